@@ -1,0 +1,189 @@
+//! `pbrt-sppm check SCENE --json [--shapes]`: the loaded scene as one JSON object.
+//!
+//! The layout is a contract (design.md §3): `syntax`, `camera`, `film`, `integrator`,
+//! `counts`, `world_bounds`, `warnings`, `skipped`, and with `--shapes` one entry per
+//! created shape (world shapes in creation order, then each instance's shapes) with its
+//! parameters after defaults and clamps, row-major `object_to_world`, orientation flags,
+//! world-space area and bounds.
+
+use crate::scene::{CameraKind, Geometry, PlacedShape, SceneDescription};
+use crate::shapes::Quadric;
+use glam::{DMat3, DMat4, DVec3};
+use serde_json::{Value, json};
+
+/// A float printed with the shortest decimal that round-trips through `f32`
+/// (so 0.1 prints as 0.1, not 0.10000000149011612); non-finite values become null.
+pub fn f32_json(x: f32) -> Value {
+    if !x.is_finite() {
+        return Value::Null;
+    }
+    x.to_string().parse::<f64>().map_or(Value::Null, |v| json!(v))
+}
+
+fn f64_json(x: f64) -> Value {
+    if x.is_finite() { json!(x) } else { Value::Null }
+}
+
+fn vec3(v: DVec3) -> Value {
+    json!([f64_json(v.x), f64_json(v.y), f64_json(v.z)])
+}
+
+fn row_major(m: &DMat4) -> Value {
+    Value::Array(m.transpose().to_cols_array().iter().map(|&x| f64_json(x)).collect())
+}
+
+fn bounds(b: Option<[DVec3; 2]>) -> Value {
+    b.map_or(Value::Null, |[lo, hi]| json!([vec3(lo), vec3(hi)]))
+}
+
+/// The whole report.
+pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
+    let c = &scene.camera;
+    let f = &scene.film;
+    let i = &scene.integrator;
+    let mut out = json!({
+        "syntax": scene.syntax.name(),
+        "syntax_evidence": scene.syntax_evidence,
+        "camera": {
+            "type": match c.kind { CameraKind::Perspective => "perspective", CameraKind::Orthographic => "orthographic" },
+            "fov": f32_json(c.fov),
+            "lensradius": f32_json(c.lens_radius),
+            "focaldistance": f32_json(c.focal_distance),
+            "frameaspectratio": f32_json(c.frame_aspect_ratio),
+            "screenwindow": c.screen_window.map(f32_json),
+            "shutteropen": f32_json(c.shutter_open),
+            "shutterclose": f32_json(c.shutter_close),
+            "camera_from_world": row_major(&c.camera_from_world),
+        },
+        "film": {
+            "type": f.ty,
+            "xresolution": f.x_resolution,
+            "yresolution": f.y_resolution,
+            "filename": f.filename,
+            "cropwindow": f.crop_window.map(f32_json),
+            "pixelbounds": f.pixel_bounds,
+            "scale": f32_json(f.scale),
+        },
+        "integrator": {
+            "type": "sppm",
+            "requested": i.requested,
+            "iterations": i.iterations,
+            "maxdepth": i.max_depth,
+            "photonsperiteration": i.photons_per_iteration,
+            "radius": f32_json(i.radius),
+            "seed": i.seed,
+        },
+        "counts": counts(scene),
+        "world_bounds": bounds(scene.world_bounds()),
+        "warnings": scene.warnings,
+        "skipped": scene.skipped,
+    });
+    if with_shapes {
+        let shapes: Vec<Value> = scene.placed_shapes().enumerate().map(|(k, p)| shape(scene, k, &p)).collect();
+        out["shapes"] = Value::Array(shapes);
+    }
+    out
+}
+
+fn counts(scene: &SceneDescription) -> Value {
+    let mut n = [0u64; 6];
+    let (mut meshes, mut triangles, mut emitters) = (0u64, 0u64, 0u64);
+    for p in scene.placed_shapes() {
+        let tris = scene.triangle_count(p.shape) as u64;
+        match &p.shape.geometry {
+            Geometry::Quadric(q) => n[quadric_slot(q)] += 1,
+            Geometry::Mesh { .. } => {
+                meshes += 1;
+                triangles += tris;
+            }
+        }
+        // pbrt makes one light per emissive shape (one per triangle for meshes);
+        // area lights inside object definitions are ignored.
+        if p.shape.area_light.is_some() && p.instance.is_none() {
+            emitters += if tris > 0 { tris } else { 1 };
+        }
+    }
+    json!({
+        "sphere": n[0], "cylinder": n[1], "disk": n[2], "cone": n[3], "paraboloid": n[4], "hyperboloid": n[5],
+        "trianglemesh": meshes,
+        "triangles": triangles,
+        "instances": scene.instances.len(),
+        "lights": scene.lights.len() as u64 + emitters,
+        "materials": scene.materials.len(),
+    })
+}
+
+fn quadric_slot(q: &Quadric) -> usize {
+    match q {
+        Quadric::Sphere(_) => 0,
+        Quadric::Cylinder(_) => 1,
+        Quadric::Disk(_) => 2,
+        Quadric::Cone(_) => 3,
+        Quadric::Paraboloid(_) => 4,
+        Quadric::Hyperboloid(_) => 5,
+    }
+}
+
+fn shape(scene: &SceneDescription, index: usize, p: &PlacedShape) -> Value {
+    let s = p.shape;
+    let linear = DMat3::from_mat4(p.object_to_world);
+    let (params, area) = match &s.geometry {
+        Geometry::Quadric(q) => (quadric_params(q), q.world_area(linear)),
+        Geometry::Mesh { mesh, filename, .. } => {
+            let m = &scene.meshes[*mesh as usize];
+            // Mesh vertices are stored transformed by the shape's own CTM already.
+            let extra = DMat3::from_mat4(p.object_to_world * s.object_to_world.inverse());
+            let params = json!({
+                "filename": filename,
+                "vertices": m.p.len(),
+                "normals": m.n.is_some(),
+                "tangents": m.s.is_some(),
+                "uv": m.uv.is_some(),
+            });
+            (params, if p.instance.is_some() { m.area_under(extra) } else { m.area() })
+        }
+    };
+    let mut v = json!({
+        "index": index,
+        "kind": s.kind(),
+        "params": params,
+        "object_to_world": row_major(&p.object_to_world),
+        "reverse_orientation": s.reverse_orientation,
+        "swaps_handedness": linear.determinant() < 0.0,
+        "area": f64_json(area),
+        "bounds": bounds(scene.world_bounds_of(p)),
+        "material": s.material,
+        "area_light": s.area_light,
+    });
+    if let Geometry::Mesh { mesh, .. } = &s.geometry {
+        v["triangles"] = json!(scene.meshes[*mesh as usize].triangle_count());
+    }
+    if let Some(i) = p.instance {
+        v["instance"] = json!(i);
+    }
+    v
+}
+
+fn quadric_params(q: &Quadric) -> Value {
+    let deg = |r: f32| f32_json((r as f64).to_degrees() as f32);
+    match q {
+        Quadric::Sphere(s) => json!({
+            "radius": f32_json(s.radius), "zmin": f32_json(s.z_min), "zmax": f32_json(s.z_max), "phimax": deg(s.phi_max),
+        }),
+        Quadric::Cylinder(s) => json!({
+            "radius": f32_json(s.radius), "zmin": f32_json(s.z_min), "zmax": f32_json(s.z_max), "phimax": deg(s.phi_max),
+        }),
+        Quadric::Disk(s) => json!({
+            "height": f32_json(s.height), "radius": f32_json(s.radius), "innerradius": f32_json(s.inner_radius),
+            "phimax": deg(s.phi_max),
+        }),
+        Quadric::Cone(s) => json!({ "height": f32_json(s.height), "radius": f32_json(s.radius), "phimax": deg(s.phi_max) }),
+        Quadric::Paraboloid(s) => json!({
+            "radius": f32_json(s.radius), "zmin": f32_json(s.z_min), "zmax": f32_json(s.z_max), "phimax": deg(s.phi_max),
+        }),
+        Quadric::Hyperboloid(s) => json!({
+            "p1": s.p1.to_array().map(f32_json), "p2": s.p2.to_array().map(f32_json), "phimax": deg(s.phi_max),
+            "zmin": f32_json(s.z_min), "zmax": f32_json(s.z_max), "rmax": f32_json(s.r_max),
+        }),
+    }
+}

@@ -1,0 +1,10 @@
+//! pbrt-sppm: reads pbrt-v3 and pbrt-v4 scene files and renders them with stochastic
+//! progressive photon mapping.
+//!
+//! Data flows one way: bytes → tokens → statements ([`parser`]) → scene description
+//! ([`scene`]) → render-ready scene → image.
+
+pub mod check;
+pub mod parser;
+pub mod scene;
+pub mod shapes;

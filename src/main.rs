@@ -1,0 +1,144 @@
+//! The `pbrt-sppm` command line: `[render] SCENE`, `check SCENE`.
+
+use clap::{Parser, Subcommand};
+use pbrt_sppm::parser::Syntax;
+use pbrt_sppm::parser::error::LoadError;
+use pbrt_sppm::scene::{LoadOptions, SceneDescription, load_scene};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "pbrt-sppm", version, about = "Renders pbrt-v3/v4 scenes with stochastic progressive photon mapping")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene (the default when the first argument is a file).
+    Render(RenderArgs),
+    /// Parse and build a scene without rendering; report what it contains.
+    Check {
+        scene: PathBuf,
+        /// Print one JSON object (design.md §3) instead of a summary.
+        #[arg(long)]
+        json: bool,
+        /// Add one entry per created shape to the JSON.
+        #[arg(long)]
+        shapes: bool,
+        #[command(flatten)]
+        common: Common,
+    },
+}
+
+#[derive(clap::Args)]
+struct Common {
+    /// Read the file as pbrt-v3 or pbrt-v4 syntax instead of detecting it.
+    #[arg(long, value_parser = parse_syntax)]
+    syntax: Option<Syntax>,
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    scene: PathBuf,
+    #[arg(long)]
+    outfile: Option<PathBuf>,
+    #[arg(long)]
+    nthreads: Option<usize>,
+    #[arg(long)]
+    seed: Option<u64>,
+    /// SPPM iterations.
+    #[arg(long, alias = "iterations")]
+    spp: Option<u32>,
+    #[arg(long)]
+    quick: bool,
+    #[arg(long)]
+    stats: bool,
+    #[arg(long)]
+    photons: Option<u64>,
+    #[arg(long)]
+    radius: Option<f32>,
+    #[arg(long)]
+    time_limit: Option<f64>,
+    #[arg(long)]
+    mse_reference_image: Option<PathBuf>,
+    #[arg(long)]
+    mse_reference_out: Option<PathBuf>,
+    #[command(flatten)]
+    common: Common,
+}
+
+fn parse_syntax(s: &str) -> Result<Syntax, String> {
+    match s {
+        "v3" => Ok(Syntax::V3),
+        "v4" => Ok(Syntax::V4),
+        _ => Err(format!("expected v3 or v4, not \"{s}\"")),
+    }
+}
+
+/// `pbrt-sppm scene.pbrt ...` means `pbrt-sppm render scene.pbrt ...`.
+fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    const KNOWN: [&str; 7] = ["render", "check", "help", "--help", "-h", "--version", "-V"];
+    if args.len() > 1 && !KNOWN.iter().any(|k| args[1] == *k) {
+        args.insert(1, "render".into());
+    }
+    args
+}
+
+fn load(scene: &PathBuf, common: &Common) -> Result<SceneDescription, ExitCode> {
+    load_scene(scene, &LoadOptions { syntax: common.syntax }).map_err(|e| report_error(&e))
+}
+
+fn report_error(e: &LoadError) -> ExitCode {
+    let text = if std::io::stderr().is_terminal() { e.with_source() } else { e.one_line() };
+    eprintln!("{text}");
+    ExitCode::FAILURE
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse_from(with_default_subcommand(std::env::args_os().collect()));
+    match cli.command {
+        Command::Check { scene, json, shapes, common } => {
+            let s = match load(&scene, &common) {
+                Ok(s) => s,
+                Err(code) => return code,
+            };
+            if json {
+                let report = pbrt_sppm::check::report(&s, shapes);
+                println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default());
+            } else {
+                s.warnings.iter().for_each(|w| eprintln!("{w}"));
+                print_summary(&s);
+            }
+            ExitCode::SUCCESS
+        }
+        Command::Render(args) => {
+            if let Err(code) = load(&args.scene, &args.common) {
+                return code;
+            }
+            eprintln!("{}: error: rendering is not implemented yet; use `pbrt-sppm check`", args.scene.display());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn print_summary(s: &SceneDescription) {
+    let r = pbrt_sppm::check::report(s, false);
+    println!("syntax      {}", s.syntax.name());
+    println!("film        {}x{} -> {}", s.film.x_resolution, s.film.y_resolution, s.film.filename);
+    let i = &s.integrator;
+    println!(
+        "sppm        {} iterations, maxdepth {}, {} photons/iteration, radius {}",
+        i.iterations, i.max_depth, i.photons_per_iteration, i.radius
+    );
+    if let Some(c) = r["counts"].as_object() {
+        let parts: Vec<String> =
+            c.iter().filter(|(_, v)| v.as_u64() != Some(0)).map(|(k, v)| format!("{k} {v}")).collect();
+        println!("counts      {}", parts.join(", "));
+    }
+    for k in &s.skipped {
+        println!("skipped     {}:{}:{}: {} ({})", k.file, k.line, k.column, k.what, k.why);
+    }
+}

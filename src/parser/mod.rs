@@ -1,0 +1,27 @@
+//! From bytes to statements: [`source`] (files, spans), [`lexer`] (tokens),
+//! [`params`] (typed parameter lists), [`stmt`] (directives over a file stack),
+//! [`error`] (located diagnostics).
+
+pub mod error;
+pub mod lexer;
+pub mod params;
+pub mod source;
+pub mod stmt;
+
+/// Which pbrt file-format version a scene is written in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Syntax {
+    #[serde(rename = "v3")]
+    V3,
+    #[serde(rename = "v4")]
+    V4,
+}
+
+impl Syntax {
+    pub fn name(self) -> &'static str {
+        match self {
+            Syntax::V3 => "v3",
+            Syntax::V4 => "v4",
+        }
+    }
+}

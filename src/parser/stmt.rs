@@ -1,0 +1,656 @@
+//! Statements: every directive of pbrt-v3 and pbrt-v4, read from a token stream with a
+//! file stack.
+//!
+//! ```text
+//! LookAt 0 5 -10  0 0 0  0 1 0          Camera "perspective" "float fov" 45
+//! WorldBegin
+//! AttributeBegin
+//!   Translate 0 1 0   Material "matte"   Shape "sphere" "float radius" 1
+//! AttributeEnd
+//! Include "geometry.pbrt"  # token level: a parameter list may run on past its end
+//! Import "lights.pbrt"     # v4: a copy of the graphics state; nothing flows back
+//! ```
+//! `Include` pushes the file's tokens onto the stream, so the last statement of an
+//! included file can take parameters from the including file (pbrt-v3-scenes
+//! cloud/f15-4a relies on this). Paths are relative to the top-level file's directory.
+//! Files ending in `.gz` (or starting with the gzip magic) are decompressed.
+
+use super::error::Diagnostic;
+use super::lexer::{Lexer, TokenKind, decode_string};
+use super::params::{Param, ParamList, ParamType, Values};
+use super::source::{FileId, SourceMap, Span};
+use super::Syntax;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// A directive and its arguments.
+#[derive(Debug)]
+pub enum StmtKind {
+    Identity,
+    Translate([f64; 3]),
+    Scale([f64; 3]),
+    Rotate([f64; 4]),
+    LookAt([f64; 9]),
+    CoordinateSystem(String),
+    CoordSysTransform(String),
+    Transform([f64; 16]),
+    ConcatTransform([f64; 16]),
+    TransformTimes([f64; 2]),
+    ActiveTransform(ActiveTransform),
+    ReverseOrientation,
+    Option { name: String, value: String },
+    ColorSpace(String),
+    Camera(Entity),
+    Sampler(Entity),
+    Film(Entity),
+    PixelFilter(Entity),
+    Integrator(Entity),
+    Accelerator(Entity),
+    MakeNamedMedium(Entity),
+    MediumInterface { inside: String, outside: String },
+    WorldBegin,
+    WorldEnd,
+    AttributeBegin,
+    AttributeEnd,
+    TransformBegin,
+    TransformEnd,
+    Attribute(Entity),
+    Shape(Entity),
+    ObjectBegin(String),
+    ObjectEnd,
+    ObjectInstance(String),
+    LightSource(Entity),
+    AreaLightSource(Entity),
+    Material(Entity),
+    MakeNamedMaterial(Entity),
+    NamedMaterial(String),
+    Texture { name: String, ty: String, class: Entity },
+    /// `Import "file"`: the statements that follow, up to the matching `ImportEnd`,
+    /// come from the imported file.
+    ImportBegin(String),
+    ImportEnd,
+}
+
+/// `ActiveTransform` argument.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ActiveTransform {
+    StartTime,
+    EndTime,
+    All,
+}
+
+/// A quoted type or name followed by a parameter list (`Shape "sphere" ...`).
+#[derive(Debug)]
+pub struct Entity {
+    pub name: String,
+    pub name_span: Span,
+    pub params: ParamList,
+}
+
+impl Entity {
+    /// An entity with no parameters and no location (defaults for missing statements).
+    pub fn default_named(name: &str) -> Entity {
+        Entity { name: name.to_string(), name_span: Span::default(), params: ParamList::default() }
+    }
+}
+
+/// One statement with the span of its directive keyword.
+#[derive(Debug)]
+pub struct Stmt {
+    pub kind: StmtKind,
+    pub span: Span,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TokKind {
+    Word,
+    Str,
+    LBracket,
+    RBracket,
+    /// The end of an `Import`ed file: ends any parameter list, like a directive would.
+    ImportEnd,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Tok {
+    kind: TokKind,
+    span: Span,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum FrameKind {
+    Top,
+    Include,
+    Import,
+}
+
+struct Frame {
+    file: FileId,
+    text: Arc<[u8]>,
+    pos: usize,
+    kind: FrameKind,
+}
+
+const MAX_INCLUDE_DEPTH: usize = 64;
+
+/// Reads statements from a top-level file and everything it includes.
+pub struct StatementReader {
+    pub sources: SourceMap,
+    base_dir: PathBuf,
+    stack: Vec<Frame>,
+    peeked: Option<Tok>,
+    /// Warnings found while reading (non-integer integers, v3 bools that are not
+    /// "true"/"false", ...).
+    pub warnings: Vec<Diagnostic>,
+    /// The first version-specific construct seen, if any.
+    pub evidence: Option<(Syntax, Span, String)>,
+}
+
+/// Reads a scene file's bytes, decompressing gzip and rejecting UTF-16.
+pub fn read_scene_bytes(path: &Path) -> Result<Vec<u8>, String> {
+    let raw = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
+    let mut bytes = if raw.starts_with(&[0x1f, 0x8b]) {
+        let mut out = Vec::new();
+        flate2::read::MultiGzDecoder::new(&raw[..])
+            .read_to_end(&mut out)
+            .map_err(|e| format!("cannot decompress \"{}\": {e}", path.display()))?;
+        out
+    } else {
+        raw
+    };
+    if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
+        return Err(format!("\"{}\" is UTF-16; pbrt scene files must be ASCII or UTF-8", path.display()));
+    }
+    if bytes.starts_with(&[0xef, 0xbb, 0xbf]) {
+        bytes[..3].fill(b' '); // a UTF-8 byte-order mark: keep offsets, drop the mark
+    }
+    Ok(bytes)
+}
+
+impl StatementReader {
+    /// Starts reading `text` as the top-level file `path` (the base for relative paths).
+    pub fn new(path: &Path, text: Vec<u8>) -> Result<StatementReader, String> {
+        let mut sources = SourceMap::default();
+        let file = sources.add(path, path.display().to_string(), text)?;
+        let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let text = sources.file(file).text.clone();
+        Ok(StatementReader {
+            sources,
+            base_dir,
+            stack: vec![Frame { file, text, pos: 0, kind: FrameKind::Top }],
+            peeked: None,
+            warnings: Vec::new(),
+            evidence: None,
+        })
+    }
+
+    /// Resolves a file name from the scene against the top-level file's directory
+    /// (pbrt-v4 falls back to the name as written when the joined path does not exist).
+    pub fn resolve_path(&self, name: &str) -> PathBuf {
+        resolve_relative(&self.base_dir, name)
+    }
+
+    /// Records the first piece of version-specific syntax.
+    pub fn note_evidence(&mut self, syntax: Syntax, span: Span, what: impl Into<String>) {
+        if self.evidence.is_none() {
+            self.evidence = Some((syntax, span, what.into()));
+        }
+    }
+
+    pub fn text(&self, span: Span) -> &[u8] {
+        &self.sources.file(span.file).text[span.start as usize..span.end as usize]
+    }
+
+    fn word(&self, t: Tok) -> String {
+        String::from_utf8_lossy(self.text(t.span)).into_owned()
+    }
+
+    fn lex(&mut self) -> Result<Option<Tok>, Diagnostic> {
+        while let Some(frame) = self.stack.last_mut() {
+            let mut lexer = Lexer::at(&frame.text, frame.pos);
+            let next = lexer.next_significant();
+            frame.pos = lexer.position();
+            let file = frame.file;
+            match next {
+                Err(e) => return Err(Diagnostic::error(Span::new(file, e.offset, e.offset + 1), e.message)),
+                Ok(Some(t)) => {
+                    let kind = match t.kind {
+                        TokenKind::Word | TokenKind::Comment => TokKind::Word,
+                        TokenKind::Str => TokKind::Str,
+                        TokenKind::LBracket => TokKind::LBracket,
+                        TokenKind::RBracket => TokKind::RBracket,
+                    };
+                    let span = Span { file, start: t.start, end: t.end };
+                    return Ok(Some(Tok { kind, span }));
+                }
+                Ok(None) => {
+                    let ended = self.stack.pop().map(|f| (f.kind, f.file, f.text.len()));
+                    if let Some((FrameKind::Import, file, len)) = ended {
+                        let span = Span::new(file, len, len);
+                        return Ok(Some(Tok { kind: TokKind::ImportEnd, span }));
+                    }
+                }
+            }
+        }
+        Ok(None)
+    }
+
+    fn peek(&mut self) -> Result<Option<Tok>, Diagnostic> {
+        if self.peeked.is_none() {
+            self.peeked = self.lex()?;
+        }
+        Ok(self.peeked)
+    }
+
+    fn next(&mut self) -> Result<Option<Tok>, Diagnostic> {
+        match self.peeked.take() {
+            Some(t) => Ok(Some(t)),
+            None => self.lex(),
+        }
+    }
+
+    /// The span just past the last token, for "premature end of file" messages.
+    fn end_span(&self, after: Span) -> Span {
+        Span { file: after.file, start: after.end, end: after.end }
+    }
+
+    fn expect(&mut self, after: Span, what: &str) -> Result<Tok, Diagnostic> {
+        self.next()?.ok_or_else(|| {
+            Diagnostic::error(self.end_span(after), format!("premature end of file: expected {what}"))
+        })
+    }
+
+    fn number(&mut self, after: Span, directive: &str) -> Result<(f64, Span), Diagnostic> {
+        let t = self.expect(after, &format!("a number for {directive}"))?;
+        let text = self.text(t.span);
+        match (t.kind, parse_f64(text)) {
+            (TokKind::Word, Some(v)) => Ok((v, t.span)),
+            _ => Err(Diagnostic::error(
+                t.span,
+                format!("{directive}: expected a number, found '{}'", self.word(t)),
+            )),
+        }
+    }
+
+    fn numbers<const N: usize>(&mut self, kw: Span, directive: &str) -> Result<[f64; N], Diagnostic> {
+        let mut out = [0.0; N];
+        let mut last = kw;
+        for v in &mut out {
+            (*v, last) = self.number(last, directive)?;
+        }
+        Ok(out)
+    }
+
+    fn bracketed<const N: usize>(&mut self, kw: Span, directive: &str) -> Result<[f64; N], Diagnostic> {
+        let open = self.expect(kw, "'['")?;
+        if open.kind != TokKind::LBracket {
+            return Err(Diagnostic::error(open.span, format!("{directive}: expected '[' and {N} numbers")));
+        }
+        let values = self.numbers::<N>(open.span, directive)?;
+        let close = self.expect(open.span, "']'")?;
+        if close.kind != TokKind::RBracket {
+            return Err(Diagnostic::error(
+                close.span,
+                format!("{directive}: expected ']' after {N} numbers, found '{}'", self.word(close)),
+            ));
+        }
+        Ok(values)
+    }
+
+    fn string(&mut self, after: Span, directive: &str) -> Result<(String, Span), Diagnostic> {
+        let t = self.expect(after, &format!("a quoted string for {directive}"))?;
+        if t.kind != TokKind::Str {
+            return Err(Diagnostic::error(
+                t.span,
+                format!("{directive}: expected a quoted string, found '{}'", self.word(t)),
+            ));
+        }
+        Ok((decode_string(self.text(t.span)), t.span))
+    }
+
+    fn entity(&mut self, kw: Span, directive: &str) -> Result<Entity, Diagnostic> {
+        let (name, name_span) = self.string(kw, directive)?;
+        let params = self.params()?;
+        Ok(Entity { name, name_span, params })
+    }
+
+    /// Reads the next statement; `Ok(None)` at the end of the top-level file.
+    pub fn next_stmt(&mut self) -> Result<Option<Stmt>, Diagnostic> {
+        loop {
+            let Some(t) = self.next()? else { return Ok(None) };
+            let kind = match t.kind {
+                TokKind::ImportEnd => StmtKind::ImportEnd,
+                TokKind::Word => match self.directive(t)? {
+                    Some(kind) => kind,
+                    None => continue, // Include: its statements follow
+                },
+                _ => {
+                    return Err(Diagnostic::error(
+                        t.span,
+                        format!("expected a directive, found '{}'", self.word(t)),
+                    ));
+                }
+            };
+            return Ok(Some(Stmt { kind, span: t.span }));
+        }
+    }
+
+    fn directive(&mut self, t: Tok) -> Result<Option<StmtKind>, Diagnostic> {
+        use StmtKind as K;
+        let kw = t.span;
+        let word = self.word(t);
+        let v3 = |r: &mut Self| r.note_evidence(Syntax::V3, kw, format!("{word} (v3 only)"));
+        let v4 = |r: &mut Self| r.note_evidence(Syntax::V4, kw, format!("{word} (v4 only)"));
+        Ok(Some(match word.as_str() {
+            "Identity" => K::Identity,
+            "Translate" => K::Translate(self.numbers(kw, "Translate")?),
+            "Scale" => K::Scale(self.numbers(kw, "Scale")?),
+            "Rotate" => K::Rotate(self.numbers(kw, "Rotate")?),
+            "LookAt" => K::LookAt(self.numbers(kw, "LookAt")?),
+            "CoordinateSystem" => K::CoordinateSystem(self.string(kw, "CoordinateSystem")?.0),
+            "CoordSysTransform" => K::CoordSysTransform(self.string(kw, "CoordSysTransform")?.0),
+            "Transform" => K::Transform(self.bracketed(kw, "Transform")?),
+            "ConcatTransform" => K::ConcatTransform(self.bracketed(kw, "ConcatTransform")?),
+            "TransformTimes" => K::TransformTimes(self.numbers(kw, "TransformTimes")?),
+            "ActiveTransform" => K::ActiveTransform(self.active_transform(kw)?),
+            "ReverseOrientation" => K::ReverseOrientation,
+            "Option" => {
+                v4(self);
+                self.option(kw)?
+            }
+            "ColorSpace" => {
+                v4(self);
+                K::ColorSpace(self.string(kw, "ColorSpace")?.0)
+            }
+            "Camera" => K::Camera(self.entity(kw, "Camera")?),
+            "Sampler" => K::Sampler(self.entity(kw, "Sampler")?),
+            "Film" => K::Film(self.entity(kw, "Film")?),
+            "PixelFilter" => K::PixelFilter(self.entity(kw, "PixelFilter")?),
+            "Integrator" => K::Integrator(self.entity(kw, "Integrator")?),
+            "Accelerator" => K::Accelerator(self.entity(kw, "Accelerator")?),
+            "MakeNamedMedium" => K::MakeNamedMedium(self.entity(kw, "MakeNamedMedium")?),
+            "MediumInterface" => self.medium_interface(kw)?,
+            "WorldBegin" => K::WorldBegin,
+            "WorldEnd" => {
+                v3(self);
+                K::WorldEnd
+            }
+            "AttributeBegin" => K::AttributeBegin,
+            "AttributeEnd" => K::AttributeEnd,
+            "TransformBegin" => {
+                v3(self);
+                K::TransformBegin
+            }
+            "TransformEnd" => {
+                v3(self);
+                K::TransformEnd
+            }
+            "Attribute" => {
+                v4(self);
+                K::Attribute(self.entity(kw, "Attribute")?)
+            }
+            "Shape" => K::Shape(self.entity(kw, "Shape")?),
+            "ObjectBegin" => K::ObjectBegin(self.string(kw, "ObjectBegin")?.0),
+            "ObjectEnd" => K::ObjectEnd,
+            "ObjectInstance" => K::ObjectInstance(self.string(kw, "ObjectInstance")?.0),
+            "LightSource" => K::LightSource(self.entity(kw, "LightSource")?),
+            "AreaLightSource" => K::AreaLightSource(self.entity(kw, "AreaLightSource")?),
+            "Material" => K::Material(self.entity(kw, "Material")?),
+            "MakeNamedMaterial" => K::MakeNamedMaterial(self.entity(kw, "MakeNamedMaterial")?),
+            "NamedMaterial" => K::NamedMaterial(self.string(kw, "NamedMaterial")?.0),
+            "Texture" => {
+                let (name, _) = self.string(kw, "Texture")?;
+                let (ty, ty_span) = self.string(kw, "Texture")?;
+                let class = self.entity(ty_span, "Texture")?;
+                K::Texture { name, ty, class }
+            }
+            "Include" => {
+                let (name, span) = self.string(kw, "Include")?;
+                self.push_file(&name, span, FrameKind::Include)?;
+                return Ok(None);
+            }
+            "Import" => {
+                v4(self);
+                let (name, span) = self.string(kw, "Import")?;
+                self.push_file(&name, span, FrameKind::Import)?;
+                K::ImportBegin(name)
+            }
+            _ => return Err(Diagnostic::error(kw, format!("unknown directive '{word}'"))),
+        }))
+    }
+
+    fn active_transform(&mut self, kw: Span) -> Result<ActiveTransform, Diagnostic> {
+        let t = self.expect(kw, "StartTime, EndTime or All")?;
+        match (t.kind, self.text(t.span)) {
+            (TokKind::Word, b"StartTime") => Ok(ActiveTransform::StartTime),
+            (TokKind::Word, b"EndTime") => Ok(ActiveTransform::EndTime),
+            (TokKind::Word, b"All") => Ok(ActiveTransform::All),
+            _ => Err(Diagnostic::error(
+                t.span,
+                format!("ActiveTransform: expected StartTime, EndTime or All, found '{}'", self.word(t)),
+            )),
+        }
+    }
+
+    /// `Option "name" value` (v4); `Option "bool name" value` is accepted too.
+    fn option(&mut self, kw: Span) -> Result<StmtKind, Diagnostic> {
+        let (name, name_span) = self.string(kw, "Option")?;
+        let name = name.split_whitespace().last().unwrap_or_default().to_string();
+        let t = self.expect(name_span, "a value for Option")?;
+        let value = match t.kind {
+            TokKind::Str => decode_string(self.text(t.span)),
+            TokKind::Word => self.word(t),
+            _ => return Err(Diagnostic::error(t.span, "Option: expected one value")),
+        };
+        Ok(StmtKind::Option { name, value })
+    }
+
+    fn medium_interface(&mut self, kw: Span) -> Result<StmtKind, Diagnostic> {
+        let (inside, _) = self.string(kw, "MediumInterface")?;
+        let outside = match self.peek()? {
+            Some(t) if t.kind == TokKind::Str => {
+                self.next()?;
+                decode_string(self.text(t.span))
+            }
+            _ => inside.clone(),
+        };
+        Ok(StmtKind::MediumInterface { inside, outside })
+    }
+
+    fn push_file(&mut self, name: &str, span: Span, kind: FrameKind) -> Result<(), Diagnostic> {
+        if self.stack.len() > MAX_INCLUDE_DEPTH {
+            return Err(Diagnostic::error(span, "files included too deeply (an Include cycle?)"));
+        }
+        let path = self.resolve_path(name);
+        let bytes = read_scene_bytes(&path).map_err(|e| Diagnostic::error(span, e))?;
+        let file = self.sources.add(&path, path.display().to_string(), bytes).map_err(|e| Diagnostic::error(span, e))?;
+        let text = self.sources.file(file).text.clone();
+        // A peeked token belongs to the including file; reading continues after it.
+        debug_assert!(self.peeked.is_none());
+        self.stack.push(Frame { file, text, pos: 0, kind });
+        Ok(())
+    }
+
+    fn params(&mut self) -> Result<ParamList, Diagnostic> {
+        let mut list = ParamList::default();
+        while let Some(t) = self.peek()? {
+            if t.kind != TokKind::Str {
+                break;
+            }
+            self.next()?;
+            list.params.push(self.param(t)?);
+        }
+        Ok(list)
+    }
+
+    fn param(&mut self, decl: Tok) -> Result<Param, Diagnostic> {
+        let text = decode_string(self.text(decl.span));
+        let mut words = text.split_ascii_whitespace();
+        let (Some(type_name), Some(name)) = (words.next(), words.next()) else {
+            return Err(Diagnostic::error(
+                decl.span,
+                format!("parameter declaration \"{text}\" needs a type and a name (or a directive keyword is missing)"),
+            ));
+        };
+        let Some((ty, evidence)) = ParamType::from_keyword(type_name) else {
+            return Err(Diagnostic::error(decl.span, format!("unknown parameter type \"{type_name}\"")));
+        };
+        if let Some(s) = evidence {
+            self.note_evidence(s, decl.span, format!("parameter type \"{type_name}\""));
+        }
+        let first = self.expect(decl.span, &format!("a value for \"{text}\""))?;
+        let mut sink = ValueSink::new(ty);
+        let value_span = match first.kind {
+            TokKind::LBracket => {
+                loop {
+                    let t = self.next()?.ok_or_else(|| {
+                        Diagnostic::error(first.span, "premature end of file: '[' is never closed")
+                    })?;
+                    match t.kind {
+                        TokKind::RBracket => break first.span.to(t.span),
+                        TokKind::Word | TokKind::Str => self.push_value(&mut sink, t, &text)?,
+                        _ => return Err(Diagnostic::error(t.span, "'[' is never closed before this")),
+                    }
+                }
+            }
+            TokKind::Word | TokKind::Str => {
+                self.push_value(&mut sink, first, &text)?;
+                first.span
+            }
+            _ => {
+                return Err(Diagnostic::error(first.span, format!("expected a value for \"{text}\"")));
+            }
+        };
+        if ty == ParamType::Blackbody {
+            let n = sink.len();
+            let s = if n == 2 { Syntax::V3 } else { Syntax::V4 };
+            self.note_evidence(s, value_span, format!("blackbody with {n} value(s)"));
+        }
+        let values = sink.finish();
+        Ok(Param::new(ty, type_name.to_string(), name.to_string(), values, decl.span, value_span))
+    }
+
+    fn push_value(&mut self, sink: &mut ValueSink, t: Tok, decl: &str) -> Result<(), Diagnostic> {
+        let bytes = self.text(t.span);
+        let is_str = t.kind == TokKind::Str;
+        let mixed = || Diagnostic::error(t.span, format!("\"{decl}\": strings and numbers mixed in one list"));
+        match (&mut sink.values, is_str) {
+            (Values::Floats(v), false) => match parse_f32(bytes) {
+                Some(x) => v.push(x),
+                None => {
+                    let msg = format!("\"{decl}\": expected a number, found '{}'", self.word(t));
+                    return Err(Diagnostic::error(t.span, msg));
+                }
+            },
+            (Values::Ints(v), false) => match parse_int(bytes) {
+                Some(x) => v.push(x),
+                None => match parse_f64(bytes).filter(|x| x.abs() < 2.147e9) {
+                    Some(x) => {
+                        v.push(x as i32);
+                        if !sink.warned {
+                            sink.warned = true;
+                            let w = self.word(t);
+                            let msg = format!("\"{decl}\": {w} is not an integer; truncated to {}", x as i32);
+                            self.warnings.push(Diagnostic::warning(t.span, msg));
+                        }
+                    }
+                    None => {
+                        let msg = format!("\"{decl}\": expected an integer, found '{}'", self.word(t));
+                        return Err(Diagnostic::error(t.span, msg));
+                    }
+                },
+            },
+            (Values::Bools(v), _) => {
+                let raw = if is_str { decode_string(bytes) } else { self.word(t) };
+                let b = match raw.as_str() {
+                    "true" => true,
+                    "false" => false,
+                    _ if is_str => {
+                        let msg = format!("\"{decl}\": value \"{raw}\" is neither \"true\" nor \"false\"; using false");
+                        self.warnings.push(Diagnostic::warning(t.span, msg));
+                        false
+                    }
+                    _ => {
+                        let msg = format!("\"{decl}\": expected true or false, found '{raw}'");
+                        return Err(Diagnostic::error(t.span, msg));
+                    }
+                };
+                let syntax = if is_str { Syntax::V3 } else { Syntax::V4 };
+                let what = if is_str { "quoted bool value" } else { "bare bool value" };
+                self.note_evidence(syntax, t.span, what);
+                v.push(b);
+            }
+            (Values::Strings(v), true) => v.push(decode_string(bytes)),
+            (Values::Strings(v), false) if sink.ty == ParamType::Spectrum && v.is_empty() => {
+                sink.values = Values::Floats(Vec::new());
+                return self.push_value(sink, t, decl);
+            }
+            (Values::Floats(v), true) if sink.ty == ParamType::Spectrum && v.is_empty() => {
+                sink.values = Values::Strings(vec![decode_string(bytes)]);
+            }
+            (Values::Strings(_), false) if matches!(sink.ty, ParamType::String | ParamType::Texture) => {
+                let msg = format!("\"{decl}\": expected a quoted string, found '{}'", self.word(t));
+                return Err(Diagnostic::error(t.span, msg));
+            }
+            _ => return Err(mixed()),
+        }
+        Ok(())
+    }
+}
+
+/// Collects the values of one parameter in the representation its type needs.
+struct ValueSink {
+    ty: ParamType,
+    values: Values,
+    warned: bool,
+}
+
+impl ValueSink {
+    fn new(ty: ParamType) -> ValueSink {
+        use ParamType::*;
+        let values = match ty {
+            Integer => Values::Ints(Vec::new()),
+            Bool => Values::Bools(Vec::new()),
+            String | Texture => Values::Strings(Vec::new()),
+            // Spectra start numeric; the first value decides.
+            _ => Values::Floats(Vec::new()),
+        };
+        ValueSink { ty, values, warned: false }
+    }
+    fn len(&self) -> usize {
+        self.values.len()
+    }
+    fn finish(self) -> Values {
+        self.values
+    }
+}
+
+/// Joins a scene-relative name to the base directory; absolute names pass through, and
+/// a name whose joined path does not exist falls back to itself (as pbrt-v4 does).
+pub fn resolve_relative(base: &Path, name: &str) -> PathBuf {
+    let p = Path::new(name);
+    if p.is_absolute() {
+        return p.to_path_buf();
+    }
+    let joined = base.join(p);
+    if !joined.exists() && p.exists() { p.to_path_buf() } else { joined }
+}
+
+/// A correctly rounded `f32` (Rust's parser rounds once, from the decimal text).
+pub fn parse_f32(b: &[u8]) -> Option<f32> {
+    std::str::from_utf8(b).ok()?.parse().ok()
+}
+
+pub fn parse_f64(b: &[u8]) -> Option<f64> {
+    std::str::from_utf8(b).ok()?.parse().ok()
+}
+
+/// pbrt-v4's strict integer syntax: optional sign, then digits.
+pub fn parse_int(b: &[u8]) -> Option<i32> {
+    let digits = b.strip_prefix(b"-").or_else(|| b.strip_prefix(b"+")).unwrap_or(b);
+    if digits.is_empty() || !digits.iter().all(u8::is_ascii_digit) {
+        return None;
+    }
+    std::str::from_utf8(b).ok()?.parse().ok()
+}

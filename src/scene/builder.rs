@@ -1,0 +1,940 @@
+//! The graphics state: statements in, [`SceneDescription`] out.
+//!
+//! ```text
+//! AttributeBegin                       # saves CTM, material, area light, orientation,
+//!   CoordSysTransform "camera"         #   and (v3 scoping) named materials/textures
+//!   ReverseOrientation
+//!   MakeNamedMaterial "gold" "string type" "metal"
+//!   NamedMaterial "gold"               # v4: may also name a material defined later
+//!   ObjectBegin "tree"  Shape "plymesh" "string filename" "tree.ply"  ObjectEnd
+//! AttributeEnd
+//! ObjectInstance "tree"                # world-from-object = CTM here · CTM at the Shape
+//! ```
+//! Transforms post-multiply the CTM (`CTM ← CTM·X`); `ActiveTransform` picks which of the
+//! start/end pair they change (shapes use the start transform; motion is warned once).
+//! Named materials and textures are scoped by `AttributeBegin` as in v3, and a name not
+//! in scope falls back to the last definition anywhere in the file (v4 forward
+//! references). Object definitions, materials, textures and area lights are built
+//! only when something uses them.
+
+use super::entities;
+use super::options::RenderOptions;
+use super::shapes::{self as shape_build, Built};
+use super::{
+    AreaLightDesc, Geometry, InstanceDesc, LightDesc, MaterialDesc, ObjectDesc, SceneDescription, ShapeDesc,
+    Skipped, TextureDesc, mesh,
+};
+use crate::parser::Syntax;
+use crate::parser::error::{Diagnostic, Located, LoadError};
+use crate::parser::params::{ParamList, ParamType};
+use crate::parser::source::Span;
+use crate::parser::stmt::{ActiveTransform, Entity, StatementReader, Stmt, StmtKind, read_scene_bytes};
+use glam::{DMat4, DVec3};
+use std::collections::HashMap;
+use std::path::Path;
+use std::rc::Rc;
+
+/// How to load a scene.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// Overrides syntax detection (`--syntax v3|v4`).
+    pub syntax: Option<Syntax>,
+}
+
+/// Reads, parses and builds a scene file.
+pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
+    let bytes = read_scene_bytes(path).map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
+    load_scene_from_bytes(path, bytes, opts)
+}
+
+/// As [`load_scene`], with the top-level file's bytes given (its path still anchors
+/// relative file names).
+pub fn load_scene_from_bytes(path: &Path, bytes: Vec<u8>, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
+    let reader = StatementReader::new(path, bytes).map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
+    let mut b = Builder::new(reader, opts.clone());
+    match b.run() {
+        Ok(scene) => Ok(scene),
+        Err(d) => Err(LoadError::from_diagnostic(&b.reader.sources, &d)),
+    }
+}
+
+type Res<T> = Result<T, Diagnostic>;
+
+/// Named materials and textures visible in a scope (v3 semantics).
+#[derive(Clone, Default)]
+struct Scope {
+    materials: HashMap<String, u32>,
+    float_textures: HashMap<String, u32>,
+    spectrum_textures: HashMap<String, u32>,
+}
+
+#[derive(Clone, Debug)]
+enum MaterialRef {
+    Pending(u32),
+    Named(String, Span),
+}
+
+#[derive(Clone)]
+struct GraphicsState {
+    ctm: [DMat4; 2],
+    active: [bool; 2],
+    reverse_orientation: bool,
+    material: MaterialRef,
+    area_light: Option<u32>,
+    scope: Rc<Scope>,
+    /// v4 `Attribute` statements in effect: (target, index into `Builder::attributes`).
+    attributes: Rc<Vec<(String, u32)>>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum PushKind {
+    Attribute,
+    Transform,
+    Object,
+    Import,
+}
+
+struct PendingMaterial {
+    ty: String,
+    name: Option<String>,
+    params: ParamList,
+    span: Option<Span>,
+    scope: Rc<Scope>,
+    built: Option<u32>,
+}
+
+struct PendingTexture {
+    name: String,
+    ty: String,
+    class: String,
+    params: ParamList,
+    span: Span,
+    world_from_texture: DMat4,
+    scope: Rc<Scope>,
+    /// `Some(None)`: tried and skipped; `Some(Some(i))`: built as texture i.
+    built: Option<Option<u32>>,
+}
+
+struct PendingShape {
+    entity: Entity,
+    ctm: DMat4,
+    reverse_orientation: bool,
+    material: MaterialRef,
+}
+
+struct PendingObject {
+    name: String,
+    span: Span,
+    shapes: Vec<PendingShape>,
+    used: bool,
+}
+
+struct Builder {
+    reader: StatementReader,
+    opts: LoadOptions,
+    gs: GraphicsState,
+    stack: Vec<(PushKind, GraphicsState, Span)>,
+    named_coords: HashMap<String, [DMat4; 2]>,
+    in_world: bool,
+    render: RenderOptions,
+    shapes: Vec<ShapeDesc>,
+    shape_materials: Vec<MaterialRef>,
+    meshes: Vec<crate::shapes::TriangleMesh>,
+    objects: Vec<PendingObject>,
+    object_names: HashMap<String, u32>,
+    current_object: Option<u32>,
+    instance_uses: Vec<(String, DMat4, Span)>,
+    lights: Vec<LightDesc>,
+    area_light_entities: Vec<(Entity, Option<u32>)>,
+    area_lights: Vec<AreaLightDesc>,
+    materials: Vec<PendingMaterial>,
+    global_materials: HashMap<String, u32>,
+    built_materials: Vec<MaterialDesc>,
+    textures: Vec<PendingTexture>,
+    global_textures: [HashMap<String, u32>; 2],
+    built_textures: Vec<TextureDesc>,
+    attributes: Vec<Entity>,
+    options: Vec<(String, String)>,
+    warnings: Vec<Diagnostic>,
+    skipped: Vec<(Option<Span>, String, String)>,
+    motion_warned: bool,
+}
+
+impl Builder {
+    fn new(reader: StatementReader, opts: LoadOptions) -> Builder {
+        let default_material = PendingMaterial {
+            ty: String::new(), // "matte" or "diffuse", decided with the syntax
+            name: None,
+            params: ParamList::default(),
+            span: None,
+            scope: Rc::default(),
+            built: None,
+        };
+        Builder {
+            reader,
+            opts,
+            gs: GraphicsState {
+                ctm: [DMat4::IDENTITY; 2],
+                active: [true; 2],
+                reverse_orientation: false,
+                material: MaterialRef::Pending(0),
+                area_light: None,
+                scope: Rc::default(),
+                attributes: Rc::default(),
+            },
+            stack: Vec::new(),
+            named_coords: HashMap::new(),
+            in_world: false,
+            render: RenderOptions::default(),
+            shapes: Vec::new(),
+            shape_materials: Vec::new(),
+            meshes: Vec::new(),
+            objects: Vec::new(),
+            object_names: HashMap::new(),
+            current_object: None,
+            instance_uses: Vec::new(),
+            lights: Vec::new(),
+            area_light_entities: Vec::new(),
+            area_lights: Vec::new(),
+            materials: vec![default_material],
+            global_materials: HashMap::new(),
+            built_materials: Vec::new(),
+            textures: Vec::new(),
+            global_textures: [HashMap::new(), HashMap::new()],
+            built_textures: Vec::new(),
+            attributes: Vec::new(),
+            options: Vec::new(),
+            warnings: Vec::new(),
+            skipped: Vec::new(),
+            motion_warned: false,
+        }
+    }
+
+    fn run(&mut self) -> Res<SceneDescription> {
+        while let Some(stmt) = self.reader.next_stmt()? {
+            if matches!(stmt.kind, StmtKind::WorldEnd) {
+                self.check_placement(&stmt)?;
+                if let Some(next) = self.reader.next_stmt()? {
+                    let msg = "statements after WorldEnd are ignored (only the first frame of a file is rendered)";
+                    self.warnings.push(Diagnostic::warning(next.span, msg));
+                }
+                break;
+            }
+            self.check_placement(&stmt)?;
+            self.apply(stmt)?;
+        }
+        for (kind, _, span) in self.stack.iter().rev() {
+            let what = match kind {
+                PushKind::Attribute => "AttributeBegin",
+                PushKind::Transform => "TransformBegin",
+                PushKind::Object => "ObjectBegin",
+                PushKind::Import => continue,
+            };
+            self.warnings.push(Diagnostic::warning(*span, format!("{what} is never closed")));
+        }
+        self.finish()
+    }
+
+    fn check_placement(&self, stmt: &Stmt) -> Res<()> {
+        use StmtKind as K;
+        let options_only = matches!(
+            stmt.kind,
+            K::Camera(_) | K::Sampler(_) | K::Film(_) | K::PixelFilter(_) | K::Integrator(_) | K::Accelerator(_)
+                | K::TransformTimes(_) | K::WorldBegin
+        );
+        let world_only = matches!(
+            stmt.kind,
+            K::ReverseOrientation | K::AttributeBegin | K::AttributeEnd | K::TransformBegin | K::TransformEnd
+                | K::Attribute(_) | K::Shape(_) | K::ObjectBegin(_) | K::ObjectEnd | K::ObjectInstance(_)
+                | K::LightSource(_) | K::AreaLightSource(_) | K::Material(_) | K::MakeNamedMaterial(_)
+                | K::NamedMaterial(_) | K::Texture { .. } | K::ImportBegin(_) | K::WorldEnd
+        );
+        let word = self.reader.sources.snippet(stmt.span);
+        if options_only && self.in_world {
+            return Err(Diagnostic::error(stmt.span, format!("{word} is allowed only before WorldBegin")));
+        }
+        if world_only && !self.in_world {
+            return Err(Diagnostic::error(stmt.span, format!("{word} is allowed only after WorldBegin")));
+        }
+        Ok(())
+    }
+
+    fn evidence(&mut self, directive: &str, ty: &str, span: Span) {
+        if let Some(s) = entities::evidence(directive, ty) {
+            self.reader.note_evidence(s, span, format!("{directive} \"{ty}\""));
+        }
+    }
+
+    fn skip(&mut self, span: Span, what: String, why: String) {
+        self.warnings.push(Diagnostic::warning(span, format!("{what}: {why}")));
+        self.skipped.push((Some(span), what, why));
+    }
+
+    fn apply(&mut self, stmt: Stmt) -> Res<()> {
+        use StmtKind as K;
+        let span = stmt.span;
+        match stmt.kind {
+            K::Identity => self.transform(span, |_| DMat4::IDENTITY),
+            K::Translate(d) => self.concat(span, DMat4::from_translation(DVec3::from(d))),
+            K::Scale(s) => self.concat(span, DMat4::from_scale(DVec3::from(s))),
+            K::Rotate([angle, x, y, z]) => {
+                let axis = DVec3::new(x, y, z);
+                if axis.length_squared() == 0.0 {
+                    return Err(Diagnostic::error(span, "Rotate: the axis is the zero vector"));
+                }
+                self.concat(span, DMat4::from_axis_angle(axis.normalize(), angle.to_radians()))
+            }
+            K::LookAt(v) => {
+                let m = look_at(&v).ok_or_else(|| {
+                    Diagnostic::error(span, "LookAt: the up vector and the viewing direction are parallel (or eye = look)")
+                })?;
+                self.concat(span, m)
+            }
+            K::Transform(m) => self.transform(span, |_| DMat4::from_cols_array(&m)),
+            K::ConcatTransform(m) => self.concat(span, DMat4::from_cols_array(&m)),
+            K::CoordinateSystem(name) => {
+                self.named_coords.insert(name, self.gs.ctm);
+                Ok(())
+            }
+            K::CoordSysTransform(name) => match self.named_coords.get(&name) {
+                Some(&m) => self.transform(span, |i| m[i]),
+                None => {
+                    self.warnings.push(Diagnostic::warning(span, format!("coordinate system \"{name}\" is not defined; CTM unchanged")));
+                    Ok(())
+                }
+            },
+            K::TransformTimes(_) => Ok(()),
+            K::ActiveTransform(a) => {
+                self.gs.active = match a {
+                    ActiveTransform::StartTime => [true, false],
+                    ActiveTransform::EndTime => [false, true],
+                    ActiveTransform::All => [true, true],
+                };
+                Ok(())
+            }
+            K::ReverseOrientation => {
+                self.gs.reverse_orientation = !self.gs.reverse_orientation;
+                Ok(())
+            }
+            K::Option { name, value } => {
+                let key = name.to_ascii_lowercase().replace(['-', '_'], "");
+                if key == "seed" {
+                    self.render.seed_option = value.parse().ok();
+                }
+                self.options.push((key, value));
+                Ok(())
+            }
+            K::ColorSpace(name) => {
+                if name != "srgb" {
+                    self.warnings.push(Diagnostic::warning(span, format!("color space \"{name}\" is not supported; RGB values are taken as sRGB")));
+                }
+                Ok(())
+            }
+            K::Camera(e) => self.camera(e, span),
+            K::Film(e) => {
+                self.evidence("Film", &e.name.clone(), e.name_span);
+                self.render.film = Some(e);
+                Ok(())
+            }
+            K::Sampler(e) => {
+                self.evidence("Sampler", &e.name.clone(), e.name_span);
+                self.render.sampler = Some(e);
+                Ok(())
+            }
+            K::Integrator(e) => {
+                self.evidence("Integrator", &e.name.clone(), e.name_span);
+                if let Some(p) = e.params.named("numiterations") {
+                    self.reader.note_evidence(Syntax::V3, p.span, "\"numiterations\"");
+                }
+                self.render.integrator = Some(e);
+                Ok(())
+            }
+            K::PixelFilter(e) => {
+                self.render.filter = Some(e);
+                Ok(())
+            }
+            K::Accelerator(e) => {
+                self.render.accelerator = Some(e);
+                Ok(())
+            }
+            K::MakeNamedMedium(e) => {
+                self.skip(e.name_span, format!("MakeNamedMedium \"{}\"", e.name), "participating media are not supported".into());
+                Ok(())
+            }
+            K::MediumInterface { inside, outside } => {
+                if !(inside.is_empty() && outside.is_empty()) {
+                    self.skip(span, "MediumInterface".into(), "participating media are not supported; ignored".into());
+                }
+                Ok(())
+            }
+            K::WorldBegin => {
+                self.in_world = true;
+                self.gs.ctm = [DMat4::IDENTITY; 2];
+                self.gs.active = [true; 2];
+                self.named_coords.insert("world".into(), self.gs.ctm);
+                Ok(())
+            }
+            K::WorldEnd => Ok(()),
+            K::AttributeBegin => self.push(PushKind::Attribute, span),
+            K::TransformBegin => self.push(PushKind::Transform, span),
+            K::AttributeEnd => self.pop(PushKind::Attribute, span),
+            K::TransformEnd => self.pop(PushKind::Transform, span),
+            K::ImportBegin(_) => self.push(PushKind::Import, span),
+            K::ImportEnd => self.pop(PushKind::Import, span),
+            K::Attribute(e) => self.attribute(e),
+            K::Shape(e) => self.shape(e, span),
+            K::ObjectBegin(name) => self.object_begin(name, span),
+            K::ObjectEnd => self.object_end(span),
+            K::ObjectInstance(name) => {
+                if self.current_object.is_some() {
+                    return Err(Diagnostic::error(span, "ObjectInstance is not allowed inside an object definition"));
+                }
+                self.instance_uses.push((name, self.gs.ctm[0], span));
+                self.warn_motion(span);
+                Ok(())
+            }
+            K::LightSource(e) => self.light(e),
+            K::AreaLightSource(e) => self.area_light(e),
+            K::Material(e) => {
+                self.evidence("Material", &e.name.clone(), e.name_span);
+                let idx = self.add_material(e.name, None, e.params, e.name_span);
+                self.gs.material = MaterialRef::Pending(idx);
+                Ok(())
+            }
+            K::MakeNamedMaterial(e) => self.make_named_material(e),
+            K::NamedMaterial(name) => {
+                self.gs.material = match self.gs.scope.materials.get(&name) {
+                    Some(&i) => MaterialRef::Pending(i),
+                    None => MaterialRef::Named(name, span),
+                };
+                Ok(())
+            }
+            K::Texture { name, ty, class } => self.texture(name, ty, class),
+        }
+    }
+
+    // ---- transforms -------------------------------------------------------------
+
+    fn transform(&mut self, span: Span, f: impl Fn(usize) -> DMat4) -> Res<()> {
+        for i in 0..2 {
+            if self.gs.active[i] {
+                self.gs.ctm[i] = f(i);
+            }
+        }
+        let m = &self.gs.ctm;
+        if !(m[0].is_finite() && m[1].is_finite()) {
+            return Err(Diagnostic::error(span, "the transform has non-finite entries"));
+        }
+        Ok(())
+    }
+
+    fn concat(&mut self, span: Span, m: DMat4) -> Res<()> {
+        let ctm = self.gs.ctm;
+        self.transform(span, |i| ctm[i] * m)
+    }
+
+    fn warn_motion(&mut self, span: Span) {
+        if self.gs.ctm[0] != self.gs.ctm[1] && !self.motion_warned {
+            self.motion_warned = true;
+            self.warnings.push(Diagnostic::warning(span, "animated transforms are not supported; the start transform is used"));
+        }
+    }
+
+    fn camera(&mut self, e: Entity, span: Span) -> Res<()> {
+        let ctm = self.gs.ctm;
+        let inv = [ctm[0].inverse(), ctm[1].inverse()];
+        if !(inv[0].is_finite() && ctm[0].determinant() != 0.0) {
+            return Err(Diagnostic::error(span, "the camera transform is not invertible"));
+        }
+        self.named_coords.insert("camera".into(), inv);
+        self.render.camera = Some((e, ctm[0]));
+        Ok(())
+    }
+
+    // ---- attribute stack --------------------------------------------------------
+
+    fn push(&mut self, kind: PushKind, span: Span) -> Res<()> {
+        self.stack.push((kind, self.gs.clone(), span));
+        Ok(())
+    }
+
+    fn pop(&mut self, kind: PushKind, span: Span) -> Res<()> {
+        let name = |k| match k {
+            PushKind::Attribute => "AttributeBegin",
+            PushKind::Transform => "TransformBegin",
+            PushKind::Object => "ObjectBegin",
+            PushKind::Import => "Import",
+        };
+        let Some(&(top, _, _)) = self.stack.last() else {
+            let word = self.reader.sources.snippet(span);
+            self.warnings.push(Diagnostic::warning(span, format!("{word} without a matching {}; ignored", name(kind))));
+            return Ok(());
+        };
+        if top != kind && kind != PushKind::Import {
+            if top == PushKind::Import || top == PushKind::Object {
+                let word = self.reader.sources.snippet(span);
+                let msg = format!("{word} closes a block opened outside the current {}", name(top));
+                return Err(Diagnostic::error(span, msg));
+            }
+            let word = self.reader.sources.snippet(span);
+            self.warnings.push(Diagnostic::warning(span, format!("{word} closes a {}", name(top))));
+        }
+        let Some((top, saved, _)) = self.stack.pop() else { return Ok(()) };
+        if top == PushKind::Transform {
+            self.gs.ctm = saved.ctm;
+            self.gs.active = saved.active;
+        } else {
+            self.gs = saved;
+        }
+        Ok(())
+    }
+
+    fn attribute(&mut self, e: Entity) -> Res<()> {
+        const TARGETS: [&str; 5] = ["shape", "light", "material", "medium", "texture"];
+        if !TARGETS.contains(&e.name.as_str()) {
+            return Err(Diagnostic::error(e.name_span, format!("Attribute target \"{}\" is not one of {TARGETS:?}", e.name)));
+        }
+        let idx = self.attributes.len() as u32;
+        let target = e.name.clone();
+        e.params.mark_all_used();
+        self.attributes.push(e);
+        Rc::make_mut(&mut self.gs.attributes).push((target, idx));
+        Ok(())
+    }
+
+    /// The entity's own parameters, after the `Attribute` defaults for `target`
+    /// (lookups find the last occurrence, so the entity's own win).
+    fn with_attributes(&self, target: &str, params: ParamList) -> ParamList {
+        let inherited: Vec<_> = self
+            .gs
+            .attributes
+            .iter()
+            .filter(|(t, _)| t == target)
+            .flat_map(|(_, i)| self.attributes[*i as usize].params.params.iter().cloned())
+            .collect();
+        if inherited.is_empty() {
+            return params;
+        }
+        inherited.iter().for_each(|p| p.mark_used());
+        ParamList { params: inherited.into_iter().chain(params.params).collect() }
+    }
+
+    // ---- shapes and objects -----------------------------------------------------
+
+    fn shape(&mut self, e: Entity, span: Span) -> Res<()> {
+        self.evidence("Shape", &e.name.clone(), e.name_span);
+        self.warn_motion(span);
+        let params = self.with_attributes("shape", e.params);
+        let e = Entity { params, ..e };
+        let pending = PendingShape {
+            entity: e,
+            ctm: self.gs.ctm[0],
+            reverse_orientation: self.gs.reverse_orientation,
+            material: self.gs.material.clone(),
+        };
+        match self.current_object {
+            Some(obj) => {
+                if self.gs.area_light.is_some() {
+                    self.warnings.push(Diagnostic::warning(span, "area lights inside object definitions are ignored (as in pbrt)"));
+                }
+                self.objects[obj as usize].shapes.push(pending);
+            }
+            None => {
+                let area_light = self.gs.area_light;
+                if let Some(shape) = self.build_shape(&pending, area_light)? {
+                    self.shapes.push(shape);
+                    self.shape_materials.push(pending.material);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Geometry, transform and flags; the material is resolved later. `None` when the
+    /// shape type is unsupported (warned and listed as skipped).
+    fn build_shape(&mut self, s: &PendingShape, area_light: Option<u32>) -> Res<Option<ShapeDesc>> {
+        let resolve = |n: &str| self.reader.resolve_path(n);
+        let mut warn = Vec::new();
+        let built = shape_build::build(&s.entity.name, &s.entity.params, s.entity.name_span, &resolve, &mut warn);
+        self.warnings.append(&mut warn);
+        let Some(built) = built? else {
+            let what = format!("Shape \"{}\"", s.entity.name);
+            self.skip(s.entity.name_span, what, "this shape type is not supported".into());
+            return Ok(None);
+        };
+        s.entity.params.report_unused(&mut self.warnings);
+        let geometry = match built {
+            Built::Quadric(q) => Geometry::Quadric(q),
+            Built::Mesh { mesh: mut m, kind, filename } => {
+                mesh::transform(&mut m, &s.ctm);
+                self.meshes.push(m);
+                Geometry::Mesh { mesh: self.meshes.len() as u32 - 1, kind, filename }
+            }
+        };
+        let area_light = match area_light {
+            Some(a) => self.use_area_light(a),
+            None => None,
+        };
+        Ok(Some(ShapeDesc {
+            geometry,
+            object_to_world: s.ctm,
+            reverse_orientation: s.reverse_orientation,
+            material: 0,
+            area_light,
+        }))
+    }
+
+    fn object_begin(&mut self, name: String, span: Span) -> Res<()> {
+        if self.current_object.is_some() {
+            return Err(Diagnostic::error(span, "ObjectBegin inside another object definition"));
+        }
+        self.push(PushKind::Object, span)?;
+        let idx = self.objects.len() as u32;
+        if self.object_names.insert(name.clone(), idx).is_some() {
+            self.warnings.push(Diagnostic::warning(span, format!("object \"{name}\" is redefined; later instances use this definition")));
+        }
+        self.objects.push(PendingObject { name, span, shapes: Vec::new(), used: false });
+        self.current_object = Some(idx);
+        Ok(())
+    }
+
+    fn object_end(&mut self, span: Span) -> Res<()> {
+        if self.current_object.is_none() {
+            return Err(Diagnostic::error(span, "ObjectEnd without ObjectBegin"));
+        }
+        if self.stack.last().map(|s| s.0) != Some(PushKind::Object) {
+            return Err(Diagnostic::error(span, "ObjectEnd inside an unclosed AttributeBegin or TransformBegin"));
+        }
+        self.pop(PushKind::Object, span)?;
+        self.current_object = None;
+        Ok(())
+    }
+
+    // ---- lights -----------------------------------------------------------------
+
+    fn light(&mut self, e: Entity) -> Res<()> {
+        let Some(known) = entities::light_params(&e.name) else {
+            let what = format!("LightSource \"{}\"", e.name);
+            self.skip(e.name_span, what, "this light type is not supported".into());
+            return Ok(());
+        };
+        if self.current_object.is_some() {
+            let what = format!("LightSource \"{}\"", e.name);
+            self.skip(e.name_span, what, "lights inside object definitions are not supported".into());
+            return Ok(());
+        }
+        if let Some(p) = e.params.named("mapname") {
+            self.reader.note_evidence(Syntax::V3, p.span, "\"mapname\"");
+        }
+        let params = self.with_attributes("light", e.params);
+        params.mark_known(known);
+        params.report_unused(&mut self.warnings);
+        self.lights.push(LightDesc { ty: e.name, params, world_from_light: self.gs.ctm[0] });
+        Ok(())
+    }
+
+    fn area_light(&mut self, e: Entity) -> Res<()> {
+        self.evidence("AreaLightSource", &e.name.clone(), e.name_span);
+        if entities::area_light_params(&e.name).is_none() {
+            let what = format!("AreaLightSource \"{}\"", e.name);
+            self.skip(e.name_span, what, "this area light type is not supported".into());
+            self.gs.area_light = None;
+            return Ok(());
+        }
+        let params = self.with_attributes("light", e.params);
+        self.area_light_entities.push((Entity { params, ..e }, None));
+        self.gs.area_light = Some(self.area_light_entities.len() as u32 - 1);
+        Ok(())
+    }
+
+    fn use_area_light(&mut self, i: u32) -> Option<u32> {
+        let (e, built) = &mut self.area_light_entities[i as usize];
+        if let Some(b) = built {
+            return Some(*b);
+        }
+        let params = std::mem::take(&mut e.params);
+        params.mark_known(entities::area_light_params(&e.name).unwrap_or(&[]));
+        params.report_unused(&mut self.warnings);
+        self.area_lights.push(AreaLightDesc { ty: e.name.clone(), params });
+        let idx = self.area_lights.len() as u32 - 1;
+        *built = Some(idx);
+        Some(idx)
+    }
+
+    // ---- materials and textures -------------------------------------------------
+
+    fn add_material(&mut self, ty: String, name: Option<String>, params: ParamList, span: Span) -> u32 {
+        let params = self.with_attributes("material", params);
+        self.materials.push(PendingMaterial { ty, name, params, span: Some(span), scope: self.gs.scope.clone(), built: None });
+        self.materials.len() as u32 - 1
+    }
+
+    fn make_named_material(&mut self, e: Entity) -> Res<()> {
+        let ty = e.params.string("type")?.ok_or_else(|| {
+            Diagnostic::error(e.name_span, format!("MakeNamedMaterial \"{}\" needs a \"string type\"", e.name))
+        })?;
+        self.evidence("MakeNamedMaterial", &ty, e.name_span);
+        if self.global_materials.contains_key(&e.name) {
+            self.warnings.push(Diagnostic::warning(e.name_span, format!("named material \"{}\" is redefined", e.name)));
+        }
+        let idx = self.add_material(ty, Some(e.name.clone()), e.params, e.name_span);
+        Rc::make_mut(&mut self.gs.scope).materials.insert(e.name.clone(), idx);
+        self.global_materials.insert(e.name, idx);
+        Ok(())
+    }
+
+    fn texture(&mut self, name: String, ty: String, class: Entity) -> Res<()> {
+        let kind = match ty.as_str() {
+            "float" => 0,
+            "spectrum" => 1,
+            "color" => {
+                self.reader.note_evidence(Syntax::V3, class.name_span, "Texture type \"color\"");
+                1
+            }
+            other => {
+                return Err(Diagnostic::error(class.name_span, format!("texture type \"{other}\" is not \"float\" or \"spectrum\"")));
+            }
+        };
+        let params = self.with_attributes("texture", class.params);
+        let idx = self.textures.len() as u32;
+        self.textures.push(PendingTexture {
+            name: name.clone(),
+            ty: if kind == 0 { "float" } else { "spectrum" }.into(),
+            class: class.name,
+            params,
+            span: class.name_span,
+            world_from_texture: self.gs.ctm[0],
+            scope: self.gs.scope.clone(),
+            built: None,
+        });
+        let scope = Rc::make_mut(&mut self.gs.scope);
+        if kind == 0 { &mut scope.float_textures } else { &mut scope.spectrum_textures }.insert(name.clone(), idx);
+        self.global_textures[kind].insert(name, idx);
+        Ok(())
+    }
+
+    fn resolve_material(&mut self, r: &MaterialRef) -> Res<u32> {
+        let idx = match r {
+            MaterialRef::Pending(i) => *i,
+            MaterialRef::Named(name, span) => *self
+                .global_materials
+                .get(name)
+                .ok_or_else(|| Diagnostic::error(*span, format!("named material \"{name}\" is not defined")))?,
+        };
+        Ok(self.build_material(idx))
+    }
+
+    fn build_material(&mut self, i: u32) -> u32 {
+        let m = &mut self.materials[i as usize];
+        if let Some(b) = m.built {
+            return b;
+        }
+        let params = std::mem::take(&mut m.params);
+        let (name, span, scope) = (m.name.clone(), m.span, m.scope.clone());
+        let mut ty = m.ty.clone();
+        params.mark_known(&["type"]);
+        let desc = match entities::material_params(&ty) {
+            Some(known) => {
+                params.mark_known(known);
+                let textures = self.texture_params(&params, &scope);
+                params.report_unused(&mut self.warnings);
+                MaterialDesc { ty, name, params, textures }
+            }
+            None => {
+                let what = match &name {
+                    Some(n) => format!("material \"{n}\" of type \"{ty}\""),
+                    None => format!("material \"{ty}\""),
+                };
+                self.skip(span.unwrap_or_default(), what, "this material type is not supported; using diffuse 0.5".into());
+                ty = "diffuse".into();
+                MaterialDesc { ty, name, params: ParamList::default(), textures: Vec::new() }
+            }
+        };
+        self.built_materials.push(desc);
+        let b = self.built_materials.len() as u32 - 1;
+        self.materials[i as usize].built = Some(b);
+        b
+    }
+
+    /// Resolves every `texture`-typed parameter; unknown names are warned and dropped.
+    fn texture_params(&mut self, params: &ParamList, scope: &Scope) -> Vec<(String, u32)> {
+        let mut out = Vec::new();
+        for p in params.params.iter().filter(|p| p.ty == ParamType::Texture && p.is_used()) {
+            let Some(tex_name) = p.strings().first() else { continue };
+            let float_first = entities::is_float_texture_param(&p.name);
+            let order = if float_first { [0, 1] } else { [1, 0] };
+            let found = order
+                .iter()
+                .find_map(|&k| if k == 0 { scope.float_textures.get(tex_name) } else { scope.spectrum_textures.get(tex_name) })
+                .or_else(|| order.iter().find_map(|&k| self.global_textures[k].get(tex_name)))
+                .copied();
+            match found {
+                Some(t) => {
+                    if let Some(b) = self.build_texture(t) {
+                        out.push((p.name.clone(), b));
+                    }
+                }
+                None => self.warnings.push(Diagnostic::warning(
+                    p.value_span,
+                    format!("texture \"{tex_name}\" is not defined; \"{}\" keeps its default", p.name),
+                )),
+            }
+        }
+        out
+    }
+
+    fn build_texture(&mut self, i: u32) -> Option<u32> {
+        let t = &mut self.textures[i as usize];
+        if let Some(b) = t.built {
+            return b;
+        }
+        t.built = Some(None); // guards against cycles while this one is being built
+        let params = std::mem::take(&mut t.params);
+        let (class, span, scope) = (t.class.clone(), t.span, t.scope.clone());
+        let Some(known) = entities::texture_params(&class) else {
+            let what = format!("Texture \"{}\" of class \"{class}\"", t.name);
+            self.skip(span, what, "this texture class is not supported".into());
+            return None;
+        };
+        params.mark_known(known);
+        let textures = self.texture_params(&params, &scope);
+        params.report_unused(&mut self.warnings);
+        let t = &self.textures[i as usize];
+        self.built_textures.push(TextureDesc {
+            name: t.name.clone(),
+            ty: t.ty.clone(),
+            class,
+            params,
+            world_from_texture: t.world_from_texture,
+            textures,
+        });
+        let b = self.built_textures.len() as u32 - 1;
+        self.textures[i as usize].built = Some(Some(b));
+        Some(b)
+    }
+
+    // ---- the end ----------------------------------------------------------------
+
+    fn finish(&mut self) -> Res<SceneDescription> {
+        let syntax = self.opts.syntax.or(self.reader.evidence.as_ref().map(|e| e.0)).unwrap_or(Syntax::V4);
+        self.materials[0].ty = if syntax == Syntax::V3 { "matte" } else { "diffuse" }.into();
+        let uses = self.resolve_instances()?;
+        let (objects, remap) = self.build_objects()?;
+        let instances = uses
+            .into_iter()
+            .map(|(obj, m)| InstanceDesc { object: remap[obj as usize], world_from_instance: m })
+            .collect();
+        let world_materials = std::mem::take(&mut self.shape_materials);
+        let resolved: Vec<u32> = world_materials.iter().map(|r| self.resolve_material(r)).collect::<Res<_>>()?;
+        for (shape, m) in self.shapes.iter_mut().zip(resolved) {
+            shape.material = m;
+        }
+        let mut warn = Vec::new();
+        let r = self.render.resolve(syntax, &mut warn)?;
+        self.warnings.append(&mut warn);
+        if let Some((c, _)) = &self.render.camera {
+            c.params.report_unused(&mut self.warnings);
+        }
+        for e in [&self.render.film, &self.render.integrator].into_iter().flatten() {
+            e.params.report_unused(&mut self.warnings);
+        }
+        self.report_left_out();
+        let sources = &self.reader.sources;
+        let mut warnings: Vec<Diagnostic> = std::mem::take(&mut self.reader.warnings);
+        warnings.append(&mut self.warnings);
+        // In file order (reader and builder warnings interleave); stable for equal spans.
+        warnings.sort_by_key(|d| d.span.map(|s| (s.file.0, s.start)));
+        let evidence = self.reader.evidence.as_ref().map(|(s, span, what)| {
+            format!("{}: {what} ({})", sources.location(*span), s.name())
+        });
+        Ok(SceneDescription {
+            syntax,
+            syntax_evidence: if self.opts.syntax.is_some() { Some("--syntax".into()) } else { evidence },
+            camera: r.camera,
+            film: r.film,
+            integrator: r.integrator,
+            shapes: std::mem::take(&mut self.shapes),
+            objects,
+            instances,
+            meshes: std::mem::take(&mut self.meshes),
+            lights: std::mem::take(&mut self.lights),
+            area_lights: std::mem::take(&mut self.area_lights),
+            materials: std::mem::take(&mut self.built_materials),
+            textures: std::mem::take(&mut self.built_textures),
+            options: std::mem::take(&mut self.options),
+            warnings: warnings.iter().map(|d| Located::resolve(sources, d.span, &d.message)).collect(),
+            skipped: self
+                .skipped
+                .iter()
+                .map(|(span, what, why)| {
+                    let l = Located::resolve(sources, *span, "");
+                    Skipped { file: l.file, line: l.line, column: l.column, what: what.clone(), why: why.clone() }
+                })
+                .collect(),
+        })
+    }
+
+    /// Instances name objects that may be defined later (v4); unknown names are errors.
+    fn resolve_instances(&mut self) -> Res<Vec<(u32, DMat4)>> {
+        let uses = std::mem::take(&mut self.instance_uses);
+        uses.into_iter()
+            .map(|(name, m, span)| {
+                let &obj = self
+                    .object_names
+                    .get(&name)
+                    .ok_or_else(|| Diagnostic::error(span, format!("object \"{name}\" is not defined")))?;
+                self.objects[obj as usize].used = true;
+                Ok((obj, m))
+            })
+            .collect()
+    }
+
+    /// Builds the objects that are instanced (opening their mesh files); returns them
+    /// and the map from definition index to built index.
+    fn build_objects(&mut self) -> Res<(Vec<ObjectDesc>, Vec<u32>)> {
+        let mut built = Vec::new();
+        let mut remap = vec![u32::MAX; self.objects.len()];
+        for i in 0..self.objects.len() {
+            if !self.objects[i].used {
+                continue;
+            }
+            let pending = std::mem::take(&mut self.objects[i].shapes);
+            let mut shapes = Vec::with_capacity(pending.len());
+            for s in &pending {
+                if let Some(mut shape) = self.build_shape(s, None)? {
+                    shape.material = self.resolve_material(&s.material)?;
+                    shapes.push(shape);
+                }
+            }
+            remap[i] = built.len() as u32;
+            built.push(ObjectDesc { name: self.objects[i].name.clone(), shapes });
+        }
+        Ok((built, remap))
+    }
+
+    fn report_left_out(&mut self) {
+        let mut left = Vec::new();
+        for o in self.objects.iter().filter(|o| !o.used) {
+            left.push((o.span, format!("ObjectBegin \"{}\"", o.name), "never instanced".to_string()));
+        }
+        for m in self.materials.iter().filter(|m| m.built.is_none() && m.name.is_some()) {
+            let name = m.name.clone().unwrap_or_default();
+            left.push((m.span.unwrap_or_default(), format!("MakeNamedMaterial \"{name}\""), "never used".to_string()));
+        }
+        for t in self.textures.iter().filter(|t| t.built.is_none()) {
+            let why = "not used by any material that is built".to_string();
+            left.push((t.span, format!("Texture \"{}\"", t.name), why));
+        }
+        self.skipped.extend(left.into_iter().map(|(s, what, why)| (Some(s), what, why)));
+    }
+}
+
+/// pbrt's LookAt: camera-from-world for eye, look and up (`None` when degenerate).
+pub fn look_at(v: &[f64; 9]) -> Option<DMat4> {
+    let (eye, look, up) = (DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5]), DVec3::new(v[6], v[7], v[8]));
+    let dir = (look - eye).try_normalize()?;
+    let right = up.try_normalize()?.cross(dir).try_normalize()?;
+    let new_up = dir.cross(right);
+    let world_from_camera = DMat4::from_cols(right.extend(0.0), new_up.extend(0.0), dir.extend(0.0), eye.extend(1.0));
+    Some(world_from_camera.inverse())
+}

@@ -1,0 +1,113 @@
+//! `Shape "trianglemesh"` parameters to a [`TriangleMesh`], with pbrt's validity checks.
+//!
+//! ```text
+//! Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  1 1 0  0 1 0] "integer indices" [0 1 2 0 2 3]
+//!       "normal N" [...] "vector3 S" [...] "point2 uv" [...] "integer faceIndices" [0 0]
+//! # v3 also: "float uv" [...], "point2 st" / "float st" [...]
+//! ```
+//! `indices` may be left out when there are exactly three points. A count that is not
+//! a multiple of 3 drops the extras (warning); an index out of range is an error.
+//! `N`/`S` with the wrong count are ignored (warning); `uv` with too few entries is
+//! ignored, with too many the extras are dropped (warnings).
+
+use crate::parser::error::Diagnostic;
+use crate::parser::params::{ParamList, ParamType};
+use crate::parser::source::Span;
+use crate::shapes::TriangleMesh;
+use glam::{DMat3, DMat4, DVec3};
+
+fn triples(v: &[f32]) -> Vec<[f32; 3]> {
+    v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+/// Reads the mesh arrays of a `trianglemesh` statement.
+pub fn from_params(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Result<TriangleMesh, Diagnostic> {
+    let positions = p
+        .array("P", ParamType::Point3)?
+        .ok_or_else(|| Diagnostic::error(span, "trianglemesh needs \"point3 P\""))?;
+    let n_p = positions.values.len() / 3;
+    let indices_span = p.find("indices", &[ParamType::Integer]).map(|i| i.value_span);
+    let indices: Vec<i32> = match p.array("indices", ParamType::Integer)? {
+        Some(i) => i.ints().to_vec(),
+        None if n_p == 3 => vec![0, 1, 2],
+        None => return Err(Diagnostic::error(span, "trianglemesh needs \"integer indices\" (only a single triangle of 3 points may leave them out)")),
+    };
+    let mut mesh = TriangleMesh { p: triples(positions.floats()), ..Default::default() };
+    mesh.indices = check_indices(indices, n_p, indices_span.unwrap_or(span), warn)?;
+    let per_vertex = |name: &str, ty: ParamType, warn: &mut Vec<Diagnostic>| -> Result<Option<Vec<[f32; 3]>>, Diagnostic> {
+        let Some(a) = p.array(name, ty)? else { return Ok(None) };
+        if a.values.len() / 3 != n_p {
+            let msg = format!("\"{name}\" has {} entries but there are {n_p} vertices; ignored", a.values.len() / 3);
+            warn.push(Diagnostic::warning(a.span, msg));
+            return Ok(None);
+        }
+        Ok(Some(triples(a.floats())))
+    };
+    mesh.n = per_vertex("N", ParamType::Normal3, warn)?;
+    mesh.s = per_vertex("S", ParamType::Vector3, warn)?;
+    mesh.uv = uvs(p, n_p, warn)?;
+    if let Some(f) = p.array("faceIndices", ParamType::Integer)? {
+        if f.ints().len() == mesh.triangle_count() {
+            mesh.face_indices = Some(f.ints().to_vec());
+        } else {
+            let msg = format!("\"faceIndices\" has {} entries for {} triangles; ignored", f.ints().len(), mesh.triangle_count());
+            warn.push(Diagnostic::warning(f.span, msg));
+        }
+    }
+    p.mark_known(&["discarddegenerateUVs"]);
+    Ok(mesh)
+}
+
+/// `uv` as point2 (both versions), or v3's `float uv`, `point2 st`, `float st`.
+fn uvs(p: &ParamList, n_p: usize, warn: &mut Vec<Diagnostic>) -> Result<Option<Vec<[f32; 2]>>, Diagnostic> {
+    let Some(a) = ["uv", "st"].iter().find_map(|n| p.find(n, &[ParamType::Point2, ParamType::Float])) else {
+        return Ok(None);
+    };
+    let f = a.floats();
+    if f.len() % 2 != 0 {
+        return Err(Diagnostic::error(a.span, format!("\"{}\" needs an even number of values", a.name)));
+    }
+    let n = f.len() / 2;
+    if n < n_p {
+        warn.push(Diagnostic::warning(a.span, format!("\"{}\" has {n} entries for {n_p} vertices; ignored", a.name)));
+        return Ok(None);
+    }
+    if n > n_p {
+        warn.push(Diagnostic::warning(a.span, format!("\"{}\" has {n} entries for {n_p} vertices; extras ignored", a.name)));
+    }
+    Ok(Some(f.chunks_exact(2).take(n_p).map(|c| [c[0], c[1]]).collect()))
+}
+
+/// Drops a trailing partial triangle (warning) and rejects out-of-range indices.
+pub fn check_indices(mut idx: Vec<i32>, n_vertices: usize, span: Span, warn: &mut Vec<Diagnostic>) -> Result<Vec<u32>, Diagnostic> {
+    if idx.len() % 3 != 0 {
+        let msg = format!("{} vertex indices is not a multiple of 3; the last {} are ignored", idx.len(), idx.len() % 3);
+        warn.push(Diagnostic::warning(span, msg));
+        idx.truncate(idx.len() / 3 * 3);
+    }
+    if let Some(&bad) = idx.iter().find(|&&i| i < 0 || i as usize >= n_vertices) {
+        return Err(Diagnostic::error(span, format!("vertex index {bad} is out of range: the mesh has {n_vertices} vertices")));
+    }
+    Ok(idx.into_iter().map(|i| i as u32).collect())
+}
+
+/// Applies the shape's transform: points by `m`, tangents by its linear part, normals by
+/// the inverse transpose (as pbrt stores meshes, already transformed).
+pub fn transform(mesh: &mut TriangleMesh, m: &DMat4) {
+    if *m == DMat4::IDENTITY {
+        return;
+    }
+    let to = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+    let from = |a: &[f32; 3]| DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
+    for p in &mut mesh.p {
+        *p = to(m.transform_point3(from(p)));
+    }
+    let linear = DMat3::from_mat4(*m);
+    if let Some(s) = &mut mesh.s {
+        s.iter_mut().for_each(|v| *v = to(linear * from(v)));
+    }
+    let normal = linear.inverse().transpose();
+    if let Some(n) = &mut mesh.n {
+        n.iter_mut().for_each(|v| *v = to(normal * from(v)));
+    }
+}

@@ -1,0 +1,225 @@
+//! The scene description: what a pbrt file says, after the graphics state has been
+//! applied, defaults filled in, names resolved and the unused left out.
+//!
+//! [`load_scene`] runs the parser and the [`builder`]; the result is plain data that the
+//! renderer turns into render-ready structures. Only what the scene references is
+//! built: never-instanced objects, never-used named materials and textures are listed
+//! in [`SceneDescription::skipped`] and their files are never opened.
+
+pub mod builder;
+pub mod entities;
+pub mod mesh;
+pub mod obj;
+pub mod options;
+pub mod ply;
+pub mod shapes;
+
+use crate::parser::Syntax;
+use crate::parser::error::Located;
+use crate::parser::params::ParamList;
+use crate::shapes::{Quadric, TriangleMesh};
+use glam::{DMat4, DVec3};
+
+pub use builder::{LoadOptions, load_scene, load_scene_from_bytes};
+pub use options::{Camera, CameraKind, Film, Integrator};
+
+/// A shape's geometry: a quadric, or a triangle mesh stored in [`SceneDescription::meshes`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Geometry {
+    Quadric(Quadric),
+    /// `kind` is the scene's shape name: `trianglemesh`, `plymesh` or `objmesh`.
+    Mesh { mesh: u32, kind: &'static str, filename: Option<String> },
+}
+
+/// One created shape.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeDesc {
+    pub geometry: Geometry,
+    /// The CTM at the `Shape` statement: world-from-object for world shapes,
+    /// instance-from-object inside an `ObjectBegin` definition. Mesh vertices are stored
+    /// with it already applied, as pbrt does.
+    pub object_to_world: DMat4,
+    pub reverse_orientation: bool,
+    /// Index into [`SceneDescription::materials`].
+    pub material: u32,
+    /// Index into [`SceneDescription::area_lights`].
+    pub area_light: Option<u32>,
+}
+
+impl ShapeDesc {
+    pub fn kind(&self) -> &'static str {
+        match &self.geometry {
+            Geometry::Quadric(q) => q.name(),
+            Geometry::Mesh { kind, .. } => kind,
+        }
+    }
+
+    /// det of the upper 3×3 of object-to-world < 0.
+    pub fn swaps_handedness(&self) -> bool {
+        glam::DMat3::from_mat4(self.object_to_world).determinant() < 0.0
+    }
+}
+
+/// An `ObjectBegin` definition that is instanced at least once.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectDesc {
+    pub name: String,
+    pub shapes: Vec<ShapeDesc>,
+}
+
+/// An `ObjectInstance`: world-from-instance and the object it places.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstanceDesc {
+    pub object: u32,
+    pub world_from_instance: DMat4,
+}
+
+/// A `LightSource` of a supported type with its parameters.
+#[derive(Debug)]
+pub struct LightDesc {
+    pub ty: String,
+    pub params: ParamList,
+    /// The CTM at the statement.
+    pub world_from_light: DMat4,
+}
+
+/// An `AreaLightSource` that some shape uses.
+#[derive(Debug)]
+pub struct AreaLightDesc {
+    pub ty: String,
+    pub params: ParamList,
+}
+
+/// A material some shape uses, with its texture parameters resolved.
+#[derive(Debug)]
+pub struct MaterialDesc {
+    /// The type as written (`matte`, `diffuse`, `interface`, ...); unsupported types are
+    /// replaced by `diffuse` with default parameters.
+    pub ty: String,
+    /// The `MakeNamedMaterial` name, if any.
+    pub name: Option<String>,
+    pub params: ParamList,
+    /// Texture-valued parameters: parameter name → index into `textures`.
+    pub textures: Vec<(String, u32)>,
+}
+
+/// A texture some used material (or texture) refers to.
+#[derive(Debug)]
+pub struct TextureDesc {
+    pub name: String,
+    /// `float` or `spectrum` (v3 `color` is reported as `spectrum`).
+    pub ty: String,
+    pub class: String,
+    pub params: ParamList,
+    pub world_from_texture: DMat4,
+    pub textures: Vec<(String, u32)>,
+}
+
+/// Something the scene asked for that is not built, and why.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Skipped {
+    pub file: String,
+    pub line: u32,
+    pub column: u32,
+    pub what: String,
+    pub why: String,
+}
+
+/// The loaded scene.
+#[derive(Debug)]
+pub struct SceneDescription {
+    pub syntax: Syntax,
+    /// Where the syntax was decided from (`file:line:col: what`), if not defaulted.
+    pub syntax_evidence: Option<String>,
+    pub camera: Camera,
+    pub film: Film,
+    pub integrator: Integrator,
+    /// World shapes (not inside object definitions), in creation order.
+    pub shapes: Vec<ShapeDesc>,
+    pub objects: Vec<ObjectDesc>,
+    pub instances: Vec<InstanceDesc>,
+    pub meshes: Vec<TriangleMesh>,
+    pub lights: Vec<LightDesc>,
+    pub area_lights: Vec<AreaLightDesc>,
+    pub materials: Vec<MaterialDesc>,
+    pub textures: Vec<TextureDesc>,
+    /// `Option` statements (v4), name → raw value.
+    pub options: Vec<(String, String)>,
+    pub warnings: Vec<Located>,
+    pub skipped: Vec<Skipped>,
+}
+
+/// A shape placed in the world: instances expanded, with world-from-object.
+pub struct PlacedShape<'a> {
+    pub shape: &'a ShapeDesc,
+    pub object_to_world: DMat4,
+    pub instance: Option<u32>,
+}
+
+impl SceneDescription {
+    /// Every shape in creation order, world shapes first, then each instance's shapes.
+    pub fn placed_shapes(&self) -> impl Iterator<Item = PlacedShape<'_>> {
+        let world = self.shapes.iter().map(|s| PlacedShape { shape: s, object_to_world: s.object_to_world, instance: None });
+        let inst = self.instances.iter().enumerate().flat_map(move |(i, inst)| {
+            self.objects[inst.object as usize].shapes.iter().map(move |s| PlacedShape {
+                shape: s,
+                object_to_world: inst.world_from_instance * s.object_to_world,
+                instance: Some(i as u32),
+            })
+        });
+        world.chain(inst)
+    }
+
+    /// Bounds of a shape in its own stored space (meshes: the stored vertices).
+    pub fn local_bounds(&self, s: &ShapeDesc) -> Option<[DVec3; 2]> {
+        match &s.geometry {
+            Geometry::Quadric(q) => Some(transform_bounds(&s.object_to_world, q.object_bounds())),
+            Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].bounds(),
+        }
+    }
+
+    /// World bounds of one placed shape.
+    pub fn world_bounds_of(&self, p: &PlacedShape) -> Option<[DVec3; 2]> {
+        let local = self.local_bounds(p.shape)?;
+        match p.instance {
+            None => Some(local),
+            Some(i) => Some(transform_bounds(&self.instances[i as usize].world_from_instance, local)),
+        }
+    }
+
+    /// Union of all shapes' world bounds (`None` for an empty scene).
+    pub fn world_bounds(&self) -> Option<[DVec3; 2]> {
+        let object_bounds: Vec<Option<[DVec3; 2]>> = self
+            .objects
+            .iter()
+            .map(|o| o.shapes.iter().filter_map(|s| self.local_bounds(s)).reduce(union))
+            .collect();
+        let world = self.shapes.iter().filter_map(|s| self.local_bounds(s));
+        let inst = self.instances.iter().filter_map(|i| {
+            object_bounds[i.object as usize].map(|b| transform_bounds(&i.world_from_instance, b))
+        });
+        world.chain(inst).reduce(union)
+    }
+
+    /// Shapes whose geometry is a triangle mesh count their triangles.
+    pub fn triangle_count(&self, s: &ShapeDesc) -> usize {
+        match &s.geometry {
+            Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].triangle_count(),
+            Geometry::Quadric(_) => 0,
+        }
+    }
+}
+
+fn union(a: [DVec3; 2], b: [DVec3; 2]) -> [DVec3; 2] {
+    [a[0].min(b[0]), a[1].max(b[1])]
+}
+
+/// Bounds of the 8 transformed corners.
+pub fn transform_bounds(m: &DMat4, b: [DVec3; 2]) -> [DVec3; 2] {
+    (0..8)
+        .map(|i| {
+            let c = DVec3::new(b[i & 1].x, b[(i >> 1) & 1].y, b[(i >> 2) & 1].z);
+            m.transform_point3(c)
+        })
+        .fold([DVec3::INFINITY, DVec3::NEG_INFINITY], |[lo, hi], p| [lo.min(p), hi.max(p)])
+}

@@ -1,0 +1,288 @@
+//! Camera, film and integrator settings, resolved after the whole file is read (the
+//! syntax version decides some defaults).
+//!
+//! ```text
+//! Camera "perspective" "float fov" 45 "float lensradius" 0 "float focaldistance" 1e6
+//!        "float frameaspectratio" 1.5 "float screenwindow" [-1 1 -1 1]
+//! Film "image" "integer xresolution" 1280 "integer yresolution" 720
+//!      "string filename" "pbrt.exr" "float cropwindow" [0 1 0 1] "float scale" 1    # v3
+//! Film "rgb" ... "integer pixelbounds" [0 1280 0 720] "float iso" 100              # v4
+//! Integrator "sppm" "integer numiterations" 64 "integer maxdepth" 5                # v3
+//!            "integer photonsperiteration" -1 "float radius" 1
+//! Sampler "halton" "integer pixelsamples" 16     # v4: SPPM iterations = pixelsamples
+//! ```
+
+use crate::parser::Syntax;
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamType;
+use crate::parser::stmt::Entity;
+use glam::DMat4;
+
+/// Perspective or orthographic.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraKind {
+    Perspective,
+    Orthographic,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub kind: CameraKind,
+    /// Full angle (degrees) spanned by the shorter image axis.
+    pub fov: f32,
+    pub lens_radius: f32,
+    pub focal_distance: f32,
+    pub frame_aspect_ratio: f32,
+    /// [x0, x1, y0, y1] in screen space.
+    pub screen_window: [f32; 4],
+    pub shutter_open: f32,
+    pub shutter_close: f32,
+    /// The CTM at the `Camera` statement.
+    pub camera_from_world: DMat4,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Film {
+    /// `image` (v3) or `rgb` (v4); `gbuffer` and `spectral` are written as `rgb`.
+    pub ty: String,
+    pub x_resolution: u32,
+    pub y_resolution: u32,
+    pub filename: String,
+    /// [x0, x1, y0, y1] in NDC, clamped to [0, 1] and sorted.
+    pub crop_window: [f32; 4],
+    /// [x0, x1, y0, y1] pixels, half open.
+    pub pixel_bounds: [u32; 4],
+    /// Output multiplier: v3 `scale`, v4 `iso`/100 × exposure time.
+    pub scale: f32,
+}
+
+impl Film {
+    pub fn pixel_count(&self) -> u64 {
+        let [x0, x1, y0, y1] = self.pixel_bounds;
+        (x1 - x0) as u64 * (y1 - y0) as u64
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Integrator {
+    /// The integrator the file asked for (we always render with SPPM).
+    pub requested: String,
+    pub iterations: u32,
+    pub max_depth: u32,
+    pub photons_per_iteration: u64,
+    pub radius: f32,
+    pub seed: u64,
+}
+
+/// The option-block statements as read (last one of each kind wins).
+#[derive(Default)]
+pub struct RenderOptions {
+    pub camera: Option<(Entity, DMat4)>,
+    pub film: Option<Entity>,
+    pub sampler: Option<Entity>,
+    pub integrator: Option<Entity>,
+    pub filter: Option<Entity>,
+    pub accelerator: Option<Entity>,
+    /// `Option "seed"`, when given.
+    pub seed_option: Option<u64>,
+}
+
+/// Results and warnings of resolving the options.
+pub struct Resolved {
+    pub camera: Camera,
+    pub film: Film,
+    pub integrator: Integrator,
+}
+
+type Res<T> = Result<T, Diagnostic>;
+
+impl RenderOptions {
+    pub fn resolve(&self, syntax: Syntax, warn: &mut Vec<Diagnostic>) -> Res<Resolved> {
+        let (film, exposure_scale) = self.film(syntax, warn)?;
+        let camera = self.camera(&film, warn)?;
+        let mut film = film;
+        if syntax == Syntax::V4 {
+            film.scale *= exposure_scale * (camera.shutter_close - camera.shutter_open);
+        }
+        let integrator = self.integrator(syntax, &film, warn)?;
+        for e in [&self.sampler, &self.filter, &self.accelerator].into_iter().flatten() {
+            e.params.mark_all_used(); // irrelevant to SPPM except pixelsamples (read below)
+        }
+        Ok(Resolved { camera, film, integrator })
+    }
+
+    fn film(&self, syntax: Syntax, warn: &mut Vec<Diagnostic>) -> Res<(Film, f32)> {
+        let empty = Entity::default_named(if syntax == Syntax::V3 { "image" } else { "rgb" });
+        let e = self.film.as_ref().unwrap_or(&empty);
+        let p = &e.params;
+        let res = |name: &str, default: i32| -> Res<u32> {
+            match p.int(name)? {
+                None => Ok(default as u32),
+                Some(v) if v >= 1 => Ok(v as u32),
+                Some(v) => Err(err_at(p.find(name, &[ParamType::Integer]), e, format!("\"{name}\" must be at least 1, not {v}"))),
+            }
+        };
+        let (xres, yres) = (res("xresolution", 1280)?, res("yresolution", 720)?);
+        let filename = p.string("filename")?.filter(|f| !f.is_empty()).unwrap_or_else(|| "pbrt.exr".into());
+        let crop = p.fixed::<4>("cropwindow", &[ParamType::Float])?;
+        let crop_window = crop.map_or([0.0, 1.0, 0.0, 1.0], |c| {
+            let [a, b, c0, d] = c.map(|v| v.clamp(0.0, 1.0));
+            [a.min(b), a.max(b), c0.min(d), c0.max(d)]
+        });
+        let bounds = match p.find("pixelbounds", &[ParamType::Integer]) {
+            Some(pb) => match pb.ints() {
+                &[x0, x1, y0, y1] => {
+                    let c = |v: i32, hi: u32| v.clamp(0, hi as i32) as u32;
+                    [c(x0.min(x1), xres), c(x0.max(x1), xres), c(y0.min(y1), yres), c(y0.max(y1), yres)]
+                }
+                _ => return Err(Diagnostic::error(pb.span, "\"pixelbounds\" needs 4 integers")),
+            },
+            None => {
+                let c = |f: f32, n: u32| (n as f32 * f).ceil() as u32;
+                [c(crop_window[0], xres), c(crop_window[1], xres), c(crop_window[2], yres), c(crop_window[3], yres)]
+            }
+        };
+        if bounds[0] >= bounds[1] || bounds[2] >= bounds[3] {
+            return Err(Diagnostic::error(e.name_span, format!("the crop window selects no pixels ({bounds:?})")));
+        }
+        let scale = p.float("scale")?.unwrap_or(1.0);
+        let iso = p.float("iso")?.unwrap_or(100.0);
+        p.mark_known(&[
+            "diagonal", "maxsampleluminance", "maxcomponentvalue", "savefp16", "whitebalance", "sensor",
+            "coordinatesystem", "buckets", "lambdamin", "lambdamax",
+        ]);
+        match e.name.as_str() {
+            "image" | "rgb" => {}
+            "gbuffer" | "spectral" => warn.push(Diagnostic::warning(
+                e.name_span,
+                format!("Film \"{}\" is written as an RGB film (R, G, B channels only)", e.name),
+            )),
+            other => return Err(Diagnostic::error(e.name_span, format!("unknown film type \"{other}\""))),
+        }
+        let film = Film {
+            ty: e.name.clone(),
+            x_resolution: xres,
+            y_resolution: yres,
+            filename,
+            crop_window,
+            pixel_bounds: bounds,
+            scale,
+        };
+        Ok((film, iso / 100.0))
+    }
+
+    fn camera(&self, film: &Film, warn: &mut Vec<Diagnostic>) -> Res<Camera> {
+        let default = (Entity::default_named("perspective"), DMat4::IDENTITY);
+        let (e, camera_from_world) = self.camera.as_ref().unwrap_or(&default);
+        let p = &e.params;
+        let kind = match e.name.as_str() {
+            "perspective" => CameraKind::Perspective,
+            "orthographic" => CameraKind::Orthographic,
+            other => {
+                warn.push(Diagnostic::warning(
+                    e.name_span,
+                    format!("camera \"{other}\" is not supported; using a perspective camera"),
+                ));
+                p.mark_all_used();
+                CameraKind::Perspective
+            }
+        };
+        let frame = match p.float("frameaspectratio")? {
+            Some(f) if f > 0.0 => f,
+            _ => film.x_resolution as f32 / film.y_resolution as f32,
+        };
+        let default_window =
+            if frame > 1.0 { [-frame, frame, -1.0, 1.0] } else { [-1.0, 1.0, -1.0 / frame, 1.0 / frame] };
+        let screen_window = p.fixed::<4>("screenwindow", &[ParamType::Float])?.unwrap_or(default_window);
+        let mut fov = p.float("fov")?.unwrap_or(90.0);
+        if let Some(h) = p.float("halffov")?.filter(|&h| h > 0.0) {
+            fov = 2.0 * h;
+        }
+        let (mut open, mut close) = (p.float("shutteropen")?.unwrap_or(0.0), p.float("shutterclose")?.unwrap_or(1.0));
+        if close < open {
+            warn.push(Diagnostic::warning(e.name_span, "shutterclose < shutteropen; swapped"));
+            std::mem::swap(&mut open, &mut close);
+        }
+        if kind == CameraKind::Perspective && !(fov > 0.0 && fov < 180.0) {
+            return Err(Diagnostic::error(e.name_span, format!("\"fov\" must be between 0 and 180 degrees, not {fov}")));
+        }
+        Ok(Camera {
+            kind,
+            fov,
+            lens_radius: p.float("lensradius")?.unwrap_or(0.0),
+            focal_distance: p.float("focaldistance")?.unwrap_or(1e6),
+            frame_aspect_ratio: frame,
+            screen_window,
+            shutter_open: open,
+            shutter_close: close,
+            camera_from_world: *camera_from_world,
+        })
+    }
+
+    fn integrator(&self, syntax: Syntax, film: &Film, warn: &mut Vec<Diagnostic>) -> Res<Integrator> {
+        let default = Entity::default_named("sppm");
+        let e = self.integrator.as_ref().unwrap_or(&default);
+        let p = &e.params;
+        if e.name != "sppm" {
+            warn.push(Diagnostic::warning(
+                e.name_span,
+                format!("integrator \"{}\" is not supported; rendering with SPPM", e.name),
+            ));
+        }
+        let positive = |name: &str, v: Option<i32>| -> Res<Option<u32>> {
+            match v {
+                Some(v) if v < 1 => Err(err_at(p.find(name, &[ParamType::Integer]), e, format!("\"{name}\" must be at least 1, not {v}"))),
+                v => Ok(v.map(|v| v as u32)),
+            }
+        };
+        let explicit = match p.int("iterations")? {
+            Some(v) => positive("iterations", Some(v))?,
+            None => positive("numiterations", p.int("numiterations")?)?,
+        };
+        let iterations = match (explicit, syntax) {
+            (Some(n), _) => n,
+            (None, Syntax::V3) => 64,
+            (None, Syntax::V4) => self.pixel_samples()?,
+        };
+        let max_depth = match p.int("maxdepth")? {
+            Some(d) if d < 0 => return Err(Diagnostic::error(e.name_span, format!("\"maxdepth\" must be >= 0, not {d}"))),
+            d => d.unwrap_or(5) as u32,
+        };
+        let photons = match p.int("photonsperiteration")? {
+            Some(n) if n > 0 => n as u64,
+            _ => film.pixel_count(),
+        };
+        let radius = p.float("radius")?.unwrap_or(1.0);
+        if !(radius > 0.0 && radius.is_finite()) {
+            return Err(Diagnostic::error(e.name_span, format!("\"radius\" must be positive, not {radius}")));
+        }
+        let seed = match p.int("seed")? {
+            Some(s) => s as u64,
+            None => self.seed_option.unwrap_or(0),
+        };
+        p.mark_known(&["imagewritefrequency"]);
+        if e.name != "sppm" {
+            p.mark_all_used();
+        }
+        Ok(Integrator { requested: e.name.clone(), iterations, max_depth, photons_per_iteration: photons, radius, seed })
+    }
+
+    /// The sampler's samples per pixel (pbrt-v4's SPPM iteration count), default 16.
+    fn pixel_samples(&self) -> Res<u32> {
+        let Some(s) = &self.sampler else { return Ok(16) };
+        let p = &s.params;
+        let n = match (p.int("pixelsamples")?, p.int("xsamples")?, p.int("ysamples")?) {
+            (Some(n), _, _) => n,
+            (None, Some(x), Some(y)) if s.name == "stratified" => x.saturating_mul(y),
+            _ => 16,
+        };
+        if n < 1 {
+            return Err(Diagnostic::error(s.name_span, format!("\"pixelsamples\" must be at least 1, not {n}")));
+        }
+        Ok(n as u32)
+    }
+}
+
+fn err_at(p: Option<&crate::parser::params::Param>, e: &Entity, msg: String) -> Diagnostic {
+    Diagnostic::error(p.map_or(e.name_span, |p| p.value_span), msg)
+}

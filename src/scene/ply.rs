@@ -1,0 +1,304 @@
+//! `Shape "plymesh" "string filename" "mesh.ply"` (also `.ply.gz`).
+//!
+//! Reads ASCII and both binary byte orders. Vertex properties `x y z` (required),
+//! `nx ny nz`, and texture coordinates from the first pair present of `u v`, `s t`,
+//! `texture_u texture_v`, `texture_s texture_t`; faces from `vertex_indices` (or
+//! `vertex_index`) lists of 3 or 4 entries, quads split as pbrt-v3 does: (a,b,c), (d,a,c);
+//! optional `face_indices`. The header (and ASCII payloads) go through ply-rs; binary
+//! payloads are decoded straight from the bytes.
+
+use crate::shapes::TriangleMesh;
+use ply_rs::parser::Parser;
+use ply_rs::ply::{Encoding, Header, Property, PropertyAccess, PropertyType, ScalarType};
+use std::io::{BufRead, Read};
+
+/// Per-vertex slots: x y z nx ny nz, then the four texture coordinate pairs.
+const VERTEX_NAMES: [&str; 14] =
+    ["x", "y", "z", "nx", "ny", "nz", "u", "v", "s", "t", "texture_u", "texture_v", "texture_s", "texture_t"];
+
+fn vertex_slot(name: &str) -> Option<usize> {
+    VERTEX_NAMES.iter().position(|n| *n == name)
+}
+
+/// What the reader collects before building the mesh.
+#[derive(Default)]
+struct Collected {
+    vertices: Vec<[f32; 14]>,
+    /// Triangulated vertex indices (checked against the vertex count at the end).
+    tris: Vec<i64>,
+    /// `face_indices` per triangle, when the file has them.
+    tri_ids: Vec<i32>,
+    faces: usize,
+    skipped_faces: usize,
+}
+
+/// Loads a PLY file. Errors are plain messages; the caller adds the location.
+pub fn load(path: &std::path::Path) -> Result<(TriangleMesh, Vec<String>), String> {
+    let raw = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
+    let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
+        let mut out = Vec::new();
+        flate2::read::MultiGzDecoder::new(&raw[..]).read_to_end(&mut out).map_err(|e| format!("cannot decompress: {e}"))?;
+        out
+    } else {
+        raw
+    };
+    let mut reader = &bytes[..];
+    let header = Parser::<AsciiVertex>::new().read_header(&mut reader).map_err(|e| format!("bad PLY header: {e}"))?;
+    let mut got = Collected::default();
+    match header.encoding {
+        Encoding::Ascii => read_ascii(&mut reader, &header, &mut got)?,
+        Encoding::BinaryLittleEndian => read_binary::<false>(reader, &header, &mut got)?,
+        Encoding::BinaryBigEndian => read_binary::<true>(reader, &header, &mut got)?,
+    }
+    build(&header, got)
+}
+
+fn build(header: &Header, got: Collected) -> Result<(TriangleMesh, Vec<String>), String> {
+    let names: Vec<&str> = header.elements.get("vertex").map_or(vec![], |e| e.properties.keys().map(String::as_str).collect());
+    let has = |n: &str| names.contains(&n);
+    if !(has("x") && has("y") && has("z")) {
+        return Err("PLY file has no vertex element with x, y and z".into());
+    }
+    let mut warnings = Vec::new();
+    let mut mesh = TriangleMesh { p: got.vertices.iter().map(|v| [v[0], v[1], v[2]]).collect(), ..Default::default() };
+    if has("nx") && has("ny") && has("nz") {
+        mesh.n = Some(got.vertices.iter().map(|v| [v[3], v[4], v[5]]).collect());
+    }
+    let uv_pair = [(6, "u", "v"), (8, "s", "t"), (10, "texture_u", "texture_v"), (12, "texture_s", "texture_t")]
+        .into_iter()
+        .find(|(_, a, b)| has(a) && has(b));
+    if let Some((slot, _, _)) = uv_pair {
+        mesh.uv = Some(got.vertices.iter().map(|v| [v[slot], v[slot + 1]]).collect());
+    }
+    let n_v = mesh.p.len() as i64;
+    if let Some(&bad) = got.tris.iter().find(|&&i| i < 0 || i >= n_v) {
+        return Err(format!("a face has vertex index {bad}, but there are {n_v} vertices"));
+    }
+    mesh.indices = got.tris.iter().map(|&i| i as u32).collect();
+    if got.tri_ids.len() == mesh.triangle_count() && got.faces > 0 {
+        mesh.face_indices = Some(got.tri_ids);
+    }
+    if got.skipped_faces > 0 {
+        warnings.push(format!("{} faces with other than 3 or 4 vertices were skipped", got.skipped_faces));
+    }
+    Ok((mesh, warnings))
+}
+
+// ---- ASCII, through ply-rs -------------------------------------------------------
+
+#[derive(Default)]
+struct AsciiVertex([f32; 14]);
+
+impl PropertyAccess for AsciiVertex {
+    fn new() -> Self {
+        AsciiVertex::default()
+    }
+    fn set_property(&mut self, name: String, p: Property) {
+        if let (Some(slot), Some(v)) = (vertex_slot(&name), scalar(&p)) {
+            self.0[slot] = v as f32;
+        }
+    }
+}
+
+#[derive(Default)]
+struct AsciiFace {
+    indices: Vec<i64>,
+    id: Option<i64>,
+}
+
+impl PropertyAccess for AsciiFace {
+    fn new() -> Self {
+        AsciiFace::default()
+    }
+    fn set_property(&mut self, name: String, p: Property) {
+        match name.as_str() {
+            "vertex_indices" | "vertex_index" => self.indices = list(&p),
+            "face_indices" => self.id = scalar(&p).map(|v| v as i64),
+            _ => {}
+        }
+    }
+}
+
+struct Ignore;
+
+impl PropertyAccess for Ignore {
+    fn new() -> Self {
+        Ignore
+    }
+}
+
+fn scalar(p: &Property) -> Option<f64> {
+    Some(match *p {
+        Property::Char(v) => v as f64,
+        Property::UChar(v) => v as f64,
+        Property::Short(v) => v as f64,
+        Property::UShort(v) => v as f64,
+        Property::Int(v) => v as f64,
+        Property::UInt(v) => v as f64,
+        Property::Float(v) => v as f64,
+        Property::Double(v) => v,
+        _ => return None,
+    })
+}
+
+fn list(p: &Property) -> Vec<i64> {
+    match p {
+        Property::ListChar(v) => v.iter().map(|&x| x as i64).collect(),
+        Property::ListUChar(v) => v.iter().map(|&x| x as i64).collect(),
+        Property::ListShort(v) => v.iter().map(|&x| x as i64).collect(),
+        Property::ListUShort(v) => v.iter().map(|&x| x as i64).collect(),
+        Property::ListInt(v) => v.iter().map(|&x| x as i64).collect(),
+        Property::ListUInt(v) => v.iter().map(|&x| x as i64).collect(),
+        _ => Vec::new(),
+    }
+}
+
+fn read_ascii(reader: &mut impl BufRead, header: &Header, got: &mut Collected) -> Result<(), String> {
+    let err = |e: std::io::Error| format!("bad PLY data: {e}");
+    for (name, def) in &header.elements {
+        match name.as_str() {
+            "vertex" => {
+                let v = Parser::<AsciiVertex>::new().read_payload_for_element(reader, def, header).map_err(err)?;
+                got.vertices = v.into_iter().map(|v| v.0).collect();
+            }
+            "face" => {
+                let faces = Parser::<AsciiFace>::new().read_payload_for_element(reader, def, header).map_err(err)?;
+                for f in faces {
+                    push_face(got, &f.indices, f.id);
+                }
+            }
+            _ => {
+                Parser::<Ignore>::new().read_payload_for_element(reader, def, header).map_err(err)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Triangles (a,b,c), and for quads also (d,a,c) as pbrt-v3 splits them.
+fn push_face(got: &mut Collected, f: &[i64], id: Option<i64>) {
+    let tris: &[[usize; 3]] = match f.len() {
+        3 => &[[0, 1, 2]],
+        4 => &[[0, 1, 2], [3, 0, 2]],
+        _ => {
+            got.skipped_faces += 1;
+            return;
+        }
+    };
+    got.faces += 1;
+    for t in tris {
+        got.tris.extend(t.iter().map(|&k| f[k]));
+        if let Some(id) = id {
+            got.tri_ids.push(id as i32);
+        }
+    }
+}
+
+// ---- binary, decoded from the byte slice ------------------------------------------
+
+struct Bytes<'a, const BIG: bool> {
+    data: &'a [u8],
+    pos: usize,
+}
+
+impl<const BIG: bool> Bytes<'_, BIG> {
+    fn take<const N: usize>(&mut self) -> Result<[u8; N], String> {
+        let s = self.data.get(self.pos..self.pos + N).ok_or("PLY file ends early")?;
+        self.pos += N;
+        let mut a: [u8; N] = s.try_into().map_err(|_| "PLY file ends early")?;
+        if BIG {
+            a.reverse();
+        }
+        Ok(a)
+    }
+
+    fn scalar(&mut self, t: &ScalarType) -> Result<f64, String> {
+        Ok(match t {
+            ScalarType::Char => i8::from_le_bytes(self.take()?) as f64,
+            ScalarType::UChar => u8::from_le_bytes(self.take()?) as f64,
+            ScalarType::Short => i16::from_le_bytes(self.take()?) as f64,
+            ScalarType::UShort => u16::from_le_bytes(self.take()?) as f64,
+            ScalarType::Int => i32::from_le_bytes(self.take()?) as f64,
+            ScalarType::UInt => u32::from_le_bytes(self.take()?) as f64,
+            ScalarType::Float => f32::from_le_bytes(self.take()?) as f64,
+            ScalarType::Double => f64::from_le_bytes(self.take()?),
+        })
+    }
+}
+
+fn scalar_size(t: &ScalarType) -> usize {
+    match t {
+        ScalarType::Char | ScalarType::UChar => 1,
+        ScalarType::Short | ScalarType::UShort => 2,
+        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+        ScalarType::Double => 8,
+    }
+}
+
+fn read_binary<const BIG: bool>(data: &[u8], header: &Header, got: &mut Collected) -> Result<(), String> {
+    let mut b = Bytes::<BIG> { data, pos: 0 };
+    for (name, def) in &header.elements {
+        let props: Vec<(&String, &PropertyType)> = def.properties.iter().map(|(k, p)| (k, &p.data_type)).collect();
+        // Never trust a header count for allocation beyond what the file can hold.
+        let room = (data.len() - b.pos) / props.len().max(1);
+        match name.as_str() {
+            "vertex" => {
+                let slots: Vec<Option<usize>> = props.iter().map(|(k, _)| vertex_slot(k)).collect();
+                got.vertices.reserve(def.count.min(room));
+                for _ in 0..def.count {
+                    let mut v = [0f32; 14];
+                    for ((_, ty), slot) in props.iter().zip(&slots) {
+                        let x = read_value(&mut b, ty, &mut Vec::new())?;
+                        if let Some(s) = slot {
+                            v[*s] = x as f32;
+                        }
+                    }
+                    got.vertices.push(v);
+                }
+            }
+            _ => {
+                let is_face = name == "face";
+                got.tris.reserve(if is_face { 3 * def.count.min(room) } else { 0 });
+                let (mut indices, mut scratch) = (Vec::new(), Vec::new());
+                for _ in 0..def.count {
+                    let mut id = None;
+                    indices.clear();
+                    for (k, ty) in &props {
+                        scratch.clear();
+                        let x = read_value(&mut b, ty, &mut scratch)?;
+                        match k.as_str() {
+                            "vertex_indices" | "vertex_index" => std::mem::swap(&mut indices, &mut scratch),
+                            "face_indices" => id = Some(x as i64),
+                            _ => {}
+                        }
+                    }
+                    if is_face {
+                        push_face(got, &indices, id);
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Reads one property; lists go to `list` (as integers) and return their length.
+fn read_value<const BIG: bool>(b: &mut Bytes<'_, BIG>, ty: &PropertyType, list: &mut Vec<i64>) -> Result<f64, String> {
+    match ty {
+        PropertyType::Scalar(t) => b.scalar(t),
+        PropertyType::List(count_ty, item_ty) => {
+            let n = b.scalar(count_ty)?;
+            if !(0.0..=1e9).contains(&n) {
+                return Err(format!("bad PLY list length {n}"));
+            }
+            let n = n as usize;
+            if b.pos + n * scalar_size(item_ty) > b.data.len() {
+                return Err("PLY file ends early".into());
+            }
+            for _ in 0..n {
+                list.push(b.scalar(item_ty)? as i64);
+            }
+            Ok(n as f64)
+        }
+    }
+}

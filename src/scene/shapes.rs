@@ -1,0 +1,140 @@
+//! `Shape` statements to geometry: quadric parameters with defaults, and the three mesh
+//! sources. Unsupported shape types return `None` (the caller skips them with a warning).
+//!
+//! ```text
+//! Shape "sphere" "float radius" 2 "float zmax" 1        # zmin defaults to -radius
+//! Shape "plymesh" "string filename" "geometry/mesh.ply"
+//! Shape "objmesh" "string filename" "model.obj"          # extension: OBJ through tobj
+//! ```
+
+use super::{mesh, obj, ply};
+use crate::parser::error::Diagnostic;
+use crate::parser::params::{FloatValue, ParamList};
+use crate::parser::source::Span;
+use crate::shapes::{Cone, Cylinder, Disk, Hyperboloid, Paraboloid, Quadric, Sphere, TriangleMesh};
+use glam::Vec3;
+use std::path::PathBuf;
+
+/// What a `Shape` statement produced.
+pub enum Built {
+    Quadric(Quadric),
+    Mesh { mesh: TriangleMesh, kind: &'static str, filename: Option<String> },
+}
+
+type Res<T> = Result<T, Diagnostic>;
+
+/// Builds a shape's geometry in object space; `resolve` maps scene-relative file names.
+pub fn build(
+    ty: &str,
+    p: &ParamList,
+    span: Span,
+    resolve: &dyn Fn(&str) -> PathBuf,
+    warn: &mut Vec<Diagnostic>,
+) -> Res<Option<Built>> {
+    check_alpha(p, span, warn)?;
+    let q = |q| Ok(Some(Built::Quadric(q)));
+    match ty {
+        "sphere" => {
+            let r = positive(p, "radius", 1.0, span)?;
+            q(Quadric::Sphere(Sphere::new(r, f(p, "zmin", -r)?, f(p, "zmax", r)?, f(p, "phimax", 360.0)?)))
+        }
+        "cylinder" => {
+            let r = positive(p, "radius", 1.0, span)?;
+            q(Quadric::Cylinder(Cylinder::new(r, f(p, "zmin", -1.0)?, f(p, "zmax", 1.0)?, f(p, "phimax", 360.0)?)))
+        }
+        "disk" => {
+            let r = positive(p, "radius", 1.0, span)?;
+            let ri = f(p, "innerradius", 0.0)?;
+            if !(0.0..=r).contains(&ri) {
+                return Err(Diagnostic::error(span, format!("disk: innerradius {ri} must lie in [0, radius {r}]")));
+            }
+            q(Quadric::Disk(Disk::new(f(p, "height", 0.0)?, r, ri, f(p, "phimax", 360.0)?)))
+        }
+        "cone" => {
+            let r = positive(p, "radius", 1.0, span)?;
+            let h = f(p, "height", 1.0)?;
+            if h == 0.0 {
+                return Err(Diagnostic::error(span, "cone: height must be nonzero"));
+            }
+            q(Quadric::Cone(Cone::new(h, r, f(p, "phimax", 360.0)?)))
+        }
+        "paraboloid" => {
+            let r = positive(p, "radius", 1.0, span)?;
+            let (z0, z1) = (f(p, "zmin", 0.0)?, f(p, "zmax", 1.0)?);
+            if z0.max(z1) == 0.0 {
+                return Err(Diagnostic::error(span, "paraboloid: zmax must be nonzero"));
+            }
+            q(Quadric::Paraboloid(Paraboloid::new(r, z0, z1, f(p, "phimax", 360.0)?)))
+        }
+        "hyperboloid" => {
+            let p1 = Vec3::from(p.point3("p1")?.unwrap_or([0.0; 3]));
+            let p2 = Vec3::from(p.point3("p2")?.unwrap_or([1.0; 3]));
+            if !(p1.is_finite() && p2.is_finite()) {
+                return Err(Diagnostic::error(span, "hyperboloid: p1 and p2 must be finite"));
+            }
+            let h = Hyperboloid::new(p1, p2, f(p, "phimax", 360.0)?).map_err(|e| Diagnostic::error(span, e))?;
+            q(Quadric::Hyperboloid(h))
+        }
+        "trianglemesh" => {
+            let m = mesh::from_params(p, span, warn)?;
+            Ok(Some(Built::Mesh { mesh: m, kind: "trianglemesh", filename: None }))
+        }
+        "plymesh" | "objmesh" => file_mesh(ty, p, span, resolve, warn).map(Some),
+        _ => Ok(None),
+    }
+}
+
+fn file_mesh(ty: &str, p: &ParamList, span: Span, resolve: &dyn Fn(&str) -> PathBuf, warn: &mut Vec<Diagnostic>) -> Res<Built> {
+    let name = p.string("filename")?.ok_or_else(|| Diagnostic::error(span, format!("{ty} needs \"string filename\"")))?;
+    let at = p.named("filename").map_or(span, |f| f.value_span);
+    let path = resolve(&name);
+    let mut m = if ty == "plymesh" {
+        let (m, notes) = ply::load(&path).map_err(|e| Diagnostic::error(at, format!("{name}: {e}")))?;
+        warn.extend(notes.into_iter().map(|n| Diagnostic::warning(at, format!("{name}: {n}"))));
+        m
+    } else {
+        obj::load(&path).map_err(|e| Diagnostic::error(at, e))?
+    };
+    if let Some(d) = p.named("displacement") {
+        d.mark_used();
+        warn.push(Diagnostic::warning(d.span, "displacement is not supported; the mesh is used undisplaced"));
+    }
+    p.mark_known(&["edgelength"]);
+    // A PLY with fewer than 3 points but no faces is simply empty.
+    m.indices.truncate(m.indices.len() / 3 * 3);
+    let kind = if ty == "plymesh" { "plymesh" } else { "objmesh" };
+    Ok(Built::Mesh { mesh: m, kind, filename: Some(name) })
+}
+
+fn f(p: &ParamList, name: &str, default: f32) -> Res<f32> {
+    let v = p.float(name)?.unwrap_or(default);
+    if !v.is_finite() {
+        let span = p.named(name).map(|p| p.value_span).unwrap_or_default();
+        return Err(Diagnostic::error(span, format!("\"{name}\" must be finite, not {v}")));
+    }
+    Ok(v)
+}
+
+fn positive(p: &ParamList, name: &str, default: f32, span: Span) -> Res<f32> {
+    let v = f(p, name, default)?;
+    if v <= 0.0 {
+        let at = p.named(name).map_or(span, |p| p.value_span);
+        return Err(Diagnostic::error(at, format!("\"{name}\" must be positive, not {v}")));
+    }
+    Ok(v)
+}
+
+/// Alpha masks are not supported: anything but a constant 1 is warned about.
+fn check_alpha(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Res<()> {
+    for name in ["alpha", "shadowalpha"] {
+        match p.float_or_texture(name)? {
+            Some(FloatValue::Const(a)) if a == 1.0 => {}
+            Some(_) => warn.push(Diagnostic::warning(
+                p.named(name).map_or(span, |x| x.span),
+                format!("\"{name}\" masks are not supported; the shape is opaque"),
+            )),
+            None => {}
+        }
+    }
+    Ok(())
+}

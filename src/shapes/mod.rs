@@ -1,0 +1,198 @@
+//! Shapes with pbrt's parameters: the six quadrics (each with its defaults, clamps and
+//! swaps applied in `new`) and triangle meshes.
+//!
+//! ```text
+//! Shape "sphere"      "float radius" 1 "float zmin" -1 "float zmax" 1 "float phimax" 360
+//! Shape "cylinder"    "float radius" 1 "float zmin" -1 "float zmax" 1 "float phimax" 360
+//! Shape "disk"        "float height" 0 "float radius" 1 "float innerradius" 0 "float phimax" 360
+//! Shape "cone"        "float height" 1 "float radius" 1 "float phimax" 360            # v3
+//! Shape "paraboloid"  "float radius" 1 "float zmin" 0 "float zmax" 1 "float phimax" 360 # v3
+//! Shape "hyperboloid" "point p1" [0 0 0] "point p2" [1 1 1] "float phimax" 360        # v3
+//! ```
+//! Every quadric is described by a parametric map p(u, v) on [0,1]² with z as its axis,
+//! φ = u·φmax. [`Quadric::point`], [`Quadric::dpdu`] and [`Quadric::dpdv`] evaluate it in
+//! `f64`; areas of transformed shapes integrate |dp/du × dp/dv| in world space.
+
+pub mod cone;
+pub mod cylinder;
+pub mod disk;
+pub mod hyperboloid;
+pub mod paraboloid;
+pub mod sphere;
+pub mod triangle;
+
+pub use cone::Cone;
+pub use cylinder::Cylinder;
+pub use disk::Disk;
+pub use hyperboloid::Hyperboloid;
+pub use paraboloid::Paraboloid;
+pub use sphere::Sphere;
+pub use triangle::TriangleMesh;
+
+use glam::{DMat3, DVec3};
+
+/// `phimax` in degrees, clamped to [0, 360], as radians (pbrt: `Radians(Clamp(phiMax, 0, 360))`).
+pub fn phi_max_radians(degrees: f32) -> f32 {
+    degrees.clamp(0.0, 360.0).to_radians()
+}
+
+/// The six quadric shapes.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Quadric {
+    Sphere(Sphere),
+    Cylinder(Cylinder),
+    Disk(Disk),
+    Cone(Cone),
+    Paraboloid(Paraboloid),
+    Hyperboloid(Hyperboloid),
+}
+
+macro_rules! dispatch {
+    ($self:ident, $s:ident => $e:expr) => {
+        match $self {
+            Quadric::Sphere($s) => $e,
+            Quadric::Cylinder($s) => $e,
+            Quadric::Disk($s) => $e,
+            Quadric::Cone($s) => $e,
+            Quadric::Paraboloid($s) => $e,
+            Quadric::Hyperboloid($s) => $e,
+        }
+    };
+}
+
+impl Quadric {
+    /// The shape's name in scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Quadric::Sphere(_) => "sphere",
+            Quadric::Cylinder(_) => "cylinder",
+            Quadric::Disk(_) => "disk",
+            Quadric::Cone(_) => "cone",
+            Quadric::Paraboloid(_) => "paraboloid",
+            Quadric::Hyperboloid(_) => "hyperboloid",
+        }
+    }
+
+    pub fn phi_max(&self) -> f64 {
+        dispatch!(self, s => s.phi_max as f64)
+    }
+
+    /// Object-space bounds, pbrt's (not tightened for φmax < 360°).
+    pub fn object_bounds(&self) -> [DVec3; 2] {
+        dispatch!(self, s => s.object_bounds())
+    }
+
+    /// Object-space surface area.
+    pub fn area(&self) -> f64 {
+        dispatch!(self, s => s.area())
+    }
+
+    pub fn point(&self, u: f64, v: f64) -> DVec3 {
+        dispatch!(self, s => s.point(u, v))
+    }
+
+    /// ∂p/∂u = φmax · (−y, x, 0) for every quadric.
+    pub fn dpdu(&self, u: f64, v: f64) -> DVec3 {
+        let p = self.point(u, v);
+        self.phi_max() * DVec3::new(-p.y, p.x, 0.0)
+    }
+
+    pub fn dpdv(&self, u: f64, v: f64) -> DVec3 {
+        dispatch!(self, s => s.dpdv(u, v))
+    }
+
+    /// Surface area after the linear map `m` (the upper 3×3 of object-to-world).
+    /// Similarity maps scale the closed form; any other map integrates
+    /// |m·dp/du × m·dp/dv| over (u, v) by Gauss–Legendre quadrature.
+    // DEVIATION(pbrt): pbrt reports object-space areas (and uses them for light
+    // sampling pdfs) even under non-uniform scales; we use the true world-space area.
+    pub fn world_area(&self, m: DMat3) -> f64 {
+        match similarity_scale(m) {
+            Some(s2) => s2 * self.area(),
+            None => integrate_unit_square(|u, v| (m * self.dpdu(u, v)).cross(m * self.dpdv(u, v)).length()),
+        }
+    }
+}
+
+/// s² when `m` = s·(rotation or reflection), else `None`.
+fn similarity_scale(m: DMat3) -> Option<f64> {
+    let g = m.transpose() * m;
+    let s2 = (g.x_axis.x + g.y_axis.y + g.z_axis.z) / 3.0;
+    let off = g - DMat3::from_diagonal(DVec3::splat(s2));
+    let err = off.x_axis.abs().max_element().max(off.y_axis.abs().max_element()).max(off.z_axis.abs().max_element());
+    (err <= 1e-12 * s2.abs()).then_some(s2)
+}
+
+/// 8-point Gauss–Legendre nodes and weights on [-1, 1].
+const GL8: [(f64, f64); 8] = [
+    (-0.960_289_856_497_536_2, 0.101_228_536_290_376_26),
+    (-0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
+    (-0.525_532_409_916_329_0, 0.313_706_645_877_887_3),
+    (-0.183_434_642_495_649_8, 0.362_683_783_378_362_0),
+    (0.183_434_642_495_649_8, 0.362_683_783_378_362_0),
+    (0.525_532_409_916_329_0, 0.313_706_645_877_887_3),
+    (0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
+    (0.960_289_856_497_536_2, 0.101_228_536_290_376_26),
+];
+
+/// ∫∫ f over [0,1]² by composite Gauss–Legendre (8 panels × 8 points per axis).
+pub fn integrate_unit_square(f: impl Fn(f64, f64) -> f64) -> f64 {
+    const PANELS: usize = 8;
+    let nodes: Vec<(f64, f64)> = (0..PANELS)
+        .flat_map(|p| {
+            GL8.iter().map(move |&(x, w)| {
+                let h = 1.0 / PANELS as f64;
+                (h * (p as f64 + 0.5 * (x + 1.0)), 0.5 * h * w)
+            })
+        })
+        .collect();
+    let mut sum = 0.0;
+    for &(v, wv) in &nodes {
+        for &(u, wu) in &nodes {
+            sum += wu * wv * f(u, v);
+        }
+    }
+    sum
+}
+
+/// ∫ f over [0,1] by the same rule (for areas of surfaces of revolution).
+pub fn integrate_unit_interval(f: impl Fn(f64) -> f64) -> f64 {
+    integrate_unit_square(|_, v| f(v))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quadrature_is_exact_for_polynomials() {
+        let i = integrate_unit_square(|u, v| u * u * v * v * v);
+        assert!((i - 1.0 / 12.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn closed_form_areas_match_quadrature_under_identity() {
+        let shapes = [
+            Quadric::Sphere(Sphere::new(2.0, -0.5, 1.5, 270.0)),
+            Quadric::Cylinder(Cylinder::new(1.5, -1.0, 2.0, 200.0)),
+            Quadric::Disk(Disk::new(0.5, 2.0, 0.5, 300.0)),
+            Quadric::Cone(Cone::new(2.0, 0.75, 270.0)),
+            Quadric::Paraboloid(Paraboloid::new(1.0, 0.25, 2.0, 360.0)),
+        ];
+        for s in shapes {
+            let numeric = integrate_unit_square(|u, v| s.dpdu(u, v).cross(s.dpdv(u, v)).length());
+            assert!((numeric - s.area()).abs() < 1e-12 * s.area(), "{}: {numeric} vs {}", s.name(), s.area());
+        }
+    }
+
+    #[test]
+    fn world_area_scales_by_square_and_integrates_otherwise() {
+        let s = Quadric::Sphere(Sphere::new(1.0, -1.0, 1.0, 360.0));
+        let a = s.world_area(DMat3::from_diagonal(DVec3::splat(-2.0)));
+        assert!((a - 16.0 * std::f64::consts::PI).abs() < 1e-6 * a, "{a}");
+        // A disk scaled by (2, 3, 5): area π·2·3.
+        let d = Quadric::Disk(Disk::new(0.0, 1.0, 0.0, 360.0));
+        let a = d.world_area(DMat3::from_diagonal(DVec3::new(2.0, 3.0, 5.0)));
+        assert!((a - 6.0 * std::f64::consts::PI).abs() < 1e-6 * a, "{a}");
+    }
+}

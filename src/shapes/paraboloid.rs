@@ -1,0 +1,50 @@
+//! `Shape "paraboloid" "float radius" 1 "float zmin" 0 "float zmax" 1 "float phimax" 360`
+//! (pbrt-v3 only)
+//!
+//! z = zmin + v·(zmax − zmin), ρ = r·sqrt(z / zmax): the radius is r at z = zmax.
+
+use super::phi_max_radians;
+use glam::DVec3;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Paraboloid {
+    pub radius: f32,
+    pub z_min: f32,
+    pub z_max: f32,
+    pub phi_max: f32,
+}
+
+impl Paraboloid {
+    pub fn new(radius: f32, z_min: f32, z_max: f32, phi_max_deg: f32) -> Paraboloid {
+        Paraboloid { radius, z_min: z_min.min(z_max), z_max: z_min.max(z_max), phi_max: phi_max_radians(phi_max_deg) }
+    }
+
+    pub fn object_bounds(&self) -> [DVec3; 2] {
+        let r = self.radius as f64;
+        [DVec3::new(-r, -r, self.z_min as f64), DVec3::new(r, r, self.z_max as f64)]
+    }
+
+    /// φmax·r⁴/(12 zmax²) · [(1 + 4 zmax²/r²)^{3/2} − (1 + 4 zmax·zmin/r²)^{3/2}].
+    pub fn area(&self) -> f64 {
+        let (r, z0, z1) = (self.radius as f64, self.z_min as f64, self.z_max as f64);
+        let (r2, k) = (r * r, 4.0 * z1 / (r * r));
+        self.phi_max as f64 * r2 * r2 / (12.0 * z1 * z1)
+            * ((k * z1 + 1.0).powf(1.5) - (k * z0 + 1.0).powf(1.5))
+    }
+
+    pub fn point(&self, u: f64, v: f64) -> DVec3 {
+        let (z0, z1) = (self.z_min as f64, self.z_max as f64);
+        let z = z0 + v * (z1 - z0);
+        let (phi, rho) = (u * self.phi_max as f64, self.radius as f64 * (z / z1).max(0.0).sqrt());
+        DVec3::new(rho * phi.cos(), rho * phi.sin(), z)
+    }
+
+    /// (zmax − zmin)·(x/(2z), y/(2z), 1), written as ρ/(2z) = r/(2·sqrt(z·zmax)).
+    pub fn dpdv(&self, u: f64, v: f64) -> DVec3 {
+        let (z0, z1) = (self.z_min as f64, self.z_max as f64);
+        let z = z0 + v * (z1 - z0);
+        let phi = u * self.phi_max as f64;
+        let k = self.radius as f64 / (2.0 * (z * z1).sqrt());
+        (z1 - z0) * DVec3::new(k * phi.cos(), k * phi.sin(), 1.0)
+    }
+}
