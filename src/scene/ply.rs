@@ -43,7 +43,7 @@ pub fn load(path: &std::path::Path) -> Result<(TriangleMesh, Vec<String>), Strin
         raw
     };
     let mut reader = &bytes[..];
-    let header = Parser::<AsciiVertex>::new().read_header(&mut reader).map_err(|e| format!("bad PLY header: {e}"))?;
+    let header = Parser::<AsciiVertex>::new().read_header(&mut reader).map_err(|e| format!("bad PLY header: {}", first_line(&e)))?;
     let mut got = Collected::default();
     match header.encoding {
         Encoding::Ascii => read_ascii(&mut reader, &header, &mut got)?,
@@ -51,6 +51,11 @@ pub fn load(path: &std::path::Path) -> Result<(TriangleMesh, Vec<String>), Strin
         Encoding::BinaryBigEndian => read_binary::<true>(reader, &header, &mut got)?,
     }
     build(&header, got)
+}
+
+/// ply-rs messages run over several lines; the first one says what and where.
+fn first_line(e: &std::io::Error) -> String {
+    e.to_string().lines().next().unwrap_or_default().trim_end().to_string()
 }
 
 fn build(header: &Header, got: Collected) -> Result<(TriangleMesh, Vec<String>), String> {
@@ -154,7 +159,7 @@ fn list(p: &Property) -> Vec<i64> {
 }
 
 fn read_ascii(reader: &mut impl BufRead, header: &Header, got: &mut Collected) -> Result<(), String> {
-    let err = |e: std::io::Error| format!("bad PLY data: {e}");
+    let err = |e: std::io::Error| format!("bad PLY data: {}", first_line(&e));
     for (name, def) in &header.elements {
         match name.as_str() {
             "vertex" => {

@@ -1,1 +1,10 @@
+//! The one integration-test binary (one link step keeps 2-core CI fast).
 
+mod bad_inputs;
+mod common;
+mod directives;
+mod instancing;
+mod real_scenes;
+mod shapes;
+mod tokenizer;
+mod truncation;

@@ -1,0 +1,399 @@
+//! Every directive of pbrt-v3 and pbrt-v4, each checked for its effect.
+
+use crate::common::{close, load, load_file, matrix, num, report, root, scene, warnings, world_shapes};
+use pbrt_sppm::parser::Syntax;
+use pbrt_sppm::scene::{Geometry, LoadOptions, load_scene};
+
+/// object_to_world (row-major) of the only shape in a world block.
+fn m(world: &str) -> [f64; 16] {
+    let shapes = world_shapes(world);
+    assert_eq!(shapes.len(), 1, "{world}");
+    matrix(&shapes[0]["object_to_world"])
+}
+
+const I: [f64; 16] = [1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.];
+
+fn approx(a: [f64; 16], b: [f64; 16]) -> bool {
+    a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12)
+}
+
+#[test]
+fn translate_scale_rotate_identity() {
+    assert_eq!(m(r#"Translate 1 2 3 Shape "sphere""#), [1., 0., 0., 1., 0., 1., 0., 2., 0., 0., 1., 3., 0., 0., 0., 1.]);
+    assert_eq!(m(r#"Scale 2 3 -4 Shape "sphere""#), [2., 0., 0., 0., 0., 3., 0., 0., 0., 0., -4., 0., 0., 0., 0., 1.]);
+    // Rotate 90 about z maps +x to +y: column 0 is (0, 1, 0).
+    let r = m(r#"Rotate 90 0 0 1 Shape "sphere""#);
+    assert!(approx(r, [0., -1., 0., 0., 1., 0., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.]), "{r:?}");
+    assert_eq!(m(r#"Translate 5 5 5 Identity Shape "sphere""#), I);
+    // The statement nearest the shape acts first: T(1,0,0)·S(2) maps x=1 to 3.
+    let ts = m(r#"Translate 1 0 0 Scale 2 2 2 Shape "sphere""#);
+    assert_eq!((ts[0], ts[3]), (2.0, 1.0));
+}
+
+#[test]
+fn transform_and_concat_transform_are_column_major() {
+    assert_eq!(
+        m(r#"Translate 9 9 9 Transform [1 0 0 0 0 1 0 0 0 0 1 0 7 8 9 1] Shape "sphere""#),
+        [1., 0., 0., 7., 0., 1., 0., 8., 0., 0., 1., 9., 0., 0., 0., 1.]
+    );
+    let c = m(r#"Translate 1 0 0 ConcatTransform [2 0 0 0 0 2 0 0 0 0 2 0 0 0 0 1] Shape "sphere""#);
+    assert_eq!((c[0], c[3], c[5]), (2.0, 1.0, 2.0));
+}
+
+#[test]
+fn look_at_follows_pbrt_handedness() {
+    let r = report("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n");
+    let cfw = matrix(&r["camera"]["camera_from_world"]);
+    // dir = -z, right = up × dir = -x: world +x appears on the image's left.
+    assert!(approx(cfw, [-1., 0., 0., 0., 0., 1., 0., 0., 0., 0., -1., 5., 0., 0., 0., 1.]), "{cfw:?}");
+}
+
+#[test]
+fn named_coordinate_systems_including_camera_and_world() {
+    assert_eq!(m(r#"Translate 1 2 3 CoordinateSystem "a" Identity CoordSysTransform "a" Shape "sphere""#)[3], 1.0);
+    let r = report("LookAt 1 2 3  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nCoordSysTransform \"camera\"\nShape \"sphere\"\n");
+    let w = matrix(&r["shapes"][0]["object_to_world"]);
+    assert!(close(w[3], 1.0, 1e-12) && close(w[7], 2.0, 1e-12) && close(w[11], 3.0, 1e-12), "{w:?}");
+    assert_eq!(m(r#"Translate 4 4 4 CoordSysTransform "world" Shape "sphere""#), I);
+    let s = scene(r#"WorldBegin CoordSysTransform "nowhere" Shape "sphere""#);
+    assert!(warnings(&s)[0].contains("\"nowhere\" is not defined"));
+}
+
+#[test]
+fn active_transform_and_transform_times() {
+    let s = scene("TransformTimes 0 2\nWorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\nShape \"sphere\"\n");
+    assert_eq!(s.shapes[0].object_to_world, glam::DMat4::IDENTITY, "shapes use the start transform");
+    assert!(warnings(&s).iter().any(|w| w.contains("animated transforms")));
+    assert_eq!(m(r#"ActiveTransform StartTime Translate 2 0 0 Shape "sphere""#)[3], 2.0);
+}
+
+#[test]
+fn reverse_orientation_toggles_and_is_scoped() {
+    let shapes = world_shapes(
+        r#"ReverseOrientation Shape "sphere"
+           AttributeBegin ReverseOrientation Shape "sphere" AttributeEnd
+           Shape "disk""#,
+    );
+    let ro: Vec<bool> = shapes.iter().map(|s| s["reverse_orientation"].as_bool().unwrap()).collect();
+    assert_eq!(ro, [true, false, true]);
+    let sw = world_shapes(r#"Scale -1 1 1 Shape "sphere""#);
+    assert_eq!(sw[0]["swaps_handedness"], true);
+}
+
+#[test]
+fn option_and_color_space() {
+    let s = scene("Option \"seed\" 42\nOption \"bool disablepixeljitter\" true\nColorSpace \"aces2065-1\"\nWorldBegin\n");
+    assert_eq!(s.integrator.seed, 42);
+    assert!(s.options.contains(&("disablepixeljitter".into(), "true".into())));
+    assert!(warnings(&s).iter().any(|w| w.contains("aces2065-1")));
+    assert_eq!(s.syntax, Syntax::V4);
+}
+
+#[test]
+fn camera_parameters_and_defaults() {
+    let r = report("Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 100\nCamera \"perspective\" \"float fov\" 30 \"float lensradius\" 0.1 \"float focaldistance\" 4\nWorldBegin\n");
+    let c = &r["camera"];
+    assert_eq!((num(&c["fov"]), num(&c["lensradius"]), num(&c["focaldistance"])), (30.0, 0.1, 4.0));
+    assert_eq!(c["screenwindow"], serde_json::json!([-2.0, 2.0, -1.0, 1.0]));
+    let r = report("Film \"image\" \"integer xresolution\" 100 \"integer yresolution\" 200\nCamera \"orthographic\"\nWorldBegin\n");
+    assert_eq!(r["camera"]["type"], "orthographic");
+    assert_eq!(r["camera"]["screenwindow"], serde_json::json!([-1.0, 1.0, -2.0, 2.0]));
+    let r = report("Camera \"perspective\" \"float halffov\" 20\nWorldBegin\n");
+    assert_eq!(num(&r["camera"]["fov"]), 40.0);
+    let r = report("WorldBegin\n");
+    assert_eq!((num(&r["camera"]["fov"]), r["film"]["xresolution"].as_u64()), (90.0, Some(1280)));
+}
+
+#[test]
+fn film_crop_window_pixel_bounds_and_scale() {
+    let r = report("Film \"image\" \"integer xresolution\" 10 \"integer yresolution\" 10 \"float cropwindow\" [0.75 0.25 0.05 1.2] \"float scale\" 1.5\nWorldBegin\n");
+    let f = &r["film"];
+    assert_eq!(f["cropwindow"], serde_json::json!([0.25, 0.75, 0.05, 1.0]));
+    assert_eq!(f["pixelbounds"], serde_json::json!([3, 8, 1, 10]));
+    assert_eq!(num(&f["scale"]), 1.5);
+    let r = report("Film \"rgb\" \"integer pixelbounds\" [2 6 1 3] \"float iso\" 200 \"string filename\" \"out.exr\"\nWorldBegin\n");
+    assert_eq!(r["film"]["pixelbounds"], serde_json::json!([2, 6, 1, 3]));
+    assert_eq!((num(&r["film"]["scale"]), r["film"]["filename"].as_str()), (2.0, Some("out.exr")));
+    assert_eq!(r["integrator"]["photonsperiteration"], 8, "default photons = pixels in the crop");
+}
+
+#[test]
+fn integrator_iterations_per_syntax_version() {
+    let v3 = scene("Integrator \"sppm\" \"integer numiterations\" 10 \"float radius\" 0.025\nWorldBegin\n");
+    assert_eq!((v3.syntax, v3.integrator.iterations, v3.integrator.radius), (Syntax::V3, 10, 0.025));
+    let v3_default = scene("Film \"image\"\nIntegrator \"sppm\"\nSampler \"halton\" \"integer pixelsamples\" 4\nWorldBegin\n");
+    assert_eq!(v3_default.integrator.iterations, 64, "v3 ignores the sampler");
+    let v4 = scene("Film \"rgb\"\nSampler \"zsobol\" \"integer pixelsamples\" 4\nIntegrator \"sppm\" \"integer maxdepth\" 7 \"integer photonsperiteration\" 1000 \"integer seed\" 9\nWorldBegin\n");
+    let i = &v4.integrator;
+    assert_eq!((i.iterations, i.max_depth, i.photons_per_iteration, i.seed), (4, 7, 1000, 9));
+    let strat = scene("Film \"rgb\"\nSampler \"stratified\" \"integer xsamples\" 3 \"integer ysamples\" 5\nWorldBegin\n");
+    assert_eq!(strat.integrator.iterations, 15);
+    assert_eq!(scene("Film \"rgb\"\nWorldBegin\n").integrator.iterations, 16);
+    let explicit = scene("Integrator \"sppm\" \"integer iterations\" 3 \"integer imagewritefrequency\" 1\nWorldBegin\n");
+    assert_eq!(explicit.integrator.iterations, 3);
+    assert!(explicit.warnings.is_empty(), "{:?}", explicit.warnings);
+    let path = scene("Integrator \"path\" \"integer maxdepth\" 3\nWorldBegin\n");
+    assert!(warnings(&path)[0].contains("\"path\" is not supported; rendering with SPPM"));
+}
+
+#[test]
+fn sampler_filter_and_accelerator_are_accepted_quietly() {
+    let s = scene("Sampler \"halton\" \"integer pixelsamples\" 8\nPixelFilter \"gaussian\" \"float xwidth\" 2\nAccelerator \"kdtree\" \"integer maxprims\" 4\nWorldBegin\n");
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+}
+
+#[test]
+fn media_are_skipped_with_one_warning_each() {
+    let s = scene("MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\nWorldBegin\nMediumInterface \"fog\" \"\"\nMediumInterface \"\"\nShape \"sphere\"\n");
+    assert_eq!(s.skipped.len(), 2);
+    assert_eq!((s.skipped[0].line, s.skipped[1].line), (1, 3));
+    assert_eq!(s.warnings.len(), 2);
+}
+
+#[test]
+fn world_begin_resets_and_world_end_ends() {
+    assert_eq!(m(r#"Shape "sphere""#), I);
+    let s = scene("Translate 1 0 0\nWorldBegin\nShape \"sphere\"\nWorldEnd\nWorldBegin\nShape \"disk\"\n");
+    assert_eq!(s.shapes.len(), 1);
+    assert_eq!(s.shapes[0].object_to_world, glam::DMat4::IDENTITY);
+    assert!(warnings(&s).iter().any(|w| w.contains("after WorldEnd")));
+    assert_eq!(s.syntax, Syntax::V3);
+}
+
+#[test]
+fn attribute_block_restores_everything_transform_block_only_the_ctm() {
+    let s = scene(
+        r#"WorldBegin
+        AttributeBegin Translate 1 0 0 Material "mirror" ReverseOrientation AreaLightSource "diffuse" AttributeEnd
+        Shape "sphere"
+        TransformBegin Translate 2 0 0 Material "mirror" TransformEnd
+        Shape "sphere""#,
+    );
+    let (a, b) = (&s.shapes[0], &s.shapes[1]);
+    assert_eq!(a.object_to_world, glam::DMat4::IDENTITY);
+    assert!(!a.reverse_orientation && a.area_light.is_none());
+    assert_eq!(s.materials[a.material as usize].ty, "matte");
+    assert_eq!(b.object_to_world, glam::DMat4::IDENTITY);
+    assert_eq!(s.materials[b.material as usize].ty, "mirror", "v3 TransformEnd keeps the material");
+}
+
+#[test]
+fn unbalanced_blocks_warn() {
+    let s = scene("WorldBegin\nAttributeEnd\nAttributeBegin\nTransformEnd\nAttributeBegin\n");
+    let w = warnings(&s);
+    assert!(w[0].contains("without a matching AttributeBegin"), "{w:?}");
+    assert!(w[1].contains("closes a AttributeBegin"), "{w:?}");
+    assert!(w[2].contains("never closed"), "{w:?}");
+}
+
+#[test]
+fn attribute_gives_lower_priority_defaults() {
+    let shapes = world_shapes(
+        r#"AttributeBegin Attribute "shape" "float radius" 2
+             Shape "sphere" Shape "sphere" "float radius" 3
+           AttributeEnd
+           Shape "sphere""#,
+    );
+    let r: Vec<f64> = shapes.iter().map(|s| num(&s["params"]["radius"])).collect();
+    assert_eq!(r, [2.0, 3.0, 1.0]);
+}
+
+#[test]
+fn objects_share_geometry_and_compose_transforms() {
+    let s = scene(
+        r#"WorldBegin
+        ObjectInstance "later"
+        ObjectBegin "later"
+          Translate 0 1 0
+          Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 2]
+        ObjectEnd
+        Translate 5 0 0
+        ObjectInstance "later""#,
+    );
+    assert_eq!(s.meshes.len(), 1, "geometry is never copied");
+    assert_eq!(s.instances.len(), 2);
+    let r = pbrt_sppm::check::report(&s, true);
+    let w = matrix(&r["shapes"][1]["object_to_world"]);
+    assert_eq!((w[3], w[7]), (5.0, 1.0), "instance · definition");
+    assert_eq!(r["shapes"][1]["bounds"], serde_json::json!([[5.0, 1.0, 0.0], [6.0, 2.0, 0.0]]));
+    assert_eq!(r["counts"]["instances"], 2);
+}
+
+#[test]
+fn lights_and_area_lights() {
+    let s = scene(
+        r#"WorldBegin
+        LightSource "point" "rgb I" [1 1 1] "float bogus" 1
+        LightSource "goniometric" "string filename" "x.exr"
+        AttributeBegin AreaLightSource "diffuse" "rgb L" [1 1 1] Shape "sphere" Shape "disk" AttributeEnd
+        AttributeBegin AreaLightSource "projection" Shape "sphere" AttributeEnd
+        Shape "sphere""#,
+    );
+    assert_eq!(s.lights.len(), 1);
+    assert_eq!(s.area_lights.len(), 1, "one AreaLightSource, shared by two shapes");
+    let lit: Vec<bool> = s.shapes.iter().map(|x| x.area_light.is_some()).collect();
+    assert_eq!(lit, [true, true, false, false]);
+    assert_eq!(s.skipped.iter().map(|k| k.what.as_str()).collect::<Vec<_>>(), [
+        "LightSource \"goniometric\"",
+        "AreaLightSource \"projection\""
+    ]);
+    let unused = s.warnings.iter().find(|w| w.message.contains("bogus")).expect("unused-parameter warning");
+    assert_eq!((unused.line, unused.column), (2, 45));
+    assert_eq!(pbrt_sppm::check::report(&s, false)["counts"]["lights"], 3);
+}
+
+#[test]
+fn named_materials_are_scoped_like_v3_and_resolve_forward_like_v4() {
+    let s = scene(
+        r#"WorldBegin
+        MakeNamedMaterial "m" "string type" "matte" "rgb Kd" [1 0 0]
+        AttributeBegin
+          MakeNamedMaterial "m" "string type" "mirror"
+          NamedMaterial "m" Shape "sphere"
+        AttributeEnd
+        NamedMaterial "m" Shape "sphere"
+        NamedMaterial "fwd" Shape "sphere"
+        MakeNamedMaterial "fwd" "string type" "glass"
+        MakeNamedMaterial "unused" "string type" "metal"
+        Material "hair" Shape "disk""#,
+    );
+    let tys: Vec<&str> = s.shapes.iter().map(|x| s.materials[x.material as usize].ty.as_str()).collect();
+    assert_eq!(tys, ["mirror", "matte", "glass", "diffuse"]);
+    let what: Vec<&str> = s.skipped.iter().map(|k| k.what.as_str()).collect();
+    assert!(what.contains(&"MakeNamedMaterial \"unused\""), "{what:?}");
+    assert!(what.contains(&"material \"hair\""), "{what:?}");
+    assert_eq!(s.materials.len(), 4, "only used materials are built");
+}
+
+#[test]
+fn textures_are_built_only_when_a_used_material_needs_them() {
+    let s = scene(
+        r#"WorldBegin
+        Texture "checks" "spectrum" "checkerboard" "rgb tex1" [1 0 0] "texture tex2" "inner"
+        Texture "inner" "spectrum" "constant" "rgb value" [0 0 1]
+        Texture "lonely" "float" "constant" "float value" 1
+        Texture "odd" "float" "wrinkled"
+        Material "diffuse" "texture reflectance" "checks" "texture displacement" "odd"
+        Shape "sphere"
+        Material "matte" "texture Kd" "missing"
+        Shape "sphere""#,
+    );
+    let names: Vec<&str> = s.textures.iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(names, ["inner", "checks"]);
+    assert_eq!(s.materials[0].textures, [("reflectance".to_string(), 1)]);
+    let what: Vec<&str> = s.skipped.iter().map(|k| k.what.as_str()).collect();
+    assert_eq!(what, ["Texture \"odd\" of class \"wrinkled\"", "Texture \"lonely\""]);
+    assert!(warnings(&s).iter().any(|w| w.contains("texture \"missing\" is not defined")));
+}
+
+#[test]
+fn include_continues_a_parameter_list_across_the_file_end() {
+    let s = load_file(&root().join("tests/data/good/continue-main.pbrt")).expect("loads");
+    let r = pbrt_sppm::check::report(&s, true);
+    let p = &r["shapes"][0]["params"];
+    assert_eq!((num(&p["radius"]), num(&p["zmax"])), (3.0, 1.0));
+    assert_eq!(matrix(&r["shapes"][0]["object_to_world"])[11], 1.0);
+    assert_eq!(matrix(&r["shapes"][1]["object_to_world"]), I, "the include's AttributeBegin closed in the parent");
+}
+
+#[test]
+fn include_paths_are_relative_to_the_top_level_file() {
+    let s = load_file(&root().join("tests/data/good/nested-main.pbrt")).expect("loads");
+    let r = pbrt_sppm::check::report(&s, true);
+    assert_eq!(num(&r["shapes"][0]["params"]["radius"]), 2.0);
+}
+
+#[test]
+fn import_does_not_leak_state_back() {
+    let s = load_file(&root().join("pbrt-scenes/v4/features.pbrt")).expect("loads");
+    let mesh = s.shapes.iter().find(|x| matches!(x.geometry, Geometry::Mesh { .. })).expect("imported mesh");
+    assert!(mesh.reverse_orientation);
+    assert!(mesh.area_light.is_some());
+    // features.pbrt's last shapes come after the Import: no leaked ReverseOrientation.
+    assert!(s.shapes.iter().filter(|x| !matches!(x.geometry, Geometry::Mesh { .. })).all(|x| !x.reverse_orientation));
+}
+
+#[test]
+fn gzip_scene_files_are_read() {
+    use std::io::Write;
+    let dir = std::env::temp_dir().join(format!("pbrt-sppm-gz-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scene.pbrt.gz");
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(b"WorldBegin\nShape \"sphere\" \"float radius\" 4\n").unwrap();
+    std::fs::write(&path, gz.finish().unwrap()).unwrap();
+    let s = load_scene(&path, &LoadOptions::default()).expect("gzip scene");
+    assert_eq!(s.shapes.len(), 1);
+}
+
+#[test]
+fn syntax_detection_and_override() {
+    let cases = [
+        ("WorldBegin\nShape \"sphere\"\n", Syntax::V4),
+        ("WorldBegin\nAreaLightSource \"diffuse\" \"bool twosided\" \"true\"\n", Syntax::V3),
+        ("WorldBegin\nAreaLightSource \"diffuse\" \"bool twosided\" true\n", Syntax::V4),
+        ("WorldBegin\nLightSource \"point\" \"blackbody I\" [5500 1]\n", Syntax::V3),
+        ("WorldBegin\nLightSource \"point\" \"blackbody I\" [5500]\n", Syntax::V4),
+        ("WorldBegin\nShape \"sphere\" \"point p\" [0 0 0]\n", Syntax::V3),
+        ("Film \"image\"\nWorldBegin\n", Syntax::V3),
+        ("Film \"rgb\"\nWorldBegin\n", Syntax::V4),
+        ("WorldBegin\nMaterial \"dielectric\"\n", Syntax::V4),
+        ("WorldBegin\nShape \"cone\"\n", Syntax::V3),
+    ];
+    for (text, want) in cases {
+        assert_eq!(scene(text).syntax, want, "{text}");
+    }
+    let e = scene("WorldBegin\nTransformBegin\nTransformEnd\n").syntax_evidence.unwrap();
+    assert!(e.contains("inline.pbrt:2:1: TransformBegin"), "{e}");
+    let forced = pbrt_sppm::scene::load_scene_from_bytes(
+        std::path::Path::new("x.pbrt"),
+        b"Film \"image\"\nWorldBegin\n".to_vec(),
+        &LoadOptions { syntax: Some(Syntax::V4) },
+    )
+    .unwrap();
+    assert_eq!((forced.syntax, forced.integrator.iterations), (Syntax::V4, 16));
+}
+
+#[test]
+fn unused_parameters_are_warned_at_their_own_location() {
+    let s = scene("WorldBegin\nShape \"sphere\" \"float radius\" 2\n  \"float radiuss\" 3 \"integer zmin\" 0\n");
+    let w: Vec<(u32, u32, &str)> = s.warnings.iter().map(|w| (w.line, w.column, w.message.as_str())).collect();
+    assert_eq!(w, [
+        (3, 3, "parameter \"float radiuss\" is not used"),
+        (3, 21, "parameter \"integer zmin\" is not used (expected type \"float\")"),
+    ]);
+}
+
+#[test]
+fn v3_and_v4_spellings_of_one_scene_give_the_same_description() {
+    let load = |v: &str| {
+        let s = load_file(&root().join(format!("pbrt-scenes/{v}/cornell-glass.pbrt"))).expect("loads");
+        assert!(s.warnings.is_empty(), "{v}: {:?}", s.warnings);
+        pbrt_sppm::check::report(&s, true)
+    };
+    let (v3, v4) = (load("v3"), load("v4"));
+    assert_eq!((v3["syntax"].as_str(), v4["syntax"].as_str()), (Some("v3"), Some("v4")));
+    for key in ["camera", "counts", "world_bounds", "shapes"] {
+        assert_eq!(v3[key], v4[key], "{key}");
+    }
+    for key in ["xresolution", "yresolution", "filename", "cropwindow", "pixelbounds", "scale"] {
+        assert_eq!(v3["film"][key], v4["film"][key], "film {key}");
+    }
+    for key in ["iterations", "maxdepth", "photonsperiteration", "radius", "seed"] {
+        assert_eq!(v3["integrator"][key], v4["integrator"][key], "integrator {key}");
+    }
+}
+
+#[test]
+fn every_bundled_scene_loads_without_errors() {
+    for v in ["v3", "v4"] {
+        for e in std::fs::read_dir(root().join("pbrt-scenes").join(v)).unwrap().flatten() {
+            let p = e.path();
+            // Fragments for Include/Import live in include/ and are not scenes.
+            if p.extension().is_some_and(|x| x == "pbrt") {
+                load_file(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            }
+        }
+    }
+    assert!(load("WorldBegin").is_ok());
+}

@@ -1,0 +1,99 @@
+//! 25,000 instances of one 30,000-triangle mesh load in about the memory of one copy.
+//! (Their load time is measured by `pbrt-bench`, not here.)
+
+use pbrt_sppm::scene::{LoadOptions, load_scene};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+/// Counts the bytes allocated by the current thread (each test runs on its own thread,
+/// and scene loading is single-threaded), so concurrent tests do not disturb it.
+struct Counting;
+
+thread_local! {
+    static LIVE: Cell<isize> = const { Cell::new(0) };
+    static PEAK: Cell<isize> = const { Cell::new(0) };
+}
+
+fn track(delta: isize) {
+    let _ = LIVE.try_with(|l| {
+        l.set(l.get() + delta);
+        let _ = PEAK.try_with(|p| p.set(p.get().max(l.get())));
+    });
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        track(layout.size() as isize);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        track(-(layout.size() as isize));
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        track(new_size as isize - layout.size() as isize);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+/// A binary PLY grid with `n × n` quads (2n² triangles).
+fn write_grid_ply(path: &std::path::Path, n: usize) {
+    let nv = (n + 1) * (n + 1);
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {nv}\nproperty float x\nproperty float y\nproperty float z\n\
+         element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        2 * n * n
+    )
+    .into_bytes();
+    for j in 0..=n {
+        for i in 0..=n {
+            for c in [i as f32 / n as f32, j as f32 / n as f32, ((i * j) % 7) as f32 * 1e-3] {
+                b.extend(c.to_le_bytes());
+            }
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let v = |di: usize, dj: usize| ((j + dj) * (n + 1) + i + di) as i32;
+            for tri in [[v(0, 0), v(1, 0), v(1, 1)], [v(0, 0), v(1, 1), v(0, 1)]] {
+                b.push(3);
+                tri.iter().for_each(|x| b.extend(x.to_le_bytes()));
+            }
+        }
+    }
+    std::fs::write(path, b).unwrap();
+}
+
+#[test]
+fn many_instances_cost_about_one_copy() {
+    let dir = std::env::temp_dir().join(format!("pbrt-sppm-inst-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    write_grid_ply(&dir.join("grid.ply"), 123); // 30,258 triangles
+    let mut scene = String::from("WorldBegin\nObjectBegin \"g\"\nShape \"plymesh\" \"string filename\" \"grid.ply\"\nObjectEnd\n");
+    for k in 0..25_000 {
+        let (x, z) = (k % 160, k / 160);
+        scene.push_str(&format!("AttributeBegin\nTranslate {x} 0 {z}\nRotate {} 0 1 0\nObjectInstance \"g\"\nAttributeEnd\n", k % 360));
+    }
+    let path = dir.join("many.pbrt");
+    std::fs::write(&path, &scene).unwrap();
+
+    let before = LIVE.with(Cell::get);
+    PEAK.with(|p| p.set(before));
+    let s = load_scene(&path, &LoadOptions::default()).expect("loads");
+    let peak = PEAK.with(Cell::get) - before;
+
+    assert_eq!(s.meshes.len(), 1, "the mesh is stored once");
+    assert_eq!(s.instances.len(), 25_000);
+    assert_eq!(s.objects[0].shapes.len(), 1);
+    let one_copy = s.meshes[0].heap_bytes() as isize;
+    assert_eq!(s.meshes[0].triangle_count(), 30_258);
+    // One copy is ~0.5 MB; 25,000 copies would be ~12 GB. Allow the mesh a few times
+    // over (reading buffers), the 1.5 MB scene text and 25,000 transforms.
+    let budget = 4 * one_copy + 3 * scene.len() as isize + 25_000 * 512;
+    assert!(peak < budget, "peak {peak} bytes while loading; budget {budget}");
+    let counts = &pbrt_sppm::check::report(&s, false)["counts"];
+    assert_eq!(counts["triangles"], 30_258u64 * 25_000);
+}

@@ -1,0 +1,204 @@
+//! Every shape's parameters: defaults, clamps, swaps, validity checks, mesh sources,
+//! world-space areas and bounds.
+
+use crate::common::{close, num, root, scene, world_shapes};
+use serde_json::{Value, json};
+use std::f64::consts::PI;
+
+fn one(world: &str) -> Value {
+    let s = world_shapes(world);
+    assert_eq!(s.len(), 1, "{world}");
+    s[0].clone()
+}
+
+fn params(world: &str) -> Value {
+    one(world)["params"].clone()
+}
+
+#[test]
+fn sphere_defaults_clamps_and_swaps() {
+    assert_eq!(params(r#"Shape "sphere""#), json!({"radius": 1.0, "zmin": -1.0, "zmax": 1.0, "phimax": 360.0}));
+    assert_eq!(params(r#"Shape "sphere" "float radius" 2"#)["zmin"], -2.0, "zmin defaults to -radius");
+    let p = params(r#"Shape "sphere" "float radius" 2 "float zmin" 5 "float zmax" -0.5 "float phimax" 400"#);
+    assert_eq!(p, json!({"radius": 2.0, "zmin": -0.5, "zmax": 2.0, "phimax": 360.0}));
+    assert_eq!(params(r#"Shape "sphere" "float phimax" -10"#)["phimax"], 0.0);
+    let s = one(r#"Shape "sphere" "float radius" 2 "float zmin" -1 "float zmax" 1.5 "float phimax" 90"#);
+    assert!(close(num(&s["area"]), PI / 2.0 * 2.0 * 2.5, 1e-6), "{}", s["area"]);
+}
+
+#[test]
+fn cylinder_disk_cone_paraboloid_defaults() {
+    assert_eq!(params(r#"Shape "cylinder""#), json!({"radius": 1.0, "zmin": -1.0, "zmax": 1.0, "phimax": 360.0}));
+    let p = params(r#"Shape "cylinder" "float radius" 0.5 "float zmin" 3 "float zmax" 2"#);
+    assert_eq!((p["zmin"].clone(), p["zmax"].clone()), (json!(2.0), json!(3.0)), "swapped, not radius-relative");
+    assert_eq!(params(r#"Shape "disk""#), json!({"height": 0.0, "radius": 1.0, "innerradius": 0.0, "phimax": 360.0}));
+    assert_eq!(params(r#"Shape "cone""#), json!({"height": 1.0, "radius": 1.0, "phimax": 360.0}));
+    assert_eq!(params(r#"Shape "paraboloid""#), json!({"radius": 1.0, "zmin": 0.0, "zmax": 1.0, "phimax": 360.0}));
+    let p = params(r#"Shape "paraboloid" "float zmin" 2 "float zmax" 0.5"#);
+    assert_eq!((p["zmin"].clone(), p["zmax"].clone()), (json!(0.5), json!(2.0)));
+}
+
+#[test]
+fn closed_form_areas() {
+    let cases = [
+        (r#"Shape "cylinder" "float radius" 2 "float zmin" 0 "float zmax" 3 "float phimax" 180"#, PI * 2.0 * 3.0),
+        (r#"Shape "disk" "float radius" 2 "float innerradius" 1 "float phimax" 180"#, PI / 2.0 * 3.0),
+        (r#"Shape "cone" "float radius" 3 "float height" 4"#, PI * 3.0 * 5.0),
+        // Paraboloid z = x² + y² up to z = 1: π/6 (5√5 − 1).
+        (r#"Shape "paraboloid""#, PI / 6.0 * (5.0 * 5f64.sqrt() - 1.0)),
+    ];
+    for (shape, area) in cases {
+        let got = num(&one(shape)["area"]);
+        assert!(close(got, area, 1e-6), "{shape}: {got} vs {area}");
+    }
+}
+
+#[test]
+fn hyperboloid_parameters_and_true_area() {
+    let s = one(r#"Shape "hyperboloid" "point p1" [1 0 -1] "point p2" [0 1 1]"#);
+    assert_eq!(s["params"]["p1"], json!([1.0, 0.0, -1.0]));
+    assert_eq!((s["params"]["zmin"].clone(), s["params"]["rmax"].clone()), (json!(-1.0), json!(1.0)));
+    // pbrt-v3's formula gives 26.18 here; the surface of revolution has area ≈ 10.77.
+    let numeric = 2.0 * PI * integrate(|v: f64| {
+        let (x, y) = (1.0 - v, v);
+        (4.0 * (x * x + y * y) + (-x + y).powi(2)).sqrt()
+    });
+    assert!(close(num(&s["area"]), numeric, 1e-6), "{} vs {numeric}", s["area"]);
+    assert!((numeric - 10.77).abs() < 0.01);
+}
+
+fn integrate(f: impl Fn(f64) -> f64) -> f64 {
+    let n = 200_000;
+    (0..n).map(|i| f((i as f64 + 0.5) / n as f64)).sum::<f64>() / n as f64
+}
+
+#[test]
+fn world_areas_under_any_transform() {
+    // A unit disk scaled by (2, 3, 7): an ellipse of area 6π.
+    let s = one(r#"Scale 2 3 7 Shape "disk""#);
+    assert!(close(num(&s["area"]), 6.0 * PI, 1e-6), "{}", s["area"]);
+    // A unit sphere scaled by (1, 1, 2): a prolate spheroid, area 2π(1 + 2·asin(e)/e), e = √3/2.
+    let e = 3f64.sqrt() / 2.0;
+    let s = one(r#"Scale 1 1 2 Shape "sphere""#);
+    assert!(close(num(&s["area"]), 2.0 * PI * (1.0 + 2.0 * e.asin() / e), 1e-6), "{}", s["area"]);
+    // Mirrored and rotated: area unchanged, handedness flips.
+    let s = one(r#"Rotate 33 1 2 3 Scale -1 1 1 Shape "cylinder""#);
+    assert!(close(num(&s["area"]), 4.0 * PI, 1e-6));
+    assert_eq!(s["swaps_handedness"], true);
+    // Meshes under a shear.
+    let s = one(r#"ConcatTransform [1 0 0 0  1 1 0 0  0 0 1 0  0 0 0 1] Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0]"#);
+    assert!(close(num(&s["area"]), 0.5, 1e-12));
+}
+
+#[test]
+fn bounds_are_world_space() {
+    let s = one(r#"Translate 1 2 3 Shape "sphere" "float radius" 2 "float zmax" 1"#);
+    assert_eq!(s["bounds"], json!([[-1.0, 0.0, 1.0], [3.0, 4.0, 4.0]]));
+}
+
+#[test]
+fn triangle_mesh_arrays_and_checks() {
+    let s = scene(
+        r#"WorldBegin
+        Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 1 1 0 0 1 0] "integer indices" [0 1 2 0 2 3 0]
+          "normal N" [0 0 1 0 0 1 0 0 1 0 0 1] "vector3 S" [1 0 0] "point2 uv" [0 0 1 0 1 1 0 1 5 5]
+          "integer faceIndices" [7 8]
+        Shape "trianglemesh" "point P" [0 0 0 1 0 0 0 1 0] "float st" [0 0 1 0]"#,
+    );
+    let m = &s.meshes[0];
+    assert_eq!(m.indices, [0, 1, 2, 0, 2, 3], "the partial triangle is dropped");
+    assert!(m.n.is_some() && m.s.is_none(), "S with the wrong count is ignored");
+    assert_eq!(m.uv.as_ref().map(Vec::len), Some(4), "extra uv dropped");
+    assert_eq!(m.face_indices, Some(vec![7, 8]));
+    let second = &s.meshes[1];
+    assert_eq!(second.indices, [0, 1, 2], "three points need no indices");
+    assert!(second.uv.is_none(), "too few uv are ignored");
+    let msgs: Vec<&str> = s.warnings.iter().map(|w| w.message.as_str()).collect();
+    assert_eq!(msgs.len(), 4, "{msgs:?}");
+}
+
+#[test]
+fn meshes_are_stored_transformed_like_pbrt() {
+    let s = scene(r#"WorldBegin Translate 0 0 5 Scale 2 2 2 Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "normal N" [0 0 1 0 0 1 0 0 1]"#);
+    assert_eq!(s.meshes[0].p, [[0.0, 0.0, 5.0], [2.0, 0.0, 5.0], [0.0, 2.0, 5.0]]);
+    assert_eq!(s.meshes[0].n.as_ref().unwrap()[0], [0.0, 0.0, 0.5]);
+}
+
+#[test]
+fn plymesh_ascii_binary_quads_and_uv_names() {
+    let s = scene(r#"WorldBegin Shape "plymesh" "string filename" "../../../pbrt-scenes/v3/geometry/icosphere.ply""#);
+    let m = &s.meshes[0];
+    assert_eq!((m.p.len(), m.triangle_count()), (42, 80));
+    assert!(m.n.is_some() && m.uv.is_some());
+    let s = scene(r#"WorldBegin Shape "plymesh" "string filename" "../../../pbrt-scenes/v3/geometry/slab_be.ply""#);
+    let m = &s.meshes[0];
+    assert_eq!((m.p.len(), m.triangle_count()), (25, 32), "16 quads split in two");
+    // Quad (a,b,c,d) = (0,1,6,5) becomes (0,1,6) and (5,0,6).
+    assert_eq!(&m.indices[..6], [0, 1, 6, 5, 0, 6]);
+    assert_eq!(m.uv.as_ref().unwrap()[6], [0.25, 0.25], "s t names");
+    assert_eq!(&m.face_indices.as_ref().unwrap()[..4], [0, 0, 1, 1]);
+}
+
+/// Writes a PLY with the given format and texture-coordinate names and loads it.
+fn ply_roundtrip(format: &str, uv: (&str, &str)) -> pbrt_sppm::shapes::TriangleMesh {
+    let dir = std::env::temp_dir().join(format!("pbrt-sppm-ply-{}-{format}-{}", std::process::id(), uv.0));
+    std::fs::create_dir_all(&dir).unwrap();
+    let head = format!(
+        "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+         property float {}\nproperty float {}\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n",
+        uv.0, uv.1
+    );
+    let verts = [[0.0f32, 0.0, 0.0, 0.1, 0.2], [1.0, 0.0, 0.0, 0.3, 0.4], [0.0, 1.0, 0.0, 0.5, 0.6]];
+    let mut bytes = head.into_bytes();
+    if format == "ascii" {
+        for v in verts {
+            bytes.extend(format!("{} {} {} {} {}\n", v[0], v[1], v[2], v[3], v[4]).bytes());
+        }
+        bytes.extend(b"3 0 1 2\n");
+    } else {
+        let big = format == "binary_big_endian";
+        for x in verts.iter().flatten() {
+            bytes.extend(if big { x.to_be_bytes() } else { x.to_le_bytes() });
+        }
+        bytes.push(3);
+        for i in [0u32, 1, 2] {
+            bytes.extend(if big { i.to_be_bytes() } else { i.to_le_bytes() });
+        }
+    }
+    std::fs::write(dir.join("t.ply"), bytes).unwrap();
+    let path = dir.join("scene.pbrt");
+    std::fs::write(&path, "WorldBegin\nShape \"plymesh\" \"string filename\" \"t.ply\"\n").unwrap();
+    let s = crate::common::load_file(&path).unwrap_or_else(|e| panic!("{format}: {e}"));
+    s.meshes[0].clone()
+}
+
+#[test]
+fn ply_every_encoding_and_texture_coordinate_name() {
+    for format in ["ascii", "binary_little_endian", "binary_big_endian"] {
+        for uv in [("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t")] {
+            let m = ply_roundtrip(format, uv);
+            assert_eq!(m.p, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], "{format} {uv:?}");
+            assert_eq!(m.indices, [0, 1, 2]);
+            assert_eq!(m.uv, Some(vec![[0.1, 0.2], [0.3, 0.4], [0.5, 0.6]]), "{format} {uv:?}");
+        }
+    }
+}
+
+#[test]
+fn objmesh_extension() {
+    let s = scene(r#"WorldBegin Shape "objmesh" "string filename" "../../../pbrt-scenes/v3/geometry/cube.obj""#);
+    let m = &s.meshes[0];
+    assert_eq!((m.p.len(), m.triangle_count()), (8, 12));
+    assert!(close(m.area(), 6.0, 1e-12));
+}
+
+#[test]
+fn unsupported_shapes_are_skipped_with_one_warning() {
+    let s = scene("WorldBegin\nShape \"curve\" \"point3 P\" [0 0 0 1 1 1 2 2 2 3 3 3]\nShape \"sphere\" \"float alpha\" 0.5\n");
+    assert_eq!(s.shapes.len(), 1);
+    assert_eq!(s.skipped.len(), 1);
+    assert_eq!((s.skipped[0].line, s.skipped[0].column, s.skipped[0].what.as_str()), (2, 7, "Shape \"curve\""));
+    let msgs: Vec<&str> = s.warnings.iter().map(|w| w.message.as_str()).collect();
+    assert_eq!(msgs, ["Shape \"curve\": this shape type is not supported", "\"alpha\" masks are not supported; the shape is opaque"]);
+    assert!(root().exists());
+}

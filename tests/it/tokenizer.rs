@@ -1,0 +1,88 @@
+//! pbrt's tokenizer tests (reference §5.3) and number parsing.
+
+use crate::common::scene;
+use pbrt_sppm::parser::lexer::{decode_string, tokenize_all};
+
+#[test]
+fn tokenizer_basics() {
+    assert_eq!(tokenize_all(br#"Shape "sphere" "float radius" [1]"#).unwrap(), [
+        "Shape",
+        "\"sphere\"",
+        "\"float radius\"",
+        "[",
+        "1",
+        "]"
+    ]);
+    // A newline between tokens changes nothing.
+    assert_eq!(
+        tokenize_all(b"Shape \"sphere\"\n\"float radius\" [1]").unwrap(),
+        tokenize_all(br#"Shape "sphere" "float radius" [1]"#).unwrap()
+    );
+}
+
+#[test]
+fn comments_glued_words_and_escapes() {
+    let toks = tokenize_all(b"Shape\"sphere\" # foo bar [\n\"float radius\\\"\" 1").unwrap();
+    assert_eq!(toks, ["Shape", "\"sphere\"", "# foo bar [", "\"float radius\\\"\"", "1"]);
+    assert_eq!(decode_string(toks[3].as_bytes()), "float radius\"");
+    assert_eq!(tokenize_all(b"[1 2]x").unwrap(), ["[", "1", "2", "]", "x"]);
+    // '#' only starts a comment where a token starts.
+    assert_eq!(tokenize_all(b"1#x 2").unwrap(), ["1#x", "2"]);
+    assert_eq!(tokenize_all(b"a\r\n# c\rb").unwrap(), ["a", "# c", "b"]);
+}
+
+#[test]
+fn tokenizer_errors() {
+    let e = tokenize_all(b"\"float radius").unwrap_err();
+    assert!(e.message.contains("premature EOF"), "{e:?}");
+    let e = tokenize_all(b"\"float radius\\").unwrap_err();
+    assert!(e.message.contains("premature EOF"), "{e:?}");
+    let e = tokenize_all(b"\"float\nradius\"").unwrap_err();
+    assert!(e.message.contains("unterminated string"), "{e:?}");
+    assert_eq!(e.offset, 6);
+}
+
+#[test]
+fn tokenize_file() {
+    let toks = tokenize_all(b"WorldBegin # hello\nIntegrator \"deep\" \"float density\" [ 2 2.66612 -5e-51]").unwrap();
+    assert_eq!(toks, [
+        "WorldBegin",
+        "# hello",
+        "Integrator",
+        "\"deep\"",
+        "\"float density\"",
+        "[",
+        "2",
+        "2.66612",
+        "-5e-51",
+        "]"
+    ]);
+}
+
+#[test]
+fn numbers_are_rounded_once_from_the_decimal_text() {
+    // Just above the midpoint between 1 and the next f32: correct rounding goes up,
+    // rounding through f64 first would land exactly on the midpoint and go to 1.
+    let s = scene(r#"WorldBegin Shape "sphere" "float radius" 1.00000005960464477539062501"#);
+    let pbrt_sppm::scene::Geometry::Quadric(pbrt_sppm::shapes::Quadric::Sphere(sp)) = &s.shapes[0].geometry else {
+        panic!("not a sphere")
+    };
+    assert_eq!(sp.radius, 1.0000001f32);
+    assert_ne!(sp.radius, 1.0);
+    let s = scene(r#"WorldBegin Shape "sphere" "float radius" [ .25 ] "float zmin" -2.5e-1 "float zmax" +0.25"#);
+    let pbrt_sppm::scene::Geometry::Quadric(pbrt_sppm::shapes::Quadric::Sphere(sp)) = &s.shapes[0].geometry else {
+        panic!("not a sphere")
+    };
+    assert_eq!((sp.radius, sp.z_min, sp.z_max), (0.25, -0.25, 0.25));
+}
+
+#[test]
+fn float_written_integers_are_truncated_with_a_warning() {
+    let s = scene(
+        r#"WorldBegin Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 2.0]"#,
+    );
+    assert_eq!(s.meshes[0].indices, [0, 1, 2]);
+    let w = &s.warnings[0];
+    assert_eq!((w.line, w.column), (1, 87));
+    assert!(w.message.contains("2.0 is not an integer"), "{}", w.message);
+}

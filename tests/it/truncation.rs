@@ -1,0 +1,61 @@
+//! Every example scene cut at every statement boundary (and every token boundary) loads
+//! or fails with an error; it never panics.
+
+use crate::common::root;
+use pbrt_sppm::parser::lexer::{Lexer, TokenKind};
+use pbrt_sppm::scene::{LoadOptions, load_scene_from_bytes};
+use std::path::{Path, PathBuf};
+
+fn scene_files() -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    for dir in ["pbrt-scenes/v3", "pbrt-scenes/v4", "tests/data/good"] {
+        for e in std::fs::read_dir(root().join(dir)).unwrap().flatten() {
+            if e.path().extension().is_some_and(|x| x == "pbrt") {
+                files.push(e.path());
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+/// (statement starts, all token boundaries) of a file.
+fn boundaries(text: &[u8]) -> (Vec<usize>, Vec<usize>) {
+    let (mut stmts, mut tokens) = (Vec::new(), Vec::new());
+    let mut lexer = Lexer::new(text);
+    while let Ok(Some(t)) = lexer.next_token() {
+        let word = &text[t.start as usize..t.end as usize];
+        if t.kind == TokenKind::Word && word[0].is_ascii_uppercase() {
+            stmts.push(t.start as usize);
+        }
+        tokens.extend([t.start as usize, t.end as usize]);
+    }
+    stmts.push(text.len());
+    (stmts, tokens)
+}
+
+fn load_prefix(path: &Path, text: &[u8], cut: usize) -> Result<bool, String> {
+    let prefix = text[..cut].to_vec();
+    std::panic::catch_unwind(|| load_scene_from_bytes(path, prefix, &LoadOptions::default()).is_ok())
+        .map_err(|_| format!("{} cut at byte {cut} panicked", path.display()))
+}
+
+#[test]
+fn truncated_scenes_never_panic() {
+    let mut statement_cuts = 0;
+    let mut loaded = 0;
+    for path in scene_files() {
+        let text = std::fs::read(&path).unwrap();
+        let (stmts, tokens) = boundaries(&text);
+        assert!(stmts.len() > 1, "{} has no statements", path.display());
+        for &cut in &stmts {
+            statement_cuts += 1;
+            loaded += load_prefix(&path, &text, cut).unwrap_or_else(|e| panic!("{e}")) as usize;
+        }
+        for &cut in &tokens {
+            load_prefix(&path, &text, cut).unwrap_or_else(|e| panic!("{e}"));
+        }
+    }
+    assert!(statement_cuts > 200, "only {statement_cuts} statement cuts");
+    assert!(loaded > 0 && loaded < statement_cuts, "some cuts load, some fail ({loaded}/{statement_cuts})");
+}

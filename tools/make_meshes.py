@@ -1,0 +1,73 @@
+#!/usr/bin/env python3
+"""Writes the small mesh files used by pbrt-scenes/ (our own geometry, no third-party data).
+
+icosphere.ply (ASCII, normals, u v), slab_be.ply (binary big-endian, quads, s t),
+cube.obj. Run from the repository root: python3 tools/make_meshes.py
+"""
+import math, struct, os
+
+def icosphere(subdiv=1):
+    t = (1 + 5 ** 0.5) / 2
+    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+         (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    v = [tuple(c / math.sqrt(sum(x * x for x in p)) for c in p) for p in v]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+         (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+         (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    for _ in range(subdiv):
+        cache, nf = {}, []
+        def mid(a, b):
+            k = (min(a, b), max(a, b))
+            if k not in cache:
+                p = [(x + y) / 2 for x, y in zip(v[a], v[b])]
+                n = math.sqrt(sum(x * x for x in p))
+                v.append(tuple(x / n for x in p))
+                cache[k] = len(v) - 1
+            return cache[k]
+        for a, b, c in f:
+            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
+            nf += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        f = nf
+    return v, f
+
+def write_ascii_ply(path):
+    v, f = icosphere(1)
+    with open(path, "w") as out:
+        out.write("ply\nformat ascii 1.0\ncomment pbrt-sppm test mesh\n")
+        out.write(f"element vertex {len(v)}\nproperty float x\nproperty float y\nproperty float z\n")
+        out.write("property float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\n")
+        out.write(f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n")
+        for x, y, z in v:
+            u = 0.5 + math.atan2(y, x) / (2 * math.pi)
+            out.write(f"{x:.6f} {y:.6f} {z:.6f} {x:.6f} {y:.6f} {z:.6f} {u:.6f} {0.5 + z / 2:.6f}\n")
+        for a, b, c in f:
+            out.write(f"3 {a} {b} {c}\n")
+
+def write_binary_quads(path, n=4):
+    verts = [(i / n, j / n, 0.0) for j in range(n + 1) for i in range(n + 1)]
+    quads = [(j * (n + 1) + i, j * (n + 1) + i + 1, (j + 1) * (n + 1) + i + 1, (j + 1) * (n + 1) + i)
+             for j in range(n) for i in range(n)]
+    head = (f"ply\nformat binary_big_endian 1.0\nelement vertex {len(verts)}\n"
+            "property float x\nproperty float y\nproperty float z\nproperty float s\nproperty float t\n"
+            f"element face {len(quads)}\nproperty list uchar int vertex_indices\nproperty int face_indices\nend_header\n")
+    with open(path, "wb") as out:
+        out.write(head.encode())
+        for x, y, z in verts:
+            out.write(struct.pack(">5f", x, y, z, x, y))
+        for k, q in enumerate(quads):
+            out.write(struct.pack(">B4ii", 4, *q, k))
+
+def write_obj(path):
+    c = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
+    faces = [(1, 3, 4, 2), (5, 6, 8, 7), (1, 2, 6, 5), (3, 7, 8, 4), (1, 5, 7, 3), (2, 4, 8, 6)]
+    with open(path, "w") as out:
+        out.write("# unit cube\no cube\n")
+        out.writelines(f"v {x} {y} {z}\n" for x, y, z in c)
+        out.writelines("f " + " ".join(map(str, f)) + "\n" for f in faces)
+
+if __name__ == "__main__":
+    for d in ("pbrt-scenes/v3/geometry", "pbrt-scenes/v4/geometry"):
+        os.makedirs(d, exist_ok=True)
+        write_ascii_ply(f"{d}/icosphere.ply")
+        write_binary_quads(f"{d}/slab_be.ply")
+        write_obj(f"{d}/cube.obj")
