@@ -177,7 +177,9 @@ fn quadric_params(q: &Quadric) -> Value {
             "height": f32_json(s.height), "radius": f32_json(s.radius), "innerradius": f32_json(s.inner_radius),
             "phimax": deg(s.phi_max),
         }),
-        Quadric::Cone(s) => json!({ "height": f32_json(s.height), "radius": f32_json(s.radius), "phimax": deg(s.phi_max) }),
+        Quadric::Cone(s) => {
+            json!({ "height": f32_json(s.height), "radius": f32_json(s.radius), "phimax": deg(s.phi_max) })
+        }
         Quadric::Paraboloid(s) => json!({
             "radius": f32_json(s.radius), "zmin": f32_json(s.z_min), "zmax": f32_json(s.z_max), "phimax": deg(s.phi_max),
         }),

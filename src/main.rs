@@ -87,7 +87,7 @@ fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::O
     args
 }
 
-fn load(scene: &PathBuf, common: &Common) -> Result<SceneDescription, ExitCode> {
+fn load(scene: &std::path::Path, common: &Common) -> Result<SceneDescription, ExitCode> {
     load_scene(scene, &LoadOptions { syntax: common.syntax }).map_err(|e| report_error(&e))
 }
 

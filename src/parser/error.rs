@@ -79,11 +79,8 @@ impl LoadError {
     pub fn with_source(&self) -> String {
         let mut s = self.one_line();
         if let Some((line, col)) = &self.source_line {
-            let pad: String = line
-                .chars()
-                .take(*col as usize - 1)
-                .map(|c| if c == '\t' { '\t' } else { ' ' })
-                .collect();
+            let pad: String =
+                line.chars().take(*col as usize - 1).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
             let _ = write!(s, "\n  {line}\n  {pad}^");
         }
         s

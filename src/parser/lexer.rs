@@ -74,8 +74,7 @@ fn whitespace(i: &[u8]) -> LexResult<'_, &[u8]> {
 }
 
 fn comment(i: &[u8]) -> LexResult<'_, TokenKind> {
-    value(TokenKind::Comment, recognize((tag("#"), take_till(|c| c == b'\n' || c == b'\r'))))
-        .parse(i)
+    value(TokenKind::Comment, recognize((tag("#"), take_till(|c| c == b'\n' || c == b'\r')))).parse(i)
 }
 
 fn bracket(i: &[u8]) -> LexResult<'_, TokenKind> {
@@ -90,18 +89,14 @@ fn word(i: &[u8]) -> LexResult<'_, TokenKind> {
 fn quoted(i: &[u8]) -> LexResult<'_, TokenKind> {
     let (mut rest, _) = tag("\"").parse(i)?;
     loop {
-        let fail = |r: &[u8], message| {
-            Err(nom::Err::Failure(Failure { remaining: r.len(), message }))
-        };
+        let fail = |r: &[u8], message| Err(nom::Err::Failure(Failure { remaining: r.len(), message }));
         match rest.iter().position(|&c| matches!(c, b'"' | b'\\' | b'\n' | b'\r')) {
             None => return fail(&rest[rest.len()..], "premature EOF inside a quoted string"),
             Some(p) => match rest[p] {
                 b'"' => return Ok((&rest[p + 1..], TokenKind::Str)),
                 b'\\' => match rest.get(p + 1) {
                     None => return fail(&rest[p + 1..], "premature EOF inside a quoted string"),
-                    Some(b'b' | b'f' | b'n' | b'r' | b't' | b'\\' | b'\'' | b'"') => {
-                        rest = &rest[p + 2..]
-                    }
+                    Some(b'b' | b'f' | b'n' | b'r' | b't' | b'\\' | b'\'' | b'"') => rest = &rest[p + 2..],
                     Some(_) => return fail(&rest[p..], "unexpected escaped character"),
                 },
                 _ => return fail(&rest[p..], "unterminated string (line break inside quotes)"),
@@ -151,9 +146,7 @@ impl<'a> Lexer<'a> {
             Err(nom::Err::Failure(f) | nom::Err::Error(f)) => {
                 Err(LexError { offset: self.src.len() - f.remaining, message: f.message })
             }
-            Err(nom::Err::Incomplete(_)) => {
-                Err(LexError { offset: start, message: "premature end of input" })
-            }
+            Err(nom::Err::Incomplete(_)) => Err(LexError { offset: start, message: "premature end of input" }),
         }
     }
 

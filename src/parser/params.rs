@@ -138,24 +138,8 @@ pub struct Param {
 }
 
 impl Param {
-    pub fn new(
-        ty: ParamType,
-        type_name: String,
-        name: String,
-        values: Values,
-        span: Span,
-        value_span: Span,
-    ) -> Param {
-        Param {
-            ty,
-            type_name,
-            name,
-            values,
-            span,
-            value_span,
-            used: Cell::new(false),
-            wanted: Cell::new(None),
-        }
+    pub fn new(ty: ParamType, type_name: String, name: String, values: Values, span: Span, value_span: Span) -> Param {
+        Param { ty, type_name, name, values, span, value_span, used: Cell::new(false), wanted: Cell::new(None) }
     }
 
     pub fn mark_used(&self) {
@@ -191,7 +175,10 @@ pub enum SpectrumValue {
     Rgb([f32; 3]),
     Xyz([f32; 3]),
     /// Temperature in kelvin; v3 files add a scale (`[T scale]`), v4 files do not.
-    Blackbody { kelvin: f32, scale: Option<f32> },
+    Blackbody {
+        kelvin: f32,
+        scale: Option<f32>,
+    },
     /// `(lambda, value)` pairs.
     Sampled(Vec<(f32, f32)>),
     /// A named spectrum (`metal-Au-eta`) or an SPD file name.
@@ -258,10 +245,9 @@ impl ParamList {
         let Some(p) = self.find(name, &[ParamType::String]) else { return Ok(None) };
         match p.strings() {
             [s] => Ok(Some(s.clone())),
-            vs => Err(Diagnostic::error(
-                p.span,
-                format!("\"string {name}\" needs exactly one value, found {}", vs.len()),
-            )),
+            vs => {
+                Err(Diagnostic::error(p.span, format!("\"string {name}\" needs exactly one value, found {}", vs.len())))
+            }
         }
     }
 
@@ -269,10 +255,7 @@ impl ParamList {
     pub fn fixed<const N: usize>(&self, name: &str, types: &[ParamType]) -> Lookup<[f32; N]> {
         let Some(p) = self.find(name, types) else { return Ok(None) };
         <[f32; N]>::try_from(p.floats()).map(Some).map_err(|_| {
-            Diagnostic::error(
-                p.span,
-                format!("\"{} {name}\" needs {N} values, found {}", p.type_name, p.values.len()),
-            )
+            Diagnostic::error(p.span, format!("\"{} {name}\" needs {N} values, found {}", p.type_name, p.values.len()))
         })
     }
 
@@ -287,11 +270,7 @@ impl ParamList {
         if p.values.len() % n != 0 {
             return Err(Diagnostic::error(
                 p.span,
-                format!(
-                    "\"{} {name}\" needs a multiple of {n} values, found {}",
-                    p.type_name,
-                    p.values.len()
-                ),
+                format!("\"{} {name}\" needs a multiple of {n} values, found {}", p.type_name, p.values.len()),
             ));
         }
         Ok(Some(p))
@@ -309,9 +288,7 @@ impl ParamList {
         };
         match (&p.values, p.ty) {
             (Values::Floats(v), _) if v.len() == 1 => Ok(Some(FloatValue::Const(v[0]))),
-            (Values::Strings(v), ParamType::Texture) if v.len() == 1 => {
-                Ok(Some(FloatValue::Texture(v[0].clone())))
-            }
+            (Values::Strings(v), ParamType::Texture) if v.len() == 1 => Ok(Some(FloatValue::Texture(v[0].clone()))),
             _ => Err(Diagnostic::error(p.span, format!("\"{name}\" needs exactly one value"))),
         }
     }
@@ -338,9 +315,9 @@ impl ParamList {
             },
             Spectrum => match &p.values {
                 Values::Strings(s) if s.len() == 1 => Ok(Some(SpectrumValue::Named(s[0].clone()))),
-                Values::Floats(v) if !v.is_empty() && v.len() % 2 == 0 => Ok(Some(
-                    SpectrumValue::Sampled(v.chunks_exact(2).map(|c| (c[0], c[1])).collect()),
-                )),
+                Values::Floats(v) if !v.is_empty() && v.len() % 2 == 0 => {
+                    Ok(Some(SpectrumValue::Sampled(v.chunks_exact(2).map(|c| (c[0], c[1])).collect())))
+                }
                 _ => bad("needs (wavelength, value) pairs or one name"),
             },
             _ => match p.strings() {

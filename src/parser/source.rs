@@ -69,12 +69,7 @@ impl SourceMap {
             return Err(format!("{name}: file is larger than 4 GiB"));
         }
         let id = FileId(self.files.len() as u32);
-        self.files.push(SourceFile {
-            path: path.to_path_buf(),
-            name,
-            text: text.into(),
-            line_starts: OnceLock::new(),
-        });
+        self.files.push(SourceFile { path: path.to_path_buf(), name, text: text.into(), line_starts: OnceLock::new() });
         Ok(id)
     }
 
@@ -108,10 +103,7 @@ impl SourceMap {
         let offset = (span.start as usize).min(f.text.len());
         let line = starts.partition_point(|&s| s as usize <= offset).max(1);
         let start = starts[line - 1] as usize;
-        let end = f.text[start..]
-            .iter()
-            .position(|&c| c == b'\n' || c == b'\r')
-            .map_or(f.text.len(), |e| start + e);
+        let end = f.text[start..].iter().position(|&c| c == b'\n' || c == b'\r').map_or(f.text.len(), |e| start + e);
         String::from_utf8_lossy(&f.text[start..end]).into_owned()
     }
 }

@@ -15,11 +15,11 @@
 //! cloud/f15-4a relies on this). Paths are relative to the top-level file's directory.
 //! Files ending in `.gz` (or starting with the gzip magic) are decompressed.
 
+use super::Syntax;
 use super::error::Diagnostic;
 use super::lexer::{Lexer, TokenKind, decode_string};
 use super::params::{Param, ParamList, ParamType, Values};
 use super::source::{FileId, SourceMap, Span};
-use super::Syntax;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -39,7 +39,10 @@ pub enum StmtKind {
     TransformTimes([f64; 2]),
     ActiveTransform(ActiveTransform),
     ReverseOrientation,
-    Option { name: String, value: String },
+    Option {
+        name: String,
+        value: String,
+    },
     ColorSpace(String),
     Camera(Entity),
     Sampler(Entity),
@@ -48,7 +51,10 @@ pub enum StmtKind {
     Integrator(Entity),
     Accelerator(Entity),
     MakeNamedMedium(Entity),
-    MediumInterface { inside: String, outside: String },
+    MediumInterface {
+        inside: String,
+        outside: String,
+    },
     WorldBegin,
     WorldEnd,
     AttributeBegin,
@@ -65,7 +71,11 @@ pub enum StmtKind {
     Material(Entity),
     MakeNamedMaterial(Entity),
     NamedMaterial(String),
-    Texture { name: String, ty: String, class: Entity },
+    Texture {
+        name: String,
+        ty: String,
+        class: Entity,
+    },
     /// `Import "file"`: the statements that follow, up to the matching `ImportEnd`,
     /// come from the imported file.
     ImportBegin(String),
@@ -256,9 +266,8 @@ impl StatementReader {
     }
 
     fn expect(&mut self, after: Span, what: &str) -> Result<Tok, Diagnostic> {
-        self.next()?.ok_or_else(|| {
-            Diagnostic::error(self.end_span(after), format!("premature end of file: expected {what}"))
-        })
+        self.next()?
+            .ok_or_else(|| Diagnostic::error(self.end_span(after), format!("premature end of file: expected {what}")))
     }
 
     fn number(&mut self, after: Span, directive: &str) -> Result<(f64, Span), Diagnostic> {
@@ -266,10 +275,7 @@ impl StatementReader {
         let text = self.text(t.span);
         match (t.kind, parse_f64(text)) {
             (TokKind::Word, Some(v)) => Ok((v, t.span)),
-            _ => Err(Diagnostic::error(
-                t.span,
-                format!("{directive}: expected a number, found '{}'", self.word(t)),
-            )),
+            _ => Err(Diagnostic::error(t.span, format!("{directive}: expected a number, found '{}'", self.word(t)))),
         }
     }
 
@@ -326,10 +332,7 @@ impl StatementReader {
                     None => continue, // Include: its statements follow
                 },
                 _ => {
-                    return Err(Diagnostic::error(
-                        t.span,
-                        format!("expected a directive, found '{}'", self.word(t)),
-                    ));
+                    return Err(Diagnostic::error(t.span, format!("expected a directive, found '{}'", self.word(t))));
                 }
             };
             return Ok(Some(Stmt { kind, span: t.span }));
@@ -464,7 +467,8 @@ impl StatementReader {
         }
         let path = self.resolve_path(name);
         let bytes = read_scene_bytes(&path).map_err(|e| Diagnostic::error(span, e))?;
-        let file = self.sources.add(&path, path.display().to_string(), bytes).map_err(|e| Diagnostic::error(span, e))?;
+        let file =
+            self.sources.add(&path, path.display().to_string(), bytes).map_err(|e| Diagnostic::error(span, e))?;
         let text = self.sources.file(file).text.clone();
         // A peeked token belongs to the including file; reading continues after it.
         debug_assert!(self.peeked.is_none());
@@ -502,18 +506,16 @@ impl StatementReader {
         let first = self.expect(decl.span, &format!("a value for \"{text}\""))?;
         let mut sink = ValueSink::new(ty);
         let value_span = match first.kind {
-            TokKind::LBracket => {
-                loop {
-                    let t = self.next()?.ok_or_else(|| {
-                        Diagnostic::error(first.span, "premature end of file: '[' is never closed")
-                    })?;
-                    match t.kind {
-                        TokKind::RBracket => break first.span.to(t.span),
-                        TokKind::Word | TokKind::Str => self.push_value(&mut sink, t, &text)?,
-                        _ => return Err(Diagnostic::error(t.span, "'[' is never closed before this")),
-                    }
+            TokKind::LBracket => loop {
+                let t = self
+                    .next()?
+                    .ok_or_else(|| Diagnostic::error(first.span, "premature end of file: '[' is never closed"))?;
+                match t.kind {
+                    TokKind::RBracket => break first.span.to(t.span),
+                    TokKind::Word | TokKind::Str => self.push_value(&mut sink, t, &text)?,
+                    _ => return Err(Diagnostic::error(t.span, "'[' is never closed before this")),
                 }
-            }
+            },
             TokKind::Word | TokKind::Str => {
                 self.push_value(&mut sink, first, &text)?;
                 first.span

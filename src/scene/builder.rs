@@ -21,11 +21,11 @@ use super::entities;
 use super::options::RenderOptions;
 use super::shapes::{self as shape_build, Built};
 use super::{
-    AreaLightDesc, Geometry, InstanceDesc, LightDesc, MaterialDesc, ObjectDesc, SceneDescription, ShapeDesc,
-    Skipped, TextureDesc, mesh,
+    AreaLightDesc, Geometry, InstanceDesc, LightDesc, MaterialDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped,
+    TextureDesc, mesh,
 };
 use crate::parser::Syntax;
-use crate::parser::error::{Diagnostic, Located, LoadError};
+use crate::parser::error::{Diagnostic, LoadError, Located};
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::parser::stmt::{ActiveTransform, Entity, StatementReader, Stmt, StmtKind, read_scene_bytes};
@@ -239,15 +239,35 @@ impl Builder {
         use StmtKind as K;
         let options_only = matches!(
             stmt.kind,
-            K::Camera(_) | K::Sampler(_) | K::Film(_) | K::PixelFilter(_) | K::Integrator(_) | K::Accelerator(_)
-                | K::TransformTimes(_) | K::WorldBegin
+            K::Camera(_)
+                | K::Sampler(_)
+                | K::Film(_)
+                | K::PixelFilter(_)
+                | K::Integrator(_)
+                | K::Accelerator(_)
+                | K::TransformTimes(_)
+                | K::WorldBegin
         );
         let world_only = matches!(
             stmt.kind,
-            K::ReverseOrientation | K::AttributeBegin | K::AttributeEnd | K::TransformBegin | K::TransformEnd
-                | K::Attribute(_) | K::Shape(_) | K::ObjectBegin(_) | K::ObjectEnd | K::ObjectInstance(_)
-                | K::LightSource(_) | K::AreaLightSource(_) | K::Material(_) | K::MakeNamedMaterial(_)
-                | K::NamedMaterial(_) | K::Texture { .. } | K::ImportBegin(_) | K::WorldEnd
+            K::ReverseOrientation
+                | K::AttributeBegin
+                | K::AttributeEnd
+                | K::TransformBegin
+                | K::TransformEnd
+                | K::Attribute(_)
+                | K::Shape(_)
+                | K::ObjectBegin(_)
+                | K::ObjectEnd
+                | K::ObjectInstance(_)
+                | K::LightSource(_)
+                | K::AreaLightSource(_)
+                | K::Material(_)
+                | K::MakeNamedMaterial(_)
+                | K::NamedMaterial(_)
+                | K::Texture { .. }
+                | K::ImportBegin(_)
+                | K::WorldEnd
         );
         let word = self.reader.sources.snippet(stmt.span);
         if options_only && self.in_world {
@@ -286,7 +306,10 @@ impl Builder {
             }
             K::LookAt(v) => {
                 let m = look_at(&v).ok_or_else(|| {
-                    Diagnostic::error(span, "LookAt: the up vector and the viewing direction are parallel (or eye = look)")
+                    Diagnostic::error(
+                        span,
+                        "LookAt: the up vector and the viewing direction are parallel (or eye = look)",
+                    )
                 })?;
                 self.concat(span, m)
             }
@@ -299,7 +322,10 @@ impl Builder {
             K::CoordSysTransform(name) => match self.named_coords.get(&name) {
                 Some(&m) => self.transform(span, |i| m[i]),
                 None => {
-                    self.warnings.push(Diagnostic::warning(span, format!("coordinate system \"{name}\" is not defined; CTM unchanged")));
+                    self.warnings.push(Diagnostic::warning(
+                        span,
+                        format!("coordinate system \"{name}\" is not defined; CTM unchanged"),
+                    ));
                     Ok(())
                 }
             },
@@ -326,7 +352,10 @@ impl Builder {
             }
             K::ColorSpace(name) => {
                 if name != "srgb" {
-                    self.warnings.push(Diagnostic::warning(span, format!("color space \"{name}\" is not supported; RGB values are taken as sRGB")));
+                    self.warnings.push(Diagnostic::warning(
+                        span,
+                        format!("color space \"{name}\" is not supported; RGB values are taken as sRGB"),
+                    ));
                 }
                 Ok(())
             }
@@ -358,7 +387,11 @@ impl Builder {
                 Ok(())
             }
             K::MakeNamedMedium(e) => {
-                self.skip(e.name_span, format!("MakeNamedMedium \"{}\"", e.name), "participating media are not supported".into());
+                self.skip(
+                    e.name_span,
+                    format!("MakeNamedMedium \"{}\"", e.name),
+                    "participating media are not supported".into(),
+                );
                 Ok(())
             }
             K::MediumInterface { inside, outside } => {
@@ -436,7 +469,8 @@ impl Builder {
     fn warn_motion(&mut self, span: Span) {
         if self.gs.ctm[0] != self.gs.ctm[1] && !self.motion_warned {
             self.motion_warned = true;
-            self.warnings.push(Diagnostic::warning(span, "animated transforms are not supported; the start transform is used"));
+            self.warnings
+                .push(Diagnostic::warning(span, "animated transforms are not supported; the start transform is used"));
         }
     }
 
@@ -492,7 +526,10 @@ impl Builder {
     fn attribute(&mut self, e: Entity) -> Res<()> {
         const TARGETS: [&str; 5] = ["shape", "light", "material", "medium", "texture"];
         if !TARGETS.contains(&e.name.as_str()) {
-            return Err(Diagnostic::error(e.name_span, format!("Attribute target \"{}\" is not one of {TARGETS:?}", e.name)));
+            return Err(Diagnostic::error(
+                e.name_span,
+                format!("Attribute target \"{}\" is not one of {TARGETS:?}", e.name),
+            ));
         }
         let idx = self.attributes.len() as u32;
         let target = e.name.clone();
@@ -535,7 +572,10 @@ impl Builder {
         match self.current_object {
             Some(obj) => {
                 if self.gs.area_light.is_some() {
-                    self.warnings.push(Diagnostic::warning(span, "area lights inside object definitions are ignored (as in pbrt)"));
+                    self.warnings.push(Diagnostic::warning(
+                        span,
+                        "area lights inside object definitions are ignored (as in pbrt)",
+                    ));
                 }
                 self.objects[obj as usize].shapes.push(pending);
             }
@@ -591,7 +631,10 @@ impl Builder {
         self.push(PushKind::Object, span)?;
         let idx = self.objects.len() as u32;
         if self.object_names.insert(name.clone(), idx).is_some() {
-            self.warnings.push(Diagnostic::warning(span, format!("object \"{name}\" is redefined; later instances use this definition")));
+            self.warnings.push(Diagnostic::warning(
+                span,
+                format!("object \"{name}\" is redefined; later instances use this definition"),
+            ));
         }
         self.objects.push(PendingObject { name, span, shapes: Vec::new(), used: false });
         self.current_object = Some(idx);
@@ -665,7 +708,14 @@ impl Builder {
 
     fn add_material(&mut self, ty: String, name: Option<String>, params: ParamList, span: Span) -> u32 {
         let params = self.with_attributes("material", params);
-        self.materials.push(PendingMaterial { ty, name, params, span: Some(span), scope: self.gs.scope.clone(), built: None });
+        self.materials.push(PendingMaterial {
+            ty,
+            name,
+            params,
+            span: Some(span),
+            scope: self.gs.scope.clone(),
+            built: None,
+        });
         self.materials.len() as u32 - 1
     }
 
@@ -692,7 +742,10 @@ impl Builder {
                 1
             }
             other => {
-                return Err(Diagnostic::error(class.name_span, format!("texture type \"{other}\" is not \"float\" or \"spectrum\"")));
+                return Err(Diagnostic::error(
+                    class.name_span,
+                    format!("texture type \"{other}\" is not \"float\" or \"spectrum\""),
+                ));
             }
         };
         let params = self.with_attributes("texture", class.params);
@@ -745,7 +798,11 @@ impl Builder {
                     Some(n) => format!("material \"{n}\" of type \"{ty}\""),
                     None => format!("material \"{ty}\""),
                 };
-                self.skip(span.unwrap_or_default(), what, "this material type is not supported; using diffuse 0.5".into());
+                self.skip(
+                    span.unwrap_or_default(),
+                    what,
+                    "this material type is not supported; using diffuse 0.5".into(),
+                );
                 ty = "diffuse".into();
                 MaterialDesc { ty, name, params: ParamList::default(), textures: Vec::new() }
             }
@@ -765,7 +822,9 @@ impl Builder {
             let order = if float_first { [0, 1] } else { [1, 0] };
             let found = order
                 .iter()
-                .find_map(|&k| if k == 0 { scope.float_textures.get(tex_name) } else { scope.spectrum_textures.get(tex_name) })
+                .find_map(|&k| {
+                    if k == 0 { scope.float_textures.get(tex_name) } else { scope.spectrum_textures.get(tex_name) }
+                })
                 .or_else(|| order.iter().find_map(|&k| self.global_textures[k].get(tex_name)))
                 .copied();
             match found {
@@ -844,9 +903,11 @@ impl Builder {
         warnings.append(&mut self.warnings);
         // In file order (reader and builder warnings interleave); stable for equal spans.
         warnings.sort_by_key(|d| d.span.map(|s| (s.file.0, s.start)));
-        let evidence = self.reader.evidence.as_ref().map(|(s, span, what)| {
-            format!("{}: {what} ({})", sources.location(*span), s.name())
-        });
+        let evidence = self
+            .reader
+            .evidence
+            .as_ref()
+            .map(|(s, span, what)| format!("{}: {what} ({})", sources.location(*span), s.name()));
         Ok(SceneDescription {
             syntax,
             syntax_evidence: if self.opts.syntax.is_some() { Some("--syntax".into()) } else { evidence },
@@ -894,7 +955,7 @@ impl Builder {
     fn build_objects(&mut self) -> Res<(Vec<ObjectDesc>, Vec<u32>)> {
         let mut built = Vec::new();
         let mut remap = vec![u32::MAX; self.objects.len()];
-        for i in 0..self.objects.len() {
+        for (i, slot) in remap.iter_mut().enumerate() {
             if !self.objects[i].used {
                 continue;
             }
@@ -906,7 +967,7 @@ impl Builder {
                     shapes.push(shape);
                 }
             }
-            remap[i] = built.len() as u32;
+            *slot = built.len() as u32;
             built.push(ObjectDesc { name: self.objects[i].name.clone(), shapes });
         }
         Ok((built, remap))

@@ -36,20 +36,50 @@ pub fn material_params(ty: &str) -> Option<&'static [&'static str]> {
         "diffuse" => &["reflectance", "displacement", "normalmap"],
         "mirror" => &["Kr", "bumpmap"],
         "glass" => &["Kr", "Kt", "eta", "index", "uroughness", "vroughness", "remaproughness", "bumpmap"],
-        "dielectric" => &["eta", "roughness", "uroughness", "vroughness", "remaproughness", "displacement", "normalmap"],
+        "dielectric" => {
+            &["eta", "roughness", "uroughness", "vroughness", "remaproughness", "displacement", "normalmap"]
+        }
         "metal" => &["eta", "k", "roughness", "uroughness", "vroughness", "remaproughness", "bumpmap"],
         "conductor" => &[
-            "eta", "k", "reflectance", "roughness", "uroughness", "vroughness", "remaproughness", "displacement",
+            "eta",
+            "k",
+            "reflectance",
+            "roughness",
+            "uroughness",
+            "vroughness",
+            "remaproughness",
+            "displacement",
             "normalmap",
         ],
         "plastic" => &["Kd", "Ks", "roughness", "remaproughness", "bumpmap"],
         "coateddiffuse" => &[
-            "reflectance", "roughness", "uroughness", "vroughness", "thickness", "eta", "albedo", "g", "maxdepth",
-            "nsamples", "remaproughness", "displacement", "normalmap",
+            "reflectance",
+            "roughness",
+            "uroughness",
+            "vroughness",
+            "thickness",
+            "eta",
+            "albedo",
+            "g",
+            "maxdepth",
+            "nsamples",
+            "remaproughness",
+            "displacement",
+            "normalmap",
         ],
         "uber" => &[
-            "Kd", "Ks", "Kr", "Kt", "roughness", "uroughness", "vroughness", "eta", "index", "opacity",
-            "remaproughness", "bumpmap",
+            "Kd",
+            "Ks",
+            "Kr",
+            "Kt",
+            "roughness",
+            "uroughness",
+            "vroughness",
+            "eta",
+            "index",
+            "opacity",
+            "remaproughness",
+            "bumpmap",
         ],
         "" | "none" | "interface" => &[],
         _ => return None,
@@ -60,12 +90,26 @@ pub fn material_params(ty: &str) -> Option<&'static [&'static str]> {
 pub fn texture_params(class: &str) -> Option<&'static [&'static str]> {
     Some(match class {
         "constant" => &["value"],
-        "checkerboard" => &[
-            "tex1", "tex2", "dimension", "aamode", "mapping", "uscale", "vscale", "udelta", "vdelta", "v1", "v2",
-        ],
+        "checkerboard" => {
+            &["tex1", "tex2", "dimension", "aamode", "mapping", "uscale", "vscale", "udelta", "vdelta", "v1", "v2"]
+        }
         "imagemap" => &[
-            "filename", "wrap", "maxanisotropy", "trilinear", "filter", "gamma", "encoding", "scale", "invert",
-            "mapping", "uscale", "vscale", "udelta", "vdelta", "v1", "v2",
+            "filename",
+            "wrap",
+            "maxanisotropy",
+            "trilinear",
+            "filter",
+            "gamma",
+            "encoding",
+            "scale",
+            "invert",
+            "mapping",
+            "uscale",
+            "vscale",
+            "udelta",
+            "vdelta",
+            "v1",
+            "v2",
         ],
         "scale" => &["tex1", "tex2", "tex", "scale"],
         "mix" => &["tex1", "tex2", "amount"],
@@ -77,8 +121,19 @@ pub fn texture_params(class: &str) -> Option<&'static [&'static str]> {
 pub fn is_float_texture_param(name: &str) -> bool {
     matches!(
         name,
-        "bumpmap" | "displacement" | "roughness" | "uroughness" | "vroughness" | "sigma" | "amount" | "index"
-            | "thickness" | "g" | "opacity" | "alpha" | "shadowalpha"
+        "bumpmap"
+            | "displacement"
+            | "roughness"
+            | "uroughness"
+            | "vroughness"
+            | "sigma"
+            | "amount"
+            | "index"
+            | "thickness"
+            | "g"
+            | "opacity"
+            | "alpha"
+            | "shadowalpha"
     )
 }
 
@@ -91,8 +146,15 @@ pub fn evidence(directive: &str, ty: &str) -> Option<Syntax> {
         ("Material" | "MakeNamedMaterial", t) => match t {
             "matte" | "plastic" | "glass" | "metal" | "mirror" | "uber" | "substrate" | "translucent"
             | "kdsubsurface" | "fourier" | "disney" | "none" | "" => Some(V3),
-            "diffuse" | "dielectric" | "conductor" | "coateddiffuse" | "coatedconductor" | "thindielectric"
-            | "diffusetransmission" | "measured" | "interface" => Some(V4),
+            "diffuse"
+            | "dielectric"
+            | "conductor"
+            | "coateddiffuse"
+            | "coatedconductor"
+            | "thindielectric"
+            | "diffusetransmission"
+            | "measured"
+            | "interface" => Some(V4),
             _ => None,
         },
         ("Shape", "cone" | "paraboloid" | "hyperboloid" | "heightfield" | "nurbs") => Some(V3),

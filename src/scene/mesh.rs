@@ -22,27 +22,33 @@ fn triples(v: &[f32]) -> Vec<[f32; 3]> {
 
 /// Reads the mesh arrays of a `trianglemesh` statement.
 pub fn from_params(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Result<TriangleMesh, Diagnostic> {
-    let positions = p
-        .array("P", ParamType::Point3)?
-        .ok_or_else(|| Diagnostic::error(span, "trianglemesh needs \"point3 P\""))?;
+    let positions =
+        p.array("P", ParamType::Point3)?.ok_or_else(|| Diagnostic::error(span, "trianglemesh needs \"point3 P\""))?;
     let n_p = positions.values.len() / 3;
     let indices_span = p.find("indices", &[ParamType::Integer]).map(|i| i.value_span);
     let indices: Vec<i32> = match p.array("indices", ParamType::Integer)? {
         Some(i) => i.ints().to_vec(),
         None if n_p == 3 => vec![0, 1, 2],
-        None => return Err(Diagnostic::error(span, "trianglemesh needs \"integer indices\" (only a single triangle of 3 points may leave them out)")),
+        None => {
+            return Err(Diagnostic::error(
+                span,
+                "trianglemesh needs \"integer indices\" (only a single triangle of 3 points may leave them out)",
+            ));
+        }
     };
     let mut mesh = TriangleMesh { p: triples(positions.floats()), ..Default::default() };
     mesh.indices = check_indices(indices, n_p, indices_span.unwrap_or(span), warn)?;
-    let per_vertex = |name: &str, ty: ParamType, warn: &mut Vec<Diagnostic>| -> Result<Option<Vec<[f32; 3]>>, Diagnostic> {
-        let Some(a) = p.array(name, ty)? else { return Ok(None) };
-        if a.values.len() / 3 != n_p {
-            let msg = format!("\"{name}\" has {} entries but there are {n_p} vertices; ignored", a.values.len() / 3);
-            warn.push(Diagnostic::warning(a.span, msg));
-            return Ok(None);
-        }
-        Ok(Some(triples(a.floats())))
-    };
+    let per_vertex =
+        |name: &str, ty: ParamType, warn: &mut Vec<Diagnostic>| -> Result<Option<Vec<[f32; 3]>>, Diagnostic> {
+            let Some(a) = p.array(name, ty)? else { return Ok(None) };
+            if a.values.len() / 3 != n_p {
+                let msg =
+                    format!("\"{name}\" has {} entries but there are {n_p} vertices; ignored", a.values.len() / 3);
+                warn.push(Diagnostic::warning(a.span, msg));
+                return Ok(None);
+            }
+            Ok(Some(triples(a.floats())))
+        };
     mesh.n = per_vertex("N", ParamType::Normal3, warn)?;
     mesh.s = per_vertex("S", ParamType::Vector3, warn)?;
     mesh.uv = uvs(p, n_p, warn)?;
@@ -50,7 +56,11 @@ pub fn from_params(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Res
         if f.ints().len() == mesh.triangle_count() {
             mesh.face_indices = Some(f.ints().to_vec());
         } else {
-            let msg = format!("\"faceIndices\" has {} entries for {} triangles; ignored", f.ints().len(), mesh.triangle_count());
+            let msg = format!(
+                "\"faceIndices\" has {} entries for {} triangles; ignored",
+                f.ints().len(),
+                mesh.triangle_count()
+            );
             warn.push(Diagnostic::warning(f.span, msg));
         }
     }
@@ -73,20 +83,32 @@ fn uvs(p: &ParamList, n_p: usize, warn: &mut Vec<Diagnostic>) -> Result<Option<V
         return Ok(None);
     }
     if n > n_p {
-        warn.push(Diagnostic::warning(a.span, format!("\"{}\" has {n} entries for {n_p} vertices; extras ignored", a.name)));
+        warn.push(Diagnostic::warning(
+            a.span,
+            format!("\"{}\" has {n} entries for {n_p} vertices; extras ignored", a.name),
+        ));
     }
     Ok(Some(f.chunks_exact(2).take(n_p).map(|c| [c[0], c[1]]).collect()))
 }
 
 /// Drops a trailing partial triangle (warning) and rejects out-of-range indices.
-pub fn check_indices(mut idx: Vec<i32>, n_vertices: usize, span: Span, warn: &mut Vec<Diagnostic>) -> Result<Vec<u32>, Diagnostic> {
-    if idx.len() % 3 != 0 {
-        let msg = format!("{} vertex indices is not a multiple of 3; the last {} are ignored", idx.len(), idx.len() % 3);
+pub fn check_indices(
+    mut idx: Vec<i32>,
+    n_vertices: usize,
+    span: Span,
+    warn: &mut Vec<Diagnostic>,
+) -> Result<Vec<u32>, Diagnostic> {
+    if !idx.len().is_multiple_of(3) {
+        let msg =
+            format!("{} vertex indices is not a multiple of 3; the last {} are ignored", idx.len(), idx.len() % 3);
         warn.push(Diagnostic::warning(span, msg));
         idx.truncate(idx.len() / 3 * 3);
     }
     if let Some(&bad) = idx.iter().find(|&&i| i < 0 || i as usize >= n_vertices) {
-        return Err(Diagnostic::error(span, format!("vertex index {bad} is out of range: the mesh has {n_vertices} vertices")));
+        return Err(Diagnostic::error(
+            span,
+            format!("vertex index {bad} is out of range: the mesh has {n_vertices} vertices"),
+        ));
     }
     Ok(idx.into_iter().map(|i| i as u32).collect())
 }

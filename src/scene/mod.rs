@@ -28,7 +28,11 @@ pub use options::{Camera, CameraKind, Film, Integrator};
 pub enum Geometry {
     Quadric(Quadric),
     /// `kind` is the scene's shape name: `trianglemesh`, `plymesh` or `objmesh`.
-    Mesh { mesh: u32, kind: &'static str, filename: Option<String> },
+    Mesh {
+        mesh: u32,
+        kind: &'static str,
+        filename: Option<String>,
+    },
 }
 
 /// One created shape.
@@ -159,7 +163,8 @@ pub struct PlacedShape<'a> {
 impl SceneDescription {
     /// Every shape in creation order, world shapes first, then each instance's shapes.
     pub fn placed_shapes(&self) -> impl Iterator<Item = PlacedShape<'_>> {
-        let world = self.shapes.iter().map(|s| PlacedShape { shape: s, object_to_world: s.object_to_world, instance: None });
+        let world =
+            self.shapes.iter().map(|s| PlacedShape { shape: s, object_to_world: s.object_to_world, instance: None });
         let inst = self.instances.iter().enumerate().flat_map(move |(i, inst)| {
             self.objects[inst.object as usize].shapes.iter().map(move |s| PlacedShape {
                 shape: s,
@@ -189,15 +194,13 @@ impl SceneDescription {
 
     /// Union of all shapes' world bounds (`None` for an empty scene).
     pub fn world_bounds(&self) -> Option<[DVec3; 2]> {
-        let object_bounds: Vec<Option<[DVec3; 2]>> = self
-            .objects
-            .iter()
-            .map(|o| o.shapes.iter().filter_map(|s| self.local_bounds(s)).reduce(union))
-            .collect();
+        let object_bounds: Vec<Option<[DVec3; 2]>> =
+            self.objects.iter().map(|o| o.shapes.iter().filter_map(|s| self.local_bounds(s)).reduce(union)).collect();
         let world = self.shapes.iter().filter_map(|s| self.local_bounds(s));
-        let inst = self.instances.iter().filter_map(|i| {
-            object_bounds[i.object as usize].map(|b| transform_bounds(&i.world_from_instance, b))
-        });
+        let inst = self
+            .instances
+            .iter()
+            .filter_map(|i| object_bounds[i.object as usize].map(|b| transform_bounds(&i.world_from_instance, b)));
         world.chain(inst).reduce(union)
     }
 

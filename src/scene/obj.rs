@@ -6,7 +6,8 @@ use crate::shapes::TriangleMesh;
 
 pub fn load(path: &std::path::Path) -> Result<TriangleMesh, String> {
     let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
-    let (models, _materials) = tobj::load_obj(path, &opts).map_err(|e| format!("cannot read OBJ \"{}\": {e}", path.display()))?;
+    let (models, _materials) =
+        tobj::load_obj(path, &opts).map_err(|e| format!("cannot read OBJ \"{}\": {e}", path.display()))?;
     let mut mesh = TriangleMesh::default();
     let all_normals = models.iter().all(|m| !m.mesh.normals.is_empty());
     let all_uvs = models.iter().all(|m| !m.mesh.texcoords.is_empty());

@@ -119,7 +119,11 @@ impl RenderOptions {
             match p.int(name)? {
                 None => Ok(default as u32),
                 Some(v) if v >= 1 => Ok(v as u32),
-                Some(v) => Err(err_at(p.find(name, &[ParamType::Integer]), e, format!("\"{name}\" must be at least 1, not {v}"))),
+                Some(v) => Err(err_at(
+                    p.find(name, &[ParamType::Integer]),
+                    e,
+                    format!("\"{name}\" must be at least 1, not {v}"),
+                )),
             }
         };
         let (xres, yres) = (res("xresolution", 1280)?, res("yresolution", 720)?);
@@ -148,8 +152,16 @@ impl RenderOptions {
         let scale = p.float("scale")?.unwrap_or(1.0);
         let iso = p.float("iso")?.unwrap_or(100.0);
         p.mark_known(&[
-            "diagonal", "maxsampleluminance", "maxcomponentvalue", "savefp16", "whitebalance", "sensor",
-            "coordinatesystem", "buckets", "lambdamin", "lambdamax",
+            "diagonal",
+            "maxsampleluminance",
+            "maxcomponentvalue",
+            "savefp16",
+            "whitebalance",
+            "sensor",
+            "coordinatesystem",
+            "buckets",
+            "lambdamin",
+            "lambdamax",
         ]);
         match e.name.as_str() {
             "image" | "rgb" => {}
@@ -204,7 +216,10 @@ impl RenderOptions {
             std::mem::swap(&mut open, &mut close);
         }
         if kind == CameraKind::Perspective && !(fov > 0.0 && fov < 180.0) {
-            return Err(Diagnostic::error(e.name_span, format!("\"fov\" must be between 0 and 180 degrees, not {fov}")));
+            return Err(Diagnostic::error(
+                e.name_span,
+                format!("\"fov\" must be between 0 and 180 degrees, not {fov}"),
+            ));
         }
         Ok(Camera {
             kind,
@@ -231,7 +246,11 @@ impl RenderOptions {
         }
         let positive = |name: &str, v: Option<i32>| -> Res<Option<u32>> {
             match v {
-                Some(v) if v < 1 => Err(err_at(p.find(name, &[ParamType::Integer]), e, format!("\"{name}\" must be at least 1, not {v}"))),
+                Some(v) if v < 1 => Err(err_at(
+                    p.find(name, &[ParamType::Integer]),
+                    e,
+                    format!("\"{name}\" must be at least 1, not {v}"),
+                )),
                 v => Ok(v.map(|v| v as u32)),
             }
         };
@@ -245,7 +264,9 @@ impl RenderOptions {
             (None, Syntax::V4) => self.pixel_samples()?,
         };
         let max_depth = match p.int("maxdepth")? {
-            Some(d) if d < 0 => return Err(Diagnostic::error(e.name_span, format!("\"maxdepth\" must be >= 0, not {d}"))),
+            Some(d) if d < 0 => {
+                return Err(Diagnostic::error(e.name_span, format!("\"maxdepth\" must be >= 0, not {d}")));
+            }
             d => d.unwrap_or(5) as u32,
         };
         let photons = match p.int("photonsperiteration")? {
@@ -264,7 +285,14 @@ impl RenderOptions {
         if e.name != "sppm" {
             p.mark_all_used();
         }
-        Ok(Integrator { requested: e.name.clone(), iterations, max_depth, photons_per_iteration: photons, radius, seed })
+        Ok(Integrator {
+            requested: e.name.clone(),
+            iterations,
+            max_depth,
+            photons_per_iteration: photons,
+            radius,
+            seed,
+        })
     }
 
     /// The sampler's samples per pixel (pbrt-v4's SPPM iteration count), default 16.

@@ -37,13 +37,17 @@ pub fn load(path: &std::path::Path) -> Result<(TriangleMesh, Vec<String>), Strin
     let raw = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
     let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
         let mut out = Vec::new();
-        flate2::read::MultiGzDecoder::new(&raw[..]).read_to_end(&mut out).map_err(|e| format!("cannot decompress: {e}"))?;
+        flate2::read::MultiGzDecoder::new(&raw[..])
+            .read_to_end(&mut out)
+            .map_err(|e| format!("cannot decompress: {e}"))?;
         out
     } else {
         raw
     };
     let mut reader = &bytes[..];
-    let header = Parser::<AsciiVertex>::new().read_header(&mut reader).map_err(|e| format!("bad PLY header: {}", first_line(&e)))?;
+    let header = Parser::<AsciiVertex>::new()
+        .read_header(&mut reader)
+        .map_err(|e| format!("bad PLY header: {}", first_line(&e)))?;
     let mut got = Collected::default();
     match header.encoding {
         Encoding::Ascii => read_ascii(&mut reader, &header, &mut got)?,
@@ -59,7 +63,8 @@ fn first_line(e: &std::io::Error) -> String {
 }
 
 fn build(header: &Header, got: Collected) -> Result<(TriangleMesh, Vec<String>), String> {
-    let names: Vec<&str> = header.elements.get("vertex").map_or(vec![], |e| e.properties.keys().map(String::as_str).collect());
+    let names: Vec<&str> =
+        header.elements.get("vertex").map_or(vec![], |e| e.properties.keys().map(String::as_str).collect());
     let has = |n: &str| names.contains(&n);
     if !(has("x") && has("y") && has("z")) {
         return Err("PLY file has no vertex element with x, y and z".into());

@@ -84,8 +84,15 @@ pub fn build(
     }
 }
 
-fn file_mesh(ty: &str, p: &ParamList, span: Span, resolve: &dyn Fn(&str) -> PathBuf, warn: &mut Vec<Diagnostic>) -> Res<Built> {
-    let name = p.string("filename")?.ok_or_else(|| Diagnostic::error(span, format!("{ty} needs \"string filename\"")))?;
+fn file_mesh(
+    ty: &str,
+    p: &ParamList,
+    span: Span,
+    resolve: &dyn Fn(&str) -> PathBuf,
+    warn: &mut Vec<Diagnostic>,
+) -> Res<Built> {
+    let name =
+        p.string("filename")?.ok_or_else(|| Diagnostic::error(span, format!("{ty} needs \"string filename\"")))?;
     let at = p.named("filename").map_or(span, |f| f.value_span);
     let path = resolve(&name);
     let mut m = if ty == "plymesh" {
@@ -128,7 +135,7 @@ fn positive(p: &ParamList, name: &str, default: f32, span: Span) -> Res<f32> {
 fn check_alpha(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Res<()> {
     for name in ["alpha", "shadowalpha"] {
         match p.float_or_texture(name)? {
-            Some(FloatValue::Const(a)) if a == 1.0 => {}
+            Some(FloatValue::Const(1.0)) => {}
             Some(_) => warn.push(Diagnostic::warning(
                 p.named(name).map_or(span, |x| x.span),
                 format!("\"{name}\" masks are not supported; the shape is opaque"),

@@ -28,8 +28,7 @@ impl Paraboloid {
     pub fn area(&self) -> f64 {
         let (r, z0, z1) = (self.radius as f64, self.z_min as f64, self.z_max as f64);
         let (r2, k) = (r * r, 4.0 * z1 / (r * r));
-        self.phi_max as f64 * r2 * r2 / (12.0 * z1 * z1)
-            * ((k * z1 + 1.0).powf(1.5) - (k * z0 + 1.0).powf(1.5))
+        self.phi_max as f64 * r2 * r2 / (12.0 * z1 * z1) * ((k * z1 + 1.0).powf(1.5) - (k * z0 + 1.0).powf(1.5))
     }
 
     pub fn point(&self, u: f64, v: f64) -> DVec3 {

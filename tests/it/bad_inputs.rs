@@ -50,7 +50,9 @@ fn the_command_line_prints_the_error_and_exits_with_1() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(
         stderr.lines().next(),
-        Some("tests/data/bad/mesh-index-out-of-range.pbrt:3:21: error: vertex index 3 is out of range: the mesh has 3 vertices")
+        Some(
+            "tests/data/bad/mesh-index-out-of-range.pbrt:3:21: error: vertex index 3 is out of range: the mesh has 3 vertices"
+        )
     );
     assert!(out.stdout.is_empty(), "no JSON on failure");
 }

@@ -19,7 +19,10 @@ fn approx(a: [f64; 16], b: [f64; 16]) -> bool {
 
 #[test]
 fn translate_scale_rotate_identity() {
-    assert_eq!(m(r#"Translate 1 2 3 Shape "sphere""#), [1., 0., 0., 1., 0., 1., 0., 2., 0., 0., 1., 3., 0., 0., 0., 1.]);
+    assert_eq!(
+        m(r#"Translate 1 2 3 Shape "sphere""#),
+        [1., 0., 0., 1., 0., 1., 0., 2., 0., 0., 1., 3., 0., 0., 0., 1.]
+    );
     assert_eq!(m(r#"Scale 2 3 -4 Shape "sphere""#), [2., 0., 0., 0., 0., 3., 0., 0., 0., 0., -4., 0., 0., 0., 0., 1.]);
     // Rotate 90 about z maps +x to +y: column 0 is (0, 1, 0).
     let r = m(r#"Rotate 90 0 0 1 Shape "sphere""#);
@@ -51,7 +54,9 @@ fn look_at_follows_pbrt_handedness() {
 #[test]
 fn named_coordinate_systems_including_camera_and_world() {
     assert_eq!(m(r#"Translate 1 2 3 CoordinateSystem "a" Identity CoordSysTransform "a" Shape "sphere""#)[3], 1.0);
-    let r = report("LookAt 1 2 3  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nCoordSysTransform \"camera\"\nShape \"sphere\"\n");
+    let r = report(
+        "LookAt 1 2 3  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nCoordSysTransform \"camera\"\nShape \"sphere\"\n",
+    );
     let w = matrix(&r["shapes"][0]["object_to_world"]);
     assert!(close(w[3], 1.0, 1e-12) && close(w[7], 2.0, 1e-12) && close(w[11], 3.0, 1e-12), "{w:?}");
     assert_eq!(m(r#"Translate 4 4 4 CoordSysTransform "world" Shape "sphere""#), I);
@@ -61,7 +66,9 @@ fn named_coordinate_systems_including_camera_and_world() {
 
 #[test]
 fn active_transform_and_transform_times() {
-    let s = scene("TransformTimes 0 2\nWorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\nShape \"sphere\"\n");
+    let s = scene(
+        "TransformTimes 0 2\nWorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\nShape \"sphere\"\n",
+    );
     assert_eq!(s.shapes[0].object_to_world, glam::DMat4::IDENTITY, "shapes use the start transform");
     assert!(warnings(&s).iter().any(|w| w.contains("animated transforms")));
     assert_eq!(m(r#"ActiveTransform StartTime Translate 2 0 0 Shape "sphere""#)[3], 2.0);
@@ -82,7 +89,8 @@ fn reverse_orientation_toggles_and_is_scoped() {
 
 #[test]
 fn option_and_color_space() {
-    let s = scene("Option \"seed\" 42\nOption \"bool disablepixeljitter\" true\nColorSpace \"aces2065-1\"\nWorldBegin\n");
+    let s =
+        scene("Option \"seed\" 42\nOption \"bool disablepixeljitter\" true\nColorSpace \"aces2065-1\"\nWorldBegin\n");
     assert_eq!(s.integrator.seed, 42);
     assert!(s.options.contains(&("disablepixeljitter".into(), "true".into())));
     assert!(warnings(&s).iter().any(|w| w.contains("aces2065-1")));
@@ -91,11 +99,15 @@ fn option_and_color_space() {
 
 #[test]
 fn camera_parameters_and_defaults() {
-    let r = report("Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 100\nCamera \"perspective\" \"float fov\" 30 \"float lensradius\" 0.1 \"float focaldistance\" 4\nWorldBegin\n");
+    let r = report(
+        "Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 100\nCamera \"perspective\" \"float fov\" 30 \"float lensradius\" 0.1 \"float focaldistance\" 4\nWorldBegin\n",
+    );
     let c = &r["camera"];
     assert_eq!((num(&c["fov"]), num(&c["lensradius"]), num(&c["focaldistance"])), (30.0, 0.1, 4.0));
     assert_eq!(c["screenwindow"], serde_json::json!([-2.0, 2.0, -1.0, 1.0]));
-    let r = report("Film \"image\" \"integer xresolution\" 100 \"integer yresolution\" 200\nCamera \"orthographic\"\nWorldBegin\n");
+    let r = report(
+        "Film \"image\" \"integer xresolution\" 100 \"integer yresolution\" 200\nCamera \"orthographic\"\nWorldBegin\n",
+    );
     assert_eq!(r["camera"]["type"], "orthographic");
     assert_eq!(r["camera"]["screenwindow"], serde_json::json!([-1.0, 1.0, -2.0, 2.0]));
     let r = report("Camera \"perspective\" \"float halffov\" 20\nWorldBegin\n");
@@ -106,12 +118,16 @@ fn camera_parameters_and_defaults() {
 
 #[test]
 fn film_crop_window_pixel_bounds_and_scale() {
-    let r = report("Film \"image\" \"integer xresolution\" 10 \"integer yresolution\" 10 \"float cropwindow\" [0.75 0.25 0.05 1.2] \"float scale\" 1.5\nWorldBegin\n");
+    let r = report(
+        "Film \"image\" \"integer xresolution\" 10 \"integer yresolution\" 10 \"float cropwindow\" [0.75 0.25 0.05 1.2] \"float scale\" 1.5\nWorldBegin\n",
+    );
     let f = &r["film"];
     assert_eq!(f["cropwindow"], serde_json::json!([0.25, 0.75, 0.05, 1.0]));
     assert_eq!(f["pixelbounds"], serde_json::json!([3, 8, 1, 10]));
     assert_eq!(num(&f["scale"]), 1.5);
-    let r = report("Film \"rgb\" \"integer pixelbounds\" [2 6 1 3] \"float iso\" 200 \"string filename\" \"out.exr\"\nWorldBegin\n");
+    let r = report(
+        "Film \"rgb\" \"integer pixelbounds\" [2 6 1 3] \"float iso\" 200 \"string filename\" \"out.exr\"\nWorldBegin\n",
+    );
     assert_eq!(r["film"]["pixelbounds"], serde_json::json!([2, 6, 1, 3]));
     assert_eq!((num(&r["film"]["scale"]), r["film"]["filename"].as_str()), (2.0, Some("out.exr")));
     assert_eq!(r["integrator"]["photonsperiteration"], 8, "default photons = pixels in the crop");
@@ -121,15 +137,20 @@ fn film_crop_window_pixel_bounds_and_scale() {
 fn integrator_iterations_per_syntax_version() {
     let v3 = scene("Integrator \"sppm\" \"integer numiterations\" 10 \"float radius\" 0.025\nWorldBegin\n");
     assert_eq!((v3.syntax, v3.integrator.iterations, v3.integrator.radius), (Syntax::V3, 10, 0.025));
-    let v3_default = scene("Film \"image\"\nIntegrator \"sppm\"\nSampler \"halton\" \"integer pixelsamples\" 4\nWorldBegin\n");
+    let v3_default =
+        scene("Film \"image\"\nIntegrator \"sppm\"\nSampler \"halton\" \"integer pixelsamples\" 4\nWorldBegin\n");
     assert_eq!(v3_default.integrator.iterations, 64, "v3 ignores the sampler");
-    let v4 = scene("Film \"rgb\"\nSampler \"zsobol\" \"integer pixelsamples\" 4\nIntegrator \"sppm\" \"integer maxdepth\" 7 \"integer photonsperiteration\" 1000 \"integer seed\" 9\nWorldBegin\n");
+    let v4 = scene(
+        "Film \"rgb\"\nSampler \"zsobol\" \"integer pixelsamples\" 4\nIntegrator \"sppm\" \"integer maxdepth\" 7 \"integer photonsperiteration\" 1000 \"integer seed\" 9\nWorldBegin\n",
+    );
     let i = &v4.integrator;
     assert_eq!((i.iterations, i.max_depth, i.photons_per_iteration, i.seed), (4, 7, 1000, 9));
-    let strat = scene("Film \"rgb\"\nSampler \"stratified\" \"integer xsamples\" 3 \"integer ysamples\" 5\nWorldBegin\n");
+    let strat =
+        scene("Film \"rgb\"\nSampler \"stratified\" \"integer xsamples\" 3 \"integer ysamples\" 5\nWorldBegin\n");
     assert_eq!(strat.integrator.iterations, 15);
     assert_eq!(scene("Film \"rgb\"\nWorldBegin\n").integrator.iterations, 16);
-    let explicit = scene("Integrator \"sppm\" \"integer iterations\" 3 \"integer imagewritefrequency\" 1\nWorldBegin\n");
+    let explicit =
+        scene("Integrator \"sppm\" \"integer iterations\" 3 \"integer imagewritefrequency\" 1\nWorldBegin\n");
     assert_eq!(explicit.integrator.iterations, 3);
     assert!(explicit.warnings.is_empty(), "{:?}", explicit.warnings);
     let path = scene("Integrator \"path\" \"integer maxdepth\" 3\nWorldBegin\n");
@@ -138,13 +159,17 @@ fn integrator_iterations_per_syntax_version() {
 
 #[test]
 fn sampler_filter_and_accelerator_are_accepted_quietly() {
-    let s = scene("Sampler \"halton\" \"integer pixelsamples\" 8\nPixelFilter \"gaussian\" \"float xwidth\" 2\nAccelerator \"kdtree\" \"integer maxprims\" 4\nWorldBegin\n");
+    let s = scene(
+        "Sampler \"halton\" \"integer pixelsamples\" 8\nPixelFilter \"gaussian\" \"float xwidth\" 2\nAccelerator \"kdtree\" \"integer maxprims\" 4\nWorldBegin\n",
+    );
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
 }
 
 #[test]
 fn media_are_skipped_with_one_warning_each() {
-    let s = scene("MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\nWorldBegin\nMediumInterface \"fog\" \"\"\nMediumInterface \"\"\nShape \"sphere\"\n");
+    let s = scene(
+        "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\nWorldBegin\nMediumInterface \"fog\" \"\"\nMediumInterface \"\"\nShape \"sphere\"\n",
+    );
     assert_eq!(s.skipped.len(), 2);
     assert_eq!((s.skipped[0].line, s.skipped[1].line), (1, 3));
     assert_eq!(s.warnings.len(), 2);
@@ -233,10 +258,10 @@ fn lights_and_area_lights() {
     assert_eq!(s.area_lights.len(), 1, "one AreaLightSource, shared by two shapes");
     let lit: Vec<bool> = s.shapes.iter().map(|x| x.area_light.is_some()).collect();
     assert_eq!(lit, [true, true, false, false]);
-    assert_eq!(s.skipped.iter().map(|k| k.what.as_str()).collect::<Vec<_>>(), [
-        "LightSource \"goniometric\"",
-        "AreaLightSource \"projection\""
-    ]);
+    assert_eq!(
+        s.skipped.iter().map(|k| k.what.as_str()).collect::<Vec<_>>(),
+        ["LightSource \"goniometric\"", "AreaLightSource \"projection\""]
+    );
     let unused = s.warnings.iter().find(|w| w.message.contains("bogus")).expect("unused-parameter warning");
     assert_eq!((unused.line, unused.column), (2, 45));
     assert_eq!(pbrt_sppm::check::report(&s, false)["counts"]["lights"], 3);
@@ -358,10 +383,13 @@ fn syntax_detection_and_override() {
 fn unused_parameters_are_warned_at_their_own_location() {
     let s = scene("WorldBegin\nShape \"sphere\" \"float radius\" 2\n  \"float radiuss\" 3 \"integer zmin\" 0\n");
     let w: Vec<(u32, u32, &str)> = s.warnings.iter().map(|w| (w.line, w.column, w.message.as_str())).collect();
-    assert_eq!(w, [
-        (3, 3, "parameter \"float radiuss\" is not used"),
-        (3, 21, "parameter \"integer zmin\" is not used (expected type \"float\")"),
-    ]);
+    assert_eq!(
+        w,
+        [
+            (3, 3, "parameter \"float radiuss\" is not used"),
+            (3, 21, "parameter \"integer zmin\" is not used (expected type \"float\")"),
+        ]
+    );
 }
 
 #[test]

@@ -72,10 +72,14 @@ fn many_instances_cost_about_one_copy() {
     let dir = std::env::temp_dir().join(format!("pbrt-sppm-inst-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     write_grid_ply(&dir.join("grid.ply"), 123); // 30,258 triangles
-    let mut scene = String::from("WorldBegin\nObjectBegin \"g\"\nShape \"plymesh\" \"string filename\" \"grid.ply\"\nObjectEnd\n");
+    let mut scene =
+        String::from("WorldBegin\nObjectBegin \"g\"\nShape \"plymesh\" \"string filename\" \"grid.ply\"\nObjectEnd\n");
     for k in 0..25_000 {
         let (x, z) = (k % 160, k / 160);
-        scene.push_str(&format!("AttributeBegin\nTranslate {x} 0 {z}\nRotate {} 0 1 0\nObjectInstance \"g\"\nAttributeEnd\n", k % 360));
+        scene.push_str(&format!(
+            "AttributeBegin\nTranslate {x} 0 {z}\nRotate {} 0 1 0\nObjectInstance \"g\"\nAttributeEnd\n",
+            k % 360
+        ));
     }
     let path = dir.join("many.pbrt");
     std::fs::write(&path, &scene).unwrap();

@@ -59,10 +59,12 @@ fn hyperboloid_parameters_and_true_area() {
     assert_eq!(s["params"]["p1"], json!([1.0, 0.0, -1.0]));
     assert_eq!((s["params"]["zmin"].clone(), s["params"]["rmax"].clone()), (json!(-1.0), json!(1.0)));
     // pbrt-v3's formula gives 26.18 here; the surface of revolution has area ≈ 10.77.
-    let numeric = 2.0 * PI * integrate(|v: f64| {
-        let (x, y) = (1.0 - v, v);
-        (4.0 * (x * x + y * y) + (-x + y).powi(2)).sqrt()
-    });
+    let numeric = 2.0
+        * PI
+        * integrate(|v: f64| {
+            let (x, y) = (1.0 - v, v);
+            (4.0 * (x * x + y * y) + (-x + y).powi(2)).sqrt()
+        });
     assert!(close(num(&s["area"]), numeric, 1e-6), "{} vs {numeric}", s["area"]);
     assert!((numeric - 10.77).abs() < 0.01);
 }
@@ -86,7 +88,9 @@ fn world_areas_under_any_transform() {
     assert!(close(num(&s["area"]), 4.0 * PI, 1e-6));
     assert_eq!(s["swaps_handedness"], true);
     // Meshes under a shear.
-    let s = one(r#"ConcatTransform [1 0 0 0  1 1 0 0  0 0 1 0  0 0 0 1] Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0]"#);
+    let s = one(
+        r#"ConcatTransform [1 0 0 0  1 1 0 0  0 0 1 0  0 0 0 1] Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0]"#,
+    );
     assert!(close(num(&s["area"]), 0.5, 1e-12));
 }
 
@@ -119,7 +123,9 @@ fn triangle_mesh_arrays_and_checks() {
 
 #[test]
 fn meshes_are_stored_transformed_like_pbrt() {
-    let s = scene(r#"WorldBegin Translate 0 0 5 Scale 2 2 2 Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "normal N" [0 0 1 0 0 1 0 0 1]"#);
+    let s = scene(
+        r#"WorldBegin Translate 0 0 5 Scale 2 2 2 Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "normal N" [0 0 1 0 0 1 0 0 1]"#,
+    );
     assert_eq!(s.meshes[0].p, [[0.0, 0.0, 5.0], [2.0, 0.0, 5.0], [0.0, 2.0, 5.0]]);
     assert_eq!(s.meshes[0].n.as_ref().unwrap()[0], [0.0, 0.0, 0.5]);
 }
@@ -194,11 +200,16 @@ fn objmesh_extension() {
 
 #[test]
 fn unsupported_shapes_are_skipped_with_one_warning() {
-    let s = scene("WorldBegin\nShape \"curve\" \"point3 P\" [0 0 0 1 1 1 2 2 2 3 3 3]\nShape \"sphere\" \"float alpha\" 0.5\n");
+    let s = scene(
+        "WorldBegin\nShape \"curve\" \"point3 P\" [0 0 0 1 1 1 2 2 2 3 3 3]\nShape \"sphere\" \"float alpha\" 0.5\n",
+    );
     assert_eq!(s.shapes.len(), 1);
     assert_eq!(s.skipped.len(), 1);
     assert_eq!((s.skipped[0].line, s.skipped[0].column, s.skipped[0].what.as_str()), (2, 7, "Shape \"curve\""));
     let msgs: Vec<&str> = s.warnings.iter().map(|w| w.message.as_str()).collect();
-    assert_eq!(msgs, ["Shape \"curve\": this shape type is not supported", "\"alpha\" masks are not supported; the shape is opaque"]);
+    assert_eq!(
+        msgs,
+        ["Shape \"curve\": this shape type is not supported", "\"alpha\" masks are not supported; the shape is opaque"]
+    );
     assert!(root().exists());
 }

@@ -5,14 +5,10 @@ use pbrt_sppm::parser::lexer::{decode_string, tokenize_all};
 
 #[test]
 fn tokenizer_basics() {
-    assert_eq!(tokenize_all(br#"Shape "sphere" "float radius" [1]"#).unwrap(), [
-        "Shape",
-        "\"sphere\"",
-        "\"float radius\"",
-        "[",
-        "1",
-        "]"
-    ]);
+    assert_eq!(
+        tokenize_all(br#"Shape "sphere" "float radius" [1]"#).unwrap(),
+        ["Shape", "\"sphere\"", "\"float radius\"", "[", "1", "]"]
+    );
     // A newline between tokens changes nothing.
     assert_eq!(
         tokenize_all(b"Shape \"sphere\"\n\"float radius\" [1]").unwrap(),
@@ -45,18 +41,10 @@ fn tokenizer_errors() {
 #[test]
 fn tokenize_file() {
     let toks = tokenize_all(b"WorldBegin # hello\nIntegrator \"deep\" \"float density\" [ 2 2.66612 -5e-51]").unwrap();
-    assert_eq!(toks, [
-        "WorldBegin",
-        "# hello",
-        "Integrator",
-        "\"deep\"",
-        "\"float density\"",
-        "[",
-        "2",
-        "2.66612",
-        "-5e-51",
-        "]"
-    ]);
+    assert_eq!(
+        toks,
+        ["WorldBegin", "# hello", "Integrator", "\"deep\"", "\"float density\"", "[", "2", "2.66612", "-5e-51", "]"]
+    );
 }
 
 #[test]
@@ -78,9 +66,7 @@ fn numbers_are_rounded_once_from_the_decimal_text() {
 
 #[test]
 fn float_written_integers_are_truncated_with_a_warning() {
-    let s = scene(
-        r#"WorldBegin Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 2.0]"#,
-    );
+    let s = scene(r#"WorldBegin Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 2.0]"#);
     assert_eq!(s.meshes[0].indices, [0, 1, 2]);
     let w = &s.warnings[0];
     assert_eq!((w.line, w.column), (1, 87));
