@@ -1,1 +1,210 @@
-fn main() {}
+//! `pbrt-bench`: benchmarks (speed lives here, never in tests).
+//!
+//! ```text
+//! cargo run --release --bin pbrt-bench -- parse [--runs 5] [--dir target/bench-data]
+//! ```
+//! `parse` generates a 50 MB scene with one inline `trianglemesh`, a scene naming a
+//! 1M-triangle binary PLY, and a scene with 25,000 instances of a 30,000-triangle PLY,
+//! then loads each `--runs` times, every run in a fresh process so its peak memory
+//! (VmHWM) is its own, and prints the median time, MB/s and peak memory.
+
+use pbrt_sppm::scene::{LoadOptions, load_scene};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+use std::time::Instant;
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().collect();
+    let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).cloned();
+    match args.get(1).map(String::as_str) {
+        Some("parse") => {
+            let runs = flag("--runs").and_then(|r| r.parse().ok()).unwrap_or(5);
+            let dir = PathBuf::from(flag("--dir").unwrap_or_else(|| "target/bench-data".into()));
+            parse_bench(&dir, runs)
+        }
+        Some("--once") => match args.get(2) {
+            Some(scene) => once(Path::new(scene)),
+            None => usage(),
+        },
+        _ => usage(),
+    }
+}
+
+fn usage() -> ExitCode {
+    eprintln!("usage: pbrt-bench parse [--runs N] [--dir DIR]");
+    ExitCode::FAILURE
+}
+
+/// Loads one scene in this process; prints `seconds peak_kib triangles`.
+fn once(scene: &Path) -> ExitCode {
+    let start = Instant::now();
+    let s = match load_scene(scene, &LoadOptions::default()) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let secs = start.elapsed().as_secs_f64();
+    let tris: usize = s.meshes.iter().map(|m| m.triangle_count()).sum();
+    println!("{secs} {} {tris}", peak_kib());
+    ExitCode::SUCCESS
+}
+
+fn peak_kib() -> u64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0)
+}
+
+fn parse_bench(dir: &Path, runs: usize) -> ExitCode {
+    if let Err(e) = std::fs::create_dir_all(dir) {
+        eprintln!("{}: {e}", dir.display());
+        return ExitCode::FAILURE;
+    }
+    let cases = [
+        ("inline trianglemesh (50 MB text)", ensure(dir, "inline.pbrt", write_inline_mesh)),
+        ("plymesh, 1M triangles (binary)", ensure(dir, "ply1m.pbrt", write_ply_scene)),
+        ("25,000 instances of a 30k-triangle PLY", ensure(dir, "instances.pbrt", write_instances)),
+    ];
+    println!("{:<42} {:>9} {:>10} {:>10} {:>11}", "case", "MB", "median s", "MB/s", "peak MiB");
+    for (name, scene) in cases {
+        let Ok((scene, bytes)) = scene else {
+            eprintln!("could not write the {name} input");
+            return ExitCode::FAILURE;
+        };
+        let mut times = Vec::new();
+        let mut peak = 0;
+        for _ in 0..runs {
+            let out = Command::new(std::env::current_exe().unwrap_or_else(|_| "pbrt-bench".into()))
+                .args(["--once", &scene.to_string_lossy()])
+                .output();
+            let Ok(out) = out else { return ExitCode::FAILURE };
+            let text = String::from_utf8_lossy(&out.stdout);
+            let v: Vec<f64> = text.split_whitespace().filter_map(|x| x.parse().ok()).collect();
+            if v.len() < 2 {
+                eprintln!("{name}: {}", String::from_utf8_lossy(&out.stderr));
+                return ExitCode::FAILURE;
+            }
+            times.push(v[0]);
+            peak = peak.max(v[1] as u64);
+        }
+        times.sort_by(f64::total_cmp);
+        let median = times[times.len() / 2];
+        let mb = bytes as f64 / 1e6;
+        println!("{name:<42} {mb:>9.1} {median:>10.3} {:>10.1} {:>11.1}", mb / median, peak as f64 / 1024.0);
+    }
+    ExitCode::SUCCESS
+}
+
+/// Writes an input once; returns the scene path and the bytes a load reads.
+fn ensure(dir: &Path, name: &str, write: fn(&Path) -> std::io::Result<u64>) -> std::io::Result<(PathBuf, u64)> {
+    let path = dir.join(name);
+    let size_file = dir.join(format!("{name}.bytes"));
+    if let (true, Ok(s)) = (path.exists(), std::fs::read_to_string(&size_file)) {
+        if let Ok(bytes) = s.trim().parse() {
+            return Ok((path, bytes));
+        }
+    }
+    let bytes = write(&path)?;
+    std::fs::write(size_file, bytes.to_string())?;
+    Ok((path, bytes))
+}
+
+/// A deterministic pseudo-random stream (xorshift), for vertex jitter.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// A grid of `n × n` quads as positions and triangle indices.
+fn grid(n: usize) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let p = (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| (i, j)))
+        .map(|(i, j)| [i as f32 / n as f32, j as f32 / n as f32, 0.0])
+        .map(|[x, y, _]| [x, y, rng.next() * 0.01])
+        .collect();
+    let mut idx = Vec::with_capacity(6 * n * n);
+    for j in 0..n {
+        for i in 0..n {
+            let v = |di: usize, dj: usize| ((j + dj) * (n + 1) + i + di) as u32;
+            idx.extend([v(0, 0), v(1, 0), v(1, 1), v(0, 0), v(1, 1), v(0, 1)]);
+        }
+    }
+    (p, idx)
+}
+
+fn write_inline_mesh(path: &Path) -> std::io::Result<u64> {
+    let (p, idx) = grid(850); // 1.4M triangles, about 50 MB of text
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(w, "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [")?;
+    for v in &p {
+        writeln!(w, "{:.6} {:.6} {:.6}", v[0], v[1], v[2])?;
+    }
+    writeln!(w, "] \"integer indices\" [")?;
+    for t in idx.chunks(3) {
+        writeln!(w, "{} {} {}", t[0], t[1], t[2])?;
+    }
+    writeln!(w, "]")?;
+    w.flush()?;
+    Ok(std::fs::metadata(path)?.len())
+}
+
+fn write_ply(path: &Path, n: usize) -> std::io::Result<u64> {
+    let (p, idx) = grid(n);
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    write!(
+        w,
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        p.len(),
+        idx.len() / 3
+    )?;
+    for v in &p {
+        for c in v {
+            w.write_all(&c.to_le_bytes())?;
+        }
+    }
+    for t in idx.chunks(3) {
+        w.write_all(&[3])?;
+        for i in t {
+            w.write_all(&i.to_le_bytes())?;
+        }
+    }
+    w.flush()?;
+    Ok(std::fs::metadata(path)?.len())
+}
+
+fn write_ply_scene(path: &Path) -> std::io::Result<u64> {
+    let ply = path.with_extension("ply");
+    let bytes = write_ply(&ply, 708)?; // 1,002,528 triangles
+    let name = ply.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    std::fs::write(path, format!("WorldBegin\nShape \"plymesh\" \"string filename\" \"{name}\"\n"))?;
+    Ok(bytes + std::fs::metadata(path)?.len())
+}
+
+fn write_instances(path: &Path) -> std::io::Result<u64> {
+    let ply = path.with_extension("ply");
+    let bytes = write_ply(&ply, 123)?;
+    let name = ply.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(w, "WorldBegin\nObjectBegin \"g\"\nShape \"plymesh\" \"string filename\" \"{name}\"\nObjectEnd")?;
+    for k in 0..25_000 {
+        let m =
+            [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, (k % 160) as f32, 0.0, (k / 160) as f32, 1.0];
+        let m: Vec<String> = m.iter().map(|x| x.to_string()).collect();
+        writeln!(w, "AttributeBegin\n  Transform [ {} ]\n  ObjectInstance \"g\"\nAttributeEnd", m.join(" "))?;
+    }
+    w.flush()?;
+    Ok(bytes + std::fs::metadata(path)?.len())
+}

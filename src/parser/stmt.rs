@@ -639,20 +639,109 @@ pub fn resolve_relative(base: &Path, name: &str) -> PathBuf {
     if !joined.exists() && p.exists() { p.to_path_buf() } else { joined }
 }
 
-/// A correctly rounded `f32` (Rust's parser rounds once, from the decimal text).
+/// A correctly rounded `f32`, rounded once from the decimal text.
+///
+/// Plain decimals with at most 8 significant digits and 10 fraction digits take Clinger's
+/// exact path: the digits (≤ 2²⁴) and the power of ten (≤ 10¹⁰) are both exact in `f32`,
+/// so one division rounds correctly. Everything else goes to the standard parser.
 pub fn parse_f32(b: &[u8]) -> Option<f32> {
-    std::str::from_utf8(b).ok()?.parse().ok()
+    fast_f32(b).or_else(|| std::str::from_utf8(b).ok()?.parse().ok())
+}
+
+fn fast_f32(b: &[u8]) -> Option<f32> {
+    const POW10: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
+    let (neg, digits) = match b.first()? {
+        b'-' => (true, &b[1..]),
+        b'+' => (false, &b[1..]),
+        _ => (false, b),
+    };
+    let (mut mantissa, mut fraction, mut seen_dot, mut any) = (0u32, 0usize, false, false);
+    for &c in digits {
+        match c {
+            b'0'..=b'9' => {
+                mantissa = mantissa.checked_mul(10)?.checked_add((c - b'0') as u32)?;
+                fraction += seen_dot as usize;
+                any = true;
+            }
+            b'.' if !seen_dot => seen_dot = true,
+            _ => return None, // exponents, inf, nan, junk: the slow path decides
+        }
+    }
+    if !any || mantissa > 1 << 24 || fraction > 10 {
+        return None;
+    }
+    let v = mantissa as f32 / POW10[fraction];
+    Some(if neg { -v } else { v })
 }
 
 pub fn parse_f64(b: &[u8]) -> Option<f64> {
     std::str::from_utf8(b).ok()?.parse().ok()
 }
 
-/// pbrt-v4's strict integer syntax: optional sign, then digits.
+/// pbrt-v4's strict integer syntax: optional sign, then digits (`None` on overflow).
 pub fn parse_int(b: &[u8]) -> Option<i32> {
-    let digits = b.strip_prefix(b"-").or_else(|| b.strip_prefix(b"+")).unwrap_or(b);
-    if digits.is_empty() || !digits.iter().all(u8::is_ascii_digit) {
+    let (neg, digits) = match b.first()? {
+        b'-' => (true, &b[1..]),
+        b'+' => (false, &b[1..]),
+        _ => (false, b),
+    };
+    if digits.is_empty() {
         return None;
     }
-    std::str::from_utf8(b).ok()?.parse().ok()
+    let mut v: i64 = 0;
+    for &c in digits {
+        if !c.is_ascii_digit() || v > i32::MAX as i64 + 1 {
+            return None;
+        }
+        v = v * 10 + (c - b'0') as i64;
+    }
+    i32::try_from(if neg { -v } else { v }).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_float_path_agrees_with_the_standard_parser() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for _ in 0..200_000 {
+            let r = next();
+            let digits = (r % 100_000_000) as u32;
+            let places = ((r >> 32) % 12) as usize;
+            let s = format!("{digits}");
+            let text = if places < s.len() {
+                format!("{}{}.{}", if r >> 63 == 1 { "-" } else { "" }, &s[..s.len() - places], &s[s.len() - places..])
+            } else {
+                format!(".{}{s}", "0".repeat(places - s.len()))
+            };
+            let want: f32 = text.parse().unwrap();
+            assert_eq!(parse_f32(text.as_bytes()).map(f32::to_bits), Some(want.to_bits()), "{text}");
+        }
+        for t in ["5.", ".5", "-0", "+3", "1e3", "16777217", "0.00000000001", "inf", "-nan"] {
+            let want: f32 = t.parse().unwrap();
+            let got = parse_f32(t.as_bytes()).unwrap();
+            assert!(got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()), "{t}");
+        }
+        assert_eq!(parse_f32(b"1.2.3"), None);
+        assert_eq!(parse_f32(b"."), None);
+    }
+
+    #[test]
+    fn strict_integers() {
+        assert_eq!(parse_int(b"-2147483648"), Some(i32::MIN));
+        assert_eq!(parse_int(b"2147483647"), Some(i32::MAX));
+        assert_eq!(parse_int(b"2147483648"), None);
+        assert_eq!(parse_int(b"99999999999999999999"), None);
+        assert_eq!(parse_int(b"+7"), Some(7));
+        for bad in [&b"5.0"[..], b"", b"-", b"1e3", b"0x10"] {
+            assert_eq!(parse_int(bad), None);
+        }
+    }
 }
