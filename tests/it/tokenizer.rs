@@ -72,3 +72,55 @@ fn float_written_integers_are_truncated_with_a_warning() {
     assert_eq!((w.line, w.column), (1, 87));
     assert!(w.message.contains("2.0 is not an integer"), "{}", w.message);
 }
+
+#[test]
+fn every_parameter_type_and_alias_parses() {
+    let s = scene(
+        r#"WorldBegin Shape "sphere"
+        "integer a" [1 -2] "float b" 1.5 "point2 c" [1 2] "vector2 d" [1 2] "point3 e" [1 2 3]
+        "vector3 f" [1 2 3] "normal g" [0 0 1] "normal3 h" [0 0 1] "bool i" "true" "bool j" false
+        "string k" "x" "texture l" "t" "rgb m" [1 1 1] "spectrum n" [400 1 500 2] "spectrum o" "metal-Au-eta"
+        "blackbody p" [5500] "point q" [1 2 3] "vector r" [1 2 3] "color s" [1 1 1] "xyz t" [1 1 1] "float u" []"#,
+    );
+    let types: Vec<String> = s
+        .warnings
+        .iter()
+        .map(|w| w.message.trim_start_matches("parameter \"").split(' ').next().unwrap_or("").to_string())
+        .collect();
+    assert_eq!(
+        types,
+        [
+            "integer",
+            "float",
+            "point2",
+            "vector2",
+            "point3",
+            "vector3",
+            "normal",
+            "normal3",
+            "bool",
+            "bool",
+            "string",
+            "texture",
+            "rgb",
+            "spectrum",
+            "spectrum",
+            "blackbody",
+            "point",
+            "vector",
+            "color",
+            "xyz",
+            "float"
+        ]
+    );
+}
+
+#[test]
+fn errors_show_the_source_line_and_a_caret() {
+    let e = crate::common::load("WorldBegin\n\tShape \"sphere\" \"float radius\" [ x ]\n").unwrap_err();
+    assert_eq!(
+        e.with_source(),
+        "tests/data/good/inline.pbrt:2:34: error: \"float radius\": expected a number, found 'x'\n  \
+         \tShape \"sphere\" \"float radius\" [ x ]\n  \t                                ^"
+    );
+}
