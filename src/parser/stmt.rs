@@ -265,13 +265,13 @@ impl StatementReader {
         Span { file: after.file, start: after.end, end: after.end }
     }
 
-    fn expect(&mut self, after: Span, what: &str) -> Result<Tok, Diagnostic> {
+    fn require(&mut self, after: Span, what: &str) -> Result<Tok, Diagnostic> {
         self.next()?
             .ok_or_else(|| Diagnostic::error(self.end_span(after), format!("premature end of file: expected {what}")))
     }
 
     fn number(&mut self, after: Span, directive: &str) -> Result<(f64, Span), Diagnostic> {
-        let t = self.expect(after, &format!("a number for {directive}"))?;
+        let t = self.require(after, &format!("a number for {directive}"))?;
         let text = self.text(t.span);
         match (t.kind, parse_f64(text)) {
             (TokKind::Word, Some(v)) => Ok((v, t.span)),
@@ -289,12 +289,12 @@ impl StatementReader {
     }
 
     fn bracketed<const N: usize>(&mut self, kw: Span, directive: &str) -> Result<[f64; N], Diagnostic> {
-        let open = self.expect(kw, "'['")?;
+        let open = self.require(kw, "'['")?;
         if open.kind != TokKind::LBracket {
             return Err(Diagnostic::error(open.span, format!("{directive}: expected '[' and {N} numbers")));
         }
         let values = self.numbers::<N>(open.span, directive)?;
-        let close = self.expect(open.span, "']'")?;
+        let close = self.require(open.span, "']'")?;
         if close.kind != TokKind::RBracket {
             return Err(Diagnostic::error(
                 close.span,
@@ -305,7 +305,7 @@ impl StatementReader {
     }
 
     fn string(&mut self, after: Span, directive: &str) -> Result<(String, Span), Diagnostic> {
-        let t = self.expect(after, &format!("a quoted string for {directive}"))?;
+        let t = self.require(after, &format!("a quoted string for {directive}"))?;
         if t.kind != TokKind::Str {
             return Err(Diagnostic::error(
                 t.span,
@@ -424,7 +424,7 @@ impl StatementReader {
     }
 
     fn active_transform(&mut self, kw: Span) -> Result<ActiveTransform, Diagnostic> {
-        let t = self.expect(kw, "StartTime, EndTime or All")?;
+        let t = self.require(kw, "StartTime, EndTime or All")?;
         match (t.kind, self.text(t.span)) {
             (TokKind::Word, b"StartTime") => Ok(ActiveTransform::StartTime),
             (TokKind::Word, b"EndTime") => Ok(ActiveTransform::EndTime),
@@ -440,7 +440,7 @@ impl StatementReader {
     fn option(&mut self, kw: Span) -> Result<StmtKind, Diagnostic> {
         let (name, name_span) = self.string(kw, "Option")?;
         let name = name.split_whitespace().last().unwrap_or_default().to_string();
-        let t = self.expect(name_span, "a value for Option")?;
+        let t = self.require(name_span, "a value for Option")?;
         let value = match t.kind {
             TokKind::Str => decode_string(self.text(t.span)),
             TokKind::Word => self.word(t),
@@ -503,7 +503,7 @@ impl StatementReader {
         if let Some(s) = evidence {
             self.note_evidence(s, decl.span, format!("parameter type \"{type_name}\""));
         }
-        let first = self.expect(decl.span, &format!("a value for \"{text}\""))?;
+        let first = self.require(decl.span, &format!("a value for \"{text}\""))?;
         let mut sink = ValueSink::new(ty);
         let value_span = match first.kind {
             TokKind::LBracket => loop {
@@ -723,12 +723,11 @@ mod tests {
             } else {
                 format!(".{}{s}", "0".repeat(places - s.len()))
             };
-            let want: f32 = text.parse().unwrap();
-            assert_eq!(parse_f32(text.as_bytes()).map(f32::to_bits), Some(want.to_bits()), "{text}");
+            let want = text.parse::<f32>().map(f32::to_bits).ok();
+            assert_eq!(parse_f32(text.as_bytes()).map(f32::to_bits), want, "{text}");
         }
         for t in ["5.", ".5", "-0", "+3", "1e3", "16777217", "0.00000000001", "inf", "-nan"] {
-            let want: f32 = t.parse().unwrap();
-            let got = parse_f32(t.as_bytes()).unwrap();
+            let (Ok(want), Some(got)) = (t.parse::<f32>(), parse_f32(t.as_bytes())) else { panic!("{t}") };
             assert!(got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()), "{t}");
         }
         assert_eq!(parse_f32(b"1.2.3"), None);

@@ -413,7 +413,7 @@ impl Builder {
             K::AttributeEnd => self.pop(PushKind::Attribute, span),
             K::TransformEnd => self.pop(PushKind::Transform, span),
             K::ImportBegin(_) => self.push(PushKind::Import, span),
-            K::ImportEnd => self.pop(PushKind::Import, span),
+            K::ImportEnd => self.end_import(span),
             K::Attribute(e) => self.attribute(e),
             K::Shape(e) => self.shape(e, span),
             K::ObjectBegin(name) => self.object_begin(name, span),
@@ -521,6 +521,26 @@ impl Builder {
             self.gs.active = saved.active;
         } else {
             self.gs = saved;
+        }
+        Ok(())
+    }
+
+    /// The end of an imported file: blocks it left open are closed (with a warning) and
+    /// the state from before the `Import` comes back.
+    fn end_import(&mut self, span: Span) -> Res<()> {
+        while let Some((kind, saved, open)) = self.stack.pop() {
+            if kind == PushKind::Import {
+                self.gs = saved;
+                if self.current_object.is_some_and(|o| self.objects[o as usize].span.file == span.file) {
+                    return Err(Diagnostic::error(span, "an ObjectBegin in an imported file is never closed"));
+                }
+                return Ok(());
+            }
+            let word = self.reader.sources.snippet(open);
+            self.warnings.push(Diagnostic::warning(open, format!("{word} is never closed in the imported file")));
+            if kind == PushKind::Object {
+                self.current_object = None;
+            }
         }
         Ok(())
     }

@@ -48,6 +48,7 @@ pub fn load(path: &std::path::Path) -> Result<(TriangleMesh, Vec<String>), Strin
     let header = Parser::<AsciiVertex>::new()
         .read_header(&mut reader)
         .map_err(|e| format!("bad PLY header: {}", first_line(&e)))?;
+    check_header(&header)?;
     let mut got = Collected::default();
     match header.encoding {
         Encoding::Ascii => read_ascii(&mut reader, &header, &mut got)?,
@@ -62,13 +63,23 @@ fn first_line(e: &std::io::Error) -> String {
     e.to_string().lines().next().unwrap_or_default().trim_end().to_string()
 }
 
-fn build(header: &Header, got: Collected) -> Result<(TriangleMesh, Vec<String>), String> {
-    let names: Vec<&str> =
-        header.elements.get("vertex").map_or(vec![], |e| e.properties.keys().map(String::as_str).collect());
-    let has = |n: &str| names.contains(&n);
-    if !(has("x") && has("y") && has("z")) {
-        return Err("PLY file has no vertex element with x, y and z".into());
+fn vertex_property_names(header: &Header) -> Vec<&str> {
+    header.elements.get("vertex").map_or(vec![], |e| e.properties.keys().map(String::as_str).collect())
+}
+
+/// Rejects files without vertex positions before any payload is read.
+fn check_header(header: &Header) -> Result<(), String> {
+    let names = vertex_property_names(header);
+    if ["x", "y", "z"].iter().all(|n| names.contains(n)) {
+        Ok(())
+    } else {
+        Err("PLY file has no vertex element with x, y and z".into())
     }
+}
+
+fn build(header: &Header, got: Collected) -> Result<(TriangleMesh, Vec<String>), String> {
+    let names = vertex_property_names(header);
+    let has = |n: &str| names.contains(&n);
     let mut warnings = Vec::new();
     let mut mesh = TriangleMesh { p: got.vertices.iter().map(|v| [v[0], v[1], v[2]]).collect(), ..Default::default() };
     if has("nx") && has("ny") && has("nz") {
@@ -249,6 +260,9 @@ fn read_binary<const BIG: bool>(data: &[u8], header: &Header, got: &mut Collecte
     let mut b = Bytes::<BIG> { data, pos: 0 };
     for (name, def) in &header.elements {
         let props: Vec<(&String, &PropertyType)> = def.properties.iter().map(|(k, p)| (k, &p.data_type)).collect();
+        if props.is_empty() {
+            continue; // holds no bytes, whatever its count says
+        }
         // Never trust a header count for allocation beyond what the file can hold.
         let room = (data.len() - b.pos) / props.len().max(1);
         match name.as_str() {

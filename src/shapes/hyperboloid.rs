@@ -107,8 +107,9 @@ mod tests {
 
     #[test]
     fn area_of_the_reference_case() {
-        let h = Hyperboloid::new(Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 1.0, 1.0), 360.0).unwrap();
-        assert!((h.area() - 10.77).abs() < 0.01, "{}", h.area());
+        let h = Hyperboloid::new(Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 1.0, 1.0), 360.0);
+        let area = h.map(|h| h.area()).unwrap_or(f64::NAN);
+        assert!((area - 10.77).abs() < 0.01, "{area}");
     }
 
     #[test]

@@ -425,3 +425,13 @@ fn every_bundled_scene_loads_without_errors() {
     }
     assert!(load("WorldBegin").is_ok());
 }
+
+#[test]
+fn an_import_that_leaves_a_block_open_is_closed_at_its_end() {
+    let s = load_file(&root().join("tests/data/good/import-open.pbrt")).expect("loads");
+    assert_eq!(s.shapes.len(), 2);
+    assert!(s.shapes[0].reverse_orientation);
+    assert!(!s.shapes[1].reverse_orientation, "state from the import does not leak");
+    assert_eq!(s.shapes[1].object_to_world, glam::DMat4::IDENTITY);
+    assert!(warnings(&s).iter().any(|w| w.contains("never closed in the imported file")), "{:?}", s.warnings);
+}

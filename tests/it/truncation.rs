@@ -59,3 +59,25 @@ fn truncated_scenes_never_panic() {
     assert!(statement_cuts > 200, "only {statement_cuts} statement cuts");
     assert!(loaded > 0 && loaded < statement_cuts, "some cuts load, some fail ({loaded}/{statement_cuts})");
 }
+
+#[test]
+fn truncated_ply_files_never_panic() {
+    let dir = std::env::temp_dir().join(format!("pbrt-sppm-plycut-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.pbrt");
+    std::fs::write(&scene, "WorldBegin\nShape \"plymesh\" \"string filename\" \"cut.ply\"\n").unwrap();
+    for source in ["icosphere.ply", "slab_be.ply"] {
+        let bytes = std::fs::read(root().join("pbrt-scenes/v3/geometry").join(source)).unwrap();
+        let mut loaded = 0;
+        for cut in 0..=bytes.len() {
+            std::fs::write(dir.join("cut.ply"), &bytes[..cut]).unwrap();
+            let ok = std::panic::catch_unwind(|| crate::common::load_file(&scene).is_ok())
+                .unwrap_or_else(|_| panic!("{source} cut at byte {cut} panicked"));
+            loaded += ok as usize;
+        }
+        // Binary: only the whole file loads. ASCII: also the cuts that drop the final
+        // newline or the last digit of the last index ("41" reads as "4").
+        let expected = if source.ends_with("_be.ply") { 1 } else { 3 };
+        assert_eq!(loaded, expected, "{source}");
+    }
+}
