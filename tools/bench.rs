@@ -105,10 +105,9 @@ fn parse_bench(dir: &Path, runs: usize) -> ExitCode {
 fn ensure(dir: &Path, name: &str, write: fn(&Path) -> std::io::Result<u64>) -> std::io::Result<(PathBuf, u64)> {
     let path = dir.join(name);
     let size_file = dir.join(format!("{name}.bytes"));
-    if let (true, Ok(s)) = (path.exists(), std::fs::read_to_string(&size_file)) {
-        if let Ok(bytes) = s.trim().parse() {
-            return Ok((path, bytes));
-        }
+    let cached = std::fs::read_to_string(&size_file).ok().and_then(|s| s.trim().parse().ok());
+    if let (true, Some(bytes)) = (path.exists(), cached) {
+        return Ok((path, bytes));
     }
     let bytes = write(&path)?;
     std::fs::write(size_file, bytes.to_string())?;
