@@ -507,6 +507,9 @@ impl StatementReader {
         let mut sink = ValueSink::new(ty);
         let value_span = match first.kind {
             TokKind::LBracket => loop {
+                if let Some(close) = self.fast_numbers(&mut sink) {
+                    break first.span.to(close);
+                }
                 let t = self
                     .next()?
                     .ok_or_else(|| Diagnostic::error(first.span, "premature end of file: '[' is never closed"))?;
@@ -531,6 +534,39 @@ impl StatementReader {
         }
         let values = sink.finish();
         Ok(Param::new(ty, type_name.to_string(), name.to_string(), values, decl.span, value_span))
+    }
+
+    /// The hot loop for big meshes: reads plain numbers of a bracketed list straight
+    /// from the current file. Returns the closing bracket's span, or `None` after
+    /// stopping (unconsumed) at anything else (a string, a bad number, a file end),
+    /// which the general path then handles with its messages.
+    fn fast_numbers(&mut self, sink: &mut ValueSink) -> Option<Span> {
+        if self.peeked.is_some() || !matches!(sink.values, Values::Floats(_) | Values::Ints(_)) {
+            return None;
+        }
+        let frame = self.stack.last_mut()?;
+        let mut lexer = Lexer::at(&frame.text, frame.pos);
+        loop {
+            let before = lexer.position();
+            let Ok(Some(t)) = lexer.next_significant() else {
+                frame.pos = before;
+                return None;
+            };
+            let bytes = &frame.text[t.start as usize..t.end as usize];
+            let pushed = match (t.kind, &mut sink.values) {
+                (TokenKind::RBracket, _) => {
+                    frame.pos = lexer.position();
+                    return Some(Span { file: frame.file, start: t.start, end: t.end });
+                }
+                (TokenKind::Word, Values::Floats(v)) => parse_f32(bytes).map(|x| v.push(x)),
+                (TokenKind::Word, Values::Ints(v)) => parse_int(bytes).map(|x| v.push(x)),
+                _ => None,
+            };
+            if pushed.is_none() {
+                frame.pos = before;
+                return None;
+            }
+        }
     }
 
     fn push_value(&mut self, sink: &mut ValueSink, t: Tok, decl: &str) -> Result<(), Diagnostic> {
