@@ -4,7 +4,11 @@
 //! Data flows one way: bytes → tokens → statements ([`parser`]) → scene description
 //! ([`scene`]) → render-ready scene → image.
 
+pub mod accel;
 pub mod check;
+pub mod interaction;
+pub mod math;
 pub mod parser;
 pub mod scene;
 pub mod shapes;
+pub mod trace;

@@ -1,4 +1,4 @@
-//! The `pbrt-sppm` command line: `[render] SCENE`, `check SCENE`.
+//! The `pbrt-sppm` command line: `[render] SCENE`, `check SCENE`, `trace SCENE`.
 
 use clap::{Parser, Subcommand};
 use pbrt_sppm::parser::Syntax;
@@ -28,6 +28,15 @@ enum Command {
         /// Add one entry per created shape to the JSON.
         #[arg(long)]
         shapes: bool,
+        #[command(flatten)]
+        common: Common,
+    },
+    /// Intersect rays (`ox oy oz dx dy dz [tmax]` per line) with the scene; JSON lines out.
+    Trace {
+        scene: PathBuf,
+        /// Read rays from this file instead of standard input.
+        #[arg(long)]
+        rays: Option<PathBuf>,
         #[command(flatten)]
         common: Common,
     },
@@ -80,7 +89,7 @@ fn parse_syntax(s: &str) -> Result<Syntax, String> {
 
 /// `pbrt-sppm scene.pbrt ...` means `pbrt-sppm render scene.pbrt ...`.
 fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
-    const KNOWN: [&str; 7] = ["render", "check", "help", "--help", "-h", "--version", "-V"];
+    const KNOWN: [&str; 8] = ["render", "check", "trace", "help", "--help", "-h", "--version", "-V"];
     if args.len() > 1 && !KNOWN.iter().any(|k| args[1] == *k) {
         args.insert(1, "render".into());
     }
@@ -114,6 +123,10 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
+        Command::Trace { scene, rays, common } => match load(&scene, &common) {
+            Ok(s) => trace(s, rays),
+            Err(code) => code,
+        },
         Command::Render(args) => {
             if let Err(code) = load(&args.scene, &args.common) {
                 return code;
@@ -122,6 +135,41 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Answers ray queries line by line; a malformed line is an error naming the line.
+fn trace(scene: SceneDescription, rays: Option<PathBuf>) -> ExitCode {
+    use std::io::{BufRead, Write};
+    let name = rays.as_ref().map_or("<stdin>".to_string(), |p| p.display().to_string());
+    let input: Box<dyn BufRead> = match &rays {
+        Some(p) => match std::fs::File::open(p) {
+            Ok(f) => Box::new(std::io::BufReader::new(f)),
+            Err(e) => {
+                eprintln!("{name}: error: cannot read: {e}");
+                return ExitCode::FAILURE;
+            }
+        },
+        None => Box::new(std::io::stdin().lock()),
+    };
+    let tracer = pbrt_sppm::trace::Tracer::new(scene);
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    for (i, line) in input.lines().enumerate() {
+        let result = line.map_err(|e| e.to_string()).and_then(|l| tracer.line(&l));
+        match result {
+            Ok(Some(v)) => {
+                if writeln!(out, "{v}").is_err() {
+                    return ExitCode::FAILURE;
+                }
+            }
+            Ok(None) => {}
+            Err(e) => {
+                let _ = out.flush();
+                eprintln!("{name}:{}: error: {e}", i + 1);
+                return ExitCode::FAILURE;
+            }
+        }
+    }
+    if out.flush().is_err() { ExitCode::FAILURE } else { ExitCode::SUCCESS }
 }
 
 fn print_summary(s: &SceneDescription) {

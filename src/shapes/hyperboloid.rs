@@ -36,6 +36,11 @@ impl Hyperboloid {
                  the hyperboloid's implicit form cannot represent (pbrt-v3 hangs on it); use a cone"
             ));
         }
+        if p1.z == p2.z {
+            return Err(format!(
+                "hyperboloid: p1 {p1:?} and p2 {p2:?} have the same z, which sweeps a flat annulus; use a disk"
+            ));
+        }
         let r_max = (p1.x * p1.x + p1.y * p1.y).sqrt().max((p2.x * p2.x + p2.y * p2.y).sqrt());
         let (mut a, b) = if p2.z == 0.0 { (p2, p1) } else { (p1, p2) };
         let (mut ah, mut ch) = (f32::NAN, f32::NAN);

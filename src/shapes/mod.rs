@@ -18,6 +18,7 @@ pub mod cylinder;
 pub mod disk;
 pub mod hyperboloid;
 pub mod paraboloid;
+pub mod quadric;
 pub mod sphere;
 pub mod triangle;
 
@@ -26,8 +27,9 @@ pub use cylinder::Cylinder;
 pub use disk::Disk;
 pub use hyperboloid::Hyperboloid;
 pub use paraboloid::Paraboloid;
+pub use quadric::{QuadricHit, QuadricShape};
 pub use sphere::Sphere;
-pub use triangle::TriangleMesh;
+pub use triangle::{MeshFlags, TriangleHit, TriangleMesh};
 
 use glam::{DMat3, DVec3};
 

@@ -77,3 +77,213 @@ impl TriangleMesh {
             + self.face_indices.as_ref().map_or(0, |v| v.capacity() * 4)
     }
 }
+
+use crate::interaction::{Shading, SurfaceInteraction};
+use crate::math::float::gamma;
+use crate::math::frame::coordinate_system;
+use crate::math::{Bounds3, Normal3, Point3, Ray, Vector3};
+use glam::Vec3;
+
+/// Orientation flags of the shape a mesh came from.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MeshFlags {
+    pub reverse_orientation: bool,
+    pub swaps_handedness: bool,
+}
+
+/// The cheap result of a ray–triangle test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    pub t: f32,
+    pub b: [f32; 3],
+}
+
+impl TriangleMesh {
+    fn corners(&self, tri: usize) -> [Vec3; 3] {
+        let i = &self.indices[3 * tri..3 * tri + 3];
+        [Vec3::from(self.p[i[0] as usize]), Vec3::from(self.p[i[1] as usize]), Vec3::from(self.p[i[2] as usize])]
+    }
+
+    pub fn triangle_bounds(&self, tri: usize) -> Bounds3 {
+        let [a, b, c] = self.corners(tri);
+        Bounds3::new(a, b).union_point(c)
+    }
+
+    /// pbrt's watertight ray–triangle test (pbrt-v3 `Triangle::Intersect`).
+    #[inline]
+    pub fn intersect_triangle(&self, tri: usize, ray: &Ray, t_max: f32) -> Option<TriangleHit> {
+        let [p0, p1, p2] = self.corners(tri);
+        // Degenerate triangles never hit (pbrt-v4 checks this first).
+        if (p2 - p0).cross(p1 - p0).length_squared() == 0.0 {
+            return None;
+        }
+        let o = ray.o.0;
+        let (mut p0t, mut p1t, mut p2t) = (p0 - o, p1 - o, p2 - o);
+        let ad = ray.d.0.abs();
+        let kz = if ad.x > ad.y && ad.x > ad.z {
+            0
+        } else if ad.y > ad.z {
+            1
+        } else {
+            2
+        };
+        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        let perm = |v: Vec3| Vec3::new(v[kx], v[ky], v[kz]);
+        let d = perm(ray.d.0);
+        (p0t, p1t, p2t) = (perm(p0t), perm(p1t), perm(p2t));
+        let (sx, sy, sz) = (-d.x / d.z, -d.y / d.z, 1.0 / d.z);
+        for p in [&mut p0t, &mut p1t, &mut p2t] {
+            p.x += sx * p.z;
+            p.y += sy * p.z;
+        }
+        let mut e0 = p1t.x * p2t.y - p1t.y * p2t.x;
+        let mut e1 = p2t.x * p0t.y - p2t.y * p0t.x;
+        let mut e2 = p0t.x * p1t.y - p0t.y * p1t.x;
+        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+            let f = |a: f32, b: f32, c: f32, d: f32| (a as f64 * b as f64 - c as f64 * d as f64) as f32;
+            e0 = f(p1t.x, p2t.y, p1t.y, p2t.x);
+            e1 = f(p2t.x, p0t.y, p2t.y, p0t.x);
+            e2 = f(p0t.x, p1t.y, p0t.y, p1t.x);
+        }
+        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+            return None;
+        }
+        let det = e0 + e1 + e2;
+        if det == 0.0 {
+            return None;
+        }
+        p0t.z *= sz;
+        p1t.z *= sz;
+        p2t.z *= sz;
+        let t_scaled = e0 * p0t.z + e1 * p1t.z + e2 * p2t.z;
+        if (det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det))
+            || (det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_max * det))
+        {
+            return None;
+        }
+        let inv_det = 1.0 / det;
+        let t = t_scaled * inv_det;
+        // Reject hits whose t is not conservatively greater than zero.
+        let max_zt = p0t.z.abs().max(p1t.z.abs()).max(p2t.z.abs());
+        let delta_z = gamma(3) * max_zt;
+        let max_xt = p0t.x.abs().max(p1t.x.abs()).max(p2t.x.abs());
+        let max_yt = p0t.y.abs().max(p1t.y.abs()).max(p2t.y.abs());
+        let delta_x = gamma(5) * (max_xt + max_zt);
+        let delta_y = gamma(5) * (max_yt + max_zt);
+        let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+        let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+        let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
+        if t <= delta_t {
+            return None;
+        }
+        Some(TriangleHit { t, b: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
+    }
+
+    fn uvs(&self, tri: usize) -> [glam::Vec2; 3] {
+        match &self.uv {
+            Some(uv) => {
+                let i = &self.indices[3 * tri..3 * tri + 3];
+                [0, 1, 2].map(|k| glam::Vec2::from(uv[i[k] as usize]))
+            }
+            None => [glam::Vec2::new(0.0, 0.0), glam::Vec2::new(1.0, 0.0), glam::Vec2::new(1.0, 1.0)],
+        }
+    }
+
+    /// Differential geometry at a hit (pbrt-v3's triangle interaction).
+    pub fn interaction(&self, tri: usize, hit: &TriangleHit, flags: MeshFlags) -> SurfaceInteraction {
+        let [p0, p1, p2] = self.corners(tri);
+        let uv = self.uvs(tri);
+        let [b0, b1, b2] = hit.b;
+        let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
+        let (dp02, dp12) = (p0 - p2, p1 - p2);
+        let det = duv02.x * duv12.y - duv02.y * duv12.x;
+        let mut dpdu = Vec3::ZERO;
+        let mut dpdv = Vec3::ZERO;
+        if det.abs() >= 1e-8 {
+            let inv = 1.0 / det;
+            dpdu = (duv12.y * dp02 - duv02.y * dp12) * inv;
+            dpdv = (-duv12.x * dp02 + duv02.x * dp12) * inv;
+        }
+        if det.abs() < 1e-8 || dpdu.cross(dpdv).length_squared() == 0.0 {
+            let ng = (p2 - p0).cross(p1 - p0);
+            (dpdu, dpdv) = coordinate_system(ng.normalize_or_zero());
+        }
+        let abs_sum = (b0 * p0).abs() + (b1 * p1).abs() + (b2 * p2).abs();
+        let p_error = gamma(7) * abs_sum;
+        let p = b0 * p0 + b1 * p1 + b2 * p2;
+        let uv_hit = b0 * uv[0] + b1 * uv[1] + b2 * uv[2];
+        let mut n = dp02.cross(dp12).normalize_or_zero();
+        if flags.reverse_orientation ^ flags.swaps_handedness {
+            n = -n;
+        }
+        let mut si = SurfaceInteraction {
+            p: Point3(p),
+            p_error,
+            t: hit.t,
+            uv: uv_hit.to_array(),
+            n: Normal3(n),
+            dpdu: Vector3(dpdu),
+            dpdv: Vector3(dpdv),
+            dndu: Normal3::default(),
+            dndv: Normal3::default(),
+            shading: Shading { n: Normal3(n), dpdu: Vector3(dpdu), dpdv: Vector3(dpdv), ..Default::default() },
+        };
+        if self.n.is_some() || self.s.is_some() {
+            self.shading_geometry(tri, hit, flags, &mut si);
+        }
+        si
+    }
+
+    /// Shading frame from per-vertex N and S; N decides the front side.
+    fn shading_geometry(&self, tri: usize, hit: &TriangleHit, flags: MeshFlags, si: &mut SurfaceInteraction) {
+        let i = &self.indices[3 * tri..3 * tri + 3];
+        let [b0, b1, b2] = hit.b;
+        let lerp = |a: &Vec<[f32; 3]>| {
+            b0 * Vec3::from(a[i[0] as usize]) + b1 * Vec3::from(a[i[1] as usize]) + b2 * Vec3::from(a[i[2] as usize])
+        };
+        let ns = match &self.n {
+            Some(n) => lerp(n).try_normalize().unwrap_or(si.n.0),
+            None => si.n.0,
+        };
+        let mut ss = match &self.s {
+            Some(s) => lerp(s).try_normalize().unwrap_or(si.dpdu.0.normalize_or_zero()),
+            None => si.dpdu.0.normalize_or_zero(),
+        };
+        let mut ts = ss.cross(ns);
+        if ts.length_squared() > 0.0 {
+            ts = ts.normalize();
+            ss = ts.cross(ns);
+        } else {
+            (ss, ts) = coordinate_system(ns);
+        }
+        let (dndu, dndv) = match &self.n {
+            Some(n) => self.normal_derivatives(tri, n),
+            None => (Vec3::ZERO, Vec3::ZERO),
+        };
+        if flags.reverse_orientation {
+            ts = -ts;
+        }
+        let shading_n = Normal3(ss.cross(ts).normalize_or_zero());
+        si.n = si.n.face_forward(shading_n.into());
+        si.shading =
+            Shading { n: shading_n, dpdu: Vector3(ss), dpdv: Vector3(ts), dndu: Normal3(dndu), dndv: Normal3(dndv) };
+    }
+
+    fn normal_derivatives(&self, tri: usize, n: &[[f32; 3]]) -> (Vec3, Vec3) {
+        let i = &self.indices[3 * tri..3 * tri + 3];
+        let nv = [0, 1, 2].map(|k| Vec3::from(n[i[k] as usize]));
+        let uv = self.uvs(tri);
+        let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
+        let (dn1, dn2) = (nv[0] - nv[2], nv[1] - nv[2]);
+        let det = duv02.x * duv12.y - duv02.y * duv12.x;
+        if det.abs() < 1e-8 {
+            let dn = (nv[2] - nv[0]).cross(nv[1] - nv[0]);
+            if dn.length_squared() == 0.0 {
+                return (Vec3::ZERO, Vec3::ZERO);
+            }
+            return coordinate_system(dn.normalize());
+        }
+        let inv = 1.0 / det;
+        ((duv12.y * dn1 - duv02.y * dn2) * inv, (-duv12.x * dn1 + duv02.x * dn2) * inv)
+    }
+}

@@ -4,6 +4,7 @@ mod bad_inputs;
 mod common;
 mod directives;
 mod instancing;
+mod intersect;
 mod real_scenes;
 mod shapes;
 mod tokenizer;

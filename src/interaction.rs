@@ -1,0 +1,97 @@
+//! Surface interactions and robust ray spawning (pbrt-v3 `core/interaction.h`).
+//!
+//! A hit point carries `p_error`, a conservative bound on the distance between the
+//! stored `f32` point and the true surface. Rays leaving the surface start at
+//! [`offset_ray_origin`]: moved along the normal far enough that the error box lies on
+//! the side the ray goes to, then one more ulp away, so a ray never re-hits the surface
+//! it leaves.
+
+use crate::math::{Normal3, Point3, Ray, Transform, Vector3};
+use glam::Vec3;
+
+/// pbrt's shadow epsilon for rays towards a point.
+pub const SHADOW_EPSILON: f32 = 0.0001;
+
+/// Shading geometry (differs from the geometric one for meshes with normals).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Shading {
+    pub n: Normal3,
+    pub dpdu: Vector3,
+    pub dpdv: Vector3,
+    pub dndu: Normal3,
+    pub dndv: Normal3,
+}
+
+/// A ray–surface hit with pbrt's differential geometry.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SurfaceInteraction {
+    pub p: Point3,
+    pub p_error: Vec3,
+    /// The ray parameter of the hit, in units of the ray's direction.
+    pub t: f32,
+    pub uv: [f32; 2],
+    /// Unit geometric normal, oriented by pbrt's rules (never turned toward the ray).
+    pub n: Normal3,
+    pub dpdu: Vector3,
+    pub dpdv: Vector3,
+    pub dndu: Normal3,
+    pub dndv: Normal3,
+    pub shading: Shading,
+}
+
+/// The origin for a ray leaving `p` in direction `w`.
+pub fn offset_ray_origin(p: Point3, p_error: Vec3, n: Normal3, w: Vector3) -> Point3 {
+    let d = n.0.abs().dot(p_error);
+    let mut offset = n.0 * d;
+    if n.dot(w) < 0.0 {
+        offset = -offset;
+    }
+    let mut po = p.0 + offset;
+    for i in 0..3 {
+        if offset[i] > 0.0 {
+            po[i] = po[i].next_up();
+        } else if offset[i] < 0.0 {
+            po[i] = po[i].next_down();
+        }
+    }
+    Point3(po)
+}
+
+impl SurfaceInteraction {
+    pub fn spawn_ray(&self, d: Vector3) -> Ray {
+        Ray::new(offset_ray_origin(self.p, self.p_error, self.n, d), d)
+    }
+
+    /// A ray from here to `p2` with `t_max` just short of it.
+    pub fn spawn_ray_to(&self, p2: Point3) -> Ray {
+        let o = offset_ray_origin(self.p, self.p_error, self.n, p2 - self.p);
+        Ray { o, d: p2 - o, t_max: 1.0 - SHADOW_EPSILON }
+    }
+
+    /// The interaction seen through `t` (instance-to-world): points with error
+    /// propagation, vectors directly, normals by the inverse transpose.
+    pub fn transformed(&self, t: &Transform) -> SurfaceInteraction {
+        let (p, p_error) = t.point_with_error_prop(self.p, self.p_error);
+        let n = t.normal(self.n).normalize();
+        let mut shading_n = t.normal(self.shading.n).normalize();
+        shading_n = shading_n.face_forward(n.into());
+        SurfaceInteraction {
+            p,
+            p_error,
+            t: self.t,
+            uv: self.uv,
+            n,
+            dpdu: t.vector(self.dpdu),
+            dpdv: t.vector(self.dpdv),
+            dndu: t.normal(self.dndu),
+            dndv: t.normal(self.dndv),
+            shading: Shading {
+                n: shading_n,
+                dpdu: t.vector(self.shading.dpdu),
+                dpdv: t.vector(self.shading.dpdv),
+                dndu: t.normal(self.shading.dndu),
+                dndv: t.normal(self.shading.dndv),
+            },
+        }
+    }
+}

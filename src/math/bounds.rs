@@ -1,0 +1,99 @@
+//! Axis-aligned boxes with pbrt's conservative ray–box test.
+
+use super::float::gamma;
+use glam::Vec3;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds3 {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Default for Bounds3 {
+    /// The empty box (min = +∞, max = −∞), the identity of `union`.
+    fn default() -> Bounds3 {
+        Bounds3 { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY }
+    }
+}
+
+impl Bounds3 {
+    pub fn new(a: Vec3, b: Vec3) -> Bounds3 {
+        Bounds3 { min: a.min(b), max: a.max(b) }
+    }
+    pub fn union(self, o: Bounds3) -> Bounds3 {
+        Bounds3 { min: self.min.min(o.min), max: self.max.max(o.max) }
+    }
+    pub fn union_point(self, p: Vec3) -> Bounds3 {
+        Bounds3 { min: self.min.min(p), max: self.max.max(p) }
+    }
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
+    }
+    pub fn centroid(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+    pub fn diagonal(&self) -> Vec3 {
+        self.max - self.min
+    }
+    pub fn surface_area(&self) -> f32 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let d = self.diagonal();
+        2.0 * (d.x * d.y + d.x * d.z + d.y * d.z)
+    }
+    pub fn max_extent(&self) -> usize {
+        let d = self.diagonal();
+        if d.x > d.y && d.x > d.z {
+            0
+        } else if d.y > d.z {
+            1
+        } else {
+            2
+        }
+    }
+    /// Position of `p` relative to the box: 0 at min, 1 at max, per axis.
+    pub fn offset(&self, p: Vec3) -> Vec3 {
+        let d = self.diagonal();
+        let mut o = p - self.min;
+        for i in 0..3 {
+            if d[i] > 0.0 {
+                o[i] /= d[i];
+            }
+        }
+        o
+    }
+
+    /// pbrt's slab test with precomputed 1/d and direction signs; t_far is enlarged by
+    /// 1 + 2γ(3) so that rounding never misses a box the ray truly crosses.
+    #[inline]
+    pub fn intersect_p(&self, o: Vec3, inv_d: Vec3, neg: [usize; 3], t_max: f32) -> Option<f32> {
+        let b = [self.min, self.max];
+        let scale = 1.0 + 2.0 * gamma(3);
+        let mut t_min = (b[neg[0]].x - o.x) * inv_d.x;
+        let mut t_far = (b[1 - neg[0]].x - o.x) * inv_d.x * scale;
+        let ty_min = (b[neg[1]].y - o.y) * inv_d.y;
+        let ty_max = (b[1 - neg[1]].y - o.y) * inv_d.y * scale;
+        if t_min > ty_max || ty_min > t_far {
+            return None;
+        }
+        if ty_min > t_min {
+            t_min = ty_min;
+        }
+        if ty_max < t_far {
+            t_far = ty_max;
+        }
+        let tz_min = (b[neg[2]].z - o.z) * inv_d.z;
+        let tz_max = (b[1 - neg[2]].z - o.z) * inv_d.z * scale;
+        if t_min > tz_max || tz_min > t_far {
+            return None;
+        }
+        if tz_min > t_min {
+            t_min = tz_min;
+        }
+        if tz_max < t_far {
+            t_far = tz_max;
+        }
+        (t_min < t_max && t_far > 0.0).then_some(t_min)
+    }
+}

@@ -1,0 +1,15 @@
+//! Geometry math: error-bounded floats, points/vectors/normals, transforms with error
+//! propagation, bounds with pbrt's conservative slab test, rays and frames.
+
+pub mod bounds;
+pub mod float;
+pub mod frame;
+pub mod ray;
+pub mod transform;
+pub mod vector;
+
+pub use bounds::Bounds3;
+pub use float::{EFloat, EFloat64, gamma};
+pub use ray::Ray;
+pub use transform::Transform;
+pub use vector::{Normal3, Point3, Vector3};

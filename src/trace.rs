@@ -1,0 +1,72 @@
+//! `pbrt-sppm trace SCENE [--rays FILE]`: ray queries against a scene's geometry.
+//!
+//! Each input line is `ox oy oz dx dy dz [tmax]` in world space (`#` comments and blank
+//! lines are skipped). t is in units of the given direction, which is not normalised.
+//! Each ray gives one JSON line: `{"hit": false}` or the hit's `t`, `p`, `p_error`, `n`
+//! (unit geometric normal oriented by pbrt's rules, never turned toward the ray), `ns`,
+//! `uv`, `dpdu`, `dpdv`, `shape`, `shape_index` (as in `check --shapes`) and `triangle`
+//! for meshes.
+
+use crate::accel::{Geometry, LocalHit};
+use crate::check::f32_json;
+use crate::math::{Point3, Ray, Vector3};
+use crate::scene::SceneDescription;
+use serde_json::{Value, json};
+
+/// The geometry plus the shape names, in `check --shapes` order.
+pub struct Tracer {
+    pub geometry: Geometry,
+    kinds: Vec<&'static str>,
+}
+
+impl Tracer {
+    pub fn new(mut scene: SceneDescription) -> Tracer {
+        let kinds = scene.placed_shapes().map(|p| p.shape.kind()).collect();
+        Tracer { geometry: Geometry::new(&mut scene), kinds }
+    }
+
+    /// One input line: `Ok(None)` for blank lines and comments.
+    pub fn line(&self, text: &str) -> Result<Option<Value>, String> {
+        let text = text.split('#').next().unwrap_or_default().trim();
+        if text.is_empty() {
+            return Ok(None);
+        }
+        let nums: Vec<f32> = text
+            .split_whitespace()
+            .map(|w| w.parse::<f32>().map_err(|_| format!("'{w}' is not a number")))
+            .collect::<Result<_, _>>()?;
+        let (o, d, t_max) = match nums.as_slice() {
+            [ox, oy, oz, dx, dy, dz] => ([*ox, *oy, *oz], [*dx, *dy, *dz], f32::INFINITY),
+            [ox, oy, oz, dx, dy, dz, t] => ([*ox, *oy, *oz], [*dx, *dy, *dz], *t),
+            _ => return Err(format!("expected 6 or 7 numbers (ox oy oz dx dy dz [tmax]), found {}", nums.len())),
+        };
+        if d == [0.0; 3] || !o.iter().chain(&d).all(|x| x.is_finite()) || t_max.is_nan() {
+            return Err("the origin and direction must be finite and the direction nonzero".into());
+        }
+        let ray = Ray { o: Point3::new(o[0], o[1], o[2]), d: Vector3::new(d[0], d[1], d[2]), t_max };
+        Ok(Some(self.trace(&ray)))
+    }
+
+    pub fn trace(&self, ray: &Ray) -> Value {
+        let Some(hit) = self.geometry.intersect(ray) else { return json!({"hit": false}) };
+        let si = self.geometry.interaction(&hit);
+        let v = |a: [f32; 3]| a.map(f32_json);
+        let mut out = json!({
+            "hit": true,
+            "t": f32_json(hit.t),
+            "p": v(si.p.to_array()),
+            "p_error": v(si.p_error.to_array()),
+            "n": v(si.n.to_array()),
+            "ns": v(si.shading.n.to_array()),
+            "uv": si.uv.map(f32_json),
+            "dpdu": v(si.dpdu.to_array()),
+            "dpdv": v(si.dpdv.to_array()),
+            "shape": self.kinds.get(hit.shape_index as usize).copied().unwrap_or("?"),
+            "shape_index": hit.shape_index,
+        });
+        if let LocalHit::Triangle { tri, .. } = hit.local {
+            out["triangle"] = json!(tri);
+        }
+        out
+    }
+}
