@@ -268,7 +268,9 @@ fn reintersect_triangle() {
     assert_eq!(failures, 0);
 }
 
+/// The literals are pbrt's test data, kept digit for digit.
 #[test]
+#[allow(clippy::excessive_precision)]
 fn triangle_bad_case_from_pbrt() {
     let mesh = single_triangle([
         Vec3::new(-1113.45459, -79.049614, -56.2431908),
