@@ -19,6 +19,7 @@ pub mod disk;
 pub mod hyperboloid;
 pub mod paraboloid;
 pub mod quadric;
+pub mod sampling;
 pub mod sphere;
 pub mod triangle;
 
@@ -28,6 +29,7 @@ pub use disk::Disk;
 pub use hyperboloid::Hyperboloid;
 pub use paraboloid::Paraboloid;
 pub use quadric::{QuadricHit, QuadricShape};
+pub use sampling::{QuadricSampler, ShapeSample};
 pub use sphere::Sphere;
 pub use triangle::{MeshFlags, TriangleHit, TriangleMesh};
 
@@ -117,7 +119,7 @@ impl Quadric {
 }
 
 /// s² when `m` = s·(rotation or reflection), else `None`.
-fn similarity_scale(m: DMat3) -> Option<f64> {
+pub(crate) fn similarity_scale(m: DMat3) -> Option<f64> {
     let g = m.transpose() * m;
     let s2 = (g.x_axis.x + g.y_axis.y + g.z_axis.z) / 3.0;
     let off = g - DMat3::from_diagonal(DVec3::splat(s2));

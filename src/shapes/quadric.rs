@@ -144,6 +144,11 @@ impl QuadricShape {
         self.intersect_t(r, t_max).is_some()
     }
 
+    /// (u, v) of a hit in f64 (the interaction stores them rounded to f32).
+    pub fn uv_of(&self, hit: &QuadricHit) -> [f64; 2] {
+        local(&self.quadric, hit.p_obj, hit.phi).uv
+    }
+
     /// Full differential geometry at a hit found by [`QuadricShape::intersect_t`].
     pub fn interaction(&self, hit: &QuadricHit) -> SurfaceInteraction {
         let l = local(&self.quadric, hit.p_obj, hit.phi);

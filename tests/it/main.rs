@@ -6,6 +6,7 @@ mod directives;
 mod instancing;
 mod intersect;
 mod real_scenes;
+mod sampling;
 mod shapes;
 mod tokenizer;
 mod truncation;
