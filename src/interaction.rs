@@ -68,6 +68,50 @@ impl SurfaceInteraction {
         Ray { o, d: p2 - o, t_max: 1.0 - SHADOW_EPSILON }
     }
 
+    /// The interaction seen through the f64 affine map `m` (instance to world).
+    ///
+    /// `p_error` in world space covers the rounding of the new point to f32, the old
+    /// error mapped through `m`, and the f32 rounding a ray spawned from here meets when
+    /// it is mapped back into instance space, so spawned rays clear the surface there.
+    // DEVIATION(pbrt): pbrt transforms instances in f32; the rounded matrix and its
+    // rounded inverse do not compose to the identity, which lets spawned rays re-hit
+    // mirrored or strongly scaled instances. Instances use f64 maps here.
+    pub fn transformed_f64(&self, m: &glam::DMat4) -> SurfaceInteraction {
+        let m3 = glam::DMat3::from_mat4(*m);
+        let normal_m = m3.inverse().transpose();
+        let p_i = self.p.0.as_dvec3();
+        let p = m.transform_point3(p_i);
+        let p32 = p.as_vec3();
+        let abs_m = m3.abs();
+        let back = abs_m * (crate::math::float::gamma(2) as f64 * p_i.abs());
+        let err =
+            abs_m * self.p_error.as_dvec3() + back + crate::math::float::gamma64(8) * (abs_m * p_i.abs() + p.abs());
+        let p_error = crate::math::float::gamma(2) * p32.abs() + err.as_vec3();
+        let v = |x: Vector3| Vector3((m3 * x.0.as_dvec3()).as_vec3());
+        let nrm = |x: Normal3| Normal3((normal_m * x.0.as_dvec3()).as_vec3());
+        let n = Normal3((normal_m * self.n.0.as_dvec3()).normalize_or_zero().as_vec3());
+        let shading_n =
+            Normal3((normal_m * self.shading.n.0.as_dvec3()).normalize_or_zero().as_vec3()).face_forward(n.into());
+        SurfaceInteraction {
+            p: Point3(p32),
+            p_error,
+            t: self.t,
+            uv: self.uv,
+            n,
+            dpdu: v(self.dpdu),
+            dpdv: v(self.dpdv),
+            dndu: nrm(self.dndu),
+            dndv: nrm(self.dndv),
+            shading: Shading {
+                n: shading_n,
+                dpdu: v(self.shading.dpdu),
+                dpdv: v(self.shading.dpdv),
+                dndu: nrm(self.shading.dndu),
+                dndv: nrm(self.shading.dndv),
+            },
+        }
+    }
+
     /// The interaction seen through `t` (instance-to-world): points with error
     /// propagation, vectors directly, normals by the inverse transpose.
     pub fn transformed(&self, t: &Transform) -> SurfaceInteraction {

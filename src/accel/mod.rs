@@ -7,9 +7,11 @@ pub mod bvh;
 pub use bvh::Bvh;
 
 use crate::interaction::SurfaceInteraction;
-use crate::math::{Bounds3, Ray, Transform};
+use crate::math::float::gamma;
+use crate::math::{Bounds3, Point3, Ray, Vector3};
 use crate::scene::{Geometry as ShapeGeometry, SceneDescription, ShapeDesc};
 use crate::shapes::{MeshFlags, QuadricHit, QuadricShape, TriangleHit, TriangleMesh};
+use glam::{DMat3, DMat4, DVec3};
 use rayon::prelude::*;
 
 /// A shape of a BVH: a quadric or a whole mesh.
@@ -37,8 +39,8 @@ struct Blas {
 /// A placed object.
 #[derive(Clone, Debug)]
 pub struct Instance {
-    pub render_from_instance: Transform,
-    pub instance_from_render: Transform,
+    pub render_from_instance: DMat4,
+    pub instance_from_render: DMat4,
     object: u32,
     /// The `check --shapes` index of the object's first shape for this instance.
     first_shape_index: u32,
@@ -147,6 +149,29 @@ impl Blas {
     }
 }
 
+/// A render-space ray in instance space: mapped in f64, rounded once to f32, and its
+/// origin moved forward by that rounding (pbrt's rule). Returns the ray and the shift
+/// `dt` (instance t + dt = render t).
+fn instance_ray(instance_from_render: &DMat4, r: &Ray) -> (Ray, f32) {
+    let o = instance_from_render.transform_point3(r.o.0.as_dvec3());
+    let d = (DMat3::from_mat4(*instance_from_render) * r.d.0.as_dvec3()).as_vec3();
+    let o32 = o.as_vec3();
+    let o_err = gamma(2) * o32.abs() + (o - o32.as_dvec3()).abs().as_vec3();
+    let len2 = d.length_squared();
+    let dt = if len2 > 0.0 { d.abs().dot(o_err) / len2 } else { 0.0 };
+    (Ray { o: Point3(o32 + d * dt), d: Vector3(d), t_max: r.t_max - dt }, dt)
+}
+
+/// Render-space bounds of an object's bounds under an instance map, widened a little.
+fn instance_bounds(m: &DMat4, b: Bounds3) -> Bounds3 {
+    if b.is_empty() {
+        return b;
+    }
+    let [lo, hi] = crate::scene::transform_bounds(m, [b.min.as_dvec3(), b.max.as_dvec3()]);
+    let grow = |v: DVec3, s: f64| (v + s * (v.abs() * 1e-6 + DVec3::splat(1e-30))).as_vec3();
+    Bounds3 { min: grow(lo, -1.0), max: grow(hi, 1.0) }
+}
+
 impl Geometry {
     /// Builds the acceleration structures, taking the scene's meshes.
     pub fn new(scene: &mut SceneDescription) -> Geometry {
@@ -164,20 +189,21 @@ impl Geometry {
             .iter()
             .enumerate()
             .map(|(k, i)| {
-                let t = Transform::from_dmat4(i.world_from_instance);
                 let first_shape_index = next;
                 next += objects[i.object as usize].shapes.len() as u32;
                 Instance {
-                    render_from_instance: t,
-                    instance_from_render: t.inverse(),
+                    render_from_instance: i.world_from_instance,
+                    instance_from_render: i.world_from_instance.inverse(),
                     object: i.object,
                     first_shape_index,
                     index: k as u32,
                 }
             })
             .collect();
-        let bounds: Vec<Bounds3> =
-            instances.iter().map(|i| i.render_from_instance.bounds(objects[i.object as usize].bvh.bounds())).collect();
+        let bounds: Vec<Bounds3> = instances
+            .iter()
+            .map(|i| instance_bounds(&i.render_from_instance, objects[i.object as usize].bvh.bounds()))
+            .collect();
         let (tlas, order) = Bvh::build(&bounds);
         instances = order.iter().map(|&k| instances[k as usize].clone()).collect();
         Geometry { quadrics, meshes, instances, world, objects, tlas }
@@ -193,7 +219,7 @@ impl Geometry {
         }
         self.tlas.intersect(ray, t_max, |k, t_max| {
             let inst = &self.instances[k];
-            let (r, dt) = inst.instance_from_render.ray(ray);
+            let (r, dt) = instance_ray(&inst.instance_from_render, ray);
             let (t, shape, local) = self.objects[inst.object as usize].intersect(self, &r, t_max - dt)?;
             let t = t + dt;
             best = Some(Hit { t, local, shape_index: inst.first_shape_index + shape, instance: Some(k as u32) });
@@ -209,7 +235,7 @@ impl Geometry {
         }
         self.tlas.intersect_p(ray, ray.t_max, |k, t_max| {
             let inst = &self.instances[k];
-            let (r, dt) = inst.instance_from_render.ray(ray);
+            let (r, dt) = instance_ray(&inst.instance_from_render, ray);
             self.objects[inst.object as usize].intersect_p(self, &r, t_max - dt)
         })
     }
@@ -224,7 +250,7 @@ impl Geometry {
         };
         match hit.instance {
             Some(k) => {
-                SurfaceInteraction { t: hit.t, ..si.transformed(&self.instances[k as usize].render_from_instance) }
+                SurfaceInteraction { t: hit.t, ..si.transformed_f64(&self.instances[k as usize].render_from_instance) }
             }
             None => si,
         }

@@ -509,3 +509,61 @@ fn trace_command_reports_a_malformed_line() {
         "tests/data/good/bad-rays.txt:2: error: expected 6 or 7 numbers (ox oy oz dx dy dz [tmax]), found 5"
     );
 }
+
+/// The reintersection test through the whole geometry path: a sphere and a closed cube
+/// mesh in an object, instanced 200 times under random transforms with mirrors and
+/// non-uniform scales. Rays spawned outward from a hit never hit that same shape.
+#[test]
+fn reintersect_through_instances() {
+    let mut rng = Rng::new(4242);
+    let mut text = String::from(
+        "WorldBegin\nObjectBegin \"o\"\nShape \"sphere\" \"float radius\" 0.5\n\
+         Shape \"trianglemesh\" \"point3 P\" [2 0 0 3 0 0 3 1 0 2 1 0 2 0 1 3 0 1 3 1 1 2 1 1]\n\
+         \"integer indices\" [0 2 1 0 3 2 4 5 6 4 6 7 0 1 5 0 5 4 2 3 7 2 7 6 1 2 6 1 6 5 3 0 4 3 4 7]\nObjectEnd\n",
+    );
+    let mut centers = Vec::new();
+    for _ in 0..200 {
+        let t = DVec3::new(rng.signed_exp(3.0), rng.signed_exp(3.0), rng.signed_exp(3.0));
+        let s = DVec3::new(rng.signed_exp(1.0), rng.signed_exp(1.0), rng.signed_exp(1.0));
+        let m = DMat4::from_translation(t)
+            * DMat4::from_axis_angle(rng.sphere_dir(), rng.uniform() * 6.0)
+            * DMat4::from_scale(s);
+        let cols: Vec<String> = m.to_cols_array().iter().map(|x| format!("{x:e}")).collect();
+        text.push_str(&format!(
+            "AttributeBegin ConcatTransform [{}] ObjectInstance \"o\" AttributeEnd\n",
+            cols.join(" ")
+        ));
+        centers.push((m, [DVec3::ZERO, DVec3::new(2.5, 0.5, 0.5)]));
+    }
+    let tracer = Tracer::new(scene(&text));
+    let g = &tracer.geometry;
+    let (mut hits, mut failures) = (0, 0);
+    for (m, local_centers) in &centers {
+        for c in local_centers {
+            let center = m.transform_point3(*c);
+            for _ in 0..10 {
+                let o = center + rng.sphere_dir() * rng.p_exp(3.0);
+                let Some(hit) = g.intersect(&to_ray(o, center - o)) else { continue };
+                hits += 1;
+                let si = g.interaction(&hit);
+                // Both shapes are convex around their centre: the outward side is the
+                // one facing away from the hit shape's own centre.
+                let own = hit.shape_index as usize % 2; // 0 = sphere, 1 = cube in each instance
+                let inst = (hit.shape_index as usize - own) / 2;
+                let own_center = centers[inst].0.transform_point3(centers[inst].1[own]);
+                let n = si.n.0.as_dvec3();
+                let outward = if n.dot(si.p.0.as_dvec3() - own_center) > 0.0 { n } else { -n };
+                for _ in 0..100 {
+                    let w = rng.sphere_dir();
+                    let w = if w.dot(outward) > 0.0 { w } else { -w };
+                    let r = si.spawn_ray(Vector3(w.as_vec3()));
+                    if g.intersect(&r).is_some_and(|h2| h2.shape_index == hit.shape_index) {
+                        failures += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(hits > 2000, "only {hits} hits");
+    assert_eq!(failures, 0, "{failures} self-intersections out of {} rays", hits * 100);
+}
