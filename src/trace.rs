@@ -64,8 +64,8 @@ impl Tracer {
             "shape": self.kinds.get(hit.shape_index as usize).copied().unwrap_or("?"),
             "shape_index": hit.shape_index,
         });
-        if let LocalHit::Triangle { tri, .. } = hit.local {
-            out["triangle"] = json!(tri);
+        if let LocalHit::Triangle { mesh, tri, .. } = hit.local {
+            out["triangle"] = json!(self.geometry.triangle_id(mesh, tri));
         }
         out
     }

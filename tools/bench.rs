@@ -2,7 +2,13 @@
 //!
 //! ```text
 //! cargo run --release --bin pbrt-bench -- parse [--runs 5] [--dir target/bench-data]
+//! cargo run --release --bin pbrt-bench -- rays [--runs 5] [--dir target/bench-data] [--dump]
 //! ```
+//! `rays` builds a 1M-triangle bumpy sphere (through a binary PLY, as a scene would),
+//! times the BVH build, then 1M coherent camera rays and 1M incoherent random rays for
+//! closest hit and any hit on 1 and 2 threads, and reports bytes per triangle.
+//! `--dump` also writes the mesh and rays as raw little-endian arrays for
+//! `tools/embree_bench.py`, which traces the same rays with Embree.
 //! `parse` generates a 50 MB scene with one inline `trianglemesh`, a scene naming a
 //! 1M-triangle binary PLY, and a scene with 25,000 instances of a 30,000-triangle PLY,
 //! then loads each `--runs` times, every run in a fresh process so its peak memory
@@ -23,6 +29,11 @@ fn main() -> ExitCode {
             let dir = PathBuf::from(flag("--dir").unwrap_or_else(|| "target/bench-data".into()));
             parse_bench(&dir, runs)
         }
+        Some("rays") => {
+            let runs = flag("--runs").and_then(|r| r.parse().ok()).unwrap_or(5);
+            let dir = PathBuf::from(flag("--dir").unwrap_or_else(|| "target/bench-data".into()));
+            rays_bench(&dir, runs, args.iter().any(|a| a == "--dump"))
+        }
         Some("--once") => match args.get(2) {
             Some(scene) => once(Path::new(scene)),
             None => usage(),
@@ -32,7 +43,7 @@ fn main() -> ExitCode {
 }
 
 fn usage() -> ExitCode {
-    eprintln!("usage: pbrt-bench parse [--runs N] [--dir DIR]");
+    eprintln!("usage: pbrt-bench parse|rays [--runs N] [--dir DIR] [--dump]");
     ExitCode::FAILURE
 }
 
@@ -206,4 +217,187 @@ fn write_instances(path: &Path) -> std::io::Result<u64> {
     }
     w.flush()?;
     Ok(bytes + std::fs::metadata(path)?.len())
+}
+
+/// A sphere of `nt × np` quads with a bumpy radius (2·nt·np triangles).
+fn bumpy_sphere(nt: usize, np: usize) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let mut p = Vec::with_capacity((nt + 1) * np);
+    for i in 0..=nt {
+        let theta = std::f32::consts::PI * i as f32 / nt as f32;
+        for j in 0..np {
+            let phi = std::f32::consts::TAU * j as f32 / np as f32;
+            let r = 1.0 + 0.05 * (7.0 * theta).sin() * (11.0 * phi).cos();
+            p.push([r * theta.sin() * phi.cos(), r * theta.sin() * phi.sin(), r * theta.cos()]);
+        }
+    }
+    let mut idx = Vec::with_capacity(6 * nt * np);
+    for i in 0..nt {
+        for j in 0..np {
+            let v = |di: usize, dj: usize| ((i + di) * np + (j + dj) % np) as u32;
+            idx.extend([v(0, 0), v(1, 0), v(1, 1), v(0, 0), v(1, 1), v(0, 1)]);
+        }
+    }
+    (p, idx)
+}
+
+fn write_mesh_ply(path: &Path, p: &[[f32; 3]], idx: &[u32]) -> std::io::Result<()> {
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    write!(
+        w,
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        p.len(),
+        idx.len() / 3
+    )?;
+    for v in p {
+        for c in v {
+            w.write_all(&c.to_le_bytes())?;
+        }
+    }
+    for t in idx.chunks(3) {
+        w.write_all(&[3])?;
+        for i in t {
+            w.write_all(&i.to_le_bytes())?;
+        }
+    }
+    w.flush()
+}
+
+fn write_f32s(path: &Path, v: impl Iterator<Item = f32>) -> std::io::Result<()> {
+    let bytes: Vec<u8> = v.flat_map(f32::to_le_bytes).collect();
+    std::fs::write(path, bytes)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// (coherent camera rays, incoherent random rays), 1M each.
+fn ray_sets() -> (Vec<pbrt_sppm::math::Ray>, Vec<pbrt_sppm::math::Ray>) {
+    use pbrt_sppm::math::{Point3, Ray, Vector3};
+    let res = 1024;
+    let tan = (22.5f32).to_radians().tan();
+    let camera = (0..res * res)
+        .map(|k| {
+            let (x, y) = ((k % res) as f32 + 0.5, (k / res) as f32 + 0.5);
+            let d = Vector3::new((2.0 * x / res as f32 - 1.0) * tan, (1.0 - 2.0 * y / res as f32) * tan, -1.0);
+            Ray::new(Point3::new(0.0, 0.0, 3.0), d)
+        })
+        .collect();
+    let mut rng = Rng(0x1234_5678_9abc_def1);
+    let random = (0..res * res)
+        .map(|_| {
+            let o = Point3::new(3.0 * rng.next() - 1.5, 3.0 * rng.next() - 1.5, 3.0 * rng.next() - 1.5);
+            let z = 1.0 - 2.0 * rng.next();
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = std::f32::consts::TAU * rng.next();
+            Ray::new(o, Vector3::new(r * phi.cos(), r * phi.sin(), z))
+        })
+        .collect();
+    (camera, random)
+}
+
+fn rays_bench(dir: &Path, runs: usize, dump: bool) -> ExitCode {
+    use pbrt_sppm::accel::Geometry;
+    use rayon::prelude::*;
+    let (p, idx) = bumpy_sphere(500, 1000);
+    let ply = dir.join("bumpy.ply");
+    let scene_path = dir.join("bumpy.pbrt");
+    let written = std::fs::create_dir_all(dir)
+        .and_then(|_| write_mesh_ply(&ply, &p, &idx))
+        .and_then(|_| std::fs::write(&scene_path, "WorldBegin\nShape \"plymesh\" \"string filename\" \"bumpy.ply\"\n"));
+    if let Err(e) = written {
+        eprintln!("{}: {e}", dir.display());
+        return ExitCode::FAILURE;
+    }
+    let scene = match load_scene(&scene_path, &LoadOptions::default()) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let tris = scene.meshes[0].triangle_count();
+    let mesh_bytes = scene.meshes[0].heap_bytes();
+    let build_times: Vec<f64> = (0..runs)
+        .map(|_| {
+            let mut s = load_scene(&scene_path, &LoadOptions::default()).unwrap_or_else(|_| scene_clone_empty());
+            let t = Instant::now();
+            let g = Geometry::new(&mut s);
+            let secs = t.elapsed().as_secs_f64();
+            drop(g);
+            secs
+        })
+        .collect();
+    let mut scene = scene;
+    let geometry = Geometry::new(&mut scene);
+    println!(
+        "mesh: {tris} triangles, {:.1} bytes/triangle; BVH {:.1} bytes/triangle",
+        mesh_bytes as f64 / tris as f64,
+        geometry.accel_bytes() as f64 / tris as f64
+    );
+    println!("BVH build (median of {runs}): {:.3} s", median(build_times));
+    let (camera, random) = ray_sets();
+    if dump {
+        let ok = write_f32s(&dir.join("vertices.f32"), p.iter().flatten().copied())
+            .and_then(|_| {
+                std::fs::write(dir.join("indices.u32"), idx.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>())
+            })
+            .and_then(|_| write_f32s(&dir.join("camera_o.f32"), camera.iter().flat_map(|r| r.o.to_array())))
+            .and_then(|_| write_f32s(&dir.join("camera_d.f32"), camera.iter().flat_map(|r| r.d.to_array())))
+            .and_then(|_| write_f32s(&dir.join("random_o.f32"), random.iter().flat_map(|r| r.o.to_array())))
+            .and_then(|_| write_f32s(&dir.join("random_d.f32"), random.iter().flat_map(|r| r.d.to_array())));
+        if let Err(e) = ok {
+            eprintln!("dump: {e}");
+            return ExitCode::FAILURE;
+        }
+    }
+    println!("{:<22} {:>8} {:>14} {:>14} {:>10}", "rays", "threads", "closest Mray/s", "any-hit Mray/s", "hits");
+    for (name, rays) in [("coherent (camera)", &camera), ("incoherent (random)", &random)] {
+        for threads in [1usize, 2] {
+            let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(threads).build() else {
+                return ExitCode::FAILURE;
+            };
+            let time = |any: bool| -> (f64, usize) {
+                let mut hits = 0;
+                let secs = median(
+                    (0..runs)
+                        .map(|_| {
+                            let t = Instant::now();
+                            hits = pool.install(|| {
+                                rays.par_chunks(4096)
+                                    .map(|c| {
+                                        c.iter()
+                                            .filter(|r| {
+                                                if any {
+                                                    geometry.intersect_p(r)
+                                                } else {
+                                                    geometry.intersect(r).is_some()
+                                                }
+                                            })
+                                            .count()
+                                    })
+                                    .sum()
+                            });
+                            t.elapsed().as_secs_f64()
+                        })
+                        .collect(),
+                );
+                (rays.len() as f64 / secs / 1e6, hits)
+            };
+            let ((closest, hits), (any, any_hits)) = (time(false), time(true));
+            if hits != any_hits {
+                eprintln!("closest and any-hit disagree: {hits} vs {any_hits}");
+                return ExitCode::FAILURE;
+            }
+            println!("{name:<22} {threads:>8} {closest:>14.2} {any:>14.2} {hits:>10}");
+        }
+    }
+    ExitCode::SUCCESS
+}
+
+fn scene_clone_empty() -> pbrt_sppm::scene::SceneDescription {
+    pbrt_sppm::scene::load_scene_from_bytes(Path::new("empty.pbrt"), b"WorldBegin".to_vec(), &LoadOptions::default())
+        .expect("the empty scene loads")
 }

@@ -1,6 +1,9 @@
 //! A bounding volume hierarchy: binned SAH build (parallel for large subtrees), flat
-//! 32-byte nodes in depth-first order, and closure-based closest-hit and any-hit
-//! traversal with pbrt's conservative slab test.
+//! 32-byte nodes, and closure-based closest-hit and any-hit traversal with pbrt's
+//! conservative slab test.
+//!
+//! Siblings are stored side by side in one 64-byte-aligned pair, so testing both
+//! children of a node touches one cache line; pairs are laid out depth first.
 //!
 //! The BVH knows only boxes: `build` returns the primitive order it wants, and the
 //! caller stores its primitives in that order, so leaves index them directly.
@@ -8,8 +11,8 @@
 use crate::math::{Bounds3, Ray};
 use glam::Vec3;
 
-/// One node: its box, and either two children (the first follows immediately, the
-/// second is at `offset`) or `count` primitives starting at `offset`.
+/// One node: its box, and either two children (the pair at index `offset`) or
+/// `count` primitives starting at `offset`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub struct Node {
@@ -28,10 +31,16 @@ impl Node {
     }
 }
 
-/// The hierarchy over primitives `0..n` (in the order `build` returned).
+/// Two sibling nodes in one cache line.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(64))]
+struct Pair([Node; 2]);
+
+/// The hierarchy over primitives `0..n` (in the order `build` returned). The root is
+/// slot 0 of pair 0.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
-    nodes: Vec<Node>,
+    pairs: Vec<Pair>,
 }
 
 #[derive(Clone, Copy)]
@@ -62,21 +71,22 @@ impl Bvh {
             .map(|(i, b)| PrimInfo { bounds: *b, centroid: b.centroid(), index: i as u32 })
             .collect();
         let root = build_recursive(&mut info, 0);
-        let mut nodes = Vec::with_capacity(2 * bounds.len() / 3 + 1);
-        flatten(&root, &mut nodes);
-        (Bvh { nodes }, info.iter().map(|p| p.index).collect())
+        let mut pairs = vec![Pair::default()];
+        flatten(&root, &mut pairs, (0, 0));
+        pairs.shrink_to_fit();
+        (Bvh { pairs }, info.iter().map(|p| p.index).collect())
     }
 
     pub fn node_count(&self) -> usize {
-        self.nodes.len()
+        2 * self.pairs.len()
     }
 
     pub fn heap_bytes(&self) -> usize {
-        self.nodes.capacity() * std::mem::size_of::<Node>()
+        self.pairs.capacity() * std::mem::size_of::<Pair>()
     }
 
     pub fn bounds(&self) -> Bounds3 {
-        self.nodes.first().map_or(Bounds3::default(), Node::bounds)
+        self.pairs.first().map_or(Bounds3::default(), |p| p.0[0].bounds())
     }
 
     /// Closest hit: `hit(prim, t_max)` returns `Some(t)` for a hit closer than `t_max`.
@@ -105,43 +115,79 @@ impl Bvh {
     /// Visits leaves front to back; `visit` returns true to stop.
     #[inline]
     fn traverse(&self, ray: &Ray, t_max: &mut f32, mut visit: impl FnMut(usize, &mut f32) -> bool) -> bool {
-        if self.nodes.is_empty() {
+        let Some(root) = self.pairs.first().map(|p| p.0[0]) else { return false };
+        let r = SlabRay::new(ray);
+        if r.entry(&root, *t_max) == f32::INFINITY {
             return false;
         }
-        let o = ray.o.0;
-        let inv_d = Vec3::ONE / ray.d.0;
-        let neg = [(inv_d.x < 0.0) as usize, (inv_d.y < 0.0) as usize, (inv_d.z < 0.0) as usize];
-        let mut stack = [0u32; 64];
+        // Far children still to visit (pair * 2 + slot), with their entry distance.
+        let mut stack = [(0u32, 0f32); 64];
         let mut sp = 0;
-        let mut current = 0usize;
+        let mut node = root;
         loop {
-            let node = &self.nodes[current];
-            if node.bounds().intersect_p(o, inv_d, neg, *t_max).is_some() {
-                if node.count > 0 {
-                    for prim in node.offset as usize..node.offset as usize + node.count as usize {
-                        if visit(prim, t_max) {
-                            return true;
-                        }
+            if node.count > 0 {
+                for prim in node.offset as usize..node.offset as usize + node.count as usize {
+                    if visit(prim, t_max) {
+                        return true;
                     }
-                } else {
-                    // Visit the near child first.
-                    let (near, far) = if neg[node.axis as usize] == 1 {
-                        (node.offset as usize, current + 1)
-                    } else {
-                        (current + 1, node.offset as usize)
-                    };
-                    stack[sp] = far as u32;
-                    sp += 1;
-                    current = near;
+                }
+            } else {
+                let pair = &self.pairs[node.offset as usize];
+                let (tl, tr) = (r.entry(&pair.0[0], *t_max), r.entry(&pair.0[1], *t_max));
+                if tl != f32::INFINITY || tr != f32::INFINITY {
+                    let (near, far, t_far) = if tl <= tr { (0, 1, tr) } else { (1, 0, tl) };
+                    if t_far != f32::INFINITY {
+                        stack[sp] = (2 * node.offset + far, t_far);
+                        sp += 1;
+                    }
+                    node = pair.0[near as usize];
                     continue;
                 }
             }
-            if sp == 0 {
-                return false;
+            // Pop, skipping children that now lie beyond the closest hit.
+            loop {
+                if sp == 0 {
+                    return false;
+                }
+                sp -= 1;
+                let (n, t) = stack[sp];
+                if t <= *t_max {
+                    node = self.pairs[n as usize / 2].0[n as usize % 2];
+                    break;
+                }
             }
-            sp -= 1;
-            current = stack[sp] as usize;
         }
+    }
+}
+
+/// A ray prepared for slab tests: origin, reciprocal direction, direction signs.
+struct SlabRay {
+    o: [f32; 3],
+    inv: [f32; 3],
+    neg: [bool; 3],
+}
+
+impl SlabRay {
+    fn new(ray: &Ray) -> SlabRay {
+        let inv = (Vec3::ONE / ray.d.0).to_array();
+        SlabRay { o: ray.o.0.to_array(), inv, neg: inv.map(|x| x < 0.0) }
+    }
+
+    /// The entry distance into the node's box within [0, t_max], or ∞ on a miss.
+    /// pbrt's conservative test: the far distances are enlarged by 1 + 2γ(3).
+    #[inline(always)]
+    fn entry(&self, node: &Node, t_max: f32) -> f32 {
+        const SCALE: f32 = 1.0 + 2.0 * crate::math::float::gamma(3);
+        let (mut t0, mut t1) = (0.0f32, t_max);
+        for a in 0..3 {
+            let (near, far) = if self.neg[a] { (node.max[a], node.min[a]) } else { (node.min[a], node.max[a]) };
+            let tn = (near - self.o[a]) * self.inv[a];
+            let tf = (far - self.o[a]) * self.inv[a] * SCALE;
+            // NaN (a ray in a slab's plane) leaves the bound unchanged: no miss.
+            t0 = if tn > t0 { tn } else { t0 };
+            t1 = if tf < t1 { tf } else { t1 };
+        }
+        if t0 <= t1 { t0 } else { f32::INFINITY }
     }
 }
 
@@ -203,7 +249,8 @@ fn sah_split(prims: &mut [PrimInfo], bounds: &Bounds3, axis: usize, lo: f32, hi:
         left = left.union(bb[i]);
         left_n += count[i];
         let cost =
-            0.125 + (left_n as f32 * left.surface_area() + right_count[i + 1] as f32 * right_area[i + 1]) / total;
+            // A traversal step costs about two triangle tests (memory bound).
+            2.0 + (left_n as f32 * left.surface_area() + right_count[i + 1] as f32 * right_area[i + 1]) / total;
         if cost < best_cost {
             (best, best_cost) = (i, cost);
         }
@@ -227,27 +274,30 @@ fn partition(prims: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize 
     i
 }
 
-fn flatten(node: &BuildNode, out: &mut Vec<Node>) {
-    let at = out.len();
+/// Writes `node` into slot `at` and its children, recursively, into new pairs.
+fn flatten(node: &BuildNode, pairs: &mut Vec<Pair>, at: (usize, usize)) {
     match node {
-        BuildNode::Leaf { bounds, first, count } => out.push(Node {
-            min: bounds.min.to_array(),
-            offset: *first as u32,
-            max: bounds.max.to_array(),
-            count: *count as u16,
-            axis: 0,
-        }),
-        BuildNode::Interior { bounds, axis, children } => {
-            out.push(Node {
+        BuildNode::Leaf { bounds, first, count } => {
+            pairs[at.0].0[at.1] = Node {
                 min: bounds.min.to_array(),
-                offset: 0,
+                offset: *first as u32,
+                max: bounds.max.to_array(),
+                count: *count as u16,
+                axis: 0,
+            }
+        }
+        BuildNode::Interior { bounds, axis, children } => {
+            let pair = pairs.len();
+            pairs.push(Pair::default());
+            pairs[at.0].0[at.1] = Node {
+                min: bounds.min.to_array(),
+                offset: pair as u32,
                 max: bounds.max.to_array(),
                 count: 0,
                 axis: *axis as u16,
-            });
-            flatten(&children.0, out);
-            out[at].offset = out.len() as u32;
-            flatten(&children.1, out);
+            };
+            flatten(&children.0, pairs, (pair, 0));
+            flatten(&children.1, pairs, (pair, 1));
         }
     }
 }

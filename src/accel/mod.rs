@@ -75,6 +75,9 @@ pub struct Geometry {
     world: Blas,
     objects: Vec<Blas>,
     tlas: Bvh,
+    /// Per mesh: the file's triangle number of each stored triangle (meshes are
+    /// reordered to follow their BVH).
+    triangle_ids: Vec<Vec<u32>>,
 }
 
 fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>) -> ShapeRef {
@@ -112,6 +115,23 @@ impl Blas {
         let (bvh, order) = Bvh::build(&bounds);
         let prims = order.iter().map(|&i| prims[i as usize]).collect();
         Blas { bvh, prims, shapes }
+    }
+
+    /// Reorders each mesh's triangles into this BVH's leaf order; records the file's
+    /// numbers in `ids` and points the primitives at the new positions.
+    fn localize(&mut self, meshes: &mut [TriangleMesh], ids: &mut [Vec<u32>]) {
+        for (shape, s) in self.shapes.iter().enumerate() {
+            let ShapeRef::Mesh { mesh, .. } = s else { continue };
+            let mesh = *mesh as usize;
+            let order: Vec<u32> = self.prims.iter().filter(|p| p.shape == shape as u32).map(|p| p.tri).collect();
+            meshes[mesh].reorder(&order);
+            let mut next = 0;
+            for p in self.prims.iter_mut().filter(|p| p.shape == shape as u32) {
+                p.tri = next;
+                next += 1;
+            }
+            ids[mesh] = order;
+        }
     }
 
     /// Closest hit: (t, local shape index, what was hit).
@@ -175,14 +195,18 @@ fn instance_bounds(m: &DMat4, b: Bounds3) -> Bounds3 {
 impl Geometry {
     /// Builds the acceleration structures, taking the scene's meshes.
     pub fn new(scene: &mut SceneDescription) -> Geometry {
-        let meshes = std::mem::take(&mut scene.meshes);
+        let mut meshes = std::mem::take(&mut scene.meshes);
         let mut quadrics = Vec::new();
         let world_shapes: Vec<ShapeRef> = scene.shapes.iter().map(|s| shape_ref(s, &mut quadrics)).collect();
         let object_shapes: Vec<Vec<ShapeRef>> =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| shape_ref(s, &mut quadrics)).collect()).collect();
-        let world = Blas::build(world_shapes, &quadrics, &meshes);
-        let objects: Vec<Blas> =
+        let mut world = Blas::build(world_shapes, &quadrics, &meshes);
+        let mut objects: Vec<Blas> =
             object_shapes.into_par_iter().map(|shapes| Blas::build(shapes, &quadrics, &meshes)).collect();
+        let mut triangle_ids = vec![Vec::new(); meshes.len()];
+        for blas in std::iter::once(&mut world).chain(objects.iter_mut()) {
+            blas.localize(&mut meshes, &mut triangle_ids);
+        }
         let mut next = scene.shapes.len() as u32;
         let mut instances: Vec<Instance> = scene
             .instances
@@ -206,7 +230,7 @@ impl Geometry {
             .collect();
         let (tlas, order) = Bvh::build(&bounds);
         instances = order.iter().map(|&k| instances[k as usize].clone()).collect();
-        Geometry { quadrics, meshes, instances, world, objects, tlas }
+        Geometry { quadrics, meshes, instances, world, objects, tlas, triangle_ids }
     }
 
     /// The closest hit along the ray before `ray.t_max`.
@@ -256,9 +280,15 @@ impl Geometry {
         }
     }
 
-    /// Bytes of BVH nodes and primitive references.
+    /// The file's number of stored triangle `tri` of mesh `mesh`.
+    pub fn triangle_id(&self, mesh: u32, tri: u32) -> u32 {
+        self.triangle_ids.get(mesh as usize).and_then(|ids| ids.get(tri as usize)).copied().unwrap_or(tri)
+    }
+
+    /// Bytes of BVH nodes, primitive references and the triangle-number maps.
     pub fn accel_bytes(&self) -> usize {
         let blas = |b: &Blas| b.bvh.heap_bytes() + b.prims.capacity() * std::mem::size_of::<Prim>();
-        blas(&self.world) + self.objects.iter().map(blas).sum::<usize>() + self.tlas.heap_bytes()
+        let ids: usize = self.triangle_ids.iter().map(|v| v.capacity() * 4).sum();
+        blas(&self.world) + self.objects.iter().map(blas).sum::<usize>() + self.tlas.heap_bytes() + ids
     }
 }

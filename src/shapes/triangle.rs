@@ -67,6 +67,33 @@ impl TriangleMesh {
         Some(it.fold([first, first], |[lo, hi], p| [lo.min(p), hi.max(p)]))
     }
 
+    /// Puts triangle `order[k]` at position k and renumbers vertices by first use, so
+    /// triangles that are near in a BVH are near in memory (their vertices too).
+    /// Per-vertex arrays follow; vertices no triangle uses are dropped.
+    pub fn reorder(&mut self, order: &[u32]) {
+        let mut remap = vec![u32::MAX; self.p.len()];
+        let mut old_of_new: Vec<u32> = Vec::with_capacity(self.p.len());
+        let mut indices = Vec::with_capacity(3 * order.len());
+        for &t in order {
+            for &v in &self.indices[3 * t as usize..3 * t as usize + 3] {
+                if remap[v as usize] == u32::MAX {
+                    remap[v as usize] = old_of_new.len() as u32;
+                    old_of_new.push(v);
+                }
+                indices.push(remap[v as usize]);
+            }
+        }
+        fn gather<T: Copy>(v: &[T], at: &[u32]) -> Vec<T> {
+            at.iter().map(|&i| v[i as usize]).collect()
+        }
+        self.indices = indices;
+        self.p = gather(&self.p, &old_of_new);
+        self.n = self.n.as_ref().map(|n| gather(n, &old_of_new));
+        self.s = self.s.as_ref().map(|s| gather(s, &old_of_new));
+        self.uv = self.uv.as_ref().map(|uv| gather(uv, &old_of_new));
+        self.face_indices = self.face_indices.as_ref().map(|f| gather(f, order));
+    }
+
     /// Heap bytes held by this mesh.
     pub fn heap_bytes(&self) -> usize {
         self.p.capacity() * 12
@@ -99,6 +126,7 @@ pub struct TriangleHit {
 }
 
 impl TriangleMesh {
+    #[inline]
     fn corners(&self, tri: usize) -> [Vec3; 3] {
         let i = &self.indices[3 * tri..3 * tri + 3];
         [Vec3::from(self.p[i[0] as usize]), Vec3::from(self.p[i[1] as usize]), Vec3::from(self.p[i[2] as usize])]
