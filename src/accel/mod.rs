@@ -32,6 +32,8 @@ struct Prim {
 #[derive(Default)]
 struct Blas {
     bvh: Bvh,
+    /// Leaf entries in BVH order; empty when the BVH holds a single mesh, whose
+    /// triangles are then stored in BVH order (entry i is triangle i).
     prims: Vec<Prim>,
     shapes: Vec<ShapeRef>,
 }
@@ -118,27 +120,35 @@ impl Blas {
     }
 
     /// Reorders each mesh's triangles into this BVH's leaf order; records the file's
-    /// numbers in `ids` and points the primitives at the new positions.
+    /// numbers in `ids` and points the primitives at the new positions. A BVH over a
+    /// single mesh then needs no primitive list at all.
     fn localize(&mut self, meshes: &mut [TriangleMesh], ids: &mut [Vec<u32>]) {
         for (shape, s) in self.shapes.iter().enumerate() {
             let ShapeRef::Mesh { mesh, .. } = s else { continue };
             let mesh = *mesh as usize;
             let order: Vec<u32> = self.prims.iter().filter(|p| p.shape == shape as u32).map(|p| p.tri).collect();
             meshes[mesh].reorder(&order);
-            let mut next = 0;
-            for p in self.prims.iter_mut().filter(|p| p.shape == shape as u32) {
-                p.tri = next;
-                next += 1;
+            for (next, p) in self.prims.iter_mut().filter(|p| p.shape == shape as u32).enumerate() {
+                p.tri = next as u32;
             }
             ids[mesh] = order;
         }
+        if matches!(self.shapes.as_slice(), [ShapeRef::Mesh { .. }]) {
+            self.prims = Vec::new();
+        }
+    }
+
+    /// Leaf entry i.
+    #[inline]
+    fn prim(&self, i: usize) -> Prim {
+        if self.prims.is_empty() { Prim { shape: 0, tri: i as u32 } } else { self.prims[i] }
     }
 
     /// Closest hit: (t, local shape index, what was hit).
     fn intersect(&self, g: &Geometry, ray: &Ray, t_max: f32) -> Option<(f32, u32, LocalHit)> {
         let mut best = None;
         self.bvh.intersect(ray, t_max, |i, t_max| {
-            let prim = self.prims[i];
+            let prim = self.prim(i);
             let hit = self.hit_prim(g, prim, ray, t_max)?;
             best = Some((prim.shape, hit.1));
             Some(hit.0)
@@ -165,7 +175,7 @@ impl Blas {
     }
 
     fn intersect_p(&self, g: &Geometry, ray: &Ray, t_max: f32) -> bool {
-        self.bvh.intersect_p(ray, t_max, |i, t_max| self.hit_prim(g, self.prims[i], ray, t_max).is_some())
+        self.bvh.intersect_p(ray, t_max, |i, t_max| self.hit_prim(g, self.prim(i), ray, t_max).is_some())
     }
 }
 

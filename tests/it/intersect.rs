@@ -567,3 +567,47 @@ fn reintersect_through_instances() {
     assert!(hits > 2000, "only {hits} hits");
     assert_eq!(failures, 0, "{failures} self-intersections out of {} rays", hits * 100);
 }
+
+/// Meshes are reordered to follow their BVH; `trace` still reports the file's
+/// triangle numbers (and face indices stay with their triangles).
+#[test]
+fn trace_reports_file_triangle_numbers_after_reordering() {
+    // A 20×20 grid of quads in z = 0, triangles listed in a scrambled order.
+    let n = 20usize;
+    let mut p = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            p.push(format!("{i} {j} 0"));
+        }
+    }
+    let mut tris = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let v = |di: usize, dj: usize| (j + dj) * (n + 1) + i + di;
+            tris.push([v(0, 0), v(1, 0), v(1, 1)]);
+            tris.push([v(0, 0), v(1, 1), v(0, 1)]);
+        }
+    }
+    let mut order: Vec<usize> = (0..tris.len()).collect();
+    let mut rng = Rng::new(3);
+    for k in (1..order.len()).rev() {
+        order.swap(k, (rng.uniform() * (k + 1) as f64) as usize);
+    }
+    let idx: Vec<String> = order.iter().map(|&t| format!("{} {} {}", tris[t][0], tris[t][1], tris[t][2])).collect();
+    let text = format!(
+        "WorldBegin Shape \"trianglemesh\" \"point3 P\" [{}] \"integer indices\" [{}]",
+        p.join(" "),
+        idx.join(" ")
+    );
+    let t = Tracer::new(scene(&text));
+    for _ in 0..200 {
+        let (x, y) = (rng.uniform() * n as f64, rng.uniform() * n as f64);
+        // Which file triangle covers (x, y): its quad, and the half it lies in.
+        let (i, j) = (x as usize, y as usize);
+        let lower = (x - i as f64) > (y - j as f64);
+        let quad_tri = 2 * (j * n + i) + if lower { 0 } else { 1 };
+        let file_index = order.iter().position(|&t| t == quad_tri).unwrap_or(usize::MAX);
+        let out = t.trace(&Ray::new(Point3::new(x as f32, y as f32, 1.0), Vector3::new(0.0, 0.0, -1.0)));
+        assert_eq!(out["triangle"].as_u64(), Some(file_index as u64), "at ({x}, {y})");
+    }
+}
