@@ -154,13 +154,25 @@ impl QuadricShape {
         let l = local(&self.quadric, hit.p_obj, hit.phi);
         let m = self.render_from_object;
         let m3 = DMat3::from_mat4(m);
-        let normal_m = m3.inverse().transpose();
-        let (dpdu, dpdv) = (m3 * l.dpdu, m3 * l.dpdv);
+        // The map is affine, so world derivatives of every order are m3 times the
+        // object ones; Weingarten on those gives the derivatives of the world normal.
+        // DEVIATION(pbrt): pbrt transforms object-space ∂n/∂u as a normal (off by the
+        // scale under scaling) and does not flip it with ReverseOrientation; ours are the
+        // derivatives of the normal we report.
+        let world = Local {
+            uv: l.uv,
+            dpdu: m3 * l.dpdu,
+            dpdv: m3 * l.dpdv,
+            d2_uu: m3 * l.d2_uu,
+            d2_uv: m3 * l.d2_uv,
+            d2_vv: m3 * l.d2_vv,
+        };
+        let (dpdu, dpdv) = (world.dpdu, world.dpdv);
         let mut n = dpdu.cross(dpdv).normalize_or_zero();
+        let (mut dndu, mut dndv) = weingarten(&world);
         if self.reverse_orientation {
-            n = -n;
+            (n, dndu, dndv) = (-n, -dndu, -dndv);
         }
-        let (dndu, dndv) = weingarten(&l);
         let p = m.transform_point3(hit.p_obj);
         let p32 = p.as_vec3();
         // The f32 rounding of p, the f64 work before it, and any distance left between
@@ -173,8 +185,8 @@ impl QuadricShape {
             n: nv,
             dpdu: Vector3(dpdu.as_vec3()),
             dpdv: Vector3(dpdv.as_vec3()),
-            dndu: Normal3((normal_m * dndu).as_vec3()),
-            dndv: Normal3((normal_m * dndv).as_vec3()),
+            dndu: Normal3(dndu.as_vec3()),
+            dndv: Normal3(dndv.as_vec3()),
         };
         SurfaceInteraction {
             p: Point3(p32),

@@ -394,8 +394,16 @@ fn uv_derivatives_and_normals_match_the_analytic_definition() {
                     };
                     close(si.dpdu.0, m3 * q.dpdu(u, v), "dpdu");
                     close(si.dpdv.0, m3 * q.dpdv(u, v), "dpdv");
-                    let n = (m3 * q.dpdu(u, v)).cross(m3 * q.dpdv(u, v)).normalize() * if ro { -1.0 } else { 1.0 };
-                    close(si.n.0, n, "n");
+                    let sign = if ro { -1.0 } else { 1.0 };
+                    let normal = |u: f64, v: f64| (m3 * q.dpdu(u, v)).cross(m3 * q.dpdv(u, v)).normalize() * sign;
+                    close(si.n.0, normal(u, v), "n");
+                    // ∂n/∂u and ∂n/∂v against central differences of the analytic normal.
+                    let h = 1e-5;
+                    let dndu = (normal(u + h, v) - normal(u - h, v)) / (2.0 * h);
+                    let dndv = (normal(u, v + h) - normal(u, v - h)) / (2.0 * h);
+                    let near = |a: Vec3, b: DVec3| (a.as_dvec3() - b).length() <= 1e-3 * b.length().max(1.0);
+                    assert!(near(si.dndu.0, dndu), "{}: dndu {} vs {dndu}", q.name(), si.dndu.0);
+                    assert!(near(si.dndv.0, dndv), "{}: dndv {} vs {dndv}", q.name(), si.dndv.0);
                     assert!(si.p_error.max_element() > 0.0);
                 }
             }
