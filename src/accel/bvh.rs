@@ -160,14 +160,14 @@ impl Bvh {
             // Push the hit children farthest first, so the nearest is visited next.
             let mut hits = [(0f32, 0usize); 4];
             let mut n = 0;
-            for slot in 0..4 {
+            for (slot, &t) in t0.iter().enumerate() {
                 if mask & (1 << slot) != 0 {
                     let mut k = n;
-                    while k > 0 && hits[k - 1].0 < t0[slot] {
+                    while k > 0 && hits[k - 1].0 < t {
                         hits[k] = hits[k - 1];
                         k -= 1;
                     }
-                    hits[k] = (t0[slot], slot);
+                    hits[k] = (t, slot);
                     n += 1;
                 }
             }
