@@ -6,7 +6,7 @@
 //! the side the ray goes to, then one more ulp away, so a ray never re-hits the surface
 //! it leaves.
 
-use crate::math::{Normal3, Point3, Ray, Transform, Vector3};
+use crate::math::{Normal3, Point3, Ray, Vector3};
 use glam::Vec3;
 
 /// pbrt's shadow epsilon for rays towards a point.
@@ -108,33 +108,6 @@ impl SurfaceInteraction {
                 dpdv: v(self.shading.dpdv),
                 dndu: nrm(self.shading.dndu),
                 dndv: nrm(self.shading.dndv),
-            },
-        }
-    }
-
-    /// The interaction seen through `t` (instance-to-world): points with error
-    /// propagation, vectors directly, normals by the inverse transpose.
-    pub fn transformed(&self, t: &Transform) -> SurfaceInteraction {
-        let (p, p_error) = t.point_with_error_prop(self.p, self.p_error);
-        let n = t.normal(self.n).normalize();
-        let mut shading_n = t.normal(self.shading.n).normalize();
-        shading_n = shading_n.face_forward(n.into());
-        SurfaceInteraction {
-            p,
-            p_error,
-            t: self.t,
-            uv: self.uv,
-            n,
-            dpdu: t.vector(self.dpdu),
-            dpdv: t.vector(self.dpdv),
-            dndu: t.normal(self.dndu),
-            dndv: t.normal(self.dndv),
-            shading: Shading {
-                n: shading_n,
-                dpdu: t.vector(self.shading.dpdu),
-                dpdv: t.vector(self.shading.dpdv),
-                dndu: t.normal(self.shading.dndu),
-                dndv: t.normal(self.shading.dndv),
             },
         }
     }

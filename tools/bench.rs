@@ -172,26 +172,7 @@ fn write_inline_mesh(path: &Path) -> std::io::Result<u64> {
 
 fn write_ply(path: &Path, n: usize) -> std::io::Result<u64> {
     let (p, idx) = grid(n);
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
-    write!(
-        w,
-        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
-         element face {}\nproperty list uchar int vertex_indices\nend_header\n",
-        p.len(),
-        idx.len() / 3
-    )?;
-    for v in &p {
-        for c in v {
-            w.write_all(&c.to_le_bytes())?;
-        }
-    }
-    for t in idx.chunks(3) {
-        w.write_all(&[3])?;
-        for i in t {
-            w.write_all(&i.to_le_bytes())?;
-        }
-    }
-    w.flush()?;
+    write_mesh_ply(path, &p, &idx)?;
     Ok(std::fs::metadata(path)?.len())
 }
 

@@ -64,35 +64,26 @@ impl Bounds3 {
         o
     }
 
-    /// pbrt's slab test with precomputed 1/d and direction signs; t_far is enlarged by
-    /// 1 + 2γ(3) so that rounding never misses a box the ray truly crosses.
+    /// pbrt's slab test with precomputed 1/d and direction signs; the far distances
+    /// are enlarged by 1 + 2γ(3) so that rounding never misses a box the ray truly
+    /// crosses. Returns the entry distance (negative when the origin is inside).
     #[inline]
     pub fn intersect_p(&self, o: Vec3, inv_d: Vec3, neg: [usize; 3], t_max: f32) -> Option<f32> {
         let b = [self.min, self.max];
         let scale = 1.0 + 2.0 * gamma(3);
-        let mut t_min = (b[neg[0]].x - o.x) * inv_d.x;
-        let mut t_far = (b[1 - neg[0]].x - o.x) * inv_d.x * scale;
-        let ty_min = (b[neg[1]].y - o.y) * inv_d.y;
-        let ty_max = (b[1 - neg[1]].y - o.y) * inv_d.y * scale;
-        if t_min > ty_max || ty_min > t_far {
-            return None;
-        }
-        if ty_min > t_min {
-            t_min = ty_min;
-        }
-        if ty_max < t_far {
-            t_far = ty_max;
-        }
-        let tz_min = (b[neg[2]].z - o.z) * inv_d.z;
-        let tz_max = (b[1 - neg[2]].z - o.z) * inv_d.z * scale;
-        if t_min > tz_max || tz_min > t_far {
-            return None;
-        }
-        if tz_min > t_min {
-            t_min = tz_min;
-        }
-        if tz_max < t_far {
-            t_far = tz_max;
+        let (mut t_min, mut t_far) = (f32::NEG_INFINITY, f32::INFINITY);
+        for a in 0..3 {
+            let near = (b[neg[a]][a] - o[a]) * inv_d[a];
+            let far = (b[1 - neg[a]][a] - o[a]) * inv_d[a] * scale;
+            if t_min > far || near > t_far {
+                return None;
+            }
+            if near > t_min {
+                t_min = near;
+            }
+            if far < t_far {
+                t_far = far;
+            }
         }
         (t_min < t_max && t_far > 0.0).then_some(t_min)
     }

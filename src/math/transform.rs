@@ -131,6 +131,18 @@ mod tests {
     }
 
     #[test]
+    fn ray_origin_moves_forward_by_its_error_and_keeps_t() {
+        let t = Transform::from_dmat4(DMat4::from_translation(glam::DVec3::new(1e4, 0.0, 0.0)));
+        let r = Ray { o: Point3::new(0.5, 0.0, 0.0), d: Vector3::new(2.0, 0.0, 0.0), t_max: 10.0 };
+        let (tr, dt) = t.ray(&r);
+        assert!(dt > 0.0, "the origin has rounding error at x = 1e4");
+        assert_eq!(tr.t_max, 10.0 - dt);
+        // The same point at the same t, up to the transform's rounding.
+        let p = t.point(r.at(3.0));
+        assert!((tr.at(3.0 - dt).0 - p.0).length() <= 2e-3, "{:?} vs {p:?}", tr.at(3.0 - dt));
+    }
+
+    #[test]
     fn normals_stay_perpendicular_under_nonuniform_scale() {
         let t = Transform::from_dmat4(DMat4::from_scale(glam::DVec3::new(1.0, 4.0, 1.0)));
         let (n, v) = (Normal3::new(1.0, 1.0, 0.0), Vector3::new(1.0, -1.0, 0.0));
