@@ -139,44 +139,55 @@ impl Bvh {
         let r = SlabRay::new(ray);
         // Entries: (node index or first primitive, primitive count or 0 for a node, entry t).
         let mut stack = [(0u32, 0u16, 0f32); 128];
-        stack[0] = (0, 0, 0.0);
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let (child, count, t) = stack[sp];
-            if t > *t_max {
-                continue;
-            }
+        let mut sp = 0;
+        let (mut child, mut count) = (0u32, 0u16);
+        loop {
             if count > 0 {
                 for prim in child as usize..child as usize + count as usize {
                     if visit(prim, t_max) {
                         return true;
                     }
                 }
-                continue;
-            }
-            let node = &self.nodes[child as usize];
-            let (t0, mask) = r.entries(node, *t_max);
-            // Push the hit children farthest first, so the nearest is visited next.
-            let mut hits = [(0f32, 0usize); 4];
-            let mut n = 0;
-            for (slot, &t) in t0.iter().enumerate() {
-                if mask & (1 << slot) != 0 {
-                    let mut k = n;
-                    while k > 0 && hits[k - 1].0 < t {
-                        hits[k] = hits[k - 1];
-                        k -= 1;
+            } else {
+                let node = &self.nodes[child as usize];
+                let (t0, mask) = r.entries(node, *t_max);
+                // Sort the hit children nearest first; go on with the nearest, push the rest.
+                let mut hits = [(0f32, 0usize); 4];
+                let mut n = 0;
+                for (slot, &t) in t0.iter().enumerate() {
+                    if mask & (1 << slot) != 0 {
+                        let mut k = n;
+                        while k > 0 && hits[k - 1].0 < t {
+                            hits[k] = hits[k - 1];
+                            k -= 1;
+                        }
+                        hits[k] = (t, slot);
+                        n += 1;
                     }
-                    hits[k] = (t, slot);
-                    n += 1;
+                }
+                if n > 0 {
+                    for &(t, slot) in &hits[..n - 1] {
+                        stack[sp] = (node.child[slot], node.count[slot], t);
+                        sp += 1;
+                    }
+                    let slot = hits[n - 1].1;
+                    (child, count) = (node.child[slot], node.count[slot]);
+                    continue;
                 }
             }
-            for &(t, slot) in &hits[..n] {
-                stack[sp] = (node.child[slot], node.count[slot], t);
-                sp += 1;
+            // Pop, skipping entries that now lie beyond the closest hit.
+            loop {
+                if sp == 0 {
+                    return false;
+                }
+                sp -= 1;
+                let (c, k, t) = stack[sp];
+                if t <= *t_max {
+                    (child, count) = (c, k);
+                    break;
+                }
             }
         }
-        false
     }
 }
 

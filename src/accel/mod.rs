@@ -161,6 +161,7 @@ impl Blas {
         Some((t, shape, local))
     }
 
+    #[inline]
     fn hit_prim(&self, g: &Geometry, prim: Prim, ray: &Ray, t_max: f32) -> Option<(f32, LocalHit)> {
         match self.shapes[prim.shape as usize] {
             ShapeRef::Quadric(q) => {
