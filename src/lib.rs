@@ -5,7 +5,9 @@
 //! ([`scene`]) → render-ready scene → image.
 
 pub mod accel;
+pub mod camera;
 pub mod check;
+pub mod imageio;
 pub mod interaction;
 pub mod math;
 pub mod parser;

@@ -1,6 +1,7 @@
 //! The one integration-test binary (one link step keeps 2-core CI fast).
 
 mod bad_inputs;
+mod camera_image;
 mod common;
 mod directives;
 mod instancing;

@@ -1,0 +1,173 @@
+//! Image files: EXR (32-bit float R, G, B, ZIP scanlines; data window = crop window;
+//! pbrt's metadata keys) and 8-bit sRGB PNG previews. Writes go to a temporary file in
+//! the same folder and are renamed into place, so a crash never leaves half an image.
+//! Reading accepts half and float EXRs (pbrt-v3 writes half, pbrt-v4 float) and PNGs.
+
+use exr::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// exr's prelude has its own `Result`; ours carry a message.
+type Res<T> = std::result::Result<T, String>;
+
+/// Metadata written into EXR headers.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ImageMeta {
+    pub render_time_seconds: Option<f32>,
+    /// SPPM iterations.
+    pub samples_per_pixel: Option<i32>,
+    pub photons_per_iteration: Option<i64>,
+    /// Row-major.
+    pub world_to_camera: Option<[f32; 16]>,
+    pub software: Option<String>,
+}
+
+/// An RGB image: the data window of a larger display window.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[f32; 3]>,
+    /// Top-left corner of the data window in the display window.
+    pub origin: (i32, i32),
+    /// Size of the display window (the full resolution).
+    pub full: (usize, usize),
+    pub meta: ImageMeta,
+}
+
+impl RgbImage {
+    /// A black image covering the whole display window.
+    pub fn new(width: usize, height: usize) -> RgbImage {
+        RgbImage {
+            width,
+            height,
+            pixels: vec![[0.0; 3]; width * height],
+            origin: (0, 0),
+            full: (width, height),
+            meta: ImageMeta::default(),
+        }
+    }
+}
+
+/// A temporary file beside `path` and the final rename.
+fn atomically(path: &Path, write: impl FnOnce(&Path) -> Res<()>) -> Res<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.{}.tmp.{ext}", std::process::id()));
+    let result = write(&tmp)
+        .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| format!("cannot rename to \"{}\": {e}", path.display())));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Writes by extension: `.png` gives an sRGB preview, anything else EXR.
+pub fn write_image(path: &Path, img: &RgbImage) -> Res<()> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("png") => write_png(path, img),
+        _ => write_exr(path, img),
+    }
+}
+
+pub fn write_exr(path: &Path, img: &RgbImage) -> Res<()> {
+    let mut attrs = LayerAttributes::named("");
+    attrs.layer_position = Vec2(img.origin.0, img.origin.1);
+    attrs.software_name = img.meta.software.as_deref().map(Text::from);
+    attrs.world_to_camera = img.meta.world_to_camera;
+    let mut put = |k: &str, v: AttributeValue| {
+        attrs.other.insert(Text::from(k), v);
+    };
+    if let Some(t) = img.meta.render_time_seconds {
+        put("renderTimeSeconds", AttributeValue::F32(t));
+    }
+    if let Some(n) = img.meta.samples_per_pixel {
+        put("samplesPerPixel", AttributeValue::I32(n));
+    }
+    if let Some(n) = img.meta.photons_per_iteration {
+        put("photonsPerIteration", AttributeValue::I32(n.min(i32::MAX as i64) as i32));
+    }
+    let w = img.width;
+    let pixels = &img.pixels;
+    let layer = Layer::new(
+        (img.width, img.height),
+        attrs,
+        Encoding::SMALL_LOSSLESS,
+        SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+            let p = pixels[y * w + x];
+            (p[0], p[1], p[2])
+        }),
+    );
+    let mut image = Image::from_layer(layer);
+    image.attributes.display_window = IntegerBounds::new((0, 0), img.full);
+    atomically(path, |tmp| image.write().to_file(tmp).map_err(|e| format!("cannot write \"{}\": {e}", path.display())))
+}
+
+/// The sRGB transfer curve.
+pub fn to_srgb(v: f32) -> f32 {
+    let v = v.clamp(0.0, 1.0);
+    if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
+}
+
+pub fn from_srgb(v: f32) -> f32 {
+    if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+}
+
+pub fn write_png(path: &Path, img: &RgbImage) -> Res<()> {
+    let bytes: Vec<u8> = img.pixels.iter().flat_map(|p| p.map(|c| (to_srgb(c) * 255.0).round() as u8)).collect();
+    let buf = image::RgbImage::from_raw(img.width as u32, img.height as u32, bytes)
+        .ok_or_else(|| "image size does not match its pixels".to_string())?;
+    atomically(path, |tmp| {
+        buf.save_with_format(tmp, image::ImageFormat::Png)
+            .map_err(|e| format!("cannot write \"{}\": {e}", path.display()))
+    })
+}
+
+/// Reads the first RGB(A) layer of an EXR (half or float), or a PNG (linearised).
+pub fn read_image(path: &Path) -> Res<RgbImage> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("png") => read_png(path),
+        _ => read_exr(path),
+    }
+}
+
+pub fn read_exr(path: &Path) -> Res<RgbImage> {
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+        |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * *w + pos.x()] = [r, g, b],
+    )
+    .map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
+    let layer = &image.layer_data;
+    let a = &layer.attributes;
+    let get_f32 = |k: &str| match a.other.get(&Text::from(k)) {
+        Some(AttributeValue::F32(v)) => Some(*v),
+        _ => None,
+    };
+    let get_i32 = |k: &str| match a.other.get(&Text::from(k)) {
+        Some(AttributeValue::I32(v)) => Some(*v),
+        _ => None,
+    };
+    let display = image.attributes.display_window;
+    Ok(RgbImage {
+        width: layer.size.width(),
+        height: layer.size.height(),
+        pixels: layer.channel_data.pixels.1.clone(),
+        origin: (a.layer_position.x() - display.position.x(), a.layer_position.y() - display.position.y()),
+        full: (display.size.width(), display.size.height()),
+        meta: ImageMeta {
+            render_time_seconds: get_f32("renderTimeSeconds"),
+            samples_per_pixel: get_i32("samplesPerPixel"),
+            photons_per_iteration: get_i32("photonsPerIteration").map(i64::from),
+            world_to_camera: a.world_to_camera,
+            software: a.software_name.as_ref().map(|t| t.to_string()),
+        },
+    })
+}
+
+pub fn read_png(path: &Path) -> Res<RgbImage> {
+    let img = image::open(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?.to_rgb32f();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let pixels = img.pixels().map(|p| p.0.map(from_srgb)).collect();
+    Ok(RgbImage { width: w, height: h, pixels, origin: (0, 0), full: (w, h), meta: ImageMeta::default() })
+}

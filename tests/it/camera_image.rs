@@ -1,0 +1,159 @@
+//! Camera orientation against pbrt's conventions, and image files: EXR round trip with
+//! crop window and metadata, half-float input, PNG previews, atomic writes.
+
+use crate::common::scene;
+use pbrt_sppm::camera::Camera;
+use pbrt_sppm::imageio::{ImageMeta, RgbImage, read_image, write_image};
+use pbrt_sppm::trace::Tracer;
+
+/// Raster pixels (x, y) whose centre ray hits something, for a scene text.
+fn hit_pixels(text: &str, res: usize) -> Vec<(usize, usize)> {
+    let s = scene(text);
+    let camera = Camera::new(&s.camera, &s.film);
+    let tracer = Tracer::new(s);
+    let mut hits = Vec::new();
+    for y in 0..res {
+        for x in 0..res {
+            let ray = camera.generate_ray([x as f32 + 0.5, y as f32 + 0.5], [0.5, 0.5]);
+            if tracer.geometry.intersect(&ray).is_some() {
+                hits.push((x, y));
+            }
+        }
+    }
+    hits
+}
+
+fn centroid(p: &[(usize, usize)]) -> (f64, f64) {
+    let n = p.len() as f64;
+    (p.iter().map(|q| q.0 as f64).sum::<f64>() / n, p.iter().map(|q| q.1 as f64).sum::<f64>() / n)
+}
+
+const FILM: &str = "Film \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 64";
+
+#[test]
+fn lookat_puts_world_x_on_the_left_like_pbrt() {
+    let view = "LookAt 0 0 5  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 60";
+    let right =
+        hit_pixels(&format!("{FILM} {view} WorldBegin Translate 1.5 0 0 Shape \"sphere\" \"float radius\" 0.5"), 64);
+    let (cx, cy) = centroid(&right);
+    assert!(cx < 32.0 - 8.0 && (cy - 32.0).abs() < 1.0, "world +x lands at ({cx}, {cy}): expected the left half");
+    let up =
+        hit_pixels(&format!("{FILM} {view} WorldBegin Translate 0 1.5 0 Shape \"sphere\" \"float radius\" 0.5"), 64);
+    let (ux, uy) = centroid(&up);
+    assert!(uy < 32.0 - 8.0 && (ux - 32.0).abs() < 1.0, "world +y lands at ({ux}, {uy}): expected the top");
+    // The exporters' fix: Scale -1 1 1 before LookAt mirrors the image.
+    let mirrored = hit_pixels(
+        &format!("{FILM} Scale -1 1 1 {view} WorldBegin Translate 1.5 0 0 Shape \"sphere\" \"float radius\" 0.5"),
+        64,
+    );
+    let (mx, _) = centroid(&mirrored);
+    // Pixel x mirrors to 63 − x.
+    assert!((mx - (63.0 - cx)).abs() < 0.5, "mirrored camera: {mx} vs {}", 63.0 - cx);
+}
+
+#[test]
+fn fov_spans_the_shorter_axis_and_orthographic_uses_the_screen_window() {
+    // A sphere of angular radius exactly fov/2 fills the shorter (vertical) axis.
+    let text = "Film \"rgb\" \"integer xresolution\" 128 \"integer yresolution\" 64 Camera \"perspective\" \"float fov\" 60 \
+                WorldBegin Translate 0 0 10 Shape \"sphere\" \"float radius\" 5";
+    let hits = hit_pixels(text, 0);
+    assert!(hits.is_empty());
+    let s = scene(text);
+    let camera = Camera::new(&s.camera, &s.film);
+    let g = Tracer::new(s);
+    let through = |x: f32, y: f32| g.geometry.intersect(&camera.generate_ray([x, y], [0.5, 0.5])).is_some();
+    assert!(through(64.0, 1.0) && through(64.0, 63.0), "top and bottom rows see the sphere");
+    assert!(!through(64.0, -0.5) || !through(0.5, 32.0), "beyond the window it does not");
+    let ortho = scene(
+        "Film \"rgb\" \"integer xresolution\" 10 \"integer yresolution\" 10 Camera \"orthographic\" \"float screenwindow\" [-2 2 -2 2] WorldBegin",
+    );
+    let cam = Camera::new(&ortho.camera, &ortho.film);
+    let r = cam.generate_ray([0.0, 0.0], [0.5, 0.5]);
+    assert_eq!((r.o.0.x, r.o.0.y, r.d.0.z), (-2.0, 2.0, 1.0), "top-left corner of the window");
+}
+
+#[test]
+fn thin_lens_rays_meet_at_the_focal_distance() {
+    let s = scene(
+        "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32 Camera \"perspective\" \"float fov\" 40 \"float lensradius\" 0.2 \"float focaldistance\" 3 WorldBegin",
+    );
+    let cam = Camera::new(&s.camera, &s.film);
+    let a = cam.generate_ray([10.5, 20.5], [0.1, 0.9]);
+    let b = cam.generate_ray([10.5, 20.5], [0.8, 0.3]);
+    assert!(a.o.0 != b.o.0, "different lens points");
+    let pa = a.at((3.0 - a.o.0.z) / a.d.0.z).0;
+    let pb = b.at((3.0 - b.o.0.z) / b.d.0.z).0;
+    assert!((pa - pb).length() < 1e-4, "{pa} vs {pb}");
+}
+
+fn dir() -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("pbrt-sppm-img-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn exr_round_trip_keeps_crop_window_and_metadata() {
+    let mut img = RgbImage::new(5, 3);
+    for (i, p) in img.pixels.iter_mut().enumerate() {
+        *p = [i as f32 * 0.25, -1.5, 1e6 + i as f32];
+    }
+    img.origin = (7, 2);
+    img.full = (20, 10);
+    img.meta = ImageMeta {
+        render_time_seconds: Some(1.25),
+        samples_per_pixel: Some(16),
+        photons_per_iteration: Some(4096),
+        world_to_camera: Some(std::array::from_fn(|i| i as f32)),
+        software: Some("pbrt-sppm test".into()),
+    };
+    let path = dir().join("round.exr");
+    write_image(&path, &img).unwrap();
+    assert_eq!(read_image(&path).unwrap(), img);
+    let leftovers: Vec<_> = std::fs::read_dir(dir())
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp."))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+#[test]
+fn half_float_exrs_are_read() {
+    use exr::prelude::*;
+    let path = dir().join("half.exr");
+    let layer = Layer::new(
+        (2, 1),
+        LayerAttributes::named(""),
+        Encoding::SMALL_LOSSLESS,
+        SpecificChannels::rgb(|Vec2(x, _): Vec2<usize>| {
+            (f16::from_f32(x as f32 + 0.5), f16::from_f32(2.0), f16::from_f32(-0.25))
+        }),
+    );
+    Image::from_layer(layer).write().to_file(&path).unwrap();
+    let img = read_image(&path).unwrap();
+    assert_eq!(img.pixels, vec![[0.5, 2.0, -0.25], [1.5, 2.0, -0.25]]);
+}
+
+#[test]
+fn png_previews_are_srgb_encoded() {
+    let mut img = RgbImage::new(3, 1);
+    img.pixels = vec![[0.0, 0.5, 1.0], [0.2140, 0.0031308, 2.0], [-1.0, 0.0, 0.0]];
+    let path = dir().join("preview.png");
+    write_image(&path, &img).unwrap();
+    let back = read_image(&path).unwrap();
+    // 0.5 linear is 188/255 in sRGB; 0.214 linear is 0.4999 (127/255); values clamp.
+    let bytes = image::open(&path).unwrap().to_rgb8();
+    assert_eq!(bytes.get_pixel(0, 0).0, [0, 188, 255]);
+    assert_eq!(bytes.get_pixel(1, 0).0[0], 127);
+    assert_eq!(bytes.get_pixel(2, 0).0, [0, 0, 0]);
+    assert!((back.pixels[0][1] - 0.5).abs() < 0.01);
+}
+
+#[test]
+fn a_failed_write_leaves_no_file() {
+    let img = RgbImage::new(2, 2);
+    let path = dir().join("no-such-folder").join("x.exr");
+    assert!(write_image(&path, &img).is_err());
+    assert!(!path.exists());
+}
