@@ -1,0 +1,211 @@
+//! BSDFs in a shading frame (pbrt-v3's BxDFs, RGB): Lambertian reflection, specular
+//! reflection, smooth dielectrics with Fresnel, smooth conductors.
+
+use crate::sampling::cosine_hemisphere;
+use crate::spectrum::Rgb;
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// Which quantity a path carries: radiance (camera paths) or importance (photons).
+/// Only refraction differs: radiance is scaled by (η_i/η_t)².
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransportMode {
+    Radiance,
+    Importance,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BxDF {
+    Lambert(Rgb),
+    Specular(Rgb),
+    Dielectric { eta: f32, kr: Rgb, kt: Rgb },
+    Conductor { eta: Rgb, k: Rgb },
+}
+
+/// A sampled direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    pub wi: Vec3,
+    pub f: Rgb,
+    pub pdf: f32,
+    pub specular: bool,
+}
+
+/// A BxDF with its shading frame and the geometric normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bsdf {
+    ss: Vec3,
+    ts: Vec3,
+    ns: Vec3,
+    ng: Vec3,
+    pub bxdf: BxDF,
+}
+
+/// Fresnel reflectance of a dielectric interface (pbrt-v3 `FrDielectric`).
+pub fn fr_dielectric(cos_i: f32, mut eta_i: f32, mut eta_t: f32) -> f32 {
+    let mut cos_i = cos_i.clamp(-1.0, 1.0);
+    if cos_i <= 0.0 {
+        std::mem::swap(&mut eta_i, &mut eta_t);
+        cos_i = cos_i.abs();
+    }
+    let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
+    let sin_t = eta_i / eta_t * sin_i;
+    if sin_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin_t * sin_t).max(0.0).sqrt();
+    let parl = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+    let perp = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    (parl * parl + perp * perp) / 2.0
+}
+
+/// Fresnel reflectance of a conductor, per channel (pbrt-v3 `FrConductor`, η_i = 1).
+pub fn fr_conductor(cos_i: f32, eta: Rgb, k: Rgb) -> Rgb {
+    let c = cos_i.clamp(-1.0, 1.0).abs();
+    let (c2, s2) = (c * c, 1.0 - c * c);
+    let (e2, k2) = (eta * eta, k * k);
+    let t0 = e2 - k2 - Vec3::splat(s2);
+    let a2b2 = (t0 * t0 + 4.0 * e2 * k2).powf(0.5);
+    let t1 = a2b2 + Vec3::splat(c2);
+    let a = (0.5 * (a2b2 + t0)).max(Vec3::ZERO).powf(0.5);
+    let t2 = 2.0 * c * a;
+    let rs = (t1 - t2) / (t1 + t2);
+    let t3 = c2 * a2b2 + Vec3::splat(s2 * s2);
+    let t4 = t2 * s2;
+    let rp = rs * (t3 - t4) / (t3 + t4);
+    0.5 * (rp + rs)
+}
+
+/// Refraction of `wi` about `n` (same side) with relative index `eta` = η_i/η_t.
+fn refract(wi: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let cos_i = n.dot(wi);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some(eta * -wi + (eta * cos_i - cos_t) * n)
+}
+
+impl Bsdf {
+    pub fn new(frame: [Vec3; 3], ng: Vec3, bxdf: BxDF) -> Bsdf {
+        Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng, bxdf }
+    }
+
+    pub fn shading_normal(&self) -> Vec3 {
+        self.ns
+    }
+
+    fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.ss), v.dot(self.ts), v.dot(self.ns))
+    }
+
+    fn to_world(&self, v: Vec3) -> Vec3 {
+        self.ss * v.x + self.ts * v.y + self.ns * v.z
+    }
+
+    /// Whether the BSDF has a diffuse part (SPPM stores visible points there).
+    pub fn is_diffuse(&self) -> bool {
+        matches!(self.bxdf, BxDF::Lambert(_))
+    }
+
+    /// f(ωo, ωi); reflection only counts when both lie on the same side of the geometric
+    /// normal (pbrt's rule, which stops light leaking through shading normals).
+    pub fn f(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        match self.bxdf {
+            BxDF::Lambert(r) if wo.dot(self.ng) * wi.dot(self.ng) > 0.0 => r * FRAC_1_PI,
+            _ => Vec3::ZERO,
+        }
+    }
+
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self.bxdf {
+            BxDF::Lambert(_) => {
+                let (o, i) = (self.to_local(wo), self.to_local(wi));
+                if o.z * i.z > 0.0 { i.z.abs() * FRAC_1_PI } else { 0.0 }
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Samples ωi for ωo; `u_lobe` chooses reflection or refraction for dielectrics.
+    pub fn sample_f(&self, wo: Vec3, u: [f32; 2], u_lobe: f32, mode: TransportMode) -> Option<BsdfSample> {
+        let o = self.to_local(wo);
+        if o.z == 0.0 {
+            return None;
+        }
+        let reflect = Vec3::new(-o.x, -o.y, o.z);
+        let specular = |wi_l: Vec3, f: Rgb, pdf: f32| {
+            let cos = wi_l.z.abs();
+            (cos > 0.0).then(|| BsdfSample { wi: self.to_world(wi_l), f: f / cos, pdf, specular: true })
+        };
+        match self.bxdf {
+            BxDF::Lambert(_) => {
+                let mut i = cosine_hemisphere(u);
+                if o.z < 0.0 {
+                    i.z = -i.z;
+                }
+                let wi = self.to_world(i);
+                let pdf = i.z.abs() * FRAC_1_PI;
+                (pdf > 0.0).then(|| BsdfSample { wi, f: self.f(wo, wi), pdf, specular: false })
+            }
+            BxDF::Specular(r) => specular(reflect, r, 1.0),
+            BxDF::Conductor { eta, k } => specular(reflect, fr_conductor(o.z, eta, k), 1.0),
+            BxDF::Dielectric { eta, kr, kt } => {
+                let fr = fr_dielectric(o.z, 1.0, eta);
+                if u_lobe < fr {
+                    return specular(reflect, fr * kr, fr);
+                }
+                let entering = o.z > 0.0;
+                let (eta_i, eta_t) = if entering { (1.0, eta) } else { (eta, 1.0) };
+                let n = if entering { Vec3::Z } else { -Vec3::Z };
+                let t = refract(o, n, eta_i / eta_t)?;
+                let mut ft = kt * (1.0 - fr);
+                if mode == TransportMode::Radiance {
+                    ft *= (eta_i / eta_t) * (eta_i / eta_t);
+                }
+                specular(t, ft, 1.0 - fr)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame() -> [Vec3; 3] {
+        [Vec3::X, Vec3::Y, Vec3::Z]
+    }
+
+    #[test]
+    fn fresnel_limits() {
+        assert!((fr_dielectric(1.0, 1.0, 1.5) - 0.04).abs() < 1e-6);
+        assert_eq!(fr_dielectric(0.1, 1.5, 1.0).max(fr_dielectric(-0.1, 1.0, 1.5)), 1.0, "total internal reflection");
+        let c = fr_conductor(1.0, Vec3::splat(0.2), Vec3::splat(3.9));
+        assert!(c.x > 0.9 && c.x < 1.0, "{c}");
+    }
+
+    #[test]
+    fn dielectric_sampling_conserves_energy_at_normal_incidence() {
+        let b = Bsdf::new(frame(), Vec3::Z, BxDF::Dielectric { eta: 1.5, kr: Vec3::ONE, kt: Vec3::ONE });
+        let wo = Vec3::Z;
+        let r = b.sample_f(wo, [0.5, 0.5], 0.0, TransportMode::Importance).unwrap();
+        let t = b.sample_f(wo, [0.5, 0.5], 0.99, TransportMode::Importance).unwrap();
+        assert!(r.wi.z > 0.99 && t.wi.z < -0.99);
+        // Weighted by probability, reflection and transmission throughputs add to 1.
+        let total = r.f.x * r.wi.z.abs() + t.f.x * t.wi.z.abs();
+        assert!((total - 1.0).abs() < 1e-5, "{total}");
+        let tr = b.sample_f(wo, [0.5, 0.5], 0.99, TransportMode::Radiance).unwrap();
+        assert!((tr.f.x / t.f.x - 1.0 / 2.25).abs() < 1e-5, "radiance scales by (1/η)²");
+    }
+
+    #[test]
+    fn lambert_reflects_only_on_the_geometric_side() {
+        let b = Bsdf::new(frame(), Vec3::Z, BxDF::Lambert(Vec3::splat(0.5)));
+        assert_eq!(b.f(Vec3::Z, Vec3::new(0.0, 0.6, 0.8)).x, 0.5 * FRAC_1_PI);
+        assert_eq!(b.f(Vec3::Z, Vec3::new(0.0, 0.6, -0.8)).x, 0.0);
+        let s = b.sample_f(Vec3::new(0.0, 0.0, -1.0), [0.3, 0.7], 0.0, TransportMode::Radiance).unwrap();
+        assert!(s.wi.z < 0.0 && s.pdf > 0.0);
+    }
+}

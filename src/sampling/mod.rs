@@ -1,0 +1,108 @@
+//! Random numbers and sampling helpers.
+//!
+//! Every sample is drawn from a generator seeded by a hash of what it is for (pixel and
+//! iteration, or iteration and photon index, plus the scene seed), so the thread count
+//! never changes which samples are drawn.
+
+use glam::Vec3;
+
+/// A small, fast generator (PCG-XSH-RR 64/32).
+#[derive(Clone, Debug)]
+pub struct Rng {
+    state: u64,
+}
+
+/// A 64-bit mix of several words (splitmix64 finaliser chained).
+pub fn hash(words: &[u64]) -> u64 {
+    let mut h = 0x9e37_79b9_7f4a_7c15u64;
+    for &w in words {
+        h ^= w.wrapping_add(0x9e37_79b9_7f4a_7c15).wrapping_add(h << 6).wrapping_add(h >> 2);
+        h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        h ^= h >> 31;
+    }
+    h
+}
+
+impl Rng {
+    pub fn new(seed: u64) -> Rng {
+        let mut r = Rng { state: seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407) };
+        r.next_u32();
+        r
+    }
+
+    pub fn next_u32(&mut self) -> u32 {
+        let old = self.state;
+        self.state = old.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        xorshifted.rotate_right((old >> 59) as u32)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn uniform(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+
+    pub fn uniform2(&mut self) -> [f32; 2] {
+        [self.uniform(), self.uniform()]
+    }
+}
+
+/// Cosine-weighted direction about +z.
+pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
+    let d = crate::camera::concentric_disk(u);
+    Vec3::new(d.x, d.y, (1.0 - d.length_squared()).max(0.0).sqrt())
+}
+
+pub fn uniform_sphere(u: [f32; 2]) -> Vec3 {
+    let z = 1.0 - 2.0 * u[0];
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * u[1];
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// A direction in the cone of half-angle acos(cos_max) about +z, uniformly.
+pub fn uniform_cone(u: [f32; 2], cos_max: f32) -> Vec3 {
+    let cos_t = (1.0 - u[0]) + u[0] * cos_max;
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * u[1];
+    Vec3::new(phi.cos() * sin_t, phi.sin() * sin_t, cos_t)
+}
+
+/// A discrete distribution proportional to non-negative weights.
+#[derive(Clone, Debug, Default)]
+pub struct Distribution1D {
+    cdf: Vec<f64>,
+    total: f64,
+}
+
+impl Distribution1D {
+    pub fn new(weights: &[f64]) -> Distribution1D {
+        let mut cdf = Vec::with_capacity(weights.len());
+        let mut total = 0.0;
+        for w in weights {
+            total += w.max(0.0);
+            cdf.push(total);
+        }
+        Distribution1D { cdf, total }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.total <= 0.0
+    }
+
+    /// An index and its probability.
+    pub fn sample(&self, u: f32) -> Option<(usize, f32)> {
+        if self.is_empty() {
+            return None;
+        }
+        let target = u as f64 * self.total;
+        let i = self.cdf.partition_point(|&c| c <= target).min(self.cdf.len() - 1);
+        Some((i, self.pmf(i)))
+    }
+
+    pub fn pmf(&self, i: usize) -> f32 {
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        ((self.cdf[i] - lo) / self.total) as f32
+    }
+}
