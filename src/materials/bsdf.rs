@@ -96,11 +96,11 @@ impl Bsdf {
         self.ns
     }
 
-    fn to_local(&self, v: Vec3) -> Vec3 {
+    fn local(&self, v: Vec3) -> Vec3 {
         Vec3::new(v.dot(self.ss), v.dot(self.ts), v.dot(self.ns))
     }
 
-    fn to_world(&self, v: Vec3) -> Vec3 {
+    fn world(&self, v: Vec3) -> Vec3 {
         self.ss * v.x + self.ts * v.y + self.ns * v.z
     }
 
@@ -121,7 +121,7 @@ impl Bsdf {
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match self.bxdf {
             BxDF::Lambert(_) => {
-                let (o, i) = (self.to_local(wo), self.to_local(wi));
+                let (o, i) = (self.local(wo), self.local(wi));
                 if o.z * i.z > 0.0 { i.z.abs() * FRAC_1_PI } else { 0.0 }
             }
             _ => 0.0,
@@ -130,14 +130,14 @@ impl Bsdf {
 
     /// Samples ωi for ωo; `u_lobe` chooses reflection or refraction for dielectrics.
     pub fn sample_f(&self, wo: Vec3, u: [f32; 2], u_lobe: f32, mode: TransportMode) -> Option<BsdfSample> {
-        let o = self.to_local(wo);
+        let o = self.local(wo);
         if o.z == 0.0 {
             return None;
         }
         let reflect = Vec3::new(-o.x, -o.y, o.z);
         let specular = |wi_l: Vec3, f: Rgb, pdf: f32| {
             let cos = wi_l.z.abs();
-            (cos > 0.0).then(|| BsdfSample { wi: self.to_world(wi_l), f: f / cos, pdf, specular: true })
+            (cos > 0.0).then(|| BsdfSample { wi: self.world(wi_l), f: f / cos, pdf, specular: true })
         };
         match self.bxdf {
             BxDF::Lambert(_) => {
@@ -145,7 +145,7 @@ impl Bsdf {
                 if o.z < 0.0 {
                     i.z = -i.z;
                 }
-                let wi = self.to_world(i);
+                let wi = self.world(i);
                 let pdf = i.z.abs() * FRAC_1_PI;
                 (pdf > 0.0).then(|| BsdfSample { wi, f: self.f(wo, wi), pdf, specular: false })
             }
