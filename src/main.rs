@@ -127,14 +127,93 @@ fn main() -> ExitCode {
             Ok(s) => trace(s, rays),
             Err(code) => code,
         },
-        Command::Render(args) => {
-            if let Err(code) = load(&args.scene, &args.common) {
-                return code;
-            }
-            eprintln!("{}: error: rendering is not implemented yet; use `pbrt-sppm check`", args.scene.display());
-            ExitCode::FAILURE
+        Command::Render(args) => match load(&args.scene, &args.common) {
+            Ok(s) => render(s, &args),
+            Err(code) => code,
+        },
+    }
+}
+
+fn fail(file: &std::path::Path, message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("{}: error: {message}", file.display());
+    ExitCode::FAILURE
+}
+
+/// Renders a loaded scene and writes the image (and ERRORS.csv).
+fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
+    use pbrt_sppm::imageio::{read_image, write_image};
+    use pbrt_sppm::render::{RenderScene, RenderSettings, errors_csv};
+    let terminal = std::io::stderr().is_terminal();
+    scene.warnings.iter().for_each(|w| eprintln!("{w}"));
+    if scene.lights.is_empty() && scene.area_lights.is_empty() {
+        eprintln!("{}: warning: the scene has no lights; the image will be black", args.scene.display());
+    }
+    let reference = match &args.mse_reference_image {
+        Some(p) => match read_image(p) {
+            Ok(img) => Some(img),
+            Err(e) => return fail(p, e),
+        },
+        None => None,
+    };
+    let outfile = args.outfile.clone().unwrap_or_else(|| PathBuf::from(&scene.film.filename));
+    let settings = RenderSettings {
+        iterations: args.spp,
+        photons: args.photons,
+        radius: args.radius,
+        seed: args.seed,
+        quick: args.quick,
+        time_limit: args.time_limit,
+        reference,
+        progress: terminal,
+    };
+    let threads = args.nthreads.unwrap_or(0);
+    let pool = match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
+        Ok(p) => p,
+        Err(e) => return fail(&args.scene, e),
+    };
+    let rs = RenderScene::new(scene);
+    let out = match pool.install(|| rs.render(&settings)) {
+        Ok(o) => o,
+        Err(e) => return fail(&args.scene, e),
+    };
+    if let Err(e) = write_image(&outfile, &out.image) {
+        return fail(&outfile, e);
+    }
+    if let Some(csv) = &args.mse_reference_out {
+        let tmp = csv.with_extension(format!("tmp.{}", std::process::id()));
+        let written = std::fs::write(&tmp, errors_csv(&out.errors)).and_then(|_| std::fs::rename(&tmp, csv));
+        if let Err(e) = written {
+            let _ = std::fs::remove_file(&tmp);
+            return fail(csv, e);
         }
     }
+    if args.stats {
+        print_stats(&out);
+    }
+    eprintln!(
+        "rendered {} iterations ({} photons each) in {:.2} s -> {}",
+        out.stats.iterations,
+        out.image.meta.photons_per_iteration.unwrap_or(0),
+        out.seconds,
+        outfile.display()
+    );
+    ExitCode::SUCCESS
+}
+
+fn print_stats(out: &pbrt_sppm::render::RenderOutput) {
+    let s = &out.stats;
+    let peak = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|t| t.lines().find_map(|l| l.strip_prefix("VmHWM:").map(|v| v.trim().to_string())))
+        .unwrap_or_else(|| "unknown".into());
+    eprintln!(
+        "stats: camera pass {:.3} s, grid {:.3} s, photons {:.3} s, update {:.3} s",
+        s.camera_seconds, s.grid_seconds, s.photon_seconds, s.update_seconds
+    );
+    eprintln!(
+        "stats: {} camera paths, {} photon paths, {} photon hits, peak memory {peak}",
+        s.camera_rays, s.photon_paths, s.photon_hits
+    );
 }
 
 /// Answers ray queries line by line; a malformed line is an error naming the line.

@@ -291,6 +291,18 @@ impl Geometry {
         }
     }
 
+    /// The hit shape as (object, index among that object's shapes), or (None, world
+    /// shape index) for shapes outside object definitions.
+    pub fn shape_of(&self, hit: &Hit) -> (Option<u32>, u32) {
+        match hit.instance {
+            None => (None, hit.shape_index),
+            Some(k) => {
+                let inst = &self.instances[k as usize];
+                (Some(inst.object), hit.shape_index - inst.first_shape_index)
+            }
+        }
+    }
+
     /// The file's number of stored triangle `tri` of mesh `mesh`.
     pub fn triangle_id(&self, mesh: u32, tri: u32) -> u32 {
         self.triangle_ids.get(mesh as usize).and_then(|ids| ids.get(tri as usize)).copied().unwrap_or(tri)

@@ -3,6 +3,8 @@
 //! the same folder and are renamed into place, so a crash never leaves half an image.
 //! Reading accepts half and float EXRs (pbrt-v3 writes half, pbrt-v4 float) and PNGs.
 
+pub mod metrics;
+
 use exr::prelude::*;
 use std::path::{Path, PathBuf};
 

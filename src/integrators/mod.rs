@@ -1,0 +1,3 @@
+//! Integrators. pbrt-sppm renders with stochastic progressive photon mapping only.
+
+pub mod sppm;

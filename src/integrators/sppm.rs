@@ -1,0 +1,452 @@
+//! Stochastic progressive photon mapping (pbrt-v3 `SPPMIntegrator`), one function per
+//! phase: camera pass (visible points and direct light), grid build (sorted
+//! (cell, pixel) pairs), photon pass (parallel, deterministic), per-pixel update
+//! (γ = 2/3, f64 accumulators), image.
+//!
+//! ```text
+//! Integrator "sppm" "integer numiterations" 64 "integer maxdepth" 5
+//!            "integer photonsperiteration" -1 "float radius" 1 "integer seed" 0
+//! ```
+//! Every random number comes from a generator seeded by (seed, pixel, iteration) or
+//! (seed, iteration, photon), and photon contributions are summed in a fixed order, so
+//! any thread count gives a bit-identical image.
+
+use crate::lights::Light;
+use crate::materials::{Bsdf, TransportMode};
+use crate::math::{Point3, Vector3};
+use crate::render::RenderScene;
+use crate::sampling::{Rng, hash};
+use crate::spectrum::{Rgb, luminance};
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+use std::time::Instant;
+
+const GAMMA: f64 = 2.0 / 3.0;
+const PHOTON_CHUNK: usize = 1024;
+/// Interfaces crossed by one path before it is abandoned (guards against loops).
+const MAX_PASSES: u32 = 64;
+
+/// A point where a camera path met a diffuse surface.
+#[derive(Clone, Copy, Debug)]
+pub struct VisiblePoint {
+    pub p: Vec3,
+    pub wo: Vec3,
+    pub ng: Vec3,
+    pub bsdf: Bsdf,
+    pub beta: Rgb,
+}
+
+/// Per-pixel SPPM state.
+#[derive(Clone, Debug)]
+pub struct Pixel {
+    pub radius: f64,
+    pub ld: DVec3,
+    pub tau: DVec3,
+    pub n: f64,
+    pub vp: Option<VisiblePoint>,
+}
+
+/// Timings and counts, for `--stats`.
+#[derive(Clone, Debug, Default)]
+pub struct Stats {
+    pub camera_seconds: f64,
+    pub grid_seconds: f64,
+    pub photon_seconds: f64,
+    pub update_seconds: f64,
+    pub camera_rays: u64,
+    pub photon_paths: u64,
+    pub photon_hits: u64,
+    pub iterations: u32,
+}
+
+/// The progressive state of a render.
+pub struct Sppm<'a> {
+    scene: &'a RenderScene,
+    pub pixels: Vec<Pixel>,
+    width: usize,
+    origin: (u32, u32),
+    pub iteration: u32,
+    pub photons_per_iteration: u64,
+    max_depth: u32,
+    seed: u64,
+    pub stats: Stats,
+}
+
+fn power_heuristic(f: f32, g: f32) -> f32 {
+    let (f2, g2) = (f * f, g * g);
+    if f2.is_infinite() { 1.0 } else { f2 / (f2 + g2) }
+}
+
+impl<'a> Sppm<'a> {
+    pub fn new(scene: &'a RenderScene, photons_per_iteration: u64, radius: f32, seed: u64) -> Sppm<'a> {
+        let [x0, x1, y0, y1] = scene.film.pixel_bounds;
+        let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
+        let pixel = Pixel { radius: radius as f64, ld: DVec3::ZERO, tau: DVec3::ZERO, n: 0.0, vp: None };
+        Sppm {
+            scene,
+            pixels: vec![pixel; w * h],
+            width: w,
+            origin: (x0, y0),
+            iteration: 0,
+            photons_per_iteration,
+            max_depth: scene.integrator.max_depth,
+            seed,
+            stats: Stats::default(),
+        }
+    }
+
+    /// One full iteration: camera pass, grid, photons, update.
+    pub fn iterate(&mut self) {
+        let t = Instant::now();
+        self.camera_pass();
+        let t1 = Instant::now();
+        let grid = Grid::build(&self.pixels);
+        let t2 = Instant::now();
+        let (phi, m) = self.photon_pass(grid.as_ref());
+        let t3 = Instant::now();
+        self.update(&phi, &m);
+        let t4 = Instant::now();
+        self.iteration += 1;
+        let s = &mut self.stats;
+        s.camera_seconds += (t1 - t).as_secs_f64();
+        s.grid_seconds += (t2 - t1).as_secs_f64();
+        s.photon_seconds += (t3 - t2).as_secs_f64();
+        s.update_seconds += (t4 - t3).as_secs_f64();
+        s.camera_rays += self.pixels.len() as u64;
+        s.iterations = self.iteration;
+    }
+
+    /// Phase 1: trace one camera path per pixel to its first diffuse vertex, adding
+    /// emitted and directly reflected light on the way.
+    fn camera_pass(&mut self) {
+        let (scene, width, origin, iter, seed, max_depth) =
+            (self.scene, self.width, self.origin, self.iteration as u64, self.seed, self.max_depth);
+        self.pixels.par_iter_mut().enumerate().for_each(|(i, px)| {
+            let (x, y) = (origin.0 as usize + i % width, origin.1 as usize + i / width);
+            let mut rng = Rng::new(hash(&[seed, x as u64, y as u64, iter, 0]));
+            let (ld, vp) = camera_path(scene, [x as f32, y as f32], &mut rng, max_depth);
+            px.ld += ld.as_dvec3();
+            px.vp = vp;
+        });
+    }
+
+    /// Phase 3: trace photons; returns per-pixel flux Φ and photon counts M.
+    fn photon_pass(&mut self, grid: Option<&Grid>) -> (Vec<DVec3>, Vec<u64>) {
+        let n = self.pixels.len();
+        let (mut phi, mut m) = (vec![DVec3::ZERO; n], vec![0u64; n]);
+        let Some(grid) = grid else { return (phi, m) };
+        if self.scene.lights.is_empty() || self.scene.light_power.is_empty() {
+            return (phi, m);
+        }
+        let (scene, pixels, iter, seed, max_depth) =
+            (self.scene, &self.pixels, self.iteration as u64, self.seed, self.max_depth);
+        let total = self.photons_per_iteration;
+        let chunks = total.div_ceil(PHOTON_CHUNK as u64);
+        let results: Vec<(Vec<(u32, Vec3)>, u64)> = (0..chunks)
+            .into_par_iter()
+            .map(|c| {
+                let mut out = Vec::new();
+                let mut hits = 0;
+                for k in c * PHOTON_CHUNK as u64..((c + 1) * PHOTON_CHUNK as u64).min(total) {
+                    let mut rng = Rng::new(hash(&[seed, iter, k, 1]));
+                    hits += trace_photon(scene, grid, pixels, &mut rng, max_depth, &mut out);
+                }
+                (out, hits)
+            })
+            .collect();
+        // Fixed order: chunk by chunk, photon by photon.
+        for (out, hits) in results {
+            self.stats.photon_hits += hits;
+            for (pixel, f) in out {
+                phi[pixel as usize] += f.as_dvec3();
+                m[pixel as usize] += 1;
+            }
+        }
+        self.stats.photon_paths += total;
+        (phi, m)
+    }
+
+    /// Phase 4: the progressive radius and flux update.
+    fn update(&mut self, phi: &[DVec3], m: &[u64]) {
+        self.pixels.par_iter_mut().enumerate().for_each(|(i, p)| {
+            if m[i] > 0
+                && let Some(vp) = &p.vp
+            {
+                let mf = m[i] as f64;
+                let n_new = p.n + GAMMA * mf;
+                let r_new = p.radius * (n_new / (p.n + mf)).sqrt();
+                p.tau = (p.tau + vp.beta.as_dvec3() * phi[i]) * (r_new * r_new) / (p.radius * p.radius);
+                p.n = n_new;
+                p.radius = r_new;
+            }
+            p.vp = None;
+        });
+    }
+
+    /// The current estimate: L = Ld/k + τ/(k·P·π·r²), times the film's scale.
+    pub fn image(&self) -> Vec<[f32; 3]> {
+        let k = self.iteration.max(1) as f64;
+        let np = self.photons_per_iteration.max(1) as f64;
+        let scale = self.scene.film.scale as f64;
+        self.pixels
+            .iter()
+            .map(|p| {
+                let l = p.ld / k + p.tau / (k * np * std::f64::consts::PI * p.radius * p.radius);
+                (l * scale).as_vec3().to_array()
+            })
+            .collect()
+    }
+}
+
+/// A camera path: (direct and emitted light gathered, the visible point).
+fn camera_path(scene: &RenderScene, pixel: [f32; 2], rng: &mut Rng, max_depth: u32) -> (Rgb, Option<VisiblePoint>) {
+    let u = rng.uniform2();
+    let mut ray = scene.camera.generate_ray([pixel[0] + u[0], pixel[1] + u[1]], rng.uniform2());
+    let (mut beta, mut ld) = (Vec3::ONE, Vec3::ZERO);
+    let (mut specular_bounce, mut depth, mut passes) = (false, 0, 0);
+    while depth < max_depth {
+        let Some(hit) = scene.geometry.intersect(&ray) else {
+            for l in &scene.lights {
+                ld += beta * l.le_escaped();
+            }
+            break;
+        };
+        let si = scene.geometry.interaction(&hit);
+        let Some(bsdf) = scene.bsdf(&hit, &si) else {
+            passes += 1;
+            if passes > MAX_PASSES {
+                break;
+            }
+            ray = si.spawn_ray(ray.d);
+            continue;
+        };
+        let wo = -ray.d.0.normalize();
+        if depth == 0 || specular_bounce {
+            ld += beta * scene.emitted(&hit, &si, wo);
+        }
+        ld += beta * direct_light(scene, &si, &bsdf, wo, rng);
+        if bsdf.is_diffuse() {
+            return (ld, Some(VisiblePoint { p: si.p.0, wo, ng: si.n.0, bsdf, beta }));
+        }
+        if depth + 1 >= max_depth {
+            break;
+        }
+        let Some(s) = bsdf.sample_f(wo, rng.uniform2(), rng.uniform(), TransportMode::Radiance) else { break };
+        beta *= s.f * s.wi.dot(bsdf.shading_normal()).abs() / s.pdf;
+        specular_bounce = s.specular;
+        if luminance(beta) < 0.25 {
+            let q = (1.0 - luminance(beta)).max(0.0);
+            if rng.uniform() < q {
+                break;
+            }
+            beta /= 1.0 - q;
+        }
+        if beta == Vec3::ZERO {
+            break;
+        }
+        ray = si.spawn_ray(Vector3(s.wi));
+        depth += 1;
+    }
+    (ld, None)
+}
+
+/// Direct light from one uniformly chosen light, MIS of light and BSDF sampling
+/// (pbrt-v3 `UniformSampleOneLight`).
+fn direct_light(
+    scene: &RenderScene,
+    si: &crate::interaction::SurfaceInteraction,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    rng: &mut Rng,
+) -> Rgb {
+    let n = scene.lights.len();
+    if n == 0 {
+        return Vec3::ZERO;
+    }
+    let idx = ((rng.uniform() * n as f32) as usize).min(n - 1);
+    let light = &scene.lights[idx];
+    let (u_light, u_bsdf, u_lobe) = (rng.uniform2(), rng.uniform2(), rng.uniform());
+    let ns = bsdf.shading_normal();
+    let mut ld = Vec3::ZERO;
+    if let Some(ls) = light.sample_li(&scene.geometry, si.p.0, u_light) {
+        let f = bsdf.f(wo, ls.wi) * ls.wi.dot(ns).abs();
+        if f != Vec3::ZERO && ls.li != Vec3::ZERO && visible(scene, si, &ls) {
+            let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi)) };
+            ld += f * ls.li * w / ls.pdf;
+        }
+    }
+    if !light.is_delta()
+        && let Some(s) = bsdf.sample_f(wo, u_bsdf, u_lobe, TransportMode::Radiance)
+        && !s.specular
+    {
+        let light_pdf = light.pdf_li(&scene.geometry, si.p.0, s.wi);
+        if light_pdf > 0.0 {
+            let w = power_heuristic(s.pdf, light_pdf);
+            let ray = si.spawn_ray(Vector3(s.wi));
+            let li = match scene.geometry.intersect(&ray) {
+                Some(hit) => match scene.emitter(&hit) {
+                    Some((_, l)) if l as usize == idx => {
+                        let lsi = scene.geometry.interaction(&hit);
+                        scene.emitted(&hit, &lsi, -s.wi)
+                    }
+                    _ => Vec3::ZERO,
+                },
+                None => light.le_escaped(),
+            };
+            ld += s.f * s.wi.dot(ns).abs() * li * w / s.pdf;
+        }
+    }
+    ld * n as f32
+}
+
+fn visible(scene: &RenderScene, si: &crate::interaction::SurfaceInteraction, ls: &crate::lights::LightSample) -> bool {
+    let ray = match ls.p_light {
+        Some(p) => si.spawn_ray_to(Point3(p)),
+        None => si.spawn_ray(Vector3(ls.wi)),
+    };
+    !scene.geometry.intersect_p(&ray)
+}
+
+/// One photon path; appends (pixel, β·f) for each visible point it reaches and returns
+/// the number of surface hits.
+fn trace_photon(
+    scene: &RenderScene,
+    grid: &Grid,
+    pixels: &[Pixel],
+    rng: &mut Rng,
+    max_depth: u32,
+    out: &mut Vec<(u32, Vec3)>,
+) -> u64 {
+    let Some((li, light_pdf)) = scene.light_power.sample(rng.uniform()) else { return 0 };
+    let light: &Light = &scene.lights[li];
+    let (u1, u2) = (rng.uniform2(), rng.uniform2());
+    let Some(e) = light.sample_le(&scene.geometry, scene.world, u1, u2) else { return 0 };
+    if e.pdf_pos <= 0.0 || e.pdf_dir <= 0.0 || e.le == Vec3::ZERO {
+        return 0;
+    }
+    let d = e.ray.d.0.normalize();
+    let mut beta = e.le * e.n.dot(d).abs() / (light_pdf * e.pdf_pos * e.pdf_dir);
+    let mut ray = crate::math::Ray::new(e.ray.o, Vector3(d));
+    let (mut depth, mut passes, mut hits) = (0, 0, 0);
+    while depth < max_depth {
+        let Some(hit) = scene.geometry.intersect(&ray) else { break };
+        hits += 1;
+        let si = scene.geometry.interaction(&hit);
+        let wi = -ray.d.0;
+        if depth > 0 {
+            grid.gather(si.p.0, |pixel| {
+                let Some(vp) = &pixels[pixel as usize].vp else { return };
+                let r = pixels[pixel as usize].radius as f32;
+                // DEVIATION(pbrt): photons arriving from behind the visible point's
+                // surface are not counted; pbrt counts them in M (f = 0), which only
+                // shrinks the radius (Mitsuba #145).
+                if (vp.p - si.p.0).length_squared() > r * r || wi.dot(vp.ng) * vp.wo.dot(vp.ng) <= 0.0 {
+                    return;
+                }
+                out.push((pixel, beta * vp.bsdf.f(vp.wo, wi)));
+            });
+        }
+        let Some(bsdf) = scene.bsdf(&hit, &si) else {
+            passes += 1;
+            if passes > MAX_PASSES {
+                break;
+            }
+            ray = si.spawn_ray(ray.d);
+            continue;
+        };
+        let Some(s) = bsdf.sample_f(wi, rng.uniform2(), rng.uniform(), TransportMode::Importance) else { break };
+        let bnew = beta * s.f * s.wi.dot(bsdf.shading_normal()).abs() / s.pdf;
+        let q = (1.0 - luminance(bnew) / luminance(beta).max(1e-30)).max(0.0);
+        if rng.uniform() < q {
+            break;
+        }
+        beta = bnew / (1.0 - q);
+        if !beta.is_finite() || beta == Vec3::ZERO {
+            break;
+        }
+        ray = si.spawn_ray(Vector3(s.wi));
+        depth += 1;
+    }
+    hits
+}
+
+/// Visible points binned into a uniform grid: (cell, pixel) pairs sorted by cell.
+pub struct Grid {
+    lo: Vec3,
+    inv_cell: Vec3,
+    res: [u64; 3],
+    entries: Vec<(u64, u32)>,
+}
+
+impl Grid {
+    /// `None` when no pixel has a visible point.
+    pub fn build(pixels: &[Pixel]) -> Option<Grid> {
+        let (mut lo, mut hi, mut max_r) = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0f32);
+        for p in pixels {
+            if let Some(vp) = &p.vp
+                && vp.beta != Vec3::ZERO
+            {
+                let r = p.radius as f32;
+                lo = lo.min(vp.p - r);
+                hi = hi.max(vp.p + r);
+                max_r = max_r.max(r);
+            }
+        }
+        if max_r <= 0.0 || lo.x > hi.x {
+            return None;
+        }
+        let diag = hi - lo;
+        let max_diag = diag.max_element().max(f32::MIN_POSITIVE);
+        let base = (max_diag / max_r).clamp(1.0, (1u32 << 20) as f32);
+        let res = [0, 1, 2].map(|a| ((base * diag[a] / max_diag) as u64).clamp(1, 1 << 20));
+        let inv_cell =
+            Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32) / diag.max(Vec3::splat(f32::MIN_POSITIVE));
+        let mut grid = Grid { lo, inv_cell, res, entries: Vec::new() };
+        let mut entries: Vec<(u64, u32)> = pixels
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(i, p)| {
+                let mut cells = Vec::new();
+                if let Some(vp) = &p.vp
+                    && vp.beta != Vec3::ZERO
+                {
+                    let r = p.radius as f32;
+                    let (a, b) = (grid.cell(vp.p - r), grid.cell(vp.p + r));
+                    for z in a[2]..=b[2] {
+                        for y in a[1]..=b[1] {
+                            for x in a[0]..=b[0] {
+                                cells.push((grid.key([x, y, z]), i as u32));
+                            }
+                        }
+                    }
+                }
+                cells
+            })
+            .collect();
+        entries.par_sort_unstable();
+        grid.entries = entries;
+        Some(grid)
+    }
+
+    fn cell(&self, p: Vec3) -> [u64; 3] {
+        let c = (p - self.lo) * self.inv_cell;
+        [0, 1, 2].map(|a| (c[a].max(0.0) as u64).min(self.res[a] - 1))
+    }
+
+    fn key(&self, c: [u64; 3]) -> u64 {
+        c[0] + self.res[0] * (c[1] + self.res[1] * c[2])
+    }
+
+    /// Calls `f` for every pixel binned in the cell containing `p` (none outside).
+    pub fn gather(&self, p: Vec3, mut f: impl FnMut(u32)) {
+        let c = (p - self.lo) * self.inv_cell;
+        if (0..3).any(|a| c[a] < 0.0 || c[a] >= self.res[a] as f32) {
+            return;
+        }
+        let key = self.key(self.cell(p));
+        let start = self.entries.partition_point(|e| e.0 < key);
+        for e in self.entries[start..].iter().take_while(|e| e.0 == key) {
+            f(e.1);
+        }
+    }
+}

@@ -1,0 +1,353 @@
+//! Lights: point, spot, distant, infinite (constant) and diffuse area lights on every
+//! shape, with each pbrt version's semantics.
+//!
+//! ```text
+//! LightSource "point" "rgb I" [10 10 10] "point from" [0 4 0]    # v3: from is a world offset
+//! LightSource "spot" "blackbody I" [5500 125] "point from" [0 5 9] "point to" [-5 2.75 0]
+//!             "float coneangle" 30 "float conedeltaangle" 5        # v3 quartic / v4 smoothstep falloff
+//! LightSource "distant" "point from" [0 0 0] "point to" [0 0 1] "rgb L" [3 3 3]
+//! LightSource "infinite" "rgb L" [.1 .1 .1]
+//! AreaLightSource "diffuse" "rgb L" [4 4 4] "bool twosided" true "float power" 100   # v4 power
+//! ```
+//! Every light can be sampled for direct lighting (`sample_li`, with the solid-angle pdf
+//! `pdf_li` for MIS), can emit photons (`sample_le`: ray, light normal, position and
+//! direction pdfs) and reports its `power` for choosing photon sources. Area lights are
+//! one light per quadric and one per triangle, as in pbrt. v4 normalises blackbody
+//! spectra to luminance 1 and honours `power`; v3 blackbody is peak-normalised × scale.
+
+use crate::accel::Geometry;
+use crate::interaction::offset_ray_origin;
+use crate::math::frame::coordinate_system;
+use crate::math::{Normal3, Point3, Ray, Vector3};
+use crate::parser::Syntax;
+use crate::parser::params::{ParamList, SpectrumValue};
+use crate::sampling::{uniform_cone, uniform_sphere};
+use crate::shapes::sampling::area_to_solid_angle;
+use crate::shapes::{MeshFlags, QuadricSampler, ShapeSample};
+use crate::spectrum::{Rgb, blackbody, luminance, to_rgb};
+use glam::{DMat3, DMat4, DVec3, Vec3};
+use std::f32::consts::PI;
+
+/// Where an area light sits.
+#[derive(Clone, Debug)]
+pub enum Emitter {
+    Quadric { index: u32, sampler: QuadricSampler },
+    Triangle { mesh: u32, tri: u32, flags: MeshFlags },
+}
+
+#[derive(Clone, Debug)]
+pub enum Light {
+    Point {
+        p: Vec3,
+        i: Rgb,
+    },
+    Spot {
+        p: Vec3,
+        frame: [Vec3; 3],
+        i: Rgb,
+        cos_total: f32,
+        cos_start: f32,
+        smooth: bool,
+    },
+    /// `w` points toward the light.
+    Distant {
+        w: Vec3,
+        l: Rgb,
+    },
+    Infinite {
+        l: Rgb,
+    },
+    Area {
+        emitter: Emitter,
+        l: Rgb,
+        two_sided: bool,
+        area: f32,
+    },
+}
+
+/// A light sample for direct lighting.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    pub wi: Vec3,
+    pub li: Rgb,
+    /// Solid-angle density (1 for delta lights).
+    pub pdf: f32,
+    /// The point to test visibility against; `None` for directions to infinity.
+    pub p_light: Option<Vec3>,
+    pub delta: bool,
+}
+
+/// A photon leaving a light.
+#[derive(Clone, Copy, Debug)]
+pub struct Emission {
+    pub ray: Ray,
+    pub n: Vec3,
+    pub pdf_pos: f32,
+    pub pdf_dir: f32,
+    pub le: Rgb,
+}
+
+/// The scene's bounding sphere (for distant and infinite lights).
+#[derive(Clone, Copy, Debug)]
+pub struct WorldSphere {
+    pub center: Vec3,
+    pub radius: f32,
+}
+
+/// Reads a light's spectrum parameter, applying v4's luminance normalisation of
+/// blackbody spectra and the `scale` parameter (float in v4, spectrum in v3).
+pub fn emission(p: &ParamList, name: &str, syntax: Syntax) -> Rgb {
+    let value = p.spectrum(name).ok().flatten();
+    let mut c = match &value {
+        Some(SpectrumValue::Blackbody { kelvin, scale: None }) if syntax == Syntax::V4 => {
+            let b = blackbody(*kelvin);
+            b / luminance(b).max(1e-6)
+        }
+        Some(v) => to_rgb(v).unwrap_or(Vec3::ONE),
+        None => Vec3::ONE,
+    };
+    match p.float("scale").ok().flatten() {
+        Some(s) => c *= s,
+        None => {
+            if let Some(s) = p.spectrum("scale").ok().flatten().and_then(|s| to_rgb(&s)) {
+                c *= s;
+            }
+        }
+    }
+    c
+}
+
+fn point3(p: &ParamList, name: &str, default: [f32; 3]) -> DVec3 {
+    DVec3::from(p.point3(name).ok().flatten().unwrap_or(default).map(f64::from))
+}
+
+impl Light {
+    /// A `LightSource` of a supported type (`None` otherwise).
+    pub fn from_desc(ty: &str, p: &ParamList, world_from_light: &DMat4, syntax: Syntax) -> Option<Light> {
+        let m = world_from_light;
+        Some(match ty {
+            "point" => {
+                let from = point3(p, "from", [0.0; 3]);
+                // v3 adds `from` in world space after the CTM; v4 transforms it.
+                let pos = if syntax == Syntax::V3 {
+                    m.transform_point3(DVec3::ZERO) + from
+                } else {
+                    m.transform_point3(from)
+                };
+                let mut i = emission(p, "I", syntax);
+                if let Some(power) = p.float("power").ok().flatten().filter(|&w| w > 0.0) {
+                    i *= power / (4.0 * PI * luminance(i).max(1e-9));
+                }
+                Light::Point { p: pos.as_vec3(), i }
+            }
+            "spot" => {
+                let (from, to) = (point3(p, "from", [0.0; 3]), point3(p, "to", [0.0, 0.0, 1.0]));
+                let dir = m.transform_vector3(to - from).normalize().as_vec3();
+                let (a, b) = coordinate_system(dir);
+                let cone = p.float("coneangle").ok().flatten().unwrap_or(30.0);
+                let delta = p.float("conedeltaangle").ok().flatten().unwrap_or(5.0);
+                let (cos_total, cos_start) = (cone.to_radians().cos(), (cone - delta).to_radians().cos());
+                let mut i = emission(p, "I", syntax);
+                if let Some(power) = p.float("power").ok().flatten().filter(|&w| w > 0.0) {
+                    i *= power / (2.0 * PI * (1.0 - 0.5 * (cos_start + cos_total)) * luminance(i).max(1e-9));
+                }
+                Light::Spot {
+                    p: m.transform_point3(from).as_vec3(),
+                    frame: [a, b, dir],
+                    i,
+                    cos_total,
+                    cos_start,
+                    smooth: syntax == Syntax::V4,
+                }
+            }
+            "distant" => {
+                let (from, to) = (point3(p, "from", [0.0; 3]), point3(p, "to", [0.0, 0.0, 1.0]));
+                Light::Distant { w: m.transform_vector3(from - to).normalize().as_vec3(), l: emission(p, "L", syntax) }
+            }
+            "infinite" => Light::Infinite { l: emission(p, "L", syntax) },
+            _ => return None,
+        })
+    }
+
+    pub fn is_delta(&self) -> bool {
+        matches!(self, Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. })
+    }
+
+    fn spot_falloff(frame: &[Vec3; 3], w: Vec3, cos_total: f32, cos_start: f32, smooth: bool) -> f32 {
+        let c = w.dot(frame[2]);
+        if c < cos_total {
+            return 0.0;
+        }
+        if c >= cos_start {
+            return 1.0;
+        }
+        let d = (c - cos_total) / (cos_start - cos_total);
+        if smooth { d * d * (3.0 - 2.0 * d) } else { d * d * d * d }
+    }
+
+    /// Total emitted power, for choosing photon sources (luminance).
+    pub fn power(&self, world: WorldSphere) -> f32 {
+        let r2 = world.radius * world.radius;
+        luminance(match self {
+            Light::Point { i, .. } => 4.0 * PI * *i,
+            Light::Spot { i, cos_total, cos_start, .. } => *i * 2.0 * PI * (1.0 - 0.5 * (cos_start + cos_total)),
+            Light::Distant { l, .. } | Light::Infinite { l } => *l * PI * r2,
+            Light::Area { l, two_sided, area, .. } => *l * *area * PI * if *two_sided { 2.0 } else { 1.0 },
+        })
+    }
+
+    /// A point on an area light as seen from `p` (solid-angle pdf), or by area.
+    fn area_sample(emitter: &Emitter, g: &Geometry, reference: Option<Vec3>, u: [f32; 2]) -> Option<ShapeSample> {
+        match (emitter, reference) {
+            (Emitter::Quadric { index, sampler }, Some(r)) => {
+                g.quadrics[*index as usize].sample_solid_angle(sampler, Point3(r), u)
+            }
+            (Emitter::Quadric { index, sampler }, None) => Some(g.quadrics[*index as usize].sample_area(sampler, u)),
+            (Emitter::Triangle { mesh, tri, flags }, r) => {
+                let s = g.meshes[*mesh as usize].sample_triangle(*tri as usize, u, *flags);
+                match r {
+                    Some(r) => area_to_solid_angle(s, Point3(r)),
+                    None => Some(s),
+                }
+            }
+        }
+    }
+
+    /// Incident light at `p` from this light.
+    pub fn sample_li(&self, g: &Geometry, p: Vec3, u: [f32; 2]) -> Option<LightSample> {
+        match self {
+            Light::Point { p: lp, i } => {
+                let d = *lp - p;
+                let d2 = d.length_squared();
+                (d2 > 0.0).then(|| LightSample {
+                    wi: d / d2.sqrt(),
+                    li: *i / d2,
+                    pdf: 1.0,
+                    p_light: Some(*lp),
+                    delta: true,
+                })
+            }
+            Light::Spot { p: lp, frame, i, cos_total, cos_start, smooth } => {
+                let d = *lp - p;
+                let d2 = d.length_squared();
+                let wi = d / d2.sqrt();
+                let f = Self::spot_falloff(frame, -wi, *cos_total, *cos_start, *smooth);
+                (d2 > 0.0 && f > 0.0).then(|| LightSample {
+                    wi,
+                    li: *i * f / d2,
+                    pdf: 1.0,
+                    p_light: Some(*lp),
+                    delta: true,
+                })
+            }
+            Light::Distant { w, l } => Some(LightSample { wi: *w, li: *l, pdf: 1.0, p_light: None, delta: true }),
+            Light::Infinite { l } => {
+                Some(LightSample { wi: uniform_sphere(u), li: *l, pdf: 1.0 / (4.0 * PI), p_light: None, delta: false })
+            }
+            Light::Area { emitter, l, two_sided, .. } => {
+                let s = Self::area_sample(emitter, g, Some(p), u)?;
+                let d = s.p.0 - p;
+                let wi = d.normalize_or_zero();
+                let facing = *two_sided || s.n.0.dot(-wi) > 0.0;
+                (s.pdf > 0.0 && facing && wi != Vec3::ZERO).then(|| LightSample {
+                    wi,
+                    li: *l,
+                    pdf: s.pdf,
+                    p_light: Some(s.p.0),
+                    delta: false,
+                })
+            }
+        }
+    }
+
+    /// The solid-angle density `sample_li` gives direction `wi` from `p`.
+    pub fn pdf_li(&self, g: &Geometry, p: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Light::Infinite { .. } => 1.0 / (4.0 * PI),
+            Light::Area { emitter: Emitter::Quadric { index, sampler }, .. } => {
+                g.quadrics[*index as usize].pdf_solid_angle(sampler, Point3(p), Vector3(wi))
+            }
+            Light::Area { emitter: Emitter::Triangle { mesh, tri, .. }, .. } => {
+                g.meshes[*mesh as usize].pdf_triangle_solid_angle(*tri as usize, Point3(p), Vector3(wi))
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// A photon: ray, light normal, pdfs and emitted radiance (pbrt's `Sample_Le`).
+    pub fn sample_le(&self, g: &Geometry, world: WorldSphere, u1: [f32; 2], u2: [f32; 2]) -> Option<Emission> {
+        let r = world.radius;
+        match self {
+            Light::Point { p, i } => {
+                let d = uniform_sphere(u1);
+                Some(Emission {
+                    ray: Ray::new(Point3(*p), Vector3(d)),
+                    n: d,
+                    pdf_pos: 1.0,
+                    pdf_dir: 1.0 / (4.0 * PI),
+                    le: *i,
+                })
+            }
+            Light::Spot { p, frame, i, cos_total, cos_start, smooth } => {
+                let l = uniform_cone(u1, *cos_total);
+                let d = frame[0] * l.x + frame[1] * l.y + frame[2] * l.z;
+                let le = *i * Self::spot_falloff(frame, d, *cos_total, *cos_start, *smooth);
+                let pdf_dir = 1.0 / (2.0 * PI * (1.0 - cos_total));
+                Some(Emission { ray: Ray::new(Point3(*p), Vector3(d)), n: d, pdf_pos: 1.0, pdf_dir, le })
+            }
+            Light::Distant { w, l } => {
+                let (a, b) = coordinate_system(*w);
+                let cd = crate::camera::concentric_disk(u1);
+                let o = world.center + r * (cd.x * a + cd.y * b) + r * *w;
+                let ray = Ray::new(Point3(o), Vector3(-*w));
+                Some(Emission { ray, n: -*w, pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0, le: *l })
+            }
+            Light::Infinite { l } => {
+                let d = -uniform_sphere(u1);
+                let (a, b) = coordinate_system(-d);
+                let cd = crate::camera::concentric_disk(u2);
+                let o = world.center + r * (cd.x * a + cd.y * b) - r * d;
+                let ray = Ray::new(Point3(o), Vector3(d));
+                Some(Emission { ray, n: d, pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0 / (4.0 * PI), le: *l })
+            }
+            Light::Area { emitter, l, two_sided, .. } => {
+                let s = Self::area_sample(emitter, g, None, u1)?;
+                let n = s.n.0;
+                // Cosine-weighted about n; two-sided lights pick a side with probability ½.
+                let (mut u2, mut side) = (u2, 1.0);
+                if *two_sided {
+                    if u2[0] < 0.5 {
+                        u2[0] *= 2.0;
+                    } else {
+                        u2[0] = 2.0 * (u2[0] - 0.5);
+                        side = -1.0;
+                    }
+                }
+                let local = crate::sampling::cosine_hemisphere(u2);
+                let (a, b) = coordinate_system(n * side);
+                let d = a * local.x + b * local.y + n * side * local.z;
+                let mut pdf_dir = local.z / PI;
+                if *two_sided {
+                    pdf_dir *= 0.5;
+                }
+                let p_error = crate::math::float::gamma(8) * s.p.0.abs() + Vec3::splat(1e-30);
+                let o = offset_ray_origin(s.p, p_error, Normal3(n), Vector3(d));
+                Some(Emission { ray: Ray::new(o, Vector3(d)), n, pdf_pos: s.pdf, pdf_dir, le: *l })
+            }
+        }
+    }
+
+    /// Radiance from an infinite light along a ray that escapes.
+    pub fn le_escaped(&self) -> Rgb {
+        match self {
+            Light::Infinite { l } => *l,
+            _ => Vec3::ZERO,
+        }
+    }
+}
+
+/// World area of an emitting quadric.
+pub fn quadric_area(g: &Geometry, index: u32) -> f32 {
+    let q = &g.quadrics[index as usize];
+    q.quadric.world_area(DMat3::from_mat4(q.render_from_object)) as f32
+}
