@@ -249,7 +249,7 @@ impl Light {
                 let d = s.p.0 - p;
                 let wi = d.normalize_or_zero();
                 let facing = *two_sided || s.n.0.dot(-wi) > 0.0;
-                (s.pdf > 0.0 && facing && wi != Vec3::ZERO).then(|| LightSample {
+                (s.pdf > 0.0 && facing && wi != Vec3::ZERO).then_some(LightSample {
                     wi,
                     li: *l,
                     pdf: s.pdf,
