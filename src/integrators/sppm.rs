@@ -279,10 +279,12 @@ fn direct_light(
         && let Some(s) = bsdf.sample_f(wo, u_bsdf, u_lobe, TransportMode::Radiance)
         && !s.specular
     {
-        let light_pdf = light.pdf_li(&scene.geometry, si.p.0, s.wi);
+        // The light's density along the same ray the BSDF sample follows: from the
+        // offset origin, so the surface just left is never taken for the light.
+        let ray = si.spawn_ray(Vector3(s.wi));
+        let light_pdf = light.pdf_li(&scene.geometry, ray.o.0, s.wi);
         if light_pdf > 0.0 {
             let w = power_heuristic(s.pdf, light_pdf);
-            let ray = si.spawn_ray(Vector3(s.wi));
             let li = match scene.geometry.intersect(&ray) {
                 Some(hit) => match scene.emitter(&hit) {
                     Some((_, l)) if l as usize == idx => {

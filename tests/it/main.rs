@@ -7,6 +7,7 @@ mod directives;
 mod instancing;
 mod intersect;
 mod real_scenes;
+mod render;
 mod sampling;
 mod shapes;
 mod tokenizer;
