@@ -3,7 +3,10 @@
 //! ```text
 //! cargo run --release --bin pbrt-bench -- parse [--runs 5] [--dir target/bench-data]
 //! cargo run --release --bin pbrt-bench -- rays [--runs 5] [--dir target/bench-data] [--dump]
+//! cargo run --release --bin pbrt-bench -- sppm [--runs 3] [SCENE.pbrt ...]
 //! ```
+//! `sppm` renders each scene (default: the bundled `pbrt-scenes/v3/*.pbrt` scenes) at 1
+//! and 2 threads and prints the median seconds per iteration and per million photons.
 //! `rays` builds a 1M-triangle bumpy sphere (through a binary PLY, as a scene would),
 //! times the BVH build, then 1M coherent camera rays and 1M incoherent random rays for
 //! closest hit and any hit on 1 and 2 threads, and reports bytes per triangle.
@@ -34,6 +37,11 @@ fn main() -> ExitCode {
             let dir = PathBuf::from(flag("--dir").unwrap_or_else(|| "target/bench-data".into()));
             rays_bench(&dir, runs, args.iter().any(|a| a == "--dump"))
         }
+        Some("sppm") => {
+            let runs = flag("--runs").and_then(|r| r.parse().ok()).unwrap_or(3);
+            let scenes: Vec<PathBuf> = args[2..].iter().filter(|a| a.ends_with(".pbrt")).map(PathBuf::from).collect();
+            sppm_bench(scenes, runs)
+        }
         Some("--once") => match args.get(2) {
             Some(scene) => once(Path::new(scene)),
             None => usage(),
@@ -43,7 +51,7 @@ fn main() -> ExitCode {
 }
 
 fn usage() -> ExitCode {
-    eprintln!("usage: pbrt-bench parse|rays [--runs N] [--dir DIR] [--dump]");
+    eprintln!("usage: pbrt-bench parse|rays|sppm [--runs N] [--dir DIR] [--dump] [SCENE.pbrt ...]");
     ExitCode::FAILURE
 }
 
@@ -381,4 +389,49 @@ fn rays_bench(dir: &Path, runs: usize, dump: bool) -> ExitCode {
 fn scene_clone_empty() -> pbrt_sppm::scene::SceneDescription {
     pbrt_sppm::scene::load_scene_from_bytes(Path::new("empty.pbrt"), b"WorldBegin".to_vec(), &LoadOptions::default())
         .expect("the empty scene loads")
+}
+
+fn sppm_bench(mut scenes: Vec<PathBuf>, runs: usize) -> ExitCode {
+    use pbrt_sppm::render::{RenderScene, RenderSettings};
+    if scenes.is_empty() {
+        scenes = ["sppm-bench", "cornell-glass", "quadric-gallery", "caustic-ring"]
+            .iter()
+            .map(|n| PathBuf::from(format!("pbrt-scenes/v3/{n}.pbrt")))
+            .collect();
+    }
+    println!(
+        "{:<34} {:>7} {:>6} {:>10} {:>10} {:>9} {:>12}",
+        "scene", "threads", "iters", "photons", "total s", "s/iter", "s/Mphoton"
+    );
+    for path in scenes {
+        let scene = match load_scene(&path, &LoadOptions::default()) {
+            Ok(s) => RenderScene::new(s),
+            Err(e) => {
+                eprintln!("{e}");
+                return ExitCode::FAILURE;
+            }
+        };
+        for threads in [1usize, 2] {
+            let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(threads).build() else {
+                return ExitCode::FAILURE;
+            };
+            let mut times = Vec::new();
+            let (mut iters, mut photons) = (0, 0);
+            for _ in 0..runs {
+                let Ok(out) = pool.install(|| scene.render(&RenderSettings::default())) else {
+                    return ExitCode::FAILURE;
+                };
+                times.push(out.seconds);
+                (iters, photons) = (out.stats.iterations, out.stats.photon_paths);
+            }
+            let t = median(times);
+            let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            println!(
+                "{name:<34} {threads:>7} {iters:>6} {photons:>10} {t:>10.3} {:>9.4} {:>12.3}",
+                t / iters.max(1) as f64,
+                t / (photons.max(1) as f64 / 1e6)
+            );
+        }
+    }
+    ExitCode::SUCCESS
 }

@@ -154,14 +154,21 @@ impl<'a> Sppm<'a> {
                 (out, hits)
             })
             .collect();
-        // Fixed order: chunk by chunk, photon by photon.
-        for (out, hits) in results {
-            self.stats.photon_hits += hits;
-            for (pixel, f) in out {
-                phi[pixel as usize] += f.as_dvec3();
-                m[pixel as usize] += 1;
+        // Each pixel sums its contributions in a fixed order (chunk by chunk, photon by
+        // photon); pixel ranges are summed in parallel, each scanning every chunk.
+        self.stats.photon_hits += results.iter().map(|r| r.1).sum::<u64>();
+        let span = n.div_ceil(rayon::current_num_threads().max(1) * 4).max(1);
+        phi.par_chunks_mut(span).zip(m.par_chunks_mut(span)).enumerate().for_each(|(c, (phi, m))| {
+            let lo = c * span;
+            for (out, _) in &results {
+                for &(pixel, f) in out {
+                    if let Some(i) = (pixel as usize).checked_sub(lo).filter(|&i| i < phi.len()) {
+                        phi[i] += f.as_dvec3();
+                        m[i] += 1;
+                    }
+                }
             }
-        }
+        });
         self.stats.photon_paths += total;
         (phi, m)
     }
@@ -372,11 +379,14 @@ fn trace_photon(
     hits
 }
 
-/// Visible points binned into a uniform grid: (cell, pixel) pairs sorted by cell.
+/// Visible points binned into a uniform grid: (cell, pixel) pairs grouped by a hash
+/// of the cell with a counting sort (pixel order within a bucket, so deterministic).
 pub struct Grid {
     lo: Vec3,
     inv_cell: Vec3,
     res: [u64; 3],
+    /// Bucket b holds `entries[offsets[b]..offsets[b + 1]]`.
+    offsets: Vec<u32>,
     entries: Vec<(u64, u32)>,
 }
 
@@ -403,31 +413,48 @@ impl Grid {
         let res = [0, 1, 2].map(|a| ((base * diag[a] / max_diag) as u64).clamp(1, 1 << 20));
         let inv_cell =
             Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32) / diag.max(Vec3::splat(f32::MIN_POSITIVE));
-        let mut grid = Grid { lo, inv_cell, res, entries: Vec::new() };
-        let mut entries: Vec<(u64, u32)> = pixels
-            .par_iter()
-            .enumerate()
-            .flat_map_iter(|(i, p)| {
-                let mut cells = Vec::new();
-                if let Some(vp) = &p.vp
-                    && vp.beta != Vec3::ZERO
-                {
-                    let r = p.radius as f32;
-                    let (a, b) = (grid.cell(vp.p - r), grid.cell(vp.p + r));
-                    for z in a[2]..=b[2] {
-                        for y in a[1]..=b[1] {
-                            for x in a[0]..=b[0] {
-                                cells.push((grid.key([x, y, z]), i as u32));
-                            }
+        let mut grid = Grid { lo, inv_cell, res, offsets: Vec::new(), entries: Vec::new() };
+        // Every cell each visible point's r-box overlaps (one pass, no per-pixel
+        // allocation: this runs once per iteration over all pixels).
+        let mut entries: Vec<(u64, u32)> = Vec::with_capacity(8 * pixels.len());
+        for (i, p) in pixels.iter().enumerate() {
+            if let Some(vp) = &p.vp
+                && vp.beta != Vec3::ZERO
+            {
+                let r = p.radius as f32;
+                let (a, b) = (grid.cell(vp.p - r), grid.cell(vp.p + r));
+                for z in a[2]..=b[2] {
+                    for y in a[1]..=b[1] {
+                        for x in a[0]..=b[0] {
+                            entries.push((grid.key([x, y, z]), i as u32));
                         }
                     }
                 }
-                cells
-            })
-            .collect();
-        entries.par_sort_unstable();
-        grid.entries = entries;
+            }
+        }
+        // Counting sort by bucket: count, prefix sums, scatter (stable).
+        let buckets = entries.len().next_power_of_two().max(1);
+        let mut offsets = vec![0u32; buckets + 1];
+        for e in &entries {
+            offsets[Grid::bucket(e.0, buckets) + 1] += 1;
+        }
+        for b in 0..buckets {
+            offsets[b + 1] += offsets[b];
+        }
+        let mut next = offsets.clone();
+        let mut sorted = vec![(0u64, 0u32); entries.len()];
+        for e in entries {
+            let b = Grid::bucket(e.0, buckets);
+            sorted[next[b] as usize] = e;
+            next[b] += 1;
+        }
+        grid.offsets = offsets;
+        grid.entries = sorted;
         Some(grid)
+    }
+
+    fn bucket(key: u64, buckets: usize) -> usize {
+        (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 32) as usize & (buckets - 1)
     }
 
     fn cell(&self, p: Vec3) -> [u64; 3] {
@@ -446,8 +473,9 @@ impl Grid {
             return;
         }
         let key = self.key(self.cell(p));
-        let start = self.entries.partition_point(|e| e.0 < key);
-        for e in self.entries[start..].iter().take_while(|e| e.0 == key) {
+        let b = Grid::bucket(key, self.offsets.len() - 1);
+        let range = self.offsets[b] as usize..self.offsets[b + 1] as usize;
+        for e in self.entries[range].iter().filter(|e| e.0 == key) {
             f(e.1);
         }
     }
