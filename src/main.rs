@@ -171,7 +171,9 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         Ok(p) => p,
         Err(e) => return fail(&args.scene, e),
     };
+    let scene_path = args.scene.display().to_string();
     let rs = RenderScene::new(scene);
+    rs.warnings.iter().for_each(|w| eprintln!("{scene_path}: warning: {w}"));
     let out = match pool.install(|| rs.render(&settings)) {
         Ok(o) => o,
         Err(e) => return fail(&args.scene, e),

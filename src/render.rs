@@ -40,13 +40,16 @@ pub struct RenderScene {
     pub world: WorldSphere,
     /// Row-major world-to-camera, for image metadata.
     pub world_to_camera: [f32; 16],
+    /// Problems found while reading textures and maps.
+    pub warnings: Vec<String>,
 }
 
 impl RenderScene {
     pub fn new(mut scene: SceneDescription) -> RenderScene {
         let camera = Camera::new(&scene.camera, &scene.film);
+        let ctx = crate::materials::TextureContext::new(&scene.base_dir);
         let materials: Vec<Material> =
-            scene.materials.iter().map(|m| Material::from_desc(m, &scene.textures)).collect();
+            scene.materials.iter().map(|m| Material::from_desc(m, &scene.textures, &ctx)).collect();
         let world_shape_material = scene.shapes.iter().map(|s| s.material).collect();
         let object_shape_material =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.material).collect()).collect();
@@ -61,7 +64,7 @@ impl RenderScene {
         let mut lights: Vec<Light> = scene
             .lights
             .iter()
-            .filter_map(|l| Light::from_desc(&l.ty, &l.params, &l.world_from_light, scene.syntax))
+            .filter_map(|l| Light::from_desc(&l.ty, &l.params, &l.world_from_light, scene.syntax, &ctx))
             .collect();
         let shape_info: Vec<(ShapeGeometry, Option<u32>, bool, bool)> = scene
             .shapes
@@ -96,6 +99,7 @@ impl RenderScene {
             light_power,
             world,
             world_to_camera: m,
+            warnings: ctx.warnings.into_inner(),
         }
     }
 

@@ -214,7 +214,7 @@ fn camera_path(scene: &RenderScene, pixel: [f32; 2], rng: &mut Rng, max_depth: u
     while depth < max_depth {
         let Some(hit) = scene.geometry.intersect(&ray) else {
             for l in &scene.lights {
-                ld += beta * l.le_escaped();
+                ld += beta * l.le_escaped(ray.d.0);
             }
             break;
         };
@@ -300,7 +300,7 @@ fn direct_light(
                     }
                     _ => Vec3::ZERO,
                 },
-                None => light.le_escaped(),
+                None => light.le_escaped(s.wi),
             };
             ld += s.f * s.wi.dot(ns).abs() * li * w / s.pdf;
         }

@@ -6,7 +6,7 @@
 //! LightSource "spot" "blackbody I" [5500 125] "point from" [0 5 9] "point to" [-5 2.75 0]
 //!             "float coneangle" 30 "float conedeltaangle" 5        # v3 quartic / v4 smoothstep falloff
 //! LightSource "distant" "point from" [0 0 0] "point to" [0 0 1] "rgb L" [3 3 3]
-//! LightSource "infinite" "rgb L" [.1 .1 .1]
+//! LightSource "infinite" "rgb L" [.1 .1 .1]      # or "string mapname"/"filename" (equirectangular)
 //! AreaLightSource "diffuse" "rgb L" [4 4 4] "bool twosided" true "float power" 100   # v4 power
 //! ```
 //! Every light can be sampled for direct lighting (`sample_li`, with the solid-angle pdf
@@ -15,8 +15,11 @@
 //! one light per quadric and one per triangle, as in pbrt. v4 normalises blackbody
 //! spectra to luminance 1 and honours `power`; v3 blackbody is peak-normalised × scale.
 
+pub mod envmap;
+
 use crate::accel::Geometry;
 use crate::interaction::offset_ray_origin;
+use crate::materials::TextureContext;
 use crate::math::frame::coordinate_system;
 use crate::math::{Normal3, Point3, Ray, Vector3};
 use crate::parser::Syntax;
@@ -25,8 +28,10 @@ use crate::sampling::{uniform_cone, uniform_sphere};
 use crate::shapes::sampling::area_to_solid_angle;
 use crate::shapes::{MeshFlags, QuadricSampler, ShapeSample};
 use crate::spectrum::{Rgb, blackbody, luminance, to_rgb};
+use envmap::EnvMap;
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// Where an area light sits.
 #[derive(Clone, Debug)]
@@ -56,6 +61,7 @@ pub enum Light {
     },
     Infinite {
         l: Rgb,
+        map: Option<Arc<EnvMap>>,
     },
     Area {
         emitter: Emitter,
@@ -123,7 +129,13 @@ fn point3(p: &ParamList, name: &str, default: [f32; 3]) -> DVec3 {
 
 impl Light {
     /// A `LightSource` of a supported type (`None` otherwise).
-    pub fn from_desc(ty: &str, p: &ParamList, world_from_light: &DMat4, syntax: Syntax) -> Option<Light> {
+    pub fn from_desc(
+        ty: &str,
+        p: &ParamList,
+        world_from_light: &DMat4,
+        syntax: Syntax,
+        ctx: &TextureContext,
+    ) -> Option<Light> {
         let m = world_from_light;
         Some(match ty {
             "point" => {
@@ -164,7 +176,15 @@ impl Light {
                 let (from, to) = (point3(p, "from", [0.0; 3]), point3(p, "to", [0.0, 0.0, 1.0]));
                 Light::Distant { w: m.transform_vector3(from - to).normalize().as_vec3(), l: emission(p, "L", syntax) }
             }
-            "infinite" => Light::Infinite { l: emission(p, "L", syntax) },
+            "infinite" => {
+                let l = emission(p, "L", syntax);
+                let name = p.string("mapname").ok().flatten().or_else(|| p.string("filename").ok().flatten());
+                let map = name
+                    .filter(|n| !n.is_empty())
+                    .and_then(|n| ctx.image(&n))
+                    .map(|img| Arc::new(EnvMap::new(img, l, DMat3::from_mat4(*m))));
+                Light::Infinite { l, map }
+            }
             _ => return None,
         })
     }
@@ -191,7 +211,8 @@ impl Light {
         luminance(match self {
             Light::Point { i, .. } => 4.0 * PI * *i,
             Light::Spot { i, cos_total, cos_start, .. } => *i * 2.0 * PI * (1.0 - 0.5 * (cos_start + cos_total)),
-            Light::Distant { l, .. } | Light::Infinite { l } => *l * PI * r2,
+            Light::Distant { l, .. } | Light::Infinite { l, map: None } => *l * PI * r2,
+            Light::Infinite { map: Some(env), .. } => Vec3::splat(env.average_luminance * PI * r2),
             Light::Area { l, two_sided, area, .. } => *l * *area * PI * if *two_sided { 2.0 } else { 1.0 },
         })
     }
@@ -241,8 +262,12 @@ impl Light {
                 })
             }
             Light::Distant { w, l } => Some(LightSample { wi: *w, li: *l, pdf: 1.0, p_light: None, delta: true }),
-            Light::Infinite { l } => {
+            Light::Infinite { l, map: None } => {
                 Some(LightSample { wi: uniform_sphere(u), li: *l, pdf: 1.0 / (4.0 * PI), p_light: None, delta: false })
+            }
+            Light::Infinite { map: Some(env), .. } => {
+                let (wi, pdf) = env.sample(u)?;
+                (pdf > 0.0).then(|| LightSample { wi, li: env.le(wi), pdf, p_light: None, delta: false })
             }
             Light::Area { emitter, l, two_sided, .. } => {
                 let s = Self::area_sample(emitter, g, Some(p), u)?;
@@ -263,7 +288,8 @@ impl Light {
     /// The solid-angle density `sample_li` gives direction `wi` from `p`.
     pub fn pdf_li(&self, g: &Geometry, p: Vec3, wi: Vec3) -> f32 {
         match self {
-            Light::Infinite { .. } => 1.0 / (4.0 * PI),
+            Light::Infinite { map: None, .. } => 1.0 / (4.0 * PI),
+            Light::Infinite { map: Some(env), .. } => env.pdf(wi),
             Light::Area { emitter: Emitter::Quadric { index, sampler }, .. } => {
                 g.quadrics[*index as usize].pdf_solid_angle(sampler, Point3(p), Vector3(wi))
             }
@@ -302,13 +328,21 @@ impl Light {
                 let ray = Ray::new(Point3(o), Vector3(-*w));
                 Some(Emission { ray, n: -*w, pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0, le: *l })
             }
-            Light::Infinite { l } => {
-                let d = -uniform_sphere(u1);
-                let (a, b) = coordinate_system(-d);
+            Light::Infinite { l, map } => {
+                // w points toward the environment; photons travel along d = −w.
+                let (w, pdf_dir, le) = match map {
+                    None => (uniform_sphere(u1), 1.0 / (4.0 * PI), *l),
+                    Some(env) => {
+                        let (w, pdf) = env.sample(u1)?;
+                        (w, pdf, env.le(w))
+                    }
+                };
+                let d = -w;
+                let (a, b) = coordinate_system(w);
                 let cd = crate::camera::concentric_disk(u2);
-                let o = world.center + r * (cd.x * a + cd.y * b) - r * d;
+                let o = world.center + r * (cd.x * a + cd.y * b) + r * w;
                 let ray = Ray::new(Point3(o), Vector3(d));
-                Some(Emission { ray, n: d, pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0 / (4.0 * PI), le: *l })
+                Some(Emission { ray, n: d, pdf_pos: 1.0 / (PI * r * r), pdf_dir, le })
             }
             Light::Area { emitter, l, two_sided, .. } => {
                 let s = Self::area_sample(emitter, g, None, u1)?;
@@ -338,9 +372,10 @@ impl Light {
     }
 
     /// Radiance from an infinite light along a ray that escapes.
-    pub fn le_escaped(&self) -> Rgb {
+    pub fn le_escaped(&self, d: Vec3) -> Rgb {
         match self {
-            Light::Infinite { l } => *l,
+            Light::Infinite { l, map: None } => *l,
+            Light::Infinite { map: Some(env), .. } => env.le(d.normalize()),
             _ => Vec3::ZERO,
         }
     }

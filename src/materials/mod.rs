@@ -14,17 +14,89 @@
 //! ```
 //! Approximations, listed in the README: plastic, coated diffuse and uber render as their
 //! diffuse part (`Kd`/`reflectance`); rough dielectrics and metals render as smooth ones;
-//! matte's `sigma` (Oren–Nayar) is ignored; image textures are not read yet (they use
-//! their average, 0.5).
+//! matte's `sigma` (Oren–Nayar) is ignored.
+//!
+//! `imagemap` reads EXR or PNG (sRGB-decoded unless `"bool gamma" false` / `"string
+//! encoding" "linear"`), looked up bilinearly with t = 0 at the image's bottom row (as
+//! pbrt), `wrap` repeat/clamp/black, `scale`, `invert`. An unreadable file is warned
+//! about and replaced by 0.5.
 
 mod bsdf;
 
 pub use bsdf::{Bsdf, BsdfSample, BxDF, TransportMode};
 
+use crate::imageio::RgbImage;
 use crate::parser::params::{FloatValue, ParamList, ParamType, SpectrumValue};
 use crate::scene::{MaterialDesc, TextureDesc};
 use crate::spectrum::{Rgb, named_metal, to_rgb};
 use glam::Vec3;
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// How image lookups treat coordinates outside [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    Repeat,
+    Clamp,
+    Black,
+}
+
+/// Bilinear lookup at (s, t) with t = 0 at the bottom row unless `top_down`.
+pub fn lookup(img: &RgbImage, s: f32, t: f32, wrap: Wrap, top_down: bool) -> Rgb {
+    let (w, h) = (img.width as i64, img.height as i64);
+    if w == 0 || h == 0 {
+        return Vec3::ZERO;
+    }
+    let y = if top_down { t } else { 1.0 - t };
+    let (x, y) = (s * w as f32 - 0.5, y * h as f32 - 0.5);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let texel = |xi: i64, yi: i64| -> Rgb {
+        let (xi, yi) = match wrap {
+            Wrap::Repeat => (xi.rem_euclid(w), yi.rem_euclid(h)),
+            Wrap::Clamp => (xi.clamp(0, w - 1), yi.clamp(0, h - 1)),
+            Wrap::Black if xi < 0 || yi < 0 || xi >= w || yi >= h => return Vec3::ZERO,
+            Wrap::Black => (xi, yi),
+        };
+        Vec3::from(img.pixels[(yi * w + xi) as usize])
+    };
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    (1.0 - fx) * (1.0 - fy) * texel(x0, y0)
+        + fx * (1.0 - fy) * texel(x0 + 1, y0)
+        + (1.0 - fx) * fy * texel(x0, y0 + 1)
+        + fx * fy * texel(x0 + 1, y0 + 1)
+}
+
+/// What building textures needs: where files are, a cache, and warnings to report.
+pub struct TextureContext {
+    pub base_dir: PathBuf,
+    cache: RefCell<HashMap<PathBuf, Option<Arc<RgbImage>>>>,
+    pub warnings: RefCell<Vec<String>>,
+}
+
+impl TextureContext {
+    pub fn new(base_dir: &Path) -> TextureContext {
+        TextureContext { base_dir: base_dir.to_path_buf(), cache: RefCell::default(), warnings: RefCell::default() }
+    }
+
+    /// An image by scene-relative name, read once; `None` (warned) when unreadable.
+    pub fn image(&self, name: &str) -> Option<Arc<RgbImage>> {
+        let path = crate::parser::stmt::resolve_relative(&self.base_dir, name);
+        self.cache
+            .borrow_mut()
+            .entry(path.clone())
+            .or_insert_with(|| match crate::imageio::read_image(&path) {
+                Ok(img) => Some(Arc::new(img)),
+                Err(e) => {
+                    self.warnings.borrow_mut().push(format!("{e}; using 0.5 instead"));
+                    None
+                }
+            })
+            .clone()
+    }
+}
 
 /// An RGB texture over (u, v).
 #[derive(Clone, Debug, PartialEq)]
@@ -33,6 +105,7 @@ pub enum Texture {
     Checker { tex1: Box<Texture>, tex2: Box<Texture>, uscale: f32, vscale: f32, udelta: f32, vdelta: f32 },
     Scale(Box<Texture>, Box<Texture>),
     Mix(Box<Texture>, Box<Texture>, Box<Texture>),
+    Image { img: Arc<RgbImage>, map: [f32; 4], wrap: Wrap, scale: f32, invert: bool },
 }
 
 impl Texture {
@@ -47,6 +120,11 @@ impl Texture {
             Texture::Mix(a, b, t) => {
                 let t = t.eval(uv);
                 a.eval(uv) * (Vec3::ONE - t) + b.eval(uv) * t
+            }
+            Texture::Image { img, map, wrap, scale, invert } => {
+                let (s, t) = (uv[0] * map[0] + map[2], uv[1] * map[1] + map[3]);
+                let v = lookup(img, s, t, *wrap, false) * *scale;
+                if *invert { (Vec3::ONE - v).max(Vec3::ZERO) } else { v }
             }
         }
     }
@@ -83,12 +161,13 @@ struct Lookup<'a> {
     params: &'a ParamList,
     textures: &'a [(String, u32)],
     all: &'a [TextureDesc],
+    ctx: &'a TextureContext,
 }
 
 impl Lookup<'_> {
     fn texture(&self, name: &str, default: Rgb) -> Texture {
         if let Some((_, t)) = self.textures.iter().find(|(n, _)| n == name) {
-            return build_texture(&self.all[*t as usize], self.all);
+            return build_texture(&self.all[*t as usize], self.all, self.ctx);
         }
         match self.params.spectrum(name).ok().flatten() {
             Some(v) => Texture::Const(to_rgb(&v).unwrap_or(default)),
@@ -118,8 +197,8 @@ impl Lookup<'_> {
 }
 
 /// Builds a texture description (and the textures it refers to).
-pub fn build_texture(t: &TextureDesc, all: &[TextureDesc]) -> Texture {
-    let l = Lookup { params: &t.params, textures: &t.textures, all };
+pub fn build_texture(t: &TextureDesc, all: &[TextureDesc], ctx: &TextureContext) -> Texture {
+    let l = Lookup { params: &t.params, textures: &t.textures, all, ctx };
     let p = &t.params;
     let f = |name: &str, d: f32| p.float(name).ok().flatten().unwrap_or(d);
     match t.class.as_str() {
@@ -144,13 +223,41 @@ pub fn build_texture(t: &TextureDesc, all: &[TextureDesc]) -> Texture {
             Box::new(l.texture("tex2", Vec3::ONE)),
             Box::new(l.texture("amount", Vec3::splat(0.5))),
         ),
-        _ => Texture::Const(Vec3::splat(0.5)), // imagemap: not read yet
+        "imagemap" => image_texture(p, ctx).unwrap_or(Texture::Const(Vec3::splat(0.5))),
+        _ => Texture::Const(Vec3::splat(0.5)),
     }
 }
 
+fn image_texture(p: &ParamList, ctx: &TextureContext) -> Option<Texture> {
+    let name = p.string("filename").ok().flatten()?;
+    let mut img = ctx.image(&name)?;
+    let is_png = name.to_ascii_lowercase().ends_with(".png");
+    let linear = p.bool("gamma").ok().flatten() == Some(false)
+        || p.string("encoding").ok().flatten().is_some_and(|e| e == "linear");
+    if is_png && linear {
+        // read_png decodes sRGB; this texture wants the stored values as they are.
+        let mut raw = (*img).clone();
+        raw.pixels.iter_mut().for_each(|px| *px = px.map(crate::imageio::to_srgb));
+        img = Arc::new(raw);
+    }
+    let f = |name: &str, d: f32| p.float(name).ok().flatten().unwrap_or(d);
+    let wrap = match p.string("wrap").ok().flatten().as_deref() {
+        Some("clamp") => Wrap::Clamp,
+        Some("black") => Wrap::Black,
+        _ => Wrap::Repeat,
+    };
+    Some(Texture::Image {
+        img,
+        map: [f("uscale", 1.0), f("vscale", 1.0), f("udelta", 0.0), f("vdelta", 0.0)],
+        wrap,
+        scale: f("scale", 1.0),
+        invert: p.bool("invert").ok().flatten().unwrap_or(false),
+    })
+}
+
 impl Material {
-    pub fn from_desc(m: &MaterialDesc, textures: &[TextureDesc]) -> Material {
-        let l = Lookup { params: &m.params, textures: &m.textures, all: textures };
+    pub fn from_desc(m: &MaterialDesc, textures: &[TextureDesc], ctx: &TextureContext) -> Material {
+        let l = Lookup { params: &m.params, textures: &m.textures, all: textures, ctx };
         let half = Vec3::splat(0.5);
         match m.ty.as_str() {
             "matte" => Material::Diffuse { kd: l.texture("Kd", half) },

@@ -197,6 +197,11 @@ impl StatementReader {
 
     /// Resolves a file name from the scene against the top-level file's directory
     /// (pbrt-v4 falls back to the name as written when the joined path does not exist).
+    /// The top-level file's directory: the base of relative file names.
+    pub fn base_dir(&self) -> &Path {
+        &self.base_dir
+    }
+
     pub fn resolve_path(&self, name: &str) -> PathBuf {
         resolve_relative(&self.base_dir, name)
     }

@@ -948,6 +948,7 @@ impl Builder {
             materials: std::mem::take(&mut self.built_materials),
             textures: std::mem::take(&mut self.built_textures),
             options: std::mem::take(&mut self.options),
+            base_dir: self.reader.base_dir().to_path_buf(),
             warnings: warnings.iter().map(|d| Located::resolve(sources, d.span, &d.message)).collect(),
             skipped: self
                 .skipped

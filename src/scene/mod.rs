@@ -149,6 +149,8 @@ pub struct SceneDescription {
     pub textures: Vec<TextureDesc>,
     /// `Option` statements (v4), name → raw value.
     pub options: Vec<(String, String)>,
+    /// The top-level file's directory, against which texture and map names resolve.
+    pub base_dir: std::path::PathBuf,
     pub warnings: Vec<Located>,
     pub skipped: Vec<Skipped>,
 }

@@ -191,3 +191,65 @@ fn direct_light_from_an_enclosing_area_light_is_unbiased() {
     let l = mean(&render(&text, &RenderSettings::default()).image.pixels);
     assert!((l - 0.75).abs() < 0.01 * 0.75, "direct only: {l}, expected 0.75");
 }
+
+fn write_exr(path: &std::path::Path, w: usize, h: usize, f: impl Fn(usize, usize) -> [f32; 3]) {
+    let mut img = pbrt_sppm::imageio::RgbImage::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            img.pixels[y * w + x] = f(x, y);
+        }
+    }
+    pbrt_sppm::imageio::write_image(path, &img).unwrap();
+}
+
+#[test]
+fn imagemap_textures_put_t_zero_at_the_bottom_row() {
+    let dir = std::env::temp_dir().join(format!("pbrt-sppm-tex-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // 2×2: top row red, green; bottom row blue, white.
+    write_exr(&dir.join("quad.exr"), 2, 2, |x, y| {
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]][y * 2 + x]
+    });
+    let path = dir.join("tex.pbrt");
+    std::fs::write(
+        &path,
+        "WorldBegin Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"quad.exr\" \"string wrap\" \"clamp\" \
+         Material \"diffuse\" \"texture reflectance\" \"t\" Shape \"sphere\" \
+         Texture \"gone\" \"spectrum\" \"imagemap\" \"string filename\" \"missing.png\" \
+         Material \"diffuse\" \"texture reflectance\" \"gone\" Shape \"disk\"",
+    )
+    .unwrap();
+    let rs = RenderScene::new(crate::common::load_file(&path).unwrap());
+    let pbrt_sppm::materials::Material::Diffuse { kd } = &rs.materials[0] else { panic!("diffuse") };
+    assert_eq!(kd.eval([0.25, 0.25]).to_array(), [0.0, 0.0, 1.0], "bottom-left is blue");
+    assert_eq!(kd.eval([0.75, 0.75]).to_array(), [0.0, 1.0, 0.0], "top-right is green");
+    let pbrt_sppm::materials::Material::Diffuse { kd } = &rs.materials[1] else { panic!("diffuse") };
+    assert_eq!(kd.eval([0.5, 0.5]).to_array(), [0.5, 0.5, 0.5], "an unreadable image becomes 0.5");
+    assert!(rs.warnings.iter().any(|w| w.contains("missing.png")), "{:?}", rs.warnings);
+}
+
+#[test]
+fn a_constant_environment_map_lights_like_a_constant_infinite_light() {
+    let dir = std::env::temp_dir().join(format!("pbrt-sppm-env-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    write_exr(&dir.join("sky.exr"), 32, 16, |_, _| [0.5, 0.5, 0.5]);
+    let scene_for = |light: &str| {
+        format!(
+            "LookAt 0 0 4 0 0 0 0 1 0 Camera \"perspective\" \"float fov\" 30 \
+             Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16 \
+             Integrator \"sppm\" \"integer iterations\" 4 \"integer photonsperiteration\" 20000 \"float radius\" 0.1 \
+             WorldBegin Rotate 30 1 1 0 {light} Material \"diffuse\" \"rgb reflectance\" [.8 .8 .8] Shape \"sphere\""
+        )
+    };
+    let render_at = |text: String| {
+        let path = dir.join("env.pbrt");
+        std::fs::write(&path, text).unwrap();
+        let out =
+            RenderScene::new(crate::common::load_file(&path).unwrap()).render(&RenderSettings::default()).unwrap();
+        mean(&out.image.pixels)
+    };
+    let constant = render_at(scene_for("LightSource \"infinite\" \"rgb L\" [.5 .5 .5]"));
+    let mapped = render_at(scene_for("LightSource \"infinite\" \"string mapname\" \"sky.exr\""));
+    assert!(constant > 0.1, "{constant}");
+    assert!((mapped - constant).abs() < 0.03 * constant, "map {mapped} vs constant {constant}");
+}
