@@ -232,7 +232,8 @@ fn camera_path(scene: &RenderScene, pixel: [f32; 2], rng: &mut Rng, max_depth: u
             ld += beta * scene.emitted(&hit, &si, wo);
         }
         ld += beta * direct_light(scene, &si, &bsdf, wo, rng);
-        if bsdf.is_diffuse() {
+        // pbrt: a visible point at diffuse surfaces, or glossy ones at the last depth.
+        if bsdf.is_diffuse() || (bsdf.is_glossy() && depth + 1 == max_depth) {
             return (ld, Some(VisiblePoint { p: si.p.0, wo, ng: si.n.0, bsdf, beta }));
         }
         if depth + 1 >= max_depth {

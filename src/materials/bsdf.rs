@@ -1,5 +1,6 @@
 //! BSDFs in a shading frame (pbrt-v3's BxDFs, RGB): Lambertian reflection, specular
-//! reflection, smooth dielectrics with Fresnel, smooth conductors.
+//! reflection, smooth dielectrics with Fresnel, smooth conductors, and rough
+//! conductors with pbrt-v3's Trowbridge–Reitz microfacet distribution.
 
 use crate::sampling::cosine_hemisphere;
 use crate::spectrum::Rgb;
@@ -18,8 +19,82 @@ pub enum TransportMode {
 pub enum BxDF {
     Lambert(Rgb),
     Specular(Rgb),
-    Dielectric { eta: f32, kr: Rgb, kt: Rgb },
-    Conductor { eta: Rgb, k: Rgb },
+    Dielectric {
+        eta: f32,
+        kr: Rgb,
+        kt: Rgb,
+    },
+    Conductor {
+        eta: Rgb,
+        k: Rgb,
+    },
+    /// Trowbridge–Reitz (GGX) microfacet reflection with conductor Fresnel.
+    RoughConductor {
+        eta: Rgb,
+        k: Rgb,
+        alpha: [f32; 2],
+    },
+}
+
+/// pbrt-v3's `TrowbridgeReitzDistribution::RoughnessToAlpha` (used by `metal`).
+pub fn roughness_to_alpha_v3(r: f32) -> f32 {
+    let x = r.max(1e-3).ln();
+    1.62142 + 0.819955 * x + 0.1734 * x * x + 0.0171201 * x * x * x + 0.000640711 * x * x * x * x
+}
+
+/// Trowbridge–Reitz microfacet distribution (pbrt-v3, sampling all normals).
+#[derive(Clone, Copy, Debug)]
+struct TrowbridgeReitz {
+    ax: f32,
+    ay: f32,
+}
+
+impl TrowbridgeReitz {
+    fn d(&self, wh: Vec3) -> f32 {
+        let cos2 = wh.z * wh.z;
+        let sin2 = (1.0 - cos2).max(0.0);
+        if cos2 == 0.0 {
+            return 0.0;
+        }
+        let tan2 = sin2 / cos2;
+        let (cos_phi2, sin_phi2) = if sin2 > 0.0 { (wh.x * wh.x / sin2, wh.y * wh.y / sin2) } else { (1.0, 0.0) };
+        let e = (cos_phi2 / (self.ax * self.ax) + sin_phi2 / (self.ay * self.ay)) * tan2;
+        1.0 / (std::f32::consts::PI * self.ax * self.ay * cos2 * cos2 * (1.0 + e) * (1.0 + e))
+    }
+
+    fn lambda(&self, w: Vec3) -> f32 {
+        let cos2 = w.z * w.z;
+        let sin2 = (1.0 - cos2).max(0.0);
+        if cos2 == 0.0 {
+            return 0.0;
+        }
+        let tan2 = sin2 / cos2;
+        let (cos_phi2, sin_phi2) = if sin2 > 0.0 { (w.x * w.x / sin2, w.y * w.y / sin2) } else { (1.0, 0.0) };
+        let alpha2 = cos_phi2 * self.ax * self.ax + sin_phi2 * self.ay * self.ay;
+        (-1.0 + (1.0 + alpha2 * tan2).sqrt()) / 2.0
+    }
+
+    fn g(&self, wo: Vec3, wi: Vec3) -> f32 {
+        1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
+    }
+
+    /// A microfacet normal in the hemisphere of `wo`, with density D·|cos θh|.
+    fn sample_wh(&self, wo: Vec3, u: [f32; 2]) -> Vec3 {
+        let phi = (self.ay / self.ax * (2.0 * std::f32::consts::PI * u[1] + 0.5 * std::f32::consts::PI).tan()).atan()
+            + if u[1] > 0.5 { std::f32::consts::PI } else { 0.0 };
+        let phi = if self.ax == self.ay { 2.0 * std::f32::consts::PI * u[1] } else { phi };
+        let (sp, cp) = phi.sin_cos();
+        let alpha2 = 1.0 / (cp * cp / (self.ax * self.ax) + sp * sp / (self.ay * self.ay));
+        let tan2 = alpha2 * u[0] / (1.0 - u[0]).max(1e-7);
+        let cos_t = 1.0 / (1.0 + tan2).sqrt();
+        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+        let wh = Vec3::new(sin_t * cp, sin_t * sp, cos_t);
+        if wh.z * wo.z < 0.0 { -wh } else { wh }
+    }
+
+    fn pdf_wh(&self, wh: Vec3) -> f32 {
+        self.d(wh) * wh.z.abs()
+    }
 }
 
 /// A sampled direction.
@@ -109,11 +184,34 @@ impl Bsdf {
         matches!(self.bxdf, BxDF::Lambert(_))
     }
 
+    /// Whether it is glossy (SPPM stores a visible point there only at the last depth).
+    pub fn is_glossy(&self) -> bool {
+        matches!(self.bxdf, BxDF::RoughConductor { .. })
+    }
+
+    fn rough_f(o: Vec3, i: Vec3, eta: Rgb, k: Rgb, alpha: [f32; 2]) -> Rgb {
+        let (co, ci) = (o.z.abs(), i.z.abs());
+        if co == 0.0 || ci == 0.0 || o.z * i.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let wh = o + i;
+        if wh == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let wh = wh.normalize();
+        let dist = TrowbridgeReitz { ax: alpha[0], ay: alpha[1] };
+        fr_conductor(i.dot(wh), eta, k) * dist.d(wh) * dist.g(o, i) / (4.0 * ci * co)
+    }
+
     /// f(ωo, ωi); reflection only counts when both lie on the same side of the geometric
     /// normal (pbrt's rule, which stops light leaking through shading normals).
     pub fn f(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if wo.dot(self.ng) * wi.dot(self.ng) <= 0.0 {
+            return Vec3::ZERO;
+        }
         match self.bxdf {
-            BxDF::Lambert(r) if wo.dot(self.ng) * wi.dot(self.ng) > 0.0 => r * FRAC_1_PI,
+            BxDF::Lambert(r) => r * FRAC_1_PI,
+            BxDF::RoughConductor { eta, k, alpha } => Self::rough_f(self.local(wo), self.local(wi), eta, k, alpha),
             _ => Vec3::ZERO,
         }
     }
@@ -123,6 +221,15 @@ impl Bsdf {
             BxDF::Lambert(_) => {
                 let (o, i) = (self.local(wo), self.local(wi));
                 if o.z * i.z > 0.0 { i.z.abs() * FRAC_1_PI } else { 0.0 }
+            }
+            BxDF::RoughConductor { alpha, .. } => {
+                let (o, i) = (self.local(wo), self.local(wi));
+                if o.z * i.z <= 0.0 {
+                    return 0.0;
+                }
+                let wh = (o + i).normalize_or_zero();
+                let d = o.dot(wh);
+                if d == 0.0 { 0.0 } else { TrowbridgeReitz { ax: alpha[0], ay: alpha[1] }.pdf_wh(wh) / (4.0 * d.abs()) }
             }
             _ => 0.0,
         }
@@ -151,6 +258,16 @@ impl Bsdf {
             }
             BxDF::Specular(r) => specular(reflect, r, 1.0),
             BxDF::Conductor { eta, k } => specular(reflect, fr_conductor(o.z, eta, k), 1.0),
+            BxDF::RoughConductor { alpha, .. } => {
+                let wh = TrowbridgeReitz { ax: alpha[0], ay: alpha[1] }.sample_wh(o, u);
+                let i = 2.0 * o.dot(wh) * wh - o;
+                if o.z * i.z <= 0.0 {
+                    return None;
+                }
+                let wi = self.world(i);
+                let pdf = self.pdf(wo, wi);
+                (pdf > 0.0).then(|| BsdfSample { wi, f: self.f(wo, wi), pdf, specular: false })
+            }
             BxDF::Dielectric { eta, kr, kt } => {
                 let fr = fr_dielectric(o.z, 1.0, eta);
                 if u_lobe < fr {
@@ -198,6 +315,27 @@ mod tests {
         assert!((total - 1.0).abs() < 1e-5, "{total}");
         let tr = b.sample_f(wo, [0.5, 0.5], 0.99, TransportMode::Radiance).unwrap();
         assert!((tr.f.x / t.f.x - 1.0 / 2.25).abs() < 1e-5, "radiance scales by (1/η)²");
+    }
+
+    #[test]
+    fn rough_conductor_sampling_matches_its_pdf_and_conserves_energy() {
+        let b = Bsdf::new(
+            frame(),
+            Vec3::Z,
+            BxDF::RoughConductor { eta: Vec3::splat(0.2), k: Vec3::splat(3.9), alpha: [0.3, 0.3] },
+        );
+        let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
+        let mut rng = crate::sampling::Rng::new(11);
+        let (mut albedo, mut n) = (0.0, 0);
+        for _ in 0..100_000 {
+            if let Some(s) = b.sample_f(wo, rng.uniform2(), 0.0, TransportMode::Radiance) {
+                assert!((b.pdf(wo, s.wi) - s.pdf).abs() <= 1e-3 * s.pdf);
+                albedo += (s.f.x * s.wi.z.abs() / s.pdf) as f64;
+            }
+            n += 1;
+        }
+        let albedo = albedo / n as f64;
+        assert!(albedo > 0.8 && albedo <= 1.0, "directional albedo {albedo}");
     }
 
     #[test]

@@ -13,7 +13,7 @@
 //! Texture "m" "spectrum" "mix" "rgb tex1" [1 1 1] "texture tex2" "checks" "float amount" 0.3
 //! ```
 //! Approximations, listed in the README: plastic, coated diffuse and uber render as their
-//! diffuse part (`Kd`/`reflectance`); rough dielectrics and metals render as smooth ones;
+//! diffuse part (`Kd`/`reflectance`); rough dielectrics render as smooth ones;
 //! matte's `sigma` (Oren–Nayar) is ignored.
 //!
 //! `imagemap` reads EXR or PNG (sRGB-decoded unless `"bool gamma" false` / `"string
@@ -147,6 +147,12 @@ pub enum Material {
     Conductor {
         eta: Rgb,
         k: Rgb,
+    },
+    /// Microfacet conductor (α along the shading tangents).
+    RoughConductor {
+        eta: Rgb,
+        k: Rgb,
+        alpha: [f32; 2],
     },
     /// A reflectance given directly (`conductor "reflectance"`): a tinted mirror.
     ConductorReflectance {
@@ -283,7 +289,24 @@ impl Material {
                     Some(v) => to_rgb(&v).unwrap_or_else(|| named(d)),
                     None => named(d),
                 };
-                Material::Conductor { eta: spec("eta", "metal-Cu-eta"), k: spec("k", "metal-Cu-k") }
+                let (eta, k) = (spec("eta", "metal-Cu-eta"), spec("k", "metal-Cu-k"));
+                // v3 metal: roughness 0.01, remapped by pbrt-v3's polynomial; v4
+                // conductor: roughness 0, remapped by √r.
+                let v3 = m.ty == "metal";
+                let r = l.float("roughness", if v3 { 0.01 } else { 0.0 });
+                let (ur, vr) = (l.float("uroughness", r), l.float("vroughness", r));
+                let remap = m.params.bool("remaproughness").ok().flatten().unwrap_or(true);
+                let to_alpha = |r: f32| match (remap, v3) {
+                    (false, _) => r,
+                    (true, true) => bsdf::roughness_to_alpha_v3(r),
+                    (true, false) => r.max(0.0).sqrt(),
+                };
+                let alpha = [to_alpha(ur), to_alpha(vr)];
+                if alpha[0] < 1e-3 && alpha[1] < 1e-3 {
+                    Material::Conductor { eta, k }
+                } else {
+                    Material::RoughConductor { eta, k, alpha: alpha.map(|a| a.max(1e-3)) }
+                }
             }
             "" | "none" | "interface" => Material::Interface,
             _ => Material::Diffuse { kd: Texture::Const(half) },
@@ -297,6 +320,7 @@ impl Material {
             Material::Mirror { kr } => BxDF::Specular(kr.eval(uv)),
             Material::Dielectric { eta, kr, kt } => BxDF::Dielectric { eta: *eta, kr: *kr, kt: *kt },
             Material::Conductor { eta, k } => BxDF::Conductor { eta: *eta, k: *k },
+            Material::RoughConductor { eta, k, alpha } => BxDF::RoughConductor { eta: *eta, k: *k, alpha: *alpha },
             Material::ConductorReflectance { r } => BxDF::Specular(r.eval(uv)),
             Material::Interface => return None,
         };

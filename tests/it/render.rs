@@ -253,3 +253,28 @@ fn a_constant_environment_map_lights_like_a_constant_infinite_light() {
     assert!(constant > 0.1, "{constant}");
     assert!((mapped - constant).abs() < 0.03 * constant, "map {mapped} vs constant {constant}");
 }
+
+#[test]
+fn metal_roughness_follows_each_versions_remapping() {
+    let rs = RenderScene::new(scene(
+        "WorldBegin Material \"metal\" Shape \"sphere\" \
+         Material \"conductor\" Shape \"sphere\" \
+         Material \"conductor\" \"float roughness\" 0.04 Shape \"sphere\" \
+         Material \"metal\" \"float roughness\" 0.3 \"bool remaproughness\" \"false\" Shape \"sphere\"",
+    ));
+    use pbrt_sppm::materials::Material::{Conductor, RoughConductor};
+    let alphas: Vec<Option<f32>> = rs
+        .materials
+        .iter()
+        .map(|m| match m {
+            RoughConductor { alpha, .. } => Some(alpha[0]),
+            Conductor { .. } => None,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    // v3 metal: roughness 0.01 → α ≈ 0.138 (pbrt-v3's polynomial); v4 conductor: 0 → smooth.
+    assert!((alphas[0].unwrap_or(0.0) - 0.138).abs() < 0.002, "{alphas:?}");
+    assert_eq!(alphas[1], None);
+    assert!((alphas[2].unwrap_or(0.0) - 0.2).abs() < 1e-6, "√0.04");
+    assert_eq!(alphas[3], Some(0.3), "no remapping");
+}
