@@ -287,23 +287,25 @@ fn direct_light(
         && let Some(s) = bsdf.sample_f(wo, u_bsdf, u_lobe, TransportMode::Radiance)
         && !s.specular
     {
-        // The light's density along the same ray the BSDF sample follows: from the
-        // offset origin, so the surface just left is never taken for the light.
+        // Trace first: the sample only counts where it reaches this light, and only
+        // then is the light's density needed (measured from the offset origin, so the
+        // surface just left is never taken for the light).
         let ray = si.spawn_ray(Vector3(s.wi));
-        let light_pdf = light.pdf_li(&scene.geometry, ray.o.0, s.wi);
-        if light_pdf > 0.0 {
-            let w = power_heuristic(s.pdf, light_pdf);
-            let li = match scene.geometry.intersect(&ray) {
-                Some(hit) => match scene.emitter(&hit) {
-                    Some((_, l)) if l as usize == idx => {
-                        let lsi = scene.geometry.interaction(&hit);
-                        scene.emitted(&hit, &lsi, -s.wi)
-                    }
-                    _ => Vec3::ZERO,
-                },
-                None => light.le_escaped(s.wi),
-            };
-            ld += s.f * s.wi.dot(ns).abs() * li * w / s.pdf;
+        let li = match scene.geometry.intersect(&ray) {
+            Some(hit) => match scene.emitter(&hit) {
+                Some((_, l)) if l as usize == idx => {
+                    let lsi = scene.geometry.interaction(&hit);
+                    scene.emitted(&hit, &lsi, -s.wi)
+                }
+                _ => Vec3::ZERO,
+            },
+            None => light.le_escaped(s.wi),
+        };
+        if li != Vec3::ZERO {
+            let light_pdf = light.pdf_li(&scene.geometry, ray.o.0, s.wi);
+            if light_pdf > 0.0 {
+                ld += s.f * s.wi.dot(ns).abs() * li * power_heuristic(s.pdf, light_pdf) / s.pdf;
+            }
         }
     }
     ld * n as f32
@@ -410,14 +412,15 @@ impl Grid {
         }
         let diag = hi - lo;
         let max_diag = diag.max_element().max(f32::MIN_POSITIVE);
-        let base = (max_diag / max_r).clamp(1.0, (1u32 << 20) as f32);
+        // Cells twice the largest radius: each r-box overlaps at most 2 cells per axis.
+        let base = (max_diag / (2.0 * max_r)).clamp(1.0, (1u32 << 20) as f32);
         let res = [0, 1, 2].map(|a| ((base * diag[a] / max_diag) as u64).clamp(1, 1 << 20));
         let inv_cell =
             Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32) / diag.max(Vec3::splat(f32::MIN_POSITIVE));
         let mut grid = Grid { lo, inv_cell, res, offsets: Vec::new(), entries: Vec::new() };
         // Every cell each visible point's r-box overlaps (one pass, no per-pixel
         // allocation: this runs once per iteration over all pixels).
-        let mut entries: Vec<(u64, u32)> = Vec::with_capacity(8 * pixels.len());
+        let mut entries: Vec<(u64, u32)> = Vec::with_capacity(4 * pixels.len());
         for (i, p) in pixels.iter().enumerate() {
             if let Some(vp) = &p.vp
                 && vp.beta != Vec3::ZERO
