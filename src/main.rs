@@ -189,6 +189,12 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
             return fail(csv, e);
         }
     }
+    if out.stats.visible_points == 0 {
+        eprintln!(
+            "{}: warning: no camera path reached a diffuse surface; the image holds only direct emission",
+            args.scene.display()
+        );
+    }
     if args.stats {
         print_stats(&out);
     }

@@ -1,7 +1,7 @@
 //! Stochastic progressive photon mapping (pbrt-v3 `SPPMIntegrator`), one function per
-//! phase: camera pass (visible points and direct light), grid build (sorted
-//! (cell, pixel) pairs), photon pass (parallel, deterministic), per-pixel update
-//! (γ = 2/3, f64 accumulators), image.
+//! phase: camera pass (visible points and direct light), grid build ((cell, pixel)
+//! pairs grouped by a counting sort), photon pass (parallel, deterministic), per-pixel
+//! update (γ = 2/3, f64 accumulators), image.
 //!
 //! ```text
 //! Integrator "sppm" "integer numiterations" 64 "integer maxdepth" 5
@@ -56,6 +56,8 @@ pub struct Stats {
     pub camera_rays: u64,
     pub photon_paths: u64,
     pub photon_hits: u64,
+    /// Visible points stored, over all iterations.
+    pub visible_points: u64,
     pub iterations: u32,
 }
 
@@ -100,6 +102,7 @@ impl<'a> Sppm<'a> {
         let t = Instant::now();
         self.camera_pass();
         let t1 = Instant::now();
+        self.stats.visible_points += self.pixels.iter().filter(|p| p.vp.is_some()).count() as u64;
         let grid = Grid::build(&self.pixels);
         let t2 = Instant::now();
         let (phi, m) = self.photon_pass(grid.as_ref());

@@ -278,3 +278,35 @@ fn metal_roughness_follows_each_versions_remapping() {
     assert!((alphas[2].unwrap_or(0.0) - 0.2).abs() < 1e-6, "√0.04");
     assert_eq!(alphas[3], Some(0.3), "no remapping");
 }
+
+#[test]
+fn the_time_limit_stops_after_the_iteration_that_passes_it() {
+    let text = furnace(
+        "LightSource \"point\" \"rgb I\" [1 1 1] AttributeBegin ReverseOrientation Shape \"sphere\" AttributeEnd",
+        5,
+    );
+    let out = render(&text, &RenderSettings { time_limit: Some(0.0), ..Default::default() });
+    assert_eq!(out.stats.iterations, 1);
+    assert_eq!(out.image.meta.samples_per_pixel, Some(1));
+    let full = render(&text, &RenderSettings::default());
+    assert_eq!(full.stats.iterations, 8);
+    assert!(full.stats.visible_points > 0);
+}
+
+#[test]
+fn an_empty_view_warns_and_renders_black() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm")).args(["-", "--outfile"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "clap rejects a missing value");
+    let dir = std::env::temp_dir().join(format!("pbrt-sppm-empty-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("empty.pbrt");
+    std::fs::write(&path, "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4 WorldBegin LightSource \"point\" \"rgb I\" [1 1 1]").unwrap();
+    let exr = dir.join("empty.exr");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
+        .args([path.to_str().unwrap(), "--outfile", exr.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no camera path reached a diffuse surface"));
+    assert!(read_image(&exr).unwrap().pixels.iter().all(|p| *p == [0.0; 3]));
+}
