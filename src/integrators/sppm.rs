@@ -208,6 +208,33 @@ impl<'a> Sppm<'a> {
     }
 }
 
+/// What a path finds at a hit.
+enum Surface {
+    Bsdf(Bsdf),
+    /// An interface (no surface): the ray now continues past it, depth unchanged.
+    PassedThrough,
+    /// Too many interfaces in a row: the path ends.
+    Abandon,
+}
+
+fn surface(
+    scene: &RenderScene,
+    hit: &crate::accel::Hit,
+    si: &crate::interaction::SurfaceInteraction,
+    ray: &mut crate::math::Ray,
+    passes: &mut u32,
+) -> Surface {
+    if let Some(b) = scene.bsdf(hit, si) {
+        return Surface::Bsdf(b);
+    }
+    *passes += 1;
+    if *passes > MAX_PASSES {
+        return Surface::Abandon;
+    }
+    *ray = si.spawn_ray(ray.d);
+    Surface::PassedThrough
+}
+
 /// A camera path: (direct and emitted light gathered, the visible point).
 fn camera_path(scene: &RenderScene, pixel: [f32; 2], rng: &mut Rng, max_depth: u32) -> (Rgb, Option<VisiblePoint>) {
     let u = rng.uniform2();
@@ -222,13 +249,10 @@ fn camera_path(scene: &RenderScene, pixel: [f32; 2], rng: &mut Rng, max_depth: u
             break;
         };
         let si = scene.geometry.interaction(&hit);
-        let Some(bsdf) = scene.bsdf(&hit, &si) else {
-            passes += 1;
-            if passes > MAX_PASSES {
-                break;
-            }
-            ray = si.spawn_ray(ray.d);
-            continue;
+        let bsdf = match surface(scene, &hit, &si, &mut ray, &mut passes) {
+            Surface::Bsdf(b) => b,
+            Surface::PassedThrough => continue,
+            Surface::Abandon => break,
         };
         let wo = -ray.d.0.normalize();
         if depth == 0 || specular_bounce {
@@ -361,13 +385,10 @@ fn trace_photon(
                 out.push((pixel, beta * vp.bsdf.f(vp.wo, wi)));
             });
         }
-        let Some(bsdf) = scene.bsdf(&hit, &si) else {
-            passes += 1;
-            if passes > MAX_PASSES {
-                break;
-            }
-            ray = si.spawn_ray(ray.d);
-            continue;
+        let bsdf = match surface(scene, &hit, &si, &mut ray, &mut passes) {
+            Surface::Bsdf(b) => b,
+            Surface::PassedThrough => continue,
+            Surface::Abandon => break,
         };
         let Some(s) = bsdf.sample_f(wi, rng.uniform2(), rng.uniform(), TransportMode::Importance) else { break };
         let bnew = beta * s.f * s.wi.dot(bsdf.shading_normal()).abs() / s.pdf;

@@ -49,27 +49,26 @@ struct TrowbridgeReitz {
     ay: f32,
 }
 
+/// (cos²θ, tan²θ, cos²φ, sin²φ) of a local direction; `None` when it is tangent.
+fn slope_terms(w: Vec3) -> Option<(f32, f32, f32, f32)> {
+    let cos2 = w.z * w.z;
+    let sin2 = (1.0 - cos2).max(0.0);
+    if cos2 == 0.0 {
+        return None;
+    }
+    let (cos_phi2, sin_phi2) = if sin2 > 0.0 { (w.x * w.x / sin2, w.y * w.y / sin2) } else { (1.0, 0.0) };
+    Some((cos2, sin2 / cos2, cos_phi2, sin_phi2))
+}
+
 impl TrowbridgeReitz {
     fn d(&self, wh: Vec3) -> f32 {
-        let cos2 = wh.z * wh.z;
-        let sin2 = (1.0 - cos2).max(0.0);
-        if cos2 == 0.0 {
-            return 0.0;
-        }
-        let tan2 = sin2 / cos2;
-        let (cos_phi2, sin_phi2) = if sin2 > 0.0 { (wh.x * wh.x / sin2, wh.y * wh.y / sin2) } else { (1.0, 0.0) };
+        let Some((cos2, tan2, cos_phi2, sin_phi2)) = slope_terms(wh) else { return 0.0 };
         let e = (cos_phi2 / (self.ax * self.ax) + sin_phi2 / (self.ay * self.ay)) * tan2;
         1.0 / (std::f32::consts::PI * self.ax * self.ay * cos2 * cos2 * (1.0 + e) * (1.0 + e))
     }
 
     fn lambda(&self, w: Vec3) -> f32 {
-        let cos2 = w.z * w.z;
-        let sin2 = (1.0 - cos2).max(0.0);
-        if cos2 == 0.0 {
-            return 0.0;
-        }
-        let tan2 = sin2 / cos2;
-        let (cos_phi2, sin_phi2) = if sin2 > 0.0 { (w.x * w.x / sin2, w.y * w.y / sin2) } else { (1.0, 0.0) };
+        let Some((_, tan2, cos_phi2, sin_phi2)) = slope_terms(w) else { return 0.0 };
         let alpha2 = cos_phi2 * self.ax * self.ax + sin_phi2 * self.ay * self.ay;
         (-1.0 + (1.0 + alpha2 * tan2).sqrt()) / 2.0
     }
