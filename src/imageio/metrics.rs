@@ -19,3 +19,71 @@ fn mean(a: &[[f32; 3]], r: &[[f32; 3]], f: impl Fn(f64, f64) -> f64) -> f64 {
         .sum::<f64>()
         / n
 }
+
+/// Mean absolute error.
+pub fn mae(a: &[[f32; 3]], r: &[[f32; 3]]) -> f64 {
+    mean(a, r, |x, y| (x - y).abs())
+}
+
+/// The largest absolute difference in any channel.
+pub fn max_abs(a: &[[f32; 3]], r: &[[f32; 3]]) -> f64 {
+    a.iter().zip(r).flat_map(|(p, q)| (0..3).map(move |c| (p[c] as f64 - q[c] as f64).abs())).fold(0.0, f64::max)
+}
+
+/// The share of pixels whose largest channel difference exceeds `threshold`.
+pub fn share_above(a: &[[f32; 3]], r: &[[f32; 3]], threshold: f64) -> f64 {
+    let n = a.len().min(r.len()).max(1) as f64;
+    a.iter().zip(r).filter(|(p, q)| (0..3).any(|c| (p[c] as f64 - q[c] as f64).abs() > threshold)).count() as f64 / n
+}
+
+/// Every metric `pbrt-imgtool diff` reports.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Diff {
+    pub mse: f64,
+    pub rmse: f64,
+    pub relmse: f64,
+    pub mae: f64,
+    pub max_abs: f64,
+    pub share_above: f64,
+}
+
+pub fn diff(a: &[[f32; 3]], r: &[[f32; 3]], pixel_threshold: f64) -> Diff {
+    let m = mse(a, r);
+    Diff {
+        mse: m,
+        rmse: m.sqrt(),
+        relmse: relmse(a, r),
+        mae: mae(a, r),
+        max_abs: max_abs(a, r),
+        share_above: share_above(a, r, pixel_threshold),
+    }
+}
+
+/// A false colour for t in [0, 1]: black → blue → red → yellow → white.
+pub fn heat(t: f32) -> [f32; 3] {
+    let t = t.clamp(0.0, 1.0) * 4.0;
+    let stops = [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 1.0, 1.0]];
+    let i = (t as usize).min(3);
+    let f = t - i as f32;
+    [0, 1, 2].map(|c| stops[i][c] * (1.0 - f) + stops[i + 1][c] * f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metrics_on_a_hand_made_pair() {
+        let a = [[1.0, 2.0, 3.0], [0.0, 0.0, 0.0]];
+        let r = [[1.0, 2.0, 2.0], [0.0, 0.5, 0.0]];
+        // Differences: 0,0,1 and 0,-0.5,0 over six samples.
+        assert_eq!(mse(&a, &r), (1.0 + 0.25) / 6.0);
+        assert_eq!(mae(&a, &r), 1.5 / 6.0);
+        assert_eq!(max_abs(&a, &r), 1.0);
+        assert_eq!(share_above(&a, &r, 0.6), 0.5);
+        let rel = (1.0 / (4.0 + 0.01) + 0.25 / (0.25 + 0.01)) / 6.0;
+        assert!((relmse(&a, &r) - rel).abs() < 1e-12);
+        assert_eq!(heat(0.0), [0.0; 3]);
+        assert_eq!(heat(1.0), [1.0; 3]);
+    }
+}

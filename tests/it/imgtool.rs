@@ -1,0 +1,102 @@
+//! `pbrt-imgtool`: metric values on small hand-made images, half-float input, the
+//! threshold exit status, the heat map, `info` and `convert`.
+
+use pbrt_sppm::imageio::{RgbImage, read_image, write_image};
+use std::process::Command;
+
+fn dir() -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("pbrt-sppm-imgtool-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn image(pixels: Vec<[f32; 3]>) -> RgbImage {
+    let mut img = RgbImage::new(pixels.len(), 1);
+    img.pixels = pixels;
+    img
+}
+
+fn tool(args: &[&str]) -> (Option<i32>, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_pbrt-imgtool")).args(args).output().unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn diff_reports_every_metric_and_thresholds_the_exit_status() {
+    let d = dir();
+    let (a, b) = (d.join("a.exr"), d.join("b.exr"));
+    write_image(&a, &image(vec![[1.0, 2.0, 3.0], [0.0, 0.0, 0.0]])).unwrap();
+    // B (the reference) is half-float, as pbrt-v3 writes.
+    {
+        use exr::prelude::*;
+        let px = [[1.0f32, 2.0, 2.0], [0.0, 0.5, 0.0]];
+        let layer = Layer::new(
+            (2, 1),
+            LayerAttributes::named(""),
+            Encoding::SMALL_LOSSLESS,
+            SpecificChannels::rgb(|Vec2(x, _): Vec2<usize>| {
+                (f16::from_f32(px[x][0]), f16::from_f32(px[x][1]), f16::from_f32(px[x][2]))
+            }),
+        );
+        Image::from_layer(layer).write().to_file(&b).unwrap();
+    }
+    let heat = d.join("heat.png");
+    let (code, out, _) =
+        tool(&["diff", a.to_str().unwrap(), b.to_str().unwrap(), "--json", "--heatmap", heat.to_str().unwrap()]);
+    assert_eq!(code, Some(0));
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let near = |k: &str, want: f64| assert!((v[k].as_f64().unwrap_or(f64::NAN) - want).abs() < 1e-12, "{k}: {}", v[k]);
+    near("mse", 1.25 / 6.0);
+    near("rmse", (1.25f64 / 6.0).sqrt());
+    near("mae", 1.5 / 6.0);
+    assert_eq!(v["max_abs"].as_f64(), Some(1.0));
+    assert_eq!(v["share_above"].as_f64(), Some(1.0), "both pixels differ by more than 0.01");
+    let rel = (1.0 / 4.01 + 0.25 / 0.26) / 6.0;
+    assert!((v["relmse"].as_f64().unwrap() - rel).abs() < 1e-9);
+    let hm = read_image(&heat).unwrap();
+    assert_eq!((hm.width, hm.height), (2, 1));
+    assert!(hm.pixels[0][0] > 0.9 && hm.pixels[0][1] > 0.9, "the largest difference is white: {:?}", hm.pixels[0]);
+    let (code, _, err) =
+        tool(&["diff", a.to_str().unwrap(), b.to_str().unwrap(), "--metric", "rmse", "--threshold", "0.1"]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("rmse"));
+    let (code, _, _) = tool(&["diff", a.to_str().unwrap(), b.to_str().unwrap(), "--metric", "max", "--threshold", "1"]);
+    assert_eq!(code, Some(0));
+    let other = d.join("other.exr");
+    write_image(&other, &image(vec![[0.0; 3]; 3])).unwrap();
+    let (code, _, err) = tool(&["diff", a.to_str().unwrap(), other.to_str().unwrap()]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains("2x1") && err.contains("3x1"), "{err}");
+}
+
+#[test]
+fn info_and_convert() {
+    let d = dir();
+    let exr = d.join("info.exr");
+    let mut img = image(vec![[0.25, 0.5, 1.0], [0.75, 0.0, -1.0]]);
+    img.origin = (3, 4);
+    img.full = (10, 10);
+    img.meta.samples_per_pixel = Some(7);
+    write_image(&exr, &img).unwrap();
+    let (code, out, _) = tool(&["info", exr.to_str().unwrap()]);
+    assert_eq!(code, Some(0));
+    assert!(out.contains("origin (3, 4), size 2x1; display window 10x10"), "{out}");
+    assert!(out.contains("samplesPerPixel: 7"));
+    assert!(out.contains("R: min 0.25 max 0.75 mean 0.5"), "{out}");
+    let png = d.join("conv.png");
+    let (code, _, _) = tool(&["convert", exr.to_str().unwrap(), png.to_str().unwrap(), "--exposure", "1"]);
+    assert_eq!(code, Some(0));
+    let back = read_image(&png).unwrap();
+    assert!((back.pixels[0][0] - 0.5).abs() < 0.01 && back.pixels[0][2] == 1.0, "{:?}", back.pixels[0]);
+    let exr2 = d.join("conv.exr");
+    let (code, _, _) = tool(&["convert", png.to_str().unwrap(), exr2.to_str().unwrap()]);
+    assert_eq!(code, Some(0));
+    assert!((read_image(&exr2).unwrap().pixels[0][1] - 1.0).abs() < 0.01);
+    let (code, _, err) = tool(&["info", "no-such.exr"]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains("no-such.exr"));
+}
