@@ -181,13 +181,10 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     if let Err(e) = write_image(&outfile, &out.image) {
         return fail(&outfile, e);
     }
-    if let Some(csv) = &args.mse_reference_out {
-        let tmp = csv.with_extension(format!("tmp.{}", std::process::id()));
-        let written = std::fs::write(&tmp, errors_csv(&out.errors)).and_then(|_| std::fs::rename(&tmp, csv));
-        if let Err(e) = written {
-            let _ = std::fs::remove_file(&tmp);
-            return fail(csv, e);
-        }
+    if let Some(csv) = &args.mse_reference_out
+        && let Err(e) = pbrt_sppm::imageio::write_text(csv, &errors_csv(&out.errors))
+    {
+        return fail(csv, e);
     }
     if out.stats.visible_points == 0 {
         eprintln!(

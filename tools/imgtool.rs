@@ -5,11 +5,16 @@
 //!                   [--pixel-threshold P] [--heatmap diff.png]
 //! pbrt-imgtool info IMAGE
 //! pbrt-imgtool convert IN OUT [--exposure STOPS]      # EXR→PNG (sRGB) or PNG→EXR
+//! pbrt-imgtool plot ERRORS.csv [MORE.csv ...] -o plot.png [--x seconds|iterations]
+//! pbrt-imgtool report SCENE.pbrt --reference REF.exr --seconds 1,2,4 [-o report.md]
 //! ```
 //! `diff` reports MSE, RMSE, relMSE (mean((a−b)²/(b² + 0.01)), B is the reference), MAE,
 //! the largest absolute difference, and the share of pixels with a channel differing by
 //! more than `--pixel-threshold` (default 0.01). With `--threshold`, the exit status is
 //! 1 when `--metric` (default relmse) exceeds it. Half and float EXRs are read.
+
+mod plot;
+mod report;
 
 use pbrt_sppm::imageio::{RgbImage, metrics, read_image, write_image};
 use std::path::{Path, PathBuf};
@@ -21,7 +26,9 @@ fn main() -> ExitCode {
         Some("diff") => diff(&args[1..]),
         Some("info") => info(&args[1..]),
         Some("convert") => convert(&args[1..]),
-        _ => Err("usage: pbrt-imgtool diff|info|convert ... (see the module docs or README)".into()),
+        Some("plot") => plot(&args[1..]),
+        Some("report") => report(&args[1..]),
+        _ => Err("usage: pbrt-imgtool diff|info|convert|plot|report ... (see the README)".into()),
     };
     match result {
         Ok(code) => code,
@@ -42,7 +49,7 @@ fn parse(args: &[String], flags: &[&str]) -> Args {
     let (mut positional, mut options) = (Vec::new(), Vec::new());
     let mut it = args.iter();
     while let Some(a) = it.next() {
-        match a.strip_prefix("--") {
+        match a.strip_prefix("--").or(if a == "-o" { Some("o") } else { None }) {
             Some(name) if flags.contains(&name) => options.push((name.to_string(), None)),
             Some(name) => options.push((name.to_string(), it.next().cloned())),
             None => positional.push(a.clone()),
@@ -161,5 +168,42 @@ fn convert(args: &[String]) -> Result<ExitCode, String> {
     let scale = 2f64.powf(a.number("exposure")?.unwrap_or(0.0)) as f32;
     img.pixels.iter_mut().for_each(|p| *p = p.map(|c| c * scale));
     write_image(&PathBuf::from(output), &img)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn plot(args: &[String]) -> Result<ExitCode, String> {
+    let a = parse(args, &[]);
+    let out = a.get("o").ok_or("plot needs -o plot.png")?;
+    let x = match a.get("x").unwrap_or("seconds") {
+        "iterations" | "iteration" => "iteration",
+        "seconds" => "seconds",
+        other => return Err(format!("--x {other}: expected seconds or iterations")),
+    };
+    let metric = a.get("metric").unwrap_or("relmse");
+    if a.positional.is_empty() {
+        return Err("plot needs at least one ERRORS.csv".into());
+    }
+    let series =
+        a.positional.iter().map(|p| plot::read_series(Path::new(p), x, metric)).collect::<Result<Vec<_>, _>>()?;
+    plot::draw(&series, x, metric, Path::new(out))?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn report(args: &[String]) -> Result<ExitCode, String> {
+    let a = parse(args, &[]);
+    let [scene] = a.positional.as_slice() else { return Err("report needs one scene file".into()) };
+    let whole = |name: &str| a.number(name).map(|v| v.map(|n| n as u64));
+    let r = report::ReportArgs {
+        scene: PathBuf::from(scene),
+        reference: PathBuf::from(a.get("reference").ok_or("report needs --reference REF.exr")?),
+        out: report::output(a.get("o")),
+        seconds: a.get("seconds").map(str::to_string),
+        iterations: a.get("iterations").map(str::to_string),
+        photons: whole("photons")?,
+        seed: whole("seed")?,
+        nthreads: whole("nthreads")?.unwrap_or(0) as usize,
+    };
+    report::report(&r)?;
+    println!("wrote {}", r.out.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -68,9 +68,25 @@ pub fn heat(t: f32) -> [f32; 3] {
     [0, 1, 2].map(|c| stops[i][c] * (1.0 - f) + stops[i + 1][c] * f)
 }
 
+/// Least-squares slope of log(y) against log(x); `None` with fewer than two distinct x.
+pub fn log_slope(points: &[(f64, f64)]) -> Option<f64> {
+    let logs: Vec<(f64, f64)> = points.iter().map(|&(x, y)| (x.ln(), y.ln())).collect();
+    let n = logs.len() as f64;
+    let (mx, my) = logs.iter().fold((0.0, 0.0), |(a, b), &(x, y)| (a + x / n, b + y / n));
+    let (sxy, sxx) = logs.iter().fold((0.0, 0.0), |(a, b), &(x, y)| (a + (x - mx) * (y - my), b + (x - mx).powi(2)));
+    (sxx > 1e-12).then(|| sxy / sxx)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn log_slope_recovers_power_laws() {
+        let pts: Vec<(f64, f64)> = (1..20).map(|i| (i as f64, 3.0 * (i as f64).powf(-0.75))).collect();
+        assert!((log_slope(&pts).unwrap() + 0.75).abs() < 1e-12);
+        assert_eq!(log_slope(&[(2.0, 1.0), (2.0, 5.0)]), None, "one distinct x has no slope");
+    }
 
     #[test]
     fn metrics_on_a_hand_made_pair() {

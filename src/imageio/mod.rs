@@ -50,8 +50,8 @@ impl RgbImage {
     }
 }
 
-/// A temporary file beside `path` and the final rename.
-fn atomically(path: &Path, write: impl FnOnce(&Path) -> Res<()>) -> Res<()> {
+/// A temporary file beside `path` and the final rename, so no reader sees a half file.
+pub fn atomically(path: &Path, write: impl FnOnce(&Path) -> Res<()>) -> Res<()> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).map_or_else(|| PathBuf::from("."), Path::to_path_buf);
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
@@ -62,6 +62,11 @@ fn atomically(path: &Path, write: impl FnOnce(&Path) -> Res<()>) -> Res<()> {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// Writes text atomically (reports, CSV files).
+pub fn write_text(path: &Path, text: &str) -> Res<()> {
+    atomically(path, |tmp| std::fs::write(tmp, text).map_err(|e| format!("cannot write \"{}\": {e}", path.display())))
 }
 
 /// Writes by extension: `.png` gives an sRGB preview, anything else EXR.

@@ -1,5 +1,5 @@
 //! `pbrt-imgtool`: metric values on small hand-made images, half-float input, the
-//! threshold exit status, the heat map, `info` and `convert`.
+//! threshold exit status, the heat map, `info`, `convert`, `plot` and `report`.
 
 use pbrt_sppm::imageio::{RgbImage, read_image, write_image};
 use std::process::Command;
@@ -99,4 +99,84 @@ fn info_and_convert() {
     let (code, _, err) = tool(&["info", "no-such.exr"]);
     assert_eq!(code, Some(1));
     assert!(err.contains("no-such.exr"));
+}
+
+#[test]
+fn plot_draws_one_line_per_csv_and_rejects_a_missing_column() {
+    let d = dir();
+    let (a, b) = (d.join("fast.csv"), d.join("slow.csv"));
+    let csv = |k: f64| {
+        let rows: String = (1..=10)
+            .map(|i| {
+                format!(
+                    "{i},{},{},{},{},{}\n",
+                    0.1 * i as f64,
+                    1000 * i,
+                    k / i as f64,
+                    (k / i as f64).sqrt(),
+                    k / i as f64
+                )
+            })
+            .collect();
+        format!("iteration,seconds,photons,mse,rmse,relmse\n{rows}")
+    };
+    std::fs::write(&a, csv(0.5)).unwrap();
+    std::fs::write(&b, csv(2.0)).unwrap();
+    let png = d.join("plot.png");
+    let (code, _, err) = tool(&["plot", a.to_str().unwrap(), b.to_str().unwrap(), "-o", png.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{err}");
+    let img = read_image(&png).unwrap();
+    assert_eq!((img.width, img.height), (900, 600));
+    // Two differently coloured lines: count pixels that are neither grey nor white.
+    let colours: std::collections::HashSet<[u8; 3]> = img
+        .pixels
+        .iter()
+        .map(|p| p.map(|c| (pbrt_sppm::imageio::to_srgb(c) * 255.0).round() as u8))
+        .filter(|p| p.iter().max().unwrap() - p.iter().min().unwrap() > 60)
+        .collect();
+    assert!(colours.len() >= 2, "expected coloured lines, found {colours:?}");
+    let (code, _, err) = tool(&["plot", a.to_str().unwrap(), "-o", png.to_str().unwrap(), "--metric", "psnr"]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains("no 'psnr' column"), "{err}");
+}
+
+#[test]
+fn report_tabulates_the_ladder_and_writes_its_files() {
+    let d = dir().join("report");
+    std::fs::create_dir_all(&d).unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/pbrt-scenes/v3/caustic-ring.pbrt");
+    let reference = d.join("ref.exr");
+    let out = Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
+        .args([scene, "--spp", "12", "--photons", "20000", "--seed", "9", "--outfile", reference.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let md = d.join("conv.md");
+    let args = ["report", scene, "--reference", reference.to_str().unwrap(), "--iterations", "4,1,2"];
+    let (code, _, err) = tool(&[&args[..], &["--photons", "20000", "-o", md.to_str().unwrap()]].concat());
+    assert_eq!(code, Some(0), "{err}");
+    let text = std::fs::read_to_string(&md).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .filter(|l| l.starts_with("| ") && l.contains(" it |"))
+        .map(|l| l.split('|').map(str::trim).collect())
+        .collect();
+    assert_eq!(rows.len(), 3, "{text}");
+    let iterations: Vec<&str> = rows.iter().map(|r| r[3]).collect();
+    assert_eq!(iterations, ["1", "2", "4"], "sorted ladder");
+    let photons: Vec<&str> = rows.iter().map(|r| r[4]).collect();
+    assert_eq!(photons, ["20000", "40000", "80000"]);
+    let relmse: Vec<f64> = rows.iter().map(|r| r[6].parse().unwrap()).collect();
+    assert!(relmse[2] < relmse[0], "error falls with iterations: {relmse:?}");
+    assert!(text.contains("Fitted log-log slope"), "{text}");
+    for ext in ["png", "csv", "exr"] {
+        let f = md.with_extension(ext);
+        assert!(std::fs::metadata(&f).map(|m| m.len() > 0).unwrap_or(false), "{} missing", f.display());
+    }
+    let csv = std::fs::read_to_string(md.with_extension("csv")).unwrap();
+    assert!(csv.starts_with("iteration,seconds,photons,mse,rmse,relmse\n"));
+    assert_eq!(csv.lines().count(), 5, "header and four iterations");
+    let (code, _, err) = tool(&["report", scene, "--reference", reference.to_str().unwrap()]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains("exactly one of --seconds or --iterations"), "{err}");
 }

@@ -1,0 +1,118 @@
+//! `pbrt-imgtool plot`: error against time (or iterations) on log-log axes.
+//!
+//! ```text
+//! pbrt-imgtool plot ERRORS.csv [MORE.csv ...] -o plot.png [--x seconds|iterations]
+//!                   [--metric relmse|rmse|mse]
+//! ```
+//! Each file becomes one line labelled with its name and the slope of a least-squares
+//! fit of log(error) against log(x); an unbiased Monte Carlo estimator converges with
+//! slope −1 in MSE (−½ in RMSE), SPPM a little slower because of its shrinking radius.
+
+pub use pbrt_sppm::imageio::metrics::log_slope;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// One column pair read from an `ERRORS.csv`.
+pub struct Series {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Reads `x` and `metric` columns, keeping the rows where both are positive (log axes).
+pub fn read_series(path: &Path, x: &str, metric: &str) -> Result<Series, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').map(str::trim).collect();
+    let column = |name: &str| {
+        header.iter().position(|h| *h == name).ok_or_else(|| format!("{}: no '{name}' column", path.display()))
+    };
+    let (xi, yi) = (column(x)?, column(metric)?);
+    let mut points = Vec::new();
+    for (n, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let value = |i: usize| -> Result<f64, String> {
+            fields.get(i).and_then(|f| f.parse().ok()).ok_or_else(|| format!("{}:{}: bad row", path.display(), n + 2))
+        };
+        let (px, py) = (value(xi)?, value(yi)?);
+        if px > 0.0 && py > 0.0 && px.is_finite() && py.is_finite() {
+            points.push((px, py));
+        }
+    }
+    if points.is_empty() {
+        return Err(format!("{}: no rows with positive {x} and {metric}", path.display()));
+    }
+    let label = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    Ok(Series { label, points })
+}
+
+/// Registers the bundled font once (plotters' `ab_glyph` backend has no system fonts).
+fn register_font() -> Result<(), String> {
+    static FONT: &[u8] = include_bytes!("fonts/DejaVuSansMono.ttf");
+    plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+        .map_err(|_| "the bundled font could not be loaded".to_string())
+}
+
+/// Draws the series into a PNG (written to a temporary file and renamed).
+pub fn draw(series: &[Series], x_label: &str, metric: &str, out: &Path) -> Result<(), String> {
+    register_font()?;
+    let all = series.iter().flat_map(|s| s.points.iter());
+    let (x0, x1, y0, y1) = all.fold((f64::MAX, f64::MIN, f64::MAX, f64::MIN), |(a, b, c, d), &(x, y)| {
+        (a.min(x), b.max(x), c.min(y), d.max(y))
+    });
+    pbrt_sppm::imageio::atomically(out, |tmp| render(series, (x0, x1, y0, y1), x_label, metric, tmp))
+}
+
+fn render(
+    series: &[Series],
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+    x_label: &str,
+    metric: &str,
+    out: &Path,
+) -> Result<(), String> {
+    {
+        let root = BitMapBackend::new(out, (900, 600)).into_drawing_area();
+        let e = |e: DrawingAreaErrorKind<_>| format!("plot: {e}");
+        root.fill(&WHITE).map_err(e)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("{metric} against {x_label}"), ("sans-serif", 22))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            // Padding keeps single points and flat lines inside a visible range.
+            .build_cartesian_2d((x0 / 1.2..x1 * 1.2).log_scale(), (y0 / 1.5..y1 * 1.5).log_scale())
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(metric)
+            .x_labels(6)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| format!("{v:.1e}"))
+            .draw()
+            .map_err(e)?;
+        for (i, s) in series.iter().enumerate() {
+            let colour = Palette99::pick(i).to_rgba();
+            let slope = log_slope(&s.points).map_or("n/a".into(), |k| format!("{k:.2}"));
+            chart
+                .draw_series(LineSeries::new(s.points.iter().copied(), colour.stroke_width(2)))
+                .map_err(e)?
+                .label(format!("{} (slope {slope})", s.label))
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(2)));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 16))
+            .draw()
+            .map_err(e)?;
+        root.present().map_err(e)?;
+    }
+    Ok(())
+}
+
+/// A short tick label: up to three significant decimals, no trailing zeros.
+fn tick(v: f64) -> String {
+    let s = format!("{v:.3}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
