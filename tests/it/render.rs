@@ -15,6 +15,12 @@ fn render(text: &str, settings: &RenderSettings) -> pbrt_sppm::render::RenderOut
 }
 
 /// The camera sits at the centre of a unit sphere whose normals face inward.
+/// Renders with default settings and checks the image mean within a relative tolerance.
+fn assert_mean_radiance(text: &str, expected: f64, tolerance: f64) {
+    let l = mean(&render(text, &RenderSettings::default()).image.pixels);
+    assert!((l - expected).abs() < tolerance * expected, "mean radiance {l}, expected {expected}");
+}
+
 fn furnace(inside: &str, depth: u32) -> String {
     format!(
         "Film \"rgb\" \"integer xresolution\" 10 \"integer yresolution\" 10 Camera \"perspective\" \"float fov\" 45 \
@@ -30,10 +36,7 @@ fn point_light_inside_a_diffuse_sphere() {
          AttributeBegin ReverseOrientation Material \"diffuse\" \"rgb reflectance\" [.5 .5 .5] Shape \"sphere\" AttributeEnd",
         5,
     );
-    let l = mean(&render(&text, &RenderSettings::default()).image.pixels);
-    let expected = 1.0 - 0.5f64.powi(5);
-    eprintln!("radiance {l}, expected {expected}");
-    assert!((l - expected).abs() < 0.02 * expected, "radiance {l}, expected {expected}");
+    assert_mean_radiance(&text, 1.0 - 0.5f64.powi(5), 0.02);
 }
 
 #[test]
@@ -43,11 +46,8 @@ fn emissive_diffuse_sphere() {
          AreaLightSource \"diffuse\" \"rgb L\" [.5 .5 .5] Shape \"sphere\" AttributeEnd",
         5,
     );
-    let l = mean(&render(&text, &RenderSettings::default()).image.pixels);
     // Le (1 + ρ + … + ρ^maxdepth): emission, direct light, and photons of depth 1…maxdepth−1.
-    let expected = 1.0 - 0.5f64.powi(6);
-    eprintln!("radiance {l}, expected {expected}");
-    assert!((l - expected).abs() < 0.02 * expected, "radiance {l}, expected {expected}");
+    assert_mean_radiance(&text, 1.0 - 0.5f64.powi(6), 0.02);
 }
 
 #[test]
@@ -59,9 +59,7 @@ fn energy_is_conserved_with_a_white_furnace_of_glass_and_mirror() {
          AreaLightSource \"diffuse\" \"rgb L\" [.1 .1 .1] Shape \"sphere\" AttributeEnd",
         8,
     );
-    let l = mean(&render(&text, &RenderSettings::default()).image.pixels);
-    let expected = 0.1 * (1.0 - 0.9f64.powi(9)) / 0.1;
-    assert!((l - expected).abs() < 0.03 * expected, "radiance {l}, expected {expected}");
+    assert_mean_radiance(&text, 0.1 * (1.0 - 0.9f64.powi(9)) / 0.1, 0.03);
 }
 
 /// Mean brightness of a floor under a one-sided disk light 1 above it.
@@ -188,8 +186,7 @@ fn direct_light_from_an_enclosing_area_light_is_unbiased() {
          AreaLightSource \"diffuse\" \"rgb L\" [.5 .5 .5] Shape \"sphere\" AttributeEnd",
         1,
     );
-    let l = mean(&render(&text, &RenderSettings::default()).image.pixels);
-    assert!((l - 0.75).abs() < 0.01 * 0.75, "direct only: {l}, expected 0.75");
+    assert_mean_radiance(&text, 0.75, 0.01);
 }
 
 fn write_exr(path: &std::path::Path, w: usize, h: usize, f: impl Fn(usize, usize) -> [f32; 3]) {
