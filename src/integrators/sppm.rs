@@ -243,8 +243,13 @@ fn camera_path(scene: &RenderScene, pixel: [f32; 2], rng: &mut Rng, max_depth: u
     let (mut specular_bounce, mut depth, mut passes) = (false, 0, 0);
     while depth < max_depth {
         let Some(hit) = scene.geometry.intersect(&ray) else {
-            for l in &scene.lights {
-                ld += beta * l.le_escaped(ray.d.0);
+            // DEVIATION(pbrt): pbrt-v3 adds the environment to every escaped ray. After a
+            // glossy bounce `direct_light` has already counted it (its BSDF-sampled MIS
+            // half), so pbrt-v3 counts it twice; pbrt-v4 MIS-weights it instead.
+            if depth == 0 || specular_bounce {
+                for l in &scene.lights {
+                    ld += beta * l.le_escaped(ray.d.0);
+                }
             }
             break;
         };
