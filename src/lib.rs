@@ -7,6 +7,7 @@
 pub mod accel;
 pub mod camera;
 pub mod check;
+pub mod export;
 pub mod imageio;
 pub mod integrators;
 pub mod interaction;

@@ -1,4 +1,5 @@
-//! The `pbrt-sppm` command line: `[render] SCENE`, `check SCENE`, `trace SCENE`.
+//! The `pbrt-sppm` command line: `[render] SCENE`, `check SCENE`, `trace SCENE`,
+//! `export --mitsuba SCENE`.
 
 use clap::{Parser, Subcommand};
 use pbrt_sppm::parser::Syntax;
@@ -28,6 +29,18 @@ enum Command {
         /// Add one entry per created shape to the JSON.
         #[arg(long)]
         shapes: bool,
+        #[command(flatten)]
+        common: Common,
+    },
+    /// Write the loaded scene for another renderer (README: "Cross-checking with Mitsuba 3").
+    Export {
+        scene: PathBuf,
+        /// The JSON form `tools/mitsuba_reference.py` reads (the only format so far).
+        #[arg(long, required = true)]
+        mitsuba: bool,
+        /// Write here instead of standard output.
+        #[arg(long, short)]
+        output: Option<PathBuf>,
         #[command(flatten)]
         common: Common,
     },
@@ -89,7 +102,7 @@ fn parse_syntax(s: &str) -> Result<Syntax, String> {
 
 /// `pbrt-sppm scene.pbrt ...` means `pbrt-sppm render scene.pbrt ...`.
 fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
-    const KNOWN: [&str; 8] = ["render", "check", "trace", "help", "--help", "-h", "--version", "-V"];
+    const KNOWN: [&str; 9] = ["render", "check", "trace", "export", "help", "--help", "-h", "--version", "-V"];
     if args.len() > 1 && !KNOWN.iter().any(|k| args[1] == *k) {
         args.insert(1, "render".into());
     }
@@ -125,6 +138,10 @@ fn main() -> ExitCode {
         }
         Command::Trace { scene, rays, common } => match load(&scene, &common) {
             Ok(s) => trace(s, rays),
+            Err(code) => code,
+        },
+        Command::Export { scene, mitsuba: _, output, common } => match load(&scene, &common) {
+            Ok(s) => export(&s, &scene, output),
             Err(code) => code,
         },
         Command::Render(args) => match load(&args.scene, &args.common) {
@@ -219,6 +236,34 @@ fn print_stats(out: &pbrt_sppm::render::RenderOutput) {
         "stats: {} camera paths, {} photon paths, {} photon hits, peak memory {peak}",
         s.camera_rays, s.photon_paths, s.photon_hits
     );
+}
+
+/// Writes the Mitsuba export; what cannot go over is also warned about on stderr.
+fn export(s: &SceneDescription, scene: &std::path::Path, output: Option<PathBuf>) -> ExitCode {
+    s.warnings.iter().for_each(|w| eprintln!("{w}"));
+    let e = pbrt_sppm::export::mitsuba(s, &scene.display().to_string());
+    for u in &e.unsupported {
+        let at = if u.location.is_empty() { scene.display().to_string() } else { u.location.clone() };
+        eprintln!("{at}: warning: export: {}: {}", u.what, u.why);
+    }
+    let text = match serde_json::to_string(&e) {
+        Ok(t) => t + "\n",
+        Err(err) => return fail(scene, err),
+    };
+    match output {
+        Some(path) => match pbrt_sppm::imageio::write_text(&path, &text) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(err) => fail(&path, err),
+        },
+        None => {
+            use std::io::Write;
+            let mut out = std::io::stdout().lock();
+            if out.write_all(text.as_bytes()).and_then(|()| out.flush()).is_err() {
+                return ExitCode::FAILURE;
+            }
+            ExitCode::SUCCESS
+        }
+    }
 }
 
 /// Answers ray queries line by line; a malformed line is an error naming the line.

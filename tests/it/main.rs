@@ -7,6 +7,7 @@ mod directives;
 mod imgtool;
 mod instancing;
 mod intersect;
+mod mitsuba;
 mod real_scenes;
 mod render;
 mod sampling;

@@ -1,0 +1,457 @@
+//! `pbrt-sppm export --mitsuba SCENE.pbrt`: the loaded scene as one flat JSON document
+//! that `tools/mitsuba_reference.py` turns into a Mitsuba 3 scene.
+//!
+//! Everything is resolved before it is written, so the other side needs no pbrt
+//! knowledge: transforms are applied, v3/v4 spectrum and `power` rules are evaluated to
+//! RGB, named materials and textures are looked up, instances are expanded. What goes
+//! out is what pbrt-sppm renders:
+//!
+//! ```text
+//! { "format": "pbrt-sppm-export", "version": 1, "source": "scene.pbrt",
+//!   "camera": { "kind": "perspective", "world_from_camera": [16, row-major], "fov": 40,
+//!               "lens_radius": 0, "focal_distance": 1e6, "check_rays": [...] },
+//!   "film": { "width": 64, "height": 48, "crop": [x0, x1, y0, y1], "scale": 1 },
+//!   "max_depth": 5,
+//!   "materials": [ { "type": "diffuse", "reflectance": [r, g, b] }, ... ],
+//!   "shapes": [ { "type": "sphere", "center": [...], "radius": 1, "flip_normals": false,
+//!                 "material": 0, "emission": { "radiance": [...], "two_sided": false } },
+//!               { "type": "mesh", "positions": [...], "normals": null, "indices": [...], ... } ],
+//!   "lights": [ { "type": "point", "position": [...], "intensity": [...] }, ... ],
+//!   "unsupported": [ { "where": "file:line:col", "what": "...", "why": "..." } ] }
+//! ```
+//! Camera space is pbrt's (left-handed: +x right, +y up, +z forward). Cylinders and
+//! disks carry `to_world` for Mitsuba's canonical shapes (unit radius, z ∈ [0, 1] /
+//! z = 0). Partial or non-similar quadrics, cones, paraboloids and hyperboloids become
+//! meshes whose winding puts the front face (Mitsuba's emitting side) where our normal
+//! points. `check_rays` are camera rays at film positions relative to the crop window,
+//! so the reader can verify its camera reproduces ours.
+
+use crate::camera::Camera;
+use crate::lights::{Light, emission};
+use crate::materials::{Material, Texture, TextureContext};
+use crate::scene::{CameraKind, Geometry, PlacedShape, SceneDescription};
+use crate::shapes::{Quadric, TriangleMesh};
+use crate::spectrum::Rgb;
+use glam::{DMat3, DMat4, DVec3, Vec3};
+use serde::Serialize;
+
+#[derive(Serialize)]
+pub struct Export {
+    pub format: &'static str,
+    pub version: u32,
+    pub source: String,
+    pub camera: CameraOut,
+    pub film: FilmOut,
+    /// pbrt's `maxdepth`: the most bounces a path may take.
+    pub max_depth: u32,
+    pub materials: Vec<MaterialOut>,
+    pub shapes: Vec<ShapeOut>,
+    pub lights: Vec<LightOut>,
+    pub unsupported: Vec<Unsupported>,
+}
+
+#[derive(Serialize)]
+pub struct CameraOut {
+    pub kind: &'static str,
+    pub world_from_camera: [f64; 16],
+    /// Full angle of the shorter image axis, degrees.
+    pub fov: f32,
+    pub lens_radius: f32,
+    pub focal_distance: f32,
+    pub check_rays: Vec<CheckRay>,
+}
+
+/// A camera ray through `film_uv` (relative to the crop window, y down) and the lens
+/// centre.
+#[derive(Serialize)]
+pub struct CheckRay {
+    pub film_uv: [f32; 2],
+    pub o: [f32; 3],
+    pub d: [f32; 3],
+}
+
+#[derive(Serialize)]
+pub struct FilmOut {
+    pub width: u32,
+    pub height: u32,
+    /// Pixel bounds [x0, x1, y0, y1], half open.
+    pub crop: [u32; 4],
+    pub scale: f32,
+}
+
+#[derive(Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum MaterialOut {
+    Diffuse {
+        reflectance: [f32; 3],
+    },
+    /// A perfect mirror scaled by `reflectance`.
+    Mirror {
+        reflectance: [f32; 3],
+    },
+    Dielectric {
+        eta: f32,
+        reflectance: [f32; 3],
+        transmittance: [f32; 3],
+    },
+    Conductor {
+        eta: [f32; 3],
+        k: [f32; 3],
+    },
+    /// GGX, α along the shading tangents.
+    RoughConductor {
+        eta: [f32; 3],
+        k: [f32; 3],
+        alpha: [f32; 2],
+    },
+    /// No surface: rays pass straight through.
+    None,
+}
+
+#[derive(Serialize)]
+pub struct Emission {
+    pub radiance: [f32; 3],
+    pub two_sided: bool,
+}
+
+#[derive(Serialize)]
+pub struct ShapeOut {
+    #[serde(flatten)]
+    pub geometry: GeometryOut,
+    pub material: u32,
+    pub emission: Option<Emission>,
+    /// `check --shapes` index of the shape this came from.
+    pub shape_index: u32,
+}
+
+#[derive(Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum GeometryOut {
+    Sphere {
+        center: [f64; 3],
+        radius: f64,
+        flip_normals: bool,
+    },
+    Cylinder {
+        to_world: [f64; 16],
+        flip_normals: bool,
+    },
+    Disk {
+        to_world: [f64; 16],
+        flip_normals: bool,
+    },
+    /// `face_normals`: shade with the flat triangle normal (pbrt meshes without `N`);
+    /// false for tessellated quadrics, whose smooth normals the reader interpolates.
+    Mesh {
+        positions: Vec<f32>,
+        normals: Option<Vec<f32>>,
+        indices: Vec<u32>,
+        face_normals: bool,
+    },
+}
+
+#[derive(Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum LightOut {
+    Point {
+        position: [f32; 3],
+        intensity: [f32; 3],
+    },
+    Spot {
+        position: [f32; 3],
+        direction: [f32; 3],
+        up: [f32; 3],
+        intensity: [f32; 3],
+        cutoff_angle: f32,
+        beam_width: f32,
+    },
+    /// `direction` is the way the light travels.
+    Distant {
+        direction: [f32; 3],
+        irradiance: [f32; 3],
+    },
+    Constant {
+        radiance: [f32; 3],
+    },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Unsupported {
+    #[serde(rename = "where")]
+    pub location: String,
+    pub what: String,
+    pub why: String,
+}
+
+/// Quadric tessellation: cells around the full φ range and along v.
+const PHI_CELLS: u32 = 96;
+const V_CELLS: u32 = 48;
+
+/// The scene as it goes to Mitsuba, with everything that cannot go noted.
+pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
+    let mut notes: Vec<Unsupported> = scene
+        .skipped
+        .iter()
+        .map(|s| Unsupported {
+            location: format!("{}:{}:{}", s.file, s.line, s.column),
+            what: s.what.clone(),
+            why: format!("skipped on load: {}", s.why),
+        })
+        .collect();
+    let ctx = TextureContext::new(&scene.base_dir);
+    let materials = scene
+        .materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| material(&m.ty, &Material::from_desc(m, &scene.textures, &ctx), i, &mut notes))
+        .collect();
+    let shapes = scene.placed_shapes().enumerate().map(|(i, p)| shape(scene, &p, i as u32, &mut notes)).collect();
+    let lights = scene
+        .lights
+        .iter()
+        .filter_map(|l| Light::from_desc(&l.ty, &l.params, &l.world_from_light, scene.syntax, &ctx))
+        .filter_map(|l| light(&l, &mut notes))
+        .collect();
+    notes.extend(ctx.warnings.into_inner().into_iter().map(|w| note("", "texture", w)));
+    Export {
+        format: "pbrt-sppm-export",
+        version: 1,
+        source: source.to_string(),
+        camera: camera(scene, &mut notes),
+        film: FilmOut {
+            width: scene.film.x_resolution,
+            height: scene.film.y_resolution,
+            crop: scene.film.pixel_bounds,
+            scale: scene.film.scale,
+        },
+        max_depth: scene.integrator.max_depth,
+        materials,
+        shapes,
+        lights,
+        unsupported: notes,
+    }
+}
+
+fn note(location: &str, what: &str, why: impl Into<String>) -> Unsupported {
+    Unsupported { location: location.to_string(), what: what.to_string(), why: why.into() }
+}
+
+fn row_major(m: &DMat4) -> [f64; 16] {
+    m.transpose().to_cols_array()
+}
+
+fn camera(scene: &SceneDescription, notes: &mut Vec<Unsupported>) -> CameraOut {
+    let c = &scene.camera;
+    let cam = Camera::new(c, &scene.film);
+    let [x0, x1, y0, y1] = scene.film.pixel_bounds.map(|v| v as f32);
+    let check_rays = [[0.5, 0.5], [0.1, 0.2], [0.9, 0.3], [0.25, 0.85], [0.0, 0.0], [1.0, 1.0]]
+        .into_iter()
+        .map(|film_uv: [f32; 2]| {
+            let raster = [x0 + film_uv[0] * (x1 - x0), y0 + film_uv[1] * (y1 - y0)];
+            let r = cam.generate_ray(raster, [0.5, 0.5]);
+            CheckRay { film_uv, o: r.o.0.to_array(), d: r.d.0.to_array() }
+        })
+        .collect();
+    let aspect = scene.film.x_resolution as f32 / scene.film.y_resolution as f32;
+    let default_window =
+        if aspect > 1.0 { [-aspect, aspect, -1.0, 1.0] } else { [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect] };
+    if c.screen_window.iter().zip(default_window).any(|(a, b)| (a - b).abs() > 1e-5 * b.abs().max(1.0)) {
+        notes.push(note("", "camera screenwindow", "a non-default screen window has no Mitsuba equivalent"));
+    }
+    CameraOut {
+        kind: match c.kind {
+            CameraKind::Perspective => "perspective",
+            CameraKind::Orthographic => "orthographic",
+        },
+        world_from_camera: row_major(&c.camera_from_world.inverse()),
+        fov: c.fov,
+        lens_radius: c.lens_radius,
+        focal_distance: c.focal_distance,
+        check_rays,
+    }
+}
+
+/// A texture as one colour: itself if constant, else its mean over (u, v) (noted).
+fn flat(t: &Texture, what: &str, notes: &mut Vec<Unsupported>) -> [f32; 3] {
+    if let Texture::Const(c) = t {
+        return c.to_array();
+    }
+    notes.push(note("", what, "textured; exported as its mean over (u, v) ∈ [0, 1]²"));
+    const N: u32 = 32;
+    let sum: Rgb = (0..N * N)
+        .map(|k| t.eval([((k % N) as f32 + 0.5) / N as f32, ((k / N) as f32 + 0.5) / N as f32]))
+        .fold(Vec3::ZERO, |a, b| a + b);
+    (sum / (N * N) as f32).to_array()
+}
+
+fn material(ty: &str, m: &Material, index: usize, notes: &mut Vec<Unsupported>) -> MaterialOut {
+    let what = format!("material {index} (\"{ty}\")");
+    if matches!(ty, "plastic" | "uber" | "coateddiffuse") {
+        notes.push(note("", &what, "rendered by pbrt-sppm as its diffuse part; exported the same way"));
+    }
+    match m {
+        Material::Diffuse { kd } => MaterialOut::Diffuse { reflectance: flat(kd, &what, notes) },
+        Material::Mirror { kr: r } | Material::ConductorReflectance { r } => {
+            MaterialOut::Mirror { reflectance: flat(r, &what, notes) }
+        }
+        Material::Dielectric { eta, kr, kt } => {
+            MaterialOut::Dielectric { eta: *eta, reflectance: kr.to_array(), transmittance: kt.to_array() }
+        }
+        Material::Conductor { eta, k } => MaterialOut::Conductor { eta: eta.to_array(), k: k.to_array() },
+        Material::RoughConductor { eta, k, alpha } => {
+            if alpha[0] != alpha[1] {
+                notes.push(note("", &what, "anisotropic roughness: Mitsuba's tangent frame differs from pbrt's"));
+            }
+            MaterialOut::RoughConductor { eta: eta.to_array(), k: k.to_array(), alpha: *alpha }
+        }
+        Material::Interface => MaterialOut::None,
+    }
+}
+
+fn light(l: &Light, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
+    Some(match l {
+        Light::Point { p, i } => LightOut::Point { position: p.to_array(), intensity: i.to_array() },
+        Light::Spot { p, frame, i, cos_total, cos_start, smooth } => {
+            if cos_start > cos_total {
+                let ours = if *smooth { "smoothstep in cos θ (v4)" } else { "quartic in cos θ (v3)" };
+                notes.push(note("", "spot light falloff", format!("Mitsuba's is linear in θ, pbrt's {ours}")));
+            }
+            LightOut::Spot {
+                position: p.to_array(),
+                direction: frame[2].to_array(),
+                up: frame[1].to_array(),
+                intensity: i.to_array(),
+                cutoff_angle: cos_total.clamp(-1.0, 1.0).acos().to_degrees(),
+                beam_width: cos_start.clamp(-1.0, 1.0).acos().to_degrees(),
+            }
+        }
+        Light::Distant { w, l } => LightOut::Distant { direction: (-*w).to_array(), irradiance: l.to_array() },
+        Light::Infinite { l, map: None } => LightOut::Constant { radiance: l.to_array() },
+        Light::Infinite { map: Some(_), .. } => {
+            notes.push(note("", "infinite light with an environment map", "not exported"));
+            return None;
+        }
+        Light::Area { .. } => return None,
+    })
+}
+
+fn shape(scene: &SceneDescription, p: &PlacedShape, index: u32, notes: &mut Vec<Unsupported>) -> ShapeOut {
+    let s = p.shape;
+    let emission = s.area_light.filter(|_| p.instance.is_none()).map(|a| {
+        let a = &scene.area_lights[a as usize];
+        let two_sided = a.params.bool("twosided").ok().flatten().unwrap_or(false);
+        if two_sided {
+            notes.push(note("", &format!("shape {index}"), "two-sided area light: Mitsuba's emit on one side"));
+        }
+        Emission { radiance: emission(&a.params, "L", scene.syntax).to_array(), two_sided }
+    });
+    // Instances place their shapes with a normal transform, which a mirror does not flip.
+    let instance_mirrors = p
+        .instance
+        .is_some_and(|i| DMat3::from_mat4(scene.instances[i as usize].world_from_instance).determinant() < 0.0);
+    let geometry = match &s.geometry {
+        Geometry::Quadric(q) => quadric(q, &p.object_to_world, s.reverse_orientation, instance_mirrors),
+        Geometry::Mesh { mesh, .. } => {
+            let m = &scene.meshes[*mesh as usize];
+            let instance = p.instance.map(|i| scene.instances[i as usize].world_from_instance);
+            mesh_out(m, instance.as_ref(), s.reverse_orientation, s.swaps_handedness(), instance_mirrors)
+        }
+    };
+    ShapeOut { geometry, material: s.material, emission, shape_index: index }
+}
+
+/// Mitsuba's sphere, cylinder and disk for full shapes under a rotation, uniform scale
+/// and translation; a mesh otherwise.
+fn quadric(q: &Quadric, m: &DMat4, reverse: bool, instance_mirrors: bool) -> GeometryOut {
+    let m3 = DMat3::from_mat4(*m);
+    let native = crate::shapes::similarity_scale(m3).is_some() && m3.determinant() > 0.0 && !instance_mirrors;
+    let full = q.phi_max() >= std::f64::consts::TAU - 1e-6;
+    match q {
+        Quadric::Sphere(s) if native && full && s.z_min <= -s.radius && s.z_max >= s.radius => GeometryOut::Sphere {
+            center: m.transform_point3(DVec3::ZERO).to_array(),
+            radius: m3.x_axis.length() * s.radius as f64,
+            flip_normals: reverse,
+        },
+        Quadric::Cylinder(c) if native && full => {
+            let (r, z0, z1) = (c.radius as f64, c.z_min as f64, c.z_max as f64);
+            let local = DMat4::from_translation(DVec3::new(0.0, 0.0, z0)) * scale(r, r, z1 - z0);
+            GeometryOut::Cylinder { to_world: row_major(&(*m * local)), flip_normals: reverse }
+        }
+        Quadric::Disk(d) if native && full && d.inner_radius == 0.0 => {
+            let r = d.radius as f64;
+            let local = DMat4::from_translation(DVec3::new(0.0, 0.0, d.height as f64)) * scale(r, r, 1.0);
+            GeometryOut::Disk { to_world: row_major(&(*m * local)), flip_normals: reverse }
+        }
+        _ => tessellate(q, m, reverse ^ instance_mirrors),
+    }
+}
+
+fn scale(x: f64, y: f64, z: f64) -> DMat4 {
+    DMat4::from_scale(DVec3::new(x, y, z))
+}
+
+/// A (u, v) grid over the quadric. Our normal is m·∂p/∂u × m·∂p/∂v (negated by
+/// ReverseOrientation), so the grid's own winding faces it unless `flip`.
+fn tessellate(q: &Quadric, m: &DMat4, flip: bool) -> GeometryOut {
+    let nu = ((PHI_CELLS as f64 * q.phi_max() / std::f64::consts::TAU).ceil() as u32).max(4);
+    let nv = V_CELLS;
+    let mut positions = Vec::with_capacity(((nu + 1) * (nv + 1) * 3) as usize);
+    for j in 0..=nv {
+        for i in 0..=nu {
+            let p = m.transform_point3(q.point(i as f64 / nu as f64, j as f64 / nv as f64));
+            positions.extend(p.as_vec3().to_array());
+        }
+    }
+    let at = |i: u32, j: u32| j * (nu + 1) + i;
+    let vertex = |k: u32| Vec3::from_slice(&positions[3 * k as usize..3 * k as usize + 3]);
+    let mut indices = Vec::with_capacity((nu * nv * 6) as usize);
+    for j in 0..nv {
+        for i in 0..nu {
+            for t in [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]] {
+                // Cells at poles and apexes collapse to slivers; leave them out.
+                let [a, b, c] = t.map(vertex);
+                if (b - a).cross(c - a).length_squared() > 0.0 {
+                    indices.extend(if flip { [t[0], t[2], t[1]] } else { t });
+                }
+            }
+        }
+    }
+    GeometryOut::Mesh { positions, normals: None, indices, face_normals: false }
+}
+
+/// A mesh in world space. The front face is our normal's side: the winding's, flipped
+/// by ReverseOrientation XOR a handedness swap, or with `N` the side `N` is on (`N` is
+/// negated by ReverseOrientation, as our shading normal is).
+fn mesh_out(
+    m: &TriangleMesh,
+    instance: Option<&DMat4>,
+    reverse: bool,
+    swaps: bool,
+    instance_mirrors: bool,
+) -> GeometryOut {
+    let identity = DMat4::IDENTITY;
+    let to_world = instance.unwrap_or(&identity);
+    let normal_map = DMat3::from_mat4(*to_world).inverse().transpose();
+    let positions =
+        m.p.iter().flat_map(|p| to_world.transform_point3(DVec3::from(p.map(f64::from))).as_vec3().to_array());
+    let sign = if reverse { -1.0 } else { 1.0 };
+    let normals = m.n.as_ref().map(|ns| {
+        ns.iter()
+            .flat_map(|n| (sign * normal_map * DVec3::from(n.map(f64::from))).normalize_or_zero().as_vec3().to_array())
+            .collect()
+    });
+    let mut indices = Vec::with_capacity(m.indices.len());
+    for (t, tri) in m.indices.chunks_exact(3).enumerate() {
+        let [a, b, c] = m.vertices(t);
+        let face = (b - a).cross(c - a);
+        let front = match &m.n {
+            Some(ns) => {
+                face.dot(sign * tri.iter().map(|&k| DVec3::from(ns[k as usize].map(f64::from))).sum::<DVec3>()) >= 0.0
+            }
+            None => !(reverse ^ swaps),
+        };
+        indices.extend(if front ^ instance_mirrors { [tri[0], tri[1], tri[2]] } else { [tri[0], tri[2], tri[1]] });
+    }
+    let face_normals = normals.is_none();
+    GeometryOut::Mesh { positions: positions.collect(), normals, indices, face_normals }
+}
