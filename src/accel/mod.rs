@@ -10,7 +10,7 @@ use crate::interaction::SurfaceInteraction;
 use crate::math::float::gamma;
 use crate::math::{Bounds3, Point3, Ray, Vector3};
 use crate::scene::{Geometry as ShapeGeometry, SceneDescription, ShapeDesc};
-use crate::shapes::{MeshFlags, QuadricHit, QuadricShape, TriangleHit, TriangleMesh};
+use crate::shapes::{MeshFlags, QuadricHit, QuadricShape, TriangleHit, TriangleMesh, WatertightRay};
 use glam::{DMat3, DMat4, DVec3};
 use rayon::prelude::*;
 
@@ -147,9 +147,10 @@ impl Blas {
     /// Closest hit: (t, local shape index, what was hit).
     fn intersect(&self, g: &Geometry, ray: &Ray, t_max: f32) -> Option<(f32, u32, LocalHit)> {
         let mut best = None;
+        let wr = WatertightRay::new(ray);
         self.bvh.intersect(ray, t_max, |i, t_max| {
             let prim = self.prim(i);
-            let hit = self.hit_prim(g, prim, ray, t_max)?;
+            let hit = self.hit_prim(g, prim, ray, &wr, t_max)?;
             best = Some((prim.shape, hit.1));
             Some(hit.0)
         });
@@ -161,22 +162,23 @@ impl Blas {
         Some((t, shape, local))
     }
 
-    #[inline]
-    fn hit_prim(&self, g: &Geometry, prim: Prim, ray: &Ray, t_max: f32) -> Option<(f32, LocalHit)> {
+    #[inline(always)]
+    fn hit_prim(&self, g: &Geometry, prim: Prim, ray: &Ray, wr: &WatertightRay, t_max: f32) -> Option<(f32, LocalHit)> {
         match self.shapes[prim.shape as usize] {
             ShapeRef::Quadric(q) => {
                 let h = g.quadrics[q as usize].intersect_t(ray, t_max)?;
                 Some((h.t, LocalHit::Quadric(q, h)))
             }
             ShapeRef::Mesh { mesh, flags } => {
-                let hit = g.meshes[mesh as usize].intersect_triangle(prim.tri as usize, ray, t_max)?;
+                let hit = g.meshes[mesh as usize].intersect_prepared(prim.tri as usize, wr, t_max)?;
                 Some((hit.t, LocalHit::Triangle { mesh, tri: prim.tri, flags, hit }))
             }
         }
     }
 
     fn intersect_p(&self, g: &Geometry, ray: &Ray, t_max: f32) -> bool {
-        self.bvh.intersect_p(ray, t_max, |i, t_max| self.hit_prim(g, self.prim(i), ray, t_max).is_some())
+        let wr = WatertightRay::new(ray);
+        self.bvh.intersect_p(ray, t_max, |i, t_max| self.hit_prim(g, self.prim(i), ray, &wr, t_max).is_some())
     }
 }
 

@@ -118,6 +118,32 @@ pub struct MeshFlags {
     pub swaps_handedness: bool,
 }
 
+/// A ray set up for the watertight test: the axis of largest |d| becomes z, and the
+/// shear that maps d to +z. pbrt recomputes this per triangle; it depends on the ray only.
+#[derive(Clone, Copy, Debug)]
+pub struct WatertightRay {
+    o: Vec3,
+    kz: usize,
+    /// (−dx/dz, −dy/dz, 1/dz) after permutation.
+    shear: Vec3,
+}
+
+impl WatertightRay {
+    pub fn new(ray: &Ray) -> WatertightRay {
+        let ad = ray.d.0.abs();
+        let kz = if ad.x > ad.y && ad.x > ad.z {
+            0
+        } else if ad.y > ad.z {
+            1
+        } else {
+            2
+        };
+        let d = ray.d.0;
+        let d = Vec3::new(d[(kz + 1) % 3], d[(kz + 2) % 3], d[kz]);
+        WatertightRay { o: ray.o.0, kz, shear: Vec3::new(-d.x / d.z, -d.y / d.z, 1.0 / d.z) }
+    }
+}
+
 /// The cheap result of a ray–triangle test.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TriangleHit {
@@ -140,29 +166,36 @@ impl TriangleMesh {
     /// pbrt's watertight ray–triangle test (pbrt-v3 `Triangle::Intersect`).
     #[inline]
     pub fn intersect_triangle(&self, tri: usize, ray: &Ray, t_max: f32) -> Option<TriangleHit> {
-        let [p0, p1, p2] = self.corners(tri);
-        // Degenerate triangles never hit (pbrt-v4 checks this first).
-        if (p2 - p0).cross(p1 - p0).length_squared() == 0.0 {
-            return None;
+        self.intersect_prepared(tri, &WatertightRay::new(ray), t_max)
+    }
+
+    /// The watertight test with the ray's permutation and shear computed once.
+    #[inline(always)]
+    pub fn intersect_prepared(&self, tri: usize, r: &WatertightRay, t_max: f32) -> Option<TriangleHit> {
+        // One instance per permutation, so the axis shuffle costs nothing per triangle.
+        match r.kz {
+            0 => self.watertight::<1, 2, 0>(tri, r, t_max),
+            1 => self.watertight::<2, 0, 1>(tri, r, t_max),
+            _ => self.watertight::<0, 1, 2>(tri, r, t_max),
         }
-        let o = ray.o.0;
-        let (mut p0t, mut p1t, mut p2t) = (p0 - o, p1 - o, p2 - o);
-        let ad = ray.d.0.abs();
-        let kz = if ad.x > ad.y && ad.x > ad.z {
-            0
-        } else if ad.y > ad.z {
-            1
-        } else {
-            2
+    }
+
+    #[inline(always)]
+    fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        tri: usize,
+        r: &WatertightRay,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        let [p0, p1, p2] = self.corners(tri);
+        let permute = |p: Vec3| {
+            let v = p - r.o;
+            Vec3::new(v[KX], v[KY], v[KZ])
         };
-        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        let perm = |v: Vec3| Vec3::new(v[kx], v[ky], v[kz]);
-        let d = perm(ray.d.0);
-        (p0t, p1t, p2t) = (perm(p0t), perm(p1t), perm(p2t));
-        let (sx, sy, sz) = (-d.x / d.z, -d.y / d.z, 1.0 / d.z);
+        let (mut p0t, mut p1t, mut p2t) = (permute(p0), permute(p1), permute(p2));
         for p in [&mut p0t, &mut p1t, &mut p2t] {
-            p.x += sx * p.z;
-            p.y += sy * p.z;
+            p.x += r.shear.x * p.z;
+            p.y += r.shear.y * p.z;
         }
         let mut e0 = p1t.x * p2t.y - p1t.y * p2t.x;
         let mut e1 = p2t.x * p0t.y - p2t.y * p0t.x;
@@ -177,12 +210,14 @@ impl TriangleMesh {
             return None;
         }
         let det = e0 + e1 + e2;
-        if det == 0.0 {
+        // Degenerate triangles never hit (pbrt-v4 checks this first; checking only the
+        // candidates that got this far gives the same answers).
+        if det == 0.0 || (p2 - p0).cross(p1 - p0).length_squared() == 0.0 {
             return None;
         }
-        p0t.z *= sz;
-        p1t.z *= sz;
-        p2t.z *= sz;
+        p0t.z *= r.shear.z;
+        p1t.z *= r.shear.z;
+        p2t.z *= r.shear.z;
         let t_scaled = e0 * p0t.z + e1 * p1t.z + e2 * p2t.z;
         if (det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det))
             || (det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_max * det))
