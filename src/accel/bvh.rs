@@ -13,6 +13,7 @@
 
 use crate::math::{Bounds3, Ray};
 use glam::{Vec3, Vec4};
+use std::mem::MaybeUninit;
 
 /// Four children: their boxes (structure of arrays) and references. A child is a
 /// node (`count` 0, `child` = node index), a leaf (`count` primitives from `child`),
@@ -20,8 +21,8 @@ use glam::{Vec3, Vec4};
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
 struct Node4 {
-    lo: [[f32; 4]; 3],
-    hi: [[f32; 4]; 3],
+    /// `bounds[0]` the low corners, `bounds[1]` the high ones, per axis.
+    bounds: [[[f32; 4]; 3]; 2],
     child: [u32; 4],
     count: [u16; 4],
     _pad: [u32; 2],
@@ -33,8 +34,7 @@ const EMPTY: u16 = u16::MAX;
 impl Default for Node4 {
     fn default() -> Node4 {
         Node4 {
-            lo: [[f32::INFINITY; 4]; 3],
-            hi: [[f32::NEG_INFINITY; 4]; 3],
+            bounds: [[[f32::INFINITY; 4]; 3], [[f32::NEG_INFINITY; 4]; 3]],
             child: [0; 4],
             count: [EMPTY; 4],
             _pad: [0; 2],
@@ -45,8 +45,8 @@ impl Default for Node4 {
 impl Node4 {
     fn set(&mut self, slot: usize, b: &Bounds3, child: u32, count: u16) {
         for a in 0..3 {
-            self.lo[a][slot] = b.min[a];
-            self.hi[a][slot] = b.max[a];
+            self.bounds[0][a][slot] = b.min[a];
+            self.bounds[1][a][slot] = b.max[a];
         }
         self.child[slot] = child;
         self.count[slot] = count;
@@ -148,26 +148,28 @@ impl Bvh {
                 }
             } else {
                 let node = &self.nodes[child as usize];
-                let (t0, mask) = r.entries(node, *t_max);
-                // Sort the hit children nearest first; go on with the nearest, push the rest.
+                let (t0, mut mask) = r.entries(node, *t_max);
+                let t0 = t0.to_array();
+                // Sort the hit children farthest first; go on with the nearest, push the rest.
                 let mut hits = [(0f32, 0usize); 4];
                 let mut n = 0;
-                for (slot, &t) in t0.iter().enumerate() {
-                    if mask & (1 << slot) != 0 {
-                        let mut k = n;
-                        while k > 0 && hits[k - 1].0 < t {
-                            hits[k] = hits[k - 1];
-                            k -= 1;
-                        }
-                        hits[k] = (t, slot);
-                        n += 1;
+                while mask != 0 {
+                    let slot = mask.trailing_zeros() as usize & 3;
+                    mask &= mask - 1;
+                    let t = t0[slot];
+                    let mut k = n;
+                    while k > 0 && hits[k - 1].0 < t {
+                        hits[k] = hits[k - 1];
+                        k -= 1;
                     }
+                    hits[k] = (t, slot);
+                    n += 1;
                 }
                 if n > 0 {
                     for &(t, slot) in &hits[..n - 1] {
-                        stack.push(node.child[slot], node.count[slot], t);
+                        stack.push(node.child[slot & 3], node.count[slot & 3], t);
                     }
-                    let slot = hits[n - 1].1;
+                    let slot = hits[n - 1].1 & 3;
                     (child, count) = (node.child[slot], node.count[slot]);
                     continue;
                 }
@@ -185,30 +187,35 @@ impl Bvh {
 }
 
 /// The traversal stack: (node index or first primitive, primitive count or 0 for a
-/// node, entry t). Plain arrays, so starting one is a short memset (an array of tuples
-/// was initialised field by field, a fifth of a cached traversal); entries past the
-/// inline ones, which only degenerate deep trees need, go to the heap.
+/// node, entry t). The inline part is left uninitialised: zeroing it cost more than
+/// the rest of a cached traversal step. Entries past it, which only degenerate deep
+/// trees need, go to the heap.
 struct Stack {
-    refs: [u64; STACK_INLINE],
-    ts: [f32; STACK_INLINE],
+    refs: [MaybeUninit<u64>; STACK_INLINE],
+    ts: [MaybeUninit<f32>; STACK_INLINE],
     len: usize,
     spill: Vec<(u64, f32)>,
 }
 
-const STACK_INLINE: usize = 64;
+const STACK_INLINE: usize = 48;
 
 impl Stack {
     #[inline(always)]
     fn new() -> Stack {
-        Stack { refs: [0; STACK_INLINE], ts: [0.0; STACK_INLINE], len: 0, spill: Vec::new() }
+        Stack {
+            refs: [const { MaybeUninit::uninit() }; STACK_INLINE],
+            ts: [const { MaybeUninit::uninit() }; STACK_INLINE],
+            len: 0,
+            spill: Vec::new(),
+        }
     }
 
     #[inline(always)]
     fn push(&mut self, child: u32, count: u16, t: f32) {
         let packed = child as u64 | (count as u64) << 32;
         if self.len < STACK_INLINE {
-            self.refs[self.len] = packed;
-            self.ts[self.len] = t;
+            self.refs[self.len].write(packed);
+            self.ts[self.len].write(t);
             self.len += 1;
         } else {
             self.spill.push((packed, t));
@@ -221,7 +228,9 @@ impl Stack {
             Some(e) => e,
             None if self.len > 0 => {
                 self.len -= 1;
-                (self.refs[self.len], self.ts[self.len])
+                // SAFETY: `push` wrote every inline entry below `len`, and `len` only
+                // shrinks here, past the entry just read.
+                unsafe { (self.refs[self.len].assume_init(), self.ts[self.len].assume_init()) }
             }
             None => return None,
         };
@@ -233,7 +242,8 @@ impl Stack {
 struct SlabRay {
     o: [Vec4; 3],
     inv: [Vec4; 3],
-    neg: [bool; 3],
+    /// Per axis, which of a node's corners (0 low, 1 high) the ray meets first.
+    near: [usize; 3],
 }
 
 impl SlabRay {
@@ -243,7 +253,7 @@ impl SlabRay {
         SlabRay {
             o: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
             inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
-            neg: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
+            near: [(inv.x < 0.0) as usize, (inv.y < 0.0) as usize, (inv.z < 0.0) as usize],
         }
     }
 
@@ -251,18 +261,20 @@ impl SlabRay {
     /// ones. pbrt's conservative test: far distances are enlarged by 1 + 2γ(3); a ray
     /// lying in a slab's plane (a NaN) is not a miss.
     #[inline(always)]
-    fn entries(&self, node: &Node4, t_max: f32) -> ([f32; 4], u32) {
+    fn entries(&self, node: &Node4, t_max: f32) -> (Vec4, u32) {
         const SCALE: f32 = 1.0 + 2.0 * crate::math::float::gamma(3);
         let mut t0 = Vec4::ZERO;
         let mut t1 = Vec4::splat(t_max);
         for a in 0..3 {
-            let (near, far) = if self.neg[a] { (node.hi[a], node.lo[a]) } else { (node.lo[a], node.hi[a]) };
-            let tn = (Vec4::from(near) - self.o[a]) * self.inv[a];
-            let tf = (Vec4::from(far) - self.o[a]) * self.inv[a] * SCALE;
-            t0 = Vec4::select(tn.cmpgt(t0), tn, t0);
-            t1 = Vec4::select(tf.cmplt(t1), tf, t1);
+            let n = self.near[a] & 1;
+            let tn = (Vec4::from_array(node.bounds[n][a]) - self.o[a]) * self.inv[a];
+            let tf = (Vec4::from_array(node.bounds[n ^ 1][a]) - self.o[a]) * self.inv[a] * SCALE;
+            // max/min (SSE maxps/minps) keep the second operand when a lane is NaN:
+            // pbrt's `if (tNear > t0) t0 = tNear`, lane by lane.
+            t0 = tn.max(t0);
+            t1 = tf.min(t1);
         }
-        (t0.to_array(), t0.cmple(t1).bitmask())
+        (t0, t0.cmple(t1).bitmask())
     }
 }
 
@@ -438,7 +450,7 @@ mod tests {
     }
 
     /// Boxes at exponentially growing x make SAH peel a few off per level: a ray along
-    /// them needs 94 stack entries here, past the inline 64.
+    /// them needs 94 stack entries here, past the inline 48.
     #[test]
     fn deep_trees_traverse_like_brute_force() {
         let boxes: Vec<Bounds3> = (0..160)
