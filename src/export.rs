@@ -3,8 +3,9 @@
 //!
 //! Everything is resolved before it is written, so the other side needs no pbrt
 //! knowledge: transforms are applied, v3/v4 spectrum and `power` rules are evaluated to
-//! RGB, named materials and textures are looked up, instances are expanded. What goes
-//! out is what pbrt-sppm renders:
+//! RGB, named materials and textures are looked up. Instanced objects go out once, in
+//! their own space, with one `to_world` per instance (Mitsuba's shape groups), so a
+//! scene of 25,000 instances stays small. What goes out is what pbrt-sppm renders:
 //!
 //! ```text
 //! { "format": "pbrt-sppm-export", "version": 1, "source": "scene.pbrt",
@@ -16,6 +17,8 @@
 //!   "shapes": [ { "type": "sphere", "center": [...], "radius": 1, "flip_normals": false,
 //!                 "material": 0, "emission": { "radiance": [...], "two_sided": false } },
 //!               { "type": "mesh", "positions": [...], "normals": null, "indices": [...], ... } ],
+//!   "objects": [ { "name": "tree", "shapes": [ ...as above, without emission... ] } ],
+//!   "instances": [ { "object": 0, "to_world": [16, row-major], "first_shape_index": 7 } ],
 //!   "lights": [ { "type": "point", "position": [...], "intensity": [...] }, ... ],
 //!   "unsupported": [ { "where": "file:line:col", "what": "...", "why": "..." } ] }
 //! ```
@@ -23,13 +26,14 @@
 //! disks carry `to_world` for Mitsuba's canonical shapes (unit radius, z ∈ [0, 1] /
 //! z = 0). Partial or non-similar quadrics, cones, paraboloids and hyperboloids become
 //! meshes whose winding puts the front face (Mitsuba's emitting side) where our normal
-//! points. `check_rays` are camera rays at film positions relative to the crop window,
+//! points. Both renderers map an instance's normals with the inverse transpose and no
+//! handedness flip, so object shapes need no correction for mirrored instances. `check_rays` are camera rays at film positions relative to the crop window,
 //! so the reader can verify its camera reproduces ours.
 
 use crate::camera::Camera;
 use crate::lights::{Light, emission};
 use crate::materials::{Material, Texture, TextureContext};
-use crate::scene::{CameraKind, Geometry, PlacedShape, SceneDescription};
+use crate::scene::{CameraKind, Geometry, SceneDescription, ShapeDesc};
 use crate::shapes::{Quadric, TriangleMesh};
 use crate::spectrum::Rgb;
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -45,7 +49,12 @@ pub struct Export {
     /// pbrt's `maxdepth`: the most bounces a path may take.
     pub max_depth: u32,
     pub materials: Vec<MaterialOut>,
+    /// World shapes, in world space.
     pub shapes: Vec<ShapeOut>,
+    /// Instanced objects, their shapes in object space (`shape_index` counts within the
+    /// object).
+    pub objects: Vec<ObjectOut>,
+    pub instances: Vec<InstanceOut>,
     pub lights: Vec<LightOut>,
     pub unsupported: Vec<Unsupported>,
 }
@@ -122,6 +131,20 @@ pub struct ShapeOut {
     pub emission: Option<Emission>,
     /// `check --shapes` index of the shape this came from.
     pub shape_index: u32,
+}
+
+#[derive(Serialize)]
+pub struct ObjectOut {
+    pub name: String,
+    pub shapes: Vec<ShapeOut>,
+}
+
+#[derive(Serialize)]
+pub struct InstanceOut {
+    pub object: u32,
+    pub to_world: [f64; 16],
+    /// `check --shapes` index of the instance's first shape.
+    pub first_shape_index: u32,
 }
 
 #[derive(Serialize)]
@@ -205,7 +228,25 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         .enumerate()
         .map(|(i, m)| material(&m.ty, &Material::from_desc(m, &scene.textures, &ctx), i, &mut notes))
         .collect();
-    let shapes = scene.placed_shapes().enumerate().map(|(i, p)| shape(scene, &p, i as u32, &mut notes)).collect();
+    let shapes = scene.shapes.iter().enumerate().map(|(i, s)| shape(scene, s, true, i as u32, &mut notes)).collect();
+    let objects = scene
+        .objects
+        .iter()
+        .map(|o| ObjectOut {
+            name: o.name.clone(),
+            shapes: o.shapes.iter().enumerate().map(|(i, s)| shape(scene, s, false, i as u32, &mut notes)).collect(),
+        })
+        .collect();
+    let mut first_shape_index = scene.shapes.len() as u32;
+    let instances = scene
+        .instances
+        .iter()
+        .map(|i| {
+            let out = InstanceOut { object: i.object, to_world: row_major(&i.world_from_instance), first_shape_index };
+            first_shape_index += scene.objects[i.object as usize].shapes.len() as u32;
+            out
+        })
+        .collect();
     let lights = scene
         .lights
         .iter()
@@ -227,6 +268,8 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         max_depth: scene.integrator.max_depth,
         materials,
         shapes,
+        objects,
+        instances,
         lights,
         unsupported: notes,
     }
@@ -335,9 +378,10 @@ fn light(l: &Light, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
     })
 }
 
-fn shape(scene: &SceneDescription, p: &PlacedShape, index: u32, notes: &mut Vec<Unsupported>) -> ShapeOut {
-    let s = p.shape;
-    let emission = s.area_light.filter(|_| p.instance.is_none()).map(|a| {
+/// One shape in its own space: the world for world shapes, its object's for object
+/// shapes (which cannot emit, in pbrt-sppm as in Mitsuba).
+fn shape(scene: &SceneDescription, s: &ShapeDesc, world: bool, index: u32, notes: &mut Vec<Unsupported>) -> ShapeOut {
+    let emission = s.area_light.filter(|_| world).map(|a| {
         let a = &scene.area_lights[a as usize];
         let two_sided = a.params.bool("twosided").ok().flatten().unwrap_or(false);
         if two_sided {
@@ -345,16 +389,10 @@ fn shape(scene: &SceneDescription, p: &PlacedShape, index: u32, notes: &mut Vec<
         }
         Emission { radiance: emission(&a.params, "L", scene.syntax).to_array(), two_sided }
     });
-    // Instances place their shapes with a normal transform, which a mirror does not flip.
-    let instance_mirrors = p
-        .instance
-        .is_some_and(|i| DMat3::from_mat4(scene.instances[i as usize].world_from_instance).determinant() < 0.0);
     let geometry = match &s.geometry {
-        Geometry::Quadric(q) => quadric(q, &p.object_to_world, s.reverse_orientation, instance_mirrors),
+        Geometry::Quadric(q) => quadric(q, &s.object_to_world, s.reverse_orientation),
         Geometry::Mesh { mesh, .. } => {
-            let m = &scene.meshes[*mesh as usize];
-            let instance = p.instance.map(|i| scene.instances[i as usize].world_from_instance);
-            mesh_out(m, instance.as_ref(), s.reverse_orientation, s.swaps_handedness(), instance_mirrors)
+            mesh_out(&scene.meshes[*mesh as usize], s.reverse_orientation, s.swaps_handedness())
         }
     };
     ShapeOut { geometry, material: s.material, emission, shape_index: index }
@@ -362,9 +400,9 @@ fn shape(scene: &SceneDescription, p: &PlacedShape, index: u32, notes: &mut Vec<
 
 /// Mitsuba's sphere, cylinder and disk for full shapes under a rotation, uniform scale
 /// and translation; a mesh otherwise.
-fn quadric(q: &Quadric, m: &DMat4, reverse: bool, instance_mirrors: bool) -> GeometryOut {
+fn quadric(q: &Quadric, m: &DMat4, reverse: bool) -> GeometryOut {
     let m3 = DMat3::from_mat4(*m);
-    let native = crate::shapes::similarity_scale(m3).is_some() && m3.determinant() > 0.0 && !instance_mirrors;
+    let native = crate::shapes::similarity_scale(m3).is_some() && m3.determinant() > 0.0;
     let full = q.phi_max() >= std::f64::consts::TAU - 1e-6;
     match q {
         Quadric::Sphere(s) if native && full && s.z_min <= -s.radius && s.z_max >= s.radius => GeometryOut::Sphere {
@@ -382,7 +420,7 @@ fn quadric(q: &Quadric, m: &DMat4, reverse: bool, instance_mirrors: bool) -> Geo
             let local = DMat4::from_translation(DVec3::new(0.0, 0.0, d.height as f64)) * scale(r, r, 1.0);
             GeometryOut::Disk { to_world: row_major(&(*m * local)), flip_normals: reverse }
         }
-        _ => tessellate(q, m, reverse ^ instance_mirrors),
+        _ => tessellate(q, m, reverse),
     }
 }
 
@@ -419,39 +457,27 @@ fn tessellate(q: &Quadric, m: &DMat4, flip: bool) -> GeometryOut {
     GeometryOut::Mesh { positions, normals: None, indices, face_normals: false }
 }
 
-/// A mesh in world space. The front face is our normal's side: the winding's, flipped
-/// by ReverseOrientation XOR a handedness swap, or with `N` the side `N` is on (`N` is
-/// negated by ReverseOrientation, as our shading normal is).
-fn mesh_out(
-    m: &TriangleMesh,
-    instance: Option<&DMat4>,
-    reverse: bool,
-    swaps: bool,
-    instance_mirrors: bool,
-) -> GeometryOut {
-    let identity = DMat4::IDENTITY;
-    let to_world = instance.unwrap_or(&identity);
-    let normal_map = DMat3::from_mat4(*to_world).inverse().transpose();
-    let positions =
-        m.p.iter().flat_map(|p| to_world.transform_point3(DVec3::from(p.map(f64::from))).as_vec3().to_array());
+/// A mesh as stored (its shape's transform applied). The front face is our normal's
+/// side: the winding's, flipped by ReverseOrientation XOR a handedness swap, or with `N`
+/// the side `N` is on (`N` is negated by ReverseOrientation, as our shading normal is).
+fn mesh_out(m: &TriangleMesh, reverse: bool, swaps: bool) -> GeometryOut {
+    let positions = m.p.iter().flatten().copied().collect();
     let sign = if reverse { -1.0 } else { 1.0 };
-    let normals = m.n.as_ref().map(|ns| {
-        ns.iter()
-            .flat_map(|n| (sign * normal_map * DVec3::from(n.map(f64::from))).normalize_or_zero().as_vec3().to_array())
-            .collect()
-    });
+    let normals =
+        m.n.as_ref().map(|ns| ns.iter().flat_map(|n| (sign * Vec3::from(*n)).normalize_or_zero().to_array()).collect());
     let mut indices = Vec::with_capacity(m.indices.len());
     for (t, tri) in m.indices.chunks_exact(3).enumerate() {
         let [a, b, c] = m.vertices(t);
         let face = (b - a).cross(c - a);
         let front = match &m.n {
             Some(ns) => {
-                face.dot(sign * tri.iter().map(|&k| DVec3::from(ns[k as usize].map(f64::from))).sum::<DVec3>()) >= 0.0
+                let n: DVec3 = tri.iter().map(|&k| DVec3::from(ns[k as usize].map(f64::from))).sum();
+                face.dot(sign as f64 * n) >= 0.0
             }
             None => !(reverse ^ swaps),
         };
-        indices.extend(if front ^ instance_mirrors { [tri[0], tri[1], tri[2]] } else { [tri[0], tri[2], tri[1]] });
+        indices.extend(if front { [tri[0], tri[1], tri[2]] } else { [tri[0], tri[2], tri[1]] });
     }
     let face_normals = normals.is_none();
-    GeometryOut::Mesh { positions: positions.collect(), normals, indices, face_normals }
+    GeometryOut::Mesh { positions, normals, indices, face_normals }
 }

@@ -78,7 +78,7 @@ def write_ply(path, positions, normals, indices):
             f.write(face.pack(3, *indices[3 * k:3 * k + 3]))
 
 
-def shape(mi, s, materials, tmp, index):
+def shape(mi, s, materials, tmp, name):
     t = s["type"]
     if t == "sphere":
         d = {"type": "sphere", "center": s["center"], "radius": s["radius"], "flip_normals": s["flip_normals"]}
@@ -87,7 +87,7 @@ def shape(mi, s, materials, tmp, index):
     elif t == "mesh":
         if not s["indices"]:
             return None
-        path = os.path.join(tmp, f"shape{index}.ply")
+        path = os.path.join(tmp, f"{name}.ply")
         write_ply(path, s["positions"], s["normals"], s["indices"])
         d = {"type": "ply", "filename": path, "face_normals": s["face_normals"]}
     else:
@@ -165,9 +165,21 @@ def build(mi, doc, tmp, spp):
          "integrator": {"type": "path", "max_depth": int(doc["max_depth"]) + 1, "hide_emitters": False},
          "sensor": sensor(mi, doc, spp)}
     for i, s in enumerate(doc["shapes"]):
-        sd = shape(mi, s, materials, tmp, i)
+        sd = shape(mi, s, materials, tmp, f"shape{i}")
         if sd is not None:
             d[f"shape{i}"] = sd
+    # Each instanced object once, as a shape group; instances refer to it.
+    groups = set()
+    for i, o in enumerate(doc["objects"]):
+        shapes = [shape(mi, s, materials, tmp, f"object{i}-{j}") for j, s in enumerate(o["shapes"])]
+        shapes = [s for s in shapes if s is not None]
+        if shapes:
+            d[f"object{i}"] = {"type": "shapegroup", **{f"shape{j}": s for j, s in enumerate(shapes)}}
+            groups.add(i)
+    for k, inst in enumerate(doc["instances"]):
+        if inst["object"] in groups:
+            d[f"instance{k}"] = {"type": "instance", "to_world": matrix(mi, inst["to_world"]),
+                                 "shapegroup": {"type": "ref", "id": f"object{inst['object']}"}}
     for i, l in enumerate(doc["lights"]):
         d[f"light{i}"] = light(mi, l)
     return d

@@ -78,10 +78,25 @@ fn check_rays_are_the_cameras_rays_through_the_crop_window() {
 }
 
 /// World-space front normals and points to test, per exported shape, as Mitsuba sees
-/// them: (shape index, point on the surface, front normal, a length scale).
+/// them: (shape index, point on the surface, front normal, a length scale). Instances
+/// map their object's faces with the inverse transpose, as both renderers do.
 fn front_faces(e: &Export) -> Vec<(u32, Vec3, Vec3, f32)> {
+    let mut out = local_faces(&e.shapes);
+    for inst in &e.instances {
+        let m = matrix(&inst.to_world);
+        let nm = glam::DMat3::from_mat4(m).inverse().transpose();
+        let scale = glam::DMat3::from_mat4(m).determinant().abs().cbrt() as f32;
+        out.extend(local_faces(&e.objects[inst.object as usize].shapes).into_iter().map(|(i, p, n, size)| {
+            let n = (nm * n.as_dvec3()).normalize().as_vec3();
+            (inst.first_shape_index + i, m.transform_point3(p.as_dvec3()).as_vec3(), n, size * scale)
+        }));
+    }
+    out
+}
+
+fn local_faces(shapes: &[pbrt_sppm::export::ShapeOut]) -> Vec<(u32, Vec3, Vec3, f32)> {
     let mut out = Vec::new();
-    for s in &e.shapes {
+    for s in shapes {
         let i = s.shape_index;
         let flip = |n: DVec3, f: bool| if f { -n } else { n };
         match &s.geometry {
@@ -179,10 +194,17 @@ fn exported_front_faces_are_our_normals_sides() {
 fn instanced_shapes_keep_their_front_faces_under_mirrors() {
     let object: String = SHAPES.iter().map(|s| format!("Translate 5 0 0 {s}\n")).collect();
     for instance in ["", "Scale -1 1 1", "Rotate 40 0 0 1 Scale 1 1 -2"] {
-        assert_front_faces_agree(&format!(
+        let text = format!(
             "WorldBegin\nObjectBegin \"o\"\nReverseOrientation\n{object}ObjectEnd\n\
-             AttributeBegin\n{instance}\nObjectInstance \"o\"\nAttributeEnd\n"
-        ));
+             AttributeBegin\n{instance}\nObjectInstance \"o\"\nAttributeEnd\n\
+             AttributeBegin\nTranslate 0 0 -30\n{instance}\nObjectInstance \"o\"\nAttributeEnd\n"
+        );
+        assert_front_faces_agree(&text);
+        // The object goes out once, however many instances place it.
+        let e = mitsuba(&scene(&text), "inline");
+        assert_eq!((e.shapes.len(), e.objects.len(), e.instances.len()), (0, 1, 2));
+        assert_eq!(e.objects[0].shapes.len(), SHAPES.len());
+        assert_eq!(e.instances[1].first_shape_index, SHAPES.len() as u32);
     }
 }
 
