@@ -454,7 +454,17 @@ fn tessellate(q: &Quadric, m: &DMat4, flip: bool) -> GeometryOut {
             }
         }
     }
-    GeometryOut::Mesh { positions, normals: None, indices, face_normals: false }
+    // Drop the vertices only slivers used (Mitsuba warns about normals it cannot make).
+    let mut remap = vec![u32::MAX; positions.len() / 3];
+    let mut kept = Vec::with_capacity(positions.len());
+    for k in indices.iter_mut() {
+        if remap[*k as usize] == u32::MAX {
+            remap[*k as usize] = (kept.len() / 3) as u32;
+            kept.extend_from_slice(&positions[3 * *k as usize..3 * *k as usize + 3]);
+        }
+        *k = remap[*k as usize];
+    }
+    GeometryOut::Mesh { positions: kept, normals: None, indices, face_normals: false }
 }
 
 /// A mesh as stored (its shape's transform applied). The front face is our normal's
