@@ -19,7 +19,8 @@
 //!               { "type": "mesh", "positions": [...], "normals": null, "indices": [...], ... } ],
 //!   "objects": [ { "name": "tree", "shapes": [ ...as above, without emission... ] } ],
 //!   "instances": [ { "object": 0, "to_world": [16, row-major], "first_shape_index": 7 } ],
-//!   "lights": [ { "type": "point", "position": [...], "intensity": [...] }, ... ],
+//!   "lights": [ { "type": "point", "position": [...], "intensity": [...] },
+//!               { "type": "env_map", "filename": "/abs/sky.exr", "to_world": [16], "scale": 1 }, ... ],
 //!   "unsupported": [ { "where": "file:line:col", "what": "...", "why": "..." } ] }
 //! ```
 //! Camera space is pbrt's (left-handed: +x right, +y up, +z forward). Cylinders and
@@ -196,6 +197,13 @@ pub enum LightOut {
     Constant {
         radiance: [f32; 3],
     },
+    /// An equirectangular map (absolute path); `to_world` maps Mitsuba's map axes to
+    /// the world.
+    EnvMap {
+        filename: String,
+        to_world: [f64; 16],
+        scale: f32,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -250,8 +258,13 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
     let lights = scene
         .lights
         .iter()
-        .filter_map(|l| Light::from_desc(&l.ty, &l.params, &l.world_from_light, scene.syntax, &ctx))
-        .filter_map(|l| light(&l, &mut notes))
+        .filter_map(|d| {
+            let l = Light::from_desc(&d.ty, &d.params, &d.world_from_light, scene.syntax, &ctx)?;
+            match &l {
+                Light::Infinite { l, map: Some(_) } => Some(env_map(scene, d, *l, &mut notes)),
+                _ => light(&l, &mut notes),
+            }
+        })
         .collect();
     notes.extend(ctx.warnings.into_inner().into_iter().map(|w| note("", "texture", w)));
     Export {
@@ -370,12 +383,28 @@ fn light(l: &Light, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
         }
         Light::Distant { w, l } => LightOut::Distant { direction: (-*w).to_array(), irradiance: l.to_array() },
         Light::Infinite { l, map: None } => LightOut::Constant { radiance: l.to_array() },
-        Light::Infinite { map: Some(_), .. } => {
-            notes.push(note("", "infinite light with an environment map", "not exported"));
-            return None;
-        }
-        Light::Area { .. } => return None,
+        Light::Area { .. } | Light::Infinite { map: Some(_), .. } => return None,
     })
+}
+
+/// An environment map for Mitsuba's `envmap`, which reads directions as
+/// (atan2(x, −z)/2π, acos(y)/π) where pbrt reads (atan2(y, x)/2π, acos(z)/π): its
+/// axes are ours through a reflection, (x, y, z)_mitsuba = (y, z, −x)_pbrt.
+fn env_map(scene: &SceneDescription, d: &crate::scene::LightDesc, l: Rgb, notes: &mut Vec<Unsupported>) -> LightOut {
+    let name = d.params.string("mapname").ok().flatten().or_else(|| d.params.string("filename").ok().flatten());
+    let path = crate::parser::stmt::resolve_relative(&scene.base_dir, &name.unwrap_or_default());
+    let path = std::path::absolute(&path).unwrap_or(path);
+    if l.max_element() - l.min_element() > 1e-6 * l.max_element() {
+        notes.push(note("", "environment map scale", "a coloured scale has no Mitsuba equivalent; its mean is used"));
+    }
+    let rotation = DMat3::from_mat4(d.world_from_light);
+    let pbrt_from_mitsuba = DMat3::from_cols(DVec3::Y, DVec3::Z, -DVec3::X);
+    let to_world = DMat4::from_mat3(rotation * pbrt_from_mitsuba);
+    LightOut::EnvMap {
+        filename: path.display().to_string(),
+        to_world: row_major(&to_world),
+        scale: (l.x + l.y + l.z) / 3.0,
+    }
 }
 
 /// One shape in its own space: the world for world shapes, its object's for object

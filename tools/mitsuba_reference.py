@@ -111,6 +111,9 @@ def light(mi, l):
         return {"type": "directional", "direction": l["direction"], "irradiance": rgb(l["irradiance"])}
     if t == "constant":
         return {"type": "constant", "radiance": rgb(l["radiance"])}
+    if t == "env_map":
+        return {"type": "envmap", "filename": l["filename"], "to_world": matrix(mi, l["to_world"]),
+                "scale": float(l["scale"])}
     raise ExportError(f"unknown light type \"{t}\"")
 
 
