@@ -29,7 +29,7 @@ fn vec3(v: DVec3) -> Value {
 }
 
 fn row_major(m: &DMat4) -> Value {
-    Value::Array(m.transpose().to_cols_array().iter().map(|&x| f64_json(x)).collect())
+    Value::Array(crate::math::transform::row_major(m).iter().map(|&x| f64_json(x)).collect())
 }
 
 fn bounds(b: Option<[DVec3; 2]>) -> Value {

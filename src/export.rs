@@ -34,6 +34,7 @@
 use crate::camera::Camera;
 use crate::lights::{Light, emission};
 use crate::materials::{Material, Texture, TextureContext};
+use crate::math::transform::row_major;
 use crate::scene::{CameraKind, Geometry, SceneDescription, ShapeDesc};
 use crate::shapes::{Quadric, TriangleMesh};
 use crate::spectrum::Rgb;
@@ -290,10 +291,6 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
 
 fn note(location: &str, what: &str, why: impl Into<String>) -> Unsupported {
     Unsupported { location: location.to_string(), what: what.to_string(), why: why.into() }
-}
-
-fn row_major(m: &DMat4) -> [f64; 16] {
-    m.transpose().to_cols_array()
 }
 
 fn camera(scene: &SceneDescription, notes: &mut Vec<Unsupported>) -> CameraOut {

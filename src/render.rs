@@ -81,7 +81,7 @@ impl RenderScene {
         let syntax = scene.syntax;
         let film = scene.film.clone();
         let integrator = scene.integrator.clone();
-        let m = scene.camera.camera_from_world.transpose().to_cols_array().map(|x| x as f32);
+        let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
         let geometry = Geometry::new(&mut scene);
         let emitters = area_lights(&geometry, &shape_info, &area_params, &mut lights);
         let light_power = Distribution1D::new(&lights.iter().map(|l| l.power(world) as f64).collect::<Vec<_>>());

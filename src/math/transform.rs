@@ -14,6 +14,11 @@ pub struct Transform {
     pub m_inv: [[f32; 4]; 4],
 }
 
+/// The 16 entries of `m` row by row, as scene files, `check` and exports write them.
+pub fn row_major(m: &DMat4) -> [f64; 16] {
+    m.transpose().to_cols_array()
+}
+
 fn rows(m: DMat4) -> [[f32; 4]; 4] {
     let t = m.transpose().to_cols_array_2d(); // columns of the transpose are rows
     t.map(|r| r.map(|x| x as f32))
