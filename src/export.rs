@@ -35,7 +35,7 @@ use crate::camera::Camera;
 use crate::lights::{Light, emission};
 use crate::materials::{Material, Texture, TextureContext};
 use crate::math::transform::row_major;
-use crate::scene::{CameraKind, Geometry, SceneDescription, ShapeDesc};
+use crate::scene::{CameraKind, Geometry, LightDesc, SceneDescription, ShapeDesc};
 use crate::shapes::{Quadric, TriangleMesh};
 use crate::spectrum::Rgb;
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -261,10 +261,7 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         .iter()
         .filter_map(|d| {
             let l = Light::from_desc(&d.ty, &d.params, &d.world_from_light, scene.syntax, &ctx)?;
-            match &l {
-                Light::Infinite { l, map: Some(_) } => Some(env_map(scene, d, *l, &mut notes)),
-                _ => light(&l, &mut notes),
-            }
+            light(scene, d, &l, &mut notes)
         })
         .collect();
     notes.extend(ctx.warnings.into_inner().into_iter().map(|w| note("", "texture", w)));
@@ -361,7 +358,7 @@ fn material(ty: &str, m: &Material, index: usize, notes: &mut Vec<Unsupported>) 
     }
 }
 
-fn light(l: &Light, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
+fn light(scene: &SceneDescription, d: &LightDesc, l: &Light, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
     Some(match l {
         Light::Point { p, i } => LightOut::Point { position: p.to_array(), intensity: i.to_array() },
         Light::Spot { p, frame, i, cos_total, cos_start, smooth } => {
@@ -380,14 +377,15 @@ fn light(l: &Light, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
         }
         Light::Distant { w, l } => LightOut::Distant { direction: (-*w).to_array(), irradiance: l.to_array() },
         Light::Infinite { l, map: None } => LightOut::Constant { radiance: l.to_array() },
-        Light::Area { .. } | Light::Infinite { map: Some(_), .. } => return None,
+        Light::Infinite { l, map: Some(_) } => env_map(scene, d, *l, notes),
+        Light::Area { .. } => return None,
     })
 }
 
 /// An environment map for Mitsuba's `envmap`, which reads directions as
 /// (atan2(x, −z)/2π, acos(y)/π) where pbrt reads (atan2(y, x)/2π, acos(z)/π): its
 /// axes are ours through a reflection, (x, y, z)_mitsuba = (y, z, −x)_pbrt.
-fn env_map(scene: &SceneDescription, d: &crate::scene::LightDesc, l: Rgb, notes: &mut Vec<Unsupported>) -> LightOut {
+fn env_map(scene: &SceneDescription, d: &LightDesc, l: Rgb, notes: &mut Vec<Unsupported>) -> LightOut {
     let name = d.params.string("mapname").ok().flatten().or_else(|| d.params.string("filename").ok().flatten());
     let path = crate::parser::stmt::resolve_relative(&scene.base_dir, &name.unwrap_or_default());
     let path = std::path::absolute(&path).unwrap_or(path);
