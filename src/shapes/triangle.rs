@@ -130,17 +130,19 @@ pub struct WatertightRay {
 
 impl WatertightRay {
     pub fn new(ray: &Ray) -> WatertightRay {
+        // Selects and indexes rather than branching: rays arrive in random directions.
         let ad = ray.d.0.abs();
-        let kz = if ad.x > ad.y && ad.x > ad.z {
-            0
-        } else if ad.y > ad.z {
-            1
-        } else {
-            2
-        };
-        let d = ray.d.0;
+        let x_largest = (ad.x > ad.y) & (ad.x > ad.z);
+        let kz = if x_largest { 0 } else { 2 - (ad.y > ad.z) as usize };
+        let d = ray.d.0.to_array();
         let d = Vec3::new(d[(kz + 1) % 3], d[(kz + 2) % 3], d[kz]);
         WatertightRay { o: ray.o.0, kz, shear: Vec3::new(-d.x / d.z, -d.y / d.z, 1.0 / d.z) }
+    }
+
+    /// The axis the ray is most nearly along: 0 for the permutation (1, 2, 0) of
+    /// [`watertight`], 1 for (2, 0, 1), 2 for (0, 1, 2).
+    pub fn kz(&self) -> usize {
+        self.kz
     }
 }
 
@@ -153,9 +155,22 @@ pub struct TriangleHit {
 
 impl TriangleMesh {
     #[inline]
-    fn corners(&self, tri: usize) -> [Vec3; 3] {
+    pub fn corners(&self, tri: usize) -> [Vec3; 3] {
         let i = &self.indices[3 * tri..3 * tri + 3];
         [Vec3::from(self.p[i[0] as usize]), Vec3::from(self.p[i[1] as usize]), Vec3::from(self.p[i[2] as usize])]
+    }
+
+    /// Asks the cache for the triangle's corners without waiting for them.
+    #[inline(always)]
+    pub fn prefetch(&self, tri: usize) {
+        #[cfg(target_arch = "x86_64")]
+        for &i in &self.indices[3 * tri..3 * tri + 3] {
+            if let Some(p) = self.p.get(i as usize) {
+                // SAFETY: a prefetch reads nothing the program sees and cannot fault; it is
+                // `unsafe` only for its `sse` target feature, which every x86_64 has.
+                unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.as_ptr().cast()) };
+            }
+        }
     }
 
     pub fn triangle_bounds(&self, tri: usize) -> Bounds3 {
@@ -174,74 +189,79 @@ impl TriangleMesh {
     pub fn intersect_prepared(&self, tri: usize, r: &WatertightRay, t_max: f32) -> Option<TriangleHit> {
         // One instance per permutation, so the axis shuffle costs nothing per triangle.
         match r.kz {
-            0 => self.watertight::<1, 2, 0>(tri, r, t_max),
-            1 => self.watertight::<2, 0, 1>(tri, r, t_max),
-            _ => self.watertight::<0, 1, 2>(tri, r, t_max),
+            0 => watertight::<1, 2, 0>(self.corners(tri), r, t_max),
+            1 => watertight::<2, 0, 1>(self.corners(tri), r, t_max),
+            _ => watertight::<0, 1, 2>(self.corners(tri), r, t_max),
         }
     }
+}
 
-    #[inline(always)]
-    fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
-        &self,
-        tri: usize,
-        r: &WatertightRay,
-        t_max: f32,
-    ) -> Option<TriangleHit> {
-        let [p0, p1, p2] = self.corners(tri);
-        let permute = |p: Vec3| {
-            let v = p - r.o;
-            Vec3::new(v[KX], v[KY], v[KZ])
-        };
-        let (mut p0t, mut p1t, mut p2t) = (permute(p0), permute(p1), permute(p2));
-        for p in [&mut p0t, &mut p1t, &mut p2t] {
-            p.x += r.shear.x * p.z;
-            p.y += r.shear.y * p.z;
-        }
-        let mut e0 = p1t.x * p2t.y - p1t.y * p2t.x;
-        let mut e1 = p2t.x * p0t.y - p2t.y * p0t.x;
-        let mut e2 = p0t.x * p1t.y - p0t.y * p1t.x;
-        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-            let f = |a: f32, b: f32, c: f32, d: f32| (a as f64 * b as f64 - c as f64 * d as f64) as f32;
-            e0 = f(p1t.x, p2t.y, p1t.y, p2t.x);
-            e1 = f(p2t.x, p0t.y, p2t.y, p0t.x);
-            e2 = f(p0t.x, p1t.y, p0t.y, p1t.x);
-        }
-        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
-            return None;
-        }
-        let det = e0 + e1 + e2;
-        // Degenerate triangles never hit (pbrt-v4 checks this first; checking only the
-        // candidates that got this far gives the same answers).
-        if det == 0.0 || (p2 - p0).cross(p1 - p0).length_squared() == 0.0 {
-            return None;
-        }
-        p0t.z *= r.shear.z;
-        p1t.z *= r.shear.z;
-        p2t.z *= r.shear.z;
-        let t_scaled = e0 * p0t.z + e1 * p1t.z + e2 * p2t.z;
-        if (det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det))
-            || (det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_max * det))
-        {
-            return None;
-        }
-        let inv_det = 1.0 / det;
-        let t = t_scaled * inv_det;
-        // Reject hits whose t is not conservatively greater than zero.
-        let max_zt = p0t.z.abs().max(p1t.z.abs()).max(p2t.z.abs());
-        let delta_z = gamma(3) * max_zt;
-        let max_xt = p0t.x.abs().max(p1t.x.abs()).max(p2t.x.abs());
-        let max_yt = p0t.y.abs().max(p1t.y.abs()).max(p2t.y.abs());
-        let delta_x = gamma(5) * (max_xt + max_zt);
-        let delta_y = gamma(5) * (max_yt + max_zt);
-        let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-        let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-        let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
-        if t <= delta_t {
-            return None;
-        }
-        Some(TriangleHit { t, b: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
+/// The watertight test of the triangle with corners `[p0, p1, p2]`, for a ray whose
+/// permutation `r.kz()` is (KX, KY, KZ).
+#[inline(always)]
+pub fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
+    [p0, p1, p2]: [Vec3; 3],
+    r: &WatertightRay,
+    t_max: f32,
+) -> Option<TriangleHit> {
+    let permute = |p: Vec3| {
+        let v = p - r.o;
+        Vec3::new(v[KX], v[KY], v[KZ])
+    };
+    let (mut p0t, mut p1t, mut p2t) = (permute(p0), permute(p1), permute(p2));
+    for p in [&mut p0t, &mut p1t, &mut p2t] {
+        p.x += r.shear.x * p.z;
+        p.y += r.shear.y * p.z;
     }
+    let mut e0 = p1t.x * p2t.y - p1t.y * p2t.x;
+    let mut e1 = p2t.x * p0t.y - p2t.y * p0t.x;
+    let mut e2 = p0t.x * p1t.y - p0t.y * p1t.x;
+    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+        let f = |a: f32, b: f32, c: f32, d: f32| (a as f64 * b as f64 - c as f64 * d as f64) as f32;
+        e0 = f(p1t.x, p2t.y, p1t.y, p2t.x);
+        e1 = f(p2t.x, p0t.y, p2t.y, p0t.x);
+        e2 = f(p0t.x, p1t.y, p0t.y, p1t.x);
+    }
+    // Non-short-circuit operators: one branch, not six, for random rays to mispredict.
+    let negative = (e0 < 0.0) | (e1 < 0.0) | (e2 < 0.0);
+    let positive = (e0 > 0.0) | (e1 > 0.0) | (e2 > 0.0);
+    if negative & positive {
+        return None;
+    }
+    let det = e0 + e1 + e2;
+    // Degenerate triangles never hit (pbrt-v4 checks this first; checking only the
+    // candidates that got this far gives the same answers).
+    if det == 0.0 || (p2 - p0).cross(p1 - p0).length_squared() == 0.0 {
+        return None;
+    }
+    p0t.z *= r.shear.z;
+    p1t.z *= r.shear.z;
+    p2t.z *= r.shear.z;
+    let t_scaled = e0 * p0t.z + e1 * p1t.z + e2 * p2t.z;
+    if (det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det))
+        || (det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_max * det))
+    {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    // Reject hits whose t is not conservatively greater than zero.
+    let max_zt = p0t.z.abs().max(p1t.z.abs()).max(p2t.z.abs());
+    let delta_z = gamma(3) * max_zt;
+    let max_xt = p0t.x.abs().max(p1t.x.abs()).max(p2t.x.abs());
+    let max_yt = p0t.y.abs().max(p1t.y.abs()).max(p2t.y.abs());
+    let delta_x = gamma(5) * (max_xt + max_zt);
+    let delta_y = gamma(5) * (max_yt + max_zt);
+    let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+    let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
+    if t <= delta_t {
+        return None;
+    }
+    Some(TriangleHit { t, b: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
+}
 
+impl TriangleMesh {
     fn uvs(&self, tri: usize) -> [glam::Vec2; 3] {
         match &self.uv {
             Some(uv) => {
