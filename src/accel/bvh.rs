@@ -1,12 +1,17 @@
 //! A bounding volume hierarchy: binned SAH build (parallel for large subtrees),
-//! collapsed into 4-wide nodes, with closure-based closest-hit and any-hit traversal
-//! using pbrt's conservative slab test on four boxes at once (SSE through glam).
+//! collapsed into 8-wide nodes, with closure-based closest-hit and any-hit traversal
+//! using pbrt's conservative slab test on four boxes at a time (SSE through glam).
 //!
 //! DEVIATION(pbrt): pbrt and the issue use flat 32-byte binary nodes.
-//! Incoherent rays on large meshes are bound by dependent cache misses, one per level;
-//! a 4-wide node keeps four child boxes in two adjacent cache lines and halves the
-//! levels. Each node is 128 bytes (four 32-byte child records: box plus reference), so
-//! the BVH still takes well under 32 bytes per triangle.
+//! Incoherent rays on large meshes wait on one dependent cache miss per node they
+//! visit, so the number of visits sets their speed: an 8-wide node visits a third as
+//! many levels as a binary one. Each node is 256 bytes (eight 32-byte child records:
+//! box and reference), and with leaves of a few triangles the BVH still takes about
+//! 18 bytes per triangle.
+//!
+//! Traversal takes the nearest hit child next and pushes the others in slot order;
+//! it picks with selects rather than branches, which random rays mispredict. Pushing
+//! unsorted costs little: most nodes have one or two hit children.
 //!
 //! The BVH knows only boxes: `build` returns the primitive order it wants, and the
 //! caller stores its primitives in that order, so leaves index them directly.
@@ -14,42 +19,46 @@
 use crate::math::{Bounds3, Ray};
 use glam::{Vec3, Vec4};
 use std::mem::MaybeUninit;
+use std::ops::Range;
 
-/// Four children: their boxes (structure of arrays) and references. A child is a
-/// node (`count` 0, `child` = node index), a leaf (`count` primitives from `child`),
-/// or empty (`count` = `EMPTY`, an inverted box).
+/// `WIDTH` children: their boxes (structure of arrays) and references. A child is a
+/// node (`count` 0, `child` = node index) or a leaf (`count` primitives from
+/// `child`); `valid` marks the slots in use.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
-struct Node4 {
+struct Node {
     /// `bounds[0]` the low corners, `bounds[1]` the high ones, per axis.
-    bounds: [[[f32; 4]; 3]; 2],
-    child: [u32; 4],
-    count: [u16; 4],
-    _pad: [u32; 2],
+    bounds: [[[f32; WIDTH]; 3]; 2],
+    child: [u32; WIDTH],
+    count: [u8; WIDTH],
+    valid: u8,
+    _pad: [u8; 3 * WIDTH - 1],
 }
 
-const _: () = assert!(std::mem::size_of::<Node4>() == 128);
-const EMPTY: u16 = u16::MAX;
+/// Children per node.
+const WIDTH: usize = 8;
+const _: () = assert!(std::mem::size_of::<Node>() == 32 * WIDTH);
 
-impl Default for Node4 {
-    fn default() -> Node4 {
-        Node4 {
-            bounds: [[[f32::INFINITY; 4]; 3], [[f32::NEG_INFINITY; 4]; 3]],
-            child: [0; 4],
-            count: [EMPTY; 4],
-            _pad: [0; 2],
+impl Node {
+    /// Encodes up to `WIDTH` children (box, child, count).
+    fn new(kids: &[(Bounds3, u32, u8)]) -> Node {
+        let mut node = Node {
+            bounds: [[[f32::INFINITY; WIDTH]; 3], [[f32::NEG_INFINITY; WIDTH]; 3]],
+            child: [0; WIDTH],
+            count: [0; WIDTH],
+            valid: 0,
+            _pad: [0; 3 * WIDTH - 1],
+        };
+        for (slot, &(b, child, count)) in kids.iter().enumerate() {
+            for a in 0..3 {
+                node.bounds[0][a][slot] = b.min[a];
+                node.bounds[1][a][slot] = b.max[a];
+            }
+            node.child[slot] = child;
+            node.count[slot] = count;
+            node.valid |= 1 << slot;
         }
-    }
-}
-
-impl Node4 {
-    fn set(&mut self, slot: usize, b: &Bounds3, child: u32, count: u16) {
-        for a in 0..3 {
-            self.bounds[0][a][slot] = b.min[a];
-            self.bounds[1][a][slot] = b.max[a];
-        }
-        self.child[slot] = child;
-        self.count[slot] = count;
+        node
     }
 }
 
@@ -57,7 +66,7 @@ impl Node4 {
 /// the root.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
-    nodes: Vec<Node4>,
+    nodes: Vec<Node>,
     bounds: Bounds3,
 }
 
@@ -65,6 +74,8 @@ pub struct Bvh {
 struct PrimInfo {
     bounds: Bounds3,
     centroid: Vec3,
+    /// Its intersection cost in triangle tests.
+    cost: f32,
     index: u32,
 }
 
@@ -74,19 +85,27 @@ enum BuildNode {
 }
 
 const BINS: usize = 12;
-const MAX_LEAF: usize = 8;
+/// A node visit's cost in triangle tests, for SAH. A visit is a dependent cache miss
+/// on large scenes, and a leaf's triangles are fetched together, so leaves of a few
+/// triangles pay: with 8-wide nodes this gives 18 bytes of BVH per triangle (2.0
+/// gave 35) at the same speed on large meshes and small ones. Quadrics cost more
+/// (`accel::QUADRIC_COST`), so they still get leaves of their own.
+const TRAVERSAL_COST: f32 = 4.0;
+/// The most primitives in a leaf.
+pub const MAX_LEAF: usize = 8;
 const PARALLEL_THRESHOLD: usize = 4096;
 
 impl Bvh {
-    /// Builds over the given boxes; returns the hierarchy and the primitive order.
-    pub fn build(bounds: &[Bounds3]) -> (Bvh, Vec<u32>) {
+    /// Builds over the given boxes, primitive i costing `cost(i)` triangle tests to
+    /// intersect; returns the hierarchy and the primitive order.
+    pub fn build(bounds: &[Bounds3], cost: impl Fn(usize) -> f32) -> (Bvh, Vec<u32>) {
         if bounds.is_empty() {
             return (Bvh::default(), Vec::new());
         }
         let mut info: Vec<PrimInfo> = bounds
             .iter()
             .enumerate()
-            .map(|(i, b)| PrimInfo { bounds: *b, centroid: b.centroid(), index: i as u32 })
+            .map(|(i, b)| PrimInfo { bounds: *b, centroid: b.centroid(), cost: cost(i), index: i as u32 })
             .collect();
         let root = build_recursive(&mut info, 0);
         let mut nodes = Vec::new();
@@ -100,7 +119,7 @@ impl Bvh {
     }
 
     pub fn heap_bytes(&self) -> usize {
-        self.nodes.capacity() * std::mem::size_of::<Node4>()
+        self.nodes.capacity() * std::mem::size_of::<Node>()
     }
 
     pub fn bounds(&self) -> Bounds3 {
@@ -110,29 +129,53 @@ impl Bvh {
     /// Closest hit: `hit(prim, t_max)` returns `Some(t)` for a hit closer than `t_max`.
     /// Returns the final t_max if anything was hit.
     #[inline]
-    pub fn intersect(&self, ray: &Ray, mut t_max: f32, mut hit: impl FnMut(usize, f32) -> Option<f32>) -> Option<f32> {
-        let mut found = false;
-        self.traverse(ray, &mut t_max, |prim, t_max| match hit(prim, *t_max) {
-            Some(t) => {
-                *t_max = t;
-                found = true;
-                false
+    pub fn intersect(&self, ray: &Ray, t_max: f32, mut hit: impl FnMut(usize, f32) -> Option<f32>) -> Option<f32> {
+        self.intersect_leaves(ray, t_max, |leaf, mut t_max| {
+            let mut found = false;
+            for prim in leaf {
+                if let Some(t) = hit(prim, t_max) {
+                    (t_max, found) = (t, true);
+                }
             }
-            None => false,
-        });
-        found.then_some(t_max)
+            found.then_some(t_max)
+        })
     }
 
     /// Any hit: stops at the first primitive for which `hit(prim, t_max)` is true.
     #[inline]
     pub fn intersect_p(&self, ray: &Ray, t_max: f32, mut hit: impl FnMut(usize, f32) -> bool) -> bool {
+        self.intersect_leaves_p(ray, t_max, |leaf, t_max| leaf.into_iter().any(|prim| hit(prim, t_max)))
+    }
+
+    /// Closest hit, a leaf at a time: `hit(prims, t_max)` returns the closest t below
+    /// `t_max` among the leaf's primitives, if any.
+    #[inline]
+    pub fn intersect_leaves(
+        &self,
+        ray: &Ray,
+        mut t_max: f32,
+        mut hit: impl FnMut(Range<usize>, f32) -> Option<f32>,
+    ) -> Option<f32> {
+        let mut found = false;
+        self.traverse(ray, &mut t_max, |leaf, t_max| {
+            if let Some(t) = hit(leaf, *t_max) {
+                (*t_max, found) = (t, true);
+            }
+            false
+        });
+        found.then_some(t_max)
+    }
+
+    /// Any hit, a leaf at a time: stops at the first leaf for which `hit` is true.
+    #[inline]
+    pub fn intersect_leaves_p(&self, ray: &Ray, t_max: f32, mut hit: impl FnMut(Range<usize>, f32) -> bool) -> bool {
         let mut t = t_max;
-        self.traverse(ray, &mut t, |prim, t_max| hit(prim, *t_max))
+        self.traverse(ray, &mut t, |leaf, t_max| hit(leaf, *t_max))
     }
 
     /// Visits leaves front to back; `visit` returns true to stop.
     #[inline]
-    fn traverse(&self, ray: &Ray, t_max: &mut f32, mut visit: impl FnMut(usize, &mut f32) -> bool) -> bool {
+    fn traverse(&self, ray: &Ray, t_max: &mut f32, mut visit: impl FnMut(Range<usize>, &mut f32) -> bool) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -141,36 +184,18 @@ impl Bvh {
         let (mut child, mut count) = (0u32, 0u16);
         loop {
             if count > 0 {
-                for prim in child as usize..child as usize + count as usize {
-                    if visit(prim, t_max) {
-                        return true;
-                    }
+                if visit(child as usize..child as usize + count as usize, t_max) {
+                    return true;
                 }
             } else {
                 let node = &self.nodes[child as usize];
-                let (t0, mut mask) = r.entries(node, *t_max);
-                let t0 = t0.to_array();
-                // Sort the hit children farthest first; go on with the nearest, push the rest.
-                let mut hits = [(0f32, 0usize); 4];
-                let mut n = 0;
-                while mask != 0 {
-                    let slot = mask.trailing_zeros() as usize & 3;
-                    mask &= mask - 1;
-                    let t = t0[slot];
-                    let mut k = n;
-                    while k > 0 && hits[k - 1].0 < t {
-                        hits[k] = hits[k - 1];
-                        k -= 1;
-                    }
-                    hits[k] = (t, slot);
-                    n += 1;
-                }
-                if n > 0 {
-                    for &(t, slot) in &hits[..n - 1] {
-                        stack.push(node.child[slot & 3], node.count[slot & 3], t);
-                    }
-                    let slot = hits[n - 1].1 & 3;
-                    (child, count) = (node.child[slot], node.count[slot]);
+                let (t0, mask) = r.entries(node, *t_max);
+                if mask != 0 {
+                    // Go on with the nearest hit child; push the others with their entry t.
+                    let nearest = nearest_slot(t0, mask);
+                    let entry = |s: usize| node.child[s] as u64 | (node.count[s] as u64) << 32;
+                    stack.push_where(mask & !(1 << nearest), std::array::from_fn(|s| (entry(s), t0[s])));
+                    (child, count) = (node.child[nearest], node.count[nearest] as u16);
                     continue;
                 }
             }
@@ -186,6 +211,25 @@ impl Bvh {
     }
 }
 
+/// The slot of the hit child (a bit of `mask`) with the smallest entry t.
+#[inline(always)]
+fn nearest_slot(t0: [f32; WIDTH], mask: u32) -> usize {
+    // Keys order like (t, slot): t ≥ 0, so its bits order like it; misses are all ones.
+    let key = |s: usize| {
+        let miss = 0u64.wrapping_sub((mask >> s & 1 ^ 1) as u64);
+        ((t0[s].to_bits() as u64) << 32 | s as u64) | miss
+    };
+    let mut k: [u64; WIDTH] = std::array::from_fn(key);
+    let mut n = WIDTH;
+    while n > 1 {
+        n /= 2;
+        for i in 0..n {
+            k[i] = k[i].min(k[i + n]);
+        }
+    }
+    (k[0] & (WIDTH as u64 - 1)) as usize
+}
+
 /// The traversal stack: (node index or first primitive, primitive count or 0 for a
 /// node, entry t). The inline part is left uninitialised: zeroing it cost more than
 /// the rest of a cached traversal step. Entries past it, which only degenerate deep
@@ -197,7 +241,7 @@ struct Stack {
     spill: Vec<(u64, f32)>,
 }
 
-const STACK_INLINE: usize = 48;
+const STACK_INLINE: usize = 64;
 
 impl Stack {
     #[inline(always)]
@@ -218,7 +262,28 @@ impl Stack {
             self.ts[self.len].write(t);
             self.len += 1;
         } else {
+            #[cfg(test)]
+            tests::SPILLED.with(|s| s.set(true));
             self.spill.push((packed, t));
+        }
+    }
+
+    /// Pushes the entries (packed reference, t) whose bit is set in `which`, in slot
+    /// order. Every entry is written when all fit, and a set bit only advances the top.
+    #[inline(always)]
+    fn push_where(&mut self, which: u32, entries: [(u64, f32); WIDTH]) {
+        if self.len + WIDTH <= STACK_INLINE {
+            for (s, (packed, t)) in entries.into_iter().enumerate() {
+                self.refs[self.len].write(packed);
+                self.ts[self.len].write(t);
+                self.len += (which >> s & 1) as usize;
+            }
+        } else {
+            for (s, &(packed, t)) in entries.iter().enumerate() {
+                if which >> s & 1 != 0 {
+                    self.push(packed as u32, (packed >> 32) as u16, t);
+                }
+            }
         }
     }
 
@@ -228,8 +293,8 @@ impl Stack {
             Some(e) => e,
             None if self.len > 0 => {
                 self.len -= 1;
-                // SAFETY: `push` wrote every inline entry below `len`, and `len` only
-                // shrinks here, past the entry just read.
+                // SAFETY: `push` and `push_where` write every inline entry below `len`
+                // before raising it past them, and `len` only shrinks here.
                 unsafe { (self.refs[self.len].assume_init(), self.ts[self.len].assume_init()) }
             }
             None => return None,
@@ -238,7 +303,7 @@ impl Stack {
     }
 }
 
-/// A ray prepared for slab tests on four boxes at once.
+/// A ray prepared for slab tests on a node's boxes, four at a time.
 struct SlabRay {
     o: [Vec4; 3],
     inv: [Vec4; 3],
@@ -257,24 +322,33 @@ impl SlabRay {
         }
     }
 
-    /// Entry distances of the four boxes within [0, t_max], and a bit mask of the hit
-    /// ones. pbrt's conservative test: far distances are enlarged by 1 + 2γ(3); a ray
-    /// lying in a slab's plane (a NaN) is not a miss.
+    /// Entry distances of the node's boxes within [0, t_max], and a bit mask of the hit
+    /// ones. pbrt's conservative test: far distances are enlarged
+    /// by 1 + 2γ(3); a ray lying in a slab's plane (a NaN) is not a miss.
     #[inline(always)]
-    fn entries(&self, node: &Node4, t_max: f32) -> (Vec4, u32) {
+    fn entries(&self, node: &Node, t_max: f32) -> ([f32; WIDTH], u32) {
         const SCALE: f32 = 1.0 + 2.0 * crate::math::float::gamma(3);
-        let mut t0 = Vec4::ZERO;
-        let mut t1 = Vec4::splat(t_max);
+        let mut t0 = [Vec4::ZERO; WIDTH / 4];
+        let mut t1 = [Vec4::splat(t_max); WIDTH / 4];
         for a in 0..3 {
             let n = self.near[a] & 1;
-            let tn = (Vec4::from_array(node.bounds[n][a]) - self.o[a]) * self.inv[a];
-            let tf = (Vec4::from_array(node.bounds[n ^ 1][a]) - self.o[a]) * self.inv[a] * SCALE;
-            // max/min (SSE maxps/minps) keep the second operand when a lane is NaN:
-            // pbrt's `if (tNear > t0) t0 = tNear`, lane by lane.
-            t0 = tn.max(t0);
-            t1 = tf.min(t1);
+            for h in 0..WIDTH / 4 {
+                let four = |b: &[f32; WIDTH]| Vec4::from_slice(&b[4 * h..4 * h + 4]);
+                let tn = (four(&node.bounds[n][a]) - self.o[a]) * self.inv[a];
+                let tf = (four(&node.bounds[n ^ 1][a]) - self.o[a]) * self.inv[a] * SCALE;
+                // max/min (SSE maxps/minps) keep the second operand when a lane is NaN:
+                // pbrt's `if (tNear > t0) t0 = tNear`, lane by lane.
+                t0[h] = tn.max(t0[h]);
+                t1[h] = tf.min(t1[h]);
+            }
         }
-        (t0, t0.cmple(t1).bitmask())
+        let mut mask = 0;
+        let mut t = [0.0; WIDTH];
+        for h in 0..WIDTH / 4 {
+            mask |= t0[h].cmple(t1[h]).bitmask() << (4 * h);
+            t[4 * h..4 * h + 4].copy_from_slice(&t0[h].to_array());
+        }
+        (t, mask & node.valid as u32)
     }
 }
 
@@ -312,37 +386,36 @@ fn build_recursive(prims: &mut [PrimInfo], first: usize) -> BuildNode {
 fn sah_split(prims: &mut [PrimInfo], bounds: &Bounds3, axis: usize, lo: f32, hi: f32) -> Option<usize> {
     let n = prims.len();
     let bin_of = |c: Vec3| (((c[axis] - lo) / (hi - lo) * BINS as f32) as usize).min(BINS - 1);
-    let mut count = [0usize; BINS];
+    // Per bin: the summed intersection cost of its primitives, and their bounds.
+    let mut cost = [0f32; BINS];
     let mut bb = [Bounds3::default(); BINS];
     for p in prims.iter() {
         let b = bin_of(p.centroid);
-        count[b] += 1;
+        cost[b] += p.cost;
         bb[b] = bb[b].union(p.bounds);
     }
     // Sweep from the right for the right-hand areas, then from the left.
     let mut right_area = [0f32; BINS];
-    let (mut acc, mut acc_n) = (Bounds3::default(), 0usize);
-    let mut right_count = [0usize; BINS];
+    let (mut acc, mut acc_cost) = (Bounds3::default(), 0f32);
+    let mut right_cost = [0f32; BINS];
     for i in (1..BINS).rev() {
         acc = acc.union(bb[i]);
-        acc_n += count[i];
+        acc_cost += cost[i];
         right_area[i] = acc.surface_area();
-        right_count[i] = acc_n;
+        right_cost[i] = acc_cost;
     }
     let total = bounds.surface_area().max(f32::MIN_POSITIVE);
     let (mut best, mut best_cost) = (0, f32::INFINITY);
-    let (mut left, mut left_n) = (Bounds3::default(), 0usize);
+    let (mut left, mut left_cost) = (Bounds3::default(), 0f32);
     for i in 0..BINS - 1 {
         left = left.union(bb[i]);
-        left_n += count[i];
-        let cost =
-            // A traversal step costs about two triangle tests (memory bound).
-            2.0 + (left_n as f32 * left.surface_area() + right_count[i + 1] as f32 * right_area[i + 1]) / total;
-        if cost < best_cost {
-            (best, best_cost) = (i, cost);
+        left_cost += cost[i];
+        let split = TRAVERSAL_COST + (left_cost * left.surface_area() + right_cost[i + 1] * right_area[i + 1]) / total;
+        if split < best_cost {
+            (best, best_cost) = (i, split);
         }
     }
-    if n <= MAX_LEAF && best_cost >= n as f32 {
+    if n <= MAX_LEAF && best_cost >= left_cost + cost[BINS - 1] {
         return None;
     }
     let mid = partition(prims, |p| bin_of(p.centroid) <= best);
@@ -369,15 +442,15 @@ impl BuildNode {
     }
 }
 
-/// Writes `node` (and, recursively, its subtree) as 4-wide nodes; returns its index.
-/// A binary node's up to four grandchildren become its children, opening the largest
-/// interior child first.
-fn collapse(node: &BuildNode, nodes: &mut Vec<Node4>) -> u32 {
+/// Writes `node` (and, recursively, its subtree) as `WIDTH`-wide nodes; returns its
+/// index. A binary node's descendants, up to `WIDTH` of them, become its children,
+/// opening the largest interior child first.
+fn collapse(node: &BuildNode, nodes: &mut Vec<Node>) -> u32 {
     let mut kids: Vec<&BuildNode> = match node {
         BuildNode::Leaf { .. } => vec![node],
         BuildNode::Interior { children, .. } => vec![&children.0, &children.1],
     };
-    while kids.len() < 4 {
+    while kids.len() < WIDTH {
         let open = kids
             .iter()
             .enumerate()
@@ -391,22 +464,26 @@ fn collapse(node: &BuildNode, nodes: &mut Vec<Node4>) -> u32 {
         }
     }
     let index = nodes.len();
-    nodes.push(Node4::default());
-    for (slot, k) in kids.into_iter().enumerate() {
-        match k {
-            BuildNode::Leaf { bounds, first, count } => nodes[index].set(slot, bounds, *first as u32, *count as u16),
-            BuildNode::Interior { bounds, .. } => {
-                let child = collapse(k, nodes);
-                nodes[index].set(slot, bounds, child, 0);
-            }
-        }
-    }
+    nodes.push(Node::new(&[]));
+    let encoded: Vec<(Bounds3, u32, u8)> = kids
+        .into_iter()
+        .map(|k| match k {
+            BuildNode::Leaf { bounds, first, count } => (*bounds, *first as u32, *count as u8),
+            BuildNode::Interior { bounds, .. } => (*bounds, collapse(k, nodes), 0),
+        })
+        .collect();
+    nodes[index] = Node::new(&encoded);
     index as u32
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    thread_local! {
+        /// Set when a traversal stack spilled past its inline part on this thread.
+        pub static SPILLED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
     use crate::math::{Point3, Vector3};
 
     #[test]
@@ -422,7 +499,7 @@ mod tests {
                 Bounds3::new(c, c + Vec3::new(rnd(), rnd(), rnd()))
             })
             .collect();
-        let (bvh, order) = Bvh::build(&boxes);
+        let (bvh, order) = Bvh::build(&boxes, |_| 1.0);
         let sorted: Vec<Bounds3> = order.iter().map(|&i| boxes[i as usize]).collect();
         for _ in 0..500 {
             let o = Vec3::new(rnd(), rnd(), rnd()) * 100.0;
@@ -449,19 +526,55 @@ mod tests {
         assert_eq!(stack.pop(), None);
     }
 
-    /// Boxes at exponentially growing x make SAH peel a few off per level: a ray along
-    /// them needs 94 stack entries here, past the inline 48.
+    #[test]
+    fn push_where_keeps_the_marked_entries_in_slot_order_and_spills() {
+        let mut stack = Stack::new();
+        let mut expected = Vec::new();
+        for round in 0..40u32 {
+            let which = round.wrapping_mul(2654435761) >> 24;
+            let entries: [(u64, f32); WIDTH] = std::array::from_fn(|s| ((round * 16 + s as u32) as u64, s as f32));
+            stack.push_where(which, entries);
+            expected.extend(entries.iter().enumerate().filter(|(s, _)| which >> s & 1 != 0).map(|(_, e)| *e));
+        }
+        assert!(expected.len() > STACK_INLINE, "the test must reach the spill");
+        while let Some(e) = expected.pop() {
+            assert_eq!(stack.pop(), Some((e.0 as u32, 0, e.1)));
+        }
+        assert_eq!(stack.pop(), None);
+    }
+
+    #[test]
+    fn nearest_slot_is_the_smallest_hit_entry() {
+        let mut state = 7u32;
+        let mut rnd = || {
+            state = state.wrapping_mul(1664525).wrapping_add(1013904223);
+            state >> 8
+        };
+        for _ in 0..10_000 {
+            // Few distinct values, so ties (broken by the lower slot) are common.
+            let t0: [f32; WIDTH] = std::array::from_fn(|_| [0.0, 0.5, 1.0, f32::INFINITY][rnd() as usize % 4]);
+            let mask = rnd() % (1 << WIDTH);
+            if mask == 0 {
+                continue;
+            }
+            let best = (0..WIDTH).filter(|s| mask >> s & 1 != 0).min_by(|&a, &b| t0[a].total_cmp(&t0[b])).unwrap();
+            assert_eq!(nearest_slot(t0, mask), best);
+        }
+    }
+
+    /// Boxes at exponentially growing x make SAH peel a few off per level, so a ray
+    /// along them needs more stack than the inline part holds.
     #[test]
     fn deep_trees_traverse_like_brute_force() {
-        let boxes: Vec<Bounds3> = (0..160)
+        let boxes: Vec<Bounds3> = (0..460)
             .map(|i| {
-                let x = 1.5f32.powi(i);
+                let x = 1.2f32.powi(i);
                 Bounds3::new(Vec3::new(x, -0.5, -0.5), Vec3::new(1.01 * x, 0.5, 0.5))
             })
             .collect();
-        let (bvh, order) = Bvh::build(&boxes);
+        let (bvh, order) = Bvh::build(&boxes, |_| 1.0);
         let sorted: Vec<Bounds3> = order.iter().map(|&i| boxes[i as usize]).collect();
-        for (o, d) in [(Vec3::new(-1.0, 0.1, 0.0), Vec3::X), (Vec3::new(1e29, 0.0, 0.2), -Vec3::X)] {
+        for (o, d) in [(Vec3::new(-1.0, 0.1, 0.0), Vec3::X), (Vec3::new(1e38, 0.0, 0.2), -Vec3::X)] {
             let ray = Ray::new(Point3(o), Vector3(d));
             let inv = Vec3::ONE / d;
             let neg = [(inv.x < 0.0) as usize, (inv.y < 0.0) as usize, (inv.z < 0.0) as usize];
@@ -478,5 +591,6 @@ mod tests {
             });
             assert_eq!(seen, boxes.len());
         }
+        assert!(SPILLED.with(|s| s.get()), "the tree must be deep enough to spill the stack");
     }
 }

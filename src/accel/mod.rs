@@ -10,9 +10,16 @@ use crate::interaction::SurfaceInteraction;
 use crate::math::float::gamma;
 use crate::math::{Bounds3, Point3, Ray, Vector3};
 use crate::scene::{Geometry as ShapeGeometry, SceneDescription, ShapeDesc};
-use crate::shapes::{MeshFlags, QuadricHit, QuadricShape, TriangleHit, TriangleMesh, WatertightRay};
+use crate::shapes::{MeshFlags, QuadricHit, QuadricShape, TriangleHit, TriangleMesh, WatertightRay, watertight};
 use glam::{DMat3, DMat4, DVec3};
 use rayon::prelude::*;
+use std::ops::Range;
+
+/// A quadric's intersection cost in triangle tests, for SAH: its root solve with
+/// error bounds and its partial-shape checks take several times a triangle's.
+pub const QUADRIC_COST: f32 = 8.0;
+/// An instance's, for the top-level SAH: a ray transform and a whole traversal.
+const INSTANCE_COST: f32 = 16.0;
 
 /// A shape of a BVH: a quadric or a whole mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,6 +43,8 @@ struct Blas {
     /// triangles are then stored in BVH order (entry i is triangle i).
     prims: Vec<Prim>,
     shapes: Vec<ShapeRef>,
+    /// That single mesh, once `localize` has put it in BVH order.
+    single_mesh: Option<(u32, MeshFlags)>,
 }
 
 /// A placed object.
@@ -114,9 +123,10 @@ impl Blas {
                 }
             }
         }
-        let (bvh, order) = Bvh::build(&bounds);
+        let is_quadric = |i: usize| matches!(shapes[prims[i].shape as usize], ShapeRef::Quadric(_));
+        let (bvh, order) = Bvh::build(&bounds, |i| if is_quadric(i) { QUADRIC_COST } else { 1.0 });
         let prims = order.iter().map(|&i| prims[i as usize]).collect();
-        Blas { bvh, prims, shapes }
+        Blas { bvh, prims, shapes, single_mesh: None }
     }
 
     /// Reorders each mesh's triangles into this BVH's leaf order; records the file's
@@ -133,52 +143,108 @@ impl Blas {
             }
             ids[mesh] = order;
         }
-        if matches!(self.shapes.as_slice(), [ShapeRef::Mesh { .. }]) {
+        if let [ShapeRef::Mesh { mesh, flags }] = self.shapes.as_slice() {
             self.prims = Vec::new();
+            self.single_mesh = Some((*mesh, *flags));
         }
-    }
-
-    /// Leaf entry i.
-    #[inline]
-    fn prim(&self, i: usize) -> Prim {
-        if self.prims.is_empty() { Prim { shape: 0, tri: i as u32 } } else { self.prims[i] }
     }
 
     /// Closest hit: (t, local shape index, what was hit).
     fn intersect(&self, g: &Geometry, ray: &Ray, t_max: f32) -> Option<(f32, u32, LocalHit)> {
-        let mut best = None;
         let wr = WatertightRay::new(ray);
-        self.bvh.intersect(ray, t_max, |i, t_max| {
-            let prim = self.prim(i);
-            let hit = self.hit_prim(g, prim, ray, &wr, t_max)?;
-            best = Some((prim.shape, hit.1));
+        let mut best = None;
+        self.bvh.intersect_leaves(ray, t_max, |leaf, t_max| {
+            let hit = self.hit_leaf::<false>(g, leaf, ray, &wr, t_max)?;
+            best = Some(hit);
             Some(hit.0)
         });
-        let (shape, local) = best?;
-        let t = match local {
-            LocalHit::Quadric(_, h) => h.t,
-            LocalHit::Triangle { hit, .. } => hit.t,
-        };
-        Some((t, shape, local))
+        best
+    }
+
+    fn intersect_p(&self, g: &Geometry, ray: &Ray, t_max: f32) -> bool {
+        let wr = WatertightRay::new(ray);
+        self.bvh.intersect_leaves_p(ray, t_max, |leaf, t_max| self.hit_leaf::<true>(g, leaf, ray, &wr, t_max).is_some())
+    }
+
+    /// The triangle test's axis permutation as const generics: chosen once per leaf,
+    /// where it is predictable, and never for rays that reach no leaf.
+    #[inline(always)]
+    fn hit_leaf<const ANY: bool>(
+        &self,
+        g: &Geometry,
+        leaf: Range<usize>,
+        ray: &Ray,
+        wr: &WatertightRay,
+        t_max: f32,
+    ) -> Option<(f32, u32, LocalHit)> {
+        match wr.kz() {
+            0 => self.hit_leaf_permuted::<1, 2, 0, ANY>(g, leaf, ray, wr, t_max),
+            1 => self.hit_leaf_permuted::<2, 0, 1, ANY>(g, leaf, ray, wr, t_max),
+            _ => self.hit_leaf_permuted::<0, 1, 2, ANY>(g, leaf, ray, wr, t_max),
+        }
+    }
+
+    /// The closest hit below `t_max` among a leaf's primitives (`ANY`: the first).
+    #[inline(always)]
+    fn hit_leaf_permuted<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
+        &self,
+        g: &Geometry,
+        leaf: Range<usize>,
+        ray: &Ray,
+        wr: &WatertightRay,
+        mut t_max: f32,
+    ) -> Option<(f32, u32, LocalHit)> {
+        let mut best = None;
+        if let Some((mesh, flags)) = self.single_mesh {
+            // Every corner is requested before the first test, so the leaf's cache misses
+            // overlap rather than each waiting on the previous test's branch.
+            let m = &g.meshes[mesh as usize];
+            for tri in leaf.clone() {
+                m.prefetch(tri);
+            }
+            for tri in leaf {
+                if let Some(hit) = watertight::<KX, KY, KZ>(m.corners(tri), wr, t_max) {
+                    t_max = hit.t;
+                    best = Some((hit.t, 0, LocalHit::Triangle { mesh, tri: tri as u32, flags, hit }));
+                    if ANY {
+                        break;
+                    }
+                }
+            }
+            return best;
+        }
+        for i in leaf {
+            let prim = self.prims[i];
+            if let Some((t, local)) = self.hit_prim::<KX, KY, KZ>(g, prim, ray, wr, t_max) {
+                t_max = t;
+                best = Some((t, prim.shape, local));
+                if ANY {
+                    break;
+                }
+            }
+        }
+        best
     }
 
     #[inline(always)]
-    fn hit_prim(&self, g: &Geometry, prim: Prim, ray: &Ray, wr: &WatertightRay, t_max: f32) -> Option<(f32, LocalHit)> {
+    fn hit_prim<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        g: &Geometry,
+        prim: Prim,
+        ray: &Ray,
+        wr: &WatertightRay,
+        t_max: f32,
+    ) -> Option<(f32, LocalHit)> {
         match self.shapes[prim.shape as usize] {
             ShapeRef::Quadric(q) => {
                 let h = g.quadrics[q as usize].intersect_t(ray, t_max)?;
                 Some((h.t, LocalHit::Quadric(q, h)))
             }
             ShapeRef::Mesh { mesh, flags } => {
-                let hit = g.meshes[mesh as usize].intersect_prepared(prim.tri as usize, wr, t_max)?;
+                let hit = watertight::<KX, KY, KZ>(g.meshes[mesh as usize].corners(prim.tri as usize), wr, t_max)?;
                 Some((hit.t, LocalHit::Triangle { mesh, tri: prim.tri, flags, hit }))
             }
         }
-    }
-
-    fn intersect_p(&self, g: &Geometry, ray: &Ray, t_max: f32) -> bool {
-        let wr = WatertightRay::new(ray);
-        self.bvh.intersect_p(ray, t_max, |i, t_max| self.hit_prim(g, self.prim(i), ray, &wr, t_max).is_some())
     }
 }
 
@@ -241,7 +307,7 @@ impl Geometry {
             .iter()
             .map(|i| instance_bounds(&i.render_from_instance, objects[i.object as usize].bvh.bounds()))
             .collect();
-        let (tlas, order) = Bvh::build(&bounds);
+        let (tlas, order) = Bvh::build(&bounds, |_| INSTANCE_COST);
         instances = order.iter().map(|&k| instances[k as usize].clone()).collect();
         Geometry { quadrics, meshes, instances, world, objects, tlas, triangle_ids }
     }
