@@ -114,6 +114,11 @@ impl Bvh {
         (Bvh { nodes, bounds: root.bounds() }, info.iter().map(|p| p.index).collect())
     }
 
+    /// See [`super::hugepages`].
+    pub fn advise_huge_pages(&self) {
+        super::hugepages::advise(&self.nodes);
+    }
+
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }

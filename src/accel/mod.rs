@@ -3,6 +3,7 @@
 //! share their object's BVH and geometry; only a transform is stored per instance.
 
 pub mod bvh;
+mod hugepages;
 
 pub use bvh::Bvh;
 
@@ -285,6 +286,13 @@ impl Geometry {
         let mut triangle_ids = vec![Vec::new(); meshes.len()];
         for blas in std::iter::once(&mut world).chain(objects.iter_mut()) {
             blas.localize(&mut meshes, &mut triangle_ids);
+        }
+        for m in &meshes {
+            hugepages::advise(&m.p);
+            hugepages::advise(&m.indices);
+        }
+        for blas in std::iter::once(&world).chain(objects.iter()) {
+            blas.bvh.advise_huge_pages();
         }
         let mut next = scene.shapes.len() as u32;
         let mut instances: Vec<Instance> = scene
