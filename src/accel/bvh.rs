@@ -92,7 +92,7 @@ const BINS: usize = 12;
 /// (`accel::QUADRIC_COST`), so they still get leaves of their own.
 const TRAVERSAL_COST: f32 = 4.0;
 /// The most primitives in a leaf.
-pub const MAX_LEAF: usize = 8;
+const MAX_LEAF: usize = 8;
 const PARALLEL_THRESHOLD: usize = 4096;
 
 impl Bvh {
@@ -328,8 +328,8 @@ impl SlabRay {
     }
 
     /// Entry distances of the node's boxes within [0, t_max], and a bit mask of the hit
-    /// ones. pbrt's conservative test: far distances are enlarged
-    /// by 1 + 2γ(3); a ray lying in a slab's plane (a NaN) is not a miss.
+    /// ones. pbrt's conservative test: far distances are enlarged by 1 + 2γ(3); a ray
+    /// lying in a slab's plane (a NaN) is not a miss.
     #[inline(always)]
     fn entries(&self, node: &Node, t_max: f32) -> ([f32; WIDTH], u32) {
         const SCALE: f32 = 1.0 + 2.0 * crate::math::float::gamma(3);
@@ -517,6 +517,27 @@ mod tests {
             let got = bvh.intersect(&ray, f32::INFINITY, |i, t| entry(&sorted[i], t));
             assert_eq!(got.unwrap_or(f32::INFINITY), brute);
         }
+    }
+
+    /// Four unit boxes a box apart: cheap primitives share one leaf, costly ones
+    /// (quadrics) get a leaf each, so a ray through one box tests one primitive.
+    #[test]
+    fn costly_primitives_get_leaves_of_their_own() {
+        let boxes: Vec<Bounds3> = (0..4)
+            .map(|i| Bounds3::new(Vec3::new(2.0 * i as f32, 0.0, 0.0), Vec3::new(2.0 * i as f32 + 1.0, 1.0, 1.0)))
+            .collect();
+        let ray = Ray::new(Point3(Vec3::new(0.5, 0.5, -1.0)), Vector3(Vec3::Z));
+        let tested = |cost: f32| {
+            let (bvh, _) = Bvh::build(&boxes, |_| cost);
+            let mut n = 0;
+            bvh.intersect_p(&ray, f32::INFINITY, |_, _| {
+                n += 1;
+                false
+            });
+            n
+        };
+        assert_eq!(tested(1.0), 4);
+        assert_eq!(tested(8.0), 1);
     }
 
     #[test]
