@@ -485,6 +485,18 @@ fn collapse(node: &BuildNode, nodes: &mut Vec<Node>) -> u32 {
 mod tests {
     use super::*;
 
+    /// pbrt's box test for the ray (o, d): the entry t, clamped to 0, below `t`.
+    fn box_entry(o: Vec3, d: Vec3) -> impl Fn(&Bounds3, f32) -> Option<f32> {
+        let inv = Vec3::ONE / d;
+        let neg = [(inv.x < 0.0) as usize, (inv.y < 0.0) as usize, (inv.z < 0.0) as usize];
+        move |b, t| b.intersect_p(o, inv, neg, t).map(|t0| t0.max(0.0)).filter(|&t0| t0 < t)
+    }
+
+    /// The smallest entry t over all boxes, by brute force.
+    fn closest_entry(boxes: &[Bounds3], entry: &impl Fn(&Bounds3, f32) -> Option<f32>) -> f32 {
+        boxes.iter().filter_map(|b| entry(b, f32::INFINITY)).fold(f32::INFINITY, f32::min)
+    }
+
     thread_local! {
         /// Set when a traversal stack spilled past its inline part on this thread.
         pub static SPILLED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
@@ -509,11 +521,8 @@ mod tests {
         for _ in 0..500 {
             let o = Vec3::new(rnd(), rnd(), rnd()) * 100.0;
             let d = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
-            let ray = Ray::new(Point3(o), Vector3(d));
-            let inv = Vec3::ONE / d;
-            let neg = [(d.x < 0.0) as usize, (d.y < 0.0) as usize, (d.z < 0.0) as usize];
-            let entry = |b: &Bounds3, t: f32| b.intersect_p(o, inv, neg, t).map(|t0| t0.max(0.0)).filter(|&t0| t0 < t);
-            let brute = boxes.iter().filter_map(|b| entry(b, f32::INFINITY)).fold(f32::INFINITY, f32::min);
+            let (ray, entry) = (Ray::new(Point3(o), Vector3(d)), box_entry(o, d));
+            let brute = closest_entry(&boxes, &entry);
             let got = bvh.intersect(&ray, f32::INFINITY, |i, t| entry(&sorted[i], t));
             assert_eq!(got.unwrap_or(f32::INFINITY), brute);
         }
@@ -601,11 +610,8 @@ mod tests {
         let (bvh, order) = Bvh::build(&boxes, |_| 1.0);
         let sorted: Vec<Bounds3> = order.iter().map(|&i| boxes[i as usize]).collect();
         for (o, d) in [(Vec3::new(-1.0, 0.1, 0.0), Vec3::X), (Vec3::new(1e38, 0.0, 0.2), -Vec3::X)] {
-            let ray = Ray::new(Point3(o), Vector3(d));
-            let inv = Vec3::ONE / d;
-            let neg = [(inv.x < 0.0) as usize, (inv.y < 0.0) as usize, (inv.z < 0.0) as usize];
-            let entry = |b: &Bounds3, t: f32| b.intersect_p(o, inv, neg, t).map(|t0| t0.max(0.0)).filter(|&t0| t0 < t);
-            let brute = boxes.iter().filter_map(|b| entry(b, f32::INFINITY)).fold(f32::INFINITY, f32::min);
+            let (ray, entry) = (Ray::new(Point3(o), Vector3(d)), box_entry(o, d));
+            let brute = closest_entry(&boxes, &entry);
             let got = bvh.intersect(&ray, f32::INFINITY, |i, t| entry(&sorted[i], t));
             assert!(brute.is_finite());
             assert_eq!(got.unwrap_or(f32::INFINITY), brute);
