@@ -28,7 +28,7 @@ use std::ops::Range;
 #[repr(C, align(64))]
 struct Node {
     /// `bounds[0]` the low corners, `bounds[1]` the high ones, per axis.
-    bounds: [[[f32; WIDTH]; 3]; 2],
+    bounds: [[[Vec4; WIDTH / 4]; 3]; 2],
     child: [u32; WIDTH],
     count: [u8; WIDTH],
     valid: u8,
@@ -43,7 +43,7 @@ impl Node {
     /// Encodes up to `WIDTH` children (box, child, count).
     fn new(kids: &[(Bounds3, u32, u8)]) -> Node {
         let mut node = Node {
-            bounds: [[[f32::INFINITY; WIDTH]; 3], [[f32::NEG_INFINITY; WIDTH]; 3]],
+            bounds: [[[Vec4::INFINITY; WIDTH / 4]; 3], [[Vec4::NEG_INFINITY; WIDTH / 4]; 3]],
             child: [0; WIDTH],
             count: [0; WIDTH],
             valid: 0,
@@ -51,8 +51,8 @@ impl Node {
         };
         for (slot, &(b, child, count)) in kids.iter().enumerate() {
             for a in 0..3 {
-                node.bounds[0][a][slot] = b.min[a];
-                node.bounds[1][a][slot] = b.max[a];
+                node.bounds[0][a][slot / 4][slot % 4] = b.min[a];
+                node.bounds[1][a][slot / 4][slot % 4] = b.max[a];
             }
             node.child[slot] = child;
             node.count[slot] = count;
@@ -186,7 +186,7 @@ impl Bvh {
         }
         let r = SlabRay::new(ray);
         let mut stack = Stack::new();
-        let (mut child, mut count) = (0u32, 0u16);
+        let (mut child, mut count) = (0u32, 0u8);
         loop {
             if count > 0 {
                 if visit(child as usize..child as usize + count as usize, t_max) {
@@ -194,117 +194,133 @@ impl Bvh {
                 }
             } else {
                 let node = &self.nodes[child as usize];
-                let (t0, mask) = r.entries(node, *t_max);
-                if mask != 0 {
-                    // Go on with the nearest hit child; push the others with their entry t.
-                    let nearest = nearest_slot(t0, mask);
-                    let entry = |s: usize| node.child[s] as u64 | (node.count[s] as u64) << 32;
-                    stack.push_where(mask & !(1 << nearest), std::array::from_fn(|s| (entry(s), t0[s])));
-                    (child, count) = (node.child[nearest], node.count[nearest] as u16);
+                let (mut ts, hits) = r.entries(node, *t_max);
+                if hits != 0 {
+                    // Go on with the nearest hit child; the others wait in one entry.
+                    let nearest = ts.nearest(hits);
+                    ts.0[nearest] = f32::INFINITY;
+                    stack.push(Pending { ts, node: child, slots: hits & !(1 << nearest) });
+                    (child, count) = (node.child[nearest], node.count[nearest]);
                     continue;
                 }
             }
-            // Pop, skipping entries that now lie beyond the closest hit.
-            loop {
-                let Some((c, k, t)) = stack.pop() else { return false };
-                if t <= *t_max {
-                    (child, count) = (c, k);
-                    break;
-                }
-            }
+            let Some((c, k)) = stack.next(&self.nodes, *t_max) else { return false };
+            (child, count) = (c, k);
         }
     }
 }
 
-/// The slot of the hit child (a bit of `mask`) with the smallest entry t.
-#[inline(always)]
-fn nearest_slot(t0: [f32; WIDTH], mask: u32) -> usize {
-    // Keys order like (t, slot): t ≥ 0, so its bits order like it; misses are all ones.
-    let key = |s: usize| {
-        let miss = 0u64.wrapping_sub((mask >> s & 1 ^ 1) as u64);
-        ((t0[s].to_bits() as u64) << 32 | s as u64) | miss
-    };
-    let mut k: [u64; WIDTH] = std::array::from_fn(key);
-    let mut n = WIDTH;
-    while n > 1 {
-        n /= 2;
-        for i in 0..n {
-            k[i] = k[i].min(k[i + n]);
-        }
+/// A float per child slot, aligned for SSE loads. Lanes are set through memory:
+/// inserting into a register by a variable index compiles to a jump table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+struct Lanes([f32; WIDTH]);
+
+impl Lanes {
+    #[inline(always)]
+    fn half(&self, h: usize) -> Vec4 {
+        Vec4::from_slice(&self.0[4 * h..4 * h + 4])
     }
-    (k[0] & (WIDTH as u64 - 1)) as usize
+
+    /// The lanes at most `t` as a bit mask.
+    #[inline(always)]
+    fn at_most(&self, t: f32) -> u32 {
+        let t = Vec4::splat(t);
+        self.half(0).cmple(t).bitmask() | self.half(1).cmple(t).bitmask() << 4
+    }
+
+    /// The slot with the smallest value among `slots` (a nonempty bit set), the lower
+    /// slot on ties. Lanes outside `slots` must hold larger values or +∞.
+    #[inline(always)]
+    fn nearest(&self, slots: u32) -> usize {
+        let least = Vec4::splat(self.half(0).min(self.half(1)).min_element());
+        let at_least = self.half(0).cmpeq(least).bitmask() | self.half(1).cmpeq(least).bitmask() << 4;
+        // Should no lane match (a NaN ray), the lowest slot of `slots` is taken.
+        ((at_least & slots | slots << WIDTH).trailing_zeros() as usize) & (WIDTH - 1)
+    }
 }
 
-/// The traversal stack: (node index or first primitive, primitive count or 0 for a
-/// node, entry t). The inline part is left uninitialised: zeroing it cost more than
-/// the rest of a cached traversal step. Entries past it, which only degenerate deep
-/// trees need, go to the heap.
+/// A visited node's hit children that are still to visit: their entry t (+∞ for the
+/// others) and their slots.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Pending {
+    ts: Lanes,
+    node: u32,
+    slots: u32,
+}
+
+/// The traversal stack. Each entry is a node on the path to the current one, so its
+/// depth is at most the tree's. The inline part is left uninitialised: zeroing it
+/// cost more than the rest of a cached traversal step. Entries past it, which only
+/// degenerate deep trees need, go to the heap.
 struct Stack {
-    refs: [MaybeUninit<u64>; STACK_INLINE],
-    ts: [MaybeUninit<f32>; STACK_INLINE],
+    inline: [MaybeUninit<Pending>; STACK_INLINE],
     len: usize,
-    spill: Vec<(u64, f32)>,
+    spill: Vec<Pending>,
 }
 
-const STACK_INLINE: usize = 64;
+/// Unit tests use a small inline part so that their trees reach the spill path.
+const STACK_INLINE: usize = if cfg!(test) { 4 } else { 64 };
 
 impl Stack {
     #[inline(always)]
     fn new() -> Stack {
-        Stack {
-            refs: [const { MaybeUninit::uninit() }; STACK_INLINE],
-            ts: [const { MaybeUninit::uninit() }; STACK_INLINE],
-            len: 0,
-            spill: Vec::new(),
-        }
+        Stack { inline: [const { MaybeUninit::uninit() }; STACK_INLINE], len: 0, spill: Vec::new() }
     }
 
+    /// Pushes the entry if it has slots; without a branch while the inline part has room.
     #[inline(always)]
-    fn push(&mut self, child: u32, count: u16, t: f32) {
-        let packed = child as u64 | (count as u64) << 32;
+    fn push(&mut self, entry: Pending) {
         if self.len < STACK_INLINE {
-            self.refs[self.len].write(packed);
-            self.ts[self.len].write(t);
-            self.len += 1;
-        } else {
+            self.inline[self.len].write(entry);
+            self.len += (entry.slots != 0) as usize;
+        } else if entry.slots != 0 {
             #[cfg(test)]
             tests::SPILLED.with(|s| s.set(true));
-            self.spill.push((packed, t));
-        }
-    }
-
-    /// Pushes the entries (packed reference, t) whose bit is set in `which`, in slot
-    /// order. Every entry is written when all fit, and a set bit only advances the top.
-    #[inline(always)]
-    fn push_where(&mut self, which: u32, entries: [(u64, f32); WIDTH]) {
-        if self.len + WIDTH <= STACK_INLINE {
-            for (s, (packed, t)) in entries.into_iter().enumerate() {
-                self.refs[self.len].write(packed);
-                self.ts[self.len].write(t);
-                self.len += (which >> s & 1) as usize;
-            }
-        } else {
-            for (s, &(packed, t)) in entries.iter().enumerate() {
-                if which >> s & 1 != 0 {
-                    self.push(packed as u32, (packed >> 32) as u16, t);
-                }
-            }
+            self.spill.push(entry);
         }
     }
 
     #[inline(always)]
-    fn pop(&mut self) -> Option<(u32, u16, f32)> {
-        let (packed, t) = match self.spill.pop() {
-            Some(e) => e,
+    fn top(&mut self) -> Option<&mut Pending> {
+        match self.spill.last_mut() {
+            Some(e) => Some(e),
             None if self.len > 0 => {
-                self.len -= 1;
-                // SAFETY: `push` and `push_where` write every inline entry below `len`
-                // before raising it past them, and `len` only shrinks here.
-                unsafe { (self.refs[self.len].assume_init(), self.ts[self.len].assume_init()) }
+                // SAFETY: `push` writes every inline entry below `len` before raising
+                // `len` past it, and `len` only shrinks in `drop_top`.
+                Some(unsafe { self.inline[self.len - 1].assume_init_mut() })
             }
-            None => return None,
-        };
-        Some((packed as u32, (packed >> 32) as u16, t))
+            None => None,
+        }
+    }
+
+    #[inline(always)]
+    fn drop_top(&mut self) {
+        if self.spill.pop().is_none() {
+            self.len -= 1;
+        }
+    }
+
+    /// The nearest waiting child (child, count) that starts within `t_max`; entries
+    /// left with none are dropped.
+    #[inline(always)]
+    fn next(&mut self, nodes: &[Node], t_max: f32) -> Option<(u32, u8)> {
+        loop {
+            let top = self.top()?;
+            let live = top.slots & top.ts.at_most(t_max);
+            if live == 0 {
+                self.drop_top();
+                continue;
+            }
+            let slot = top.ts.nearest(live);
+            top.ts.0[slot] = f32::INFINITY;
+            top.slots = live & !(1 << slot);
+            let node = &nodes[top.node as usize];
+            if top.slots == 0 {
+                self.drop_top();
+            }
+            return Some((node.child[slot], node.count[slot]));
+        }
     }
 }
 
@@ -327,33 +343,32 @@ impl SlabRay {
         }
     }
 
-    /// Entry distances of the node's boxes within [0, t_max], and a bit mask of the hit
-    /// ones. pbrt's conservative test: far distances are enlarged by 1 + 2γ(3); a ray
+    /// Entry distances of the node's boxes within [0, t_max] (+∞ for the missed ones),
+    /// and a bit mask of the hit ones. pbrt's conservative test: far distances are enlarged by 1 + 2γ(3); a ray
     /// lying in a slab's plane (a NaN) is not a miss.
     #[inline(always)]
-    fn entries(&self, node: &Node, t_max: f32) -> ([f32; WIDTH], u32) {
+    fn entries(&self, node: &Node, t_max: f32) -> (Lanes, u32) {
         const SCALE: f32 = 1.0 + 2.0 * crate::math::float::gamma(3);
         let mut t0 = [Vec4::ZERO; WIDTH / 4];
         let mut t1 = [Vec4::splat(t_max); WIDTH / 4];
         for a in 0..3 {
             let n = self.near[a] & 1;
             for h in 0..WIDTH / 4 {
-                let four = |b: &[f32; WIDTH]| Vec4::from_slice(&b[4 * h..4 * h + 4]);
-                let tn = (four(&node.bounds[n][a]) - self.o[a]) * self.inv[a];
-                let tf = (four(&node.bounds[n ^ 1][a]) - self.o[a]) * self.inv[a] * SCALE;
+                let tn = (node.bounds[n][a][h] - self.o[a]) * self.inv[a];
+                let tf = (node.bounds[n ^ 1][a][h] - self.o[a]) * self.inv[a] * SCALE;
                 // max/min (SSE maxps/minps) keep the second operand when a lane is NaN:
                 // pbrt's `if (tNear > t0) t0 = tNear`, lane by lane.
                 t0[h] = tn.max(t0[h]);
                 t1[h] = tf.min(t1[h]);
             }
         }
-        let mut mask = 0;
-        let mut t = [0.0; WIDTH];
+        let (mut hits, mut ts) = (0, Lanes([0.0; WIDTH]));
         for h in 0..WIDTH / 4 {
-            mask |= t0[h].cmple(t1[h]).bitmask() << (4 * h);
-            t[4 * h..4 * h + 4].copy_from_slice(&t0[h].to_array());
+            let hit = t0[h].cmple(t1[h]);
+            hits |= hit.bitmask() << (4 * h);
+            ts.0[4 * h..4 * h + 4].copy_from_slice(&Vec4::select(hit, t0[h], Vec4::INFINITY).to_array());
         }
-        (t, mask & node.valid as u32)
+        (ts, hits & node.valid as u32)
     }
 }
 
@@ -549,37 +564,49 @@ mod tests {
         assert_eq!(tested(8.0), 1);
     }
 
+    /// A node of `WIDTH` leaves, slot s holding primitive s.
+    fn leaf_node() -> Node {
+        let kids: Vec<(Bounds3, u32, u8)> = (0..WIDTH as u32).map(|s| (Bounds3::default(), s, 1)).collect();
+        Node::new(&kids)
+    }
+
+    fn pending(ts: [f32; WIDTH], slots: u32) -> Pending {
+        Pending { ts: Lanes(ts), node: 0, slots }
+    }
+
+    #[test]
+    fn the_stack_gives_children_nearest_first_and_skips_those_past_t_max() {
+        let nodes = [leaf_node()];
+        let mut stack = Stack::new();
+        stack.push(pending([3.0, 9.0, 1.0, f32::INFINITY, f32::INFINITY, 2.0, 2.0, 5.0], 0b1110_0111));
+        // Slots 1 and 7 start past t_max; 5 and 6 tie, the lower first.
+        let mut order = Vec::new();
+        while let Some((prim, count)) = stack.next(&nodes, 4.0) {
+            assert_eq!(count, 1);
+            order.push(prim);
+        }
+        assert_eq!(order, [2, 5, 6, 0]);
+        assert!(stack.top().is_none(), "exhausted entries are dropped");
+        // Entries without slots are never pushed.
+        stack.push(pending([0.0; WIDTH], 0));
+        assert!(stack.next(&nodes, f32::INFINITY).is_none());
+    }
+
     #[test]
     fn the_stack_is_last_in_first_out_past_its_inline_part() {
+        let nodes = [leaf_node()];
         let mut stack = Stack::new();
-        for i in 0..3 * STACK_INLINE as u32 {
-            stack.push(u32::MAX - i, (i % 9) as u16, i as f32);
+        for i in 0..3 * STACK_INLINE {
+            stack.push(pending([i as f32; WIDTH], 1 << (i % WIDTH)));
         }
-        for i in (0..3 * STACK_INLINE as u32).rev() {
-            assert_eq!(stack.pop(), Some((u32::MAX - i, (i % 9) as u16, i as f32)));
+        for i in (0..3 * STACK_INLINE).rev() {
+            assert_eq!(stack.next(&nodes, f32::INFINITY), Some(((i % WIDTH) as u32, 1)));
         }
-        assert_eq!(stack.pop(), None);
+        assert_eq!(stack.next(&nodes, f32::INFINITY), None);
     }
 
     #[test]
-    fn push_where_keeps_the_marked_entries_in_slot_order_and_spills() {
-        let mut stack = Stack::new();
-        let mut expected = Vec::new();
-        for round in 0..40u32 {
-            let which = round.wrapping_mul(2654435761) >> 24;
-            let entries: [(u64, f32); WIDTH] = std::array::from_fn(|s| ((round * 16 + s as u32) as u64, s as f32));
-            stack.push_where(which, entries);
-            expected.extend(entries.iter().enumerate().filter(|(s, _)| which >> s & 1 != 0).map(|(_, e)| *e));
-        }
-        assert!(expected.len() > STACK_INLINE, "the test must reach the spill");
-        while let Some(e) = expected.pop() {
-            assert_eq!(stack.pop(), Some((e.0 as u32, 0, e.1)));
-        }
-        assert_eq!(stack.pop(), None);
-    }
-
-    #[test]
-    fn nearest_slot_is_the_smallest_hit_entry() {
+    fn nearest_is_the_smallest_entry_among_the_slots() {
         let mut state = 7u32;
         let mut rnd = || {
             state = state.wrapping_mul(1664525).wrapping_add(1013904223);
@@ -587,13 +614,18 @@ mod tests {
         };
         for _ in 0..10_000 {
             // Few distinct values, so ties (broken by the lower slot) are common.
-            let t0: [f32; WIDTH] = std::array::from_fn(|_| [0.0, 0.5, 1.0, f32::INFINITY][rnd() as usize % 4]);
-            let mask = rnd() % (1 << WIDTH);
-            if mask == 0 {
+            let mut t0: [f32; WIDTH] = std::array::from_fn(|_| [0.0, 0.5, 1.0, f32::INFINITY][rnd() as usize % 4]);
+            let slots = rnd() % (1 << WIDTH);
+            if slots == 0 {
                 continue;
             }
-            let best = (0..WIDTH).filter(|s| mask >> s & 1 != 0).min_by(|&a, &b| t0[a].total_cmp(&t0[b])).unwrap();
-            assert_eq!(nearest_slot(t0, mask), best);
+            let best = (0..WIDTH).filter(|s| slots >> s & 1 != 0).min_by(|&a, &b| t0[a].total_cmp(&t0[b])).unwrap();
+            for (s, t) in t0.iter_mut().enumerate() {
+                if slots >> s & 1 == 0 {
+                    *t = f32::INFINITY;
+                }
+            }
+            assert_eq!(Lanes(t0).nearest(slots), best);
         }
     }
 
