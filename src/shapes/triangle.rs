@@ -109,7 +109,7 @@ use crate::interaction::{Shading, SurfaceInteraction};
 use crate::math::float::gamma;
 use crate::math::frame::coordinate_system;
 use crate::math::{Bounds3, Normal3, Point3, Ray, Vector3};
-use glam::Vec3;
+use glam::{Mat4, Vec3, Vec4};
 
 /// Orientation flags of the shape a mesh came from.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -158,6 +158,39 @@ impl TriangleMesh {
     pub fn corners(&self, tri: usize) -> [Vec3; 3] {
         let i = &self.indices[3 * tri..3 * tri + 3];
         [Vec3::from(self.p[i[0] as usize]), Vec3::from(self.p[i[1] as usize]), Vec3::from(self.p[i[2] as usize])]
+    }
+
+    /// The corners of triangles `first..first + 4` for [`edge_candidates`] (past the
+    /// last triangle, the last again): `[c][axis]` holds corner c's coordinate on that
+    /// axis, one lane per triangle.
+    #[inline(always)]
+    pub fn corner_lanes(&self, first: usize) -> [[Vec4; 3]; 3] {
+        let last = self.indices.len() / 3 - 1;
+        let idx: [u32; 12] = match self.indices.get(3 * first..3 * first + 12) {
+            Some(run) => run.try_into().unwrap_or([0; 12]),
+            None => std::array::from_fn(|j| self.indices[3 * (first + j / 3).min(last) + j % 3]),
+        };
+        // Named functions and no `array::map`: closures here were not inlined.
+        [self.corner_lane(&idx, 0), self.corner_lane(&idx, 1), self.corner_lane(&idx, 2)]
+    }
+
+    /// Corner c of the four triangles `idx` lists, as x, y and z lanes.
+    #[inline(always)]
+    fn corner_lane(&self, idx: &[u32; 12], c: usize) -> [Vec4; 3] {
+        let v = |k: usize| self.vertex4(idx[3 * k + c]);
+        let m = Mat4::from_cols(v(0), v(1), v(2), v(3)).transpose();
+        [m.x_axis, m.y_axis, m.z_axis]
+    }
+
+    /// Vertex `v` and the next one's x, as one 16-byte load (the last vertex has no
+    /// next).
+    #[inline(always)]
+    fn vertex4(&self, v: u32) -> Vec4 {
+        let i = 3 * v as usize;
+        match self.p.as_flattened().get(i..i + 4) {
+            Some(four) => Vec4::from_slice(four),
+            None => Vec3::from(self.p[v as usize]).extend(0.0),
+        }
     }
 
     /// Asks the cache for the triangle's corners without waiting for them.
@@ -259,6 +292,34 @@ pub fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
         return None;
     }
     Some(TriangleHit { t, b: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
+}
+
+/// Which of four triangles the ray's line crosses, as a bit set: [`watertight`]'s
+/// edge functions and sign test, four triangles at a time (`corners[c][axis]` holds
+/// corner c's coordinate on that axis for each), with the same operations in the
+/// same order. A triangle left out is one [`watertight`] rejects; one with an edge
+/// function of exactly zero, which [`watertight`] redoes in f64, is kept. A ray's
+/// line crosses few of a leaf's triangles, so the full test runs about once a leaf.
+#[inline(always)]
+pub fn edge_candidates<const KX: usize, const KY: usize, const KZ: usize>(
+    corners: &[[Vec4; 3]; 3],
+    r: &WatertightRay,
+) -> u32 {
+    let (sx, sy) = (Vec4::splat(r.shear.x), Vec4::splat(r.shear.y));
+    let sheared = |c: &[Vec4; 3]| {
+        let (x, y, z) = (c[KX] - Vec4::splat(r.o[KX]), c[KY] - Vec4::splat(r.o[KY]), c[KZ] - Vec4::splat(r.o[KZ]));
+        (x + sx * z, y + sy * z)
+    };
+    // (`array::map` is not always inlined.)
+    let (p0, p1, p2) = (sheared(&corners[0]), sheared(&corners[1]), sheared(&corners[2]));
+    let e0 = p1.0 * p2.1 - p1.1 * p2.0;
+    let e1 = p2.0 * p0.1 - p2.1 * p0.0;
+    let e2 = p0.0 * p1.1 - p0.1 * p1.0;
+    let zero = Vec4::ZERO;
+    let any_zero = e0.cmpeq(zero) | e1.cmpeq(zero) | e2.cmpeq(zero);
+    let negative = e0.cmplt(zero) | e1.cmplt(zero) | e2.cmplt(zero);
+    let positive = e0.cmpgt(zero) | e1.cmpgt(zero) | e2.cmpgt(zero);
+    (!(negative & positive) | any_zero).bitmask()
 }
 
 impl TriangleMesh {

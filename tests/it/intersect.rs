@@ -8,6 +8,7 @@ use glam::{DMat3, DMat4, DVec3, Vec3};
 use pbrt_sppm::math::{Normal3, Point3, Ray, Vector3};
 use pbrt_sppm::shapes::{
     Cone, Cylinder, Disk, Hyperboloid, MeshFlags, Paraboloid, Quadric, QuadricShape, Sphere, TriangleMesh,
+    WatertightRay, edge_candidates,
 };
 use pbrt_sppm::trace::Tracer;
 use rayon::prelude::*;
@@ -345,6 +346,89 @@ fn closed_mesh_is_watertight() {
         escapes += g.intersect(&Ray::new(Point3(o.as_vec3()), Vector3(e - o.as_vec3()))).is_none() as usize;
     }
     assert_eq!(escapes, 0);
+}
+
+/// Rays from inside and outside the perturbed sphere, half of them aimed exactly at a
+/// vertex or along an edge, where edge functions are zero.
+fn sphere_probe_rays(verts: &[Vec3], tris: &[[u32; 3]], rng: &mut Rng) -> Vec<Ray> {
+    (0..20_000)
+        .map(|k| {
+            let o = rng.sphere_dir() * if k % 2 == 0 { 0.5 * rng.uniform() } else { 4.0 + 8.0 * rng.uniform() };
+            let target = match k % 4 {
+                0 | 1 => o.as_vec3() + rng.sphere_dir().as_vec3(),
+                2 => verts[(rng.uniform() * verts.len() as f64) as usize],
+                _ => {
+                    let [a, b, _] = tris[(rng.uniform() * tris.len() as f64) as usize];
+                    verts[a as usize].lerp(verts[b as usize], rng.uniform() as f32)
+                }
+            };
+            Ray::new(Point3(o.as_vec3()), Vector3(target - o.as_vec3()))
+        })
+        .collect()
+}
+
+/// The leaf test filters four triangles at a time with their edge functions before
+/// the full test: it must keep every triangle the full test hits, including rays
+/// through vertices and along edges, and it must actually filter.
+#[test]
+fn edge_filter_keeps_every_triangle_the_full_test_hits() {
+    let mut rng = Rng::new(5150);
+    let s = scene(&perturbed_sphere(&mut rng));
+    let mesh = &s.meshes[0];
+    let verts: Vec<Vec3> = mesh.p.iter().map(|v| Vec3::from(*v)).collect();
+    let tris: Vec<[u32; 3]> = mesh.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let n = mesh.triangle_count();
+    // Groups at every offset, those past the last triangle included.
+    for first in 0..n {
+        for (c, [x, y, z]) in mesh.corner_lanes(first).into_iter().enumerate() {
+            let lane = |k: usize| Vec3::new(x[k], y[k], z[k]);
+            let expected = |k: usize| mesh.corners((first + k).min(n - 1))[c];
+            assert_eq!([0, 1, 2, 3].map(lane), [0, 1, 2, 3].map(expected));
+        }
+    }
+    let (mut kept, mut tested, mut hits) = (0, 0, 0);
+    for ray in sphere_probe_rays(&verts, &tris, &mut rng) {
+        let wr = WatertightRay::new(&ray);
+        for first in (0..n).step_by(4) {
+            let lanes = mesh.corner_lanes(first);
+            let candidates = match wr.kz() {
+                0 => edge_candidates::<1, 2, 0>(&lanes, &wr),
+                1 => edge_candidates::<2, 0, 1>(&lanes, &wr),
+                _ => edge_candidates::<0, 1, 2>(&lanes, &wr),
+            };
+            for k in 0..4.min(n - first) {
+                let hit = mesh.intersect_prepared(first + k, &wr, f32::INFINITY).is_some();
+                assert!(!hit || candidates >> k & 1 != 0, "triangle {} dropped for {ray:?}", first + k);
+                (kept, tested, hits) = (kept + (candidates >> k & 1) as usize, tested + 1, hits + hit as usize);
+            }
+        }
+    }
+    assert!(hits > 10_000, "the rays must hit ({hits})");
+    assert!(kept * 10 < tested, "the filter must reject most triangles ({kept} of {tested} kept)");
+}
+
+/// The BVH (which tests leaves four triangles at a time) finds the closest t of all
+/// the mesh's triangles. Where triangles meet, their t differ in the last bits, and
+/// pbrt's test compares t with t_max before dividing by the determinant, so a
+/// triangle within about an ulp of the closest hit found so far may be passed over:
+/// the answer is one of the triangles' t, at most 4 ulps above the smallest.
+#[test]
+fn mesh_traversal_finds_the_closest_hit_of_all_triangles() {
+    let mut rng = Rng::new(6061);
+    let mut s = scene(&perturbed_sphere(&mut rng));
+    let mesh = s.meshes[0].clone();
+    let verts: Vec<Vec3> = mesh.p.iter().map(|v| Vec3::from(*v)).collect();
+    let tris: Vec<[u32; 3]> = mesh.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let g = pbrt_sppm::accel::Geometry::new(&mut s);
+    for ray in sphere_probe_rays(&verts, &tris, &mut rng) {
+        let brute = (0..mesh.triangle_count())
+            .filter_map(|t| mesh.intersect_triangle(t, &ray, f32::INFINITY))
+            .map(|h| h.t)
+            .fold(f32::INFINITY, f32::min);
+        let got = g.intersect(&ray).map_or(f32::INFINITY, |h| h.t);
+        assert!(got == brute || (got > brute && got <= brute * (1.0 + 4.0 * f32::EPSILON)), "{got} {brute} {ray:?}");
+        assert_eq!(g.intersect_p(&Ray { t_max: f32::INFINITY, ..ray }), brute.is_finite());
+    }
 }
 
 /// Hits every quadric under identity, a mirror and ReverseOrientation, and compares
