@@ -9,9 +9,11 @@
 //! box and reference), and with leaves of a few triangles the BVH still takes about
 //! 18 bytes per triangle.
 //!
-//! Traversal takes the nearest hit child next and pushes the others in slot order;
-//! it picks with selects rather than branches, which random rays mispredict. Pushing
-//! unsorted costs little: most nodes have one or two hit children.
+//! Closest-hit traversal takes the nearest hit child next; the node's other hit
+//! children wait in one stack entry, from which the nearest that still starts before
+//! the closest hit is taken next. It picks with SSE compares rather than branches,
+//! which random rays mispredict. Any-hit traversal takes children in slot order: it
+//! needs no order, and coherent shadow rays ran 1.5× faster without one.
 //!
 //! The BVH knows only boxes: `build` returns the primitive order it wants, and the
 //! caller stores its primitives in that order, so leaves index them directly.
@@ -162,7 +164,7 @@ impl Bvh {
         mut hit: impl FnMut(Range<usize>, f32) -> Option<f32>,
     ) -> Option<f32> {
         let mut found = false;
-        self.traverse(ray, &mut t_max, |leaf, t_max| {
+        self.traverse::<true>(ray, &mut t_max, |leaf, t_max| {
             if let Some(t) = hit(leaf, *t_max) {
                 (*t_max, found) = (t, true);
             }
@@ -175,12 +177,17 @@ impl Bvh {
     #[inline]
     pub fn intersect_leaves_p(&self, ray: &Ray, t_max: f32, mut hit: impl FnMut(Range<usize>, f32) -> bool) -> bool {
         let mut t = t_max;
-        self.traverse(ray, &mut t, |leaf, t_max| hit(leaf, *t_max))
+        self.traverse::<false>(ray, &mut t, |leaf, t_max| hit(leaf, *t_max))
     }
 
     /// Visits leaves front to back; `visit` returns true to stop.
     #[inline]
-    fn traverse(&self, ray: &Ray, t_max: &mut f32, mut visit: impl FnMut(Range<usize>, &mut f32) -> bool) -> bool {
+    fn traverse<const NEAREST: bool>(
+        &self,
+        ray: &Ray,
+        t_max: &mut f32,
+        mut visit: impl FnMut(Range<usize>, &mut f32) -> bool,
+    ) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -197,14 +204,14 @@ impl Bvh {
                 let (mut ts, hits) = r.entries(node, *t_max);
                 if hits != 0 {
                     // Go on with the nearest hit child; the others wait in one entry.
-                    let nearest = ts.nearest(hits);
+                    let nearest = ts.first::<NEAREST>(hits);
                     ts.0[nearest] = f32::INFINITY;
                     stack.push(Pending { ts, node: child, slots: hits & !(1 << nearest) });
                     (child, count) = (node.child[nearest], node.count[nearest]);
                     continue;
                 }
             }
-            let Some((c, k)) = stack.next(&self.nodes, *t_max) else { return false };
+            let Some((c, k)) = stack.next::<NEAREST>(&self.nodes, *t_max) else { return false };
             (child, count) = (c, k);
         }
     }
@@ -227,6 +234,13 @@ impl Lanes {
     fn at_most(&self, t: f32) -> u32 {
         let t = Vec4::splat(t);
         self.half(0).cmple(t).bitmask() | self.half(1).cmple(t).bitmask() << 4
+    }
+
+    /// The slot to visit first among `slots`: the nearest, or (for any-hit queries,
+    /// which need no order) the lowest.
+    #[inline(always)]
+    fn first<const NEAREST: bool>(&self, slots: u32) -> usize {
+        if NEAREST { self.nearest(slots) } else { slots.trailing_zeros() as usize & (WIDTH - 1) }
     }
 
     /// The slot with the smallest value among `slots` (a nonempty bit set), the lower
@@ -304,7 +318,7 @@ impl Stack {
     /// The nearest waiting child (child, count) that starts within `t_max`; entries
     /// left with none are dropped.
     #[inline(always)]
-    fn next(&mut self, nodes: &[Node], t_max: f32) -> Option<(u32, u8)> {
+    fn next<const NEAREST: bool>(&mut self, nodes: &[Node], t_max: f32) -> Option<(u32, u8)> {
         loop {
             let top = self.top()?;
             let live = top.slots & top.ts.at_most(t_max);
@@ -312,7 +326,7 @@ impl Stack {
                 self.drop_top();
                 continue;
             }
-            let slot = top.ts.nearest(live);
+            let slot = top.ts.first::<NEAREST>(live);
             top.ts.0[slot] = f32::INFINITY;
             top.slots = live & !(1 << slot);
             let node = &nodes[top.node as usize];
@@ -581,15 +595,19 @@ mod tests {
         stack.push(pending([3.0, 9.0, 1.0, f32::INFINITY, f32::INFINITY, 2.0, 2.0, 5.0], 0b1110_0111));
         // Slots 1 and 7 start past t_max; 5 and 6 tie, the lower first.
         let mut order = Vec::new();
-        while let Some((prim, count)) = stack.next(&nodes, 4.0) {
+        while let Some((prim, count)) = stack.next::<true>(&nodes, 4.0) {
             assert_eq!(count, 1);
             order.push(prim);
         }
         assert_eq!(order, [2, 5, 6, 0]);
         assert!(stack.top().is_none(), "exhausted entries are dropped");
+        // Any-hit queries take the slots in order.
+        stack.push(pending([3.0, 9.0, 1.0, f32::INFINITY, f32::INFINITY, 2.0, 2.0, 5.0], 0b1110_0111));
+        let unordered: Vec<u32> = std::iter::from_fn(|| stack.next::<false>(&nodes, 4.0).map(|(p, _)| p)).collect();
+        assert_eq!(unordered, [0, 2, 5, 6]);
         // Entries without slots are never pushed.
         stack.push(pending([0.0; WIDTH], 0));
-        assert!(stack.next(&nodes, f32::INFINITY).is_none());
+        assert!(stack.next::<true>(&nodes, f32::INFINITY).is_none());
     }
 
     #[test]
@@ -600,9 +618,9 @@ mod tests {
             stack.push(pending([i as f32; WIDTH], 1 << (i % WIDTH)));
         }
         for i in (0..3 * STACK_INLINE).rev() {
-            assert_eq!(stack.next(&nodes, f32::INFINITY), Some(((i % WIDTH) as u32, 1)));
+            assert_eq!(stack.next::<true>(&nodes, f32::INFINITY), Some(((i % WIDTH) as u32, 1)));
         }
-        assert_eq!(stack.next(&nodes, f32::INFINITY), None);
+        assert_eq!(stack.next::<true>(&nodes, f32::INFINITY), None);
     }
 
     #[test]
