@@ -180,7 +180,7 @@ impl Bvh {
         self.traverse::<false>(ray, &mut t, |leaf, t_max| hit(leaf, *t_max))
     }
 
-    /// Visits leaves front to back; `visit` returns true to stop.
+    /// Visits leaves, front to back if `NEAREST`; `visit` returns true to stop.
     #[inline]
     fn traverse<const NEAREST: bool>(
         &self,
@@ -203,7 +203,7 @@ impl Bvh {
                 let node = &self.nodes[child as usize];
                 let (mut ts, hits) = r.entries(node, *t_max);
                 if hits != 0 {
-                    // Go on with the nearest hit child; the others wait in one entry.
+                    // Go on with one hit child (the nearest); the others wait in one entry.
                     let nearest = ts.first::<NEAREST>(hits);
                     ts.0[nearest] = f32::INFINITY;
                     stack.push(Pending { ts, node: child, slots: hits & !(1 << nearest) });
@@ -315,8 +315,8 @@ impl Stack {
         }
     }
 
-    /// The nearest waiting child (child, count) that starts within `t_max`; entries
-    /// left with none are dropped.
+    /// The next waiting child (child, count) that starts within `t_max`, the nearest
+    /// if `NEAREST`; entries left with none are dropped.
     #[inline(always)]
     fn next<const NEAREST: bool>(&mut self, nodes: &[Node], t_max: f32) -> Option<(u32, u8)> {
         loop {
@@ -358,8 +358,8 @@ impl SlabRay {
     }
 
     /// Entry distances of the node's boxes within [0, t_max] (+∞ for the missed ones),
-    /// and a bit mask of the hit ones. pbrt's conservative test: far distances are enlarged by 1 + 2γ(3); a ray
-    /// lying in a slab's plane (a NaN) is not a miss.
+    /// and a bit mask of the hit ones. pbrt's conservative test: far distances are
+    /// enlarged by 1 + 2γ(3); a ray lying in a slab's plane (a NaN) is not a miss.
     #[inline(always)]
     fn entries(&self, node: &Node, t_max: f32) -> (Lanes, u32) {
         const SCALE: f32 = 1.0 + 2.0 * crate::math::float::gamma(3);

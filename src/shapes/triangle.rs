@@ -161,11 +161,11 @@ impl TriangleMesh {
     }
 
     /// The corners of triangles `first..first + 4` for [`edge_candidates`] (past the
-    /// last triangle, the last again): `[c][axis]` holds corner c's coordinate on that
-    /// axis, one lane per triangle.
+    /// last triangle, the last again; the mesh must have one): `[c][axis]` holds
+    /// corner c's coordinate on that axis, one lane per triangle.
     #[inline(always)]
     pub fn corner_lanes(&self, first: usize) -> [[Vec4; 3]; 3] {
-        let last = self.indices.len() / 3 - 1;
+        let last = (self.indices.len() / 3).saturating_sub(1);
         let idx: [u32; 12] = match self.indices.get(3 * first..3 * first + 12) {
             Some(run) => run.try_into().unwrap_or([0; 12]),
             None => std::array::from_fn(|j| self.indices[3 * (first + j / 3).min(last) + j % 3]),
