@@ -205,28 +205,39 @@ impl Blas {
             for tri in leaf.clone() {
                 m.prefetch(tri);
             }
-            // Four at a time through the edge test; the full test for what it keeps.
             for first in leaf.clone().step_by(4) {
                 let n = (leaf.end - first).min(4);
-                let lanes = m.corner_lanes(first);
-                let mut candidates = edge_candidates::<KX, KY, KZ>(&lanes, wr) & ((1 << n) - 1);
-                while candidates != 0 {
-                    let k = candidates.trailing_zeros() as usize;
-                    candidates &= candidates - 1;
-                    if let Some(hit) = watertight::<KX, KY, KZ>(m.corners(first + k), wr, t_max) {
-                        t_max = hit.t;
-                        let tri = (first + k) as u32;
-                        best = Some((hit.t, 0, LocalHit::Triangle { mesh, tri, flags, hit }));
-                        if ANY {
-                            return best;
-                        }
+                if let Some((tri, hit)) = hit_four::<KX, KY, KZ, ANY>(m, first, n, wr, &mut t_max) {
+                    best = Some((hit.t, 0, LocalHit::Triangle { mesh, tri, flags, hit }));
+                    if ANY {
+                        return best;
                     }
                 }
             }
             return best;
         }
-        for i in leaf {
+        let mut i = leaf.start;
+        while i < leaf.end {
             let prim = self.prims[i];
+            // A mesh's triangles that follow each other in the leaf are stored next to
+            // each other (`localize`), so up to four go through `hit_four` together.
+            let run = self.prims[i..leaf.end]
+                .iter()
+                .take(4)
+                .enumerate()
+                .take_while(|(k, p)| p.shape == prim.shape && p.tri == prim.tri.wrapping_add(*k as u32))
+                .count();
+            if let (ShapeRef::Mesh { mesh, flags }, 2..) = (self.shapes[prim.shape as usize], run) {
+                let m = &g.meshes[mesh as usize];
+                if let Some((tri, hit)) = hit_four::<KX, KY, KZ, ANY>(m, prim.tri as usize, run, wr, &mut t_max) {
+                    best = Some((hit.t, prim.shape, LocalHit::Triangle { mesh, tri, flags, hit }));
+                    if ANY {
+                        return best;
+                    }
+                }
+                i += run;
+                continue;
+            }
             if let Some((t, local)) = self.hit_prim::<KX, KY, KZ>(g, prim, ray, wr, t_max) {
                 t_max = t;
                 best = Some((t, prim.shape, local));
@@ -234,6 +245,7 @@ impl Blas {
                     break;
                 }
             }
+            i += 1;
         }
         best
     }
@@ -258,6 +270,33 @@ impl Blas {
             }
         }
     }
+}
+
+/// The closest hit below `t_max` (`ANY`: the first) among triangles `first..first + n`
+/// of a mesh, n ≤ 4: the edge filter for the four at once, the full test for those it
+/// keeps. Lowers `t_max` to each hit found.
+#[inline(always)]
+fn hit_four<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
+    m: &TriangleMesh,
+    first: usize,
+    n: usize,
+    wr: &WatertightRay,
+    t_max: &mut f32,
+) -> Option<(u32, TriangleHit)> {
+    let mut best = None;
+    let mut candidates = edge_candidates::<KX, KY, KZ>(&m.corner_lanes(first), wr) & ((1 << n) - 1);
+    while candidates != 0 {
+        let k = candidates.trailing_zeros() as usize;
+        candidates &= candidates - 1;
+        if let Some(hit) = watertight::<KX, KY, KZ>(m.corners(first + k), wr, *t_max) {
+            *t_max = hit.t;
+            best = Some(((first + k) as u32, hit));
+            if ANY {
+                break;
+            }
+        }
+    }
+    best
 }
 
 /// A render-space ray in instance space: mapped in f64, rounded once to f32, and its

@@ -407,27 +407,42 @@ fn edge_filter_keeps_every_triangle_the_full_test_hits() {
     assert!(kept * 10 < tested, "the filter must reject most triangles ({kept} of {tested} kept)");
 }
 
-/// The BVH (which tests leaves four triangles at a time) finds the closest t of all
-/// the mesh's triangles. Where triangles meet, their t differ in the last bits, and
-/// pbrt's test compares t with t_max before dividing by the determinant, so a
-/// triangle within about an ulp of the closest hit found so far may be passed over:
-/// the answer is one of the triangles' t, at most 4 ulps above the smallest.
+/// The BVH (which tests a mesh's triangles four at a time) finds the closest t of all
+/// the mesh's triangles, alone in its BVH and beside a sphere (where leaves mix
+/// shapes). Where triangles meet, their t differ in the last bits, and pbrt's test
+/// compares t with t_max before dividing by the determinant, so a triangle within
+/// about an ulp of the closest hit found so far may be passed over: the answer is one
+/// of the triangles' t, at most 4 ulps above the smallest.
 #[test]
 fn mesh_traversal_finds_the_closest_hit_of_all_triangles() {
-    let mut rng = Rng::new(6061);
-    let mut s = scene(&perturbed_sphere(&mut rng));
-    let mesh = s.meshes[0].clone();
-    let verts: Vec<Vec3> = mesh.p.iter().map(|v| Vec3::from(*v)).collect();
-    let tris: Vec<[u32; 3]> = mesh.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-    let g = pbrt_sppm::accel::Geometry::new(&mut s);
-    for ray in sphere_probe_rays(&verts, &tris, &mut rng) {
-        let brute = (0..mesh.triangle_count())
-            .filter_map(|t| mesh.intersect_triangle(t, &ray, f32::INFINITY))
-            .map(|h| h.t)
-            .fold(f32::INFINITY, f32::min);
-        let got = g.intersect(&ray).map_or(f32::INFINITY, |h| h.t);
-        assert!(got == brute || (got > brute && got <= brute * (1.0 + 4.0 * f32::EPSILON)), "{got} {brute} {ray:?}");
-        assert_eq!(g.intersect_p(&Ray { t_max: f32::INFINITY, ..ray }), brute.is_finite());
+    for with_sphere in [false, true] {
+        let mut rng = Rng::new(6061);
+        let mut text = perturbed_sphere(&mut rng);
+        if with_sphere {
+            text += " AttributeBegin Translate 0.2 0 0 Shape \"sphere\" \"float radius\" 0.3 AttributeEnd";
+        }
+        let mut s = scene(&text);
+        let mesh = s.meshes[0].clone();
+        let verts: Vec<Vec3> = mesh.p.iter().map(|v| Vec3::from(*v)).collect();
+        let tris: Vec<[u32; 3]> = mesh.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let g = pbrt_sppm::accel::Geometry::new(&mut s);
+        assert_eq!(g.quadrics.len(), with_sphere as usize);
+        for ray in sphere_probe_rays(&verts, &tris, &mut rng) {
+            let brute = (0..mesh.triangle_count())
+                .filter_map(|t| mesh.intersect_triangle(t, &ray, f32::INFINITY))
+                .map(|h| h.t)
+                .fold(f32::INFINITY, f32::min);
+            let sphere = g.quadrics.first().and_then(|q| q.intersect_t(&ray, f32::INFINITY)).map(|h| h.t);
+            let got = g.intersect(&ray).map_or(f32::INFINITY, |h| h.t);
+            if sphere.is_some_and(|t| t <= brute) {
+                assert_eq!(Some(got), sphere, "{ray:?}");
+            } else {
+                let close = got == brute || (got > brute && got <= brute * (1.0 + 4.0 * f32::EPSILON));
+                assert!(close, "{got} {brute} {ray:?}");
+            }
+            let any = brute.is_finite() || sphere.is_some();
+            assert_eq!(g.intersect_p(&Ray { t_max: f32::INFINITY, ..ray }), any);
+        }
     }
 }
 
