@@ -197,25 +197,39 @@ impl Blas {
         wr: &WatertightRay,
         mut t_max: f32,
     ) -> Option<(f32, u32, LocalHit)> {
+        let Some((mesh, flags)) = self.single_mesh else {
+            return self.hit_mixed_leaf::<KX, KY, KZ, ANY>(g, leaf, ray, wr, t_max);
+        };
+        // Every corner is requested before the first test, so the leaf's cache misses
+        // overlap rather than each waiting on the previous test's branch.
+        let m = &g.meshes[mesh as usize];
+        for tri in leaf.clone() {
+            m.prefetch(tri);
+        }
         let mut best = None;
-        if let Some((mesh, flags)) = self.single_mesh {
-            // Every corner is requested before the first test, so the leaf's cache misses
-            // overlap rather than each waiting on the previous test's branch.
-            let m = &g.meshes[mesh as usize];
-            for tri in leaf.clone() {
-                m.prefetch(tri);
-            }
-            for first in leaf.clone().step_by(4) {
-                let n = (leaf.end - first).min(4);
-                if let Some((tri, hit)) = hit_four::<KX, KY, KZ, ANY>(m, first, n, wr, &mut t_max) {
-                    best = Some((hit.t, 0, LocalHit::Triangle { mesh, tri, flags, hit }));
-                    if ANY {
-                        return best;
-                    }
+        for first in leaf.clone().step_by(4) {
+            let n = (leaf.end - first).min(4);
+            if let Some((tri, hit)) = hit_four::<KX, KY, KZ, ANY>(m, first, n, wr, &mut t_max) {
+                best = Some((hit.t, 0, LocalHit::Triangle { mesh, tri, flags, hit }));
+                if ANY {
+                    break;
                 }
             }
-            return best;
         }
+        best
+    }
+
+    /// [`Self::hit_leaf_permuted`] for a BVH over several shapes.
+    #[inline(always)]
+    fn hit_mixed_leaf<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
+        &self,
+        g: &Geometry,
+        leaf: Range<usize>,
+        ray: &Ray,
+        wr: &WatertightRay,
+        mut t_max: f32,
+    ) -> Option<(f32, u32, LocalHit)> {
+        let mut best = None;
         let mut i = leaf.start;
         while i < leaf.end {
             let prim = self.prims[i];
@@ -227,25 +241,22 @@ impl Blas {
                 .enumerate()
                 .take_while(|(k, p)| p.shape == prim.shape && p.tri == prim.tri.wrapping_add(*k as u32))
                 .count();
-            if let (ShapeRef::Mesh { mesh, flags }, 2..) = (self.shapes[prim.shape as usize], run) {
-                let m = &g.meshes[mesh as usize];
-                if let Some((tri, hit)) = hit_four::<KX, KY, KZ, ANY>(m, prim.tri as usize, run, wr, &mut t_max) {
-                    best = Some((hit.t, prim.shape, LocalHit::Triangle { mesh, tri, flags, hit }));
-                    if ANY {
-                        return best;
-                    }
+            let (found, step) = match (self.shapes[prim.shape as usize], run) {
+                (ShapeRef::Mesh { mesh, flags }, 2..) => {
+                    let m = &g.meshes[mesh as usize];
+                    let hit = hit_four::<KX, KY, KZ, ANY>(m, prim.tri as usize, run, wr, &mut t_max);
+                    (hit.map(|(tri, hit)| (hit.t, LocalHit::Triangle { mesh, tri, flags, hit })), run)
                 }
-                i += run;
-                continue;
-            }
-            if let Some((t, local)) = self.hit_prim::<KX, KY, KZ>(g, prim, ray, wr, t_max) {
+                _ => (self.hit_prim::<KX, KY, KZ>(g, prim, ray, wr, t_max), 1),
+            };
+            i += step;
+            if let Some((t, local)) = found {
                 t_max = t;
                 best = Some((t, prim.shape, local));
                 if ANY {
                     break;
                 }
             }
-            i += 1;
         }
         best
     }
