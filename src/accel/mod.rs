@@ -201,11 +201,10 @@ impl Blas {
             return self.hit_mixed_leaf::<KX, KY, KZ, ANY>(g, leaf, ray, wr, t_max);
         };
         // Every corner is requested before the first test, so the leaf's cache misses
-        // overlap rather than each waiting on the previous test's branch.
+        // overlap rather than each waiting on the previous test's branch. (The first
+        // four triangles' corners are loaded together in any case.)
         let m = &g.meshes[mesh as usize];
-        for tri in leaf.clone() {
-            m.prefetch(tri);
-        }
+        m.prefetch(leaf.start + 4..leaf.end);
         let mut best = None;
         for first in leaf.clone().step_by(4) {
             let n = (leaf.end - first).min(4);

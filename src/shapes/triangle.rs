@@ -110,6 +110,7 @@ use crate::math::float::gamma;
 use crate::math::frame::coordinate_system;
 use crate::math::{Bounds3, Normal3, Point3, Ray, Vector3};
 use glam::{Mat4, Vec3, Vec4};
+use std::ops::Range;
 
 /// Orientation flags of the shape a mesh came from.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -170,39 +171,25 @@ impl TriangleMesh {
             Some(run) => run.try_into().unwrap_or([0; 12]),
             None => std::array::from_fn(|j| self.indices[3 * (first + j / 3).min(last) + j % 3]),
         };
-        // Named functions and no `array::map`: closures here were not inlined.
-        [self.corner_lane(&idx, 0), self.corner_lane(&idx, 1), self.corner_lane(&idx, 2)]
-    }
-
-    /// Corner c of the four triangles `idx` lists, as x, y and z lanes.
-    #[inline(always)]
-    fn corner_lane(&self, idx: &[u32; 12], c: usize) -> [Vec4; 3] {
-        let v = |k: usize| self.vertex4(idx[3 * k + c]);
-        let m = Mat4::from_cols(v(0), v(1), v(2), v(3)).transpose();
-        [m.x_axis, m.y_axis, m.z_axis]
-    }
-
-    /// Vertex `v` and the next one's x, as one 16-byte load (the last vertex has no
-    /// next).
-    #[inline(always)]
-    fn vertex4(&self, v: u32) -> Vec4 {
-        let i = 3 * v as usize;
-        match self.p.as_flattened().get(i..i + 4) {
-            Some(four) => Vec4::from_slice(four),
-            None => Vec3::from(self.p[v as usize]).extend(0.0),
+        // One bounds check for all twelve corners, not one each.
+        if idx.iter().fold(0, |most, &v| most.max(v)) < self.p.len() as u32 {
+            // SAFETY: every index is below `p.len() as u32`, which is at most `p.len()`.
+            corner_lanes_of(&idx, |v| Vec3::from(*unsafe { self.p.get_unchecked(v as usize) }).extend(0.0))
+        } else {
+            corner_lanes_of(&idx, |v| Vec3::from(self.p[v as usize]).extend(0.0))
         }
     }
 
-    /// Asks the cache for the triangle's corners without waiting for them.
+    /// Asks the cache for the corners of triangles `tris` without waiting for them.
     #[inline(always)]
-    pub fn prefetch(&self, tri: usize) {
+    pub fn prefetch(&self, tris: Range<usize>) {
         #[cfg(target_arch = "x86_64")]
-        for &i in &self.indices[3 * tri..3 * tri + 3] {
-            if let Some(p) = self.p.get(i as usize) {
-                // SAFETY: a prefetch reads nothing the program sees and cannot fault; it is
-                // `unsafe` only for its `sse` target feature, which every x86_64 has.
-                unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.as_ptr().cast()) };
-            }
+        for &i in self.indices.get(3 * tris.start..3 * tris.end).unwrap_or_default() {
+            let p = self.p.as_ptr().wrapping_add(i as usize);
+            // SAFETY: a prefetch reads nothing the program sees and cannot fault, even
+            // at an address outside `p`; it is `unsafe` only for its `sse` target
+            // feature, which every x86_64 has.
+            unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast()) };
         }
     }
 
@@ -292,6 +279,17 @@ pub fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
         return None;
     }
     Some(TriangleHit { t, b: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
+}
+
+/// The corners of the four triangles `idx` lists as lanes (`[c][axis]`), with `load`
+/// giving a vertex in a `Vec4`'s x, y and z.
+#[inline(always)]
+fn corner_lanes_of(idx: &[u32; 12], load: impl Fn(u32) -> Vec4) -> [[Vec4; 3]; 3] {
+    let lane = |c: usize| {
+        let m = Mat4::from_cols(load(idx[c]), load(idx[3 + c]), load(idx[6 + c]), load(idx[9 + c])).transpose();
+        [m.x_axis, m.y_axis, m.z_axis]
+    };
+    [lane(0), lane(1), lane(2)]
 }
 
 /// Which of four triangles the ray's line crosses, as a bit set: [`watertight`]'s
