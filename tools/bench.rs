@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release --bin pbrt-bench -- parse [--runs 5] [--dir target/bench-data]
-//! cargo run --release --bin pbrt-bench -- rays [--runs 5] [--dir target/bench-data] [--dump]
+//! cargo run --release --bin pbrt-bench -- rays [--runs 5] [--dir target/bench-data] [--dump] [--sse]
 //! cargo run --release --bin pbrt-bench -- sppm [--runs 3] [SCENE.pbrt ...]
 //! ```
 //! `sppm` renders each scene (default: the bundled `pbrt-scenes/v3/*.pbrt` scenes) at 1
@@ -13,7 +13,8 @@
 //! times the incoherent rays that hit apart from those that miss (1 thread, best of
 //! `--runs`): the hitting 28% take nearly all the time.
 //! `--dump` also writes the mesh and rays as raw little-endian arrays for
-//! `tools/embree_bench.py`, which traces the same rays with Embree.
+//! `tools/embree_bench.py`, which traces the same rays with Embree. Traversal uses AVX2
+//! where the processor has it; `--sse` times the SSE node test instead.
 //! `parse` generates a 50 MB scene with one inline `trianglemesh`, a scene naming a
 //! 1M-triangle binary PLY, and a scene with 25,000 instances of a 30,000-triangle PLY,
 //! then loads each `--runs` times, every run in a fresh process so its peak memory
@@ -37,7 +38,7 @@ fn main() -> ExitCode {
         Some("rays") => {
             let runs = flag("--runs").and_then(|r| r.parse().ok()).unwrap_or(5);
             let dir = PathBuf::from(flag("--dir").unwrap_or_else(|| "target/bench-data".into()));
-            rays_bench(&dir, runs, args.iter().any(|a| a == "--dump"))
+            rays_bench(&dir, runs, args.iter().any(|a| a == "--dump"), args.iter().any(|a| a == "--sse"))
         }
         Some("sppm") => {
             let runs = flag("--runs").and_then(|r| r.parse().ok()).unwrap_or(3);
@@ -53,7 +54,7 @@ fn main() -> ExitCode {
 }
 
 fn usage() -> ExitCode {
-    eprintln!("usage: pbrt-bench parse|rays|sppm [--runs N] [--dir DIR] [--dump] [SCENE.pbrt ...]");
+    eprintln!("usage: pbrt-bench parse|rays|sppm [--runs N] [--dir DIR] [--dump] [--sse] [SCENE.pbrt ...]");
     ExitCode::FAILURE
 }
 
@@ -289,7 +290,7 @@ fn ray_sets() -> (Vec<pbrt_sppm::math::Ray>, Vec<pbrt_sppm::math::Ray>) {
     (camera, random)
 }
 
-fn rays_bench(dir: &Path, runs: usize, dump: bool) -> ExitCode {
+fn rays_bench(dir: &Path, runs: usize, dump: bool, sse: bool) -> ExitCode {
     use pbrt_sppm::accel::Geometry;
     use rayon::prelude::*;
     let (p, idx) = bumpy_sphere(500, 1000);
@@ -322,7 +323,9 @@ fn rays_bench(dir: &Path, runs: usize, dump: bool) -> ExitCode {
         })
         .collect();
     let mut scene = scene;
-    let geometry = Geometry::new(&mut scene);
+    let mut geometry = Geometry::new(&mut scene);
+    geometry.set_avx(!sse);
+    println!("node test: {}", if geometry.uses_avx() { "AVX2" } else { "SSE" });
     println!(
         "mesh: {tris} triangles, {:.1} bytes/triangle; BVH {:.1} bytes/triangle",
         mesh_bytes as f64 / tris as f64,

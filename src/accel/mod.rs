@@ -5,7 +5,7 @@
 pub mod bvh;
 mod hugepages;
 
-pub use bvh::Bvh;
+pub use bvh::{Avx, Bvh, Isa, Sse};
 
 use crate::interaction::SurfaceInteraction;
 use crate::math::float::gamma;
@@ -92,6 +92,8 @@ pub struct Geometry {
     /// Per mesh: the file's triangle number of each stored triangle (meshes are
     /// reordered to follow their BVH).
     triangle_ids: Vec<Vec<u32>>,
+    /// Set where the processor has AVX2: BVH traversal then uses it.
+    avx: Option<Avx>,
 }
 
 fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>) -> ShapeRef {
@@ -105,6 +107,32 @@ fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>) -> ShapeRef {
             flags: MeshFlags { reverse_orientation: s.reverse_orientation, swaps_handedness: s.swaps_handedness() },
         },
     }
+}
+
+/// The body of [`Blas::intersect`] for an [`Isa`]. A macro, not a function: a closure
+/// is compiled with the target features of the function it is written in, so the leaf
+/// test must be written inside the AVX function to be compiled for AVX.
+macro_rules! closest_hit {
+    ($blas:expr, $isa:expr, $g:expr, $ray:expr, $t_max:expr) => {{
+        let wr = WatertightRay::new($ray);
+        let mut best = None;
+        $blas.bvh.intersect_leaves($isa, $ray, $t_max, |leaf, t_max| {
+            let hit = $blas.hit_leaf::<false>($g, leaf, $ray, &wr, t_max)?;
+            best = Some(hit);
+            Some(hit.0)
+        });
+        best
+    }};
+}
+
+/// The body of [`Blas::intersect_p`], as [`closest_hit`] is of `intersect`.
+macro_rules! any_hit {
+    ($blas:expr, $isa:expr, $g:expr, $ray:expr, $t_max:expr) => {{
+        let wr = WatertightRay::new($ray);
+        $blas.bvh.intersect_leaves_p($isa, $ray, $t_max, |leaf, t_max| {
+            $blas.hit_leaf::<true>($g, leaf, $ray, &wr, t_max).is_some()
+        })
+    }};
 }
 
 impl Blas {
@@ -154,19 +182,34 @@ impl Blas {
 
     /// Closest hit: (t, local shape index, what was hit).
     fn intersect(&self, g: &Geometry, ray: &Ray, t_max: f32) -> Option<(f32, u32, LocalHit)> {
-        let wr = WatertightRay::new(ray);
-        let mut best = None;
-        self.bvh.intersect_leaves(ray, t_max, |leaf, t_max| {
-            let hit = self.hit_leaf::<false>(g, leaf, ray, &wr, t_max)?;
-            best = Some(hit);
-            Some(hit.0)
-        });
-        best
+        match g.avx {
+            // SAFETY: holding an `Avx` proves the processor has what `intersect_avx` enables.
+            #[cfg(target_arch = "x86_64")]
+            Some(avx) => unsafe { self.intersect_avx(avx, g, ray, t_max) },
+            _ => closest_hit!(self, Sse, g, ray, t_max),
+        }
+    }
+
+    /// [`Self::intersect`] compiled for AVX2, traversal and leaf tests alike.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    fn intersect_avx(&self, avx: Avx, g: &Geometry, ray: &Ray, t_max: f32) -> Option<(f32, u32, LocalHit)> {
+        closest_hit!(self, avx, g, ray, t_max)
     }
 
     fn intersect_p(&self, g: &Geometry, ray: &Ray, t_max: f32) -> bool {
-        let wr = WatertightRay::new(ray);
-        self.bvh.intersect_leaves_p(ray, t_max, |leaf, t_max| self.hit_leaf::<true>(g, leaf, ray, &wr, t_max).is_some())
+        match g.avx {
+            // SAFETY: as in `intersect`.
+            #[cfg(target_arch = "x86_64")]
+            Some(avx) => unsafe { self.intersect_p_avx(avx, g, ray, t_max) },
+            _ => any_hit!(self, Sse, g, ray, t_max),
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    fn intersect_p_avx(&self, avx: Avx, g: &Geometry, ray: &Ray, t_max: f32) -> bool {
+        any_hit!(self, avx, g, ray, t_max)
     }
 
     /// The triangle test's axis permutation as const generics: chosen once per leaf,
@@ -377,7 +420,18 @@ impl Geometry {
             .collect();
         let (tlas, order) = Bvh::build(&bounds, |_| INSTANCE_COST);
         instances = order.iter().map(|&k| instances[k as usize].clone()).collect();
-        Geometry { quadrics, meshes, instances, world, objects, tlas, triangle_ids }
+        Geometry { quadrics, meshes, instances, world, objects, tlas, triangle_ids, avx: Avx::detect() }
+    }
+
+    /// Whether BVH traversal uses AVX2, as it does by default where the processor has it.
+    pub fn uses_avx(&self) -> bool {
+        self.avx.is_some()
+    }
+
+    /// Turns AVX2 traversal on (where the processor has it) or off. Both give the
+    /// same hits; the switch is there to compare them.
+    pub fn set_avx(&mut self, on: bool) {
+        self.avx = if on { Avx::detect() } else { None };
     }
 
     /// The closest hit along the ray before `ray.t_max`.

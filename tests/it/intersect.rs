@@ -412,7 +412,8 @@ fn edge_filter_keeps_every_triangle_the_full_test_hits() {
 /// shapes). Where triangles meet, their t differ in the last bits, and pbrt's test
 /// compares t with t_max before dividing by the determinant, so a triangle within
 /// about an ulp of the closest hit found so far may be passed over: the answer is one
-/// of the triangles' t, at most 4 ulps above the smallest.
+/// of the triangles' t, at most 4 ulps above the smallest. Traversal with AVX and
+/// with SSE give the same hit.
 #[test]
 fn mesh_traversal_finds_the_closest_hit_of_all_triangles() {
     for with_sphere in [false, true] {
@@ -425,7 +426,7 @@ fn mesh_traversal_finds_the_closest_hit_of_all_triangles() {
         let mesh = s.meshes[0].clone();
         let verts: Vec<Vec3> = mesh.p.iter().map(|v| Vec3::from(*v)).collect();
         let tris: Vec<[u32; 3]> = mesh.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-        let g = pbrt_sppm::accel::Geometry::new(&mut s);
+        let mut g = pbrt_sppm::accel::Geometry::new(&mut s);
         assert_eq!(g.quadrics.len(), with_sphere as usize);
         for ray in sphere_probe_rays(&verts, &tris, &mut rng) {
             let brute = (0..mesh.triangle_count())
@@ -433,7 +434,8 @@ fn mesh_traversal_finds_the_closest_hit_of_all_triangles() {
                 .map(|h| h.t)
                 .fold(f32::INFINITY, f32::min);
             let sphere = g.quadrics.first().and_then(|q| q.intersect_t(&ray, f32::INFINITY)).map(|h| h.t);
-            let got = g.intersect(&ray).map_or(f32::INFINITY, |h| h.t);
+            let hit = g.intersect(&ray);
+            let got = hit.map_or(f32::INFINITY, |h| h.t);
             if sphere.is_some_and(|t| t <= brute) {
                 assert_eq!(Some(got), sphere, "{ray:?}");
             } else {
@@ -442,6 +444,13 @@ fn mesh_traversal_finds_the_closest_hit_of_all_triangles() {
             }
             let any = brute.is_finite() || sphere.is_some();
             assert_eq!(g.intersect_p(&Ray { t_max: f32::INFINITY, ..ray }), any);
+            // The SSE node test finds the same hit as the AVX one.
+            if g.uses_avx() {
+                g.set_avx(false);
+                assert_eq!(g.intersect(&ray), hit, "{ray:?}");
+                assert_eq!(g.intersect_p(&Ray { t_max: f32::INFINITY, ..ray }), any);
+                g.set_avx(true);
+            }
         }
     }
 }
