@@ -243,9 +243,9 @@ impl Blas {
         let Some((mesh, flags)) = self.single_mesh else {
             return self.hit_mixed_leaf::<KX, KY, KZ, ANY>(g, leaf, ray, wr, t_max);
         };
-        // Every corner is requested before the first test, so the leaf's cache misses
-        // overlap rather than each waiting on the previous test's branch. (The first
-        // four triangles' corners are loaded together in any case.)
+        // The corners past the first four triangles (which the first test loads
+        // together) are requested before that test, so the leaf's cache misses overlap
+        // rather than each group's waiting on the previous group's branches.
         let m = &g.meshes[mesh as usize];
         m.prefetch(leaf.start + 4..leaf.end);
         let mut best = None;
