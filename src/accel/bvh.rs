@@ -274,7 +274,7 @@ impl Bvh {
     }
 }
 
-/// A float per child slot, aligned for SSE loads. Lanes are set through memory:
+/// A float per child slot, aligned for AVX loads. Lanes are set through memory:
 /// inserting into a register by a variable index compiles to a jump table.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(32))]
@@ -408,7 +408,7 @@ impl Stack {
 /// The far-distance scale of pbrt's conservative slab test, 1 + 2γ(3).
 const SCALE: f32 = 1.0 + 2.0 * crate::math::float::gamma(3);
 
-/// A ray prepared for slab tests on a node's boxes, four at a time.
+/// A ray prepared for slab tests on a node's boxes.
 struct SlabRay {
     o: [Vec4; 3],
     inv: [Vec4; 3],
@@ -470,7 +470,7 @@ mod avx {
     #[target_feature(enable = "avx")]
     #[inline]
     fn load(l: &Lanes) -> __m256 {
-        // SAFETY: `Lanes` is 32 floats' worth of bytes aligned to 32.
+        // SAFETY: `Lanes` is eight floats (32 bytes) aligned to 32 bytes.
         unsafe { _mm256_load_ps(l.0.as_ptr()) }
     }
 
