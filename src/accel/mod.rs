@@ -135,6 +135,30 @@ macro_rules! any_hit {
     }};
 }
 
+/// A query method that runs `$body` with AVX2 where the [`Geometry`] holds an [`Avx`],
+/// in a second method compiled for it (traversal and leaf tests alike), and with SSE
+/// otherwise. The features enabled are those `Avx::detect` checks for.
+macro_rules! with_isa {
+    ($(#[$doc:meta])* fn $name:ident, $avx_name:ident -> $ret:ty = $body:ident) => {
+        $(#[$doc])*
+        fn $name(&self, g: &Geometry, ray: &Ray, t_max: f32) -> $ret {
+            match g.avx {
+                // SAFETY: holding an `Avx` proves the processor has what the AVX
+                // method enables.
+                #[cfg(target_arch = "x86_64")]
+                Some(avx) => unsafe { self.$avx_name(avx, g, ray, t_max) },
+                _ => $body!(self, Sse, g, ray, t_max),
+            }
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+        fn $avx_name(&self, avx: Avx, g: &Geometry, ray: &Ray, t_max: f32) -> $ret {
+            $body!(self, avx, g, ray, t_max)
+        }
+    };
+}
+
 impl Blas {
     fn build(shapes: Vec<ShapeRef>, quadrics: &[QuadricShape], meshes: &[TriangleMesh]) -> Blas {
         let mut prims = Vec::new();
@@ -180,36 +204,14 @@ impl Blas {
         }
     }
 
-    /// Closest hit: (t, local shape index, what was hit).
-    fn intersect(&self, g: &Geometry, ray: &Ray, t_max: f32) -> Option<(f32, u32, LocalHit)> {
-        match g.avx {
-            // SAFETY: holding an `Avx` proves the processor has what `intersect_avx` enables.
-            #[cfg(target_arch = "x86_64")]
-            Some(avx) => unsafe { self.intersect_avx(avx, g, ray, t_max) },
-            _ => closest_hit!(self, Sse, g, ray, t_max),
-        }
+    with_isa! {
+        /// Closest hit: (t, local shape index, what was hit).
+        fn intersect, intersect_avx -> Option<(f32, u32, LocalHit)> = closest_hit
     }
 
-    /// [`Self::intersect`] compiled for AVX2, traversal and leaf tests alike.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-    fn intersect_avx(&self, avx: Avx, g: &Geometry, ray: &Ray, t_max: f32) -> Option<(f32, u32, LocalHit)> {
-        closest_hit!(self, avx, g, ray, t_max)
-    }
-
-    fn intersect_p(&self, g: &Geometry, ray: &Ray, t_max: f32) -> bool {
-        match g.avx {
-            // SAFETY: as in `intersect`.
-            #[cfg(target_arch = "x86_64")]
-            Some(avx) => unsafe { self.intersect_p_avx(avx, g, ray, t_max) },
-            _ => any_hit!(self, Sse, g, ray, t_max),
-        }
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-    fn intersect_p_avx(&self, avx: Avx, g: &Geometry, ray: &Ray, t_max: f32) -> bool {
-        any_hit!(self, avx, g, ray, t_max)
+    with_isa! {
+        /// Whether anything is hit before `t_max`.
+        fn intersect_p, intersect_p_avx -> bool = any_hit
     }
 
     /// The triangle test's axis permutation as const generics: chosen once per leaf,
