@@ -19,7 +19,9 @@
 //! needs no order, and coherent shadow rays ran 1.5× faster without one.
 //!
 //! The BVH knows only boxes: `build` returns the primitive order it wants, and the
-//! caller stores its primitives in that order, so leaves index them directly.
+//! caller stores its primitives in that order, so leaves index them directly; or it
+//! gives each leaf a reference and a tag of its own (`relabel_leaves`), as meshes do
+//! for their leaf blocks.
 
 use crate::math::{Bounds3, Ray};
 use glam::{Vec3, Vec4};
@@ -36,8 +38,10 @@ struct Node {
     bounds: [[Lanes; 3]; 2],
     child: [u32; WIDTH],
     count: [u8; WIDTH],
+    /// Per leaf, a byte the caller sets with [`Bvh::relabel_leaves`].
+    tag: [u8; WIDTH],
     valid: u8,
-    _pad: [u8; 3 * WIDTH - 1],
+    _pad: [u8; 2 * WIDTH - 1],
 }
 
 /// Children per node.
@@ -97,8 +101,9 @@ impl Node {
             bounds: [[Lanes([f32::INFINITY; WIDTH]); 3], [Lanes([f32::NEG_INFINITY; WIDTH]); 3]],
             child: [0; WIDTH],
             count: [0; WIDTH],
+            tag: [0; WIDTH],
             valid: 0,
-            _pad: [0; 3 * WIDTH - 1],
+            _pad: [0; 2 * WIDTH - 1],
         };
         for (slot, &(b, child, count)) in kids.iter().enumerate() {
             for a in 0..3 {
@@ -110,6 +115,27 @@ impl Node {
             node.valid |= 1 << slot;
         }
         node
+    }
+
+    /// A slot's (child, count, tag).
+    #[inline(always)]
+    fn slot(&self, slot: usize) -> (u32, u8, u8) {
+        (self.child[slot], self.count[slot], self.tag[slot])
+    }
+}
+
+/// A leaf as traversal hands it over: `count` primitives from `first`, or after
+/// [`Bvh::relabel_leaves`] the reference and tag set there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Leaf {
+    pub first: usize,
+    pub count: usize,
+    pub tag: u8,
+}
+
+impl Leaf {
+    pub fn prims(&self) -> Range<usize> {
+        self.first..self.first + self.count
     }
 }
 
@@ -142,14 +168,19 @@ const BINS: usize = 12;
 /// gave 35) at the same speed on large meshes and small ones. Quadrics cost more
 /// (`accel::QUADRIC_COST`), so they still get leaves of their own.
 const TRAVERSAL_COST: f32 = 4.0;
-/// The most primitives in a leaf.
-const MAX_LEAF: usize = 8;
+/// The most primitives in a leaf, unless the caller asks for another limit.
+pub const MAX_LEAF: usize = 8;
 const PARALLEL_THRESHOLD: usize = 4096;
 
 impl Bvh {
     /// Builds over the given boxes, primitive i costing `cost(i)` triangle tests to
     /// intersect; returns the hierarchy and the primitive order.
     pub fn build(bounds: &[Bounds3], cost: impl Fn(usize) -> f32) -> (Bvh, Vec<u32>) {
+        Bvh::build_with_max_leaf(bounds, cost, MAX_LEAF)
+    }
+
+    /// [`Bvh::build`] with at most `max_leaf` (at most 255) primitives per leaf.
+    pub fn build_with_max_leaf(bounds: &[Bounds3], cost: impl Fn(usize) -> f32, max_leaf: usize) -> (Bvh, Vec<u32>) {
         if bounds.is_empty() {
             return (Bvh::default(), Vec::new());
         }
@@ -158,11 +189,24 @@ impl Bvh {
             .enumerate()
             .map(|(i, b)| PrimInfo { bounds: *b, centroid: b.centroid(), cost: cost(i), index: i as u32 })
             .collect();
-        let root = build_recursive(&mut info, 0);
+        let root = build_recursive(&mut info, 0, max_leaf.clamp(1, u8::MAX as usize));
         let mut nodes = Vec::new();
         collapse(&root, &mut nodes);
         nodes.shrink_to_fit();
         (Bvh { nodes, bounds: root.bounds() }, info.iter().map(|p| p.index).collect())
+    }
+
+    /// Replaces each leaf's (first, tag) by `relabel(first, count)`, for callers that
+    /// keep their own per-leaf records; traversal then hands over those instead.
+    pub fn relabel_leaves(&mut self, mut relabel: impl FnMut(usize, usize) -> (u32, u8)) {
+        for node in &mut self.nodes {
+            for slot in 0..WIDTH {
+                if node.valid & 1 << slot != 0 && node.count[slot] > 0 {
+                    let (child, tag) = relabel(node.child[slot] as usize, node.count[slot] as usize);
+                    (node.child[slot], node.tag[slot]) = (child, tag);
+                }
+            }
+        }
     }
 
     /// See [`super::hugepages`].
@@ -188,7 +232,7 @@ impl Bvh {
     pub fn intersect(&self, ray: &Ray, t_max: f32, mut hit: impl FnMut(usize, f32) -> Option<f32>) -> Option<f32> {
         self.intersect_leaves(Sse, ray, t_max, |leaf, mut t_max| {
             let mut found = false;
-            for prim in leaf {
+            for prim in leaf.prims() {
                 if let Some(t) = hit(prim, t_max) {
                     (t_max, found) = (t, true);
                 }
@@ -200,10 +244,10 @@ impl Bvh {
     /// Any hit: stops at the first primitive for which `hit(prim, t_max)` is true.
     #[inline]
     pub fn intersect_p(&self, ray: &Ray, t_max: f32, mut hit: impl FnMut(usize, f32) -> bool) -> bool {
-        self.intersect_leaves_p(Sse, ray, t_max, |leaf, t_max| leaf.into_iter().any(|prim| hit(prim, t_max)))
+        self.intersect_leaves_p(Sse, ray, t_max, |leaf, t_max| leaf.prims().any(|prim| hit(prim, t_max)))
     }
 
-    /// Closest hit, a leaf at a time: `hit(prims, t_max)` returns the closest t below
+    /// Closest hit, a leaf at a time: `hit(leaf, t_max)` returns the closest t below
     /// `t_max` among the leaf's primitives, if any. `isa` picks the node test.
     #[inline(always)]
     pub fn intersect_leaves<I: Isa>(
@@ -211,7 +255,7 @@ impl Bvh {
         isa: I,
         ray: &Ray,
         mut t_max: f32,
-        mut hit: impl FnMut(Range<usize>, f32) -> Option<f32>,
+        mut hit: impl FnMut(Leaf, f32) -> Option<f32>,
     ) -> Option<f32> {
         let mut found = false;
         self.traverse::<I, true>(isa, ray, &mut t_max, |leaf, t_max| {
@@ -230,7 +274,7 @@ impl Bvh {
         isa: I,
         ray: &Ray,
         t_max: f32,
-        mut hit: impl FnMut(Range<usize>, f32) -> bool,
+        mut hit: impl FnMut(Leaf, f32) -> bool,
     ) -> bool {
         let mut t = t_max;
         self.traverse::<I, false>(isa, ray, &mut t, |leaf, t_max| hit(leaf, *t_max))
@@ -243,17 +287,17 @@ impl Bvh {
         _isa: I,
         ray: &Ray,
         t_max: &mut f32,
-        mut visit: impl FnMut(Range<usize>, &mut f32) -> bool,
+        mut visit: impl FnMut(Leaf, &mut f32) -> bool,
     ) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
         let r = SlabRay::new(ray);
         let mut stack = Stack::new();
-        let (mut child, mut count) = (0u32, 0u8);
+        let (mut child, mut count, mut tag) = (0u32, 0u8, 0u8);
         loop {
             if count > 0 {
-                if visit(child as usize..child as usize + count as usize, t_max) {
+                if visit(Leaf { first: child as usize, count: count as usize, tag }, t_max) {
                     return true;
                 }
             } else {
@@ -264,12 +308,12 @@ impl Bvh {
                     let nearest = ts.first::<I, NEAREST>(hits);
                     ts.0[nearest] = f32::INFINITY;
                     stack.push(Pending { ts, node: child, slots: hits & !(1 << nearest) });
-                    (child, count) = (node.child[nearest], node.count[nearest]);
+                    (child, count, tag) = node.slot(nearest);
                     continue;
                 }
             }
-            let Some((c, k)) = stack.next::<I, NEAREST>(&self.nodes, *t_max) else { return false };
-            (child, count) = (c, k);
+            let Some(next) = stack.next::<I, NEAREST>(&self.nodes, *t_max) else { return false };
+            (child, count, tag) = next;
         }
     }
 }
@@ -382,10 +426,10 @@ impl Stack {
         }
     }
 
-    /// The next waiting child (child, count) that starts within `t_max`, the nearest
-    /// if `NEAREST`; entries left with none are dropped.
+    /// The next waiting child that starts within `t_max`, the nearest if `NEAREST`, as
+    /// [`Node::slot`] gives it; entries left with none are dropped.
     #[inline(always)]
-    fn next<I: Isa, const NEAREST: bool>(&mut self, nodes: &[Node], t_max: f32) -> Option<(u32, u8)> {
+    fn next<I: Isa, const NEAREST: bool>(&mut self, nodes: &[Node], t_max: f32) -> Option<(u32, u8, u8)> {
         loop {
             let top = self.top()?;
             let live = top.slots & top.ts.at_most::<I>(t_max);
@@ -400,7 +444,7 @@ impl Stack {
             if top.slots == 0 {
                 self.drop_top();
             }
-            return Some((node.child[slot], node.count[slot]));
+            return Some(node.slot(slot));
         }
     }
 }
@@ -516,7 +560,7 @@ mod avx {
     }
 }
 
-fn build_recursive(prims: &mut [PrimInfo], first: usize) -> BuildNode {
+fn build_recursive(prims: &mut [PrimInfo], first: usize, max_leaf: usize) -> BuildNode {
     let bounds = prims.iter().fold(Bounds3::default(), |b, p| b.union(p.bounds));
     let n = prims.len();
     if n == 1 {
@@ -527,27 +571,34 @@ fn build_recursive(prims: &mut [PrimInfo], first: usize) -> BuildNode {
     let (lo, hi) = (centroids.min[axis], centroids.max[axis]);
     let mid = if hi <= lo {
         // All centroids coincide: a leaf if it fits, else split by count.
-        if n <= MAX_LEAF {
+        if n <= max_leaf {
             return BuildNode::Leaf { bounds, first, count: n };
         }
         n / 2
     } else {
-        match sah_split(prims, &bounds, axis, lo, hi) {
+        match sah_split(prims, &bounds, axis, lo, hi, max_leaf) {
             Some(mid) => mid,
             None => return BuildNode::Leaf { bounds, first, count: n },
         }
     };
     let (left, right) = prims.split_at_mut(mid);
     let (a, b) = if n > PARALLEL_THRESHOLD {
-        rayon::join(|| build_recursive(left, first), || build_recursive(right, first + mid))
+        rayon::join(|| build_recursive(left, first, max_leaf), || build_recursive(right, first + mid, max_leaf))
     } else {
-        (build_recursive(left, first), build_recursive(right, first + mid))
+        (build_recursive(left, first, max_leaf), build_recursive(right, first + mid, max_leaf))
     };
     BuildNode::Interior { bounds, children: Box::new((a, b)) }
 }
 
 /// Partitions by the cheapest of the bin boundaries; `None` when a leaf is cheaper.
-fn sah_split(prims: &mut [PrimInfo], bounds: &Bounds3, axis: usize, lo: f32, hi: f32) -> Option<usize> {
+fn sah_split(
+    prims: &mut [PrimInfo],
+    bounds: &Bounds3,
+    axis: usize,
+    lo: f32,
+    hi: f32,
+    max_leaf: usize,
+) -> Option<usize> {
     let n = prims.len();
     let bin_of = |c: Vec3| (((c[axis] - lo) / (hi - lo) * BINS as f32) as usize).min(BINS - 1);
     // Per bin: the summed intersection cost of its primitives, and their bounds.
@@ -579,7 +630,7 @@ fn sah_split(prims: &mut [PrimInfo], bounds: &Bounds3, axis: usize, lo: f32, hi:
             (best, best_cost) = (i, split);
         }
     }
-    if n <= MAX_LEAF && best_cost >= left_cost + cost[BINS - 1] {
+    if n <= max_leaf && best_cost >= left_cost + cost[BINS - 1] {
         return None;
     }
     let mid = partition(prims, |p| bin_of(p.centroid) <= best);
@@ -693,7 +744,7 @@ mod tests {
     /// The closest hit through `intersect_leaves` with the given node test.
     fn closest_with(isa: impl Isa, bvh: &Bvh, ray: &Ray, hit: impl Fn(usize, f32) -> Option<f32>) -> f32 {
         let t = bvh.intersect_leaves(isa, ray, f32::INFINITY, |leaf, t_max| {
-            leaf.fold(None, |best: Option<f32>, i| hit(i, best.unwrap_or(t_max)).or(best))
+            leaf.prims().fold(None, |best: Option<f32>, i| hit(i, best.unwrap_or(t_max)).or(best))
         });
         t.unwrap_or(f32::INFINITY)
     }
@@ -776,7 +827,7 @@ mod tests {
         stack.push(pending([3.0, 9.0, 1.0, f32::INFINITY, f32::INFINITY, 2.0, 2.0, 5.0], 0b1110_0111));
         // Slots 1 and 7 start past t_max; 5 and 6 tie, the lower first.
         let mut order = Vec::new();
-        while let Some((prim, count)) = stack.next::<Sse, true>(&nodes, 4.0) {
+        while let Some((prim, count, _)) = stack.next::<Sse, true>(&nodes, 4.0) {
             assert_eq!(count, 1);
             order.push(prim);
         }
@@ -785,7 +836,7 @@ mod tests {
         // Any-hit queries take the slots in order.
         stack.push(pending([3.0, 9.0, 1.0, f32::INFINITY, f32::INFINITY, 2.0, 2.0, 5.0], 0b1110_0111));
         let unordered: Vec<u32> =
-            std::iter::from_fn(|| stack.next::<Sse, false>(&nodes, 4.0).map(|(p, _)| p)).collect();
+            std::iter::from_fn(|| stack.next::<Sse, false>(&nodes, 4.0).map(|(p, ..)| p)).collect();
         assert_eq!(unordered, [0, 2, 5, 6]);
         // Entries without slots are never pushed.
         stack.push(pending([0.0; WIDTH], 0));
@@ -800,7 +851,7 @@ mod tests {
             stack.push(pending([i as f32; WIDTH], 1 << (i % WIDTH)));
         }
         for i in (0..3 * STACK_INLINE).rev() {
-            assert_eq!(stack.next::<Sse, true>(&nodes, f32::INFINITY), Some(((i % WIDTH) as u32, 1)));
+            assert_eq!(stack.next::<Sse, true>(&nodes, f32::INFINITY), Some(((i % WIDTH) as u32, 1, 0)));
         }
         assert_eq!(stack.next::<Sse, true>(&nodes, f32::INFINITY), None);
     }

@@ -4,8 +4,10 @@
 
 pub mod bvh;
 mod hugepages;
+mod leaves;
 
-pub use bvh::{Avx, Bvh, Isa, Sse};
+pub use bvh::{Avx, Bvh, Isa, Leaf, Sse};
+use leaves::LeafBlocks;
 
 use crate::interaction::SurfaceInteraction;
 use crate::math::float::gamma;
@@ -14,7 +16,7 @@ use crate::scene::{Geometry as ShapeGeometry, SceneDescription, ShapeDesc};
 use crate::shapes::{
     MeshFlags, QuadricHit, QuadricShape, TriangleHit, TriangleMesh, WatertightRay, edge_candidates, watertight,
 };
-use glam::{DMat3, DMat4, DVec3};
+use glam::{DMat3, DMat4, DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -23,6 +25,9 @@ use std::ops::Range;
 pub const QUADRIC_COST: f32 = 8.0;
 /// An instance's, for the top-level SAH: a ray transform and a whole traversal.
 const INSTANCE_COST: f32 = 16.0;
+/// A triangle's in a leaf block, relative to a node visit: its leaf's memory is one
+/// trip, so larger leaves pay (and their blocks share more vertices).
+const BLOCK_TRIANGLE_COST: f32 = 0.5;
 
 /// A shape of a BVH: a quadric or a whole mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,11 +48,13 @@ struct Prim {
 struct Blas {
     bvh: Bvh,
     /// Leaf entries in BVH order; empty when the BVH holds a single mesh, whose
-    /// triangles are then stored in BVH order (entry i is triangle i).
+    /// triangles are then stored in BVH order and copied into `blocks`.
     prims: Vec<Prim>,
     shapes: Vec<ShapeRef>,
     /// That single mesh, once `localize` has put it in BVH order.
     single_mesh: Option<(u32, MeshFlags)>,
+    /// The single mesh's leaf blocks, which its BVH's leaves then refer to.
+    blocks: LeafBlocks,
 }
 
 /// A placed object.
@@ -179,14 +186,20 @@ impl Blas {
             }
         }
         let is_quadric = |i: usize| matches!(shapes[prims[i].shape as usize], ShapeRef::Quadric(_));
-        let (bvh, order) = Bvh::build(&bounds, |i| if is_quadric(i) { QUADRIC_COST } else { 1.0 });
+        let cost = |i| if is_quadric(i) { QUADRIC_COST } else { 1.0 };
+        let (bvh, order) = match shapes.as_slice() {
+            [ShapeRef::Mesh { mesh, .. }] if LeafBlocks::fit(meshes[*mesh as usize].triangle_count()) => {
+                Bvh::build_with_max_leaf(&bounds, |_| BLOCK_TRIANGLE_COST, leaves::MAX_LEAF)
+            }
+            _ => Bvh::build(&bounds, cost),
+        };
         let prims = order.iter().map(|&i| prims[i as usize]).collect();
-        Blas { bvh, prims, shapes, single_mesh: None }
+        Blas { bvh, prims, shapes, single_mesh: None, blocks: LeafBlocks::default() }
     }
 
     /// Reorders each mesh's triangles into this BVH's leaf order; records the file's
     /// numbers in `ids` and points the primitives at the new positions. A BVH over a
-    /// single mesh then needs no primitive list at all.
+    /// single mesh then needs no primitive list: its leaves refer to leaf blocks.
     fn localize(&mut self, meshes: &mut [TriangleMesh], ids: &mut [Vec<u32>]) {
         for (shape, s) in self.shapes.iter().enumerate() {
             let ShapeRef::Mesh { mesh, .. } = s else { continue };
@@ -199,8 +212,14 @@ impl Blas {
             ids[mesh] = order;
         }
         if let [ShapeRef::Mesh { mesh, flags }] = self.shapes.as_slice() {
-            self.prims = Vec::new();
-            self.single_mesh = Some((*mesh, *flags));
+            let m = &meshes[*mesh as usize];
+            if LeafBlocks::fit(m.triangle_count()) {
+                let mut blocks = LeafBlocks::default();
+                self.bvh.relabel_leaves(|first, count| blocks.push(m, first, count));
+                blocks.shrink_to_fit();
+                (self.blocks, self.prims) = (blocks, Vec::new());
+                self.single_mesh = Some((*mesh, *flags));
+            }
         }
     }
 
@@ -220,7 +239,7 @@ impl Blas {
     fn hit_leaf<const ANY: bool>(
         &self,
         g: &Geometry,
-        leaf: Range<usize>,
+        leaf: Leaf,
         ray: &Ray,
         wr: &WatertightRay,
         t_max: f32,
@@ -237,23 +256,23 @@ impl Blas {
     fn hit_leaf_permuted<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
         &self,
         g: &Geometry,
-        leaf: Range<usize>,
+        leaf: Leaf,
         ray: &Ray,
         wr: &WatertightRay,
         mut t_max: f32,
     ) -> Option<(f32, u32, LocalHit)> {
         let Some((mesh, flags)) = self.single_mesh else {
-            return self.hit_mixed_leaf::<KX, KY, KZ, ANY>(g, leaf, ray, wr, t_max);
+            return self.hit_mixed_leaf::<KX, KY, KZ, ANY>(g, leaf.prims(), ray, wr, t_max);
         };
-        // The corners past the first four triangles (which the first test loads
-        // together) are requested before that test, so the leaf's cache misses overlap
-        // rather than each group's waiting on the previous group's branches.
-        let m = &g.meshes[mesh as usize];
-        m.prefetch(leaf.start + 4..leaf.end);
+        // The block's lines are all requested before the first test waits on its
+        // first, so the leaf costs one cache miss's latency, not one per line.
+        self.blocks.prefetch(leaf);
+        let block = self.blocks.block(leaf)?;
         let mut best = None;
-        for first in leaf.clone().step_by(4) {
-            let n = (leaf.end - first).min(4);
-            if let Some((tri, hit)) = hit_four::<KX, KY, KZ, ANY>(m, first, n, wr, &mut t_max) {
+        for g in 0..block.count().div_ceil(4) {
+            let n = (block.count() - 4 * g).min(4);
+            let triangle = |k| (block.corners(4 * g + k), block.triangle(4 * g + k));
+            if let Some((tri, hit)) = hit_four::<KX, KY, KZ, ANY>(&block.corner_lanes(g), n, triangle, wr, &mut t_max) {
                 best = Some((hit.t, 0, LocalHit::Triangle { mesh, tri, flags, hit }));
                 if ANY {
                     break;
@@ -288,7 +307,9 @@ impl Blas {
             let (found, step) = match (self.shapes[prim.shape as usize], run) {
                 (ShapeRef::Mesh { mesh, flags }, 2..) => {
                     let m = &g.meshes[mesh as usize];
-                    let hit = hit_four::<KX, KY, KZ, ANY>(m, prim.tri as usize, run, wr, &mut t_max);
+                    let first = prim.tri as usize;
+                    let triangle = |k| (m.corners(first + k), (first + k) as u32);
+                    let hit = hit_four::<KX, KY, KZ, ANY>(&m.corner_lanes(first), run, triangle, wr, &mut t_max);
                     (hit.map(|(tri, hit)| (hit.t, LocalHit::Triangle { mesh, tri, flags, hit })), run)
                 }
                 _ => (self.hit_prim::<KX, KY, KZ>(g, prim, ray, wr, t_max), 1),
@@ -327,25 +348,27 @@ impl Blas {
     }
 }
 
-/// The closest hit below `t_max` (`ANY`: the first) among triangles `first..first + n`
-/// of a mesh, n ≤ 4: the edge filter for the four at once, the full test for those it
-/// keeps. Lowers `t_max` to each hit found.
+/// The closest hit below `t_max` (`ANY`: the first) among the first `n` of four
+/// triangles: the edge filter on their corner lanes for the four at once, then the
+/// full test on the corners and triangle number `triangle(k)` gives for those it keeps.
+/// Lowers `t_max` to each hit found.
 #[inline(always)]
 fn hit_four<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
-    m: &TriangleMesh,
-    first: usize,
+    lanes: &[[Vec4; 3]; 3],
     n: usize,
+    triangle: impl Fn(usize) -> ([Vec3; 3], u32),
     wr: &WatertightRay,
     t_max: &mut f32,
 ) -> Option<(u32, TriangleHit)> {
     let mut best = None;
-    let mut candidates = edge_candidates::<KX, KY, KZ>(&m.corner_lanes(first), wr) & ((1 << n) - 1);
+    let mut candidates = edge_candidates::<KX, KY, KZ>(lanes, wr) & ((1 << n) - 1);
     while candidates != 0 {
         let k = candidates.trailing_zeros() as usize;
         candidates &= candidates - 1;
-        if let Some(hit) = watertight::<KX, KY, KZ>(m.corners(first + k), wr, *t_max) {
+        let (corners, tri) = triangle(k);
+        if let Some(hit) = watertight::<KX, KY, KZ>(corners, wr, *t_max) {
             *t_max = hit.t;
-            best = Some(((first + k) as u32, hit));
+            best = Some((tri, hit));
             if ANY {
                 break;
             }
@@ -502,7 +525,8 @@ impl Geometry {
 
     /// Bytes of BVH nodes, primitive references and the triangle-number maps.
     pub fn accel_bytes(&self) -> usize {
-        let blas = |b: &Blas| b.bvh.heap_bytes() + b.prims.capacity() * std::mem::size_of::<Prim>();
+        let blas =
+            |b: &Blas| b.bvh.heap_bytes() + b.prims.capacity() * std::mem::size_of::<Prim>() + b.blocks.heap_bytes();
         let ids: usize = self.triangle_ids.iter().map(|v| v.capacity() * 4).sum();
         blas(&self.world) + self.objects.iter().map(blas).sum::<usize>() + self.tlas.heap_bytes() + ids
     }

@@ -31,7 +31,7 @@ pub use paraboloid::Paraboloid;
 pub use quadric::{QuadricHit, QuadricShape};
 pub use sampling::{QuadricSampler, ShapeSample};
 pub use sphere::Sphere;
-pub use triangle::{MeshFlags, TriangleHit, TriangleMesh, WatertightRay, edge_candidates, watertight};
+pub use triangle::{MeshFlags, TriangleHit, TriangleMesh, WatertightRay, corner_lanes_of, edge_candidates, watertight};
 
 use glam::{DMat3, DVec3};
 

@@ -110,7 +110,6 @@ use crate::math::float::gamma;
 use crate::math::frame::coordinate_system;
 use crate::math::{Bounds3, Normal3, Point3, Ray, Vector3};
 use glam::{Mat4, Vec3, Vec4};
-use std::ops::Range;
 
 /// Orientation flags of the shape a mesh came from.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -177,19 +176,6 @@ impl TriangleMesh {
             corner_lanes_of(&idx, |v| Vec3::from(*unsafe { self.p.get_unchecked(v as usize) }).extend(0.0))
         } else {
             corner_lanes_of(&idx, |v| Vec3::from(self.p[v as usize]).extend(0.0))
-        }
-    }
-
-    /// Asks the cache for the corners of triangles `tris` without waiting for them.
-    #[inline(always)]
-    pub fn prefetch(&self, tris: Range<usize>) {
-        #[cfg(target_arch = "x86_64")]
-        for &i in self.indices.get(3 * tris.start..3 * tris.end).unwrap_or_default() {
-            let p = self.p.as_ptr().wrapping_add(i as usize);
-            // SAFETY: a prefetch reads nothing the program sees and cannot fault, even
-            // at an address outside `p`; it is `unsafe` only for its `sse` target
-            // feature, which every x86_64 has.
-            unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast()) };
         }
     }
 
@@ -284,7 +270,7 @@ pub fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
 /// The corners of the four triangles `idx` lists as lanes (`[c][axis]`), with `load`
 /// giving a vertex in a `Vec4`'s x, y and z.
 #[inline(always)]
-fn corner_lanes_of(idx: &[u32; 12], load: impl Fn(u32) -> Vec4) -> [[Vec4; 3]; 3] {
+pub fn corner_lanes_of(idx: &[u32; 12], load: impl Fn(u32) -> Vec4) -> [[Vec4; 3]; 3] {
     let lane = |c: usize| {
         let m = Mat4::from_cols(load(idx[c]), load(idx[3 + c]), load(idx[6 + c]), load(idx[9 + c])).transpose();
         [m.x_axis, m.y_axis, m.z_axis]
