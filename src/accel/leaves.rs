@@ -14,12 +14,14 @@
 //! [1 + 3g ..]          the vertices, three f32 each
 //! ```
 
-use super::bvh::Leaf;
-use crate::shapes::{TriangleMesh, corner_lanes_of};
+use super::bvh::{Isa, Leaf};
+#[cfg(target_arch = "x86_64")]
+use crate::shapes::edge_candidates8;
+use crate::shapes::{TriangleMesh, WatertightRay, corner_lanes_of, edge_candidates};
 use glam::{Vec3, Vec4};
 
-/// The most triangles in a leaf with a block: its length in words, at most
-/// 1 + 3·4 + 3·48 = 157, fits the node's byte-sized tag.
+/// The most triangles in a leaf with a block; their at most 48 vertices fit the
+/// node's byte-sized tag and [`all_bytes_below`].
 pub const MAX_LEAF: usize = 16;
 
 /// The blocks of all leaves of one BVH, one after another.
@@ -33,10 +35,11 @@ pub struct LeafBlocks {
 #[derive(Clone, Copy)]
 pub struct Block<'a> {
     first: u32,
-    /// Three words of corner bytes per group.
-    corners: &'a [u32],
-    /// The vertices and the words after them (at least one).
+    /// Twelve corner bytes per group.
+    corners: &'a [u8],
+    /// The vertices and one word after them.
     verts: &'a [u32],
+    vertex_count: u32,
     count: usize,
 }
 
@@ -52,8 +55,8 @@ impl LeafBlocks {
     }
 
     /// Appends the block of triangles `first..first + count` of `mesh`; returns its
-    /// reference and length for the BVH's leaf. The mesh must [`fit`](Self::fit), and
-    /// `count` be at most [`MAX_LEAF`].
+    /// reference and vertex count, the BVH leaf's reference and tag. The mesh must
+    /// [`fit`](Self::fit), and `count` be at most [`MAX_LEAF`].
     pub fn push(&mut self, mesh: &TriangleMesh, first: usize, count: usize) -> (u32, u8) {
         assert!(count <= MAX_LEAF, "a leaf block holds at most {MAX_LEAF} triangles");
         self.words.pop(); // the previous block's spare word
@@ -68,11 +71,11 @@ impl LeafBlocks {
             corner_bytes[k] = local as u8;
         }
         self.words.push(first as u32);
-        self.words.extend(corner_bytes.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])));
+        // Native byte order, so that the bytes lie in memory in this order.
+        self.words.extend(corner_bytes.chunks_exact(4).map(|b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]])));
         self.words.extend(verts.iter().flat_map(|&v| mesh.p[v as usize].map(f32::to_bits)));
-        let len = self.words.len() - at as usize;
         self.words.push(0);
-        (at, len as u8)
+        (at, verts.len() as u8)
     }
 
     pub fn shrink_to_fit(&mut self) {
@@ -83,14 +86,22 @@ impl LeafBlocks {
         self.words.capacity() * 4
     }
 
+    /// A block's length in words, without the spare word.
+    #[inline(always)]
+    fn len(leaf: Leaf) -> usize {
+        1 + 3 * leaf.count.div_ceil(4) + 3 * leaf.tag as usize
+    }
+
     /// The block of a leaf the BVH handed over; `None` for a reference this store did
     /// not make.
     #[inline(always)]
     pub fn block(&self, leaf: Leaf) -> Option<Block<'_>> {
-        let words = self.words.get(leaf.first..leaf.first + leaf.tag as usize + 1)?;
+        let words = self.words.get(leaf.first..leaf.first + Self::len(leaf) + 1)?;
         let (&first, rest) = words.split_first()?;
         let (corners, verts) = rest.split_at_checked(3 * leaf.count.div_ceil(4))?;
-        Some(Block { first, corners, verts, count: leaf.count })
+        // SAFETY: the bytes of `corners`, which any bit pattern is.
+        let corners = unsafe { std::slice::from_raw_parts(corners.as_ptr().cast::<u8>(), 4 * corners.len()) };
+        Some(Block { first, corners, verts, vertex_count: leaf.tag as u32, count: leaf.count })
     }
 
     /// Asks the cache for the lines of the leaf's block past its first, which the
@@ -100,7 +111,7 @@ impl LeafBlocks {
         #[cfg(target_arch = "x86_64")]
         {
             let start = self.words.as_ptr().wrapping_add(leaf.first) as usize;
-            let end = start + 4 * leaf.tag as usize;
+            let end = start + 4 * Self::len(leaf);
             for line in ((start | 63) + 1..end).step_by(64) {
                 // SAFETY: a prefetch reads nothing the program sees and cannot fault;
                 // it is `unsafe` only for its `sse` target feature, which every x86_64 has.
@@ -125,29 +136,67 @@ impl Block<'_> {
     /// block's last have the first vertex for every corner).
     #[inline(always)]
     pub fn corner_lanes(&self, g: usize) -> [[Vec4; 3]; 3] {
-        let w = &self.corners[3 * g..3 * g + 3];
-        let bytes = [w[0].to_le_bytes(), w[1].to_le_bytes(), w[2].to_le_bytes()];
-        let idx: [u32; 12] = std::array::from_fn(|j| bytes[j / 4][j % 4] as u32);
-        // One bounds check for all twelve: the vertex and the word after it.
-        let most = idx.iter().fold(0, |m, &v| m.max(v)) as usize;
-        if 3 * most + 4 <= self.verts.len() {
-            // SAFETY: every index is at most `most`, whose four words lie in `verts`.
+        let bytes: [u8; 12] = self.corners[12 * g..12 * g + 12].try_into().unwrap_or_default();
+        let idx = bytes.map(u32::from);
+        let word = |w: usize| u32::from_ne_bytes([bytes[4 * w], bytes[4 * w + 1], bytes[4 * w + 2], bytes[4 * w + 3]]);
+        // One bounds check for all twelve: each vertex and the word after it.
+        let loadable = self.vertex_count.min(128);
+        if all_bytes_below([word(0), word(1), word(2)], loadable) {
+            // SAFETY: every index v is below `loadable`, at most the block's vertex
+            // count, so 3v + 4 is at most `verts.len()`: the vertices and one word.
             corner_lanes_of(&idx, |v| load4(unsafe { self.verts.get_unchecked(3 * v as usize..3 * v as usize + 4) }))
         } else {
             corner_lanes_of(&idx, |v| load4(&self.verts[3 * v as usize..3 * v as usize + 4]))
         }
     }
 
+    /// The triangles from group `g` on that the edge filter keeps, as bits from the
+    /// group's first, and how many groups it looked at: two with AVX while two are
+    /// left, else one.
+    #[inline(always)]
+    pub fn edge_candidates<I: Isa, const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        _isa: I,
+        g: usize,
+        wr: &WatertightRay,
+    ) -> (u32, usize) {
+        let left = self.count - 4 * g;
+        #[cfg(target_arch = "x86_64")]
+        if I::AVX && left > 4 {
+            let (lo, hi) = (self.corner_lanes(g), self.corner_lanes(g + 1));
+            // SAFETY: an `Avx` value, the only `Isa` with `AVX`, proves the processor has it.
+            let kept = unsafe { edge_candidates8::<KX, KY, KZ>(&lo, &hi, wr) };
+            return (kept & lanes_below(left), 2);
+        }
+        (edge_candidates::<KX, KY, KZ>(&self.corner_lanes(g), wr) & lanes_below(left.min(4)), 1)
+    }
+
     /// Triangle k's corners.
     #[inline(always)]
     pub fn corners(&self, k: usize) -> [Vec3; 3] {
-        let byte = |j: usize| (self.corners[j / 4].to_le_bytes()[j % 4] as usize) * 3;
         let vertex = |j: usize| {
-            let v = &self.verts[byte(j)..byte(j) + 3];
+            let v = 3 * self.corners[j] as usize;
+            let v = &self.verts[v..v + 3];
             Vec3::new(f32::from_bits(v[0]), f32::from_bits(v[1]), f32::from_bits(v[2]))
         };
         [vertex(3 * k), vertex(3 * k + 1), vertex(3 * k + 2)]
     }
+}
+
+/// The bits of the first `n` (at most 8) lanes.
+#[inline(always)]
+fn lanes_below(n: usize) -> u32 {
+    (1u32 << n.min(8)) - 1
+}
+
+/// Whether every byte of the words is below `n` (at most 128), four bytes at a time:
+/// for a byte b, (b | 0x80) − n borrows nothing from the next byte, and its high bit
+/// is set exactly when b mod 128 ≥ n; b's own high bit is set when b ≥ 128.
+#[inline(always)]
+fn all_bytes_below(w: [u32; 3], n: u32) -> bool {
+    const HIGH: u32 = 0x8080_8080;
+    let over = |w: u32| w | (w | HIGH).wrapping_sub(n * 0x0101_0101);
+    (over(w[0]) | over(w[1]) | over(w[2])) & HIGH == 0
 }
 
 /// A vertex's three words, and the next, as a `Vec4` (the fourth lane is unused).
@@ -212,9 +261,26 @@ mod tests {
         let mesh = strip(16);
         let mut blocks = LeafBlocks::default();
         let (_, tag) = blocks.push(&mesh, 0, 16);
-        // 16 strip triangles use 18 vertices: 1 + 3·4 + 3·18 words.
-        assert_eq!(tag, 1 + 12 + 54);
+        // 16 strip triangles use 18 vertices; the block is 1 + 3·4 + 3·18 words.
+        assert_eq!(tag, 18);
+        assert_eq!(blocks.words.len(), 1 + 12 + 54 + 1);
         assert_eq!(blocks.block(Leaf { first: 0, count: 16, tag: tag + 1 }).map(|b| b.count()), None);
+    }
+
+    #[test]
+    fn the_byte_check_agrees_with_comparing_each_byte() {
+        for n in 0..=128u32 {
+            for b in 0..=255u32 {
+                for pos in 0..12 {
+                    // b at one position among bytes just below n (or 0).
+                    let fill = n.saturating_sub(1) * 0x0101_0101;
+                    let mut w = [fill; 3];
+                    w[pos / 4] = w[pos / 4] & !(0xff << (8 * (pos % 4))) | b << (8 * (pos % 4));
+                    let want = w.iter().all(|x| x.to_le_bytes().iter().all(|&y| (y as u32) < n));
+                    assert_eq!(all_bytes_below(w, n), want, "n {n} byte {b} at {pos}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -16,7 +16,7 @@ use crate::scene::{Geometry as ShapeGeometry, SceneDescription, ShapeDesc};
 use crate::shapes::{
     MeshFlags, QuadricHit, QuadricShape, TriangleHit, TriangleMesh, WatertightRay, edge_candidates, watertight,
 };
-use glam::{DMat3, DMat4, DVec3, Vec3, Vec4};
+use glam::{DMat3, DMat4, DVec3, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -124,7 +124,7 @@ macro_rules! closest_hit {
         let wr = WatertightRay::new($ray);
         let mut best = None;
         $blas.bvh.intersect_leaves($isa, $ray, $t_max, |leaf, t_max| {
-            let hit = $blas.hit_leaf::<false>($g, leaf, $ray, &wr, t_max)?;
+            let hit = $blas.hit_leaf::<_, false>($isa, $g, leaf, $ray, &wr, t_max)?;
             best = Some(hit);
             Some(hit.0)
         });
@@ -137,7 +137,7 @@ macro_rules! any_hit {
     ($blas:expr, $isa:expr, $g:expr, $ray:expr, $t_max:expr) => {{
         let wr = WatertightRay::new($ray);
         $blas.bvh.intersect_leaves_p($isa, $ray, $t_max, |leaf, t_max| {
-            $blas.hit_leaf::<true>($g, leaf, $ray, &wr, t_max).is_some()
+            $blas.hit_leaf::<_, true>($isa, $g, leaf, $ray, &wr, t_max).is_some()
         })
     }};
 }
@@ -236,8 +236,9 @@ impl Blas {
     /// The triangle test's axis permutation as const generics: chosen once per leaf,
     /// where it is predictable, and never for rays that reach no leaf.
     #[inline(always)]
-    fn hit_leaf<const ANY: bool>(
+    fn hit_leaf<I: Isa, const ANY: bool>(
         &self,
+        isa: I,
         g: &Geometry,
         leaf: Leaf,
         ray: &Ray,
@@ -245,16 +246,17 @@ impl Blas {
         t_max: f32,
     ) -> Option<(f32, u32, LocalHit)> {
         match wr.kz() {
-            0 => self.hit_leaf_permuted::<1, 2, 0, ANY>(g, leaf, ray, wr, t_max),
-            1 => self.hit_leaf_permuted::<2, 0, 1, ANY>(g, leaf, ray, wr, t_max),
-            _ => self.hit_leaf_permuted::<0, 1, 2, ANY>(g, leaf, ray, wr, t_max),
+            0 => self.hit_leaf_permuted::<I, 1, 2, 0, ANY>(isa, g, leaf, ray, wr, t_max),
+            1 => self.hit_leaf_permuted::<I, 2, 0, 1, ANY>(isa, g, leaf, ray, wr, t_max),
+            _ => self.hit_leaf_permuted::<I, 0, 1, 2, ANY>(isa, g, leaf, ray, wr, t_max),
         }
     }
 
     /// The closest hit below `t_max` among a leaf's primitives (`ANY`: the first).
     #[inline(always)]
-    fn hit_leaf_permuted<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
+    fn hit_leaf_permuted<I: Isa, const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
         &self,
+        isa: I,
         g: &Geometry,
         leaf: Leaf,
         ray: &Ray,
@@ -269,15 +271,18 @@ impl Blas {
         self.blocks.prefetch(leaf);
         let block = self.blocks.block(leaf)?;
         let mut best = None;
-        for g in 0..block.count().div_ceil(4) {
-            let n = (block.count() - 4 * g).min(4);
+        let groups = block.count().div_ceil(4);
+        let mut g = 0;
+        while g < groups {
+            let (candidates, step) = block.edge_candidates::<I, KX, KY, KZ>(isa, g, wr);
             let triangle = |k| (block.corners(4 * g + k), block.triangle(4 * g + k));
-            if let Some((tri, hit)) = hit_four::<KX, KY, KZ, ANY>(&block.corner_lanes(g), n, triangle, wr, &mut t_max) {
+            if let Some((tri, hit)) = hit_candidates::<KX, KY, KZ, ANY>(candidates, triangle, wr, &mut t_max) {
                 best = Some((hit.t, 0, LocalHit::Triangle { mesh, tri, flags, hit }));
                 if ANY {
                     break;
                 }
             }
+            g += step;
         }
         best
     }
@@ -309,7 +314,8 @@ impl Blas {
                     let m = &g.meshes[mesh as usize];
                     let first = prim.tri as usize;
                     let triangle = |k| (m.corners(first + k), (first + k) as u32);
-                    let hit = hit_four::<KX, KY, KZ, ANY>(&m.corner_lanes(first), run, triangle, wr, &mut t_max);
+                    let candidates = edge_candidates::<KX, KY, KZ>(&m.corner_lanes(first), wr) & ((1 << run) - 1);
+                    let hit = hit_candidates::<KX, KY, KZ, ANY>(candidates, triangle, wr, &mut t_max);
                     (hit.map(|(tri, hit)| (hit.t, LocalHit::Triangle { mesh, tri, flags, hit })), run)
                 }
                 _ => (self.hit_prim::<KX, KY, KZ>(g, prim, ray, wr, t_max), 1),
@@ -348,20 +354,17 @@ impl Blas {
     }
 }
 
-/// The closest hit below `t_max` (`ANY`: the first) among the first `n` of four
-/// triangles: the edge filter on their corner lanes for the four at once, then the
-/// full test on the corners and triangle number `triangle(k)` gives for those it keeps.
-/// Lowers `t_max` to each hit found.
+/// The closest hit below `t_max` (`ANY`: the first) among the triangles the edge
+/// filter kept (bit k of `candidates`): the full test on the corners and triangle
+/// number `triangle(k)` gives. Lowers `t_max` to each hit found.
 #[inline(always)]
-fn hit_four<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
-    lanes: &[[Vec4; 3]; 3],
-    n: usize,
+fn hit_candidates<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
+    mut candidates: u32,
     triangle: impl Fn(usize) -> ([Vec3; 3], u32),
     wr: &WatertightRay,
     t_max: &mut f32,
 ) -> Option<(u32, TriangleHit)> {
     let mut best = None;
-    let mut candidates = edge_candidates::<KX, KY, KZ>(lanes, wr) & ((1 << n) - 1);
     while candidates != 0 {
         let k = candidates.trailing_zeros() as usize;
         candidates &= candidates - 1;

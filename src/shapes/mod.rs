@@ -31,6 +31,8 @@ pub use paraboloid::Paraboloid;
 pub use quadric::{QuadricHit, QuadricShape};
 pub use sampling::{QuadricSampler, ShapeSample};
 pub use sphere::Sphere;
+#[cfg(target_arch = "x86_64")]
+pub use triangle::edge_candidates8;
 pub use triangle::{MeshFlags, TriangleHit, TriangleMesh, WatertightRay, corner_lanes_of, edge_candidates, watertight};
 
 use glam::{DMat3, DVec3};

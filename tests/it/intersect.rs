@@ -11,6 +11,8 @@ use pbrt_sppm::shapes::{
     WatertightRay, edge_candidates,
 };
 use pbrt_sppm::trace::Tracer;
+#[cfg(target_arch = "x86_64")]
+use pbrt_sppm::{accel::Avx, shapes::edge_candidates8};
 use rayon::prelude::*;
 
 /// A small deterministic generator (PCG-style LCG, top bits).
@@ -369,7 +371,8 @@ fn sphere_probe_rays(verts: &[Vec3], tris: &[[u32; 3]], rng: &mut Rng) -> Vec<Ra
 
 /// The leaf test filters four triangles at a time with their edge functions before
 /// the full test: it must keep every triangle the full test hits, including rays
-/// through vertices and along edges, and it must actually filter.
+/// through vertices and along edges, and it must actually filter. The AVX filter,
+/// eight at a time, must give the same bits.
 #[test]
 fn edge_filter_keeps_every_triangle_the_full_test_hits() {
     let mut rng = Rng::new(5150);
@@ -389,6 +392,7 @@ fn edge_filter_keeps_every_triangle_the_full_test_hits() {
     let (mut kept, mut tested, mut hits) = (0, 0, 0);
     for ray in sphere_probe_rays(&verts, &tris, &mut rng) {
         let wr = WatertightRay::new(&ray);
+        let mut previous = None;
         for first in (0..n).step_by(4) {
             let lanes = mesh.corner_lanes(first);
             let candidates = match wr.kz() {
@@ -396,6 +400,19 @@ fn edge_filter_keeps_every_triangle_the_full_test_hits() {
                 1 => edge_candidates::<2, 0, 1>(&lanes, &wr),
                 _ => edge_candidates::<0, 1, 2>(&lanes, &wr),
             };
+            #[cfg(target_arch = "x86_64")]
+            if let (Some(_), Some((lo, before))) = (Avx::detect(), previous) {
+                // SAFETY: `Avx::detect` found AVX.
+                let eight = unsafe {
+                    match wr.kz() {
+                        0 => edge_candidates8::<1, 2, 0>(&lo, &lanes, &wr),
+                        1 => edge_candidates8::<2, 0, 1>(&lo, &lanes, &wr),
+                        _ => edge_candidates8::<0, 1, 2>(&lo, &lanes, &wr),
+                    }
+                };
+                assert_eq!(eight, before | candidates << 4, "for {ray:?}");
+            }
+            previous = Some((lanes, candidates));
             for k in 0..4.min(n - first) {
                 let hit = mesh.intersect_prepared(first + k, &wr, f32::INFINITY).is_some();
                 assert!(!hit || candidates >> k & 1 != 0, "triangle {} dropped for {ray:?}", first + k);
