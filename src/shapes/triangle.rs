@@ -308,6 +308,9 @@ pub fn edge_candidates<const KX: usize, const KY: usize, const KZ: usize>(
 
 /// [`edge_candidates`] for eight triangles at once with AVX: `lo` the corner lanes of
 /// the first four, `hi` of the next four. The same operations in the same order.
+///
+/// # Safety
+/// The processor must have AVX.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
 #[inline]
