@@ -1,5 +1,5 @@
-//! Transparent huge pages for the large arrays rays walk: BVH nodes and mesh vertices
-//! and indices. Incoherent rays on a large scene touch a new 4 KiB page at nearly
+//! Transparent huge pages for the large arrays rays walk: BVH nodes, leaf blocks and
+//! mesh vertices and indices. Incoherent rays on a large scene touch a new 4 KiB page at nearly
 //! every step, and each TLB miss is a page walk (a two-dimensional one under a
 //! hypervisor); 2 MiB pages cut most of those walks away. Embree does the same.
 

@@ -82,6 +82,11 @@ impl LeafBlocks {
         self.words.shrink_to_fit();
     }
 
+    /// See [`super::hugepages`].
+    pub fn advise_huge_pages(&self) {
+        super::hugepages::advise(&self.words);
+    }
+
     pub fn heap_bytes(&self) -> usize {
         self.words.capacity() * 4
     }

@@ -424,6 +424,7 @@ impl Geometry {
         }
         for blas in std::iter::once(&world).chain(objects.iter()) {
             blas.bvh.advise_huge_pages();
+            blas.blocks.advise_huge_pages();
         }
         let mut next = scene.shapes.len() as u32;
         let mut instances: Vec<Instance> = scene
