@@ -527,7 +527,8 @@ impl Geometry {
         self.triangle_ids.get(mesh as usize).and_then(|ids| ids.get(tri as usize)).copied().unwrap_or(tri)
     }
 
-    /// Bytes of BVH nodes, primitive references and the triangle-number maps.
+    /// Bytes of BVH nodes, primitive references, leaf blocks and the triangle-number
+    /// maps.
     pub fn accel_bytes(&self) -> usize {
         let blas =
             |b: &Blas| b.bvh.heap_bytes() + b.prims.capacity() * std::mem::size_of::<Prim>() + b.blocks.heap_bytes();

@@ -291,9 +291,12 @@ fn triangle_bad_case_from_pbrt() {
 
 /// pbrt's 16×16 "sphere" with shared poles and seam, each vertex at radius 1 + 5u.
 fn perturbed_sphere(rng: &mut Rng) -> String {
-    let (nt, np) = (16usize, 16usize);
+    sphere_mesh(16, 16, || 1.0 + 5.0 * rng.uniform())
+}
+
+/// A closed `nt`×`np` sphere mesh with shared poles and seam, vertex radii from `r`.
+fn sphere_mesh(nt: usize, np: usize, mut r: impl FnMut() -> f64) -> String {
     let mut p = Vec::new();
-    let mut r = || 1.0 + 5.0 * rng.uniform();
     let push = |v: DVec3, p: &mut Vec<f64>| p.extend([v.x, v.y, v.z]);
     push(DVec3::new(0.0, 0.0, r()), &mut p);
     for t in 1..nt {
@@ -325,6 +328,26 @@ fn perturbed_sphere(rng: &mut Rng) -> String {
     let ps: Vec<String> = p.iter().map(|x| format!("{}", *x as f32)).collect();
     let is: Vec<String> = idx.iter().map(|x| x.to_string()).collect();
     format!("WorldBegin Shape \"trianglemesh\" \"point3 P\" [{}] \"integer indices\" [{}]", ps.join(" "), is.join(" "))
+}
+
+/// The storage targets on a mesh large enough for them to mean something (51,000
+/// triangles): the mesh about 18 bytes per triangle, the acceleration structure
+/// (nodes, leaf blocks and the map back to file triangle numbers) at most 32.
+#[test]
+fn a_large_mesh_fits_the_storage_budgets() {
+    let mut rng = Rng::new(404);
+    let mut s = scene(&sphere_mesh(160, 160, || 1.0 + 0.01 * rng.uniform()));
+    let triangles = s.meshes[0].triangle_count() as f64;
+    assert!(triangles > 50_000.0);
+    let mesh = s.meshes[0].heap_bytes() as f64 / triangles;
+    let g = pbrt_sppm::accel::Geometry::new(&mut s);
+    let accel = g.accel_bytes() as f64 / triangles;
+    // A closed genus-0 mesh has T/2 + 2 vertices of 12 bytes, and 12 bytes of
+    // indices per triangle.
+    assert!(mesh <= 18.0 + 24.0 / triangles, "mesh: {mesh} bytes per triangle");
+    assert!(accel <= 32.0, "BVH: {accel} bytes per triangle");
+    // Leaf blocks are there: the nodes alone take about half.
+    assert!(accel > 20.0, "BVH: {accel} bytes per triangle");
 }
 
 #[test]
