@@ -13,6 +13,9 @@
 //! [1 .. 1 + 3g]        corner indices, a byte each, 12 per group: triangle k's at bytes 3k..3k+3
 //! [1 + 3g ..]          the vertices, three f32 each
 //! ```
+//!
+//! The BVH leaf holds the block's offset and, as its tag, the block's vertex count,
+//! so the block's length is known, and all of it requested, before any of it arrives.
 
 use super::bvh::{Isa, Leaf};
 #[cfg(target_arch = "x86_64")]
