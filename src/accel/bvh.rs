@@ -169,7 +169,7 @@ const BINS: usize = 12;
 /// (`accel::QUADRIC_COST`), so they still get leaves of their own.
 const TRAVERSAL_COST: f32 = 4.0;
 /// The most primitives in a leaf, unless the caller asks for another limit.
-pub const MAX_LEAF: usize = 8;
+const MAX_LEAF: usize = 8;
 const PARALLEL_THRESHOLD: usize = 4096;
 
 impl Bvh {
@@ -913,5 +913,36 @@ mod tests {
             assert_eq!(seen, boxes.len());
         }
         assert!(SPILLED.with(|s| s.get()), "the tree must be deep enough to spill the stack");
+    }
+
+    /// `relabel_leaves` sees every leaf once, the leaves cover the primitives once, and
+    /// traversal then hands over the new reference and tag with the old count.
+    #[test]
+    fn relabeled_leaves_reach_traversal() {
+        let boxes: Vec<Bounds3> = (0..300)
+            .map(|i| {
+                let c = Vec3::new((i % 7) as f32, (i / 7 % 6) as f32, (i / 42) as f32);
+                Bounds3::new(c, c + Vec3::splat(0.9))
+            })
+            .collect();
+        let (mut bvh, _) = Bvh::build_with_max_leaf(&boxes, |_| 0.5, 16);
+        let mut covered = vec![0; boxes.len()];
+        let mut leaves = Vec::new();
+        bvh.relabel_leaves(|first, count| {
+            assert!((1..=16).contains(&count));
+            covered[first..first + count].iter_mut().for_each(|c| *c += 1);
+            leaves.push((first, count));
+            (1_000_000 + first as u32, count as u8 + 100)
+        });
+        assert!(covered.iter().all(|&c| c == 1));
+        assert!(leaves.iter().any(|&(_, count)| count > MAX_LEAF), "larger leaves than the default");
+        let ray = Ray::new(Point3(Vec3::new(-1.0, 0.45, 0.45)), Vector3(Vec3::X));
+        let mut seen = Vec::new();
+        bvh.intersect_leaves_p(Sse, &ray, f32::INFINITY, |leaf, _| {
+            assert_eq!(leaf.tag as usize, leaf.count + 100);
+            seen.push((leaf.first - 1_000_000, leaf.count));
+            false
+        });
+        assert!(!seen.is_empty() && seen.iter().all(|l| leaves.contains(l)));
     }
 }
