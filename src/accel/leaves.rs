@@ -107,7 +107,8 @@ impl LeafBlocks {
         let words = self.words.get(leaf.first..leaf.first + Self::len(leaf) + 1)?;
         let (&first, rest) = words.split_first()?;
         let (corners, verts) = rest.split_at_checked(3 * leaf.count.div_ceil(4))?;
-        // SAFETY: the bytes of `corners`, which any bit pattern is.
+        // SAFETY: the same memory as `corners`, read as bytes: u8 needs no alignment
+        // and takes any bit pattern, and the borrow keeps the words alive and unchanged.
         let corners = unsafe { std::slice::from_raw_parts(corners.as_ptr().cast::<u8>(), 4 * corners.len()) };
         Some(Block { first, corners, verts, vertex_count: leaf.tag as u32, count: leaf.count })
     }
