@@ -51,7 +51,8 @@ struct Blas {
     /// triangles are then stored in BVH order and copied into `blocks`.
     prims: Vec<Prim>,
     shapes: Vec<ShapeRef>,
-    /// That single mesh, once `localize` has put it in BVH order.
+    /// The BVH's only shape, when it is a mesh small enough for leaf blocks, which
+    /// `localize` builds once it has put the mesh in BVH order.
     single_mesh: Option<(u32, MeshFlags)>,
     /// The single mesh's leaf blocks, which its BVH's leaves then refer to.
     blocks: LeafBlocks,
@@ -187,14 +188,18 @@ impl Blas {
         }
         let is_quadric = |i: usize| matches!(shapes[prims[i].shape as usize], ShapeRef::Quadric(_));
         let cost = |i| if is_quadric(i) { QUADRIC_COST } else { 1.0 };
-        let (bvh, order) = match shapes.as_slice() {
-            [ShapeRef::Mesh { mesh, .. }] if LeafBlocks::fit(meshes[*mesh as usize].triangle_count()) => {
-                Bvh::build_with_max_leaf(&bounds, |_| BLOCK_TRIANGLE_COST, leaves::MAX_LEAF)
+        let single_mesh = match shapes.as_slice() {
+            [ShapeRef::Mesh { mesh, flags }] if LeafBlocks::fit(meshes[*mesh as usize].triangle_count()) => {
+                Some((*mesh, *flags))
             }
-            _ => Bvh::build(&bounds, cost),
+            _ => None,
+        };
+        let (bvh, order) = match single_mesh {
+            Some(_) => Bvh::build_with_max_leaf(&bounds, |_| BLOCK_TRIANGLE_COST, leaves::MAX_LEAF),
+            None => Bvh::build(&bounds, cost),
         };
         let prims = order.iter().map(|&i| prims[i as usize]).collect();
-        Blas { bvh, prims, shapes, single_mesh: None, blocks: LeafBlocks::default() }
+        Blas { bvh, prims, shapes, single_mesh, blocks: LeafBlocks::default() }
     }
 
     /// Reorders each mesh's triangles into this BVH's leaf order; records the file's
@@ -211,15 +216,12 @@ impl Blas {
             }
             ids[mesh] = order;
         }
-        if let [ShapeRef::Mesh { mesh, flags }] = self.shapes.as_slice() {
-            let m = &meshes[*mesh as usize];
-            if LeafBlocks::fit(m.triangle_count()) {
-                let mut blocks = LeafBlocks::default();
-                self.bvh.relabel_leaves(|first, count| blocks.push(m, first, count));
-                blocks.shrink_to_fit();
-                (self.blocks, self.prims) = (blocks, Vec::new());
-                self.single_mesh = Some((*mesh, *flags));
-            }
+        if let Some((mesh, _)) = self.single_mesh {
+            let m = &meshes[mesh as usize];
+            let mut blocks = LeafBlocks::default();
+            self.bvh.relabel_leaves(|first, count| blocks.push(m, first, count));
+            blocks.shrink_to_fit();
+            (self.blocks, self.prims) = (blocks, Vec::new());
         }
     }
 
