@@ -333,15 +333,20 @@ pub fn edge_candidates8<const KX: usize, const KY: usize, const KZ: usize>(
     let edge =
         |a: (__m256, __m256), b: (__m256, __m256)| _mm256_sub_ps(_mm256_mul_ps(a.0, b.1), _mm256_mul_ps(a.1, b.0));
     let (e0, e1, e2) = (edge(p1, p2), edge(p2, p0), edge(p0, p1));
-    let z = _mm256_setzero_ps();
-    let any = |a, b, c| _mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(a, b), c)) as u32;
-    let any_zero =
-        any(_mm256_cmp_ps::<_CMP_EQ_OQ>(e0, z), _mm256_cmp_ps::<_CMP_EQ_OQ>(e1, z), _mm256_cmp_ps::<_CMP_EQ_OQ>(e2, z));
-    let negative =
-        any(_mm256_cmp_ps::<_CMP_LT_OQ>(e0, z), _mm256_cmp_ps::<_CMP_LT_OQ>(e1, z), _mm256_cmp_ps::<_CMP_LT_OQ>(e2, z));
-    let positive =
-        any(_mm256_cmp_ps::<_CMP_GT_OQ>(e0, z), _mm256_cmp_ps::<_CMP_GT_OQ>(e1, z), _mm256_cmp_ps::<_CMP_GT_OQ>(e2, z));
+    let e = [e0, e1, e2];
+    let (any_zero, negative, positive) = (any::<_CMP_EQ_OQ>(e), any::<_CMP_LT_OQ>(e), any::<_CMP_GT_OQ>(e));
     (!(negative & positive) | any_zero) & 0xff
+}
+
+/// The lanes where any of the three edge values compares `CMP` with zero, as bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+fn any<const CMP: i32>(e: [std::arch::x86_64::__m256; 3]) -> u32 {
+    use std::arch::x86_64::*;
+    let z = _mm256_setzero_ps();
+    let c = |v| _mm256_cmp_ps::<CMP>(v, z);
+    _mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(c(e[0]), c(e[1])), c(e[2]))) as u32
 }
 
 impl TriangleMesh {
