@@ -1,7 +1,7 @@
 //! `pbrt-sppm check SCENE --json [--shapes]`: the loaded scene as one JSON object.
 //!
 //! The layout is a contract (design.md §3): `syntax`, `camera`, `film`, `integrator`,
-//! `counts`, `world_bounds`, `warnings`, `skipped`, and with `--shapes` one entry per
+//! `counts`, `world_bounds`, `warnings`, `skipped`, `approximated`, and with `--shapes` one entry per
 //! created shape (world shapes in creation order, then each instance's shapes) with its
 //! parameters after defaults and clamps, row-major `object_to_world`, orientation flags,
 //! world-space area and bounds.
@@ -77,6 +77,7 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
         "world_bounds": bounds(scene.world_bounds()),
         "warnings": scene.warnings,
         "skipped": scene.skipped,
+        "approximated": scene.approximated,
     });
     if with_shapes {
         let shapes: Vec<Value> = scene.placed_shapes().enumerate().map(|(k, p)| shape(scene, k, &p)).collect();

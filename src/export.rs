@@ -32,10 +32,10 @@
 //! so the reader can verify its camera reproduces ours.
 
 use crate::camera::Camera;
-use crate::lights::{Light, emission};
-use crate::materials::{Material, Texture, TextureContext};
+use crate::lights::Light;
+use crate::materials::{Material, Textures};
 use crate::math::transform::row_major;
-use crate::scene::{CameraKind, Geometry, LightDesc, SceneDescription, ShapeDesc};
+use crate::scene::{CameraKind, Geometry, LightDesc, LightKind, SceneDescription, ShapeDesc, TexValue};
 use crate::shapes::{Quadric, TriangleMesh};
 use crate::spectrum::Rgb;
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -230,12 +230,17 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
             why: format!("skipped on load: {}", s.why),
         })
         .collect();
-    let ctx = TextureContext::new(&scene.base_dir);
+    notes.extend(scene.approximated.iter().map(|a| Unsupported {
+        location: format!("{}:{}:{}", a.file, a.line, a.column),
+        what: a.what.clone(),
+        why: format!("approximated by pbrt-sppm too: {}", a.how),
+    }));
+    let textures = Textures::new(&scene.textures);
     let materials = scene
         .materials
         .iter()
         .enumerate()
-        .map(|(i, m)| material(&m.ty, &Material::from_desc(m, &scene.textures, &ctx), i, &mut notes))
+        .map(|(i, m)| material(&m.ty, &Material::from_desc(m, &textures), &textures, i, &mut notes))
         .collect();
     let shapes = scene.shapes.iter().enumerate().map(|(i, s)| shape(scene, s, true, i as u32, &mut notes)).collect();
     let objects = scene
@@ -256,15 +261,7 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
             out
         })
         .collect();
-    let lights = scene
-        .lights
-        .iter()
-        .filter_map(|d| {
-            let l = Light::from_desc(&d.ty, &d.params, &d.world_from_light, scene.syntax, &ctx)?;
-            light(scene, d, &l, &mut notes)
-        })
-        .collect();
-    notes.extend(ctx.warnings.into_inner().into_iter().map(|w| note("", "texture", w)));
+    let lights = scene.lights.iter().filter_map(|d| light(d, &Light::from_desc(d), &mut notes)).collect();
     Export {
         format: "pbrt-sppm-export",
         version: 1,
@@ -322,28 +319,23 @@ fn camera(scene: &SceneDescription, notes: &mut Vec<Unsupported>) -> CameraOut {
 }
 
 /// A texture as one colour: itself if constant, else its mean over (u, v) (noted).
-fn flat(t: &Texture, what: &str, notes: &mut Vec<Unsupported>) -> [f32; 3] {
-    if let Texture::Const(c) = t {
+fn flat(t: TexValue, textures: &Textures, what: &str, notes: &mut Vec<Unsupported>) -> [f32; 3] {
+    if let TexValue::Const(c) = t {
         return c.to_array();
     }
     notes.push(note("", what, "textured; exported as its mean over (u, v) ∈ [0, 1]²"));
     const N: u32 = 32;
     let sum: Rgb = (0..N * N)
-        .map(|k| t.eval([((k % N) as f32 + 0.5) / N as f32, ((k / N) as f32 + 0.5) / N as f32]))
+        .map(|k| textures.eval(t, [((k % N) as f32 + 0.5) / N as f32, ((k / N) as f32 + 0.5) / N as f32]))
         .fold(Vec3::ZERO, |a, b| a + b);
     (sum / (N * N) as f32).to_array()
 }
 
-fn material(ty: &str, m: &Material, index: usize, notes: &mut Vec<Unsupported>) -> MaterialOut {
+fn material(ty: &str, m: &Material, textures: &Textures, index: usize, notes: &mut Vec<Unsupported>) -> MaterialOut {
     let what = format!("material {index} (\"{ty}\")");
-    if matches!(ty, "plastic" | "uber" | "coateddiffuse") {
-        notes.push(note("", &what, "rendered by pbrt-sppm as its diffuse part; exported the same way"));
-    }
     match m {
-        Material::Diffuse { kd } => MaterialOut::Diffuse { reflectance: flat(kd, &what, notes) },
-        Material::Mirror { kr: r } | Material::ConductorReflectance { r } => {
-            MaterialOut::Mirror { reflectance: flat(r, &what, notes) }
-        }
+        Material::Diffuse { kd } => MaterialOut::Diffuse { reflectance: flat(*kd, textures, &what, notes) },
+        Material::Mirror { kr } => MaterialOut::Mirror { reflectance: flat(*kr, textures, &what, notes) },
         Material::Dielectric { eta, kr, kt } => {
             MaterialOut::Dielectric { eta: *eta, reflectance: kr.to_array(), transmittance: kt.to_array() }
         }
@@ -358,7 +350,7 @@ fn material(ty: &str, m: &Material, index: usize, notes: &mut Vec<Unsupported>) 
     }
 }
 
-fn light(scene: &SceneDescription, d: &LightDesc, l: &Light, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
+fn light(d: &LightDesc, l: &Light, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
     Some(match l {
         Light::Point { p, i } => LightOut::Point { position: p.to_array(), intensity: i.to_array() },
         Light::Spot { p, frame, i, cos_total, cos_start, smooth } => {
@@ -377,7 +369,7 @@ fn light(scene: &SceneDescription, d: &LightDesc, l: &Light, notes: &mut Vec<Uns
         }
         Light::Distant { w, l } => LightOut::Distant { direction: (-*w).to_array(), irradiance: l.to_array() },
         Light::Infinite { l, map: None } => LightOut::Constant { radiance: l.to_array() },
-        Light::Infinite { l, map: Some(_) } => env_map(scene, d, *l, notes),
+        Light::Infinite { l, map: Some(_) } => env_map(d, *l, notes)?,
         Light::Area { .. } => return None,
     })
 }
@@ -385,21 +377,20 @@ fn light(scene: &SceneDescription, d: &LightDesc, l: &Light, notes: &mut Vec<Uns
 /// An environment map for Mitsuba's `envmap`, which reads directions as
 /// (atan2(x, −z)/2π, acos(y)/π) where pbrt reads (atan2(y, x)/2π, acos(z)/π): its
 /// axes are ours through a reflection, (x, y, z)_mitsuba = (y, z, −x)_pbrt.
-fn env_map(scene: &SceneDescription, d: &LightDesc, l: Rgb, notes: &mut Vec<Unsupported>) -> LightOut {
-    let name = d.params.string("mapname").ok().flatten().or_else(|| d.params.string("filename").ok().flatten());
-    let path = crate::parser::stmt::resolve_relative(&scene.base_dir, &name.unwrap_or_default());
-    let path = std::path::absolute(&path).unwrap_or(path);
+fn env_map(d: &LightDesc, l: Rgb, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
+    let LightKind::Infinite { map: Some(map), .. } = &d.kind else { return None };
+    let path = std::path::absolute(&map.path).unwrap_or_else(|_| map.path.clone());
     if l.max_element() - l.min_element() > 1e-6 * l.max_element() {
         notes.push(note("", "environment map scale", "a coloured scale has no Mitsuba equivalent; its mean is used"));
     }
     let rotation = DMat3::from_mat4(d.world_from_light);
     let pbrt_from_mitsuba = DMat3::from_cols(DVec3::Y, DVec3::Z, -DVec3::X);
     let to_world = DMat4::from_mat3(rotation * pbrt_from_mitsuba);
-    LightOut::EnvMap {
+    Some(LightOut::EnvMap {
         filename: path.display().to_string(),
         to_world: row_major(&to_world),
         scale: (l.x + l.y + l.z) / 3.0,
-    }
+    })
 }
 
 /// One shape in its own space: the world for world shapes, its object's for object
@@ -407,11 +398,14 @@ fn env_map(scene: &SceneDescription, d: &LightDesc, l: Rgb, notes: &mut Vec<Unsu
 fn shape(scene: &SceneDescription, s: &ShapeDesc, world: bool, index: u32, notes: &mut Vec<Unsupported>) -> ShapeOut {
     let emission = s.area_light.filter(|_| world).map(|a| {
         let a = &scene.area_lights[a as usize];
-        let two_sided = a.params.bool("twosided").ok().flatten().unwrap_or(false);
-        if two_sided {
+        if a.two_sided {
             notes.push(note("", &format!("shape {index}"), "two-sided area light: Mitsuba's emit on one side"));
         }
-        Emission { radiance: emission(&a.params, "L", scene.syntax).to_array(), two_sided }
+        let area = match &s.geometry {
+            Geometry::Quadric(q) => q.world_area(DMat3::from_mat4(s.object_to_world)),
+            Geometry::Mesh { mesh, .. } => scene.meshes[*mesh as usize].area(),
+        };
+        Emission { radiance: crate::render::area_emission(a, area).to_array(), two_sided: a.two_sided }
     });
     let geometry = match &s.geometry {
         Geometry::Quadric(q) => quadric(q, &s.object_to_world, s.reverse_orientation),

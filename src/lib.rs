@@ -12,6 +12,7 @@ pub mod imageio;
 pub mod integrators;
 pub mod interaction;
 pub mod lights;
+pub mod limits;
 pub mod materials;
 pub mod math;
 pub mod parser;

@@ -1,12 +1,13 @@
 //! The `pbrt-sppm` command line: `[render] SCENE`, `check SCENE`, `trace SCENE`,
-//! `export --mitsuba SCENE`.
+//! `export --mitsuba SCENE`. A scene named `-` is read from standard input.
 
 use clap::{Parser, Subcommand};
+use pbrt_sppm::limits::Limits;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::parser::error::LoadError;
-use pbrt_sppm::scene::{LoadOptions, SceneDescription, load_scene};
-use std::io::IsTerminal;
-use std::path::PathBuf;
+use pbrt_sppm::scene::{LoadOptions, SceneDescription, load_scene, load_scene_from_bytes};
+use std::io::{IsTerminal, Read, Write};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -22,6 +23,7 @@ enum Command {
     Render(RenderArgs),
     /// Parse and build a scene without rendering; report what it contains.
     Check {
+        /// The scene file (`-` reads standard input).
         scene: PathBuf,
         /// Print one JSON object (design.md §3) instead of a summary.
         #[arg(long)]
@@ -34,6 +36,7 @@ enum Command {
     },
     /// Write the loaded scene for another renderer (README: "Cross-checking with Mitsuba 3").
     Export {
+        /// The scene file (`-` reads standard input).
         scene: PathBuf,
         /// The JSON form `tools/mitsuba_reference.py` reads (the only format so far).
         #[arg(long, required = true)]
@@ -46,6 +49,7 @@ enum Command {
     },
     /// Intersect rays (`ox oy oz dx dy dz [tmax]` per line) with the scene; JSON lines out.
     Trace {
+        /// The scene file (`-` reads standard input; then give the rays with --rays).
         scene: PathBuf,
         /// Read rays from this file instead of standard input.
         #[arg(long)]
@@ -60,33 +64,52 @@ struct Common {
     /// Read the file as pbrt-v3 or pbrt-v4 syntax instead of detecting it.
     #[arg(long, value_parser = parse_syntax)]
     syntax: Option<Syntax>,
+    /// Raise or lower a limit, NAME=N (pixels, photons, iterations, maxdepth, file-bytes,
+    /// texture-pixels, include-depth); may be repeated.
+    #[arg(long = "limit", value_name = "NAME=N")]
+    limits: Vec<String>,
+    /// Print no warnings and no summary (errors still go to standard error).
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(clap::Args)]
 struct RenderArgs {
+    /// The scene file (`-` reads standard input).
     scene: PathBuf,
+    /// The image to write (`.exr`, or `.png` for an 8-bit sRGB preview); default: the
+    /// Film's `filename`.
     #[arg(long)]
     outfile: Option<PathBuf>,
-    #[arg(long)]
+    /// Worker threads (0, the default, uses every core).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<usize, 0>)]
     nthreads: Option<usize>,
-    #[arg(long)]
+    /// The seed every random number derives from (default: the Integrator's `seed`).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u64, 0>)]
     seed: Option<u64>,
-    /// SPPM iterations.
-    #[arg(long, alias = "iterations")]
+    /// SPPM iterations (at least 1), overriding the scene's.
+    #[arg(long, alias = "iterations", allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
     spp: Option<u32>,
+    /// Divide the iteration count by 16 (at least 1 remains), as pbrt-v3 does.
     #[arg(long)]
     quick: bool,
+    /// Print the time per phase, the paths traced and the peak memory.
     #[arg(long)]
     stats: bool,
-    #[arg(long)]
+    /// Photons per iteration (at least 1), overriding `photonsperiteration`.
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u64, 1>)]
     photons: Option<u64>,
-    #[arg(long)]
+    /// The initial photon radius (positive), overriding `radius`.
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_positive)]
     radius: Option<f32>,
-    #[arg(long)]
-    time_limit: Option<f64>,
-    #[arg(long)]
+    /// Stop after the iteration that passes this many seconds (positive).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_positive)]
+    time_limit: Option<f32>,
+    /// Compare every iteration with this image (needs --mse-reference-out).
+    #[arg(long, requires = "mse_reference_out")]
     mse_reference_image: Option<PathBuf>,
-    #[arg(long)]
+    /// Write the per-iteration errors (ERRORS.csv) here (needs --mse-reference-image).
+    #[arg(long, requires = "mse_reference_image")]
     mse_reference_out: Option<PathBuf>,
     #[command(flatten)]
     common: Common,
@@ -100,6 +123,20 @@ fn parse_syntax(s: &str) -> Result<Syntax, String> {
     }
 }
 
+/// A whole number of at least `MIN`.
+fn parse_count<T: TryFrom<u64>, const MIN: u64>(s: &str) -> Result<T, String> {
+    let n: i128 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a whole number"))?;
+    if n < MIN as i128 {
+        return Err(format!("must be at least {MIN}, not {n}"));
+    }
+    u64::try_from(n).ok().and_then(|n| T::try_from(n).ok()).ok_or_else(|| format!("{n} is too large"))
+}
+
+fn parse_positive(s: &str) -> Result<f32, String> {
+    let v: f32 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a number"))?;
+    if v > 0.0 && v.is_finite() { Ok(v) } else { Err(format!("must be a positive number, not {s}")) }
+}
+
 /// `pbrt-sppm scene.pbrt ...` means `pbrt-sppm render scene.pbrt ...`.
 fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
     const KNOWN: [&str; 9] = ["render", "check", "trace", "export", "help", "--help", "-h", "--version", "-V"];
@@ -109,39 +146,79 @@ fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::O
     args
 }
 
-fn load(scene: &std::path::Path, common: &Common) -> Result<SceneDescription, ExitCode> {
-    load_scene(scene, &LoadOptions { syntax: common.syntax }).map_err(|e| report_error(&e))
+/// Writes a line to standard error; a closed stderr is not worth a panic.
+macro_rules! say {
+    ($($t:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($t)*);
+    }};
+}
+
+fn load(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> {
+    let mut limits = Limits::default();
+    for spec in &common.limits {
+        if let Err(e) = limits.set(spec) {
+            return Err(fail(Path::new("--limit"), e));
+        }
+    }
+    let opts = LoadOptions { syntax: common.syntax, limits };
+    let loaded = if scene.as_os_str() == "-" {
+        let mut bytes = Vec::new();
+        let max = limits.file_bytes;
+        if let Err(e) = std::io::stdin().lock().take(max + 1).read_to_end(&mut bytes) {
+            return Err(fail(Path::new("<stdin>"), format!("cannot read: {e}")));
+        }
+        if bytes.len() as u64 > max {
+            return Err(fail(Path::new("<stdin>"), Limits::over("the scene", "file-bytes", max)));
+        }
+        // Relative names in a scene from standard input resolve against the current folder.
+        load_scene_from_bytes(Path::new("<stdin>"), bytes, &opts)
+    } else {
+        load_scene(scene, &opts)
+    };
+    let s = loaded.map_err(|e| report_error(&e))?;
+    if !common.quiet {
+        s.warnings.iter().for_each(|w| say!("{w}"));
+    }
+    Ok(s)
 }
 
 fn report_error(e: &LoadError) -> ExitCode {
     let text = if std::io::stderr().is_terminal() { e.with_source() } else { e.one_line() };
-    eprintln!("{text}");
+    say!("{text}");
     ExitCode::FAILURE
+}
+
+fn fail(file: &Path, message: impl std::fmt::Display) -> ExitCode {
+    say!("{}: error: {message}", file.display());
+    ExitCode::FAILURE
+}
+
+/// Standard output that reports a failed write (a full disk, a closed pipe) as an error.
+fn print(text: &str) -> ExitCode {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => fail(Path::new("<stdout>"), format!("cannot write: {e}")),
+    }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse_from(with_default_subcommand(std::env::args_os().collect()));
     match cli.command {
-        Command::Check { scene, json, shapes, common } => {
-            let s = match load(&scene, &common) {
-                Ok(s) => s,
-                Err(code) => return code,
-            };
-            if json {
+        Command::Check { scene, json, shapes, common } => match load(&scene, &common) {
+            Ok(s) if json => {
                 let report = pbrt_sppm::check::report(&s, shapes);
-                println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default());
-            } else {
-                s.warnings.iter().for_each(|w| eprintln!("{w}"));
-                print_summary(&s);
+                print(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"))
             }
-            ExitCode::SUCCESS
-        }
+            Ok(s) => print(&summary(&s)),
+            Err(code) => code,
+        },
         Command::Trace { scene, rays, common } => match load(&scene, &common) {
             Ok(s) => trace(s, rays),
             Err(code) => code,
         },
         Command::Export { scene, mitsuba: _, output, common } => match load(&scene, &common) {
-            Ok(s) => export(&s, &scene, output),
+            Ok(s) => export(&s, &scene, output, common.quiet),
             Err(code) => code,
         },
         Command::Render(args) => match load(&args.scene, &args.common) {
@@ -151,60 +228,93 @@ fn main() -> ExitCode {
     }
 }
 
-fn fail(file: &std::path::Path, message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("{}: error: {message}", file.display());
-    ExitCode::FAILURE
+/// Where the image goes and what to blame when it cannot: `--outfile`, or the Film's
+/// `filename` parameter at its location.
+fn output_path(scene: &SceneDescription, args: &RenderArgs) -> (PathBuf, String) {
+    match &args.outfile {
+        Some(p) => (p.clone(), "--outfile".to_string()),
+        None => {
+            let at = scene.film.filename_location.clone().unwrap_or_else(|| "Film \"filename\"".into());
+            (PathBuf::from(&scene.film.filename), at)
+        }
+    }
+}
+
+/// Checks an output path before any work: a known extension, and a folder we can write
+/// a file in (the temporary file is made and removed).
+fn check_output(path: &Path, image: bool) -> Result<(), String> {
+    if image {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        if !matches!(ext.as_deref(), Some("exr" | "png")) {
+            return Err(format!("\"{}\": the image must end in .exr or .png", path.display()));
+        }
+    }
+    pbrt_sppm::imageio::check_writable(path)
 }
 
 /// Renders a loaded scene and writes the image (and ERRORS.csv).
 fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     use pbrt_sppm::imageio::{read_image, write_image};
     use pbrt_sppm::render::{RenderScene, RenderSettings, errors_csv};
-    let terminal = std::io::stderr().is_terminal();
-    scene.warnings.iter().for_each(|w| eprintln!("{w}"));
-    if scene.lights.is_empty() && scene.area_lights.is_empty() {
-        eprintln!("{}: warning: the scene has no lights; the image will be black", args.scene.display());
+    let quiet = args.common.quiet;
+    let (outfile, blame) = output_path(&scene, args);
+    if let Err(e) = check_output(&outfile, true) {
+        say!("{blame}: error: {e}");
+        return ExitCode::FAILURE;
+    }
+    if let Some(csv) = &args.mse_reference_out
+        && let Err(e) = check_output(csv, false)
+    {
+        say!("--mse-reference-out: error: {e}");
+        return ExitCode::FAILURE;
+    }
+    if let Err(e) = check_overrides(&scene, args) {
+        say!("{e}");
+        return ExitCode::FAILURE;
+    }
+    if scene.lights.is_empty() && scene.area_lights.is_empty() && !quiet {
+        say!("{}: warning: the scene has no lights; the image will be black", args.scene.display());
     }
     let reference = match &args.mse_reference_image {
         Some(p) => match read_image(p) {
             Ok(img) => Some(img),
-            Err(e) => return fail(p, e),
+            Err(e) => return fail(Path::new("--mse-reference-image"), e),
         },
         None => None,
     };
-    let outfile = args.outfile.clone().unwrap_or_else(|| PathBuf::from(&scene.film.filename));
     let settings = RenderSettings {
         iterations: args.spp,
         photons: args.photons,
         radius: args.radius,
         seed: args.seed,
         quick: args.quick,
-        time_limit: args.time_limit,
+        time_limit: args.time_limit.map(f64::from),
         reference,
-        progress: terminal,
+        progress: std::io::stderr().is_terminal() && !quiet,
     };
-    let threads = args.nthreads.unwrap_or(0);
-    let pool = match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
+    let pool = match rayon::ThreadPoolBuilder::new().num_threads(args.nthreads.unwrap_or(0)).build() {
         Ok(p) => p,
-        Err(e) => return fail(&args.scene, e),
+        Err(e) => return fail(Path::new("--nthreads"), e),
     };
-    let scene_path = args.scene.display().to_string();
     let rs = RenderScene::new(scene);
-    rs.warnings.iter().for_each(|w| eprintln!("{scene_path}: warning: {w}"));
     let out = match pool.install(|| rs.render(&settings)) {
         Ok(o) => o,
         Err(e) => return fail(&args.scene, e),
     };
     if let Err(e) = write_image(&outfile, &out.image) {
-        return fail(&outfile, e);
+        say!("{blame}: error: {e}");
+        return ExitCode::FAILURE;
     }
     if let Some(csv) = &args.mse_reference_out
         && let Err(e) = pbrt_sppm::imageio::write_text(csv, &errors_csv(&out.errors))
     {
         return fail(csv, e);
     }
+    if quiet {
+        return ExitCode::SUCCESS;
+    }
     if out.stats.visible_points == 0 {
-        eprintln!(
+        say!(
             "{}: warning: no camera path reached a diffuse surface; the image holds only direct emission",
             args.scene.display()
         );
@@ -212,7 +322,7 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     if args.stats {
         print_stats(&out);
     }
-    eprintln!(
+    say!(
         "rendered {} iterations ({} photons each) in {:.2} s -> {}",
         out.stats.iterations,
         out.image.meta.photons_per_iteration.unwrap_or(0),
@@ -222,29 +332,50 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     ExitCode::SUCCESS
 }
 
+/// Command-line values the scene's limits also bound.
+fn check_overrides(scene: &SceneDescription, args: &RenderArgs) -> Result<(), String> {
+    let l = &scene.limits;
+    if let Some(n) = args.spp.filter(|&n| n as u64 > l.iterations) {
+        return Err(format!("--spp: error: {}", Limits::over(format!("{n} iterations"), "iterations", l.iterations)));
+    }
+    if let Some(n) = args.photons.filter(|&n| n > l.photons) {
+        return Err(format!("--photons: error: {}", Limits::over(format!("{n} photons"), "photons", l.photons)));
+    }
+    Ok(())
+}
+
 fn print_stats(out: &pbrt_sppm::render::RenderOutput) {
     let s = &out.stats;
     let peak = std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|t| t.lines().find_map(|l| l.strip_prefix("VmHWM:").map(|v| v.trim().to_string())))
         .unwrap_or_else(|| "unknown".into());
-    eprintln!(
+    say!(
         "stats: camera pass {:.3} s, grid {:.3} s, photons {:.3} s, update {:.3} s",
-        s.camera_seconds, s.grid_seconds, s.photon_seconds, s.update_seconds
+        s.camera_seconds,
+        s.grid_seconds,
+        s.photon_seconds,
+        s.update_seconds
     );
-    eprintln!(
+    say!(
         "stats: {} camera paths, {} photon paths, {} photon hits, peak memory {peak}",
-        s.camera_rays, s.photon_paths, s.photon_hits
+        s.camera_rays,
+        s.photon_paths,
+        s.photon_hits
     );
 }
 
 /// Writes the Mitsuba export; what cannot go over is also warned about on stderr.
-fn export(s: &SceneDescription, scene: &std::path::Path, output: Option<PathBuf>) -> ExitCode {
-    s.warnings.iter().for_each(|w| eprintln!("{w}"));
+fn export(s: &SceneDescription, scene: &Path, output: Option<PathBuf>, quiet: bool) -> ExitCode {
+    if let Some(path) = &output
+        && let Err(e) = check_output(path, false)
+    {
+        return fail(Path::new("--output"), e);
+    }
     let e = pbrt_sppm::export::mitsuba(s, &scene.display().to_string());
-    for u in &e.unsupported {
+    for u in e.unsupported.iter().filter(|_| !quiet) {
         let at = if u.location.is_empty() { scene.display().to_string() } else { u.location.clone() };
-        eprintln!("{at}: warning: export: {}: {}", u.what, u.why);
+        say!("{at}: warning: export: {}: {}", u.what, u.why);
     }
     let text = match serde_json::to_string(&e) {
         Ok(t) => t + "\n",
@@ -255,28 +386,18 @@ fn export(s: &SceneDescription, scene: &std::path::Path, output: Option<PathBuf>
             Ok(()) => ExitCode::SUCCESS,
             Err(err) => fail(&path, err),
         },
-        None => {
-            use std::io::Write;
-            let mut out = std::io::stdout().lock();
-            if out.write_all(text.as_bytes()).and_then(|()| out.flush()).is_err() {
-                return ExitCode::FAILURE;
-            }
-            ExitCode::SUCCESS
-        }
+        None => print(&text),
     }
 }
 
 /// Answers ray queries line by line; a malformed line is an error naming the line.
 fn trace(scene: SceneDescription, rays: Option<PathBuf>) -> ExitCode {
-    use std::io::{BufRead, Write};
+    use std::io::BufRead;
     let name = rays.as_ref().map_or("<stdin>".to_string(), |p| p.display().to_string());
     let input: Box<dyn BufRead> = match &rays {
         Some(p) => match std::fs::File::open(p) {
             Ok(f) => Box::new(std::io::BufReader::new(f)),
-            Err(e) => {
-                eprintln!("{name}: error: cannot read: {e}");
-                return ExitCode::FAILURE;
-            }
+            Err(e) => return fail(Path::new(&name), format!("cannot read: {e}")),
         },
         None => Box::new(std::io::stdin().lock()),
     };
@@ -286,36 +407,46 @@ fn trace(scene: SceneDescription, rays: Option<PathBuf>) -> ExitCode {
         let result = line.map_err(|e| e.to_string()).and_then(|l| tracer.line(&l));
         match result {
             Ok(Some(v)) => {
-                if writeln!(out, "{v}").is_err() {
-                    return ExitCode::FAILURE;
+                if let Err(e) = writeln!(out, "{v}") {
+                    return fail(Path::new("<stdout>"), format!("cannot write: {e}"));
                 }
             }
             Ok(None) => {}
             Err(e) => {
                 let _ = out.flush();
-                eprintln!("{name}:{}: error: {e}", i + 1);
+                say!("{name}:{}: error: {e}", i + 1);
                 return ExitCode::FAILURE;
             }
         }
     }
-    if out.flush().is_err() { ExitCode::FAILURE } else { ExitCode::SUCCESS }
+    match out.flush() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => fail(Path::new("<stdout>"), format!("cannot write: {e}")),
+    }
 }
 
-fn print_summary(s: &SceneDescription) {
+fn summary(s: &SceneDescription) -> String {
+    use std::fmt::Write as _;
     let r = pbrt_sppm::check::report(s, false);
-    println!("syntax      {}", s.syntax.name());
-    println!("film        {}x{} -> {}", s.film.x_resolution, s.film.y_resolution, s.film.filename);
+    let mut out = String::new();
+    let _ = writeln!(out, "syntax      {}", s.syntax.name());
+    let _ = writeln!(out, "film        {}x{} -> {}", s.film.x_resolution, s.film.y_resolution, s.film.filename);
     let i = &s.integrator;
-    println!(
+    let _ = writeln!(
+        out,
         "sppm        {} iterations, maxdepth {}, {} photons/iteration, radius {}",
         i.iterations, i.max_depth, i.photons_per_iteration, i.radius
     );
     if let Some(c) = r["counts"].as_object() {
         let parts: Vec<String> =
             c.iter().filter(|(_, v)| v.as_u64() != Some(0)).map(|(k, v)| format!("{k} {v}")).collect();
-        println!("counts      {}", parts.join(", "));
+        let _ = writeln!(out, "counts      {}", parts.join(", "));
     }
     for k in &s.skipped {
-        println!("skipped     {}:{}:{}: {} ({})", k.file, k.line, k.column, k.what, k.why);
+        let _ = writeln!(out, "skipped     {}:{}:{}: {} ({})", k.file, k.line, k.column, k.what, k.why);
     }
+    for a in &s.approximated {
+        let _ = writeln!(out, "approximated {}:{}:{}: {} ({})", a.file, a.line, a.column, a.what, a.how);
+    }
+    out
 }

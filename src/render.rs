@@ -5,16 +5,15 @@
 use crate::accel::{Geometry, Hit, LocalHit};
 use crate::camera::Camera;
 use crate::interaction::SurfaceInteraction;
-use crate::lights::{Emitter, Light, WorldSphere, emission, quadric_area};
-use crate::materials::{Bsdf, Material};
+use crate::lights::{Emitter, Light, WorldSphere, quadric_area};
+use crate::materials::{Bsdf, Material, Textures};
 use crate::math::frame::coordinate_system;
 use crate::parser::Syntax;
 use crate::sampling::Distribution1D;
-use crate::scene::{Film, Geometry as ShapeGeometry, Integrator, SceneDescription};
+use crate::scene::{AreaLightDesc, Film, Geometry as ShapeGeometry, Integrator, SceneDescription};
 use crate::shapes::MeshFlags;
-use crate::spectrum::Rgb;
+use crate::spectrum::{Rgb, luminance};
 use glam::Vec3;
-use std::collections::HashMap;
 
 /// An emitting world shape: its radiance and where its lights start.
 #[derive(Clone, Copy, Debug)]
@@ -32,24 +31,23 @@ pub struct RenderScene {
     pub integrator: Integrator,
     pub syntax: Syntax,
     pub materials: Vec<Material>,
+    pub textures: Textures,
     world_shape_material: Vec<u32>,
     object_shape_material: Vec<Vec<u32>>,
-    pub emitters: HashMap<u32, EmitterInfo>,
+    /// Per world shape (by `check --shapes` index): its emission, if it emits.
+    pub emitters: Vec<Option<EmitterInfo>>,
     pub lights: Vec<Light>,
     pub light_power: Distribution1D,
     pub world: WorldSphere,
     /// Row-major world-to-camera, for image metadata.
     pub world_to_camera: [f32; 16],
-    /// Problems found while reading textures and maps.
-    pub warnings: Vec<String>,
 }
 
 impl RenderScene {
     pub fn new(mut scene: SceneDescription) -> RenderScene {
         let camera = Camera::new(&scene.camera, &scene.film);
-        let ctx = crate::materials::TextureContext::new(&scene.base_dir);
-        let materials: Vec<Material> =
-            scene.materials.iter().map(|m| Material::from_desc(m, &scene.textures, &ctx)).collect();
+        let textures = Textures::new(&scene.textures);
+        let materials: Vec<Material> = scene.materials.iter().map(|m| Material::from_desc(m, &textures)).collect();
         let world_shape_material = scene.shapes.iter().map(|s| s.material).collect();
         let object_shape_material =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.material).collect()).collect();
@@ -61,23 +59,13 @@ impl RenderScene {
             }
             None => WorldSphere { center: Vec3::ZERO, radius: 1.0 },
         };
-        let mut lights: Vec<Light> = scene
-            .lights
-            .iter()
-            .filter_map(|l| Light::from_desc(&l.ty, &l.params, &l.world_from_light, scene.syntax, &ctx))
-            .collect();
+        let mut lights: Vec<Light> = scene.lights.iter().map(Light::from_desc).collect();
         let shape_info: Vec<(ShapeGeometry, Option<u32>, bool, bool)> = scene
             .shapes
             .iter()
             .map(|s| (s.geometry.clone(), s.area_light, s.reverse_orientation, s.swaps_handedness()))
             .collect();
-        let area_params: Vec<(Rgb, bool)> = scene
-            .area_lights
-            .iter()
-            .map(|a| {
-                (emission(&a.params, "L", scene.syntax), a.params.bool("twosided").ok().flatten().unwrap_or(false))
-            })
-            .collect();
+        let area_params = scene.area_lights.clone();
         let syntax = scene.syntax;
         let film = scene.film.clone();
         let integrator = scene.integrator.clone();
@@ -92,6 +80,7 @@ impl RenderScene {
             integrator,
             syntax,
             materials,
+            textures,
             world_shape_material,
             object_shape_material,
             emitters,
@@ -99,7 +88,6 @@ impl RenderScene {
             light_power,
             world,
             world_to_camera: m,
-            warnings: ctx.warnings.into_inner(),
         }
     }
 
@@ -121,7 +109,7 @@ impl RenderScene {
             ss = coordinate_system(ns).0;
         }
         let ts = ns.cross(ss);
-        self.material(hit).bsdf(si.uv, [ss, ts, ns], si.n.0)
+        self.material(hit).bsdf(&self.textures, si.uv, [ss, ts, ns], si.n.0)
     }
 
     /// The emitting world shape hit, and which of its lights (for MIS).
@@ -129,7 +117,7 @@ impl RenderScene {
         if hit.instance.is_some() {
             return None; // area lights inside object definitions are ignored, as in pbrt
         }
-        let info = *self.emitters.get(&hit.shape_index)?;
+        let info = (*self.emitters.get(hit.shape_index as usize)?)?;
         let light = match hit.local {
             LocalHit::Triangle { tri, .. } => info.first_light + tri,
             LocalHit::Quadric(..) => info.first_light,
@@ -146,14 +134,15 @@ impl RenderScene {
     }
 }
 
-/// One light per emitting quadric and per triangle of emitting meshes (world shapes).
+/// One light per emitting quadric and per non-degenerate triangle of emitting meshes
+/// (world shapes).
 fn area_lights(
     g: &Geometry,
     shapes: &[(ShapeGeometry, Option<u32>, bool, bool)],
-    params: &[(Rgb, bool)],
+    params: &[AreaLightDesc],
     lights: &mut Vec<Light>,
-) -> HashMap<u32, EmitterInfo> {
-    let mut emitters = HashMap::new();
+) -> Vec<Option<EmitterInfo>> {
+    let mut emitters = vec![None; shapes.len()];
     let mut quadric = 0u32;
     for (i, (geom, area, ro, swaps)) in shapes.iter().enumerate() {
         let this_quadric = quadric;
@@ -161,18 +150,15 @@ fn area_lights(
             quadric += 1;
         }
         let Some(a) = area else { continue };
-        let (l, two_sided) = params[*a as usize];
+        let desc = &params[*a as usize];
         let first_light = lights.len() as u32;
+        let mut shape_lights = Vec::new();
         match geom {
             ShapeGeometry::Quadric(_) => {
                 let sampler = g.quadrics[this_quadric as usize].sampler();
                 let area = quadric_area(g, this_quadric);
-                lights.push(Light::Area {
-                    emitter: Emitter::Quadric { index: this_quadric, sampler },
-                    l,
-                    two_sided,
-                    area,
-                });
+                let emitter = Emitter::Quadric { index: this_quadric, sampler };
+                shape_lights.push((emitter, area));
             }
             ShapeGeometry::Mesh { mesh, .. } => {
                 let m = &g.meshes[*mesh as usize];
@@ -180,18 +166,33 @@ fn area_lights(
                 for t in 0..m.triangle_count() {
                     let [a, b, c] = m.vertices(t);
                     let area = (0.5 * (b - a).cross(c - a).length()) as f32;
-                    lights.push(Light::Area {
-                        emitter: Emitter::Triangle { mesh: *mesh, tri: t as u32, flags },
-                        l,
-                        two_sided,
-                        area,
-                    });
+                    // Zero-area triangles keep their slot (lights are found by triangle
+                    // number) but emit nothing.
+                    shape_lights.push((Emitter::Triangle { mesh: *mesh, tri: t as u32, flags }, area));
                 }
             }
         }
-        emitters.insert(i as u32, EmitterInfo { l, two_sided, first_light });
+        let l = area_emission(desc, shape_lights.iter().map(|(_, a)| *a as f64).sum());
+        for (emitter, area) in shape_lights {
+            let l = if area > 0.0 { l } else { Vec3::ZERO };
+            lights.push(Light::Area { emitter, l, two_sided: desc.two_sided, area });
+        }
+        emitters[i] = Some(EmitterInfo { l, two_sided: desc.two_sided, first_light });
     }
     emitters
+}
+
+/// An area light's radiance on a shape of total area `area`, after v4's `power`.
+// DEVIATION(pbrt): pbrt-v4 applies `power` to each triangle of a mesh on its own, so a
+// mesh of n triangles emits n times the power asked for; we spread it over the shape.
+pub fn area_emission(a: &AreaLightDesc, area: f64) -> Rgb {
+    match a.power {
+        Some(w) if area > 0.0 => {
+            let sides = if a.two_sided { 2.0 } else { 1.0 };
+            a.l * (w as f64 / (std::f64::consts::PI * sides * area * luminance(a.l).max(1e-9) as f64)) as f32
+        }
+        _ => a.l,
+    }
 }
 
 /// Command-line overrides and reporting for a render.
@@ -260,7 +261,7 @@ impl RenderScene {
         if !(radius > 0.0 && radius.is_finite()) {
             return Err(format!("the radius must be positive, not {radius}"));
         }
-        let mut sppm = crate::integrators::sppm::Sppm::new(self, photons, radius, settings.seed.unwrap_or(i.seed));
+        let mut sppm = crate::integrators::sppm::Sppm::new(self, photons, radius, settings.seed.unwrap_or(i.seed))?;
         let [x0, x1, y0, y1] = self.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
         if let Some(r) = &settings.reference

@@ -10,7 +10,6 @@
 //! matching functions (Wyman, Sloan and Shirley 2013) and converted XYZ → linear sRGB.
 //! Named metal spectra use common RGB reductions.
 
-use crate::parser::params::SpectrumValue;
 use glam::Vec3;
 
 /// Linear sRGB.
@@ -75,8 +74,8 @@ pub fn luminance(c: Rgb) -> f32 {
     0.212_671 * c.x + 0.715_160 * c.y + 0.072_169 * c.z
 }
 
-/// RGB (eta, k) for the named metal spectra pbrt-v4 knows.
-pub fn named_metal(name: &str) -> Option<Rgb> {
+/// RGB reductions of the named spectra pbrt-v4 knows (metal η and k, glass indices).
+pub fn named_spectrum(name: &str) -> Option<Rgb> {
     Some(match name {
         "metal-Cu-eta" => Vec3::new(0.200, 0.924, 1.102),
         "metal-Cu-k" => Vec3::new(3.912, 2.452, 2.142),
@@ -93,19 +92,9 @@ pub fn named_metal(name: &str) -> Option<Rgb> {
     })
 }
 
-/// A spectrum parameter as RGB; `None` for texture references and unknown names.
-pub fn to_rgb(v: &SpectrumValue) -> Option<Rgb> {
-    match v {
-        SpectrumValue::Rgb(c) => Some(Vec3::from(*c)),
-        SpectrumValue::Xyz(c) => Some(xyz_to_rgb(c.map(f64::from))),
-        SpectrumValue::Blackbody { kelvin, scale } => Some(blackbody(*kelvin) * scale.unwrap_or(1.0)),
-        SpectrumValue::Sampled(pairs) => {
-            let s = |l: f64| interpolate(pairs, l as f32) as f64;
-            Some(xyz_to_rgb(integrate(s)))
-        }
-        SpectrumValue::Named(n) => named_metal(n),
-        SpectrumValue::Texture(_) => None,
-    }
+/// A piecewise-linear spectrum of (λ nm, value) pairs (increasing λ) as RGB.
+pub fn sampled_to_rgb(pairs: &[(f32, f32)]) -> Rgb {
+    xyz_to_rgb(integrate(|l| interpolate(pairs, l as f32) as f64))
 }
 
 /// Piecewise-linear interpolation of (λ, value) pairs, clamped at the ends.
@@ -127,7 +116,7 @@ mod tests {
     #[test]
     fn a_flat_spectrum_is_illuminant_e() {
         // Equal energy is slightly pink in sRGB (its white point is D65), luminance 1.
-        let c = to_rgb(&SpectrumValue::Sampled(vec![(300.0, 1.0), (900.0, 1.0)])).unwrap_or_default();
+        let c = sampled_to_rgb(&[(300.0, 1.0), (900.0, 1.0)]);
         assert!((c - Vec3::new(1.205, 0.948, 0.909)).abs().max_element() < 0.02, "{c}");
         assert!((luminance(c) - 1.0).abs() < 0.01);
     }

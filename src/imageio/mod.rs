@@ -52,10 +52,7 @@ impl RgbImage {
 
 /// A temporary file beside `path` and the final rename, so no reader sees a half file.
 pub fn atomically(path: &Path, write: impl FnOnce(&Path) -> Res<()>) -> Res<()> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).map_or_else(|| PathBuf::from("."), Path::to_path_buf);
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp.{ext}", std::process::id()));
+    let tmp = temp_path(path);
     let result = write(&tmp)
         .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| format!("cannot rename to \"{}\": {e}", path.display())));
     if result.is_err() {
@@ -64,17 +61,39 @@ pub fn atomically(path: &Path, write: impl FnOnce(&Path) -> Res<()>) -> Res<()> 
     result
 }
 
+/// The temporary name beside `path` that [`atomically`] writes first.
+fn temp_path(path: &Path) -> PathBuf {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    dir.join(format!(".{name}.{}.tmp.{ext}", std::process::id()))
+}
+
 /// Writes text atomically (reports, CSV files).
 pub fn write_text(path: &Path, text: &str) -> Res<()> {
     atomically(path, |tmp| std::fs::write(tmp, text).map_err(|e| format!("cannot write \"{}\": {e}", path.display())))
 }
 
-/// Writes by extension: `.png` gives an sRGB preview, anything else EXR.
+/// Writes by extension: `.exr`, or `.png` for an sRGB preview; any other name is an
+/// error (never EXR bytes under another format's name).
 pub fn write_image(path: &Path, img: &RgbImage) -> Res<()> {
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("png") => write_png(path, img),
-        _ => write_exr(path, img),
+        Some("exr") => write_exr(path, img),
+        _ => Err(format!("\"{}\": an image name must end in .exr or .png", path.display())),
     }
+}
+
+/// Checks, before any work, that a file can be written at `path`: its folder exists and
+/// takes a new file (made and removed again), and `path` is not a folder.
+pub fn check_writable(path: &Path) -> Res<()> {
+    if path.is_dir() {
+        return Err(format!("\"{}\" is a folder", path.display()));
+    }
+    let tmp = temp_path(path);
+    std::fs::File::create(&tmp).map_err(|e| format!("cannot write \"{}\": {e}", path.display()))?;
+    let _ = std::fs::remove_file(&tmp);
+    Ok(())
 }
 
 pub fn write_exr(path: &Path, img: &RgbImage) -> Res<()> {
@@ -128,6 +147,46 @@ pub fn write_png(path: &Path, img: &RgbImage) -> Res<()> {
         buf.save_with_format(tmp, image::ImageFormat::Png)
             .map_err(|e| format!("cannot write \"{}\": {e}", path.display()))
     })
+}
+
+/// Reads an image for a scene: a regular file within `limits.file_bytes`, whose size
+/// (from its header, before decoding) is within `limits.texture_pixels`.
+pub fn read_image_within(path: &Path, limits: &crate::limits::Limits) -> Res<RgbImage> {
+    let shown = path.display();
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
+    if !meta.is_file() {
+        return Err(format!("cannot read \"{shown}\": not a regular file"));
+    }
+    if meta.len() > limits.file_bytes {
+        let what = format!("\"{shown}\" has {} bytes, which", meta.len());
+        return Err(crate::limits::Limits::over(what, "file-bytes", limits.file_bytes));
+    }
+    let (w, h) = dimensions(path)?;
+    if w as u64 * h as u64 > limits.texture_pixels {
+        let what = format!("\"{shown}\" is {w}x{h} pixels, which");
+        return Err(crate::limits::Limits::over(what, "texture-pixels", limits.texture_pixels));
+    }
+    read_image(path)
+}
+
+/// Width and height from the file's header alone.
+fn dimensions(path: &Path) -> Res<(usize, usize)> {
+    let shown = path.display();
+    if is_png(path) {
+        let (w, h) = image::ImageReader::open(path)
+            .and_then(|r| r.with_guessed_format())
+            .map_err(|e| format!("cannot read \"{shown}\": {e}"))?
+            .into_dimensions()
+            .map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
+        return Ok((w as usize, h as usize));
+    }
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
+    let header = meta.headers.first().ok_or_else(|| format!("cannot read \"{shown}\": no image in the file"))?;
+    Ok((header.layer_size.width(), header.layer_size.height()))
+}
+
+fn is_png(path: &Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png"))
 }
 
 /// Reads the first RGB(A) layer of an EXR (half or float), or a PNG (linearised).

@@ -80,13 +80,20 @@ fn power_heuristic(f: f32, g: f32) -> f32 {
 }
 
 impl<'a> Sppm<'a> {
-    pub fn new(scene: &'a RenderScene, photons_per_iteration: u64, radius: f32, seed: u64) -> Sppm<'a> {
+    /// Fails (rather than aborting) when the pixels' state does not fit in memory.
+    pub fn new(scene: &'a RenderScene, photons_per_iteration: u64, radius: f32, seed: u64) -> Result<Sppm<'a>, String> {
         let [x0, x1, y0, y1] = scene.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
         let pixel = Pixel { radius: radius as f64, ld: DVec3::ZERO, tau: DVec3::ZERO, n: 0.0, vp: None };
-        Sppm {
+        let mut pixels = Vec::new();
+        pixels.try_reserve_exact(w * h).map_err(|_| {
+            let bytes = (w * h).saturating_mul(std::mem::size_of::<Pixel>());
+            format!("not enough memory for the state of {w}x{h} pixels ({bytes} bytes)")
+        })?;
+        pixels.resize(w * h, pixel);
+        Ok(Sppm {
             scene,
-            pixels: vec![pixel; w * h],
+            pixels,
             width: w,
             origin: (x0, y0),
             iteration: 0,
@@ -94,7 +101,7 @@ impl<'a> Sppm<'a> {
             max_depth: scene.integrator.max_depth,
             seed,
             stats: Stats::default(),
-        }
+        })
     }
 
     /// One full iteration: camera pass, grid, photons, update.

@@ -10,7 +10,8 @@
 //! 2D piecewise-constant distribution of luminance × sin θ, with the matching pdf.
 
 use crate::imageio::RgbImage;
-use crate::materials::{Wrap, lookup};
+use crate::materials::lookup;
+use crate::scene::Wrap;
 use crate::spectrum::{Rgb, luminance};
 use glam::{DMat3, DVec3, Vec3};
 use std::f32::consts::PI;

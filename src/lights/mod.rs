@@ -9,7 +9,8 @@
 //! LightSource "infinite" "rgb L" [.1 .1 .1]      # or "string mapname"/"filename" (equirectangular)
 //! AreaLightSource "diffuse" "rgb L" [4 4 4] "bool twosided" true "float power" 100   # v4 power
 //! ```
-//! Every light can be sampled for direct lighting (`sample_li`, with the solid-angle pdf
+//! The scene description settles every parameter (`scene::lights`); this module turns
+//! the typed lights into what the integrator samples. Every light can be sampled for direct lighting (`sample_li`, with the solid-angle pdf
 //! `pdf_li` for MIS), can emit photons (`sample_le`: ray, light normal, position and
 //! direction pdfs) and reports its `power` for choosing photon sources. Area lights are
 //! one light per quadric and one per triangle, as in pbrt. v4 normalises blackbody
@@ -19,17 +20,15 @@ pub mod envmap;
 
 use crate::accel::Geometry;
 use crate::interaction::offset_ray_origin;
-use crate::materials::TextureContext;
 use crate::math::frame::coordinate_system;
 use crate::math::{Normal3, Point3, Ray, Vector3};
-use crate::parser::Syntax;
-use crate::parser::params::{ParamList, SpectrumValue};
 use crate::sampling::{uniform_cone, uniform_sphere};
+use crate::scene::{LightDesc, LightKind};
 use crate::shapes::sampling::area_to_solid_angle;
 use crate::shapes::{MeshFlags, QuadricSampler, ShapeSample};
-use crate::spectrum::{Rgb, blackbody, luminance, to_rgb};
+use crate::spectrum::{Rgb, luminance};
 use envmap::EnvMap;
-use glam::{DMat3, DMat4, DVec3, Vec3};
+use glam::{DMat3, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -100,93 +99,29 @@ pub struct WorldSphere {
     pub radius: f32,
 }
 
-/// Reads a light's spectrum parameter, applying v4's luminance normalisation of
-/// blackbody spectra and the `scale` parameter (float in v4, spectrum in v3).
-pub fn emission(p: &ParamList, name: &str, syntax: Syntax) -> Rgb {
-    let value = p.spectrum(name).ok().flatten();
-    let mut c = match &value {
-        Some(SpectrumValue::Blackbody { kelvin, scale: None }) if syntax == Syntax::V4 => {
-            let b = blackbody(*kelvin);
-            b / luminance(b).max(1e-6)
-        }
-        Some(v) => to_rgb(v).unwrap_or(Vec3::ONE),
-        None => Vec3::ONE,
-    };
-    match p.float("scale").ok().flatten() {
-        Some(s) => c *= s,
-        None => {
-            if let Some(s) = p.spectrum("scale").ok().flatten().and_then(|s| to_rgb(&s)) {
-                c *= s;
-            }
-        }
-    }
-    c
-}
-
-fn point3(p: &ParamList, name: &str, default: [f32; 3]) -> DVec3 {
-    DVec3::from(p.point3(name).ok().flatten().unwrap_or(default).map(f64::from))
-}
-
 impl Light {
-    /// A `LightSource` of a supported type (`None` otherwise).
-    pub fn from_desc(
-        ty: &str,
-        p: &ParamList,
-        world_from_light: &DMat4,
-        syntax: Syntax,
-        ctx: &TextureContext,
-    ) -> Option<Light> {
-        let m = world_from_light;
-        Some(match ty {
-            "point" => {
-                let from = point3(p, "from", [0.0; 3]);
-                // v3 adds `from` in world space after the CTM; v4 transforms it.
-                let pos = if syntax == Syntax::V3 {
-                    m.transform_point3(DVec3::ZERO) + from
-                } else {
-                    m.transform_point3(from)
-                };
-                let mut i = emission(p, "I", syntax);
-                if let Some(power) = p.float("power").ok().flatten().filter(|&w| w > 0.0) {
-                    i *= power / (4.0 * PI * luminance(i).max(1e-9));
-                }
-                Light::Point { p: pos.as_vec3(), i }
-            }
-            "spot" => {
-                let (from, to) = (point3(p, "from", [0.0; 3]), point3(p, "to", [0.0, 0.0, 1.0]));
-                let dir = m.transform_vector3(to - from).normalize().as_vec3();
+    /// The render form of a typed light.
+    pub fn from_desc(d: &LightDesc) -> Light {
+        match &d.kind {
+            LightKind::Point { position, i } => Light::Point { p: position.as_vec3(), i: *i },
+            LightKind::Spot { position, direction, i, cos_total, cos_start, smooth_falloff } => {
+                let dir = direction.as_vec3();
                 let (a, b) = coordinate_system(dir);
-                let cone = p.float("coneangle").ok().flatten().unwrap_or(30.0);
-                let delta = p.float("conedeltaangle").ok().flatten().unwrap_or(5.0);
-                let (cos_total, cos_start) = (cone.to_radians().cos(), (cone - delta).to_radians().cos());
-                let mut i = emission(p, "I", syntax);
-                if let Some(power) = p.float("power").ok().flatten().filter(|&w| w > 0.0) {
-                    i *= power / (2.0 * PI * (1.0 - 0.5 * (cos_start + cos_total)) * luminance(i).max(1e-9));
-                }
                 Light::Spot {
-                    p: m.transform_point3(from).as_vec3(),
+                    p: position.as_vec3(),
                     frame: [a, b, dir],
-                    i,
-                    cos_total,
-                    cos_start,
-                    smooth: syntax == Syntax::V4,
+                    i: *i,
+                    cos_total: *cos_total,
+                    cos_start: *cos_start,
+                    smooth: *smooth_falloff,
                 }
             }
-            "distant" => {
-                let (from, to) = (point3(p, "from", [0.0; 3]), point3(p, "to", [0.0, 0.0, 1.0]));
-                Light::Distant { w: m.transform_vector3(from - to).normalize().as_vec3(), l: emission(p, "L", syntax) }
-            }
-            "infinite" => {
-                let l = emission(p, "L", syntax);
-                let name = p.string("mapname").ok().flatten().or_else(|| p.string("filename").ok().flatten());
-                let map = name
-                    .filter(|n| !n.is_empty())
-                    .and_then(|n| ctx.image(&n))
-                    .map(|img| Arc::new(EnvMap::new(img, l, DMat3::from_mat4(*m))));
-                Light::Infinite { l, map }
-            }
-            _ => return None,
-        })
+            LightKind::Distant { toward_light, l } => Light::Distant { w: toward_light.as_vec3(), l: *l },
+            LightKind::Infinite { l, map } => Light::Infinite {
+                l: *l,
+                map: map.as_ref().map(|m| Arc::new(EnvMap::new(m.image.clone(), *l, m.world_from_light))),
+            },
+        }
     }
 
     pub fn is_delta(&self) -> bool {

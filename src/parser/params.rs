@@ -340,6 +340,16 @@ impl ParamList {
         self.params.iter().for_each(Param::mark_used);
     }
 
+    /// The first parameter nobody found because a lookup wanted it with another type.
+    pub fn wrong_type(&self) -> Option<Diagnostic> {
+        let p = self.params.iter().find(|p| !p.is_used() && p.wanted.get().is_some())?;
+        let want = p.wanted.get()?.keyword();
+        Some(Diagnostic::error(
+            p.span,
+            format!("parameter \"{} {}\" has the wrong type: expected \"{want}\"", p.type_name, p.name),
+        ))
+    }
+
     /// One warning per parameter nobody looked up, at the parameter's own span.
     // DEVIATION(pbrt): pbrt-v4 aborts on an unused parameter; we warn, as pbrt-v3 does,
     // so that v3 files (and v3 shape-level material overrides) still load.

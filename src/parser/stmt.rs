@@ -20,7 +20,7 @@ use super::error::Diagnostic;
 use super::lexer::{Lexer, TokenKind, decode_string};
 use super::params::{Param, ParamList, ParamType, Values};
 use super::source::{FileId, SourceMap, Span};
-use std::io::Read;
+use crate::limits::Limits;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -142,8 +142,6 @@ struct Frame {
     kind: FrameKind,
 }
 
-const MAX_INCLUDE_DEPTH: usize = 64;
-
 /// Reads statements from a top-level file and everything it includes.
 pub struct StatementReader {
     pub sources: SourceMap,
@@ -155,20 +153,12 @@ pub struct StatementReader {
     pub warnings: Vec<Diagnostic>,
     /// The first version-specific construct seen, if any.
     pub evidence: Option<(Syntax, Span, String)>,
+    pub limits: Limits,
 }
 
-/// Reads a scene file's bytes, decompressing gzip and rejecting UTF-16.
-pub fn read_scene_bytes(path: &Path) -> Result<Vec<u8>, String> {
-    let raw = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
-    let mut bytes = if raw.starts_with(&[0x1f, 0x8b]) {
-        let mut out = Vec::new();
-        flate2::read::MultiGzDecoder::new(&raw[..])
-            .read_to_end(&mut out)
-            .map_err(|e| format!("cannot decompress \"{}\": {e}", path.display()))?;
-        out
-    } else {
-        raw
-    };
+/// Reads a scene file's bytes within the limits, decompressing gzip and rejecting UTF-16.
+pub fn read_scene_bytes(path: &Path, limits: &Limits) -> Result<Vec<u8>, String> {
+    let mut bytes = crate::limits::read_file(path, limits)?;
     if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
         return Err(format!("\"{}\" is UTF-16; pbrt scene files must be ASCII or UTF-8", path.display()));
     }
@@ -180,7 +170,7 @@ pub fn read_scene_bytes(path: &Path) -> Result<Vec<u8>, String> {
 
 impl StatementReader {
     /// Starts reading `text` as the top-level file `path` (the base for relative paths).
-    pub fn new(path: &Path, text: Vec<u8>) -> Result<StatementReader, String> {
+    pub fn new(path: &Path, text: Vec<u8>, limits: Limits) -> Result<StatementReader, String> {
         let mut sources = SourceMap::default();
         let file = sources.add(path, path.display().to_string(), text)?;
         let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -192,6 +182,7 @@ impl StatementReader {
             peeked: None,
             warnings: Vec::new(),
             evidence: None,
+            limits,
         })
     }
 
@@ -467,11 +458,13 @@ impl StatementReader {
     }
 
     fn push_file(&mut self, name: &str, span: Span, kind: FrameKind) -> Result<(), Diagnostic> {
-        if self.stack.len() > MAX_INCLUDE_DEPTH {
-            return Err(Diagnostic::error(span, "files included too deeply (an Include cycle?)"));
+        let depth = self.limits.include_depth;
+        if self.stack.len() as u64 > depth {
+            let what = format!("Include/Import nesting ({} files deep; an Include cycle?)", self.stack.len());
+            return Err(Diagnostic::error(span, Limits::over(what, "include-depth", depth)));
         }
         let path = self.resolve_path(name);
-        let bytes = read_scene_bytes(&path).map_err(|e| Diagnostic::error(span, e))?;
+        let bytes = read_scene_bytes(&path, &self.limits).map_err(|e| Diagnostic::error(span, e))?;
         let file =
             self.sources.add(&path, path.display().to_string(), bytes).map_err(|e| Diagnostic::error(span, e))?;
         let text = self.sources.file(file).text.clone();

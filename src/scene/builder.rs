@@ -17,40 +17,46 @@
 //! references). Object definitions, materials, textures and area lights are built
 //! only when something uses them.
 
+mod typed;
+
+use super::approx::Approx;
 use super::entities;
+use super::materials::{MaterialDesc, TextureDesc};
 use super::options::RenderOptions;
 use super::shapes::{self as shape_build, Built};
-use super::{
-    AreaLightDesc, Geometry, InstanceDesc, LightDesc, MaterialDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped,
-    TextureDesc, mesh,
-};
+use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped, mesh};
+use crate::imageio::RgbImage;
+use crate::limits::Limits;
 use crate::parser::Syntax;
 use crate::parser::error::{Diagnostic, LoadError, Located};
-use crate::parser::params::{ParamList, ParamType};
+use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::parser::stmt::{ActiveTransform, Entity, StatementReader, Stmt, StmtKind, read_scene_bytes};
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::rc::Rc;
+use std::sync::Arc;
 
 /// How to load a scene.
 #[derive(Clone, Debug, Default)]
 pub struct LoadOptions {
     /// Overrides syntax detection (`--syntax v3|v4`).
     pub syntax: Option<Syntax>,
+    pub limits: Limits,
 }
 
 /// Reads, parses and builds a scene file.
 pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
-    let bytes = read_scene_bytes(path).map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
+    let bytes = read_scene_bytes(path, &opts.limits).map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
     load_scene_from_bytes(path, bytes, opts)
 }
 
 /// As [`load_scene`], with the top-level file's bytes given (its path still anchors
 /// relative file names).
 pub fn load_scene_from_bytes(path: &Path, bytes: Vec<u8>, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
-    let reader = StatementReader::new(path, bytes).map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
+    let reader = StatementReader::new(path, bytes, opts.limits)
+        .map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
     let mut b = Builder::new(reader, opts.clone());
     match b.run() {
         Ok(scene) => Ok(scene),
@@ -109,7 +115,6 @@ struct PendingTexture {
     class: String,
     params: ParamList,
     span: Span,
-    world_from_texture: DMat4,
     scope: Rc<Scope>,
     /// `Some(None)`: tried and skipped; `Some(Some(i))`: built as texture i.
     built: Option<Option<u32>>,
@@ -144,15 +149,23 @@ struct Builder {
     object_names: HashMap<String, u32>,
     current_object: Option<u32>,
     instance_uses: Vec<(String, DMat4, Span)>,
-    lights: Vec<LightDesc>,
+    /// `LightSource` statements (outside object definitions) and the CTM at each.
+    pending_lights: Vec<(Entity, DMat4)>,
     area_light_entities: Vec<(Entity, Option<u32>)>,
-    area_lights: Vec<AreaLightDesc>,
+    /// Indices into `area_light_entities` of the area lights shapes use, by built index.
+    area_lights_used: Vec<u32>,
     materials: Vec<PendingMaterial>,
     global_materials: HashMap<String, u32>,
     built_materials: Vec<MaterialDesc>,
     textures: Vec<PendingTexture>,
     global_textures: [HashMap<String, u32>; 2],
     built_textures: Vec<TextureDesc>,
+    /// Texture lookups one evaluation of each built texture makes.
+    texture_lookups: Vec<u64>,
+    images: HashMap<PathBuf, Arc<RgbImage>>,
+    /// Decided when the whole file is read.
+    syntax: Option<Syntax>,
+    approximated: Vec<(Span, String, Approx)>,
     attributes: Vec<Entity>,
     options: Vec<(String, String)>,
     warnings: Vec<Diagnostic>,
@@ -193,15 +206,19 @@ impl Builder {
             object_names: HashMap::new(),
             current_object: None,
             instance_uses: Vec::new(),
-            lights: Vec::new(),
+            pending_lights: Vec::new(),
             area_light_entities: Vec::new(),
-            area_lights: Vec::new(),
+            area_lights_used: Vec::new(),
             materials: vec![default_material],
             global_materials: HashMap::new(),
             built_materials: Vec::new(),
             textures: Vec::new(),
             global_textures: [HashMap::new(), HashMap::new()],
             built_textures: Vec::new(),
+            texture_lookups: Vec::new(),
+            images: HashMap::new(),
+            syntax: None,
+            approximated: Vec::new(),
             attributes: Vec::new(),
             options: Vec::new(),
             warnings: Vec::new(),
@@ -345,17 +362,17 @@ impl Builder {
             K::Option { name, value } => {
                 let key = name.to_ascii_lowercase().replace(['-', '_'], "");
                 if key == "seed" {
-                    self.render.seed_option = value.parse().ok();
+                    let seed = value.parse().map_err(|_| {
+                        Diagnostic::error(span, format!("Option \"seed\": \"{value}\" is not a whole number"))
+                    })?;
+                    self.render.seed_option = Some(seed);
                 }
                 self.options.push((key, value));
                 Ok(())
             }
             K::ColorSpace(name) => {
                 if name != "srgb" {
-                    self.warnings.push(Diagnostic::warning(
-                        span,
-                        format!("color space \"{name}\" is not supported; RGB values are taken as sRGB"),
-                    ));
+                    self.note(span, format!("ColorSpace \"{name}\""), Approx::ColorSpace);
                 }
                 Ok(())
             }
@@ -471,8 +488,7 @@ impl Builder {
     fn warn_motion(&mut self, span: Span) {
         if self.gs.ctm[0] != self.gs.ctm[1] && !self.motion_warned {
             self.motion_warned = true;
-            self.warnings
-                .push(Diagnostic::warning(span, "animated transforms are not supported; the start transform is used"));
+            self.note(span, "ActiveTransform".into(), Approx::Motion);
         }
     }
 
@@ -615,28 +631,34 @@ impl Builder {
     /// Geometry, transform and flags; the material is resolved later. `None` when the
     /// shape type is unsupported (warned and listed as skipped).
     fn build_shape(&mut self, s: &PendingShape, area_light: Option<u32>) -> Res<Option<ShapeDesc>> {
+        let (p, at) = (&s.entity.params, s.entity.name_span);
         let resolve = |n: &str| self.reader.resolve_path(n);
         let mut warn = Vec::new();
-        let built = shape_build::build(&s.entity.name, &s.entity.params, s.entity.name_span, &resolve, &mut warn);
+        let built = shape_build::build(&s.entity.name, p, at, &resolve, &self.reader.limits, &mut warn);
         self.warnings.append(&mut warn);
         let Some(built) = built? else {
             let what = format!("Shape \"{}\"", s.entity.name);
-            self.skip(s.entity.name_span, what, "this shape type is not supported".into());
+            self.skip(at, what, "this shape type is not supported".into());
             return Ok(None);
         };
-        s.entity.params.report_unused(&mut self.warnings);
+        if let Some(alpha) = shape_build::alpha_mask(p)? {
+            self.note(alpha, format!("\"alpha\" of Shape \"{}\"", s.entity.name), Approx::AlphaMask);
+        }
+        typed::finish_params(p, &mut self.warnings)?;
         let geometry = match built {
             Built::Quadric(q) => Geometry::Quadric(q),
             Built::Mesh { mesh: mut m, kind, filename } => {
                 mesh::transform(&mut m, &s.ctm);
+                let where_ = p.named("P").or(p.named("filename")).map_or(at, |x| x.span);
+                mesh::validate(&m).map_err(|e| Diagnostic::error(where_, e))?;
+                if let Some(w) = mesh::degenerate_warning(&m) {
+                    self.warnings.push(Diagnostic::warning(where_, w));
+                }
                 self.meshes.push(m);
                 Geometry::Mesh { mesh: self.meshes.len() as u32 - 1, kind, filename }
             }
         };
-        let area_light = match area_light {
-            Some(a) => self.use_area_light(a),
-            None => None,
-        };
+        let area_light = area_light.map(|a| self.use_area_light(a));
         Ok(Some(ShapeDesc {
             geometry,
             object_to_world: s.ctm,
@@ -678,11 +700,6 @@ impl Builder {
     // ---- lights -----------------------------------------------------------------
 
     fn light(&mut self, e: Entity) -> Res<()> {
-        let Some(known) = entities::light_params(&e.name) else {
-            let what = format!("LightSource \"{}\"", e.name);
-            self.skip(e.name_span, what, "this light type is not supported".into());
-            return Ok(());
-        };
         if self.current_object.is_some() {
             let what = format!("LightSource \"{}\"", e.name);
             self.skip(e.name_span, what, "lights inside object definitions are not supported".into());
@@ -692,15 +709,13 @@ impl Builder {
             self.reader.note_evidence(Syntax::V3, p.span, "\"mapname\"");
         }
         let params = self.with_attributes("light", e.params);
-        params.mark_known(known);
-        params.report_unused(&mut self.warnings);
-        self.lights.push(LightDesc { ty: e.name, params, world_from_light: self.gs.ctm[0] });
+        self.pending_lights.push((Entity { params, ..e }, self.gs.ctm[0]));
         Ok(())
     }
 
     fn area_light(&mut self, e: Entity) -> Res<()> {
         self.evidence("AreaLightSource", &e.name.clone(), e.name_span);
-        if entities::area_light_params(&e.name).is_none() {
+        if !matches!(e.name.as_str(), "diffuse" | "area") {
             let what = format!("AreaLightSource \"{}\"", e.name);
             self.skip(e.name_span, what, "this area light type is not supported".into());
             self.gs.area_light = None;
@@ -712,18 +727,16 @@ impl Builder {
         Ok(())
     }
 
-    fn use_area_light(&mut self, i: u32) -> Option<u32> {
-        let (e, built) = &mut self.area_light_entities[i as usize];
+    /// The built index of area light `i`, given on its first use by a shape.
+    fn use_area_light(&mut self, i: u32) -> u32 {
+        let (_, built) = &mut self.area_light_entities[i as usize];
         if let Some(b) = built {
-            return Some(*b);
+            return *b;
         }
-        let params = std::mem::take(&mut e.params);
-        params.mark_known(entities::area_light_params(&e.name).unwrap_or(&[]));
-        params.report_unused(&mut self.warnings);
-        self.area_lights.push(AreaLightDesc { ty: e.name.clone(), params });
-        let idx = self.area_lights.len() as u32 - 1;
+        self.area_lights_used.push(i);
+        let idx = self.area_lights_used.len() as u32 - 1;
         *built = Some(idx);
-        Some(idx)
+        idx
     }
 
     // ---- materials and textures -------------------------------------------------
@@ -778,7 +791,6 @@ impl Builder {
             class: class.name,
             params,
             span: class.name_span,
-            world_from_texture: self.gs.ctm[0],
             scope: self.gs.scope.clone(),
             built: None,
         });
@@ -799,108 +811,14 @@ impl Builder {
                 .get(name)
                 .ok_or_else(|| Diagnostic::error(*span, format!("named material \"{name}\" is not defined")))?,
         };
-        Ok(self.build_material(idx))
-    }
-
-    fn build_material(&mut self, i: u32) -> u32 {
-        let m = &mut self.materials[i as usize];
-        if let Some(b) = m.built {
-            return b;
-        }
-        let params = std::mem::take(&mut m.params);
-        let (name, span, scope) = (m.name.clone(), m.span, m.scope.clone());
-        let mut ty = m.ty.clone();
-        params.mark_known(&["type"]);
-        let desc = match entities::material_params(&ty) {
-            Some(known) => {
-                params.mark_known(known);
-                let textures = self.texture_params(&params, &scope);
-                params.report_unused(&mut self.warnings);
-                MaterialDesc { ty, name, params, textures }
-            }
-            None => {
-                let what = match &name {
-                    Some(n) => format!("material \"{n}\" of type \"{ty}\""),
-                    None => format!("material \"{ty}\""),
-                };
-                self.skip(
-                    span.unwrap_or_default(),
-                    what,
-                    "this material type is not supported; using diffuse 0.5".into(),
-                );
-                ty = "diffuse".into();
-                MaterialDesc { ty, name, params: ParamList::default(), textures: Vec::new() }
-            }
-        };
-        self.built_materials.push(desc);
-        let b = self.built_materials.len() as u32 - 1;
-        self.materials[i as usize].built = Some(b);
-        b
-    }
-
-    /// Resolves every `texture`-typed parameter; unknown names are warned and dropped.
-    fn texture_params(&mut self, params: &ParamList, scope: &Scope) -> Vec<(String, u32)> {
-        let mut out = Vec::new();
-        for p in params.params.iter().filter(|p| p.ty == ParamType::Texture && p.is_used()) {
-            let Some(tex_name) = p.strings().first() else { continue };
-            let float_first = entities::is_float_texture_param(&p.name);
-            let order = if float_first { [0, 1] } else { [1, 0] };
-            let found = order
-                .iter()
-                .find_map(|&k| {
-                    if k == 0 { scope.float_textures.get(tex_name) } else { scope.spectrum_textures.get(tex_name) }
-                })
-                .or_else(|| order.iter().find_map(|&k| self.global_textures[k].get(tex_name)))
-                .copied();
-            match found {
-                Some(t) => {
-                    if let Some(b) = self.build_texture(t) {
-                        out.push((p.name.clone(), b));
-                    }
-                }
-                None => self.warnings.push(Diagnostic::warning(
-                    p.value_span,
-                    format!("texture \"{tex_name}\" is not defined; \"{}\" keeps its default", p.name),
-                )),
-            }
-        }
-        out
-    }
-
-    fn build_texture(&mut self, i: u32) -> Option<u32> {
-        let t = &mut self.textures[i as usize];
-        if let Some(b) = t.built {
-            return b;
-        }
-        t.built = Some(None); // guards against cycles while this one is being built
-        let params = std::mem::take(&mut t.params);
-        let (class, span, scope) = (t.class.clone(), t.span, t.scope.clone());
-        let Some(known) = entities::texture_params(&class) else {
-            let what = format!("Texture \"{}\" of class \"{class}\"", t.name);
-            self.skip(span, what, "this texture class is not supported".into());
-            return None;
-        };
-        params.mark_known(known);
-        let textures = self.texture_params(&params, &scope);
-        params.report_unused(&mut self.warnings);
-        let t = &self.textures[i as usize];
-        self.built_textures.push(TextureDesc {
-            name: t.name.clone(),
-            ty: t.ty.clone(),
-            class,
-            params,
-            world_from_texture: t.world_from_texture,
-            textures,
-        });
-        let b = self.built_textures.len() as u32 - 1;
-        self.textures[i as usize].built = Some(Some(b));
-        Some(b)
+        self.build_material(idx)
     }
 
     // ---- the end ----------------------------------------------------------------
 
     fn finish(&mut self) -> Res<SceneDescription> {
         let syntax = self.opts.syntax.or(self.reader.evidence.as_ref().map(|e| e.0)).unwrap_or(Syntax::V4);
+        self.syntax = Some(syntax);
         self.materials[0].ty = if syntax == Syntax::V3 { "matte" } else { "diffuse" }.into();
         let uses = self.resolve_instances()?;
         let (objects, remap) = self.build_objects()?;
@@ -913,17 +831,27 @@ impl Builder {
         for (shape, m) in self.shapes.iter_mut().zip(resolved) {
             shape.material = m;
         }
-        let mut warn = Vec::new();
-        let r = self.render.resolve(syntax, &mut warn)?;
-        self.warnings.append(&mut warn);
+        let lights = self.build_lights()?;
+        let area_lights = self.build_area_lights()?;
+        let mut approx = Vec::new();
+        let r = self.render.resolve(syntax, &self.opts.limits, &mut self.warnings, &mut approx)?;
+        for (at, what, how) in approx {
+            self.note(at, what, how);
+        }
         if let Some((c, _)) = &self.render.camera {
-            c.params.report_unused(&mut self.warnings);
+            typed::finish_params(&c.params, &mut self.warnings)?;
         }
         for e in [&self.render.film, &self.render.integrator].into_iter().flatten() {
-            e.params.report_unused(&mut self.warnings);
+            typed::finish_params(&e.params, &mut self.warnings)?;
         }
         self.report_left_out();
+        // In file order, whatever the order they were found in.
+        self.skipped.sort_by_key(|(span, _, _)| span.map(|s| (s.file.0, s.start)));
+        self.approximated.sort_by_key(|(span, _, _)| (span.file.0, span.start));
         let sources = &self.reader.sources;
+        let mut film = r.film;
+        let filename_param = self.render.film.as_ref().and_then(|e| e.params.named("filename"));
+        film.filename_location = filename_param.map(|p| sources.location(p.value_span).to_string());
         let mut warnings: Vec<Diagnostic> = std::mem::take(&mut self.reader.warnings);
         warnings.append(&mut self.warnings);
         // In file order (reader and builder warnings interleave); stable for equal spans.
@@ -937,14 +865,14 @@ impl Builder {
             syntax,
             syntax_evidence: if self.opts.syntax.is_some() { Some("--syntax".into()) } else { evidence },
             camera: r.camera,
-            film: r.film,
+            film,
             integrator: r.integrator,
             shapes: std::mem::take(&mut self.shapes),
             objects,
             instances,
             meshes: std::mem::take(&mut self.meshes),
-            lights: std::mem::take(&mut self.lights),
-            area_lights: std::mem::take(&mut self.area_lights),
+            lights,
+            area_lights,
             materials: std::mem::take(&mut self.built_materials),
             textures: std::mem::take(&mut self.built_textures),
             options: std::mem::take(&mut self.options),
@@ -958,6 +886,16 @@ impl Builder {
                     Skipped { file: l.file, line: l.line, column: l.column, what: what.clone(), why: why.clone() }
                 })
                 .collect(),
+            approximated: self
+                .approximated
+                .iter()
+                .map(|(span, what, how)| {
+                    let l = Located::resolve(sources, Some(*span), "");
+                    let (what, how) = (what.clone(), how.how().to_string());
+                    Approximated { file: l.file, line: l.line, column: l.column, what, how }
+                })
+                .collect(),
+            limits: self.opts.limits,
         })
     }
 

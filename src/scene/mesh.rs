@@ -133,3 +133,42 @@ pub fn transform(mesh: &mut TriangleMesh, m: &DMat4) {
         n.iter_mut().for_each(|v| *v = to(normal * from(v)));
     }
 }
+
+/// Coordinates beyond this overflow f32 arithmetic (squared lengths, areas).
+const MAX_COORDINATE: f32 = 1e18;
+
+/// Rejects non-finite or overflowing vertex data, naming the first bad vertex.
+pub fn validate(mesh: &TriangleMesh) -> Result<(), String> {
+    let bad = |v: &[f32]| v.iter().any(|x| !x.is_finite() || x.abs() > MAX_COORDINATE);
+    if let Some(i) = mesh.p.iter().position(|v| bad(v)) {
+        let [x, y, z] = mesh.p[i];
+        return Err(format!(
+            "vertex {i} is at ({x}, {y}, {z}): positions must be finite and within ±{MAX_COORDINATE:e}"
+        ));
+    }
+    let non_finite = |v: &[f32]| v.iter().any(|x| !x.is_finite());
+    let arrays: [(&str, Option<Vec<&[f32]>>); 3] = [
+        ("normal", mesh.n.as_ref().map(|a| a.iter().map(|v| &v[..]).collect())),
+        ("tangent", mesh.s.as_ref().map(|a| a.iter().map(|v| &v[..]).collect())),
+        ("uv", mesh.uv.as_ref().map(|a| a.iter().map(|v| &v[..]).collect())),
+    ];
+    for (what, values) in arrays {
+        if let Some(i) = values.as_ref().and_then(|v| v.iter().position(|x| non_finite(x))) {
+            return Err(format!("the {what} of vertex {i} is not finite"));
+        }
+    }
+    Ok(())
+}
+
+/// One warning counting zero-area triangles: they are never hit and never emit.
+pub fn degenerate_warning(mesh: &TriangleMesh) -> Option<String> {
+    let n = (0..mesh.triangle_count())
+        .filter(|&t| {
+            let [a, b, c] = mesh.vertices(t);
+            (b - a).cross(c - a).length_squared() == 0.0
+        })
+        .count();
+    (n > 0).then(|| {
+        format!("{n} of {} triangles have zero area; they are never hit and never emit", mesh.triangle_count())
+    })
+}

@@ -6,21 +6,27 @@
 //! built: never-instanced objects, never-used named materials and textures are listed
 //! in [`SceneDescription::skipped`] and their files are never opened.
 
+pub mod approx;
 pub mod builder;
 pub mod entities;
+pub mod lights;
+pub mod materials;
 pub mod mesh;
 pub mod obj;
 pub mod options;
 pub mod ply;
 pub mod shapes;
+pub mod values;
 
 use crate::parser::Syntax;
 use crate::parser::error::Located;
-use crate::parser::params::ParamList;
 use crate::shapes::{Quadric, TriangleMesh};
 use glam::{DMat4, DVec3};
 
+pub use approx::Approx;
 pub use builder::{LoadOptions, load_scene, load_scene_from_bytes};
+pub use lights::{AreaLightDesc, EnvMapDesc, LightDesc, LightKind};
+pub use materials::{MaterialDesc, MaterialKind, RoughnessRemap, TexValue, TextureDesc, TextureKind, UvMapping, Wrap};
 pub use options::{Camera, CameraKind, Film, Integrator};
 
 /// A shape's geometry: a quadric, or a triangle mesh stored in [`SceneDescription::meshes`].
@@ -78,47 +84,6 @@ pub struct InstanceDesc {
     pub world_from_instance: DMat4,
 }
 
-/// A `LightSource` of a supported type with its parameters.
-#[derive(Debug)]
-pub struct LightDesc {
-    pub ty: String,
-    pub params: ParamList,
-    /// The CTM at the statement.
-    pub world_from_light: DMat4,
-}
-
-/// An `AreaLightSource` that some shape uses.
-#[derive(Debug)]
-pub struct AreaLightDesc {
-    pub ty: String,
-    pub params: ParamList,
-}
-
-/// A material some shape uses, with its texture parameters resolved.
-#[derive(Debug)]
-pub struct MaterialDesc {
-    /// The type as written (`matte`, `diffuse`, `interface`, ...); unsupported types are
-    /// replaced by `diffuse` with default parameters.
-    pub ty: String,
-    /// The `MakeNamedMaterial` name, if any.
-    pub name: Option<String>,
-    pub params: ParamList,
-    /// Texture-valued parameters: parameter name → index into `textures`.
-    pub textures: Vec<(String, u32)>,
-}
-
-/// A texture some used material (or texture) refers to.
-#[derive(Debug)]
-pub struct TextureDesc {
-    pub name: String,
-    /// `float` or `spectrum` (v3 `color` is reported as `spectrum`).
-    pub ty: String,
-    pub class: String,
-    pub params: ParamList,
-    pub world_from_texture: DMat4,
-    pub textures: Vec<(String, u32)>,
-}
-
 /// Something the scene asked for that is not built, and why.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Skipped {
@@ -127,6 +92,16 @@ pub struct Skipped {
     pub column: u32,
     pub what: String,
     pub why: String,
+}
+
+/// Something rendered other than as the file says, and how ([`Approx::how`]).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Approximated {
+    pub file: String,
+    pub line: u32,
+    pub column: u32,
+    pub what: String,
+    pub how: String,
 }
 
 /// The loaded scene.
@@ -153,6 +128,9 @@ pub struct SceneDescription {
     pub base_dir: std::path::PathBuf,
     pub warnings: Vec<Located>,
     pub skipped: Vec<Skipped>,
+    pub approximated: Vec<Approximated>,
+    /// The limits the scene was loaded under (the renderer checks its overrides too).
+    pub limits: crate::limits::Limits,
 }
 
 /// A shape placed in the world: instances expanded, with world-from-object.

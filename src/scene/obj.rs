@@ -4,10 +4,12 @@
 
 use crate::shapes::TriangleMesh;
 
-pub fn load(path: &std::path::Path) -> Result<TriangleMesh, String> {
+pub fn load(path: &std::path::Path, limits: &crate::limits::Limits) -> Result<TriangleMesh, String> {
     let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
-    let (models, _materials) =
-        tobj::load_obj(path, &opts).map_err(|e| format!("cannot read OBJ \"{}\": {e}", path.display()))?;
+    let bytes = crate::limits::read_file(path, limits)?;
+    // Materials (.mtl) are not used: the scene gives the material.
+    let (models, _materials) = tobj::load_obj_buf(&mut &bytes[..], &opts, |_| Ok(Default::default()))
+        .map_err(|e| format!("cannot read OBJ \"{}\": {e}", path.display()))?;
     let mut mesh = TriangleMesh::default();
     let all_normals = models.iter().all(|m| !m.mesh.normals.is_empty());
     let all_uvs = models.iter().all(|m| !m.mesh.texcoords.is_empty());

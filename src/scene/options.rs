@@ -12,9 +12,13 @@
 //! Sampler "halton" "integer pixelsamples" 16     # v4: SPPM iterations = pixelsamples
 //! ```
 
+use super::approx::Approx;
+use super::values::{self, Range};
+use crate::limits::Limits;
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamType;
+use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use glam::DMat4;
 
@@ -48,6 +52,8 @@ pub struct Film {
     pub x_resolution: u32,
     pub y_resolution: u32,
     pub filename: String,
+    /// Where the scene gives `filename` (`file:line:col`), for errors about it.
+    pub filename_location: Option<String>,
     /// [x0, x1, y0, y1] in NDC, clamped to [0, 1] and sorted.
     pub crop_window: [f32; 4],
     /// [x0, x1, y0, y1] pixels, half open.
@@ -96,22 +102,31 @@ pub struct Resolved {
 
 type Res<T> = Result<T, Diagnostic>;
 
+/// Approximations found while resolving: where, what, how.
+pub type Notes = Vec<(Span, String, Approx)>;
+
 impl RenderOptions {
-    pub fn resolve(&self, syntax: Syntax, warn: &mut Vec<Diagnostic>) -> Res<Resolved> {
-        let (film, exposure_scale) = self.film(syntax, warn)?;
-        let camera = self.camera(&film, warn)?;
+    pub fn resolve(
+        &self,
+        syntax: Syntax,
+        limits: &Limits,
+        warn: &mut Vec<Diagnostic>,
+        notes: &mut Notes,
+    ) -> Res<Resolved> {
+        let (film, exposure_scale) = self.film(syntax, limits, warn, notes)?;
+        let camera = self.camera(&film, notes)?;
         let mut film = film;
         if syntax == Syntax::V4 {
             film.scale *= exposure_scale * (camera.shutter_close - camera.shutter_open);
         }
-        let integrator = self.integrator(syntax, &film, warn)?;
+        let integrator = self.integrator(syntax, &film, limits, warn)?;
         for e in [&self.sampler, &self.filter, &self.accelerator].into_iter().flatten() {
             e.params.mark_all_used(); // irrelevant to SPPM except pixelsamples (read below)
         }
         Ok(Resolved { camera, film, integrator })
     }
 
-    fn film(&self, syntax: Syntax, warn: &mut Vec<Diagnostic>) -> Res<(Film, f32)> {
+    fn film(&self, syntax: Syntax, limits: &Limits, warn: &mut Vec<Diagnostic>, notes: &mut Notes) -> Res<(Film, f32)> {
         let empty = Entity::default_named(if syntax == Syntax::V3 { "image" } else { "rgb" });
         let e = self.film.as_ref().unwrap_or(&empty);
         let p = &e.params;
@@ -129,6 +144,12 @@ impl RenderOptions {
         let (xres, yres) = (res("xresolution", 1280)?, res("yresolution", 720)?);
         let filename = p.string("filename")?.filter(|f| !f.is_empty()).unwrap_or_else(|| "pbrt.exr".into());
         let crop = p.fixed::<4>("cropwindow", &[ParamType::Float])?;
+        if let Some(c) = crop
+            && let Some(x) = c.iter().find(|x| !x.is_finite())
+        {
+            let at = p.named("cropwindow").map_or(e.name_span, |c| c.value_span);
+            return Err(Diagnostic::error(at, format!("\"cropwindow\" must be finite, not {x}")));
+        }
         let crop_window = crop.map_or([0.0, 1.0, 0.0, 1.0], |c| {
             let [a, b, c0, d] = c.map(|v| v.clamp(0.0, 1.0));
             [a.min(b), a.max(b), c0.min(d), c0.max(d)]
@@ -149,26 +170,20 @@ impl RenderOptions {
         if bounds[0] >= bounds[1] || bounds[2] >= bounds[3] {
             return Err(Diagnostic::error(e.name_span, format!("the crop window selects no pixels ({bounds:?})")));
         }
-        let scale = p.float("scale")?.unwrap_or(1.0);
-        let iso = p.float("iso")?.unwrap_or(100.0);
-        p.mark_known(&[
-            "diagonal",
-            "maxsampleluminance",
-            "maxcomponentvalue",
-            "savefp16",
-            "whitebalance",
-            "sensor",
-            "coordinatesystem",
-            "buckets",
-            "lambdamin",
-            "lambdamax",
-        ]);
+        let pixels = (bounds[1] - bounds[0]) as u64 * (bounds[3] - bounds[2]) as u64;
+        if pixels > limits.pixels {
+            let what = format!("the film's {}x{} = {pixels} pixels", bounds[1] - bounds[0], bounds[3] - bounds[2]);
+            return Err(Diagnostic::error(e.name_span, Limits::over(what, "pixels", limits.pixels)));
+        }
+        let scale = values::float(p, "scale", 1.0, Range::NonNegative)?;
+        let iso = values::float(p, "iso", 100.0, Range::Positive)?;
+        // Output format and spectral-film details: nothing in the pixel values changes.
+        values::no_effect(p, &["diagonal", "savefp16", "coordinatesystem", "buckets", "lambdamin", "lambdamax"]);
+        let why = "pixel values are not clamped, and colours are not white-balanced";
+        values::ignored(p, &["maxsampleluminance", "maxcomponentvalue", "whitebalance", "sensor"], why, warn);
         match e.name.as_str() {
             "image" | "rgb" => {}
-            "gbuffer" | "spectral" => warn.push(Diagnostic::warning(
-                e.name_span,
-                format!("Film \"{}\" is written as an RGB film (R, G, B channels only)", e.name),
-            )),
+            "gbuffer" | "spectral" => notes.push((e.name_span, format!("Film \"{}\"", e.name), Approx::FilmType)),
             other => return Err(Diagnostic::error(e.name_span, format!("unknown film type \"{other}\""))),
         }
         let film = Film {
@@ -176,6 +191,7 @@ impl RenderOptions {
             x_resolution: xres,
             y_resolution: yres,
             filename,
+            filename_location: None,
             crop_window,
             pixel_bounds: bounds,
             scale,
@@ -183,7 +199,7 @@ impl RenderOptions {
         Ok((film, iso / 100.0))
     }
 
-    fn camera(&self, film: &Film, warn: &mut Vec<Diagnostic>) -> Res<Camera> {
+    fn camera(&self, film: &Film, notes: &mut Notes) -> Res<Camera> {
         let default = (Entity::default_named("perspective"), DMat4::IDENTITY);
         let (e, camera_from_world) = self.camera.as_ref().unwrap_or(&default);
         let p = &e.params;
@@ -191,28 +207,31 @@ impl RenderOptions {
             "perspective" => CameraKind::Perspective,
             "orthographic" => CameraKind::Orthographic,
             other => {
-                warn.push(Diagnostic::warning(
-                    e.name_span,
-                    format!("camera \"{other}\" is not supported; using a perspective camera"),
-                ));
+                notes.push((e.name_span, format!("Camera \"{other}\""), Approx::Camera));
                 p.mark_all_used();
                 CameraKind::Perspective
             }
         };
-        let frame = match p.float("frameaspectratio")? {
-            Some(f) if f > 0.0 => f,
+        let frame = match values::float(p, "frameaspectratio", -1.0, Range::Any)? {
+            f if f > 0.0 => f,
             _ => film.x_resolution as f32 / film.y_resolution as f32,
         };
         let default_window =
             if frame > 1.0 { [-frame, frame, -1.0, 1.0] } else { [-1.0, 1.0, -1.0 / frame, 1.0 / frame] };
         let screen_window = p.fixed::<4>("screenwindow", &[ParamType::Float])?.unwrap_or(default_window);
-        let mut fov = p.float("fov")?.unwrap_or(90.0);
-        if let Some(h) = p.float("halffov")?.filter(|&h| h > 0.0) {
-            fov = 2.0 * h;
+        if let Some(x) = screen_window.iter().find(|x| !x.is_finite()) {
+            let at = p.named("screenwindow").map_or(e.name_span, |c| c.value_span);
+            return Err(Diagnostic::error(at, format!("\"screenwindow\" must be finite, not {x}")));
         }
-        let (mut open, mut close) = (p.float("shutteropen")?.unwrap_or(0.0), p.float("shutterclose")?.unwrap_or(1.0));
+        let mut fov = values::float(p, "fov", 90.0, Range::Any)?;
+        let half = values::float(p, "halffov", -1.0, Range::Any)?;
+        if half > 0.0 {
+            fov = 2.0 * half;
+        }
+        let open = values::float(p, "shutteropen", 0.0, Range::Any)?;
+        let close = values::float(p, "shutterclose", 1.0, Range::Any)?;
+        let (mut open, mut close) = (open, close);
         if close < open {
-            warn.push(Diagnostic::warning(e.name_span, "shutterclose < shutteropen; swapped"));
             std::mem::swap(&mut open, &mut close);
         }
         if kind == CameraKind::Perspective && !(fov > 0.0 && fov < 180.0) {
@@ -224,8 +243,8 @@ impl RenderOptions {
         Ok(Camera {
             kind,
             fov,
-            lens_radius: p.float("lensradius")?.unwrap_or(0.0),
-            focal_distance: p.float("focaldistance")?.unwrap_or(1e6),
+            lens_radius: values::float(p, "lensradius", 0.0, Range::NonNegative)?,
+            focal_distance: values::float(p, "focaldistance", 1e6, Range::Positive)?,
             frame_aspect_ratio: frame,
             screen_window,
             shutter_open: open,
@@ -234,7 +253,7 @@ impl RenderOptions {
         })
     }
 
-    fn integrator(&self, syntax: Syntax, film: &Film, warn: &mut Vec<Diagnostic>) -> Res<Integrator> {
+    fn integrator(&self, syntax: Syntax, film: &Film, limits: &Limits, warn: &mut Vec<Diagnostic>) -> Res<Integrator> {
         let default = Entity::default_named("sppm");
         let e = self.integrator.as_ref().unwrap_or(&default);
         let p = &e.params;
@@ -263,9 +282,14 @@ impl RenderOptions {
             (None, Syntax::V3) => 64,
             (None, Syntax::V4) => self.pixel_samples()?,
         };
+        if iterations as u64 > limits.iterations {
+            let at = p.named("iterations").or(p.named("numiterations")).map_or(e.name_span, |x| x.value_span);
+            let what = format!("{iterations} SPPM iterations");
+            return Err(Diagnostic::error(at, Limits::over(what, "iterations", limits.iterations)));
+        }
         let max_depth = match p.int("maxdepth")? {
             Some(d) if d < 0 => {
-                return Err(Diagnostic::error(e.name_span, format!("\"maxdepth\" must be >= 0, not {d}")));
+                return Err(err_at(p.named("maxdepth"), e, format!("\"maxdepth\" must be >= 0, not {d}")));
             }
             d => d.unwrap_or(5) as u32,
         };
@@ -273,15 +297,21 @@ impl RenderOptions {
             Some(n) if n > 0 => n as u64,
             _ => film.pixel_count(),
         };
-        let radius = p.float("radius")?.unwrap_or(1.0);
-        if !(radius > 0.0 && radius.is_finite()) {
-            return Err(Diagnostic::error(e.name_span, format!("\"radius\" must be positive, not {radius}")));
-        }
+        let over = |name: &str, value: u64, limit: u64, what: &str| -> Res<()> {
+            if value <= limit {
+                return Ok(());
+            }
+            let at = p.named(name).map_or(e.name_span, |x| x.value_span);
+            Err(Diagnostic::error(at, Limits::over(format!("{what} {value}"), name_of_limit(name), limit)))
+        };
+        over("maxdepth", max_depth as u64, limits.max_depth, "maxdepth")?;
+        over("photonsperiteration", photons, limits.photons, "photonsperiteration")?;
+        let radius = values::float(p, "radius", 1.0, Range::Positive)?;
         let seed = match p.int("seed")? {
             Some(s) => s as u64,
             None => self.seed_option.unwrap_or(0),
         };
-        p.mark_known(&["imagewritefrequency"]);
+        values::no_effect(p, &["imagewritefrequency"]);
         if e.name != "sppm" {
             p.mark_all_used();
         }
@@ -308,6 +338,14 @@ impl RenderOptions {
             return Err(Diagnostic::error(s.name_span, format!("\"pixelsamples\" must be at least 1, not {n}")));
         }
         Ok(n as u32)
+    }
+}
+
+/// The `--limit` name for an Integrator parameter.
+fn name_of_limit(param: &str) -> &'static str {
+    match param {
+        "maxdepth" => "maxdepth",
+        _ => "photons",
     }
 }
 

@@ -4,13 +4,19 @@
 //! `nx ny nz`, and texture coordinates from the first pair present of `u v`, `s t`,
 //! `texture_u texture_v`, `texture_s texture_t`; faces from `vertex_indices` (or
 //! `vertex_index`) lists of 3 or 4 entries, quads split as pbrt-v3 does: (a,b,c), (d,a,c);
-//! optional `face_indices`. The header (and ASCII payloads) go through ply-rs; binary
-//! payloads are decoded straight from the bytes.
+//! optional `face_indices`. The header is read here, and every count in it checked
+//! against the bytes that follow, before anything is allocated; ASCII payloads then go
+//! through ply-rs and binary payloads are decoded straight from the bytes.
+//!
+//! Errors name the element: `face 12 has 5 vertices (pbrt reads triangles and quads)`.
 
+use crate::limits::Limits;
 use crate::shapes::TriangleMesh;
 use ply_rs::parser::Parser;
-use ply_rs::ply::{Encoding, Header, Property, PropertyAccess, PropertyType, ScalarType};
-use std::io::{BufRead, Read};
+use ply_rs::ply::{
+    Addable, ElementDef, Encoding, Header, Property, PropertyAccess, PropertyDef, PropertyType, ScalarType,
+};
+use std::io::BufRead;
 
 /// Per-vertex slots: x y z nx ny nz, then the four texture coordinate pairs.
 const VERTEX_NAMES: [&str; 14] =
@@ -29,26 +35,15 @@ struct Collected {
     /// `face_indices` per triangle, when the file has them.
     tri_ids: Vec<i32>,
     faces: usize,
-    skipped_faces: usize,
 }
 
 /// Loads a PLY file. Errors are plain messages; the caller adds the location.
-pub fn load(path: &std::path::Path) -> Result<(TriangleMesh, Vec<String>), String> {
-    let raw = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
-    let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
-        let mut out = Vec::new();
-        flate2::read::MultiGzDecoder::new(&raw[..])
-            .read_to_end(&mut out)
-            .map_err(|e| format!("cannot decompress: {e}"))?;
-        out
-    } else {
-        raw
-    };
-    let mut reader = &bytes[..];
-    let header = Parser::<AsciiVertex>::new()
-        .read_header(&mut reader)
-        .map_err(|e| format!("bad PLY header: {}", first_line(&e)))?;
+pub fn load(path: &std::path::Path, limits: &Limits) -> Result<TriangleMesh, String> {
+    let bytes = crate::limits::read_file(path, limits)?;
+    let (header, body) = read_header(&bytes)?;
     check_header(&header)?;
+    check_counts(&header, body.len())?;
+    let mut reader = body;
     let mut got = Collected::default();
     match header.encoding {
         Encoding::Ascii => read_ascii(&mut reader, &header, &mut got)?,
@@ -56,6 +51,108 @@ pub fn load(path: &std::path::Path) -> Result<(TriangleMesh, Vec<String>), Strin
         Encoding::BinaryBigEndian => read_binary::<true>(reader, &header, &mut got)?,
     }
     build(&header, got)
+}
+
+/// Parses the header (up to and including `end_header`'s line break); returns it and
+/// the payload bytes.
+fn read_header(bytes: &[u8]) -> Result<(Header, &[u8]), String> {
+    const MAX_HEADER: usize = 1 << 20;
+    let mut header = Header::new();
+    let mut format = None;
+    let mut pos = 0;
+    for n in 1.. {
+        let end = bytes[pos..].iter().position(|&c| c == b'\n').map(|e| pos + e + 1);
+        let Some(end) = end.filter(|&e| e <= MAX_HEADER) else {
+            return Err("bad PLY header: no end_header line".into());
+        };
+        let line =
+            std::str::from_utf8(&bytes[pos..end]).map_err(|_| format!("bad PLY header: line {n} is not text"))?;
+        pos = end;
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let bad = |why: &str| Err(format!("bad PLY header, line {n} (\"{}\"): {why}", line.trim_end()));
+        match words.as_slice() {
+            ["ply"] if n == 1 => {}
+            _ if n == 1 => return bad("a PLY file starts with \"ply\""),
+            ["format", enc, version] => {
+                let e = match *enc {
+                    "ascii" => Encoding::Ascii,
+                    "binary_little_endian" => Encoding::BinaryLittleEndian,
+                    "binary_big_endian" => Encoding::BinaryBigEndian,
+                    _ => return bad("unknown format"),
+                };
+                if *version != "1.0" {
+                    return bad("only PLY version 1.0 is read");
+                }
+                format = Some(e);
+            }
+            ["comment", ..] | ["obj_info", ..] | [] => {}
+            ["element", name, count] => {
+                let Ok(count) = count.parse::<usize>() else { return bad("the count is not a whole number that fits") };
+                let mut e = ElementDef::new(name.to_string());
+                e.count = count;
+                header.elements.add(e);
+            }
+            ["property", rest @ ..] => {
+                let (ty, name) = match rest {
+                    ["list", count, item, name] => match (scalar_type(count), scalar_type(item)) {
+                        (Some(c), Some(i)) => (PropertyType::List(c, i), name),
+                        _ => return bad("unknown list types"),
+                    },
+                    [ty, name] => match scalar_type(ty) {
+                        Some(t) => (PropertyType::Scalar(t), name),
+                        None => return bad("unknown property type"),
+                    },
+                    _ => return bad("expected \"property TYPE NAME\" or \"property list COUNT ITEM NAME\""),
+                };
+                let Some((_, mut e)) = header.elements.pop_back() else { return bad("a property before any element") };
+                e.properties.add(PropertyDef::new(name.to_string(), ty));
+                header.elements.add(e);
+            }
+            ["end_header"] => break,
+            _ => return bad("unknown header line"),
+        }
+    }
+    header.encoding = format.ok_or("bad PLY header: no format line")?;
+    Ok((header, &bytes[pos..]))
+}
+
+fn scalar_type(t: &str) -> Option<ScalarType> {
+    Some(match t {
+        "char" | "int8" => ScalarType::Char,
+        "uchar" | "uint8" => ScalarType::UChar,
+        "short" | "int16" => ScalarType::Short,
+        "ushort" | "uint16" => ScalarType::UShort,
+        "int" | "int32" => ScalarType::Int,
+        "uint" | "uint32" => ScalarType::UInt,
+        "float" | "float32" => ScalarType::Float,
+        "double" | "float64" => ScalarType::Double,
+        _ => return None,
+    })
+}
+
+/// Every element count against the bytes present: a binary element takes at least its
+/// scalars' bytes (a list at least its count), an ASCII one at least two bytes a value.
+fn check_counts(header: &Header, payload: usize) -> Result<(), String> {
+    let mut need: u128 = 0;
+    for (name, def) in &header.elements {
+        let per: u128 = def
+            .properties
+            .values()
+            .map(|p| match (&header.encoding, &p.data_type) {
+                (Encoding::Ascii, _) => 2,
+                (_, PropertyType::Scalar(t)) => scalar_size(t) as u128,
+                (_, PropertyType::List(c, _)) => scalar_size(c) as u128,
+            })
+            .sum();
+        need += per * def.count as u128;
+        if need > payload as u128 {
+            return Err(format!(
+                "the header declares {} \"{name}\" elements, more than the {payload} bytes after it can hold",
+                def.count
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// ply-rs messages run over several lines; the first one says what and where.
@@ -77,10 +174,9 @@ fn check_header(header: &Header) -> Result<(), String> {
     }
 }
 
-fn build(header: &Header, got: Collected) -> Result<(TriangleMesh, Vec<String>), String> {
+fn build(header: &Header, got: Collected) -> Result<TriangleMesh, String> {
     let names = vertex_property_names(header);
     let has = |n: &str| names.contains(&n);
-    let mut warnings = Vec::new();
     let mut mesh = TriangleMesh { p: got.vertices.iter().map(|v| [v[0], v[1], v[2]]).collect(), ..Default::default() };
     if has("nx") && has("ny") && has("nz") {
         mesh.n = Some(got.vertices.iter().map(|v| [v[3], v[4], v[5]]).collect());
@@ -92,17 +188,15 @@ fn build(header: &Header, got: Collected) -> Result<(TriangleMesh, Vec<String>),
         mesh.uv = Some(got.vertices.iter().map(|v| [v[slot], v[slot + 1]]).collect());
     }
     let n_v = mesh.p.len() as i64;
-    if let Some(&bad) = got.tris.iter().find(|&&i| i < 0 || i >= n_v) {
-        return Err(format!("a face has vertex index {bad}, but there are {n_v} vertices"));
+    if let Some(k) = got.tris.iter().position(|&i| i < 0 || i >= n_v) {
+        let bad = got.tris[k];
+        return Err(format!("triangle {} has vertex index {bad}, but there are {n_v} vertices", k / 3));
     }
     mesh.indices = got.tris.iter().map(|&i| i as u32).collect();
     if got.tri_ids.len() == mesh.triangle_count() && got.faces > 0 {
         mesh.face_indices = Some(got.tri_ids);
     }
-    if got.skipped_faces > 0 {
-        warnings.push(format!("{} faces with other than 3 or 4 vertices were skipped", got.skipped_faces));
-    }
-    Ok((mesh, warnings))
+    Ok(mesh)
 }
 
 // ---- ASCII, through ply-rs -------------------------------------------------------
@@ -121,15 +215,14 @@ impl PropertyAccess for AsciiVertex {
     }
 }
 
-#[derive(Default)]
 struct AsciiFace {
-    indices: Vec<i64>,
+    indices: Result<Vec<i64>, String>,
     id: Option<i64>,
 }
 
 impl PropertyAccess for AsciiFace {
     fn new() -> Self {
-        AsciiFace::default()
+        AsciiFace { indices: Ok(Vec::new()), id: None }
     }
     fn set_property(&mut self, name: String, p: Property) {
         match name.as_str() {
@@ -162,16 +255,26 @@ fn scalar(p: &Property) -> Option<f64> {
     })
 }
 
-fn list(p: &Property) -> Vec<i64> {
-    match p {
+/// A vertex index list; float lists must hold whole numbers.
+fn list(p: &Property) -> Result<Vec<i64>, String> {
+    let whole = |x: f64| {
+        if x.fract() == 0.0 && x.abs() < 9e15 {
+            Ok(x as i64)
+        } else {
+            Err(format!("vertex index {x} is not a whole number"))
+        }
+    };
+    Ok(match p {
         Property::ListChar(v) => v.iter().map(|&x| x as i64).collect(),
         Property::ListUChar(v) => v.iter().map(|&x| x as i64).collect(),
         Property::ListShort(v) => v.iter().map(|&x| x as i64).collect(),
         Property::ListUShort(v) => v.iter().map(|&x| x as i64).collect(),
         Property::ListInt(v) => v.iter().map(|&x| x as i64).collect(),
         Property::ListUInt(v) => v.iter().map(|&x| x as i64).collect(),
+        Property::ListFloat(v) => v.iter().map(|&x| whole(x as f64)).collect::<Result<_, _>>()?,
+        Property::ListDouble(v) => v.iter().map(|&x| whole(x)).collect::<Result<_, _>>()?,
         _ => Vec::new(),
-    }
+    })
 }
 
 fn read_ascii(reader: &mut impl BufRead, header: &Header, got: &mut Collected) -> Result<(), String> {
@@ -185,7 +288,8 @@ fn read_ascii(reader: &mut impl BufRead, header: &Header, got: &mut Collected) -
             "face" => {
                 let faces = Parser::<AsciiFace>::new().read_payload_for_element(reader, def, header).map_err(err)?;
                 for f in faces {
-                    push_face(got, &f.indices, f.id);
+                    let indices = f.indices.map_err(|e| format!("face {}: {e}", got.faces))?;
+                    push_face(got, &indices, f.id)?;
                 }
             }
             _ => {
@@ -197,14 +301,11 @@ fn read_ascii(reader: &mut impl BufRead, header: &Header, got: &mut Collected) -
 }
 
 /// Triangles (a,b,c), and for quads also (d,a,c) as pbrt-v3 splits them.
-fn push_face(got: &mut Collected, f: &[i64], id: Option<i64>) {
+fn push_face(got: &mut Collected, f: &[i64], id: Option<i64>) -> Result<(), String> {
     let tris: &[[usize; 3]] = match f.len() {
         3 => &[[0, 1, 2]],
         4 => &[[0, 1, 2], [3, 0, 2]],
-        _ => {
-            got.skipped_faces += 1;
-            return;
-        }
+        n => return Err(format!("face {} has {n} vertices (pbrt reads triangles and quads)", got.faces)),
     };
     got.faces += 1;
     for t in tris {
@@ -213,6 +314,7 @@ fn push_face(got: &mut Collected, f: &[i64], id: Option<i64>) {
             got.tri_ids.push(id as i32);
         }
     }
+    Ok(())
 }
 
 // ---- binary, decoded from the byte slice ------------------------------------------
@@ -297,7 +399,7 @@ fn read_binary<const BIG: bool>(data: &[u8], header: &Header, got: &mut Collecte
                         }
                     }
                     if is_face {
-                        push_face(got, &indices, id);
+                        push_face(got, &indices, id)?;
                     }
                 }
             }
@@ -320,7 +422,11 @@ fn read_value<const BIG: bool>(b: &mut Bytes<'_, BIG>, ty: &PropertyType, list: 
                 return Err("PLY file ends early".into());
             }
             for _ in 0..n {
-                list.push(b.scalar(item_ty)? as i64);
+                let x = b.scalar(item_ty)?;
+                if x.fract() != 0.0 || x.abs() >= 9e15 {
+                    return Err(format!("vertex index {x} is not a whole number"));
+                }
+                list.push(x as i64);
             }
             Ok(n as f64)
         }

@@ -8,6 +8,7 @@
 //! ```
 
 use super::{mesh, obj, ply};
+use crate::limits::Limits;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList};
 use crate::parser::source::Span;
@@ -29,9 +30,9 @@ pub fn build(
     p: &ParamList,
     span: Span,
     resolve: &dyn Fn(&str) -> PathBuf,
+    limits: &Limits,
     warn: &mut Vec<Diagnostic>,
 ) -> Res<Option<Built>> {
-    check_alpha(p, span, warn)?;
     let q = |q| Ok(Some(Built::Quadric(q)));
     match ty {
         "sphere" => {
@@ -79,7 +80,7 @@ pub fn build(
             let m = mesh::from_params(p, span, warn)?;
             Ok(Some(Built::Mesh { mesh: m, kind: "trianglemesh", filename: None }))
         }
-        "plymesh" | "objmesh" => file_mesh(ty, p, span, resolve, warn).map(Some),
+        "plymesh" | "objmesh" => file_mesh(ty, p, span, resolve, limits, warn).map(Some),
         _ => Ok(None),
     }
 }
@@ -89,6 +90,7 @@ fn file_mesh(
     p: &ParamList,
     span: Span,
     resolve: &dyn Fn(&str) -> PathBuf,
+    limits: &Limits,
     warn: &mut Vec<Diagnostic>,
 ) -> Res<Built> {
     let name =
@@ -96,11 +98,9 @@ fn file_mesh(
     let at = p.named("filename").map_or(span, |f| f.value_span);
     let path = resolve(&name);
     let mut m = if ty == "plymesh" {
-        let (m, notes) = ply::load(&path).map_err(|e| Diagnostic::error(at, format!("{name}: {e}")))?;
-        warn.extend(notes.into_iter().map(|n| Diagnostic::warning(at, format!("{name}: {n}"))));
-        m
+        ply::load(&path, limits).map_err(|e| Diagnostic::error(at, format!("{name}: {e}")))?
     } else {
-        obj::load(&path).map_err(|e| Diagnostic::error(at, e))?
+        obj::load(&path, limits).map_err(|e| Diagnostic::error(at, e))?
     };
     if let Some(d) = p.named("displacement") {
         d.mark_used();
@@ -131,17 +131,14 @@ fn positive(p: &ParamList, name: &str, default: f32, span: Span) -> Res<f32> {
     Ok(v)
 }
 
-/// Alpha masks are not supported: anything but a constant 1 is warned about.
-fn check_alpha(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Res<()> {
+/// The span of an `alpha`/`shadowalpha` mask other than a constant 1, if any (masks
+/// are not supported: the shape is opaque).
+pub fn alpha_mask(p: &ParamList) -> Res<Option<Span>> {
     for name in ["alpha", "shadowalpha"] {
         match p.float_or_texture(name)? {
-            Some(FloatValue::Const(1.0)) => {}
-            Some(_) => warn.push(Diagnostic::warning(
-                p.named(name).map_or(span, |x| x.span),
-                format!("\"{name}\" masks are not supported; the shape is opaque"),
-            )),
-            None => {}
+            None | Some(FloatValue::Const(1.0)) => {}
+            Some(_) => return Ok(p.named(name).map(|x| x.span)),
         }
     }
-    Ok(())
+    Ok(None)
 }

@@ -283,10 +283,13 @@ fn named_materials_are_scoped_like_v3_and_resolve_forward_like_v4() {
         Material "hair" Shape "disk""#,
     );
     let tys: Vec<&str> = s.shapes.iter().map(|x| s.materials[x.material as usize].ty.as_str()).collect();
-    assert_eq!(tys, ["mirror", "matte", "glass", "diffuse"]);
+    assert_eq!(tys, ["mirror", "matte", "glass", "hair"]);
     let what: Vec<&str> = s.skipped.iter().map(|k| k.what.as_str()).collect();
     assert!(what.contains(&"MakeNamedMaterial \"unused\""), "{what:?}");
-    assert!(what.contains(&"material \"hair\""), "{what:?}");
+    let grey =
+        pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: pbrt_sppm::scene::TexValue::Const([0.5; 3].into()) };
+    assert_eq!(s.materials[3].kind, grey, "an unsupported material is drawn grey diffuse");
+    assert_eq!(s.approximated.iter().map(|a| a.what.as_str()).collect::<Vec<_>>(), ["material \"hair\""]);
     assert_eq!(s.materials.len(), 4, "only used materials are built");
 }
 
@@ -299,16 +302,20 @@ fn textures_are_built_only_when_a_used_material_needs_them() {
         Texture "lonely" "float" "constant" "float value" 1
         Texture "odd" "float" "wrinkled"
         Material "diffuse" "texture reflectance" "checks" "texture displacement" "odd"
-        Shape "sphere"
-        Material "matte" "texture Kd" "missing"
         Shape "sphere""#,
     );
     let names: Vec<&str> = s.textures.iter().map(|t| t.name.as_str()).collect();
     assert_eq!(names, ["inner", "checks"]);
-    assert_eq!(s.materials[0].textures, [("reflectance".to_string(), 1)]);
+    use pbrt_sppm::scene::{MaterialKind, TexValue};
+    assert_eq!(s.materials[0].kind, MaterialKind::Diffuse { reflectance: TexValue::Texture(1) });
     let what: Vec<&str> = s.skipped.iter().map(|k| k.what.as_str()).collect();
-    assert_eq!(what, ["Texture \"odd\" of class \"wrinkled\"", "Texture \"lonely\""]);
-    assert!(warnings(&s).iter().any(|w| w.contains("texture \"missing\" is not defined")));
+    assert_eq!(what, ["Texture \"lonely\"", "Texture \"odd\""], "displacement is not built");
+    let how: Vec<&str> = s.approximated.iter().map(|a| a.what.as_str()).collect();
+    assert_eq!(how, ["\"displacement\" of material \"diffuse\""]);
+    let e = crate::common::load("WorldBegin Material \"matte\" \"texture Kd\" \"missing\" Shape \"sphere\"")
+        .unwrap_err()
+        .one_line();
+    assert!(e.ends_with("error: spectrum texture \"missing\" is not defined"), "{e}");
 }
 
 #[test]
@@ -373,7 +380,7 @@ fn syntax_detection_and_override() {
     let forced = pbrt_sppm::scene::load_scene_from_bytes(
         std::path::Path::new("x.pbrt"),
         b"Film \"image\"\nWorldBegin\n".to_vec(),
-        &LoadOptions { syntax: Some(Syntax::V4) },
+        &LoadOptions { syntax: Some(Syntax::V4), ..Default::default() },
     )
     .unwrap();
     assert_eq!((forced.syntax, forced.integrator.iterations), (Syntax::V4, 16));
@@ -381,15 +388,14 @@ fn syntax_detection_and_override() {
 
 #[test]
 fn unused_parameters_are_warned_at_their_own_location() {
-    let s = scene("WorldBegin\nShape \"sphere\" \"float radius\" 2\n  \"float radiuss\" 3 \"integer zmin\" 0\n");
+    let s = scene("WorldBegin\nShape \"sphere\" \"float radius\" 2\n  \"float radiuss\" 3 \"rgb Kd\" [1 0 0]\n");
     let w: Vec<(u32, u32, &str)> = s.warnings.iter().map(|w| (w.line, w.column, w.message.as_str())).collect();
-    assert_eq!(
-        w,
-        [
-            (3, 3, "parameter \"float radiuss\" is not used"),
-            (3, 21, "parameter \"integer zmin\" is not used (expected type \"float\")"),
-        ]
-    );
+    assert_eq!(w, [(3, 3, "parameter \"float radiuss\" is not used"), (3, 21, "parameter \"rgb Kd\" is not used")]);
+    // A parameter a lookup asked for with another type is an error, not a warning.
+    let e = crate::common::load("WorldBegin\nShape \"sphere\" \"integer zmin\" 0\n").unwrap_err().one_line();
+    assert!(e.ends_with("2:16: error: parameter \"integer zmin\" has the wrong type: expected \"float\""), "{e}");
+    let e = crate::common::load("WorldBegin\nMaterial \"matte\" \"float Kd\" 0.5 Shape \"disk\"\n").unwrap_err();
+    assert!(e.one_line().contains("\"float Kd\" has the wrong type: expected \"rgb\""), "{}", e.one_line());
 }
 
 #[test]

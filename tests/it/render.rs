@@ -211,18 +211,27 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
     std::fs::write(
         &path,
         "WorldBegin Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"quad.exr\" \"string wrap\" \"clamp\" \
-         Material \"diffuse\" \"texture reflectance\" \"t\" Shape \"sphere\" \
-         Texture \"gone\" \"spectrum\" \"imagemap\" \"string filename\" \"missing.png\" \
-         Material \"diffuse\" \"texture reflectance\" \"gone\" Shape \"disk\"",
+         Material \"diffuse\" \"texture reflectance\" \"t\" Shape \"sphere\"",
     )
     .unwrap();
     let rs = RenderScene::new(crate::common::load_file(&path).unwrap());
     let pbrt_sppm::materials::Material::Diffuse { kd } = &rs.materials[0] else { panic!("diffuse") };
-    assert_eq!(kd.eval([0.25, 0.25]).to_array(), [0.0, 0.0, 1.0], "bottom-left is blue");
-    assert_eq!(kd.eval([0.75, 0.75]).to_array(), [0.0, 1.0, 0.0], "top-right is green");
-    let pbrt_sppm::materials::Material::Diffuse { kd } = &rs.materials[1] else { panic!("diffuse") };
-    assert_eq!(kd.eval([0.5, 0.5]).to_array(), [0.5, 0.5, 0.5], "an unreadable image becomes 0.5");
-    assert!(rs.warnings.iter().any(|w| w.contains("missing.png")), "{:?}", rs.warnings);
+    assert_eq!(rs.textures.eval(*kd, [0.25, 0.25]).to_array(), [0.0, 0.0, 1.0], "bottom-left is blue");
+    assert_eq!(rs.textures.eval(*kd, [0.75, 0.75]).to_array(), [0.0, 1.0, 0.0], "top-right is green");
+    std::fs::write(
+        &path,
+        "WorldBegin Texture \"gone\" \"spectrum\" \"imagemap\" \"string filename\" \"missing.png\" \
+         Material \"diffuse\" \"texture reflectance\" \"gone\" Shape \"disk\"",
+    )
+    .unwrap();
+    // An image that cannot be read is drawn as 0.5, and noted where it is named.
+    let s = crate::common::load_file(&path).unwrap();
+    assert_eq!(s.approximated.len(), 1, "{:?}", s.approximated);
+    let a = &s.approximated[0];
+    assert!(a.what.contains("missing.png") && (a.line, a.column) == (1, 67), "{a:?}");
+    let rs = RenderScene::new(s);
+    let pbrt_sppm::materials::Material::Diffuse { kd } = &rs.materials[0] else { panic!("diffuse") };
+    assert_eq!(rs.textures.eval(*kd, [0.3, 0.3]).to_array(), [0.5; 3]);
 }
 
 #[test]

@@ -209,7 +209,12 @@ fn unsupported_shapes_are_skipped_with_one_warning() {
     let msgs: Vec<&str> = s.warnings.iter().map(|w| w.message.as_str()).collect();
     assert_eq!(
         msgs,
-        ["Shape \"curve\": this shape type is not supported", "\"alpha\" masks are not supported; the shape is opaque"]
+        [
+            "Shape \"curve\": this shape type is not supported",
+            "\"alpha\" of Shape \"sphere\": alpha masks are not supported; the shape is opaque"
+        ]
     );
+    assert_eq!(s.approximated.len(), 1);
+    assert_eq!((s.approximated[0].line, s.approximated[0].column), (3, 16));
     assert!(root().exists());
 }

@@ -1,0 +1,143 @@
+//! Limits on what a scene may ask for, checked before anything is allocated.
+//!
+//! ```text
+//! pbrt-sppm scene.pbrt --limit pixels=1e9 --limit file-bytes=8e9
+//! ```
+//! A scene that goes past a limit gets a located error naming the limit and the flag
+//! that raises it, never an out-of-memory abort. Files are read only when they are
+//! regular files (so `/dev/zero`, FIFOs and folders are refused) of at most
+//! `file-bytes`, and gzip streams are decompressed to at most `file-bytes` too.
+
+use std::io::Read;
+use std::path::Path;
+
+/// The limits in force for one run; `--limit NAME=N` changes one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Film pixels (the crop window's).
+    pub pixels: u64,
+    /// Photons per SPPM iteration.
+    pub photons: u64,
+    /// SPPM iterations.
+    pub iterations: u64,
+    /// `maxdepth`.
+    pub max_depth: u64,
+    /// Bytes of any one file read (scene, Include, Import, PLY, OBJ, image), and of what
+    /// a gzip file decompresses to.
+    pub file_bytes: u64,
+    /// Pixels of one texture or environment image.
+    pub texture_pixels: u64,
+    /// Nested `Include`/`Import` files.
+    pub include_depth: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Limits {
+        Limits {
+            pixels: 1 << 28,
+            photons: 1 << 28,
+            iterations: 1 << 24,
+            max_depth: 1 << 16,
+            file_bytes: (1 << 32) - 1,
+            texture_pixels: 1 << 28,
+            include_depth: 64,
+        }
+    }
+}
+
+/// Every limit: its name on the command line and what it bounds.
+pub const NAMES: [(&str, &str); 7] = [
+    ("pixels", "film pixels"),
+    ("photons", "photons per iteration"),
+    ("iterations", "SPPM iterations"),
+    ("maxdepth", "maxdepth"),
+    ("file-bytes", "bytes of one input file (after gzip decompression)"),
+    ("texture-pixels", "pixels of one texture image"),
+    ("include-depth", "nested Include/Import files"),
+];
+
+impl Limits {
+    fn slot(&mut self, name: &str) -> Option<&mut u64> {
+        Some(match name {
+            "pixels" => &mut self.pixels,
+            "photons" => &mut self.photons,
+            "iterations" => &mut self.iterations,
+            "maxdepth" => &mut self.max_depth,
+            "file-bytes" => &mut self.file_bytes,
+            "texture-pixels" => &mut self.texture_pixels,
+            "include-depth" => &mut self.include_depth,
+            _ => return None,
+        })
+    }
+
+    /// Applies `NAME=N` (N may be written `1e9`).
+    pub fn set(&mut self, spec: &str) -> Result<(), String> {
+        let names = || NAMES.map(|n| n.0).join(", ");
+        let (name, value) =
+            spec.split_once('=').ok_or_else(|| format!("expected NAME=N, not \"{spec}\" (names: {})", names()))?;
+        let n: f64 = value.trim().parse().map_err(|_| format!("limit {name}: \"{value}\" is not a number"))?;
+        if !(n >= 0.0 && n.fract() == 0.0 && n < 1.8e19) {
+            return Err(format!("limit {name}: {value} is not a whole number of at least 0"));
+        }
+        let slot = self.slot(name.trim()).ok_or_else(|| format!("unknown limit \"{name}\" (names: {})", names()))?;
+        *slot = n as u64;
+        Ok(())
+    }
+
+    /// `"{what} is over the limit of N (raise it with --limit NAME=N)"`.
+    pub fn over(what: impl std::fmt::Display, name: &str, limit: u64) -> String {
+        format!("{what} is over the limit of {limit} (raise it with --limit {name}=N)")
+    }
+}
+
+/// Reads a whole input file: a regular file of at most `limits.file_bytes`, gunzipped
+/// (to at most as many bytes) when it starts with the gzip magic.
+pub fn read_file(path: &Path, limits: &Limits) -> Result<Vec<u8>, String> {
+    let shown = path.display();
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
+    if !meta.is_file() {
+        return Err(format!("cannot read \"{shown}\": not a regular file"));
+    }
+    if meta.len() > limits.file_bytes {
+        let what = format!("\"{shown}\" has {} bytes, which", meta.len());
+        return Err(Limits::over(what, "file-bytes", limits.file_bytes));
+    }
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
+    let mut raw = Vec::new();
+    // The size can change between the check and the read (a growing file): read at most
+    // one byte past the limit to notice.
+    file.take(limits.file_bytes + 1).read_to_end(&mut raw).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
+    if raw.len() as u64 > limits.file_bytes {
+        return Err(Limits::over(format!("\"{shown}\" grew while being read and"), "file-bytes", limits.file_bytes));
+    }
+    if raw.starts_with(&[0x1f, 0x8b]) { gunzip(&raw, limits).map_err(|e| format!("\"{shown}\": {e}")) } else { Ok(raw) }
+}
+
+/// Decompresses a gzip stream (several members allowed) to at most `file_bytes`.
+pub fn gunzip(raw: &[u8], limits: &Limits) -> Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    flate2::read::MultiGzDecoder::new(raw)
+        .take(limits.file_bytes + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| format!("cannot decompress (corrupt or truncated gzip data): {e}"))?;
+    if out.len() as u64 > limits.file_bytes {
+        return Err(Limits::over("the decompressed data", "file-bytes", limits.file_bytes));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn limits_are_set_by_name() {
+        let mut l = Limits::default();
+        assert_eq!(l.set("pixels=1e9"), Ok(()));
+        assert_eq!(l.pixels, 1_000_000_000);
+        assert!(l.set("pixles=3").unwrap_err().contains("unknown limit"));
+        assert!(l.set("photons=-1").is_err());
+        assert!(l.set("photons=1.5").is_err());
+        assert!(l.set("photons").is_err());
+    }
+}

@@ -1,0 +1,68 @@
+//! What we render differently from what a scene file says: one kind per way, with the
+//! text `check`, the renderer and the README all use (a test holds the README to it).
+//!
+//! ```text
+//! Material "plastic" "rgb Kd" [.4 .1 .1]     # approximated: rendered as its diffuse part
+//! Material "glass" "float uroughness" .1     # approximated: rendered as smooth glass
+//! ```
+
+/// One way of rendering something other than as written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Approx {
+    DiffusePart,
+    UnsupportedMaterial,
+    UnsupportedTexture,
+    MissingImage,
+    RoughDielectric,
+    OrenNayar,
+    BumpMap,
+    TextureAtCentre,
+    TextureMapping,
+    AlphaMask,
+    Motion,
+    Camera,
+    FilmType,
+    ColorSpace,
+    EqualAreaMap,
+}
+
+impl Approx {
+    pub const ALL: [Approx; 15] = [
+        Approx::DiffusePart,
+        Approx::UnsupportedMaterial,
+        Approx::UnsupportedTexture,
+        Approx::MissingImage,
+        Approx::RoughDielectric,
+        Approx::OrenNayar,
+        Approx::BumpMap,
+        Approx::TextureAtCentre,
+        Approx::TextureMapping,
+        Approx::AlphaMask,
+        Approx::Motion,
+        Approx::Camera,
+        Approx::FilmType,
+        Approx::ColorSpace,
+        Approx::EqualAreaMap,
+    ];
+
+    /// How it is rendered instead (the README lists these texts).
+    pub fn how(self) -> &'static str {
+        match self {
+            Approx::DiffusePart => "rendered as its diffuse part; the glossy coat or specular layer is left out",
+            Approx::UnsupportedMaterial => "this material type is not supported; rendered as diffuse 0.5",
+            Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
+            Approx::MissingImage => "the image cannot be read; a constant 0.5 (a constant sky for maps) is used",
+            Approx::RoughDielectric => "rough dielectrics are rendered smooth",
+            Approx::OrenNayar => "Oren–Nayar roughness is not supported; rendered Lambertian",
+            Approx::BumpMap => "bump, displacement and normal maps are not supported; the surface is left smooth",
+            Approx::TextureAtCentre => "this input can only be constant; the texture is taken at (u, v) = (0.5, 0.5)",
+            Approx::TextureMapping => "only 2D (u, v) texture mappings are supported; (u, v) is used",
+            Approx::AlphaMask => "alpha masks are not supported; the shape is opaque",
+            Approx::Motion => "animated transforms are not supported; the start transform is used",
+            Approx::Camera => "this camera type is not supported; a perspective camera is used",
+            Approx::FilmType => "written as an RGB film (R, G, B channels only)",
+            Approx::ColorSpace => "only sRGB is supported; RGB values are taken as sRGB",
+            Approx::EqualAreaMap => "pbrt-v4's equal-area environment maps are read as equirectangular ones",
+        }
+    }
+}

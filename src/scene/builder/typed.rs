@@ -1,0 +1,260 @@
+//! The builder's second half: lights, area lights, materials and textures become typed
+//! descriptions once the whole file is read (the syntax version decides some
+//! meanings), and only those something uses. Texture references follow v3 scoping,
+//! then v4 forward references; a texture that refers to itself is an error.
+
+use super::{Builder, Res, Scope};
+use crate::imageio::RgbImage;
+use crate::parser::Syntax;
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::parser::stmt::Entity;
+use crate::scene::approx::Approx;
+use crate::scene::lights::{self, LightContext, LightDesc};
+use crate::scene::materials::{self, MaterialDesc, Resolver, TexValue, TextureDesc};
+use crate::scene::values::SpectrumContext;
+use glam::Vec3;
+use std::rc::Rc;
+use std::sync::Arc;
+
+/// Textures may refer to textures this deep (a chain of definitions), no deeper.
+const TEXTURE_DEPTH: usize = 64;
+/// Texture lookups one evaluation may make (a texture used twice by another counts
+/// twice), so a few shared definitions cannot make shading exponentially slow.
+const TEXTURE_LOOKUPS: u64 = 100_000;
+
+/// The builder as a [`Resolver`] for one material's or texture's scope.
+struct Scoped<'b> {
+    b: &'b mut Builder,
+    scope: Rc<Scope>,
+    depth: usize,
+}
+
+impl Builder {
+    pub(super) fn syntax(&self) -> Syntax {
+        self.syntax.unwrap_or(Syntax::V4)
+    }
+
+    fn spectrum_context(&self, lights: bool) -> SpectrumContext<'_> {
+        SpectrumContext {
+            base_dir: self.reader.base_dir(),
+            normalize_blackbody: lights && self.syntax() == Syntax::V4,
+            limits: &self.reader.limits,
+        }
+    }
+
+    /// An image by scene-relative name, read once, its size checked before decoding.
+    pub(super) fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String> {
+        let path = self.reader.resolve_path(name);
+        if let Some(img) = self.images.get(&path) {
+            return Ok(img.clone());
+        }
+        let img = Arc::new(crate::imageio::read_image_within(&path, &self.reader.limits)?);
+        self.images.insert(path, img.clone());
+        Ok(img)
+    }
+
+    /// Every `LightSource` of a supported type, typed.
+    pub(super) fn build_lights(&mut self) -> Res<Vec<LightDesc>> {
+        let pending = std::mem::take(&mut self.pending_lights);
+        let mut out = Vec::new();
+        for (e, ctm) in pending {
+            if self.syntax() == Syntax::V4 && e.name == "infinite" && e.params.named("filename").is_some() {
+                let at = e.params.named("filename").map_or(e.name_span, |p| p.span);
+                self.note(at, "environment map".into(), Approx::EqualAreaMap);
+            }
+            let (limits, base) = (self.reader.limits, self.reader.base_dir().to_path_buf());
+            let mut warnings = Vec::new();
+            let mut missing = Vec::new();
+            let kind = {
+                let syntax = self.syntax();
+                let mut note_missing = |at: Span, what: String| missing.push((at, what));
+                let mut images = |n: &str| self.image(n);
+                let mut ctx = LightContext {
+                    syntax,
+                    spectra: SpectrumContext {
+                        base_dir: &base,
+                        normalize_blackbody: syntax == Syntax::V4,
+                        limits: &limits,
+                    },
+                    image: &mut images,
+                    warnings: &mut warnings,
+                    missing: &mut note_missing,
+                };
+                lights::light(&e.name, &e.params, &ctm, e.name_span, &mut ctx)
+            };
+            self.warnings.append(&mut warnings);
+            for (at, what) in missing {
+                self.note(at, what, Approx::MissingImage);
+            }
+            let kind = kind?;
+            match kind {
+                Some(kind) => {
+                    finish_params(&e.params, &mut self.warnings)?;
+                    out.push(LightDesc { kind, world_from_light: ctm });
+                }
+                None => {
+                    let what = format!("LightSource \"{}\"", e.name);
+                    self.skip(e.name_span, what, "this light type is not supported".into());
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The area lights some world shape used, in the order of their indices.
+    pub(super) fn build_area_lights(&mut self) -> Res<Vec<lights::AreaLightDesc>> {
+        let used = std::mem::take(&mut self.area_lights_used);
+        let mut out = Vec::with_capacity(used.len());
+        for i in used {
+            let e = std::mem::replace(&mut self.area_light_entities[i as usize].0, Entity::default_named(""));
+            let mut no_image = |_: &str| Err::<Arc<RgbImage>, String>(String::new());
+            let mut no_note = |_: Span, _: String| {};
+            let mut warnings = Vec::new();
+            let syntax = self.syntax();
+            let mut ctx = LightContext {
+                syntax,
+                spectra: self.spectrum_context(true),
+                image: &mut no_image,
+                warnings: &mut warnings,
+                missing: &mut no_note,
+            };
+            let desc = lights::area_light(&e.name, &e.params, &mut ctx);
+            self.warnings.append(&mut warnings);
+            let desc = desc?.ok_or_else(|| Diagnostic::error(e.name_span, "unsupported area light"))?;
+            finish_params(&e.params, &mut self.warnings)?;
+            out.push(desc);
+        }
+        Ok(out)
+    }
+
+    pub(super) fn note(&mut self, at: Span, what: String, how: Approx) {
+        self.warnings.push(Diagnostic::warning(at, format!("{what}: {}", how.how())));
+        self.approximated.push((at, what, how));
+    }
+
+    /// Builds material `i` on first use; its index among the built materials.
+    pub(super) fn build_material(&mut self, i: u32) -> Res<u32> {
+        let m = &mut self.materials[i as usize];
+        if let Some(b) = m.built {
+            return Ok(b);
+        }
+        let params = std::mem::take(&mut m.params);
+        let (name, span, scope, ty) = (m.name.clone(), m.span, m.scope.clone(), m.ty.clone());
+        params.mark_known(&["type"]);
+        let at = span.unwrap_or_default();
+        let kind = {
+            let mut r = Scoped { b: self, scope, depth: 0 };
+            materials::material(&ty, &params, at, &mut r)?
+        };
+        finish_params(&params, &mut self.warnings)?;
+        self.built_materials.push(MaterialDesc { ty, name, kind });
+        let b = self.built_materials.len() as u32 - 1;
+        self.materials[i as usize].built = Some(b);
+        Ok(b)
+    }
+
+    /// Builds texture `i` (and what it refers to) on first use.
+    fn build_texture(&mut self, i: u32, depth: usize, at: Span) -> Res<u32> {
+        let t = &mut self.textures[i as usize];
+        match t.built {
+            Some(Some(b)) => return Ok(b),
+            Some(None) => {
+                return Err(Diagnostic::error(at, format!("texture \"{}\" refers to itself", t.name)));
+            }
+            None => {}
+        }
+        if depth >= TEXTURE_DEPTH {
+            return Err(Diagnostic::error(at, format!("textures refer to textures more than {TEXTURE_DEPTH} deep")));
+        }
+        t.built = Some(None); // being built: a reference back to it is a cycle
+        let params = std::mem::take(&mut t.params);
+        let (class, span, scope, is_float) = (t.class.clone(), t.span, t.scope.clone(), t.ty == "float");
+        let kind = {
+            let mut r = Scoped { b: self, scope, depth: depth + 1 };
+            materials::texture(&class, is_float, &params, span, &mut r)?
+        };
+        let kind = kind.unwrap_or_else(|| {
+            params.mark_all_used();
+            let what = format!("texture \"{}\" of class \"{class}\"", self.textures[i as usize].name);
+            self.note(span, what, Approx::UnsupportedTexture);
+            materials::TextureKind::Constant(TexValue::Const(Vec3::splat(0.5)))
+        });
+        finish_params(&params, &mut self.warnings)?;
+        let lookups = 1 + children(&kind).iter().map(|&c| self.texture_lookups[c as usize]).sum::<u64>();
+        if lookups > TEXTURE_LOOKUPS {
+            let msg = format!("texture needs {lookups} lookups per evaluation, more than {TEXTURE_LOOKUPS}");
+            return Err(Diagnostic::error(span, msg));
+        }
+        let name = self.textures[i as usize].name.clone();
+        self.built_textures.push(TextureDesc { name, kind });
+        self.texture_lookups.push(lookups);
+        let b = self.built_textures.len() as u32 - 1;
+        self.textures[i as usize].built = Some(Some(b));
+        Ok(b)
+    }
+}
+
+/// The textures a texture reads.
+fn children(k: &materials::TextureKind) -> Vec<u32> {
+    use materials::TextureKind as K;
+    let vals: Vec<TexValue> = match k {
+        K::Constant(v) => vec![*v],
+        K::Checkerboard { tex1, tex2, .. } => vec![*tex1, *tex2],
+        K::Scale { tex, scale } => vec![*tex, *scale],
+        K::Mix { tex1, tex2, amount } => vec![*tex1, *tex2, *amount],
+        K::Image { .. } => vec![],
+    };
+    vals.into_iter().filter_map(|v| if let TexValue::Texture(t) = v { Some(t) } else { None }).collect()
+}
+
+/// After a typed build: a parameter some lookup wanted with another type is an error;
+/// the rest nobody looked up are warned as unused.
+pub(super) fn finish_params(p: &ParamList, warnings: &mut Vec<Diagnostic>) -> Res<()> {
+    if let Some(e) = p.wrong_type() {
+        return Err(e);
+    }
+    p.report_unused(warnings);
+    Ok(())
+}
+
+impl Resolver for Scoped<'_> {
+    fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<u32> {
+        let (mine, other) = if float {
+            (&self.scope.float_textures, &self.scope.spectrum_textures)
+        } else {
+            (&self.scope.spectrum_textures, &self.scope.float_textures)
+        };
+        let kind = if float { 0 } else { 1 };
+        let found = mine
+            .get(name)
+            .or_else(|| self.b.global_textures[kind].get(name))
+            .or_else(|| other.get(name))
+            .or_else(|| self.b.global_textures[1 - kind].get(name))
+            .copied();
+        let want = if float { "float" } else { "spectrum" };
+        let i = found.ok_or_else(|| Diagnostic::error(at, format!("{want} texture \"{name}\" is not defined")))?;
+        self.b.build_texture(i, self.depth, at)
+    }
+
+    fn approximate(&mut self, at: Span, what: String, how: Approx) {
+        self.b.note(at, what, how);
+    }
+
+    fn warn(&mut self, d: Diagnostic) {
+        self.b.warnings.push(d);
+    }
+
+    fn syntax(&self) -> Syntax {
+        self.b.syntax()
+    }
+
+    fn spectra(&self) -> SpectrumContext<'_> {
+        self.b.spectrum_context(false)
+    }
+
+    fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String> {
+        self.b.image(name)
+    }
+}

@@ -1,0 +1,373 @@
+//! `Material`, `MakeNamedMaterial` and `Texture` statements to typed descriptions.
+//!
+//! ```text
+//! Material "matte" "rgb Kd" [.5 .5 .5]        Material "diffuse" "texture reflectance" "checks"
+//! Material "mirror" "rgb Kr" [.9 .9 .9]
+//! Material "glass" "float index" 1.5          Material "dielectric" "float eta" 1.5
+//! Material "metal" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k" "float roughness" .1
+//! Material "conductor" "rgb reflectance" [.9 .6 .3]
+//! Material "plastic" / "coateddiffuse" / "uber"     # approximated: their diffuse part
+//! Material "" / "none" / "interface"                # no surface: paths pass through
+//! Texture "checks" "spectrum" "checkerboard" "float uscale" 8 "rgb tex1" [1 0 0]
+//! Texture "s" "spectrum" "scale" "texture tex" "checks" "float scale" 0.5      # v3: tex1 × tex2
+//! Texture "m" "spectrum" "mix" "rgb tex1" [1 1 1] "texture tex2" "checks" "float amount" 0.3
+//! Texture "img" "spectrum" "imagemap" "string filename" "wood.png" "string wrap" "clamp"
+//! ```
+//! What we render differently from the file (a material drawn as its diffuse part, rough
+//! glass as smooth, a textured roughness taken at the texture's centre, ...) is recorded
+//! as an [`Approx`] at the statement, so `check` and the renderer report it.
+
+use super::approx::Approx;
+use super::values::{self, Range, Res, SpectrumContext, SpectrumOrTexture};
+use crate::imageio::RgbImage;
+use crate::parser::Syntax;
+use crate::parser::error::Diagnostic;
+use crate::parser::params::{FloatValue, ParamList, ParamType};
+use crate::parser::source::Span;
+use crate::spectrum::Rgb;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// A spectrum- or float-valued input: a constant (floats as grey) or a texture, by its
+/// index in [`super::SceneDescription::textures`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TexValue {
+    Const(Rgb),
+    Texture(u32),
+}
+
+/// How a roughness becomes a microfacet α.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RoughnessRemap {
+    /// `remaproughness false`: α = roughness.
+    None,
+    /// pbrt-v3's polynomial in log(roughness) (`metal`, `glass`, `plastic`, `uber`).
+    V3,
+    /// pbrt-v4's √roughness (`conductor`, `dielectric`, `coated*`).
+    V4,
+}
+
+/// A material some shape uses.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialKind {
+    Diffuse {
+        reflectance: TexValue,
+    },
+    /// A perfect mirror tinted by `reflectance` (`mirror`, `conductor "reflectance"`).
+    Mirror {
+        reflectance: TexValue,
+    },
+    /// A smooth dielectric.
+    Dielectric {
+        eta: TexValue,
+        kr: TexValue,
+        kt: TexValue,
+    },
+    /// A conductor; smooth when both roughnesses give α below 10⁻³.
+    Conductor {
+        eta: Rgb,
+        k: Rgb,
+        roughness: [TexValue; 2],
+        remap: RoughnessRemap,
+    },
+    /// No surface: rays continue straight through.
+    Interface,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialDesc {
+    /// The type as written (`matte`, `diffuse`, `interface`, ...).
+    pub ty: String,
+    /// The `MakeNamedMaterial` name, if any.
+    pub name: Option<String>,
+    pub kind: MaterialKind,
+}
+
+/// How image lookups treat coordinates outside [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    Repeat,
+    Clamp,
+    Black,
+}
+
+/// (s, t) = (su·u + du, sv·v + dv).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvMapping {
+    pub su: f32,
+    pub sv: f32,
+    pub du: f32,
+    pub dv: f32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum TextureKind {
+    Constant(TexValue),
+    Checkerboard { tex1: TexValue, tex2: TexValue, map: UvMapping },
+    Scale { tex: TexValue, scale: TexValue },
+    Mix { tex1: TexValue, tex2: TexValue, amount: TexValue },
+    Image { image: Arc<RgbImage>, map: UvMapping, wrap: Wrap, scale: f32, invert: bool },
+}
+
+/// A texture some used material (or texture) refers to.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureDesc {
+    pub name: String,
+    pub kind: TextureKind,
+}
+
+/// What building materials and textures needs from the scene builder.
+pub trait Resolver {
+    /// The float or spectrum texture `name`, built on first use; `at` is the span of
+    /// the parameter naming it.
+    fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<u32>;
+    fn approximate(&mut self, at: Span, what: String, how: Approx);
+    fn warn(&mut self, d: Diagnostic);
+    fn syntax(&self) -> Syntax;
+    fn spectra(&self) -> SpectrumContext<'_>;
+    /// An image for `imagemap` (cached); errors are plain messages.
+    fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String>;
+}
+
+/// A spectrum input: constant (non-negative) or a spectrum texture.
+fn spectrum(p: &ParamList, name: &str, default: f32, r: &mut dyn Resolver) -> Res<TexValue> {
+    let found = values::spectrum(p, name, &r.spectra(), Range::NonNegative)?;
+    Ok(match found {
+        None => TexValue::Const(Vec3::splat(default)),
+        Some((SpectrumOrTexture::Rgb(c), _)) => TexValue::Const(c),
+        Some((SpectrumOrTexture::Texture(t), at)) => TexValue::Texture(r.texture(&t, false, at)?),
+    })
+}
+
+/// A float input: constant (in `range`) or a float texture.
+fn float(p: &ParamList, name: &str, default: f32, range: Range, r: &mut dyn Resolver) -> Res<TexValue> {
+    Ok(match values::float_or_texture(p, name, range)? {
+        None => TexValue::Const(Vec3::splat(default)),
+        Some((FloatValue::Const(v), _)) => TexValue::Const(Vec3::splat(v)),
+        Some((FloatValue::Texture(t), at)) => TexValue::Texture(r.texture(&t, true, at)?),
+    })
+}
+
+/// Notes a textured input the material can only take as one value.
+fn at_centre(v: TexValue, p: &ParamList, name: &str, ty: &str, r: &mut dyn Resolver) {
+    if let (TexValue::Texture(_), Some(at)) = (v, values::span_of(p, name)) {
+        r.approximate(at, format!("textured \"{name}\" of material \"{ty}\""), Approx::TextureAtCentre);
+    }
+}
+
+/// The material of type `ty`; unsupported types become grey diffuse (noted).
+pub fn material(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
+    bump_maps(ty, p, r);
+    Ok(match ty {
+        "matte" => {
+            let sigma = float(p, "sigma", 0.0, Range::NonNegative, r)?;
+            if sigma != TexValue::Const(Vec3::ZERO) {
+                let at = values::span_of(p, "sigma").unwrap_or(at);
+                r.approximate(at, "matte \"sigma\"".into(), Approx::OrenNayar);
+            }
+            MaterialKind::Diffuse { reflectance: spectrum(p, "Kd", 0.5, r)? }
+        }
+        "diffuse" => MaterialKind::Diffuse { reflectance: spectrum(p, "reflectance", 0.5, r)? },
+        "mirror" => MaterialKind::Mirror { reflectance: spectrum(p, "Kr", 0.9, r)? },
+        "glass" | "dielectric" => dielectric(ty, p, at, r)?,
+        "metal" | "conductor" => conductor(ty, p, r)?,
+        "plastic" | "uber" | "coateddiffuse" => {
+            let (kd, default) = if ty == "coateddiffuse" { ("reflectance", 0.5) } else { ("Kd", 0.25) };
+            let reflectance = spectrum(p, kd, default, r)?;
+            check_coat(ty, p, r)?;
+            r.approximate(at, format!("material \"{ty}\""), Approx::DiffusePart);
+            MaterialKind::Diffuse { reflectance }
+        }
+        "" | "none" | "interface" => MaterialKind::Interface,
+        _ => {
+            p.mark_all_used();
+            r.approximate(at, format!("material \"{ty}\""), Approx::UnsupportedMaterial);
+            MaterialKind::Diffuse { reflectance: TexValue::Const(Vec3::splat(0.5)) }
+        }
+    })
+}
+
+fn bump_maps(ty: &str, p: &ParamList, r: &mut dyn Resolver) {
+    for name in ["bumpmap", "displacement", "normalmap"] {
+        if let Some(param) = p.named(name) {
+            param.mark_used();
+            r.approximate(param.span, format!("\"{name}\" of material \"{ty}\""), Approx::BumpMap);
+        }
+    }
+}
+
+/// v3 `glass` (`eta`, else `index`; `Kr`, `Kt`) and v4 `dielectric` (`eta` a float or
+/// a spectrum). Rough ones render smooth (noted).
+fn dielectric(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
+    let eta_name = if ty == "glass" && p.named("eta").is_none() { "index" } else { "eta" };
+    let eta = if values::given(p, eta_name, &[ParamType::Float, ParamType::Texture]) {
+        float(p, eta_name, 1.5, Range::Positive, r)?
+    } else {
+        // A spectral index (v4): RGB has one index, its luminance-weighted mean.
+        match values::rgb(p, eta_name, &r.spectra(), Range::Positive)? {
+            Some(c) => TexValue::Const(Vec3::splat(crate::spectrum::luminance(c))),
+            None => TexValue::Const(Vec3::splat(1.5)),
+        }
+    };
+    at_centre(eta, p, eta_name, ty, r);
+    let (kr, kt) = if ty == "glass" { (spectrum(p, "Kr", 1.0, r)?, spectrum(p, "Kt", 1.0, r)?) } else { one_one() };
+    for (name, v) in [("Kr", kr), ("Kt", kt)] {
+        at_centre(v, p, name, ty, r);
+    }
+    let rough = roughness(p, 0.0, r)?;
+    let _ = p.bool("remaproughness")?;
+    if rough.iter().any(|v| *v != TexValue::Const(Vec3::ZERO)) {
+        r.approximate(at, format!("rough material \"{ty}\""), Approx::RoughDielectric);
+    }
+    Ok(MaterialKind::Dielectric { eta, kr, kt })
+}
+
+fn one_one() -> (TexValue, TexValue) {
+    (TexValue::Const(Vec3::ONE), TexValue::Const(Vec3::ONE))
+}
+
+/// `roughness` (both directions), overridden per direction by `uroughness`/`vroughness`.
+fn roughness(p: &ParamList, default: f32, r: &mut dyn Resolver) -> Res<[TexValue; 2]> {
+    let both = float(p, "roughness", default, Range::NonNegative, r)?;
+    let one = |name: &str, r: &mut dyn Resolver| -> Res<TexValue> {
+        Ok(if p.named(name).is_some() { float(p, name, default, Range::NonNegative, r)? } else { both })
+    };
+    Ok([one("uroughness", r)?, one("vroughness", r)?])
+}
+
+/// v3 `metal` (copper by default, roughness 0.01 through v3's remapping) and v4
+/// `conductor` (roughness 0, √ remapping, or a `reflectance`).
+fn conductor(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<MaterialKind> {
+    if ty == "conductor" && p.named("reflectance").is_some() {
+        let reflectance = spectrum(p, "reflectance", 1.0, r)?;
+        let _ = roughness(p, 0.0, r)?;
+        let _ = p.bool("remaproughness")?;
+        return Ok(MaterialKind::Mirror { reflectance });
+    }
+    let spectra = r.spectra();
+    let named = |n: &str| crate::spectrum::named_spectrum(n).unwrap_or(Vec3::ONE);
+    let eta = values::rgb(p, "eta", &spectra, Range::Positive)?.unwrap_or_else(|| named("metal-Cu-eta"));
+    let k = values::rgb(p, "k", &spectra, Range::NonNegative)?.unwrap_or_else(|| named("metal-Cu-k"));
+    let v3 = ty == "metal";
+    let roughness = roughness(p, if v3 { 0.01 } else { 0.0 }, r)?;
+    for (name, v) in ["uroughness", "vroughness"].iter().zip(roughness) {
+        let name = if p.named(name).is_some() { name } else { "roughness" };
+        at_centre(v, p, name, ty, r);
+    }
+    let remap = match (p.bool("remaproughness")?.unwrap_or(true), v3) {
+        (false, _) => RoughnessRemap::None,
+        (true, true) => RoughnessRemap::V3,
+        (true, false) => RoughnessRemap::V4,
+    };
+    Ok(MaterialKind::Conductor { eta, k, roughness, remap })
+}
+
+/// The coat and specular parameters of materials we draw as their diffuse part: read
+/// (so a bad value is still an error) and covered by the material's note.
+fn check_coat(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<()> {
+    let spectra: &[&str] = match ty {
+        "plastic" => &["Ks"],
+        "uber" => &["Ks", "Kr", "Kt", "opacity"],
+        _ => &["albedo"],
+    };
+    for name in spectra {
+        spectrum(p, name, 0.0, r)?;
+    }
+    roughness(p, 0.0, r)?;
+    for name in ["eta", "index", "thickness", "g"] {
+        if values::given(p, name, &[ParamType::Float, ParamType::Texture]) {
+            float(p, name, 0.0, Range::Any, r)?;
+        } else {
+            values::rgb(p, name, &r.spectra(), Range::Any)?;
+        }
+    }
+    for name in ["maxdepth", "nsamples"] {
+        p.int(name)?;
+    }
+    p.bool("remaproughness")?;
+    Ok(())
+}
+
+/// One texture input of a texture of kind `float` or `spectrum`.
+fn input(p: &ParamList, name: &str, default: f32, is_float: bool, r: &mut dyn Resolver) -> Res<TexValue> {
+    if is_float { float(p, name, default, Range::Any, r) } else { spectrum(p, name, default, r) }
+}
+
+/// A texture of class `class`, or `None` for classes we do not support.
+pub fn texture(class: &str, is_float: bool, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Option<TextureKind>> {
+    Ok(Some(match class {
+        "constant" => TextureKind::Constant(input(p, "value", 1.0, is_float, r)?),
+        "checkerboard" => {
+            let map = mapping(p, at, r)?;
+            let dimension = p.int("dimension")?.unwrap_or(2);
+            if dimension != 2 {
+                let at = values::span_of(p, "dimension").unwrap_or(at);
+                r.approximate(at, "3D checkerboard".into(), Approx::TextureMapping);
+            }
+            values::no_effect(p, &["aamode"]);
+            let (tex1, tex2) = (input(p, "tex1", 1.0, is_float, r)?, input(p, "tex2", 0.0, is_float, r)?);
+            TextureKind::Checkerboard { tex1, tex2, map }
+        }
+        // v3: tex1 × tex2; v4: tex × scale (a float texture).
+        "scale" if p.named("tex1").is_some() || p.named("tex2").is_some() => {
+            TextureKind::Scale { tex: input(p, "tex1", 1.0, is_float, r)?, scale: input(p, "tex2", 1.0, is_float, r)? }
+        }
+        "scale" => TextureKind::Scale {
+            tex: input(p, "tex", 1.0, is_float, r)?,
+            scale: float(p, "scale", 1.0, Range::Any, r)?,
+        },
+        "mix" => TextureKind::Mix {
+            tex1: input(p, "tex1", 0.0, is_float, r)?,
+            tex2: input(p, "tex2", 1.0, is_float, r)?,
+            amount: float(p, "amount", 0.5, Range::Any, r)?,
+        },
+        "imagemap" => image_texture(p, at, r)?,
+        _ => return Ok(None),
+    }))
+}
+
+/// `mapping "uv"` with its scales and offsets; other mappings are approximated by uv.
+fn mapping(p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<UvMapping> {
+    let kind = values::choice(p, "mapping", "uv", &["uv", "spherical", "cylindrical", "planar"])?;
+    if kind != "uv" {
+        let at = values::span_of(p, "mapping").unwrap_or(at);
+        r.approximate(at, format!("texture mapping \"{kind}\""), Approx::TextureMapping);
+        for name in ["v1", "v2"] {
+            p.fixed::<3>(name, &[ParamType::Vector3])?;
+        }
+    }
+    let f = |name: &str, d: f32| values::float(p, name, d, Range::Any);
+    Ok(UvMapping { su: f("uscale", 1.0)?, sv: f("vscale", 1.0)?, du: f("udelta", 0.0)?, dv: f("vdelta", 0.0)? })
+}
+
+fn image_texture(p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<TextureKind> {
+    let name = p.string("filename")?.ok_or_else(|| Diagnostic::error(at, "imagemap needs \"string filename\""))?;
+    let name_at = p.named("filename").map_or(at, |f| f.value_span);
+    let map = mapping(p, at, r)?;
+    let wrap = match values::choice(p, "wrap", "repeat", &["repeat", "clamp", "black", "octahedralsphere"])? {
+        "clamp" => Wrap::Clamp,
+        "black" => Wrap::Black,
+        _ => Wrap::Repeat,
+    };
+    let scale = values::float(p, "scale", 1.0, Range::Any)?;
+    let invert = p.bool("invert")?.unwrap_or(false);
+    let gamma = p.bool("gamma")?;
+    let encoding = p.string("encoding")?;
+    // Filtering hints: lookups are bilinear, and SPPM's many samples per pixel filter.
+    values::no_effect(p, &["maxanisotropy", "trilinear", "filter"]);
+    let mut image = match r.image(&name) {
+        Ok(img) => img,
+        Err(e) => {
+            r.approximate(name_at, format!("imagemap ({e})"), Approx::MissingImage);
+            return Ok(TextureKind::Constant(TexValue::Const(Vec3::splat(0.5))));
+        }
+    };
+    let linear = gamma == Some(false) || encoding.as_deref() == Some("linear");
+    if name.to_ascii_lowercase().ends_with(".png") && linear {
+        // PNGs are read sRGB-decoded; this texture wants the stored values as they are.
+        let mut raw = (*image).clone();
+        raw.pixels.iter_mut().for_each(|px| *px = px.map(crate::imageio::to_srgb));
+        image = Arc::new(raw);
+    }
+    Ok(TextureKind::Image { image, map, wrap, scale, invert })
+}

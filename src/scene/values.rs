@@ -1,0 +1,217 @@
+//! Typed parameter values: the checks every value of a light, material or texture gets
+//! before it leaves `scene/` (the last place a parameter list is seen).
+//!
+//! ```text
+//! "float eta" 1.5              # exactly one finite number; eta must be positive
+//! "rgb Kd" [.8 .2 .2]          # exactly three finite, non-negative numbers
+//! "blackbody L" [6500]         # v4; v3 writes [6500 1] (temperature, scale)
+//! "spectrum k" "metal-Au-k"    # a named spectrum, or an SPD file of (λ, value) pairs
+//! "texture Kd" "checks"        # a texture of the right kind, defined somewhere
+//! ```
+//! Each lookup marks the parameter used, so what no lookup asked for is reported as
+//! unused at its own span; a wrong type, arity or value is a located error.
+
+use crate::parser::error::Diagnostic;
+use crate::parser::params::{FloatValue, Param, ParamList, ParamType, SpectrumValue};
+use crate::parser::source::Span;
+use crate::spectrum::{Rgb, blackbody, named_spectrum, sampled_to_rgb, xyz_to_rgb};
+use glam::Vec3;
+use std::path::Path;
+
+pub type Res<T> = Result<T, Diagnostic>;
+
+/// What range a number must lie in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Range {
+    Any,
+    NonNegative,
+    Positive,
+}
+
+impl Range {
+    fn check(self, v: f32) -> Option<&'static str> {
+        if !v.is_finite() {
+            return Some("finite");
+        }
+        match self {
+            Range::Any => None,
+            Range::NonNegative => (v < 0.0).then_some("at least 0"),
+            Range::Positive => (v <= 0.0).then_some("greater than 0"),
+        }
+    }
+}
+
+fn bad_value(p: &Param, what: &str, v: impl std::fmt::Display) -> Diagnostic {
+    Diagnostic::error(p.value_span, format!("\"{} {}\" must be {what}, not {v}", p.type_name, p.name))
+}
+
+/// A float, checked against `range`; `default` when absent.
+pub fn float(p: &ParamList, name: &str, default: f32, range: Range) -> Res<f32> {
+    let Some(v) = p.float(name)? else { return Ok(default) };
+    match range.check(v) {
+        Some(what) => Err(bad_value(last(p, name), what, v)),
+        None => Ok(v),
+    }
+}
+
+/// The parameter a successful lookup of `name` just found.
+fn last<'a>(p: &'a ParamList, name: &str) -> &'a Param {
+    p.named(name).unwrap_or_else(|| unreachable!("\"{name}\" was just found"))
+}
+
+/// A float constant or a float texture's name.
+pub fn float_or_texture(p: &ParamList, name: &str, range: Range) -> Res<Option<(FloatValue, Span)>> {
+    let Some(v) = p.float_or_texture(name)? else { return Ok(None) };
+    let param = last(p, name);
+    if let FloatValue::Const(x) = v
+        && let Some(what) = range.check(x)
+    {
+        return Err(bad_value(param, what, x));
+    }
+    Ok(Some((v, param.value_span)))
+}
+
+/// A spectrum parameter reduced to RGB, or a texture name.
+pub enum SpectrumOrTexture {
+    Rgb(Rgb),
+    Texture(String),
+}
+
+/// What a spectrum lookup needs besides the parameter list.
+pub struct SpectrumContext<'a> {
+    /// Directory that SPD file names are relative to.
+    pub base_dir: &'a Path,
+    /// v4 blackbody spectra are normalised to luminance 1 where lights use them.
+    pub normalize_blackbody: bool,
+    pub limits: &'a crate::limits::Limits,
+}
+
+/// A spectrum (`rgb`, `xyz`, `blackbody`, `spectrum`) or texture; every component must
+/// be finite and, with `NonNegative`, at least 0.
+pub fn spectrum(
+    p: &ParamList,
+    name: &str,
+    ctx: &SpectrumContext,
+    range: Range,
+) -> Res<Option<(SpectrumOrTexture, Span)>> {
+    let Some(v) = p.spectrum(name)? else { return Ok(None) };
+    let param = last(p, name);
+    let rgb = match v {
+        SpectrumValue::Rgb(c) => {
+            check3(param, c, range)?;
+            Vec3::from(c)
+        }
+        SpectrumValue::Xyz(c) => {
+            check3(param, c, Range::Any)?;
+            xyz_to_rgb(c.map(f64::from))
+        }
+        SpectrumValue::Blackbody { kelvin, scale } => blackbody_rgb(param, kelvin, scale, ctx)?,
+        SpectrumValue::Sampled(pairs) => sampled(param, &pairs)?,
+        SpectrumValue::Named(n) => named_or_file(param, &n, ctx)?,
+        SpectrumValue::Texture(t) => return Ok(Some((SpectrumOrTexture::Texture(t), param.value_span))),
+    };
+    if let Some(what) = [rgb.x, rgb.y, rgb.z].into_iter().find_map(|c| range.check(c)) {
+        return Err(bad_value(param, what, rgb));
+    }
+    Ok(Some((SpectrumOrTexture::Rgb(rgb), param.value_span)))
+}
+
+/// A spectrum that may not be a texture (light emission, `eta`/`k` of metals).
+pub fn rgb(p: &ParamList, name: &str, ctx: &SpectrumContext, range: Range) -> Res<Option<Rgb>> {
+    match spectrum(p, name, ctx, range)? {
+        None => Ok(None),
+        Some((SpectrumOrTexture::Rgb(c), _)) => Ok(Some(c)),
+        Some((SpectrumOrTexture::Texture(_), span)) => {
+            Err(Diagnostic::error(span, format!("\"{name}\" cannot be a texture here; give a spectrum")))
+        }
+    }
+}
+
+fn check3(p: &Param, c: [f32; 3], range: Range) -> Res<()> {
+    match c.iter().find_map(|&x| range.check(x)) {
+        Some(what) => Err(bad_value(p, what, format!("[{} {} {}]", c[0], c[1], c[2]))),
+        None => Ok(()),
+    }
+}
+
+fn blackbody_rgb(p: &Param, kelvin: f32, scale: Option<f32>, ctx: &SpectrumContext) -> Res<Rgb> {
+    if !(kelvin.is_finite() && kelvin > 0.0) {
+        return Err(bad_value(p, "a positive temperature in kelvin", kelvin));
+    }
+    if let Some(s) = scale.filter(|s| !s.is_finite()) {
+        return Err(bad_value(p, "finite", s));
+    }
+    let b = blackbody(kelvin);
+    Ok(match scale {
+        Some(s) => b * s,
+        None if ctx.normalize_blackbody => b / crate::spectrum::luminance(b).max(1e-6),
+        None => b,
+    })
+}
+
+fn sampled(p: &Param, pairs: &[(f32, f32)]) -> Res<Rgb> {
+    if let Some(&(l, v)) = pairs.iter().find(|(l, v)| !(l.is_finite() && v.is_finite())) {
+        return Err(bad_value(p, "finite (wavelength, value) pairs", format!("({l}, {v})")));
+    }
+    if pairs.windows(2).any(|w| w[1].0 <= w[0].0) {
+        return Err(Diagnostic::error(p.value_span, "sampled spectrum wavelengths must increase"));
+    }
+    Ok(sampled_to_rgb(pairs))
+}
+
+/// A named spectrum pbrt knows, or an SPD file: whitespace-separated (λ, value) pairs,
+/// `#` comments (pbrt-v3's format).
+fn named_or_file(p: &Param, name: &str, ctx: &SpectrumContext) -> Res<Rgb> {
+    if let Some(c) = named_spectrum(name) {
+        return Ok(c);
+    }
+    let path = crate::parser::stmt::resolve_relative(ctx.base_dir, name);
+    let at = |m: String| Diagnostic::error(p.value_span, m);
+    let bytes = crate::limits::read_file(&path, ctx.limits)
+        .map_err(|e| at(format!("\"{name}\" is neither a named spectrum nor a readable SPD file: {e}")))?;
+    let text = String::from_utf8_lossy(&bytes);
+    let mut values = Vec::new();
+    for line in text.lines() {
+        for word in line.split('#').next().unwrap_or("").split_whitespace() {
+            let v: f32 = word.parse().map_err(|_| at(format!("{name}: \"{word}\" is not a number")))?;
+            values.push(v);
+        }
+    }
+    if values.is_empty() || values.len() % 2 != 0 {
+        return Err(at(format!("{name}: an SPD file needs (wavelength, value) pairs, found {} numbers", values.len())));
+    }
+    let pairs: Vec<(f32, f32)> = values.chunks_exact(2).map(|c| (c[0], c[1])).collect();
+    sampled(p, &pairs)
+}
+
+/// A string from a fixed set of choices.
+pub fn choice<'a>(p: &ParamList, name: &str, default: &'a str, choices: &[&'a str]) -> Res<&'a str> {
+    let Some(v) = p.string(name)? else { return Ok(default) };
+    choices.iter().find(|c| **c == v).copied().ok_or_else(|| {
+        Diagnostic::error(last(p, name).value_span, format!("\"{name}\" must be one of {choices:?}, not \"{v}\""))
+    })
+}
+
+/// Warns once per parameter that is read but has no effect yet, at its span.
+pub fn ignored(p: &ParamList, names: &[&str], why: &str, warnings: &mut Vec<Diagnostic>) {
+    for param in p.params.iter().filter(|x| names.contains(&x.name.as_str())) {
+        param.mark_used();
+        let msg = format!("\"{} {}\" is ignored: {why}", param.type_name, param.name);
+        warnings.push(Diagnostic::warning(param.span, msg));
+    }
+}
+
+/// Marks parameters that change nothing in an SPPM render (sampling hints) as used.
+pub fn no_effect(p: &ParamList, names: &[&str]) {
+    p.params.iter().filter(|x| names.contains(&x.name.as_str())).for_each(Param::mark_used);
+}
+
+/// The span of a parameter if present (for notes about it).
+pub fn span_of(p: &ParamList, name: &str) -> Option<Span> {
+    p.named(name).map(|x| x.span)
+}
+
+/// Is `name` given with any of `types`? (Does not mark it used.)
+pub fn given(p: &ParamList, name: &str, types: &[ParamType]) -> bool {
+    p.named(name).is_some_and(|x| types.contains(&x.ty))
+}
