@@ -16,79 +16,154 @@
 mod plot;
 mod report;
 
+use clap::{Parser, Subcommand};
 use pbrt_sppm::imageio::{RgbImage, metrics, read_image, write_image};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+/// Compare, inspect and convert images (EXR, PNG).
+#[derive(Parser)]
+#[command(name = "pbrt-imgtool", version)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Error metrics of A against the reference B (relMSE = mean((a−b)²/(b² + 0.01))).
+    Diff {
+        a: String,
+        /// The reference.
+        b: String,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+        /// The metric --threshold tests.
+        #[arg(long, default_value = "relmse", value_parser = ["mse", "rmse", "relmse", "mae", "max"])]
+        metric: String,
+        /// Exit with status 1 when the metric is above this.
+        #[arg(long, allow_negative_numbers = true, value_parser = non_negative)]
+        threshold: Option<f64>,
+        /// A pixel counts as different when a channel differs by more than this.
+        #[arg(long, default_value_t = 0.01, allow_negative_numbers = true, value_parser = non_negative)]
+        pixel_threshold: f64,
+        /// Write the per-pixel largest difference in false colour (.png or .exr).
+        #[arg(long)]
+        heatmap: Option<PathBuf>,
+    },
+    /// Size, windows, metadata and per-channel statistics.
+    Info { image: String },
+    /// EXR → PNG (exposure, then sRGB) or PNG → EXR (sRGB decoded).
+    Convert {
+        input: String,
+        output: PathBuf,
+        /// Exposure in stops.
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        exposure: f64,
+    },
+    /// Error against seconds or iterations, log-log, one line per ERRORS.csv.
+    Plot {
+        #[arg(required = true)]
+        csv: Vec<String>,
+        #[arg(short, long)]
+        o: PathBuf,
+        #[arg(long, default_value = "seconds", value_parser = ["seconds", "iterations"])]
+        x: String,
+        #[arg(long, default_value = "relmse", value_parser = ["relmse", "rmse", "mse"])]
+        metric: String,
+    },
+    /// Render a scene once and report its error at each budget against a reference.
+    Report {
+        scene: PathBuf,
+        #[arg(long)]
+        reference: PathBuf,
+        /// Budgets in seconds, e.g. 1,2,4,8.
+        #[arg(long, conflicts_with = "iterations", required_unless_present = "iterations")]
+        seconds: Option<String>,
+        /// Budgets in iterations, e.g. 4,8,16.
+        #[arg(long)]
+        iterations: Option<String>,
+        /// The report (its folder is made if needed); report.csv, .png, .exr go beside it.
+        #[arg(short, long, default_value = "report.md")]
+        o: PathBuf,
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        photons: Option<u64>,
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (0: every core).
+        #[arg(long, default_value_t = 0)]
+        nthreads: usize,
+    },
+}
+
+fn non_negative(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v >= 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("expected a number of at least 0, not \"{s}\"")),
+    }
+}
+
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let result = match args.first().map(String::as_str) {
-        Some("diff") => diff(&args[1..]),
-        Some("info") => info(&args[1..]),
-        Some("convert") => convert(&args[1..]),
-        Some("plot") => plot(&args[1..]),
-        Some("report") => report(&args[1..]),
-        _ => Err("usage: pbrt-imgtool diff|info|convert|plot|report ... (see the README)".into()),
+    let result = match Cli::parse().command {
+        Command::Diff { a, b, json, metric, threshold, pixel_threshold, heatmap } => {
+            diff(&a, &b, json, &metric, threshold, pixel_threshold, heatmap.as_deref())
+        }
+        Command::Info { image } => info(&image),
+        Command::Convert { input, output, exposure } => convert(&input, &output, exposure),
+        Command::Plot { csv, o, x, metric } => plot(&csv, &o, &x, &metric),
+        Command::Report { scene, reference, seconds, iterations, o, photons, seed, nthreads } => {
+            let r = report::ReportArgs { scene, reference, out: o, seconds, iterations, photons, seed, nthreads };
+            report::report(&r).and_then(|()| say(&format!("wrote {}\n", r.out.display())))
+        }
     };
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("pbrt-imgtool: error: {e}");
+            let _ = writeln!(std::io::stderr(), "pbrt-imgtool: error: {e}");
             ExitCode::FAILURE
         }
     }
 }
 
-/// Positional arguments and `--name value` / `--flag` options.
-struct Args {
-    positional: Vec<String>,
-    options: Vec<(String, Option<String>)>,
-}
-
-fn parse(args: &[String], flags: &[&str]) -> Args {
-    let (mut positional, mut options) = (Vec::new(), Vec::new());
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.strip_prefix("--").or(if a == "-o" { Some("o") } else { None }) {
-            Some(name) if flags.contains(&name) => options.push((name.to_string(), None)),
-            Some(name) => options.push((name.to_string(), it.next().cloned())),
-            None => positional.push(a.clone()),
-        }
-    }
-    Args { positional, options }
-}
-
-impl Args {
-    fn get(&self, name: &str) -> Option<&str> {
-        self.options.iter().rev().find(|(n, _)| n == name).and_then(|(_, v)| v.as_deref())
-    }
-    fn has(&self, name: &str) -> bool {
-        self.options.iter().any(|(n, _)| n == name)
-    }
-    fn number(&self, name: &str) -> Result<Option<f64>, String> {
-        self.get(name).map(|v| v.parse().map_err(|_| format!("--{name}: '{v}' is not a number"))).transpose()
-    }
+/// Standard output; a failed write (closed pipe, full disk) is an error, not a panic.
+fn say(text: &str) -> Result<ExitCode, String> {
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(|e| format!("cannot write to standard output: {e}"))?;
+    Ok(ExitCode::SUCCESS)
 }
 
 fn read(path: &str) -> Result<RgbImage, String> {
     read_image(Path::new(path))
 }
 
-fn diff(args: &[String]) -> Result<ExitCode, String> {
-    let a = parse(args, &["json"]);
-    let [x, y] = a.positional.as_slice() else { return Err("diff needs two images".into()) };
+fn diff(
+    x: &str,
+    y: &str,
+    json: bool,
+    metric: &str,
+    threshold: Option<f64>,
+    pixel_threshold: f64,
+    heat: Option<&Path>,
+) -> Result<ExitCode, String> {
+    if let Some(out) = heat {
+        check_image_name(out)?;
+    }
     let (ia, ib) = (read(x)?, read(y)?);
     if (ia.width, ia.height) != (ib.width, ib.height) {
         return Err(format!("{x} is {}x{}, {y} is {}x{}", ia.width, ia.height, ib.width, ib.height));
     }
-    let d = metrics::diff(&ia.pixels, &ib.pixels, a.number("pixel-threshold")?.unwrap_or(0.01));
-    if let Some(out) = a.get("heatmap") {
-        heatmap(&ia, &ib, d.max_abs, Path::new(out))?;
+    let d = metrics::diff(&ia.pixels, &ib.pixels, pixel_threshold);
+    if let Some(out) = heat {
+        heatmap(&ia, &ib, d.max_abs, out)?;
     }
-    if a.has("json") {
-        println!("{}", serde_json::to_string(&d).unwrap_or_default());
+    let text = if json {
+        serde_json::to_string(&d).unwrap_or_default()
     } else {
-        println!(
+        format!(
             "MSE {:.6e}  RMSE {:.6e}  relMSE {:.6e}  MAE {:.6e}  max |diff| {:.6e}  pixels above threshold {:.4}%",
             d.mse,
             d.rmse,
@@ -96,23 +171,31 @@ fn diff(args: &[String]) -> Result<ExitCode, String> {
             d.mae,
             d.max_abs,
             100.0 * d.share_above
-        );
-    }
-    let metric = a.get("metric").unwrap_or("relmse");
+        )
+    };
+    say(&(text + "\n"))?;
     let value = match metric {
         "mse" => d.mse,
         "rmse" => d.rmse,
-        "relmse" => d.relmse,
         "mae" => d.mae,
         "max" => d.max_abs,
-        other => return Err(format!("unknown metric '{other}' (mse, rmse, relmse, mae, max)")),
+        _ => d.relmse,
     };
-    match a.number("threshold")? {
-        Some(t) if value > t => {
-            eprintln!("{metric} {value:.6e} is above the threshold {t:.6e}");
+    match threshold {
+        Some(t) if value > t || value.is_nan() => {
+            let _ = writeln!(std::io::stderr(), "{metric} {value:.6e} is above the threshold {t:.6e}");
             Ok(ExitCode::FAILURE)
         }
         _ => Ok(ExitCode::SUCCESS),
+    }
+}
+
+/// An image output name must say its format.
+fn check_image_name(path: &Path) -> Result<(), String> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("exr" | "png") => pbrt_sppm::imageio::check_writable(path),
+        _ => Err(format!("\"{}\": an image name must end in .exr or .png", path.display())),
     }
 }
 
@@ -124,86 +207,60 @@ fn heatmap(a: &RgbImage, b: &RgbImage, max: f64, out: &Path) -> Result<(), Strin
         // The PNG writer applies sRGB; undo it so the palette lands as designed.
         *p = metrics::heat(if max > 0.0 { (d as f64 / max) as f32 } else { 0.0 }).map(pbrt_sppm::imageio::from_srgb);
     }
-    write_image(&out.with_extension("png"), &img)
+    write_image(out, &img)
 }
 
-fn info(args: &[String]) -> Result<ExitCode, String> {
-    let a = parse(args, &[]);
-    let [path] = a.positional.as_slice() else { return Err("info needs one image".into()) };
+fn info(path: &str) -> Result<ExitCode, String> {
+    use std::fmt::Write as _;
     let img = read(path)?;
-    println!("{path}: {}x{} pixels, channels R G B", img.width, img.height);
-    println!(
+    let mut out = String::new();
+    let _ = writeln!(out, "{path}: {}x{} pixels, channels R G B", img.width, img.height);
+    let _ = writeln!(
+        out,
         "data window: origin ({}, {}), size {}x{}; display window {}x{}",
         img.origin.0, img.origin.1, img.width, img.height, img.full.0, img.full.1
     );
     let m = &img.meta;
     if let Some(t) = m.render_time_seconds {
-        println!("renderTimeSeconds: {t}");
+        let _ = writeln!(out, "renderTimeSeconds: {t}");
     }
     if let Some(n) = m.samples_per_pixel {
-        println!("samplesPerPixel: {n}");
+        let _ = writeln!(out, "samplesPerPixel: {n}");
     }
     if let Some(n) = m.photons_per_iteration {
-        println!("photonsPerIteration: {n}");
+        let _ = writeln!(out, "photonsPerIteration: {n}");
     }
     if let Some(s) = &m.software {
-        println!("software: {s}");
+        let _ = writeln!(out, "software: {s}");
     }
     if let Some(w) = m.world_to_camera {
-        println!("worldToCamera: {w:?}");
+        let _ = writeln!(out, "worldToCamera: {w:?}");
     }
     for (c, name) in ["R", "G", "B"].iter().enumerate() {
         let v: Vec<f32> = img.pixels.iter().map(|p| p[c]).collect();
         let (lo, hi) = v.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &x| (l.min(x), h.max(x)));
         let mean = v.iter().map(|&x| x as f64).sum::<f64>() / v.len().max(1) as f64;
-        println!("{name}: min {lo} max {hi} mean {mean}");
+        let _ = writeln!(out, "{name}: min {lo} max {hi} mean {mean}");
     }
-    Ok(ExitCode::SUCCESS)
+    say(&out)
 }
 
-fn convert(args: &[String]) -> Result<ExitCode, String> {
-    let a = parse(args, &[]);
-    let [input, output] = a.positional.as_slice() else { return Err("convert needs an input and an output".into()) };
+fn convert(input: &str, output: &Path, exposure: f64) -> Result<ExitCode, String> {
+    check_image_name(output)?;
     let mut img = read(input)?;
-    let scale = 2f64.powf(a.number("exposure")?.unwrap_or(0.0)) as f32;
+    let scale = 2f64.powf(exposure) as f32;
     img.pixels.iter_mut().for_each(|p| *p = p.map(|c| c * scale));
-    write_image(&PathBuf::from(output), &img)?;
+    write_image(output, &img)?;
     Ok(ExitCode::SUCCESS)
 }
 
-fn plot(args: &[String]) -> Result<ExitCode, String> {
-    let a = parse(args, &[]);
-    let out = a.get("o").ok_or("plot needs -o plot.png")?;
-    let x = match a.get("x").unwrap_or("seconds") {
-        "iterations" | "iteration" => "iteration",
-        "seconds" => "seconds",
-        other => return Err(format!("--x {other}: expected seconds or iterations")),
-    };
-    let metric = a.get("metric").unwrap_or("relmse");
-    if a.positional.is_empty() {
-        return Err("plot needs at least one ERRORS.csv".into());
+fn plot(csv: &[String], out: &Path, x: &str, metric: &str) -> Result<ExitCode, String> {
+    if !out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        return Err(format!("\"{}\": the plot is written as PNG; name it .png", out.display()));
     }
-    let series =
-        a.positional.iter().map(|p| plot::read_series(Path::new(p), x, metric)).collect::<Result<Vec<_>, _>>()?;
-    plot::draw(&series, x, metric, Path::new(out))?;
-    Ok(ExitCode::SUCCESS)
-}
-
-fn report(args: &[String]) -> Result<ExitCode, String> {
-    let a = parse(args, &[]);
-    let [scene] = a.positional.as_slice() else { return Err("report needs one scene file".into()) };
-    let whole = |name: &str| a.number(name).map(|v| v.map(|n| n as u64));
-    let r = report::ReportArgs {
-        scene: PathBuf::from(scene),
-        reference: PathBuf::from(a.get("reference").ok_or("report needs --reference REF.exr")?),
-        out: report::output(a.get("o")),
-        seconds: a.get("seconds").map(str::to_string),
-        iterations: a.get("iterations").map(str::to_string),
-        photons: whole("photons")?,
-        seed: whole("seed")?,
-        nthreads: whole("nthreads")?.unwrap_or(0) as usize,
-    };
-    report::report(&r)?;
-    println!("wrote {}", r.out.display());
+    pbrt_sppm::imageio::check_writable(out)?;
+    let x = if x == "iterations" { "iteration" } else { "seconds" };
+    let series = csv.iter().map(|p| plot::read_series(Path::new(p), x, metric)).collect::<Result<Vec<_>, _>>()?;
+    plot::draw(&series, x, metric, out)?;
     Ok(ExitCode::SUCCESS)
 }

@@ -18,7 +18,7 @@ use pbrt_sppm::imageio::{read_image, write_image, write_text};
 use pbrt_sppm::render::{ErrorRow, RenderScene, RenderSettings, errors_csv};
 use pbrt_sppm::scene::{LoadOptions, load_scene};
 use std::fmt::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The budget ladder: wall-clock seconds or iteration counts.
 enum Ladder {
@@ -82,6 +82,11 @@ fn rungs(rows: &[ErrorRow], ladder: &Ladder) -> Vec<(String, ErrorRow)> {
 
 pub fn report(a: &ReportArgs) -> Result<(), String> {
     let ladder = ladder(a)?;
+    // The folder is made, and checked writable, before the render.
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("cannot make \"{}\": {e}", dir.display()))?;
+    }
+    pbrt_sppm::imageio::check_writable(&a.out)?;
     let reference = read_image(&a.reference)?;
     let scene = load_scene(&a.scene, &LoadOptions::default()).map_err(|e| e.one_line())?;
     let mut settings =
@@ -156,9 +161,4 @@ fn markdown(
 
 fn thread_label(n: usize) -> String {
     if n == 0 { format!("all ({})", rayon::current_num_threads()) } else { n.to_string() }
-}
-
-/// Resolves `-o` (default `report.md` in the current directory).
-pub fn output(path: Option<&str>) -> PathBuf {
-    path.map_or_else(|| Path::new("report.md").to_path_buf(), PathBuf::from)
 }

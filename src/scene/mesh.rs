@@ -143,7 +143,7 @@ pub fn validate(mesh: &TriangleMesh) -> Result<(), String> {
     if let Some(i) = mesh.p.iter().position(|v| bad(v)) {
         let [x, y, z] = mesh.p[i];
         return Err(format!(
-            "vertex {i} is at ({x}, {y}, {z}): positions must be finite and within ±{MAX_COORDINATE:e}"
+            "vertex {i} is at ({x:?}, {y:?}, {z:?}): positions must be finite and within ±{MAX_COORDINATE:e}"
         ));
     }
     let non_finite = |v: &[f32]| v.iter().any(|x| !x.is_finite());

@@ -135,9 +135,14 @@ fn plot_draws_one_line_per_csv_and_rejects_a_missing_column() {
         .filter(|p| p.iter().max().unwrap() - p.iter().min().unwrap() > 60)
         .collect();
     assert!(colours.len() >= 2, "expected coloured lines, found {colours:?}");
-    let (code, _, err) = tool(&["plot", a.to_str().unwrap(), "-o", png.to_str().unwrap(), "--metric", "psnr"]);
+    let short = d.join("short.csv");
+    std::fs::write(&short, "iteration,seconds,photons,mse\n1,0.1,10,0.5\n").unwrap();
+    let (code, _, err) = tool(&["plot", short.to_str().unwrap(), "-o", png.to_str().unwrap()]);
     assert_eq!(code, Some(1));
-    assert!(err.contains("no 'psnr' column"), "{err}");
+    assert!(err.contains("no 'relmse' column"), "{err}");
+    let (code, _, err) = tool(&["plot", a.to_str().unwrap(), "-o", png.to_str().unwrap(), "--metric", "psnr"]);
+    assert_eq!(code, Some(2), "clap rejects an unknown metric");
+    assert!(err.contains("invalid value 'psnr'"), "{err}");
 }
 
 #[test]
@@ -177,6 +182,11 @@ fn report_tabulates_the_ladder_and_writes_its_files() {
     assert!(csv.starts_with("iteration,seconds,photons,mse,rmse,relmse\n"));
     assert_eq!(csv.lines().count(), 5, "header and four iterations");
     let (code, _, err) = tool(&["report", scene, "--reference", reference.to_str().unwrap()]);
-    assert_eq!(code, Some(1));
-    assert!(err.contains("exactly one of --seconds or --iterations"), "{err}");
+    assert_eq!(code, Some(2));
+    assert!(err.contains("--seconds <SECONDS>"), "a budget ladder is required: {err}");
+    // -o into a folder that does not exist yet makes it.
+    let nested = d.join("new/folder/r.md");
+    let (code, _, err) = tool(&[&args[..], &["--photons", "2000", "-o", nested.to_str().unwrap()]].concat());
+    assert_eq!(code, Some(0), "{err}");
+    assert!(nested.exists());
 }
