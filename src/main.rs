@@ -88,7 +88,7 @@ struct RenderArgs {
     #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u64, 0>)]
     seed: Option<u64>,
     /// SPPM iterations (at least 1), overriding the scene's.
-    #[arg(long, alias = "iterations", allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
+    #[arg(long, visible_alias = "iterations", allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
     spp: Option<u32>,
     /// Divide the iteration count by 16 (at least 1 remains), as pbrt-v3 does.
     #[arg(long)]

@@ -289,7 +289,7 @@ impl ParamList {
         match (&p.values, p.ty) {
             (Values::Floats(v), _) if v.len() == 1 => Ok(Some(FloatValue::Const(v[0]))),
             (Values::Strings(v), ParamType::Texture) if v.len() == 1 => Ok(Some(FloatValue::Texture(v[0].clone()))),
-            _ => Err(Diagnostic::error(p.span, format!("\"{name}\" needs exactly one value"))),
+            _ => Err(Diagnostic::error(p.span, format!("\"{} {name}\" needs exactly one value", p.type_name))),
         }
     }
 

@@ -305,7 +305,10 @@ impl RenderOptions {
             Err(Diagnostic::error(at, Limits::over(format!("{what} {value}"), name_of_limit(name), limit)))
         };
         over("maxdepth", max_depth as u64, limits.max_depth, "maxdepth")?;
-        over("photonsperiteration", photons, limits.photons, "photonsperiteration")?;
+        // The default (one photon per pixel) is bounded by the pixel limit already.
+        if p.named("photonsperiteration").is_some() {
+            over("photonsperiteration", photons, limits.photons, "photonsperiteration")?;
+        }
         let radius = values::float(p, "radius", 1.0, Range::Positive)?;
         let seed = match p.int("seed")? {
             Some(s) => s as u64,

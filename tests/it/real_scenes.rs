@@ -1,5 +1,6 @@
-//! The third-party scenes in ../shared/scenes that use only our subset load.
-//! (Skipped, with a message, when the folder is absent.)
+//! The third-party scenes in ../shared/scenes that use only our subset load. These
+//! tests are opt-in (`--include-ignored`, which .ci/run uses), since the folder sits
+//! beside the repository, not in it; without the folder they fail under CI.
 
 use crate::common::{load_file, root};
 use std::path::PathBuf;
@@ -9,7 +10,7 @@ fn shared() -> Option<PathBuf> {
     if dir.is_dir() {
         Some(dir)
     } else {
-        eprintln!("skipped: ../shared/scenes is not present next to the repository");
+        crate::common::missing_prerequisite("../shared/scenes is not present next to the repository");
         None
     }
 }
@@ -35,6 +36,7 @@ fn walk(dir: &std::path::Path, out: &mut Vec<PathBuf>) {
 }
 
 #[test]
+#[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
 fn every_shared_scene_in_the_subset_loads() {
     let Some(dir) = shared() else { return };
     let mut files = Vec::new();
@@ -59,6 +61,7 @@ fn every_shared_scene_in_the_subset_loads() {
 }
 
 #[test]
+#[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
 fn caustic_glass_is_read_as_pbrt_reads_it() {
     let Some(dir) = shared() else { return };
     let s = load_file(&dir.join("pbrt-v3-scenes/caustic-glass/f16-9a.pbrt")).expect("loads");
@@ -88,6 +91,7 @@ fn caustic_glass_is_read_as_pbrt_reads_it() {
 }
 
 #[test]
+#[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
 fn buddha_fractal_instances_one_mesh_25250_times() {
     let Some(dir) = shared() else { return };
     let s = load_file(&dir.join("pbrt-v3-scenes/buddha-fractal/buddha-fractal.pbrt")).expect("loads");
