@@ -489,10 +489,12 @@ impl StatementReader {
     fn param(&mut self, decl: Tok) -> Result<Param, Diagnostic> {
         let text = decode_string(self.text(decl.span));
         let mut words = text.split_ascii_whitespace();
-        let (Some(type_name), Some(name)) = (words.next(), words.next()) else {
+        let (Some(type_name), Some(name), None) = (words.next(), words.next(), words.next()) else {
             return Err(Diagnostic::error(
                 decl.span,
-                format!("parameter declaration \"{text}\" needs a type and a name (or a directive keyword is missing)"),
+                format!(
+                    "parameter declaration \"{text}\" must be a type and a name, like \"float radius\" (or a directive keyword is missing)"
+                ),
             ));
         };
         let Some((ty, evidence)) = ParamType::from_keyword(type_name) else {

@@ -200,7 +200,8 @@ fn bump_maps(ty: &str, p: &ParamList, r: &mut dyn Resolver) {
 /// a spectrum). Rough ones render smooth (noted).
 fn dielectric(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
     let eta_name = if ty == "glass" && p.named("eta").is_none() { "index" } else { "eta" };
-    let eta = if values::given(p, eta_name, &[ParamType::Float, ParamType::Texture]) {
+    // v3 glass takes a float (texture); v4 dielectric also a spectrum.
+    let eta = if ty == "glass" || values::given(p, eta_name, &[ParamType::Float, ParamType::Texture]) {
         float(p, eta_name, 1.5, Range::Positive, r)?
     } else {
         // A spectral index (v4): RGB has one index, its luminance-weighted mean.
@@ -341,7 +342,9 @@ fn mapping(p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<UvMapping> {
 }
 
 fn image_texture(p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<TextureKind> {
-    let name = p.string("filename")?.ok_or_else(|| Diagnostic::error(at, "imagemap needs \"string filename\""))?;
+    let name = p
+        .string("filename")?
+        .ok_or_else(|| p.wrong_type().unwrap_or_else(|| Diagnostic::error(at, "imagemap needs \"string filename\"")))?;
     let name_at = p.named("filename").map_or(at, |f| f.value_span);
     let map = mapping(p, at, r)?;
     let wrap = match values::choice(p, "wrap", "repeat", &["repeat", "clamp", "black", "octahedralsphere"])? {

@@ -236,7 +236,7 @@ impl RenderOptions {
         }
         if kind == CameraKind::Perspective && !(fov > 0.0 && fov < 180.0) {
             return Err(Diagnostic::error(
-                e.name_span,
+                p.named("fov").map_or(e.name_span, |f| f.value_span),
                 format!("\"fov\" must be between 0 and 180 degrees, not {fov}"),
             ));
         }
@@ -283,13 +283,15 @@ impl RenderOptions {
             (None, Syntax::V4) => self.pixel_samples()?,
         };
         if iterations as u64 > limits.iterations {
-            let at = p.named("iterations").or(p.named("numiterations")).map_or(e.name_span, |x| x.value_span);
+            let sampler = self.sampler.as_ref().and_then(|s| s.params.named("pixelsamples"));
+            let named = p.named("iterations").or(p.named("numiterations")).or(sampler);
+            let at = named.map_or(e.name_span, |x| x.value_span);
             let what = format!("{iterations} SPPM iterations");
             return Err(Diagnostic::error(at, Limits::over(what, "iterations", limits.iterations)));
         }
         let max_depth = match p.int("maxdepth")? {
             Some(d) if d < 0 => {
-                return Err(err_at(p.named("maxdepth"), e, format!("\"maxdepth\" must be >= 0, not {d}")));
+                return Err(err_at(p.named("maxdepth"), e, format!("\"maxdepth\" must be at least 0, not {d}")));
             }
             d => d.unwrap_or(5) as u32,
         };

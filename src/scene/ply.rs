@@ -155,11 +155,6 @@ fn check_counts(header: &Header, payload: usize) -> Result<(), String> {
     Ok(())
 }
 
-/// ply-rs messages run over several lines; the first one says what and where.
-fn first_line(e: &std::io::Error) -> String {
-    e.to_string().lines().next().unwrap_or_default().trim_end().to_string()
-}
-
 fn vertex_property_names(header: &Header) -> Vec<&str> {
     header.elements.get("vertex").map_or(vec![], |e| e.properties.keys().map(String::as_str).collect())
 }
@@ -278,8 +273,8 @@ fn list(p: &Property) -> Result<Vec<i64>, String> {
 }
 
 fn read_ascii(reader: &mut impl BufRead, header: &Header, got: &mut Collected) -> Result<(), String> {
-    let err = |e: std::io::Error| format!("bad PLY data: {}", first_line(&e));
     for (name, def) in &header.elements {
+        let err = |_| format!("bad ASCII data in the \"{name}\" elements (a value that is not a number, or too few)");
         match name.as_str() {
             "vertex" => {
                 let v = Parser::<AsciiVertex>::new().read_payload_for_element(reader, def, header).map_err(err)?;

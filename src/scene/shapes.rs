@@ -98,7 +98,10 @@ fn file_mesh(
     let at = p.named("filename").map_or(span, |f| f.value_span);
     let path = resolve(&name);
     let mut m = if ty == "plymesh" {
-        ply::load(&path, limits).map_err(|e| Diagnostic::error(at, format!("{name}: {e}")))?
+        ply::load(&path, limits).map_err(|e| {
+            // Read errors name the file already; format errors get its name first.
+            Diagnostic::error(at, if e.starts_with("cannot read") { e } else { format!("{name}: {e}") })
+        })?
     } else {
         obj::load(&path, limits).map_err(|e| Diagnostic::error(at, e))?
     };

@@ -24,7 +24,7 @@ fn bad_cases() -> Vec<(String, String)> {
 #[test]
 fn every_bad_input_gives_its_located_error() {
     let cases = bad_cases();
-    assert!(cases.len() >= 30, "only {} bad inputs", cases.len());
+    assert!(cases.len() >= 200, "only {} bad inputs", cases.len());
     let mut failures = Vec::new();
     for (name, expected) in &cases {
         let rel = format!("tests/data/bad/{name}");
