@@ -160,7 +160,7 @@ fn load(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> {
             return Err(fail(Path::new("--limit"), e));
         }
     }
-    let opts = LoadOptions { syntax: common.syntax, limits };
+    let opts = LoadOptions { syntax: common.syntax, limits, ..Default::default() };
     let loaded = if scene.as_os_str() == "-" {
         let mut bytes = Vec::new();
         let max = limits.file_bytes;
@@ -255,7 +255,8 @@ fn check_output(path: &Path, image: bool) -> Result<(), String> {
 /// Renders a loaded scene and writes the image (and ERRORS.csv).
 fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     use pbrt_sppm::imageio::{read_image, write_image};
-    use pbrt_sppm::render::{RenderScene, RenderSettings, errors_csv};
+    use pbrt_sppm::integrators::{RenderSettings, errors_csv};
+    use pbrt_sppm::render::RenderScene;
     let quiet = args.common.quiet;
     let (outfile, blame) = output_path(&scene, args);
     if let Err(e) = check_output(&outfile, true) {
@@ -344,7 +345,7 @@ fn check_overrides(scene: &SceneDescription, args: &RenderArgs) -> Result<(), St
     Ok(())
 }
 
-fn print_stats(out: &pbrt_sppm::render::RenderOutput) {
+fn print_stats(out: &pbrt_sppm::integrators::RenderOutput) {
     let s = &out.stats;
     let peak = std::fs::read_to_string("/proc/self/status")
         .ok()

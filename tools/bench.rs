@@ -415,7 +415,8 @@ fn scene_clone_empty() -> pbrt_sppm::scene::SceneDescription {
 }
 
 fn sppm_bench(mut scenes: Vec<PathBuf>, runs: usize) -> ExitCode {
-    use pbrt_sppm::render::{RenderScene, RenderSettings};
+    use pbrt_sppm::integrators::RenderSettings;
+    use pbrt_sppm::render::RenderScene;
     if scenes.is_empty() {
         scenes = ["sppm-bench", "cornell-glass", "quadric-gallery", "caustic-ring"]
             .iter()

@@ -15,7 +15,8 @@
 
 use crate::plot::{Series, draw, log_slope};
 use pbrt_sppm::imageio::{read_image, write_image, write_text};
-use pbrt_sppm::render::{ErrorRow, RenderScene, RenderSettings, errors_csv};
+use pbrt_sppm::integrators::{ErrorRow, RenderSettings, errors_csv};
+use pbrt_sppm::render::RenderScene;
 use pbrt_sppm::scene::{LoadOptions, load_scene};
 use std::fmt::Write;
 use std::path::PathBuf;

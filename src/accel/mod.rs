@@ -400,7 +400,7 @@ fn instance_bounds(m: &DMat4, b: Bounds3) -> Bounds3 {
     if b.is_empty() {
         return b;
     }
-    let [lo, hi] = crate::scene::transform_bounds(m, [b.min.as_dvec3(), b.max.as_dvec3()]);
+    let [lo, hi] = crate::math::bounds::transform_bounds(m, [b.min.as_dvec3(), b.max.as_dvec3()]);
     let grow = |v: DVec3, s: f64| (v + s * (v.abs() * 1e-6 + DVec3::splat(1e-30))).as_vec3();
     Bounds3 { min: grow(lo, -1.0), max: grow(hi, 1.0) }
 }

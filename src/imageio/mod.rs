@@ -152,37 +152,29 @@ pub fn write_png(path: &Path, img: &RgbImage) -> Res<()> {
 /// Reads an image for a scene: a regular file within `limits.file_bytes`, whose size
 /// (from its header, before decoding) is within `limits.texture_pixels`.
 pub fn read_image_within(path: &Path, limits: &crate::limits::Limits) -> Res<RgbImage> {
-    let shown = path.display();
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
-    if !meta.is_file() {
-        return Err(format!("cannot read \"{shown}\": not a regular file"));
-    }
-    if meta.len() > limits.file_bytes {
-        let what = format!("\"{shown}\" has {} bytes, which", meta.len());
-        return Err(crate::limits::Limits::over(what, "file-bytes", limits.file_bytes));
-    }
-    let (w, h) = dimensions(path)?;
-    if w as u64 * h as u64 > limits.texture_pixels {
-        let what = format!("\"{shown}\" is {w}x{h} pixels, which");
-        return Err(crate::limits::Limits::over(what, "texture-pixels", limits.texture_pixels));
-    }
-    read_image(path)
+    let bytes = crate::limits::read_file(path, limits)?;
+    decode_image(&bytes, is_png(path), limits.texture_pixels).map_err(|e| format!("\"{}\": {e}", path.display()))
 }
 
-/// Width and height from the file's header alone.
-fn dimensions(path: &Path) -> Res<(usize, usize)> {
-    let shown = path.display();
-    if is_png(path) {
-        let (w, h) = image::ImageReader::open(path)
-            .and_then(|r| r.with_guessed_format())
-            .map_err(|e| format!("cannot read \"{shown}\": {e}"))?
+/// Decodes an EXR or PNG held in memory, refusing (from the header alone) images of
+/// more than `max_pixels` pixels.
+pub fn decode_image(bytes: &[u8], png: bool, max_pixels: u64) -> Res<RgbImage> {
+    let (w, h) = if png {
+        let (w, h) = image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Png)
             .into_dimensions()
-            .map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
-        return Ok((w as usize, h as usize));
+            .map_err(|e| format!("not a readable PNG: {e}"))?;
+        (w as u64, h as u64)
+    } else {
+        let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+            .map_err(|e| format!("not a readable EXR: {e}"))?;
+        let header = meta.headers.first().ok_or("not a readable EXR: no image in the file")?;
+        (header.layer_size.width() as u64, header.layer_size.height() as u64)
+    };
+    if w.saturating_mul(h) > max_pixels {
+        let what = format!("the image's {w}x{h} pixels");
+        return Err(crate::limits::Limits::over(what, "texture-pixels", max_pixels));
     }
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
-    let header = meta.headers.first().ok_or_else(|| format!("cannot read \"{shown}\": no image in the file"))?;
-    Ok((header.layer_size.width(), header.layer_size.height()))
+    if png { decode_png(bytes) } else { decode_exr(bytes) }
 }
 
 fn is_png(path: &Path) -> bool {
@@ -198,12 +190,22 @@ pub fn read_image(path: &Path) -> Res<RgbImage> {
 }
 
 pub fn read_exr(path: &Path) -> Res<RgbImage> {
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
-        |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * *w + pos.x()] = [r, g, b],
-    )
-    .map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
+    decode_exr(&bytes).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))
+}
+
+fn decode_exr(bytes: &[u8]) -> Res<RgbImage> {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+            |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * *w + pos.x()] = [r, g, b],
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| e.to_string())?;
     let layer = &image.layer_data;
     let a = &layer.attributes;
     let get_f32 = |k: &str| match a.other.get(&Text::from(k)) {
@@ -232,7 +234,13 @@ pub fn read_exr(path: &Path) -> Res<RgbImage> {
 }
 
 pub fn read_png(path: &Path) -> Res<RgbImage> {
-    let img = image::open(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?.to_rgb32f();
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
+    decode_png(&bytes).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))
+}
+
+fn decode_png(bytes: &[u8]) -> Res<RgbImage> {
+    let img =
+        image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(|e| e.to_string())?.to_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     let pixels = img.pixels().map(|p| p.0.map(from_srgb)).collect();
     Ok(RgbImage { width: w, height: h, pixels, origin: (0, 0), full: (w, h), meta: ImageMeta::default() })

@@ -1,7 +1,17 @@
 //! Axis-aligned boxes with pbrt's conservative ray–box test.
 
 use super::float::gamma;
-use glam::Vec3;
+use glam::{DMat4, DVec3, Vec3};
+
+/// Bounds of a box's 8 corners under `m` (f64, for placing shapes and instances).
+pub fn transform_bounds(m: &DMat4, b: [DVec3; 2]) -> [DVec3; 2] {
+    (0..8)
+        .map(|i| {
+            let c = DVec3::new(b[i & 1].x, b[(i >> 1) & 1].y, b[(i >> 2) & 1].z);
+            m.transform_point3(c)
+        })
+        .fold([DVec3::INFINITY, DVec3::NEG_INFINITY], |[lo, hi], p| [lo.min(p), hi.max(p)])
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds3 {

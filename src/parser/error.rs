@@ -50,6 +50,13 @@ impl LoadError {
         LoadError { location: None, file: file.into(), message: message.into(), source_line: None }
     }
 
+    /// A problem with a whole file, reported at its first line and column.
+    pub fn at_start(file: impl Into<String>, message: impl Into<String>) -> LoadError {
+        let file = file.into();
+        let location = Location { file: file.clone(), line: 1, column: 1 };
+        LoadError { location: Some(location), file, message: message.into(), source_line: None }
+    }
+
     /// Resolves a diagnostic's span now that it is about to be printed.
     pub fn from_diagnostic(sources: &SourceMap, d: &Diagnostic) -> LoadError {
         match d.span {

@@ -154,6 +154,8 @@ pub struct StatementReader {
     /// The first version-specific construct seen, if any.
     pub evidence: Option<(Syntax, Span, String)>,
     pub limits: Limits,
+    /// Included files served from memory by name (see `LoadOptions::in_memory`).
+    pub in_memory: std::collections::HashMap<String, Arc<[u8]>>,
 }
 
 /// Reads a scene file's bytes within the limits, decompressing gzip and rejecting UTF-16.
@@ -183,6 +185,7 @@ impl StatementReader {
             warnings: Vec::new(),
             evidence: None,
             limits,
+            in_memory: Default::default(),
         })
     }
 
@@ -464,7 +467,10 @@ impl StatementReader {
             return Err(Diagnostic::error(span, Limits::over(what, "include-depth", depth)));
         }
         let path = self.resolve_path(name);
-        let bytes = read_scene_bytes(&path, &self.limits).map_err(|e| Diagnostic::error(span, e))?;
+        let bytes = match self.in_memory.get(name) {
+            Some(b) => b.to_vec(),
+            None => read_scene_bytes(&path, &self.limits).map_err(|e| Diagnostic::error(span, e))?,
+        };
         let file =
             self.sources.add(&path, path.display().to_string(), bytes).map_err(|e| Diagnostic::error(span, e))?;
         let text = self.sources.file(file).text.clone();

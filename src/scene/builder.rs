@@ -44,19 +44,31 @@ pub struct LoadOptions {
     /// Overrides syntax detection (`--syntax v3|v4`).
     pub syntax: Option<Syntax>,
     pub limits: Limits,
+    /// Files `Include`/`Import` read from memory instead of disk, by the name the scene
+    /// gives (for fuzzing and tests).
+    pub in_memory: HashMap<String, Arc<[u8]>>,
 }
 
 /// Reads, parses and builds a scene file.
 pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
-    let bytes = read_scene_bytes(path, &opts.limits).map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
+    let bytes = read_scene_bytes(path, &opts.limits).map_err(|e| {
+        // A file that exists but cannot be used (UTF-16, corrupt gzip, too large) is
+        // blamed at its start; a missing one has no line to point at.
+        let name = path.display().to_string();
+        match path.is_file() {
+            true => LoadError::at_start(name, e),
+            false => LoadError::in_file(name, e),
+        }
+    })?;
     load_scene_from_bytes(path, bytes, opts)
 }
 
 /// As [`load_scene`], with the top-level file's bytes given (its path still anchors
 /// relative file names).
 pub fn load_scene_from_bytes(path: &Path, bytes: Vec<u8>, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
-    let reader = StatementReader::new(path, bytes, opts.limits)
+    let mut reader = StatementReader::new(path, bytes, opts.limits)
         .map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
+    reader.in_memory = opts.in_memory.clone();
     let mut b = Builder::new(reader, opts.clone());
     match b.run() {
         Ok(scene) => Ok(scene),

@@ -18,6 +18,7 @@ pub mod ply;
 pub mod shapes;
 pub mod values;
 
+use crate::math::bounds::transform_bounds;
 use crate::parser::Syntax;
 use crate::parser::error::Located;
 use crate::shapes::{Quadric, TriangleMesh};
@@ -195,14 +196,4 @@ impl SceneDescription {
 
 fn union(a: [DVec3; 2], b: [DVec3; 2]) -> [DVec3; 2] {
     [a[0].min(b[0]), a[1].max(b[1])]
-}
-
-/// Bounds of the 8 transformed corners.
-pub fn transform_bounds(m: &DMat4, b: [DVec3; 2]) -> [DVec3; 2] {
-    (0..8)
-        .map(|i| {
-            let c = DVec3::new(b[i & 1].x, b[(i >> 1) & 1].y, b[(i >> 2) & 1].z);
-            m.transform_point3(c)
-        })
-        .fold([DVec3::INFINITY, DVec3::NEG_INFINITY], |[lo, hi], p| [lo.min(p), hi.max(p)])
 }

@@ -39,8 +39,12 @@ struct Collected {
 
 /// Loads a PLY file. Errors are plain messages; the caller adds the location.
 pub fn load(path: &std::path::Path, limits: &Limits) -> Result<TriangleMesh, String> {
-    let bytes = crate::limits::read_file(path, limits)?;
-    let (header, body) = read_header(&bytes)?;
+    parse(&crate::limits::read_file(path, limits)?)
+}
+
+/// Parses a PLY file's bytes (already decompressed).
+pub fn parse(bytes: &[u8]) -> Result<TriangleMesh, String> {
+    let (header, body) = read_header(bytes)?;
     check_header(&header)?;
     check_counts(&header, body.len())?;
     let mut reader = body;

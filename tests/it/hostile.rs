@@ -207,7 +207,7 @@ fn a_gzip_bomb_stops_at_the_file_limit() {
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
     let (code, err) = sppm(&["check", cut.to_str().unwrap()]);
     assert_eq!(code, Some(1));
-    assert!(err.starts_with(&format!("{}: error: ", cut.display())) && err.contains("truncated gzip"), "{err}");
+    assert!(err.starts_with(&format!("{}:1:1: error: ", cut.display())) && err.contains("truncated gzip"), "{err}");
 }
 
 #[test]

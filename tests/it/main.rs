@@ -4,6 +4,7 @@ mod bad_inputs;
 mod camera_image;
 mod common;
 mod directives;
+mod fuzz_regressions;
 mod hostile;
 mod imgtool;
 mod instancing;

@@ -4,13 +4,14 @@
 
 use crate::common::{root, scene};
 use pbrt_sppm::imageio::read_image;
-use pbrt_sppm::render::{ERRORS_HEADER, RenderScene, RenderSettings};
+use pbrt_sppm::integrators::{ERRORS_HEADER, RenderSettings};
+use pbrt_sppm::render::RenderScene;
 
 fn mean(px: &[[f32; 3]]) -> f64 {
     px.iter().flat_map(|p| p.iter()).map(|&c| c as f64).sum::<f64>() / (3 * px.len()) as f64
 }
 
-fn render(text: &str, settings: &RenderSettings) -> pbrt_sppm::render::RenderOutput {
+fn render(text: &str, settings: &RenderSettings) -> pbrt_sppm::integrators::RenderOutput {
     RenderScene::new(scene(text)).render(settings).expect("renders")
 }
 

@@ -1,0 +1,55 @@
+//! Entry points the fuzz targets (`tools/fuzz`) and their regression test share: each
+//! takes arbitrary bytes and must return, never panic.
+//!
+//! ```text
+//! cargo +nightly fuzz run --fuzz-dir tools/fuzz builder
+//! ```
+
+use crate::limits::Limits;
+use crate::parser::stmt::StatementReader;
+use crate::scene::{LoadOptions, load_scene_from_bytes};
+use std::path::Path;
+
+/// Small limits, so that a fuzzer's inputs cannot ask for gigabytes.
+pub fn limits() -> Limits {
+    Limits {
+        pixels: 1 << 16,
+        photons: 1 << 16,
+        iterations: 1 << 10,
+        max_depth: 1 << 10,
+        file_bytes: 1 << 20,
+        texture_pixels: 1 << 16,
+        include_depth: 16,
+    }
+}
+
+/// Tokenizer and statement reader: reads statements until the end or an error.
+pub fn statements(data: &[u8]) {
+    let Ok(mut reader) = StatementReader::new(Path::new("fuzz.pbrt"), data.to_vec(), limits()) else { return };
+    while let Ok(Some(_)) = reader.next_stmt() {}
+}
+
+/// The whole builder, as `check` runs it. Bytes after the first NUL are the file
+/// `Include "inc.pbrt"` (and `Import`) reads, from memory.
+pub fn builder(data: &[u8]) {
+    let (main, inc) = match data.iter().position(|&b| b == 0) {
+        Some(i) => (&data[..i], &data[i + 1..]),
+        None => (data, &[][..]),
+    };
+    let mut opts = LoadOptions { limits: limits(), ..Default::default() };
+    opts.in_memory.insert("inc.pbrt".into(), inc.into());
+    if let Ok(scene) = load_scene_from_bytes(Path::new("/nonexistent/fuzz.pbrt"), main.to_vec(), &opts) {
+        let _ = crate::check::report(&scene, true);
+    }
+}
+
+/// The PLY reader.
+pub fn ply(data: &[u8]) {
+    let _ = crate::scene::ply::parse(data);
+}
+
+/// The image readers: the first byte picks PNG (odd) or EXR (even).
+pub fn image(data: &[u8]) {
+    let Some((&first, rest)) = data.split_first() else { return };
+    let _ = crate::imageio::decode_image(rest, first % 2 == 1, limits().texture_pixels);
+}
