@@ -8,7 +8,6 @@ use crate::interaction::SurfaceInteraction;
 use crate::lights::{Emitter, Light, WorldSphere, quadric_area};
 use crate::materials::{Bsdf, Material, Textures};
 use crate::math::frame::coordinate_system;
-use crate::parser::Syntax;
 use crate::sampling::Distribution1D;
 use crate::scene::{AreaLightDesc, Film, Geometry as ShapeGeometry, Integrator, SceneDescription};
 use crate::shapes::MeshFlags;
@@ -29,7 +28,6 @@ pub struct RenderScene {
     pub camera: Camera,
     pub film: Film,
     pub integrator: Integrator,
-    pub syntax: Syntax,
     pub materials: Vec<Material>,
     pub textures: Textures,
     world_shape_material: Vec<u32>,
@@ -66,7 +64,6 @@ impl RenderScene {
             .map(|s| (s.geometry.clone(), s.area_light, s.reverse_orientation, s.swaps_handedness()))
             .collect();
         let area_params = scene.area_lights.clone();
-        let syntax = scene.syntax;
         let film = scene.film.clone();
         let integrator = scene.integrator.clone();
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
@@ -78,7 +75,6 @@ impl RenderScene {
             camera,
             film,
             integrator,
-            syntax,
             materials,
             textures,
             world_shape_material,

@@ -110,7 +110,7 @@ fn point3(p: &ParamList, name: &str, default: [f32; 3]) -> Res<DVec3> {
     Ok(DVec3::from(v.map(f64::from)))
 }
 
-/// `Some(scale)` to make emission of luminance `lum` match a given `power` (v4).
+/// v4's `power` in watts, when given and positive (≤ 0 means "not given", as in pbrt).
 fn power(p: &ParamList) -> Res<Option<f32>> {
     Ok(Some(values::float(p, "power", -1.0, Range::Any)?).filter(|&w| w > 0.0))
 }

@@ -20,7 +20,6 @@
 use super::approx::Approx;
 use super::values::{self, Range, Res, SpectrumContext, SpectrumOrTexture};
 use crate::imageio::RgbImage;
-use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList, ParamType};
 use crate::parser::source::Span;
@@ -122,8 +121,6 @@ pub trait Resolver {
     /// the parameter naming it.
     fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<u32>;
     fn approximate(&mut self, at: Span, what: String, how: Approx);
-    fn warn(&mut self, d: Diagnostic);
-    fn syntax(&self) -> Syntax;
     fn spectra(&self) -> SpectrumContext<'_>;
     /// An image for `imagemap` (cached); errors are plain messages.
     fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String>;

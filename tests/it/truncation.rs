@@ -81,3 +81,31 @@ fn truncated_ply_files_never_panic() {
         assert_eq!(loaded, expected, "{source}");
     }
 }
+
+#[test]
+fn truncated_gzip_scenes_never_panic_and_say_where() {
+    use std::io::Write;
+    let dir = std::env::temp_dir().join(format!("pbrt-sppm-gzcut-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read(root().join("pbrt-scenes/v3/cornell-glass.pbrt")).unwrap();
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    enc.write_all(&text).unwrap();
+    let gz = enc.finish().unwrap();
+    let path = dir.join("cut.pbrt.gz");
+    let mut loaded = 0;
+    let cuts: std::collections::BTreeSet<usize> = (0..=gz.len()).step_by(3).chain([gz.len()]).collect();
+    for cut in cuts {
+        std::fs::write(&path, &gz[..cut]).unwrap();
+        let result = std::panic::catch_unwind(|| crate::common::load_file(&path))
+            .unwrap_or_else(|_| panic!("gzip cut at byte {cut} panicked"));
+        match result {
+            Ok(_) => loaded += 1,
+            // Every error is located: a cut gzip stream at the file's start.
+            Err(e) => {
+                assert!(e.one_line().starts_with(&format!("{}:1:1: error: ", path.display())), "{}", e.one_line())
+            }
+        }
+    }
+    // Only the whole stream and the empty file (an empty scene) load.
+    assert_eq!(loaded, 2);
+}

@@ -242,14 +242,6 @@ impl Resolver for Scoped<'_> {
         self.b.note(at, what, how);
     }
 
-    fn warn(&mut self, d: Diagnostic) {
-        self.b.warnings.push(d);
-    }
-
-    fn syntax(&self) -> Syntax {
-        self.b.syntax()
-    }
-
     fn spectra(&self) -> SpectrumContext<'_> {
         self.b.spectrum_context(false)
     }
