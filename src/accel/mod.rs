@@ -179,7 +179,9 @@ impl Blas {
                 }
                 ShapeRef::Mesh { mesh, .. } => {
                     let m = &meshes[*mesh as usize];
-                    for t in 0..m.triangle_count() {
+                    // Zero-area triangles are left out: `localize` then drops them from
+                    // the mesh, and the map back to file numbers skips them.
+                    for t in (0..m.triangle_count()).filter(|&t| !m.is_degenerate(t)) {
                         prims.push(Prim { shape: i as u32, tri: t as u32 });
                         bounds.push(m.triangle_bounds(t));
                     }

@@ -160,15 +160,8 @@ pub fn validate(mesh: &TriangleMesh) -> Result<(), String> {
     Ok(())
 }
 
-/// One warning counting zero-area triangles: they are never hit and never emit.
+/// One warning counting zero-area triangles, which the renderer drops.
 pub fn degenerate_warning(mesh: &TriangleMesh) -> Option<String> {
-    let n = (0..mesh.triangle_count())
-        .filter(|&t| {
-            let [a, b, c] = mesh.vertices(t);
-            (b - a).cross(c - a).length_squared() == 0.0
-        })
-        .count();
-    (n > 0).then(|| {
-        format!("{n} of {} triangles have zero area; they are never hit and never emit", mesh.triangle_count())
-    })
+    let n = (0..mesh.triangle_count()).filter(|&t| mesh.is_degenerate(t)).count();
+    (n > 0).then(|| format!("{n} of {} triangles have zero area and are dropped", mesh.triangle_count()))
 }

@@ -28,6 +28,12 @@ impl TriangleMesh {
         [v(0), v(1), v(2)]
     }
 
+    /// Zero area (in f64, from the stored corners): never hit, never sampled.
+    pub fn is_degenerate(&self, tri: usize) -> bool {
+        let [a, b, c] = self.vertices(tri);
+        (b - a).cross(c - a).length_squared() == 0.0
+    }
+
     /// Σ ½‖(p1 − p0) × (p2 − p0)‖.
     pub fn area(&self) -> f64 {
         (0..self.triangle_count())

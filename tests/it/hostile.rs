@@ -409,3 +409,26 @@ fn approximations_are_listed_and_the_readme_names_every_kind() {
         assert!(readme.contains(a.how()), "the README does not list: {}", a.how());
     }
 }
+
+#[test]
+fn zero_area_triangles_are_dropped_and_the_rest_keep_their_file_numbers() {
+    // Triangle 1 is a sliver of zero area (a repeated corner); 0 and 2 are real.
+    let text = "WorldBegin AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \
+                Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0  5 0 0  6 0 0  5 1 0] \
+                \"integer indices\" [0 1 2  0 0 1  3 4 5]";
+    let s = crate::common::scene(text);
+    assert!(
+        crate::common::warnings(&s).iter().any(|w| w == "1 of 3 triangles have zero area and are dropped"),
+        "{:?}",
+        s.warnings
+    );
+    let tracer = pbrt_sppm::trace::Tracer::new(s);
+    let hit = |o: &str| -> serde_json::Value {
+        let line = tracer.line(&format!("{o} 0 0 1")).unwrap().unwrap();
+        serde_json::from_str(&line.to_string()).unwrap()
+    };
+    assert_eq!(hit("5.2 0.2 -1")["triangle"], 2, "file numbers survive the drop");
+    assert_eq!(hit("0.2 0.2 -1")["triangle"], 0);
+    let rs = pbrt_sppm::render::RenderScene::new(crate::common::scene(text));
+    assert_eq!(rs.lights.len(), 2, "one light per kept triangle");
+}
