@@ -162,8 +162,9 @@ fn area_lights(
                 for t in 0..m.triangle_count() {
                     let [a, b, c] = m.vertices(t);
                     let area = (0.5 * (b - a).cross(c - a).length()) as f32;
-                    // Zero-area triangles keep their slot (lights are found by triangle
-                    // number) but emit nothing.
+                    // The BVH dropped zero-area triangles; one whose area underflows in
+                    // f32 still keeps its slot (lights are found by triangle) but emits
+                    // nothing.
                     shape_lights.push((Emitter::Triangle { mesh: *mesh, tri: t as u32, flags }, area));
                 }
             }

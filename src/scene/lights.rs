@@ -17,7 +17,7 @@ use super::values::{self, Range, Res, SpectrumContext};
 use crate::imageio::RgbImage;
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
-use crate::parser::params::ParamList;
+use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::spectrum::{Rgb, luminance};
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -91,12 +91,12 @@ pub struct LightContext<'a> {
 
 /// Light emission: the spectrum `name` (default 1) times `scale` (a float, or in v3 a
 /// spectrum).
-fn emission(p: &ParamList, name: &str, ctx: &LightContext) -> Res<Rgb> {
-    let l = values::rgb(p, name, &ctx.spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE);
-    let scale = match p.float("scale") {
-        Ok(Some(_)) => Vec3::splat(values::float(p, "scale", 1.0, Range::NonNegative)?),
-        Ok(None) => values::rgb(p, "scale", &ctx.spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE),
-        Err(e) => return Err(e),
+fn emission(p: &ParamList, name: &str, spectra: &SpectrumContext) -> Res<Rgb> {
+    let l = values::rgb(p, name, spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE);
+    let scale = if values::given(p, "scale", &[ParamType::Float]) {
+        Vec3::splat(values::float(p, "scale", 1.0, Range::NonNegative)?)
+    } else {
+        values::rgb(p, "scale", spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE)
     };
     Ok(l * scale)
 }
@@ -135,7 +135,7 @@ pub fn light(ty: &str, p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightCont
                 Syntax::V3 => m.transform_point3(DVec3::ZERO) + from,
                 Syntax::V4 => m.transform_point3(from),
             };
-            let mut i = emission(p, "I", ctx)?;
+            let mut i = emission(p, "I", &ctx.spectra)?;
             if let Some(w) = power(p)? {
                 i *= w / (4.0 * std::f32::consts::PI * luminance(i).max(1e-9));
             }
@@ -146,7 +146,7 @@ pub fn light(ty: &str, p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightCont
             let cone = values::float(p, "coneangle", 30.0, Range::NonNegative)?;
             let delta = values::float(p, "conedeltaangle", 5.0, Range::NonNegative)?;
             let (cos_total, cos_start) = (cone.to_radians().cos(), (cone - delta).to_radians().cos());
-            let mut i = emission(p, "I", ctx)?;
+            let mut i = emission(p, "I", &ctx.spectra)?;
             if let Some(w) = power(p)? {
                 let solid = 2.0 * std::f32::consts::PI * (1.0 - 0.5 * (cos_start + cos_total));
                 i *= w / (solid * luminance(i)).max(1e-9);
@@ -156,7 +156,7 @@ pub fn light(ty: &str, p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightCont
         }
         "distant" => {
             let (_, d) = direction(p, m, span)?;
-            let mut l = emission(p, "L", ctx)?;
+            let mut l = emission(p, "L", &ctx.spectra)?;
             if let Some(e) = Some(values::float(p, "illuminance", -1.0, Range::Any)?).filter(|&e| e > 0.0) {
                 l *= e / luminance(l).max(1e-9);
             }
@@ -169,7 +169,7 @@ pub fn light(ty: &str, p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightCont
 
 fn infinite(p: &ParamList, m: &DMat4, ctx: &mut LightContext) -> Res<LightKind> {
     values::ignored(p, &["portal"], "portals are not supported; the whole map is sampled", ctx.warnings);
-    let mut l = emission(p, "L", ctx)?;
+    let mut l = emission(p, "L", &ctx.spectra)?;
     let name = match p.string("mapname")? {
         Some(n) => Some((n, "mapname")),
         None => p.string("filename")?.map(|n| (n, "filename")),
@@ -219,15 +219,20 @@ fn upper_hemisphere_illuminance(img: &RgbImage) -> f32 {
 }
 
 /// A `diffuse` (v3 also `area`) area light, or `None` for other types.
-pub fn area_light(ty: &str, p: &ParamList, ctx: &mut LightContext) -> Res<Option<AreaLightDesc>> {
+pub fn area_light(
+    ty: &str,
+    p: &ParamList,
+    spectra: &SpectrumContext,
+    warnings: &mut Vec<Diagnostic>,
+) -> Res<Option<AreaLightDesc>> {
     if !matches!(ty, "diffuse" | "area") {
         return Ok(None);
     }
     values::no_effect(p, &["samples", "nsamples"]);
     let why = "image area lights are not supported; the light emits L uniformly";
-    values::ignored(p, &["filename"], why, ctx.warnings);
+    values::ignored(p, &["filename"], why, warnings);
     Ok(Some(AreaLightDesc {
-        l: emission(p, "L", ctx)?,
+        l: emission(p, "L", spectra)?,
         two_sided: p.bool("twosided")?.unwrap_or(false),
         power: power(p)?,
     }))

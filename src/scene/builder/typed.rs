@@ -109,18 +109,8 @@ impl Builder {
         let mut out = Vec::with_capacity(used.len());
         for i in used {
             let e = std::mem::replace(&mut self.area_light_entities[i as usize].0, Entity::default_named(""));
-            let mut no_image = |_: &str| Err::<Arc<RgbImage>, String>(String::new());
-            let mut no_note = |_: Span, _: String| {};
             let mut warnings = Vec::new();
-            let syntax = self.syntax();
-            let mut ctx = LightContext {
-                syntax,
-                spectra: self.spectrum_context(true),
-                image: &mut no_image,
-                warnings: &mut warnings,
-                missing: &mut no_note,
-            };
-            let desc = lights::area_light(&e.name, &e.params, &mut ctx);
+            let desc = lights::area_light(&e.name, &e.params, &self.spectrum_context(true), &mut warnings);
             self.warnings.append(&mut warnings);
             let desc = desc?.ok_or_else(|| Diagnostic::error(e.name_span, "unsupported area light"))?;
             finish_params(&e.params, &mut self.warnings)?;
