@@ -20,6 +20,7 @@ pub fn limits() -> Limits {
         file_bytes: 1 << 20,
         texture_pixels: 1 << 16,
         include_depth: 16,
+        triangles: 1 << 16,
     }
 }
 

@@ -29,6 +29,8 @@ pub struct Limits {
     pub texture_pixels: u64,
     /// Nested `Include`/`Import` files.
     pub include_depth: u64,
+    /// Triangles one `loopsubdiv` shape refines into.
+    pub triangles: u64,
 }
 
 impl Default for Limits {
@@ -41,12 +43,13 @@ impl Default for Limits {
             file_bytes: (1 << 32) - 1,
             texture_pixels: 1 << 28,
             include_depth: 64,
+            triangles: 1 << 28,
         }
     }
 }
 
 /// Every limit: its name on the command line and what it bounds.
-pub const NAMES: [(&str, &str); 7] = [
+pub const NAMES: [(&str, &str); 8] = [
     ("pixels", "film pixels"),
     ("photons", "photons per iteration"),
     ("iterations", "SPPM iterations"),
@@ -54,6 +57,7 @@ pub const NAMES: [(&str, &str); 7] = [
     ("file-bytes", "bytes of one input file (after gzip decompression)"),
     ("texture-pixels", "pixels of one texture image"),
     ("include-depth", "nested Include/Import files"),
+    ("triangles", "triangles of one subdivided (loopsubdiv) shape"),
 ];
 
 impl Limits {
@@ -66,6 +70,7 @@ impl Limits {
             "file-bytes" => &mut self.file_bytes,
             "texture-pixels" => &mut self.texture_pixels,
             "include-depth" => &mut self.include_depth,
+            "triangles" => &mut self.triangles,
             _ => return None,
         })
     }

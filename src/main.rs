@@ -65,7 +65,7 @@ struct Common {
     #[arg(long, value_parser = parse_syntax)]
     syntax: Option<Syntax>,
     /// Raise or lower a limit, NAME=N (pixels, photons, iterations, maxdepth, file-bytes,
-    /// texture-pixels, include-depth); may be repeated.
+    /// texture-pixels, include-depth, triangles); may be repeated.
     #[arg(long = "limit", value_name = "NAME=N")]
     limits: Vec<String>,
     /// Print no warnings and no summary (errors still go to standard error).

@@ -10,9 +10,9 @@
 use super::{mesh, obj, ply};
 use crate::limits::Limits;
 use crate::parser::error::Diagnostic;
-use crate::parser::params::{FloatValue, ParamList};
+use crate::parser::params::{FloatValue, ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::shapes::{Cone, Cylinder, Disk, Hyperboloid, Paraboloid, Quadric, Sphere, TriangleMesh};
+use crate::shapes::{Cone, Cylinder, Disk, Hyperboloid, Paraboloid, Quadric, Sphere, TriangleMesh, loopsubdiv};
 use glam::Vec3;
 use std::path::PathBuf;
 
@@ -80,9 +80,35 @@ pub fn build(
             let m = mesh::from_params(p, span, warn)?;
             Ok(Some(Built::Mesh { mesh: m, kind: "trianglemesh", filename: None }))
         }
+        "loopsubdiv" => loop_subdiv(p, span, limits, warn).map(Some),
         "plymesh" | "objmesh" => file_mesh(ty, p, span, resolve, limits, warn).map(Some),
         _ => Ok(None),
     }
+}
+
+/// `loopsubdiv`: the control mesh refined to its limit surface now, so the renderer
+/// sees an ordinary triangle mesh with normals.
+fn loop_subdiv(p: &ParamList, span: Span, limits: &Limits, warn: &mut Vec<Diagnostic>) -> Res<Built> {
+    let need = |what: &str| Diagnostic::error(span, format!("loopsubdiv needs {what}"));
+    let positions = p.array("P", ParamType::Point3)?.ok_or_else(|| need("\"point3 P\""))?;
+    let indices = p.array("indices", ParamType::Integer)?.ok_or_else(|| need("\"integer indices\""))?;
+    let n_p = positions.values.len() / 3;
+    let indices = mesh::check_indices(indices.ints().to_vec(), n_p, indices.value_span, warn)?;
+    // v3 also reads "nlevels"; both default to 3.
+    let levels_at = p.find("levels", &[ParamType::Integer]).or(p.find("nlevels", &[ParamType::Integer]));
+    let levels = p.int("levels")?.or(p.int("nlevels")?).unwrap_or(3).max(0) as u32;
+    let at = levels_at.map_or(span, |l| l.value_span);
+    let tris = loopsubdiv::triangle_count(indices.len() / 3, levels).unwrap_or(u64::MAX);
+    if tris > limits.triangles {
+        let what = format!("loopsubdiv: {levels} levels make {tris} triangles, which");
+        return Err(Diagnostic::error(at, Limits::over(what, "triangles", limits.triangles)));
+    }
+    let points: Vec<[f32; 3]> = positions.floats().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let s = loopsubdiv::subdivide(&points, &indices, levels)
+        .map_err(|e| Diagnostic::error(p.named("indices").map_or(span, |i| i.value_span), e))?;
+    p.mark_known(&["scheme"]);
+    let mesh = TriangleMesh { p: s.p, indices: s.indices, n: Some(s.n), ..Default::default() };
+    Ok(Built::Mesh { mesh, kind: "loopsubdiv", filename: None })
 }
 
 fn file_mesh(

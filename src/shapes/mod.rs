@@ -17,6 +17,7 @@ pub mod cone;
 pub mod cylinder;
 pub mod disk;
 pub mod hyperboloid;
+pub mod loopsubdiv;
 pub mod paraboloid;
 pub mod quadric;
 pub mod sampling;

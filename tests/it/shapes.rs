@@ -1,7 +1,7 @@
 //! Every shape's parameters: defaults, clamps, swaps, validity checks, mesh sources,
 //! world-space areas and bounds.
 
-use crate::common::{close, num, root, scene, world_shapes};
+use crate::common::{close, load, num, report, root, scene, world_shapes};
 use serde_json::{Value, json};
 use std::f64::consts::PI;
 
@@ -119,6 +119,28 @@ fn triangle_mesh_arrays_and_checks() {
     assert!(second.uv.is_none(), "too few uv are ignored");
     let msgs: Vec<&str> = s.warnings.iter().map(|w| w.message.as_str()).collect();
     assert_eq!(msgs.len(), 4, "{msgs:?}");
+}
+
+#[test]
+fn loopsubdiv_refines_to_a_closed_limit_mesh_with_normals() {
+    let tetra = r#""point3 P" [1 1 1  -1 -1 1  -1 1 -1  1 -1 -1] "integer indices" [0 1 2 0 2 3 0 3 1 1 3 2]"#;
+    // v4 defaults to 3 levels; v3 also reads "nlevels".
+    let s = scene(&format!("WorldBegin Shape \"loopsubdiv\" {tetra}"));
+    let m = &s.meshes[0];
+    assert_eq!(m.triangle_count(), 4 * 64);
+    assert_eq!(m.p.len(), 2 + m.triangle_count() / 2, "a closed surface: V = 2 + F/2");
+    assert_eq!(m.n.as_ref().map(Vec::len), Some(m.p.len()));
+    assert!(m.p.iter().all(|p| glam::Vec3::from(*p).length() < 3f32.sqrt()), "the limit lies inside the hull");
+    let s = scene(&format!("WorldBegin Translate 0 0 10 Shape \"loopsubdiv\" \"integer nlevels\" 1 {tetra}"));
+    assert_eq!(s.meshes[0].triangle_count(), 16);
+    assert!(s.meshes[0].p.iter().all(|p| p[2] > 8.0), "stored in world space");
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let r = report(&format!("WorldBegin Shape \"loopsubdiv\" \"integer levels\" 2 {tetra}"));
+    assert_eq!(r["shapes"][0]["kind"], "loopsubdiv");
+    assert_eq!(r["counts"]["triangles"], 64);
+    // A level count past the triangle limit is a located error, before any work.
+    let e = load(&format!("WorldBegin\nShape \"loopsubdiv\" \"integer levels\" 40 {tetra}")).unwrap_err();
+    assert!(e.to_string().contains("inline.pbrt:2:37: error") && e.to_string().contains("--limit triangles"), "{e}");
 }
 
 #[test]
