@@ -33,9 +33,11 @@
 
 use crate::camera::Camera;
 use crate::lights::Light;
-use crate::materials::{Material, Textures};
+use crate::materials::Textures;
 use crate::math::transform::row_major;
-use crate::scene::{CameraKind, Geometry, LightDesc, LightKind, SceneDescription, ShapeDesc, TexValue};
+use crate::scene::{
+    CameraKind, Geometry, LightDesc, LightKind, MaterialDesc, MaterialKind, SceneDescription, ShapeDesc, TexValue,
+};
 use crate::shapes::{Quadric, TriangleMesh};
 use crate::spectrum::Rgb;
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -236,12 +238,7 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         why: format!("approximated by pbrt-sppm too: {}", a.how),
     }));
     let textures = Textures::new(&scene.textures);
-    let materials = scene
-        .materials
-        .iter()
-        .enumerate()
-        .map(|(i, m)| material(&m.ty, &Material::from_desc(m, &textures), &textures, i, &mut notes))
-        .collect();
+    let materials = scene.materials.iter().enumerate().map(|(i, m)| material(m, &textures, i, &mut notes)).collect();
     let shapes = scene.shapes.iter().enumerate().map(|(i, s)| shape(scene, s, true, i as u32, &mut notes)).collect();
     let objects = scene
         .objects
@@ -331,22 +328,41 @@ fn flat(t: TexValue, textures: &Textures, what: &str, notes: &mut Vec<Unsupporte
     (sum / (N * N) as f32).to_array()
 }
 
-fn material(ty: &str, m: &Material, textures: &Textures, index: usize, notes: &mut Vec<Unsupported>) -> MaterialOut {
-    let what = format!("material {index} (\"{ty}\")");
-    match m {
-        Material::Diffuse { kd } => MaterialOut::Diffuse { reflectance: flat(*kd, textures, &what, notes) },
-        Material::Mirror { kr } => MaterialOut::Mirror { reflectance: flat(*kr, textures, &what, notes) },
-        Material::Dielectric { eta, kr, kt } => {
-            MaterialOut::Dielectric { eta: *eta, reflectance: kr.to_array(), transmittance: kt.to_array() }
+fn material(m: &MaterialDesc, textures: &Textures, index: usize, notes: &mut Vec<Unsupported>) -> MaterialOut {
+    let what = format!("material {index} (\"{}\")", m.ty);
+    let one = |t: TexValue, notes: &mut Vec<Unsupported>| flat(t, textures, &what, notes);
+    match &m.kind {
+        MaterialKind::Diffuse { reflectance } => MaterialOut::Diffuse { reflectance: one(*reflectance, notes) },
+        MaterialKind::Mirror { reflectance } => MaterialOut::Mirror { reflectance: one(*reflectance, notes) },
+        MaterialKind::Dielectric { eta, kr, kt, roughness, .. } => {
+            if roughness.iter().any(|r| *r != TexValue::Const(Vec3::ZERO)) {
+                notes.push(note("", &what, "rough dielectric: exported smooth"));
+            }
+            MaterialOut::Dielectric {
+                eta: one(*eta, notes)[0],
+                reflectance: one(*kr, notes),
+                transmittance: one(*kt, notes),
+            }
         }
-        Material::Conductor { eta, k } => MaterialOut::Conductor { eta: eta.to_array(), k: k.to_array() },
-        Material::RoughConductor { eta, k, alpha } => {
+        MaterialKind::Conductor { eta, k, roughness, remap } => {
+            let alpha = roughness.map(|r| remap.alpha(one(r, notes)[0]));
+            if alpha[0] < 1e-3 && alpha[1] < 1e-3 {
+                return MaterialOut::Conductor { eta: eta.to_array(), k: k.to_array() };
+            }
             if alpha[0] != alpha[1] {
                 notes.push(note("", &what, "anisotropic roughness: Mitsuba's tangent frame differs from pbrt's"));
             }
-            MaterialOut::RoughConductor { eta: eta.to_array(), k: k.to_array(), alpha: *alpha }
+            MaterialOut::RoughConductor { eta: eta.to_array(), k: k.to_array(), alpha: alpha.map(|a| a.max(1e-3)) }
         }
-        Material::Interface => MaterialOut::None,
+        MaterialKind::OrenNayar { reflectance, .. }
+        | MaterialKind::Plastic { kd: reflectance, .. }
+        | MaterialKind::Uber { kd: reflectance, .. }
+        | MaterialKind::Translucent { kd: reflectance, .. }
+        | MaterialKind::Substrate { kd: reflectance, .. } => {
+            notes.push(note("", &what, "no Mitsuba equivalent is exported yet; exported as its diffuse part"));
+            MaterialOut::Diffuse { reflectance: one(*reflectance, notes) }
+        }
+        MaterialKind::Interface => MaterialOut::None,
     }
 }
 

@@ -45,7 +45,7 @@ impl RenderScene {
     pub fn new(mut scene: SceneDescription) -> RenderScene {
         let camera = Camera::new(&scene.camera, &scene.film);
         let textures = Textures::new(&scene.textures);
-        let materials: Vec<Material> = scene.materials.iter().map(|m| Material::from_desc(m, &textures)).collect();
+        let materials: Vec<Material> = scene.materials.iter().map(Material::from_desc).collect();
         let world_shape_material = scene.shapes.iter().map(|s| s.material).collect();
         let object_shape_material =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.material).collect()).collect();

@@ -62,6 +62,25 @@ enum Command {
         /// Exposure in stops.
         #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         exposure: f64,
+        /// Write EXR channels as half floats (small reference images).
+        #[arg(long)]
+        half: bool,
+    },
+    /// Channel means of A against the reference B, whole image and each tile of a grid;
+    /// exits with status 1 when the worst relative deviation is above --tolerance.
+    Tiles {
+        a: String,
+        /// The reference.
+        b: String,
+        /// Tiles per side.
+        #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=64))]
+        grid: u64,
+        /// Tile means below this share of the image mean are compared against it.
+        #[arg(long, default_value_t = 0.05, value_parser = non_negative)]
+        floor: f64,
+        /// The largest relative deviation allowed, e.g. 0.02.
+        #[arg(long, value_parser = non_negative)]
+        tolerance: Option<f64>,
     },
     /// Error against seconds or iterations, log-log, one line per ERRORS.csv.
     Plot {
@@ -111,7 +130,8 @@ fn main() -> ExitCode {
             diff(&a, &b, json, &metric, threshold, pixel_threshold, heatmap.as_deref())
         }
         Command::Info { image } => info(&image),
-        Command::Convert { input, output, exposure } => convert(&input, &output, exposure),
+        Command::Convert { input, output, exposure, half } => convert(&input, &output, exposure, half),
+        Command::Tiles { a, b, grid, floor, tolerance } => tiles(&a, &b, grid as usize, floor, tolerance),
         Command::Plot { csv, o, x, metric } => plot(&csv, &o, &x, &metric),
         Command::Report { scene, reference, seconds, iterations, o, photons, seed, nthreads } => {
             let r = report::ReportArgs { scene, reference, out: o, seconds, iterations, photons, seed, nthreads };
@@ -138,6 +158,24 @@ fn say(text: &str) -> Result<ExitCode, String> {
 
 fn read(path: &str) -> Result<RgbImage, String> {
     read_image(Path::new(path))
+}
+
+fn tiles(x: &str, y: &str, grid: usize, floor: f64, tolerance: Option<f64>) -> Result<ExitCode, String> {
+    let (ia, ib) = (read(x)?, read(y)?);
+    if (ia.width, ia.height) != (ib.width, ib.height) {
+        return Err(format!("{x} is {}x{}, {y} is {}x{}", ia.width, ia.height, ib.width, ib.height));
+    }
+    let (w, h) = (ia.width, ia.height);
+    let (ma, mb) = (metrics::tile_means(&ia.pixels, w, h, grid), metrics::tile_means(&ib.pixels, w, h, grid));
+    let mut text = String::new();
+    for (k, (a, b)) in ma.iter().zip(&mb).enumerate() {
+        let ratio = [0, 1, 2].map(|c| if b[c] > 0.0 { format!("{:.4}", a[c] / b[c]) } else { "-".into() });
+        text += &format!("tile ({}, {}): ratio {}\n", k % grid, k / grid, ratio.join(" "));
+    }
+    let (d, at, c) = metrics::worst_mean_deviation(&ia.pixels, &ib.pixels, w, h, grid, floor);
+    text += &format!("worst deviation {:.4}% at {at}, channel {}\n", 100.0 * d, ["R", "G", "B"][c]);
+    say(&text)?;
+    Ok(if tolerance.is_some_and(|t| d > t) { ExitCode::FAILURE } else { ExitCode::SUCCESS })
 }
 
 fn diff(
@@ -245,12 +283,20 @@ fn info(path: &str) -> Result<ExitCode, String> {
     say(&out)
 }
 
-fn convert(input: &str, output: &Path, exposure: f64) -> Result<ExitCode, String> {
+fn convert(input: &str, output: &Path, exposure: f64, half: bool) -> Result<ExitCode, String> {
     check_image_name(output)?;
+    let is_exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if half && !is_exr {
+        return Err(format!("--half writes EXR; \"{}\" is not .exr", output.display()));
+    }
     let mut img = read(input)?;
     let scale = 2f64.powf(exposure) as f32;
     img.pixels.iter_mut().for_each(|p| *p = p.map(|c| c * scale));
-    write_image(output, &img)?;
+    if half {
+        pbrt_sppm::imageio::write_exr_half(output, &img)?
+    } else {
+        write_image(output, &img)?
+    }
     Ok(ExitCode::SUCCESS)
 }
 

@@ -59,6 +59,59 @@ pub fn diff(a: &[[f32; 3]], r: &[[f32; 3]], pixel_threshold: f64) -> Diff {
     }
 }
 
+/// Channel means of each tile of a `grid`×`grid` split (row-major from the top left);
+/// tile edges fall at ⌊k·size/grid⌋.
+pub fn tile_means(px: &[[f32; 3]], width: usize, height: usize, grid: usize) -> Vec<[f64; 3]> {
+    let edge = |k: usize, size: usize| k * size / grid;
+    let mut out = Vec::with_capacity(grid * grid);
+    for ty in 0..grid {
+        for tx in 0..grid {
+            let (x0, x1, y0, y1) = (edge(tx, width), edge(tx + 1, width), edge(ty, height), edge(ty + 1, height));
+            let mut sum = [0.0f64; 3];
+            for y in y0..y1 {
+                for p in &px[y * width + x0..y * width + x1] {
+                    (0..3).for_each(|c| sum[c] += p[c] as f64);
+                }
+            }
+            let n = ((x1 - x0) * (y1 - y0)).max(1) as f64;
+            out.push(sum.map(|s| s / n));
+        }
+    }
+    out
+}
+
+/// The worst relative deviation of `a`'s channel means from the reference's, over the
+/// whole image and every tile of a `grid`×`grid` split. A mean below `floor` × the
+/// reference's whole-image mean of that channel is compared against that floor, so
+/// near-black tiles are held to an absolute bound instead of a ratio of noise.
+/// Returns (deviation, "where": `image` or `tile (x, y)`, channel).
+pub fn worst_mean_deviation(
+    a: &[[f32; 3]],
+    r: &[[f32; 3]],
+    width: usize,
+    height: usize,
+    grid: usize,
+    floor: f64,
+) -> (f64, String, usize) {
+    let whole = |px: &[[f32; 3]]| tile_means(px, width, height, 1)[0];
+    let (wa, wr) = (whole(a), whole(r));
+    let mut worst = (0.0, String::new(), 0);
+    let mut consider = |ma: [f64; 3], mr: [f64; 3], at: String| {
+        for c in 0..3 {
+            let d = (ma[c] - mr[c]).abs() / mr[c].max(floor * wr[c]).max(1e-30);
+            if d > worst.0 || worst.1.is_empty() {
+                worst = (d, at.clone(), c);
+            }
+        }
+    };
+    consider(wa, wr, "image".into());
+    let (ta, tr) = (tile_means(a, width, height, grid), tile_means(r, width, height, grid));
+    for (k, (ma, mr)) in ta.into_iter().zip(tr).enumerate() {
+        consider(ma, mr, format!("tile ({}, {})", k % grid, k / grid));
+    }
+    worst
+}
+
 /// A false colour for t in [0, 1]: black → blue → red → yellow → white.
 pub fn heat(t: f32) -> [f32; 3] {
     let t = t.clamp(0.0, 1.0) * 4.0;
@@ -86,6 +139,25 @@ mod tests {
         let pts: Vec<(f64, f64)> = (1..20).map(|i| (i as f64, 3.0 * (i as f64).powf(-0.75))).collect();
         assert!((log_slope(&pts).unwrap() + 0.75).abs() < 1e-12);
         assert_eq!(log_slope(&[(2.0, 1.0), (2.0, 5.0)]), None, "one distinct x has no slope");
+    }
+
+    #[test]
+    fn tile_means_find_a_local_difference_a_whole_image_mean_hides() {
+        let (w, h) = (8, 8);
+        let r = vec![[1.0f32; 3]; w * h];
+        // Brighter in the top-left 2×2 tile, darker by as much in the bottom-right one.
+        let a: Vec<[f32; 3]> = (0..w * h)
+            .map(|i| match (i % w / 2, i / w / 2) {
+                (0, 0) => [1.2; 3],
+                (3, 3) => [0.8; 3],
+                _ => [1.0; 3],
+            })
+            .collect();
+        assert_eq!(tile_means(&a, w, h, 4)[0], [1.2f32 as f64; 3]);
+        let (d, at, _) = worst_mean_deviation(&a, &r, w, h, 4, 0.05);
+        assert!((d - 0.2).abs() < 1e-6 && at == "tile (0, 0)", "{d} {at}");
+        let (d, at, _) = worst_mean_deviation(&a, &r, w, h, 1, 0.05);
+        assert!(d < 1e-6 && at == "image", "the whole-image mean is unchanged: {d}");
     }
 
     #[test]

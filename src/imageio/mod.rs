@@ -97,6 +97,15 @@ pub fn check_writable(path: &Path) -> Res<()> {
 }
 
 pub fn write_exr(path: &Path, img: &RgbImage) -> Res<()> {
+    write_exr_as(path, img, false)
+}
+
+/// Half-float RGB (pbrt-v3's output format; small reference images).
+pub fn write_exr_half(path: &Path, img: &RgbImage) -> Res<()> {
+    write_exr_as(path, img, true)
+}
+
+fn write_exr_as(path: &Path, img: &RgbImage, half: bool) -> Res<()> {
     let mut attrs = LayerAttributes::named("");
     attrs.layer_position = Vec2(img.origin.0, img.origin.1);
     attrs.software_name = img.meta.software.as_deref().map(Text::from);
@@ -113,20 +122,19 @@ pub fn write_exr(path: &Path, img: &RgbImage) -> Res<()> {
     if let Some(n) = img.meta.photons_per_iteration {
         put("photonsPerIteration", AttributeValue::I32(n.min(i32::MAX as i64) as i32));
     }
-    let w = img.width;
-    let pixels = &img.pixels;
-    let layer = Layer::new(
-        (img.width, img.height),
-        attrs,
-        Encoding::SMALL_LOSSLESS,
-        SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
-            let p = pixels[y * w + x];
-            (p[0], p[1], p[2])
-        }),
-    );
-    let mut image = Image::from_layer(layer);
-    image.attributes.display_window = IntegerBounds::new((0, 0), img.full);
-    atomically(path, |tmp| image.write().to_file(tmp).map_err(|e| format!("cannot write \"{}\": {e}", path.display())))
+    let (w, pixels, size, full) = (img.width, &img.pixels, (img.width, img.height), img.full);
+    let fail = |e: exr::error::Error| format!("cannot write \"{}\": {e}", path.display());
+    if half {
+        let h = |v: f32| exr::prelude::f16::from_f32(v);
+        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| pixels[y * w + x].map(h).into());
+        let mut image = Image::from_layer(Layer::new(size, attrs, Encoding::SMALL_LOSSLESS, channels));
+        image.attributes.display_window = IntegerBounds::new((0, 0), full);
+        return atomically(path, |tmp| image.write().to_file(tmp).map_err(fail));
+    }
+    let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| pixels[y * w + x].into());
+    let mut image = Image::from_layer(Layer::new(size, attrs, Encoding::SMALL_LOSSLESS, channels));
+    image.attributes.display_window = IntegerBounds::new((0, 0), full);
+    atomically(path, |tmp| image.write().to_file(tmp).map_err(fail))
 }
 
 /// The sRGB transfer curve.

@@ -216,6 +216,8 @@ impl<'a> Sppm<'a> {
 }
 
 /// What a path finds at a hit.
+// A stack temporary per hit: boxing the BSDF would allocate on every bounce.
+#[allow(clippy::large_enum_variant)]
 enum Surface {
     Bsdf(Bsdf),
     /// An interface (no surface): the ray now continues past it, depth unchanged.
@@ -388,10 +390,11 @@ fn trace_photon(
             grid.gather(si.p.0, |pixel| {
                 let Some(vp) = &pixels[pixel as usize].vp else { return };
                 let r = pixels[pixel as usize].radius as f32;
-                // DEVIATION(pbrt): photons arriving from behind the visible point's
-                // surface are not counted; pbrt counts them in M (f = 0), which only
-                // shrinks the radius (Mitsuba #145).
-                if (vp.p - si.p.0).length_squared() > r * r || wi.dot(vp.ng) * vp.wo.dot(vp.ng) <= 0.0 {
+                // DEVIATION(pbrt): photons arriving from behind an opaque visible
+                // point's surface are not counted; pbrt counts them in M (f = 0), which
+                // only shrinks the radius (Mitsuba #145). Transmitting surfaces count them.
+                let behind = wi.dot(vp.ng) * vp.wo.dot(vp.ng) <= 0.0;
+                if (vp.p - si.p.0).length_squared() > r * r || (behind && !vp.bsdf.transmits()) {
                     return;
                 }
                 out.push((pixel, beta * vp.bsdf.f(vp.wo, wi)));

@@ -12,8 +12,12 @@
 //! `invert`.
 
 mod bsdf;
+pub mod lobes;
+pub mod microfacet;
 
-pub use bsdf::{Bsdf, BsdfSample, BxDF, TransportMode};
+pub use bsdf::{Bsdf, BsdfSample, TransportMode};
+use lobes::{Lobe, MAX_LOBES, oren_nayar_ab};
+use microfacet::{Fresnel, TrowbridgeReitz};
 
 use crate::imageio::RgbImage;
 use crate::scene::{MaterialDesc, MaterialKind, RoughnessRemap, TexValue, TextureDesc, TextureKind, UvMapping, Wrap};
@@ -110,74 +114,171 @@ impl Texture {
     }
 }
 
-/// A material ready to shade.
+/// A material ready to shade: the scene's description, its inputs evaluated at each hit.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Material {
-    Diffuse {
-        kd: TexValue,
-    },
-    /// A perfect mirror tinted by `kr`.
-    Mirror {
-        kr: TexValue,
-    },
-    Dielectric {
-        eta: f32,
-        kr: Rgb,
-        kt: Rgb,
-    },
-    Conductor {
-        eta: Rgb,
-        k: Rgb,
-    },
-    /// Microfacet conductor (α along the shading tangents).
-    RoughConductor {
-        eta: Rgb,
-        k: Rgb,
-        alpha: [f32; 2],
-    },
-    /// No surface: rays continue straight through.
-    Interface,
+pub struct Material(MaterialKind);
+
+/// Clamps to [0, 1] as pbrt's `Spectrum::Clamp()` does for reflectances.
+fn unit(c: Rgb) -> Rgb {
+    c.clamp(Vec3::ZERO, Vec3::ONE)
 }
 
-/// The (u, v) where inputs that can only be constant take a texture's value.
-const CENTRE: [f32; 2] = [0.5, 0.5];
-
 impl Material {
-    pub fn from_desc(m: &MaterialDesc, textures: &Textures) -> Material {
-        let at_centre = |v: TexValue| textures.eval(v, CENTRE);
-        match &m.kind {
-            MaterialKind::Diffuse { reflectance } => Material::Diffuse { kd: *reflectance },
-            MaterialKind::Mirror { reflectance } => Material::Mirror { kr: *reflectance },
-            MaterialKind::Dielectric { eta, kr, kt } => {
-                Material::Dielectric { eta: at_centre(*eta).x, kr: at_centre(*kr), kt: at_centre(*kt) }
-            }
-            MaterialKind::Conductor { eta, k, roughness, remap } => {
-                let to_alpha = |r: f32| match remap {
-                    RoughnessRemap::None => r,
-                    RoughnessRemap::V3 => bsdf::roughness_to_alpha_v3(r),
-                    RoughnessRemap::V4 => r.max(0.0).sqrt(),
-                };
-                let alpha = roughness.map(|r| to_alpha(at_centre(r).x));
-                if alpha[0] < 1e-3 && alpha[1] < 1e-3 {
-                    Material::Conductor { eta: *eta, k: *k }
-                } else {
-                    Material::RoughConductor { eta: *eta, k: *k, alpha: alpha.map(|a| a.max(1e-3)) }
-                }
-            }
-            MaterialKind::Interface => Material::Interface,
-        }
+    pub fn from_desc(m: &MaterialDesc) -> Material {
+        Material(m.kind.clone())
+    }
+
+    pub fn kind(&self) -> &MaterialKind {
+        &self.0
     }
 
     /// The BSDF at a hit (`None` for interfaces).
     pub fn bsdf(&self, textures: &Textures, uv: [f32; 2], frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
-        let bxdf = match self {
-            Material::Diffuse { kd } => BxDF::Lambert(textures.eval(*kd, uv).clamp(Vec3::ZERO, Vec3::ONE)),
-            Material::Mirror { kr } => BxDF::Specular(textures.eval(*kr, uv)),
-            Material::Dielectric { eta, kr, kt } => BxDF::Dielectric { eta: *eta, kr: *kr, kt: *kt },
-            Material::Conductor { eta, k } => BxDF::Conductor { eta: *eta, k: *k },
-            Material::RoughConductor { eta, k, alpha } => BxDF::RoughConductor { eta: *eta, k: *k, alpha: *alpha },
-            Material::Interface => return None,
-        };
-        Some(Bsdf::new(frame, ng, bxdf))
+        let mut lobes = Lobes::default();
+        self.lobes(&Inputs { textures, uv }, &mut lobes)?;
+        Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n]))
+    }
+
+    fn lobes(&self, i: &Inputs, out: &mut Lobes) -> Option<()> {
+        match &self.0 {
+            MaterialKind::Diffuse { reflectance } => out.push_nonzero(unit(i.rgb(*reflectance)), Lobe::Lambert),
+            MaterialKind::OrenNayar { reflectance, sigma } => {
+                let r = unit(i.rgb(*reflectance));
+                match oren_nayar_ab(i.float(*sigma)) {
+                    (_, 0.0) => out.push_nonzero(r, Lobe::Lambert),
+                    (a, b) => out.push_nonzero(r, |r| Lobe::OrenNayar { r, a, b }),
+                }
+            }
+            MaterialKind::Mirror { reflectance } => {
+                out.push(Lobe::SpecularReflection { r: i.rgb(*reflectance), fresnel: Fresnel::One })
+            }
+            MaterialKind::Dielectric { eta, kr, kt, roughness, remap } => {
+                dielectric(i.float(*eta), unit(i.rgb(*kr)), unit(i.rgb(*kt)), i.alpha(roughness, *remap), out)
+            }
+            MaterialKind::Conductor { eta, k, roughness, remap } => {
+                let fresnel = Fresnel::Conductor { eta: *eta, k: *k };
+                let alpha = i.alpha(roughness, *remap);
+                if alpha[0] < 1e-3 && alpha[1] < 1e-3 {
+                    out.push(Lobe::SpecularReflection { r: Vec3::ONE, fresnel });
+                } else {
+                    out.push(Lobe::MicrofacetReflection { r: Vec3::ONE, dist: TrowbridgeReitz::new(alpha), fresnel });
+                }
+            }
+            MaterialKind::Plastic { kd, ks, roughness, remap } => {
+                out.push_nonzero(unit(i.rgb(*kd)), Lobe::Lambert);
+                let a = remap.alpha(i.float(*roughness));
+                let (dist, fresnel) = (TrowbridgeReitz::new([a, a]), Fresnel::Coat { eta: 1.5 });
+                out.push_nonzero(unit(i.rgb(*ks)), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
+            }
+            MaterialKind::Uber { .. } => uber(&self.0, i, out),
+            MaterialKind::Translucent { kd, ks, reflect, transmit, roughness, remap } => {
+                let (r, t) = (unit(i.rgb(*reflect)), unit(i.rgb(*transmit)));
+                let (kd, ks) = (unit(i.rgb(*kd)), unit(i.rgb(*ks)));
+                out.push_nonzero(r * kd, Lobe::Lambert);
+                out.push_nonzero(t * kd, Lobe::LambertTransmission);
+                let a = remap.alpha(i.float(*roughness));
+                let (dist, eta) = (TrowbridgeReitz::new([a, a]), 1.5);
+                let fresnel = Fresnel::Dielectric { eta };
+                out.push_nonzero(r * ks, |r| Lobe::MicrofacetReflection { r, dist, fresnel });
+                out.push_nonzero(t * ks, |t| Lobe::MicrofacetTransmission { t, dist, eta });
+            }
+            MaterialKind::Substrate { kd, ks, roughness, remap } => {
+                let (rd, rs) = (unit(i.rgb(*kd)), unit(i.rgb(*ks)));
+                if rd != Vec3::ZERO || rs != Vec3::ZERO {
+                    let dist = TrowbridgeReitz::new(i.alpha(roughness, *remap));
+                    out.push(Lobe::FresnelBlend { rd, rs, dist });
+                }
+            }
+            MaterialKind::Interface => return None,
+        }
+        Some(())
+    }
+}
+
+/// Smooth glass is one Fresnel-weighted lobe; rough glass is pbrt-v3's pair of
+/// microfacet reflection and transmission lobes.
+fn dielectric(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], out: &mut Lobes) {
+    if r == Vec3::ZERO && t == Vec3::ZERO {
+        return;
+    }
+    if alpha == [0.0, 0.0] {
+        out.push(Lobe::FresnelSpecular { r, t, eta });
+        return;
+    }
+    let dist = TrowbridgeReitz::new(alpha);
+    out.push_nonzero(r, |r| Lobe::MicrofacetReflection { r, dist, fresnel: Fresnel::Dielectric { eta } });
+    out.push_nonzero(t, |t| Lobe::MicrofacetTransmission { t, dist, eta });
+}
+
+/// pbrt-v3's uber: an opacity pass-through, then each layer scaled by the opacity.
+fn uber(kind: &MaterialKind, i: &Inputs, out: &mut Lobes) {
+    let MaterialKind::Uber { kd, ks, kr, kt, roughness, eta, opacity, remap } = kind else { return };
+    let op = unit(i.rgb(*opacity));
+    out.push_nonzero(unit(Vec3::ONE - op), |t| Lobe::SpecularTransmission { t, eta: 1.0 });
+    let eta = i.float(*eta);
+    out.push_nonzero(op * unit(i.rgb(*kd)), Lobe::Lambert);
+    let (dist, fresnel) = (TrowbridgeReitz::new(i.alpha(roughness, *remap)), Fresnel::Dielectric { eta });
+    out.push_nonzero(op * unit(i.rgb(*ks)), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
+    out.push_nonzero(op * unit(i.rgb(*kr)), |r| Lobe::SpecularReflection { r, fresnel });
+    out.push_nonzero(op * unit(i.rgb(*kt)), |t| Lobe::SpecularTransmission { t, eta });
+}
+
+/// Texture inputs at one hit.
+struct Inputs<'a> {
+    textures: &'a Textures,
+    uv: [f32; 2],
+}
+
+impl Inputs<'_> {
+    fn rgb(&self, v: TexValue) -> Rgb {
+        self.textures.eval(v, self.uv)
+    }
+
+    fn float(&self, v: TexValue) -> f32 {
+        self.rgb(v).x
+    }
+
+    fn alpha(&self, roughness: &[TexValue; 2], remap: RoughnessRemap) -> [f32; 2] {
+        roughness.map(|r| remap.alpha(self.float(r)))
+    }
+}
+
+impl RoughnessRemap {
+    /// The microfacet α of a roughness as written.
+    pub fn alpha(self, r: f32) -> f32 {
+        match self {
+            RoughnessRemap::None => r.max(0.0),
+            RoughnessRemap::V3 => microfacet::roughness_to_alpha_v3(r),
+            RoughnessRemap::V4 => r.max(0.0).sqrt(),
+        }
+    }
+}
+
+/// The lobes one hit's material makes.
+#[derive(Default)]
+struct Lobes {
+    list: [Lobe; MAX_LOBES],
+    n: usize,
+}
+
+impl Default for Lobe {
+    fn default() -> Lobe {
+        Lobe::Lambert(Vec3::ZERO)
+    }
+}
+
+impl Lobes {
+    fn push(&mut self, l: Lobe) {
+        if self.n < MAX_LOBES {
+            self.list[self.n] = l;
+            self.n += 1;
+        }
+    }
+
+    /// Adds `make(c)` unless `c` is black (pbrt adds no lobe for a black input).
+    fn push_nonzero(&mut self, c: Rgb, make: impl FnOnce(Rgb) -> Lobe) {
+        if c != Vec3::ZERO {
+            self.push(make(c));
+        }
     }
 }

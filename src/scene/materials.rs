@@ -6,7 +6,12 @@
 //! Material "glass" "float index" 1.5          Material "dielectric" "float eta" 1.5
 //! Material "metal" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k" "float roughness" .1
 //! Material "conductor" "rgb reflectance" [.9 .6 .3]
-//! Material "plastic" / "coateddiffuse" / "uber"     # approximated: their diffuse part
+//! Material "plastic" "rgb Kd" [.4 .1 .1] "rgb Ks" [.3 .3 .3] "float roughness" .05
+//! Material "uber" "rgb Kr" [.2 .2 .2] "float index" 1.5 "rgb opacity" [1 1 1]
+//! Material "translucent" "rgb reflect" [.5 .5 .5] "rgb transmit" [.5 .5 .5]
+//! Material "substrate" "float uroughness" .05 "float vroughness" .2
+//! Material "matte" "float sigma" 20                   # Oren–Nayar
+//! Material "coateddiffuse"                            # approximated: its diffuse part
 //! Material "" / "none" / "interface"                # no surface: paths pass through
 //! Texture "checks" "spectrum" "checkerboard" "float uscale" 8 "rgb tex1" [1 0 0]
 //! Texture "s" "spectrum" "scale" "texture tex" "checks" "float scale" 0.5      # v3: tex1 × tex2
@@ -46,21 +51,63 @@ pub enum RoughnessRemap {
     V4,
 }
 
-/// A material some shape uses.
+/// A material some shape uses. Inputs are taken at each hit's (u, v); roughnesses are
+/// as written, turned into α by `remap` when shading.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MaterialKind {
     Diffuse {
         reflectance: TexValue,
     },
+    /// v3 `matte` with `sigma` (degrees) not zero.
+    OrenNayar {
+        reflectance: TexValue,
+        sigma: TexValue,
+    },
+    /// v3 `plastic`: Lambertian plus a microfacet coat of index 1.5.
+    Plastic {
+        kd: TexValue,
+        ks: TexValue,
+        roughness: TexValue,
+        remap: RoughnessRemap,
+    },
+    /// v3 `uber`: plastic-like layers plus specular reflection, transmission and opacity.
+    Uber {
+        kd: TexValue,
+        ks: TexValue,
+        kr: TexValue,
+        kt: TexValue,
+        roughness: [TexValue; 2],
+        eta: TexValue,
+        opacity: TexValue,
+        remap: RoughnessRemap,
+    },
+    /// v3 `translucent`: diffuse and glossy reflection and transmission.
+    Translucent {
+        kd: TexValue,
+        ks: TexValue,
+        reflect: TexValue,
+        transmit: TexValue,
+        roughness: TexValue,
+        remap: RoughnessRemap,
+    },
+    /// v3 `substrate` (Ashikhmin–Shirley).
+    Substrate {
+        kd: TexValue,
+        ks: TexValue,
+        roughness: [TexValue; 2],
+        remap: RoughnessRemap,
+    },
     /// A perfect mirror tinted by `reflectance` (`mirror`, `conductor "reflectance"`).
     Mirror {
         reflectance: TexValue,
     },
-    /// A smooth dielectric.
+    /// A dielectric; smooth when both roughnesses are 0.
     Dielectric {
         eta: TexValue,
         kr: TexValue,
         kt: TexValue,
+        roughness: [TexValue; 2],
+        remap: RoughnessRemap,
     },
     /// A conductor; smooth when both roughnesses give α below 10⁻³.
     Conductor {
@@ -145,32 +192,49 @@ fn float(p: &ParamList, name: &str, default: f32, range: Range, r: &mut dyn Reso
     })
 }
 
-/// Notes a textured input the material can only take as one value.
-fn at_centre(v: TexValue, p: &ParamList, name: &str, ty: &str, r: &mut dyn Resolver) {
-    if let (TexValue::Texture(_), Some(at)) = (v, values::span_of(p, name)) {
-        r.approximate(at, format!("textured \"{name}\" of material \"{ty}\""), Approx::TextureAtCentre);
-    }
-}
-
 /// The material of type `ty`; unsupported types become grey diffuse (noted).
 pub fn material(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
     bump_maps(ty, p, r);
     Ok(match ty {
         "matte" => {
             let sigma = float(p, "sigma", 0.0, Range::NonNegative, r)?;
-            if sigma != TexValue::Const(Vec3::ZERO) {
-                let at = values::span_of(p, "sigma").unwrap_or(at);
-                r.approximate(at, "matte \"sigma\"".into(), Approx::OrenNayar);
+            let reflectance = spectrum(p, "Kd", 0.5, r)?;
+            if sigma == TexValue::Const(Vec3::ZERO) {
+                MaterialKind::Diffuse { reflectance }
+            } else {
+                MaterialKind::OrenNayar { reflectance, sigma }
             }
-            MaterialKind::Diffuse { reflectance: spectrum(p, "Kd", 0.5, r)? }
         }
         "diffuse" => MaterialKind::Diffuse { reflectance: spectrum(p, "reflectance", 0.5, r)? },
         "mirror" => MaterialKind::Mirror { reflectance: spectrum(p, "Kr", 0.9, r)? },
-        "glass" | "dielectric" => dielectric(ty, p, at, r)?,
+        "glass" | "dielectric" => dielectric(ty, p, r)?,
         "metal" | "conductor" => conductor(ty, p, r)?,
-        "plastic" | "uber" | "coateddiffuse" => {
-            let (kd, default) = if ty == "coateddiffuse" { ("reflectance", 0.5) } else { ("Kd", 0.25) };
-            let reflectance = spectrum(p, kd, default, r)?;
+        "plastic" => MaterialKind::Plastic {
+            kd: spectrum(p, "Kd", 0.25, r)?,
+            ks: spectrum(p, "Ks", 0.25, r)?,
+            roughness: float(p, "roughness", 0.1, Range::NonNegative, r)?,
+            remap: remap_v3(p)?,
+        },
+        "uber" => uber(p, r)?,
+        "translucent" => MaterialKind::Translucent {
+            kd: spectrum(p, "Kd", 0.25, r)?,
+            ks: spectrum(p, "Ks", 0.25, r)?,
+            reflect: spectrum(p, "reflect", 0.5, r)?,
+            transmit: spectrum(p, "transmit", 0.5, r)?,
+            roughness: float(p, "roughness", 0.1, Range::NonNegative, r)?,
+            remap: remap_v3(p)?,
+        },
+        "substrate" => {
+            let rough = |name: &str, r: &mut dyn Resolver| float(p, name, 0.1, Range::NonNegative, r);
+            MaterialKind::Substrate {
+                kd: spectrum(p, "Kd", 0.5, r)?,
+                ks: spectrum(p, "Ks", 0.5, r)?,
+                roughness: [rough("uroughness", r)?, rough("vroughness", r)?],
+                remap: remap_v3(p)?,
+            }
+        }
+        "coateddiffuse" => {
+            let reflectance = spectrum(p, "reflectance", 0.5, r)?;
             check_coat(ty, p, r)?;
             r.approximate(at, format!("material \"{ty}\""), Approx::DiffusePart);
             MaterialKind::Diffuse { reflectance }
@@ -195,7 +259,7 @@ fn bump_maps(ty: &str, p: &ParamList, r: &mut dyn Resolver) {
 
 /// v3 `glass` (`eta`, else `index`; `Kr`, `Kt`) and v4 `dielectric` (`eta` a float or
 /// a spectrum). Rough ones render smooth (noted).
-fn dielectric(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
+fn dielectric(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<MaterialKind> {
     let eta_name = if ty == "glass" && p.named("eta").is_none() { "index" } else { "eta" };
     // v3 glass takes a float (texture); v4 dielectric also a spectrum.
     let eta = if ty == "glass" || values::given(p, eta_name, &[ParamType::Float, ParamType::Texture]) {
@@ -207,17 +271,35 @@ fn dielectric(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Ma
             None => TexValue::Const(Vec3::splat(1.5)),
         }
     };
-    at_centre(eta, p, eta_name, ty, r);
     let (kr, kt) = if ty == "glass" { (spectrum(p, "Kr", 1.0, r)?, spectrum(p, "Kt", 1.0, r)?) } else { one_one() };
-    for (name, v) in [("Kr", kr), ("Kt", kt)] {
-        at_centre(v, p, name, ty, r);
-    }
-    let rough = roughness(p, 0.0, r)?;
-    let _ = p.bool("remaproughness")?;
-    if rough.iter().any(|v| *v != TexValue::Const(Vec3::ZERO)) {
-        r.approximate(at, format!("rough material \"{ty}\""), Approx::RoughDielectric);
-    }
-    Ok(MaterialKind::Dielectric { eta, kr, kt })
+    let roughness = roughness(p, 0.0, r)?;
+    let remap = if ty == "glass" { remap_v3(p)? } else { remap_v4(p)? };
+    Ok(MaterialKind::Dielectric { eta, kr, kt, roughness, remap })
+}
+
+/// v3 `remaproughness` (default true): pbrt-v3's polynomial.
+fn remap_v3(p: &ParamList) -> Res<RoughnessRemap> {
+    Ok(if p.bool("remaproughness")?.unwrap_or(true) { RoughnessRemap::V3 } else { RoughnessRemap::None })
+}
+
+/// v4 `remaproughness` (default true): α = √roughness.
+fn remap_v4(p: &ParamList) -> Res<RoughnessRemap> {
+    Ok(if p.bool("remaproughness")?.unwrap_or(true) { RoughnessRemap::V4 } else { RoughnessRemap::None })
+}
+
+/// v3 `uber`: `roughness` .1 overridden by `uroughness`/`vroughness`; `eta`, else `index`.
+fn uber(p: &ParamList, r: &mut dyn Resolver) -> Res<MaterialKind> {
+    let eta_name = if p.named("eta").is_some() { "eta" } else { "index" };
+    Ok(MaterialKind::Uber {
+        kd: spectrum(p, "Kd", 0.25, r)?,
+        ks: spectrum(p, "Ks", 0.25, r)?,
+        kr: spectrum(p, "Kr", 0.0, r)?,
+        kt: spectrum(p, "Kt", 0.0, r)?,
+        roughness: roughness(p, 0.1, r)?,
+        eta: float(p, eta_name, 1.5, Range::Positive, r)?,
+        opacity: spectrum(p, "opacity", 1.0, r)?,
+        remap: remap_v3(p)?,
+    })
 }
 
 fn one_one() -> (TexValue, TexValue) {
@@ -248,29 +330,15 @@ fn conductor(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<MaterialKind>
     let k = values::rgb(p, "k", &spectra, Range::NonNegative)?.unwrap_or_else(|| named("metal-Cu-k"));
     let v3 = ty == "metal";
     let roughness = roughness(p, if v3 { 0.01 } else { 0.0 }, r)?;
-    for (name, v) in ["uroughness", "vroughness"].iter().zip(roughness) {
-        let name = if p.named(name).is_some() { name } else { "roughness" };
-        at_centre(v, p, name, ty, r);
-    }
-    let remap = match (p.bool("remaproughness")?.unwrap_or(true), v3) {
-        (false, _) => RoughnessRemap::None,
-        (true, true) => RoughnessRemap::V3,
-        (true, false) => RoughnessRemap::V4,
-    };
+    let remap = if v3 { remap_v3(p)? } else { remap_v4(p)? };
     Ok(MaterialKind::Conductor { eta, k, roughness, remap })
 }
 
 /// The coat and specular parameters of materials we draw as their diffuse part: read
 /// (so a bad value is still an error) and covered by the material's note.
 fn check_coat(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<()> {
-    let spectra: &[&str] = match ty {
-        "plastic" => &["Ks"],
-        "uber" => &["Ks", "Kr", "Kt", "opacity"],
-        _ => &["albedo"],
-    };
-    for name in spectra {
-        spectrum(p, name, 0.0, r)?;
-    }
+    let _ = ty;
+    spectrum(p, "albedo", 0.0, r)?;
     roughness(p, 0.0, r)?;
     for name in ["eta", "index", "thickness", "g"] {
         if values::given(p, name, &[ParamType::Float, ParamType::Texture]) {

@@ -395,12 +395,12 @@ fn imgtool_rejects_unknown_flags_and_keeps_its_promises() {
 #[test]
 fn approximations_are_listed_and_the_readme_names_every_kind() {
     let s = crate::common::scene(
-        "WorldBegin Material \"plastic\" Shape \"disk\" Material \"glass\" \"float uroughness\" 0.1 Shape \"disk\" \
-         Material \"matte\" \"float sigma\" 20 Shape \"disk\"",
+        "WorldBegin Material \"coateddiffuse\" Shape \"disk\" Texture \"f\" \"float\" \"ptex\" \
+         Material \"matte\" \"texture sigma\" \"f\" Shape \"disk\" Material \"weird\" Shape \"disk\"",
     );
     let how: Vec<&str> = s.approximated.iter().map(|a| a.how.as_str()).collect();
     use pbrt_sppm::scene::Approx;
-    assert_eq!(how, [Approx::DiffusePart.how(), Approx::RoughDielectric.how(), Approx::OrenNayar.how()]);
+    assert_eq!(how, [Approx::DiffusePart.how(), Approx::UnsupportedTexture.how(), Approx::UnsupportedMaterial.how()]);
     let json = pbrt_sppm::check::report(&s, false);
     assert_eq!(json["approximated"].as_array().map(Vec::len), Some(3));
     assert_eq!(json["approximated"][0]["line"], 1);

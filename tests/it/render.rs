@@ -216,7 +216,7 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
     )
     .unwrap();
     let rs = RenderScene::new(crate::common::load_file(&path).unwrap());
-    let pbrt_sppm::materials::Material::Diffuse { kd } = &rs.materials[0] else { panic!("diffuse") };
+    let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
     assert_eq!(rs.textures.eval(*kd, [0.25, 0.25]).to_array(), [0.0, 0.0, 1.0], "bottom-left is blue");
     assert_eq!(rs.textures.eval(*kd, [0.75, 0.75]).to_array(), [0.0, 1.0, 0.0], "top-right is green");
     std::fs::write(
@@ -231,7 +231,7 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
     let a = &s.approximated[0];
     assert!(a.what.contains("missing.png") && (a.line, a.column) == (1, 67), "{a:?}");
     let rs = RenderScene::new(s);
-    let pbrt_sppm::materials::Material::Diffuse { kd } = &rs.materials[0] else { panic!("diffuse") };
+    let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
     assert_eq!(rs.textures.eval(*kd, [0.3, 0.3]).to_array(), [0.5; 3]);
 }
 
@@ -269,14 +269,18 @@ fn metal_roughness_follows_each_versions_remapping() {
          Material \"conductor\" \"float roughness\" 0.04 Shape \"sphere\" \
          Material \"metal\" \"float roughness\" 0.3 \"bool remaproughness\" \"false\" Shape \"sphere\"",
     ));
-    use pbrt_sppm::materials::Material::{Conductor, RoughConductor};
+    use pbrt_sppm::materials::lobes::Lobe;
     let alphas: Vec<Option<f32>> = rs
         .materials
         .iter()
-        .map(|m| match m {
-            RoughConductor { alpha, .. } => Some(alpha[0]),
-            Conductor { .. } => None,
-            other => panic!("{other:?}"),
+        .map(|m| {
+            let frame = [glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z];
+            let bsdf = m.bsdf(&rs.textures, [0.5, 0.5], frame, glam::Vec3::Z).expect("a surface");
+            match bsdf.lobes() {
+                [Lobe::MicrofacetReflection { dist, .. }] => Some(dist.ax),
+                [Lobe::SpecularReflection { .. }] => None,
+                other => panic!("{other:?}"),
+            }
         })
         .collect();
     // v3 metal: roughness 0.01 → α ≈ 0.138 (pbrt-v3's polynomial); v4 conductor: 0 → smooth.

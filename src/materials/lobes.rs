@@ -1,0 +1,368 @@
+//! pbrt-v3's BxDFs in the local shading frame (z = shading normal): each lobe's value,
+//! density and sampling. A [`super::Bsdf`] combines up to [`MAX_LOBES`] of them as pbrt's
+//! `BSDF` does.
+
+use super::TransportMode;
+use super::microfacet::{Fresnel, TrowbridgeReitz, fr_dielectric};
+use crate::sampling::cosine_hemisphere;
+use crate::spectrum::Rgb;
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// The most lobes one material makes (v3 `uber` with opacity: five).
+pub const MAX_LOBES: usize = 5;
+
+/// One scattering lobe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lobe {
+    /// Lambertian reflection.
+    Lambert(Rgb),
+    /// Lambertian transmission (`translucent`, `diffusetransmission`).
+    LambertTransmission(Rgb),
+    /// Oren–Nayar reflection with pbrt's A and B.
+    OrenNayar { r: Rgb, a: f32, b: f32 },
+    /// Mirror reflection times a Fresnel term.
+    SpecularReflection { r: Rgb, fresnel: Fresnel },
+    /// Smooth refraction from air into index `eta` (pbrt `SpecularTransmission`).
+    SpecularTransmission { t: Rgb, eta: f32 },
+    /// Smooth glass: reflection or refraction chosen by Fresnel (pbrt `FresnelSpecular`).
+    FresnelSpecular { r: Rgb, t: Rgb, eta: f32 },
+    /// Microfacet reflection (Torrance–Sparrow).
+    MicrofacetReflection { r: Rgb, dist: TrowbridgeReitz, fresnel: Fresnel },
+    /// Rough refraction from air into index `eta` (pbrt-v3 `MicrofacetTransmission`).
+    MicrofacetTransmission { t: Rgb, dist: TrowbridgeReitz, eta: f32 },
+    /// Ashikhmin–Shirley diffuse + glossy (pbrt `FresnelBlend`, `substrate`).
+    FresnelBlend { rd: Rgb, rs: Rgb, dist: TrowbridgeReitz },
+}
+
+/// What kind of scattering a lobe does (pbrt's `BxDFType`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    Diffuse,
+    Glossy,
+    Specular,
+}
+
+/// A lobe's sampled direction.
+pub struct LobeSample {
+    pub wi: Vec3,
+    pub f: Rgb,
+    pub pdf: f32,
+}
+
+fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
+    a.z * b.z > 0.0
+}
+
+fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
+    -wo + 2.0 * wo.dot(n) * n
+}
+
+/// Refraction of `wi` about `n` (same side) with relative index `eta` = η_i/η_t.
+pub fn refract(wi: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let cos_i = n.dot(wi);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some(eta * -wi + (eta * cos_i - cos_t) * n)
+}
+
+/// A cosine-weighted direction on `wo`'s side (`same`) or the other side.
+fn cosine_on(wo: Vec3, u: [f32; 2], same: bool) -> Vec3 {
+    let mut i = cosine_hemisphere(u);
+    if (wo.z < 0.0) == same {
+        i.z = -i.z;
+    }
+    i
+}
+
+fn pow5(x: f32) -> f32 {
+    (x * x) * (x * x) * x
+}
+
+impl Lobe {
+    pub fn kind(&self) -> Kind {
+        match self {
+            Lobe::Lambert(_) | Lobe::LambertTransmission(_) | Lobe::OrenNayar { .. } => Kind::Diffuse,
+            Lobe::MicrofacetReflection { .. } | Lobe::MicrofacetTransmission { .. } | Lobe::FresnelBlend { .. } => {
+                Kind::Glossy
+            }
+            Lobe::SpecularReflection { .. } | Lobe::SpecularTransmission { .. } | Lobe::FresnelSpecular { .. } => {
+                Kind::Specular
+            }
+        }
+    }
+
+    /// Whether the lobe reflects, transmits (pbrt's flags; smooth glass does both).
+    pub fn sides(&self) -> (bool, bool) {
+        match self {
+            Lobe::LambertTransmission(_) | Lobe::SpecularTransmission { .. } | Lobe::MicrofacetTransmission { .. } => {
+                (false, true)
+            }
+            Lobe::FresnelSpecular { .. } => (true, true),
+            _ => (true, false),
+        }
+    }
+
+    pub fn f(&self, o: Vec3, i: Vec3, mode: TransportMode) -> Rgb {
+        match *self {
+            Lobe::Lambert(r) if same_hemisphere(o, i) => r * FRAC_1_PI,
+            Lobe::LambertTransmission(t) if !same_hemisphere(o, i) => t * FRAC_1_PI,
+            Lobe::OrenNayar { r, a, b } if same_hemisphere(o, i) => r * FRAC_1_PI * oren_nayar(o, i, a, b),
+            Lobe::MicrofacetReflection { r, dist, fresnel } => microfacet_reflection(o, i, r, dist, fresnel),
+            Lobe::MicrofacetTransmission { t, dist, eta } => microfacet_transmission(o, i, t, dist, eta, mode),
+            Lobe::FresnelBlend { rd, rs, dist } => fresnel_blend(o, i, rd, rs, dist),
+            _ => Vec3::ZERO,
+        }
+    }
+
+    pub fn pdf(&self, o: Vec3, i: Vec3) -> f32 {
+        match *self {
+            Lobe::Lambert(_) | Lobe::OrenNayar { .. } if same_hemisphere(o, i) => i.z.abs() * FRAC_1_PI,
+            Lobe::LambertTransmission(_) if !same_hemisphere(o, i) => i.z.abs() * FRAC_1_PI,
+            Lobe::MicrofacetReflection { dist, .. } if same_hemisphere(o, i) => {
+                let wh = (o + i).normalize_or_zero();
+                let d = o.dot(wh);
+                if d == 0.0 { 0.0 } else { dist.pdf_wh(wh) / (4.0 * d.abs()) }
+            }
+            Lobe::MicrofacetTransmission { dist, eta, .. } => transmission_pdf(o, i, dist, eta),
+            Lobe::FresnelBlend { dist, .. } if same_hemisphere(o, i) => {
+                let wh = (o + i).normalize_or_zero();
+                let d = o.dot(wh);
+                let glossy = if d == 0.0 { 0.0 } else { dist.pdf_wh(wh) / (4.0 * d.abs()) };
+                0.5 * (i.z.abs() * FRAC_1_PI + glossy)
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Samples a direction for `o`; `u_choice` picks between sub-lobes (glass's
+    /// reflection or refraction, substrate's diffuse or glossy part).
+    pub fn sample(&self, o: Vec3, u: [f32; 2], u_choice: f32, mode: TransportMode) -> Option<LobeSample> {
+        if o.z == 0.0 {
+            return None;
+        }
+        let specular = |i: Vec3, f: Rgb, pdf: f32| {
+            let cos = i.z.abs();
+            (cos > 0.0 && pdf > 0.0).then(|| LobeSample { wi: i, f: f / cos, pdf })
+        };
+        let mirror = Vec3::new(-o.x, -o.y, o.z);
+        let i = match *self {
+            Lobe::Lambert(_) | Lobe::OrenNayar { .. } => cosine_on(o, u, true),
+            Lobe::LambertTransmission(_) => cosine_on(o, u, false),
+            Lobe::SpecularReflection { r, fresnel } => return specular(mirror, fresnel.eval(mirror.z) * r, 1.0),
+            Lobe::SpecularTransmission { t, eta } => {
+                let (i, ft) = refraction(o, eta, mode)?;
+                return specular(i, t * ft * (1.0 - fr_dielectric(i.z, 1.0, eta)), 1.0);
+            }
+            Lobe::FresnelSpecular { r, t, eta } => {
+                let fr = fr_dielectric(o.z, 1.0, eta);
+                if u_choice < fr {
+                    return specular(mirror, fr * r, fr);
+                }
+                let (i, ft) = refraction(o, eta, mode)?;
+                return specular(i, t * ft * (1.0 - fr), 1.0 - fr);
+            }
+            Lobe::MicrofacetReflection { dist, .. } => {
+                let wh = dist.sample_wh(o, u);
+                if o.dot(wh) < 0.0 {
+                    return None;
+                }
+                reflect(o, wh)
+            }
+            Lobe::MicrofacetTransmission { dist, eta, .. } => {
+                let wh = dist.sample_wh(o, u);
+                if o.dot(wh) < 0.0 {
+                    return None;
+                }
+                let rel = if o.z > 0.0 { 1.0 / eta } else { eta };
+                refract(o, wh, rel)?
+            }
+            Lobe::FresnelBlend { dist, .. } => {
+                if u_choice < 0.5 {
+                    cosine_on(o, u, true)
+                } else {
+                    let wh = dist.sample_wh(o, u);
+                    reflect(o, wh)
+                }
+            }
+        };
+        let pdf = self.pdf(o, i);
+        (pdf > 0.0).then(|| LobeSample { wi: i, f: self.f(o, i, mode), pdf })
+    }
+}
+
+/// The refracted direction through a smooth interface into index `eta` and the
+/// radiance scale (η_i/η_t)² (1 for importance).
+fn refraction(o: Vec3, eta: f32, mode: TransportMode) -> Option<(Vec3, f32)> {
+    let entering = o.z > 0.0;
+    let (eta_i, eta_t) = if entering { (1.0, eta) } else { (eta, 1.0) };
+    let n = if entering { Vec3::Z } else { -Vec3::Z };
+    let i = refract(o, n, eta_i / eta_t)?;
+    let scale = if mode == TransportMode::Radiance { (eta_i / eta_t) * (eta_i / eta_t) } else { 1.0 };
+    Some((i, scale))
+}
+
+/// pbrt's Oren–Nayar factor A + B·max(0, cos(φi − φo))·sin α·tan β.
+fn oren_nayar(o: Vec3, i: Vec3, a: f32, b: f32) -> f32 {
+    let sin_theta = |w: Vec3| (1.0 - w.z * w.z).max(0.0).sqrt();
+    let (sin_i, sin_o) = (sin_theta(i), sin_theta(o));
+    let mut max_cos = 0.0;
+    if sin_i > 1e-4 && sin_o > 1e-4 {
+        let (ci, si) = ((i.x / sin_i).clamp(-1.0, 1.0), (i.y / sin_i).clamp(-1.0, 1.0));
+        let (co, so) = ((o.x / sin_o).clamp(-1.0, 1.0), (o.y / sin_o).clamp(-1.0, 1.0));
+        max_cos = (ci * co + si * so).max(0.0);
+    }
+    let (sin_alpha, tan_beta) =
+        if i.z.abs() > o.z.abs() { (sin_o, sin_i / i.z.abs()) } else { (sin_i, sin_o / o.z.abs()) };
+    a + b * max_cos * sin_alpha * tan_beta
+}
+
+/// pbrt's A and B for a σ in degrees (clamped to [0°, 90°]).
+pub fn oren_nayar_ab(sigma_degrees: f32) -> (f32, f32) {
+    let s2 = sigma_degrees.clamp(0.0, 90.0).to_radians().powi(2);
+    (1.0 - s2 / (2.0 * (s2 + 0.33)), 0.45 * s2 / (s2 + 0.09))
+}
+
+fn microfacet_reflection(o: Vec3, i: Vec3, r: Rgb, dist: TrowbridgeReitz, fresnel: Fresnel) -> Rgb {
+    let (co, ci) = (o.z.abs(), i.z.abs());
+    if co == 0.0 || ci == 0.0 || !same_hemisphere(o, i) {
+        return Vec3::ZERO;
+    }
+    let wh = o + i;
+    if wh == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let wh = wh.normalize();
+    // Fresnel with the microfacet normal on the shading normal's side, so that light
+    // from inside sees total internal reflection (pbrt-v3 after #254).
+    let wh_up = if wh.z < 0.0 { -wh } else { wh };
+    r * fresnel.eval(i.dot(wh_up)) * dist.d(wh) * dist.g(o, i) / (4.0 * ci * co)
+}
+
+/// The generalised half vector of a refraction pair, facing +z, with the relative
+/// index η_t/η_i of `o`'s side; `None` when the pair is not a refraction.
+fn refraction_half(o: Vec3, i: Vec3, eta: f32) -> Option<(Vec3, f32)> {
+    if same_hemisphere(o, i) || o.z == 0.0 || i.z == 0.0 {
+        return None;
+    }
+    let rel = if o.z > 0.0 { eta } else { 1.0 / eta };
+    let wh = (o + i * rel).normalize_or_zero();
+    if wh == Vec3::ZERO {
+        return None;
+    }
+    let wh = if wh.z < 0.0 { -wh } else { wh };
+    (o.dot(wh) * i.dot(wh) < 0.0).then_some((wh, rel))
+}
+
+fn microfacet_transmission(o: Vec3, i: Vec3, t: Rgb, dist: TrowbridgeReitz, eta: f32, mode: TransportMode) -> Rgb {
+    let Some((wh, rel)) = refraction_half(o, i, eta) else { return Vec3::ZERO };
+    let f = fr_dielectric(o.dot(wh), 1.0, eta);
+    let denom = o.dot(wh) + rel * i.dot(wh);
+    let factor = if mode == TransportMode::Radiance { 1.0 / rel } else { 1.0 };
+    let v = dist.d(wh) * dist.g(o, i) * rel * rel * i.dot(wh).abs() * o.dot(wh).abs() * factor * factor
+        / (i.z * o.z * denom * denom);
+    (1.0 - f) * t * v.abs()
+}
+
+fn transmission_pdf(o: Vec3, i: Vec3, dist: TrowbridgeReitz, eta: f32) -> f32 {
+    let Some((wh, rel)) = refraction_half(o, i, eta) else { return 0.0 };
+    let denom = o.dot(wh) + rel * i.dot(wh);
+    let dwh_dwi = (rel * rel * i.dot(wh) / (denom * denom)).abs();
+    // `sample_wh` turns the normal towards `o`; either orientation is the same facet.
+    dist.pdf_wh(wh) * dwh_dwi
+}
+
+fn fresnel_blend(o: Vec3, i: Vec3, rd: Rgb, rs: Rgb, dist: TrowbridgeReitz) -> Rgb {
+    if !same_hemisphere(o, i) {
+        return Vec3::ZERO;
+    }
+    let diffuse = (28.0 / (23.0 * std::f32::consts::PI))
+        * rd
+        * (Vec3::ONE - rs)
+        * (1.0 - pow5(1.0 - 0.5 * i.z.abs()))
+        * (1.0 - pow5(1.0 - 0.5 * o.z.abs()));
+    let wh = o + i;
+    if wh == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let wh = wh.normalize();
+    let c = i.dot(wh);
+    let schlick = rs + pow5(1.0 - c) * (Vec3::ONE - rs);
+    let specular = dist.d(wh) / (4.0 * c.abs() * i.z.abs().max(o.z.abs())) * schlick;
+    diffuse + specular
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{Rng, uniform_sphere};
+
+    fn glossy_lobes() -> Vec<Lobe> {
+        let dist = TrowbridgeReitz::new([0.3, 0.15]);
+        vec![
+            Lobe::Lambert(Vec3::ONE),
+            Lobe::LambertTransmission(Vec3::ONE),
+            Lobe::OrenNayar { r: Vec3::ONE, a: 0.8, b: 0.3 },
+            Lobe::MicrofacetReflection { r: Vec3::ONE, dist, fresnel: Fresnel::Dielectric { eta: 1.5 } },
+            Lobe::MicrofacetReflection { r: Vec3::ONE, dist, fresnel: Fresnel::Coat { eta: 1.5 } },
+            Lobe::MicrofacetTransmission { t: Vec3::ONE, dist, eta: 1.5 },
+            Lobe::FresnelBlend { rd: Vec3::splat(0.5), rs: Vec3::splat(0.2), dist },
+        ]
+    }
+
+    /// ∫ f cos dωi two ways: by the lobe's own sampling and by uniform sphere sampling.
+    fn albedos(l: &Lobe, o: Vec3, mode: TransportMode) -> (f64, f64) {
+        let mut rng = Rng::new(7);
+        let n = 400_000;
+        let (mut by_lobe, mut by_sphere) = (0.0, 0.0);
+        for _ in 0..n {
+            if let Some(s) = l.sample(o, rng.uniform2(), rng.uniform(), mode) {
+                let pdf = l.pdf(o, s.wi);
+                assert!((pdf - s.pdf).abs() <= 1e-3 * pdf.max(1e-3), "{l:?}: pdf {pdf} vs sampled {}", s.pdf);
+                by_lobe += (s.f.x * s.wi.z.abs() / s.pdf) as f64;
+            }
+            let i = uniform_sphere(rng.uniform2());
+            by_sphere += (l.f(o, i, mode).x * i.z.abs()) as f64 * 4.0 * std::f64::consts::PI;
+        }
+        (by_lobe / n as f64, by_sphere / n as f64)
+    }
+
+    #[test]
+    fn sampling_matches_each_lobes_value_and_conserves_energy() {
+        for o in [Vec3::new(0.3, 0.2, 0.93).normalize(), Vec3::new(-0.7, 0.1, -0.5).normalize()] {
+            for l in glossy_lobes() {
+                let (a, b) = albedos(&l, o, TransportMode::Importance);
+                assert!(a <= 1.02, "{l:?} at {o}: albedo {a}");
+                assert!((a - b).abs() < 0.03 * a.max(0.05), "{l:?} at {o}: sampled {a} vs uniform {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn oren_nayar_at_zero_sigma_is_lambertian() {
+        assert_eq!(oren_nayar_ab(0.0), (1.0, 0.0));
+        let (a, b) = oren_nayar_ab(20.0);
+        assert!(a < 1.0 && b > 0.0);
+    }
+
+    #[test]
+    fn rough_transmission_scales_radiance_by_the_relative_index() {
+        let l = Lobe::MicrofacetTransmission { t: Vec3::ONE, dist: TrowbridgeReitz::new([0.2, 0.2]), eta: 1.5 };
+        let (o, i) = (Vec3::new(0.1, 0.0, 0.99).normalize(), Vec3::new(-0.05, 0.02, -0.99).normalize());
+        let (rad, imp) = (l.f(o, i, TransportMode::Radiance).x, l.f(o, i, TransportMode::Importance).x);
+        assert!(rad > 0.0 && (rad / imp - 1.0 / 2.25).abs() < 1e-4, "{rad} {imp}");
+    }
+
+    #[test]
+    fn plastic_coat_follows_air_to_plastic_fresnel_from_either_side() {
+        let coat = Fresnel::Coat { eta: 1.5 };
+        // 60° from the normal: Fresnel about 0.09, not pbrt-v3's total reflection.
+        let f = coat.eval(0.5).x;
+        assert!(f > 0.05 && f < 0.15, "{f}");
+        assert_eq!(coat.eval(-0.5), coat.eval(0.5));
+        assert_eq!(Fresnel::Dielectric { eta: 1.5 }.eval(-0.5).x, 1.0, "glass from inside reflects totally");
+    }
+}
