@@ -27,7 +27,7 @@ const PHOTON_CHUNK: usize = 1024;
 const MAX_PASSES: u32 = 64;
 
 /// A point where a camera path met a diffuse surface.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct VisiblePoint {
     pub p: Vec3,
     pub wo: Vec3,

@@ -25,28 +25,42 @@ pub struct BsdfSample {
 }
 
 /// Lobes with their shading frame and the geometric normal.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Bsdf {
     ss: Vec3,
     ts: Vec3,
     ns: Vec3,
     ng: Vec3,
-    lobes: [Lobe; MAX_LOBES],
-    count: u8,
+    lobes: Lobes,
+}
+
+/// One lobe inline (the common case, and what every visible point of a matte scene
+/// stores); several on the heap, so only materials that make them pay for them.
+#[derive(Clone, Debug, PartialEq)]
+enum Lobes {
+    None,
+    One(Lobe),
+    Many(Box<[Lobe]>),
 }
 
 impl Bsdf {
     /// A BSDF of the given lobes (extra ones past [`MAX_LOBES`] are dropped; materials
     /// never make more).
     pub fn new(frame: [Vec3; 3], ng: Vec3, lobes: &[Lobe]) -> Bsdf {
-        let mut all = [Lobe::Lambert(Vec3::ZERO); MAX_LOBES];
-        let count = lobes.len().min(MAX_LOBES);
-        all[..count].copy_from_slice(&lobes[..count]);
-        Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng, lobes: all, count: count as u8 }
+        let lobes = match &lobes[..lobes.len().min(MAX_LOBES)] {
+            [] => Lobes::None,
+            [one] => Lobes::One(*one),
+            many => Lobes::Many(many.into()),
+        };
+        Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng, lobes }
     }
 
     pub fn lobes(&self) -> &[Lobe] {
-        &self.lobes[..self.count as usize]
+        match &self.lobes {
+            Lobes::None => &[],
+            Lobes::One(l) => std::slice::from_ref(l),
+            Lobes::Many(l) => l,
+        }
     }
 
     pub fn shading_normal(&self) -> Vec3 {
@@ -85,6 +99,10 @@ impl Bsdf {
     fn f_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
         let reflect = wo.dot(self.ng) * wi.dot(self.ng) > 0.0;
         let (o, i) = (self.local(wo), self.local(wi));
+        if let Lobes::One(l) = &self.lobes {
+            let (r, t) = l.sides();
+            return if (reflect && r) || (!reflect && t) { l.f(o, i, mode) } else { Vec3::ZERO };
+        }
         self.lobes().iter().filter(|l| if reflect { l.sides().0 } else { l.sides().1 }).map(|l| l.f(o, i, mode)).sum()
     }
 
@@ -95,20 +113,20 @@ impl Bsdf {
 
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let (o, i) = (self.local(wo), self.local(wi));
-        let n = self.count.max(1) as f32;
+        let n = self.lobes().len().max(1) as f32;
         self.lobes().iter().map(|l| l.pdf(o, i)).sum::<f32>() / n
     }
 
     /// Samples ωi for ωo; `u_lobe` chooses the lobe and then, rescaled, between a
     /// lobe's parts (a dielectric's reflection or refraction).
     pub fn sample_f(&self, wo: Vec3, u: [f32; 2], u_lobe: f32, mode: TransportMode) -> Option<BsdfSample> {
-        let n = self.count as usize;
+        let n = self.lobes().len();
         if n == 0 {
             return None;
         }
         let pick = ((u_lobe * n as f32) as usize).min(n - 1);
         let u_rest = (u_lobe * n as f32 - pick as f32).clamp(0.0, 1.0 - f32::EPSILON / 2.0);
-        let lobe = self.lobes[pick];
+        let lobe = self.lobes()[pick];
         let o = self.local(wo);
         let s = lobe.sample(o, u, u_rest, mode)?;
         let wi = self.world(s.wi);

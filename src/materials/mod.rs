@@ -134,6 +134,12 @@ impl Material {
 
     /// The BSDF at a hit (`None` for interfaces).
     pub fn bsdf(&self, textures: &Textures, uv: [f32; 2], frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
+        if let MaterialKind::Diffuse { reflectance } = &self.0 {
+            // The common case, without the lobe list's set-up.
+            let r = unit(textures.eval(*reflectance, uv));
+            let lobes: &[Lobe] = if r == Vec3::ZERO { &[] } else { &[Lobe::Lambert(r)] };
+            return Some(Bsdf::new(frame, ng, lobes));
+        }
         let mut lobes = Lobes::default();
         self.lobes(&Inputs { textures, uv }, &mut lobes)?;
         Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n]))
