@@ -235,7 +235,7 @@ pub fn material(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<
         }
         "coateddiffuse" => {
             let reflectance = spectrum(p, "reflectance", 0.5, r)?;
-            check_coat(ty, p, r)?;
+            check_coat(p, r)?;
             r.approximate(at, format!("material \"{ty}\""), Approx::DiffusePart);
             MaterialKind::Diffuse { reflectance }
         }
@@ -334,10 +334,9 @@ fn conductor(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<MaterialKind>
     Ok(MaterialKind::Conductor { eta, k, roughness, remap })
 }
 
-/// The coat and specular parameters of materials we draw as their diffuse part: read
+/// The coat parameters of `coateddiffuse`, which we draw as its diffuse part: read
 /// (so a bad value is still an error) and covered by the material's note.
-fn check_coat(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<()> {
-    let _ = ty;
+fn check_coat(p: &ParamList, r: &mut dyn Resolver) -> Res<()> {
     spectrum(p, "albedo", 0.0, r)?;
     roughness(p, 0.0, r)?;
     for name in ["eta", "index", "thickness", "g"] {
