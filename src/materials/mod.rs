@@ -159,7 +159,12 @@ impl Material {
                 out.push(Lobe::SpecularReflection { r: i.rgb(*reflectance), fresnel: Fresnel::One })
             }
             MaterialKind::Dielectric { eta, kr, kt, roughness, remap } => {
-                dielectric(i.float(*eta), unit(i.rgb(*kr)), unit(i.rgb(*kt)), i.alpha(roughness, *remap), out)
+                // Smooth when the roughness as written is 0 (pbrt-v3: v3's remapping
+                // takes 0 to α ≈ 0.047) or α is below 10⁻³ (pbrt-v4's test).
+                let raw = roughness.map(|r| i.float(r));
+                let alpha = if raw == [0.0; 2] { raw } else { raw.map(|r| remap.alpha(r)) };
+                let alpha = if alpha.iter().all(|a| *a < 1e-3) { [0.0; 2] } else { alpha };
+                dielectric(i.float(*eta), unit(i.rgb(*kr)), unit(i.rgb(*kt)), alpha, out)
             }
             MaterialKind::Conductor { eta, k, roughness, remap } => {
                 let fresnel = Fresnel::Conductor { eta: *eta, k: *k };

@@ -338,3 +338,26 @@ fn a_glossy_ball_under_a_uniform_sky_reflects_it_once() {
     // about 1.7.
     assert!((0.80..0.90).contains(&l), "mean radiance {l}");
 }
+
+#[test]
+fn glass_is_smooth_at_roughness_zero_in_both_versions() {
+    use pbrt_sppm::materials::lobes::Lobe;
+    // v3's remapping takes roughness 0 to α ≈ 0.047; pbrt-v3 still treats it as smooth.
+    let rs = RenderScene::new(scene(
+        "WorldBegin Material \"glass\" Shape \"sphere\" Material \"dielectric\" Shape \"sphere\" \
+         Material \"glass\" \"float roughness\" 0.01 Shape \"sphere\"",
+    ));
+    let frame = [glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z];
+    let lobes: Vec<Vec<Lobe>> = rs
+        .materials
+        .iter()
+        .map(|m| m.bsdf(&rs.textures, [0.5, 0.5], frame, glam::Vec3::Z).expect("a surface").lobes().to_vec())
+        .collect();
+    assert!(matches!(lobes[0][..], [Lobe::FresnelSpecular { .. }]), "{:?}", lobes[0]);
+    assert!(matches!(lobes[1][..], [Lobe::FresnelSpecular { .. }]), "{:?}", lobes[1]);
+    assert!(
+        matches!(lobes[2][..], [Lobe::MicrofacetReflection { .. }, Lobe::MicrofacetTransmission { .. }]),
+        "{:?}",
+        lobes[2]
+    );
+}
