@@ -99,11 +99,8 @@ impl Bsdf {
     fn f_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
         let reflect = wo.dot(self.ng) * wi.dot(self.ng) > 0.0;
         let (o, i) = (self.local(wo), self.local(wi));
-        if let Lobes::One(l) = &self.lobes {
-            let (r, t) = l.sides();
-            return if (reflect && r) || (!reflect && t) { l.f(o, i, mode) } else { Vec3::ZERO };
-        }
-        self.lobes().iter().filter(|l| if reflect { l.sides().0 } else { l.sides().1 }).map(|l| l.f(o, i, mode)).sum()
+        let counts = |l: &Lobe| if reflect { l.sides().0 } else { l.sides().1 };
+        self.lobes().iter().filter(|l| counts(l)).map(|l| l.f(o, i, mode)).sum()
     }
 
     /// f(ωo, ωi) for radiance (camera paths and the photons they gather).

@@ -136,9 +136,8 @@ impl Material {
     pub fn bsdf(&self, textures: &Textures, uv: [f32; 2], frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
         if let MaterialKind::Diffuse { reflectance } = &self.0 {
             // The common case, without the lobe list's set-up.
-            let r = unit(textures.eval(*reflectance, uv));
-            let lobes: &[Lobe] = if r == Vec3::ZERO { &[] } else { &[Lobe::Lambert(r)] };
-            return Some(Bsdf::new(frame, ng, lobes));
+            let lambert = lambert(unit(textures.eval(*reflectance, uv)));
+            return Some(Bsdf::new(frame, ng, lambert.as_slice()));
         }
         let mut lobes = Lobes::default();
         self.lobes(&Inputs { textures, uv }, &mut lobes)?;
@@ -147,7 +146,9 @@ impl Material {
 
     fn lobes(&self, i: &Inputs, out: &mut Lobes) -> Option<()> {
         match &self.0 {
-            MaterialKind::Diffuse { reflectance } => out.push_nonzero(unit(i.rgb(*reflectance)), Lobe::Lambert),
+            MaterialKind::Diffuse { reflectance } => {
+                lambert(unit(i.rgb(*reflectance))).into_iter().for_each(|l| out.push(l))
+            }
             MaterialKind::OrenNayar { reflectance, sigma } => {
                 let r = unit(i.rgb(*reflectance));
                 match oren_nayar_ab(i.float(*sigma)) {
@@ -181,7 +182,17 @@ impl Material {
                 let (dist, fresnel) = (TrowbridgeReitz::new([a, a]), Fresnel::Coat { eta: 1.5 });
                 out.push_nonzero(unit(i.rgb(*ks)), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
             }
-            MaterialKind::Uber { .. } => uber(&self.0, i, out),
+            MaterialKind::Uber { kd, ks, kr, kt, roughness, eta, opacity, remap } => {
+                // pbrt-v3: a pass-through of 1 − opacity, then each layer scaled by it.
+                let op = unit(i.rgb(*opacity));
+                out.push_nonzero(unit(Vec3::ONE - op), |t| Lobe::SpecularTransmission { t, eta: 1.0 });
+                let eta = i.float(*eta);
+                out.push_nonzero(op * unit(i.rgb(*kd)), Lobe::Lambert);
+                let (dist, fresnel) = (TrowbridgeReitz::new(i.alpha(roughness, *remap)), Fresnel::Dielectric { eta });
+                out.push_nonzero(op * unit(i.rgb(*ks)), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
+                out.push_nonzero(op * unit(i.rgb(*kr)), |r| Lobe::SpecularReflection { r, fresnel });
+                out.push_nonzero(op * unit(i.rgb(*kt)), |t| Lobe::SpecularTransmission { t, eta });
+            }
             MaterialKind::Translucent { kd, ks, reflect, transmit, roughness, remap } => {
                 let (r, t) = (unit(i.rgb(*reflect)), unit(i.rgb(*transmit)));
                 let (kd, ks) = (unit(i.rgb(*kd)), unit(i.rgb(*ks)));
@@ -206,6 +217,11 @@ impl Material {
     }
 }
 
+/// A Lambertian lobe, or none for a black reflectance (pbrt adds no lobe then).
+fn lambert(r: Rgb) -> Option<Lobe> {
+    (r != Vec3::ZERO).then_some(Lobe::Lambert(r))
+}
+
 /// Smooth glass is one Fresnel-weighted lobe; rough glass is pbrt-v3's pair of
 /// microfacet reflection and transmission lobes.
 fn dielectric(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], out: &mut Lobes) {
@@ -219,19 +235,6 @@ fn dielectric(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], out: &mut Lobes) {
     let dist = TrowbridgeReitz::new(alpha);
     out.push_nonzero(r, |r| Lobe::MicrofacetReflection { r, dist, fresnel: Fresnel::Dielectric { eta } });
     out.push_nonzero(t, |t| Lobe::MicrofacetTransmission { t, dist, eta });
-}
-
-/// pbrt-v3's uber: an opacity pass-through, then each layer scaled by the opacity.
-fn uber(kind: &MaterialKind, i: &Inputs, out: &mut Lobes) {
-    let MaterialKind::Uber { kd, ks, kr, kt, roughness, eta, opacity, remap } = kind else { return };
-    let op = unit(i.rgb(*opacity));
-    out.push_nonzero(unit(Vec3::ONE - op), |t| Lobe::SpecularTransmission { t, eta: 1.0 });
-    let eta = i.float(*eta);
-    out.push_nonzero(op * unit(i.rgb(*kd)), Lobe::Lambert);
-    let (dist, fresnel) = (TrowbridgeReitz::new(i.alpha(roughness, *remap)), Fresnel::Dielectric { eta });
-    out.push_nonzero(op * unit(i.rgb(*ks)), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
-    out.push_nonzero(op * unit(i.rgb(*kr)), |r| Lobe::SpecularReflection { r, fresnel });
-    out.push_nonzero(op * unit(i.rgb(*kt)), |t| Lobe::SpecularTransmission { t, eta });
 }
 
 /// Texture inputs at one hit.
