@@ -10,6 +10,7 @@ mod imgtool;
 mod instancing;
 mod intersect;
 mod mitsuba;
+mod pbrt_refs;
 mod real_scenes;
 mod render;
 mod sampling;
