@@ -33,7 +33,7 @@
 
 use crate::camera::Camera;
 use crate::lights::Light;
-use crate::materials::Textures;
+use crate::materials::{TexCtx, Textures};
 use crate::math::transform::row_major;
 use crate::scene::{
     CameraKind, Geometry, LightDesc, LightKind, MaterialDesc, MaterialKind, SceneDescription, ShapeDesc, TexValue,
@@ -323,7 +323,10 @@ fn flat(t: TexValue, textures: &Textures, what: &str, notes: &mut Vec<Unsupporte
     notes.push(note("", what, "textured; exported as its mean over (u, v) ∈ [0, 1]²"));
     const N: u32 = 32;
     let sum: Rgb = (0..N * N)
-        .map(|k| textures.eval(t, [((k % N) as f32 + 0.5) / N as f32, ((k / N) as f32 + 0.5) / N as f32]))
+        .map(|k| {
+            let uv = [((k % N) as f32 + 0.5) / N as f32, ((k / N) as f32 + 0.5) / N as f32];
+            textures.eval(t, &TexCtx { uv, ..TexCtx::default() })
+        })
         .fold(Vec3::ZERO, |a, b| a + b);
     (sum / (N * N) as f32).to_array()
 }

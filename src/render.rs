@@ -6,7 +6,7 @@ use crate::accel::{Geometry, Hit, LocalHit};
 use crate::camera::Camera;
 use crate::interaction::SurfaceInteraction;
 use crate::lights::{Emitter, Light, WorldSphere, quadric_area};
-use crate::materials::{Bsdf, Material, Textures};
+use crate::materials::{Bsdf, Material, TexCtx, Textures};
 use crate::math::frame::coordinate_system;
 use crate::sampling::Distribution1D;
 use crate::scene::{AreaLightDesc, Film, Geometry as ShapeGeometry, Integrator, SceneDescription};
@@ -105,7 +105,8 @@ impl RenderScene {
             ss = coordinate_system(ns).0;
         }
         let ts = ns.cross(ss);
-        self.material(hit).bsdf(&self.textures, si.uv, [ss, ts, ns], si.n.0)
+        let ctx = TexCtx { p: si.p.0, n: si.n.0, uv: si.uv };
+        self.material(hit).bsdf(&self.textures, &ctx, [ss, ts, ns], si.n.0)
     }
 
     /// The emitting world shape hit, and which of its lights (for MIS).

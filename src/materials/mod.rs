@@ -6,151 +6,68 @@
 //! Texture "checks" "spectrum" "checkerboard" "float uscale" 8 "rgb tex1" [1 0 0]
 //! ```
 //! Every parameter is settled by the scene description (`scene::materials`); this module
-//! turns typed materials into BSDFs. Textures live in one array and refer to each other
-//! by index, so shared definitions are stored once. `imagemap` lookups are bilinear with
-//! t = 0 at the image's bottom row (as pbrt), `wrap` repeat/clamp/black, `scale`,
-//! `invert`.
+//! turns typed materials into BSDFs, their inputs evaluated at each hit. Textures live
+//! in one array and refer to each other by index, so shared definitions are stored once
+//! (`textures`).
 
 mod bsdf;
 pub mod lobes;
 pub mod microfacet;
+pub mod noise;
+mod textures;
 
 pub use bsdf::{Bsdf, BsdfSample, TransportMode};
 use lobes::{Lobe, MAX_LOBES, oren_nayar_ab};
 use microfacet::{Fresnel, TrowbridgeReitz};
+pub use textures::{TexCtx, Textures, lookup};
 
-use crate::imageio::RgbImage;
-use crate::scene::{MaterialDesc, MaterialKind, RoughnessRemap, TexValue, TextureDesc, TextureKind, UvMapping, Wrap};
+use crate::scene::{MaterialDesc, MaterialKind, RoughnessRemap, TexValue};
 use crate::spectrum::Rgb;
 use glam::Vec3;
-use std::sync::Arc;
-
-/// Bilinear lookup at (s, t) with t = 0 at the bottom row unless `top_down`.
-pub fn lookup(img: &RgbImage, s: f32, t: f32, wrap: Wrap, top_down: bool) -> Rgb {
-    let (w, h) = (img.width as i64, img.height as i64);
-    if w == 0 || h == 0 {
-        return Vec3::ZERO;
-    }
-    let y = if top_down { t } else { 1.0 - t };
-    let (x, y) = (s * w as f32 - 0.5, y * h as f32 - 0.5);
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let texel = |xi: i64, yi: i64| -> Rgb {
-        let (xi, yi) = match wrap {
-            Wrap::Repeat => (xi.rem_euclid(w), yi.rem_euclid(h)),
-            Wrap::Clamp => (xi.clamp(0, w - 1), yi.clamp(0, h - 1)),
-            Wrap::Black if xi < 0 || yi < 0 || xi >= w || yi >= h => return Vec3::ZERO,
-            Wrap::Black => (xi, yi),
-        };
-        Vec3::from(img.pixels[(yi * w + xi) as usize])
-    };
-    let (x0, y0) = (x0 as i64, y0 as i64);
-    (1.0 - fx) * (1.0 - fy) * texel(x0, y0)
-        + fx * (1.0 - fy) * texel(x0 + 1, y0)
-        + (1.0 - fx) * fy * texel(x0, y0 + 1)
-        + fx * fy * texel(x0 + 1, y0 + 1)
-}
-
-/// An RGB texture over (u, v); inputs refer to other textures by index.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Texture {
-    Const(Rgb),
-    Checker { tex1: TexValue, tex2: TexValue, map: UvMapping },
-    Scale(TexValue, TexValue),
-    Mix(TexValue, TexValue, TexValue),
-    Image { img: Arc<RgbImage>, map: UvMapping, wrap: Wrap, scale: f32, invert: bool },
-}
-
-/// Every texture of a scene, by the indices [`TexValue::Texture`] names.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Textures(pub Vec<Texture>);
-
-impl Textures {
-    pub fn new(descs: &[TextureDesc]) -> Textures {
-        Textures(descs.iter().map(|t| Texture::from_kind(&t.kind)).collect())
-    }
-
-    pub fn eval(&self, v: TexValue, uv: [f32; 2]) -> Rgb {
-        match v {
-            TexValue::Const(c) => c,
-            TexValue::Texture(t) => self.0.get(t as usize).map_or(Vec3::ZERO, |t| t.eval(self, uv)),
-        }
-    }
-}
-
-impl Texture {
-    fn from_kind(k: &TextureKind) -> Texture {
-        match k {
-            TextureKind::Constant(TexValue::Const(c)) => Texture::Const(*c),
-            TextureKind::Constant(v) => Texture::Scale(*v, TexValue::Const(Vec3::ONE)),
-            TextureKind::Checkerboard { tex1, tex2, map } => Texture::Checker { tex1: *tex1, tex2: *tex2, map: *map },
-            TextureKind::Scale { tex, scale } => Texture::Scale(*tex, *scale),
-            TextureKind::Mix { tex1, tex2, amount } => Texture::Mix(*tex1, *tex2, *amount),
-            TextureKind::Image { image, map, wrap, scale, invert } => {
-                Texture::Image { img: image.clone(), map: *map, wrap: *wrap, scale: *scale, invert: *invert }
-            }
-        }
-    }
-
-    pub fn eval(&self, all: &Textures, uv: [f32; 2]) -> Rgb {
-        let st = |m: &UvMapping| (uv[0] * m.su + m.du, uv[1] * m.sv + m.dv);
-        match self {
-            Texture::Const(c) => *c,
-            Texture::Checker { tex1, tex2, map } => {
-                let (s, t) = st(map);
-                if (s.floor() as i64 + t.floor() as i64) % 2 == 0 { all.eval(*tex1, uv) } else { all.eval(*tex2, uv) }
-            }
-            Texture::Scale(a, b) => all.eval(*a, uv) * all.eval(*b, uv),
-            Texture::Mix(a, b, t) => {
-                let t = all.eval(*t, uv);
-                all.eval(*a, uv) * (Vec3::ONE - t) + all.eval(*b, uv) * t
-            }
-            Texture::Image { img, map, wrap, scale, invert } => {
-                let (s, t) = st(map);
-                let v = lookup(img, s, t, *wrap, false) * *scale;
-                if *invert { (Vec3::ONE - v).max(Vec3::ZERO) } else { v }
-            }
-        }
-    }
-}
 
 /// A material ready to shade: the scene's description, its inputs evaluated at each hit.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Material(MaterialKind);
-
-/// Clamps to [0, 1] as pbrt's `Spectrum::Clamp()` does for reflectances.
-fn unit(c: Rgb) -> Rgb {
-    c.clamp(Vec3::ZERO, Vec3::ONE)
+pub struct Material {
+    kind: MaterialKind,
+    /// Reflectances are clamped to [0, this]: pbrt-v3's materials clamp only below
+    /// (`Spectrum::Clamp()`), so a v3 `Kd` above 1 reflects more than it receives, as
+    /// in pbrt-v3; pbrt-v4's clamp to [0, 1].
+    max_reflectance: f32,
 }
+
+/// pbrt-v3's material types (the rest are pbrt-v4's).
+const V3_TYPES: [&str; 8] = ["matte", "plastic", "uber", "translucent", "substrate", "glass", "metal", "mirror"];
 
 impl Material {
     pub fn from_desc(m: &MaterialDesc) -> Material {
-        Material(m.kind.clone())
+        let v3 = V3_TYPES.contains(&m.ty.as_str());
+        Material { kind: m.kind.clone(), max_reflectance: if v3 { f32::INFINITY } else { 1.0 } }
     }
 
     pub fn kind(&self) -> &MaterialKind {
-        &self.0
+        &self.kind
     }
 
     /// The BSDF at a hit (`None` for interfaces).
-    pub fn bsdf(&self, textures: &Textures, uv: [f32; 2], frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
-        if let MaterialKind::Diffuse { reflectance } = &self.0 {
+    pub fn bsdf(&self, textures: &Textures, ctx: &TexCtx, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
+        let inputs = Inputs { textures, ctx, max_reflectance: self.max_reflectance };
+        if let MaterialKind::Diffuse { reflectance } = &self.kind {
             // The common case, without the lobe list's set-up.
-            let lambert = lambert(unit(textures.eval(*reflectance, uv)));
+            let lambert = lambert(inputs.refl(*reflectance));
             return Some(Bsdf::new(frame, ng, lambert.as_slice()));
         }
         let mut lobes = Lobes::default();
-        self.lobes(&Inputs { textures, uv }, &mut lobes)?;
+        self.lobes(&inputs, &mut lobes)?;
         Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n]))
     }
 
     fn lobes(&self, i: &Inputs, out: &mut Lobes) -> Option<()> {
-        match &self.0 {
+        match &self.kind {
             MaterialKind::Diffuse { reflectance } => {
-                lambert(unit(i.rgb(*reflectance))).into_iter().for_each(|l| out.push(l))
+                lambert(i.refl(*reflectance)).into_iter().for_each(|l| out.push(l))
             }
             MaterialKind::OrenNayar { reflectance, sigma } => {
-                let r = unit(i.rgb(*reflectance));
+                let r = i.refl(*reflectance);
                 match oren_nayar_ab(i.float(*sigma)) {
                     (_, 0.0) => out.push_nonzero(r, Lobe::Lambert),
                     (a, b) => out.push_nonzero(r, |r| Lobe::OrenNayar { r, a, b }),
@@ -165,7 +82,7 @@ impl Material {
                 let raw = roughness.map(|r| i.float(r));
                 let alpha = if raw == [0.0; 2] { raw } else { raw.map(|r| remap.alpha(r)) };
                 let alpha = if alpha.iter().all(|a| *a < 1e-3) { [0.0; 2] } else { alpha };
-                dielectric(i.float(*eta), unit(i.rgb(*kr)), unit(i.rgb(*kt)), alpha, out)
+                dielectric(i.float(*eta), i.refl(*kr), i.refl(*kt), alpha, out)
             }
             MaterialKind::Conductor { eta, k, roughness, remap } => {
                 let fresnel = Fresnel::Conductor { eta: *eta, k: *k };
@@ -177,25 +94,25 @@ impl Material {
                 }
             }
             MaterialKind::Plastic { kd, ks, roughness, remap } => {
-                out.push_nonzero(unit(i.rgb(*kd)), Lobe::Lambert);
+                out.push_nonzero(i.refl(*kd), Lobe::Lambert);
                 let a = remap.alpha(i.float(*roughness));
                 let (dist, fresnel) = (TrowbridgeReitz::new([a, a]), Fresnel::Coat { eta: 1.5 });
-                out.push_nonzero(unit(i.rgb(*ks)), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
+                out.push_nonzero(i.refl(*ks), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
             }
             MaterialKind::Uber { kd, ks, kr, kt, roughness, eta, opacity, remap } => {
                 // pbrt-v3: a pass-through of 1 − opacity, then each layer scaled by it.
-                let op = unit(i.rgb(*opacity));
-                out.push_nonzero(unit(Vec3::ONE - op), |t| Lobe::SpecularTransmission { t, eta: 1.0 });
+                let op = i.refl(*opacity);
+                out.push_nonzero((Vec3::ONE - op).max(Vec3::ZERO), |t| Lobe::SpecularTransmission { t, eta: 1.0 });
                 let eta = i.float(*eta);
-                out.push_nonzero(op * unit(i.rgb(*kd)), Lobe::Lambert);
+                out.push_nonzero(op * i.refl(*kd), Lobe::Lambert);
                 let (dist, fresnel) = (TrowbridgeReitz::new(i.alpha(roughness, *remap)), Fresnel::Dielectric { eta });
-                out.push_nonzero(op * unit(i.rgb(*ks)), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
-                out.push_nonzero(op * unit(i.rgb(*kr)), |r| Lobe::SpecularReflection { r, fresnel });
-                out.push_nonzero(op * unit(i.rgb(*kt)), |t| Lobe::SpecularTransmission { t, eta });
+                out.push_nonzero(op * i.refl(*ks), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
+                out.push_nonzero(op * i.refl(*kr), |r| Lobe::SpecularReflection { r, fresnel });
+                out.push_nonzero(op * i.refl(*kt), |t| Lobe::SpecularTransmission { t, eta });
             }
             MaterialKind::Translucent { kd, ks, reflect, transmit, roughness, remap } => {
-                let (r, t) = (unit(i.rgb(*reflect)), unit(i.rgb(*transmit)));
-                let (kd, ks) = (unit(i.rgb(*kd)), unit(i.rgb(*ks)));
+                let (r, t) = (i.refl(*reflect), i.refl(*transmit));
+                let (kd, ks) = (i.refl(*kd), i.refl(*ks));
                 out.push_nonzero(r * kd, Lobe::Lambert);
                 out.push_nonzero(t * kd, Lobe::LambertTransmission);
                 let a = remap.alpha(i.float(*roughness));
@@ -205,7 +122,7 @@ impl Material {
                 out.push_nonzero(t * ks, |t| Lobe::MicrofacetTransmission { t, dist, eta });
             }
             MaterialKind::Substrate { kd, ks, roughness, remap } => {
-                let (rd, rs) = (unit(i.rgb(*kd)), unit(i.rgb(*ks)));
+                let (rd, rs) = (i.refl(*kd), i.refl(*ks));
                 if rd != Vec3::ZERO || rs != Vec3::ZERO {
                     let dist = TrowbridgeReitz::new(i.alpha(roughness, *remap));
                     out.push(Lobe::FresnelBlend { rd, rs, dist });
@@ -240,16 +157,22 @@ fn dielectric(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], out: &mut Lobes) {
 /// Texture inputs at one hit.
 struct Inputs<'a> {
     textures: &'a Textures,
-    uv: [f32; 2],
+    ctx: &'a TexCtx,
+    max_reflectance: f32,
 }
 
 impl Inputs<'_> {
+    /// A reflectance (or transmittance), clamped as the material's version does.
+    fn refl(&self, v: TexValue) -> Rgb {
+        self.rgb(v).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance))
+    }
+
     fn rgb(&self, v: TexValue) -> Rgb {
-        self.textures.eval(v, self.uv)
+        self.textures.eval(v, self.ctx)
     }
 
     fn float(&self, v: TexValue) -> f32 {
-        self.rgb(v).x
+        self.textures.float(v, self.ctx)
     }
 
     fn alpha(&self, roughness: &[TexValue; 2], remap: RoughnessRemap) -> [f32; 2] {

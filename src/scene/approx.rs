@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! Material "coateddiffuse" "rgb reflectance" [.4 .1 .1]  # approximated: its diffuse part
-//! Texture "t" "float" "fbm"                              # approximated: a constant 0.5
+//! Texture "t" "float" "ptex"                             # approximated: a constant 0.5
 //! ```
 
 /// One way of rendering something other than as written.
@@ -14,7 +14,6 @@ pub enum Approx {
     UnsupportedTexture,
     MissingImage,
     BumpMap,
-    TextureMapping,
     AlphaMask,
     Motion,
     Camera,
@@ -24,13 +23,12 @@ pub enum Approx {
 }
 
 impl Approx {
-    pub const ALL: [Approx; 12] = [
+    pub const ALL: [Approx; 11] = [
         Approx::DiffusePart,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
         Approx::MissingImage,
         Approx::BumpMap,
-        Approx::TextureMapping,
         Approx::AlphaMask,
         Approx::Motion,
         Approx::Camera,
@@ -47,7 +45,6 @@ impl Approx {
             Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
             Approx::MissingImage => "the image cannot be read; a constant 0.5 (a constant sky for maps) is used",
             Approx::BumpMap => "bump, displacement and normal maps are not supported; the surface is left smooth",
-            Approx::TextureMapping => "only 2D (u, v) texture mappings are supported; (u, v) is used",
             Approx::AlphaMask => "alpha masks are not supported; the shape is opaque",
             Approx::Motion => "animated transforms are not supported; the start transform is used",
             Approx::Camera => "this camera type is not supported; a perspective camera is used",

@@ -21,9 +21,10 @@ mod typed;
 
 use super::approx::Approx;
 use super::entities;
-use super::materials::{MaterialDesc, TextureDesc};
+use super::materials::MaterialDesc;
 use super::options::RenderOptions;
 use super::shapes::{self as shape_build, Built};
+use super::textures::TextureDesc;
 use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped, mesh};
 use crate::imageio::RgbImage;
 use crate::limits::Limits;
@@ -128,6 +129,8 @@ struct PendingTexture {
     params: ParamList,
     span: Span,
     scope: Rc<Scope>,
+    /// The CTM at the statement (texture space for 3D textures and mappings).
+    ctm: DMat4,
     /// `Some(None)`: tried and skipped; `Some(Some(i))`: built as texture i.
     built: Option<Option<u32>>,
 }
@@ -804,6 +807,7 @@ impl Builder {
             params,
             span: class.name_span,
             scope: self.gs.scope.clone(),
+            ctm: self.gs.ctm[0],
             built: None,
         });
         let scope = Rc::make_mut(&mut self.gs.scope);

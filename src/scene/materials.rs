@@ -1,4 +1,5 @@
-//! `Material`, `MakeNamedMaterial` and `Texture` statements to typed descriptions.
+//! `Material` and `MakeNamedMaterial` statements to typed descriptions (textures:
+//! [`super::textures`]).
 //!
 //! ```text
 //! Material "matte" "rgb Kd" [.5 .5 .5]        Material "diffuse" "texture reflectance" "checks"
@@ -13,10 +14,6 @@
 //! Material "matte" "float sigma" 20                   # Oren–Nayar
 //! Material "coateddiffuse"                            # approximated: its diffuse part
 //! Material "" / "none" / "interface"                # no surface: paths pass through
-//! Texture "checks" "spectrum" "checkerboard" "float uscale" 8 "rgb tex1" [1 0 0]
-//! Texture "s" "spectrum" "scale" "texture tex" "checks" "float scale" 0.5      # v3: tex1 × tex2
-//! Texture "m" "spectrum" "mix" "rgb tex1" [1 1 1] "texture tex2" "checks" "float amount" 0.3
-//! Texture "img" "spectrum" "imagemap" "string filename" "wood.png" "string wrap" "clamp"
 //! ```
 //! What we render differently from the file (a material drawn as its diffuse part, rough
 //! glass as smooth, a textured roughness taken at the texture's centre, ...) is recorded
@@ -25,7 +22,6 @@
 use super::approx::Approx;
 use super::values::{self, Range, Res, SpectrumContext, SpectrumOrTexture};
 use crate::imageio::RgbImage;
-use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::spectrum::Rgb;
@@ -129,39 +125,6 @@ pub struct MaterialDesc {
     pub kind: MaterialKind,
 }
 
-/// How image lookups treat coordinates outside [0, 1].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Wrap {
-    Repeat,
-    Clamp,
-    Black,
-}
-
-/// (s, t) = (su·u + du, sv·v + dv).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct UvMapping {
-    pub su: f32,
-    pub sv: f32,
-    pub du: f32,
-    pub dv: f32,
-}
-
-#[derive(Clone, Debug, PartialEq)]
-pub enum TextureKind {
-    Constant(TexValue),
-    Checkerboard { tex1: TexValue, tex2: TexValue, map: UvMapping },
-    Scale { tex: TexValue, scale: TexValue },
-    Mix { tex1: TexValue, tex2: TexValue, amount: TexValue },
-    Image { image: Arc<RgbImage>, map: UvMapping, wrap: Wrap, scale: f32, invert: bool },
-}
-
-/// A texture some used material (or texture) refers to.
-#[derive(Clone, Debug, PartialEq)]
-pub struct TextureDesc {
-    pub name: String,
-    pub kind: TextureKind,
-}
-
 /// What building materials and textures needs from the scene builder.
 pub trait Resolver {
     /// The float or spectrum texture `name`, built on first use; `at` is the span of
@@ -174,7 +137,7 @@ pub trait Resolver {
 }
 
 /// A spectrum input: constant (non-negative) or a spectrum texture.
-fn spectrum(p: &ParamList, name: &str, default: f32, r: &mut dyn Resolver) -> Res<TexValue> {
+pub(super) fn spectrum(p: &ParamList, name: &str, default: f32, r: &mut dyn Resolver) -> Res<TexValue> {
     let found = values::spectrum(p, name, &r.spectra(), Range::NonNegative)?;
     Ok(match found {
         None => TexValue::Const(Vec3::splat(default)),
@@ -184,7 +147,7 @@ fn spectrum(p: &ParamList, name: &str, default: f32, r: &mut dyn Resolver) -> Re
 }
 
 /// A float input: constant (in `range`) or a float texture.
-fn float(p: &ParamList, name: &str, default: f32, range: Range, r: &mut dyn Resolver) -> Res<TexValue> {
+pub(super) fn float(p: &ParamList, name: &str, default: f32, range: Range, r: &mut dyn Resolver) -> Res<TexValue> {
     Ok(match values::float_or_texture(p, name, range)? {
         None => TexValue::Const(Vec3::splat(default)),
         Some((FloatValue::Const(v), _)) => TexValue::Const(Vec3::splat(v)),
@@ -351,90 +314,4 @@ fn check_coat(p: &ParamList, r: &mut dyn Resolver) -> Res<()> {
     }
     p.bool("remaproughness")?;
     Ok(())
-}
-
-/// One texture input of a texture of kind `float` or `spectrum`.
-fn input(p: &ParamList, name: &str, default: f32, is_float: bool, r: &mut dyn Resolver) -> Res<TexValue> {
-    if is_float { float(p, name, default, Range::Any, r) } else { spectrum(p, name, default, r) }
-}
-
-/// A texture of class `class`, or `None` for classes we do not support.
-pub fn texture(class: &str, is_float: bool, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Option<TextureKind>> {
-    Ok(Some(match class {
-        "constant" => TextureKind::Constant(input(p, "value", 1.0, is_float, r)?),
-        "checkerboard" => {
-            let map = mapping(p, at, r)?;
-            let dimension = p.int("dimension")?.unwrap_or(2);
-            if dimension != 2 {
-                let at = values::span_of(p, "dimension").unwrap_or(at);
-                r.approximate(at, "3D checkerboard".into(), Approx::TextureMapping);
-            }
-            values::no_effect(p, &["aamode"]);
-            let (tex1, tex2) = (input(p, "tex1", 1.0, is_float, r)?, input(p, "tex2", 0.0, is_float, r)?);
-            TextureKind::Checkerboard { tex1, tex2, map }
-        }
-        // v3: tex1 × tex2; v4: tex × scale (a float texture).
-        "scale" if p.named("tex1").is_some() || p.named("tex2").is_some() => {
-            TextureKind::Scale { tex: input(p, "tex1", 1.0, is_float, r)?, scale: input(p, "tex2", 1.0, is_float, r)? }
-        }
-        "scale" => TextureKind::Scale {
-            tex: input(p, "tex", 1.0, is_float, r)?,
-            scale: float(p, "scale", 1.0, Range::Any, r)?,
-        },
-        "mix" => TextureKind::Mix {
-            tex1: input(p, "tex1", 0.0, is_float, r)?,
-            tex2: input(p, "tex2", 1.0, is_float, r)?,
-            amount: float(p, "amount", 0.5, Range::Any, r)?,
-        },
-        "imagemap" => image_texture(p, at, r)?,
-        _ => return Ok(None),
-    }))
-}
-
-/// `mapping "uv"` with its scales and offsets; other mappings are approximated by uv.
-fn mapping(p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<UvMapping> {
-    let kind = values::choice(p, "mapping", "uv", &["uv", "spherical", "cylindrical", "planar"])?;
-    if kind != "uv" {
-        let at = values::span_of(p, "mapping").unwrap_or(at);
-        r.approximate(at, format!("texture mapping \"{kind}\""), Approx::TextureMapping);
-        for name in ["v1", "v2"] {
-            p.fixed::<3>(name, &[ParamType::Vector3])?;
-        }
-    }
-    let f = |name: &str, d: f32| values::float(p, name, d, Range::Any);
-    Ok(UvMapping { su: f("uscale", 1.0)?, sv: f("vscale", 1.0)?, du: f("udelta", 0.0)?, dv: f("vdelta", 0.0)? })
-}
-
-fn image_texture(p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<TextureKind> {
-    let name = p
-        .string("filename")?
-        .ok_or_else(|| p.wrong_type().unwrap_or_else(|| Diagnostic::error(at, "imagemap needs \"string filename\"")))?;
-    let name_at = p.named("filename").map_or(at, |f| f.value_span);
-    let map = mapping(p, at, r)?;
-    let wrap = match values::choice(p, "wrap", "repeat", &["repeat", "clamp", "black", "octahedralsphere"])? {
-        "clamp" => Wrap::Clamp,
-        "black" => Wrap::Black,
-        _ => Wrap::Repeat,
-    };
-    let scale = values::float(p, "scale", 1.0, Range::Any)?;
-    let invert = p.bool("invert")?.unwrap_or(false);
-    let gamma = p.bool("gamma")?;
-    let encoding = p.string("encoding")?;
-    // Filtering hints: lookups are bilinear, and SPPM's many samples per pixel filter.
-    values::no_effect(p, &["maxanisotropy", "trilinear", "filter"]);
-    let mut image = match r.image(&name) {
-        Ok(img) => img,
-        Err(e) => {
-            r.approximate(name_at, format!("imagemap ({e})"), Approx::MissingImage);
-            return Ok(TextureKind::Constant(TexValue::Const(Vec3::splat(0.5))));
-        }
-    };
-    let linear = gamma == Some(false) || encoding.as_deref() == Some("linear");
-    if name.to_ascii_lowercase().ends_with(".png") && linear {
-        // PNGs are read sRGB-decoded; this texture wants the stored values as they are.
-        let mut raw = (*image).clone();
-        raw.pixels.iter_mut().for_each(|px| *px = px.map(crate::imageio::to_srgb));
-        image = Arc::new(raw);
-    }
-    Ok(TextureKind::Image { image, map, wrap, scale, invert })
 }

@@ -16,6 +16,7 @@ pub mod obj;
 pub mod options;
 pub mod ply;
 pub mod shapes;
+pub mod textures;
 pub mod values;
 
 use crate::math::bounds::transform_bounds;
@@ -27,8 +28,9 @@ use glam::{DMat4, DVec3};
 pub use approx::Approx;
 pub use builder::{LoadOptions, load_scene, load_scene_from_bytes};
 pub use lights::{AreaLightDesc, EnvMapDesc, LightDesc, LightKind};
-pub use materials::{MaterialDesc, MaterialKind, RoughnessRemap, TexValue, TextureDesc, TextureKind, UvMapping, Wrap};
+pub use materials::{MaterialDesc, MaterialKind, RoughnessRemap, TexValue};
 pub use options::{Camera, CameraKind, Film, Integrator};
+pub use textures::{Mapping2D, Octaves, TextureDesc, TextureKind, TextureSite, UvMapping, Wrap};
 
 /// A shape's geometry: a quadric, or a triangle mesh stored in [`SceneDescription::meshes`].
 #[derive(Clone, Debug, PartialEq)]

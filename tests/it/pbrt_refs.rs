@@ -28,3 +28,17 @@ fn a_glass_sphere_focuses_a_spot_light_as_in_pbrt_v3() {
     let (worst, at, _) = compare("v3-caustic");
     assert!(worst <= 0.02, "worst tile deviation {:.2}% at {at} (bound 2%)", 100.0 * worst);
 }
+
+#[test]
+fn procedural_textures_and_mappings_match_pbrt_v3() {
+    // pbrt-v3's own 16-iteration image: worst tile 0.33%, relMSE 1.4e-3.
+    let (worst, at, _) = compare("v3-textures");
+    assert!(worst <= 0.02, "worst tile deviation {:.2}% at {at} (bound 2%)", 100.0 * worst);
+}
+
+#[test]
+fn procedural_textures_and_mappings_match_pbrt_v4() {
+    // pbrt-v4's own 64-iteration image: worst tile 1.49%, relMSE 5.4e-3.
+    let (worst, at, _) = compare("v4-textures");
+    assert!(worst <= 0.04, "worst tile deviation {:.2}% at {at} (bound 4%)", 100.0 * worst);
+}

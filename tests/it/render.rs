@@ -217,8 +217,8 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
     .unwrap();
     let rs = RenderScene::new(crate::common::load_file(&path).unwrap());
     let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
-    assert_eq!(rs.textures.eval(*kd, [0.25, 0.25]).to_array(), [0.0, 0.0, 1.0], "bottom-left is blue");
-    assert_eq!(rs.textures.eval(*kd, [0.75, 0.75]).to_array(), [0.0, 1.0, 0.0], "top-right is green");
+    assert_eq!(rs.textures.eval(*kd, &at_uv([0.25, 0.25])).to_array(), [0.0, 0.0, 1.0], "bottom-left is blue");
+    assert_eq!(rs.textures.eval(*kd, &at_uv([0.75, 0.75])).to_array(), [0.0, 1.0, 0.0], "top-right is green");
     std::fs::write(
         &path,
         "WorldBegin Texture \"gone\" \"spectrum\" \"imagemap\" \"string filename\" \"missing.png\" \
@@ -232,7 +232,7 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
     assert!(a.what.contains("missing.png") && (a.line, a.column) == (1, 67), "{a:?}");
     let rs = RenderScene::new(s);
     let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
-    assert_eq!(rs.textures.eval(*kd, [0.3, 0.3]).to_array(), [0.5; 3]);
+    assert_eq!(rs.textures.eval(*kd, &at_uv([0.3, 0.3])).to_array(), [0.5; 3]);
 }
 
 #[test]
@@ -275,7 +275,7 @@ fn metal_roughness_follows_each_versions_remapping() {
         .iter()
         .map(|m| {
             let frame = [glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z];
-            let bsdf = m.bsdf(&rs.textures, [0.5, 0.5], frame, glam::Vec3::Z).expect("a surface");
+            let bsdf = m.bsdf(&rs.textures, &at_uv([0.5, 0.5]), frame, glam::Vec3::Z).expect("a surface");
             match bsdf.lobes() {
                 [Lobe::MicrofacetReflection { dist, .. }] => Some(dist.ax),
                 [Lobe::SpecularReflection { .. }] => None,
@@ -351,7 +351,7 @@ fn glass_is_smooth_at_roughness_zero_in_both_versions() {
     let lobes: Vec<Vec<Lobe>> = rs
         .materials
         .iter()
-        .map(|m| m.bsdf(&rs.textures, [0.5, 0.5], frame, glam::Vec3::Z).expect("a surface").lobes().to_vec())
+        .map(|m| m.bsdf(&rs.textures, &at_uv([0.5, 0.5]), frame, glam::Vec3::Z).expect("a surface").lobes().to_vec())
         .collect();
     assert!(matches!(lobes[0][..], [Lobe::FresnelSpecular { .. }]), "{:?}", lobes[0]);
     assert!(matches!(lobes[1][..], [Lobe::FresnelSpecular { .. }]), "{:?}", lobes[1]);
@@ -360,4 +360,9 @@ fn glass_is_smooth_at_roughness_zero_in_both_versions() {
         "{:?}",
         lobes[2]
     );
+}
+
+/// A texture lookup at (u, v) only.
+fn at_uv(uv: [f32; 2]) -> pbrt_sppm::materials::TexCtx {
+    pbrt_sppm::materials::TexCtx { uv, ..Default::default() }
 }

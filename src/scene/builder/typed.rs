@@ -12,7 +12,8 @@ use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::scene::approx::Approx;
 use crate::scene::lights::{self, LightContext, LightDesc};
-use crate::scene::materials::{self, MaterialDesc, Resolver, TexValue, TextureDesc};
+use crate::scene::materials::{self, MaterialDesc, Resolver, TexValue};
+use crate::scene::textures::{self, TextureDesc, TextureKind, TextureSite};
 use crate::scene::values::SpectrumContext;
 use glam::Vec3;
 use std::rc::Rc;
@@ -161,18 +162,19 @@ impl Builder {
         t.built = Some(None); // being built: a reference back to it is a cycle
         let params = std::mem::take(&mut t.params);
         let (class, span, scope, is_float) = (t.class.clone(), t.span, t.scope.clone(), t.ty == "float");
+        let site = TextureSite { world_from_texture: t.ctm, syntax: self.syntax() };
         let kind = {
             let mut r = Scoped { b: self, scope, depth: depth + 1 };
-            materials::texture(&class, is_float, &params, span, &mut r)?
+            textures::texture(&class, is_float, &params, span, &site, &mut r)?
         };
         let kind = kind.unwrap_or_else(|| {
             params.mark_all_used();
             let what = format!("texture \"{}\" of class \"{class}\"", self.textures[i as usize].name);
             self.note(span, what, Approx::UnsupportedTexture);
-            materials::TextureKind::Constant(TexValue::Const(Vec3::splat(0.5)))
+            TextureKind::Constant(TexValue::Const(Vec3::splat(0.5)))
         });
         finish_params(&params, &mut self.warnings)?;
-        let lookups = 1 + children(&kind).iter().map(|&c| self.texture_lookups[c as usize]).sum::<u64>();
+        let lookups = 1 + children(&kind).map(|c| self.texture_lookups[c as usize]).sum::<u64>();
         if lookups > TEXTURE_LOOKUPS {
             let msg = format!("texture needs {lookups} lookups per evaluation, more than {TEXTURE_LOOKUPS}");
             return Err(Diagnostic::error(span, msg));
@@ -187,16 +189,8 @@ impl Builder {
 }
 
 /// The textures a texture reads.
-fn children(k: &materials::TextureKind) -> Vec<u32> {
-    use materials::TextureKind as K;
-    let vals: Vec<TexValue> = match k {
-        K::Constant(v) => vec![*v],
-        K::Checkerboard { tex1, tex2, .. } => vec![*tex1, *tex2],
-        K::Scale { tex, scale } => vec![*tex, *scale],
-        K::Mix { tex1, tex2, amount } => vec![*tex1, *tex2, *amount],
-        K::Image { .. } => vec![],
-    };
-    vals.into_iter().filter_map(|v| if let TexValue::Texture(t) = v { Some(t) } else { None }).collect()
+fn children(k: &TextureKind) -> impl Iterator<Item = u32> {
+    k.inputs().into_iter().filter_map(|v| if let TexValue::Texture(t) = v { Some(t) } else { None })
 }
 
 /// After a typed build: a parameter some lookup wanted with another type is an error;
