@@ -7,9 +7,12 @@ use crate::camera::Camera;
 use crate::interaction::SurfaceInteraction;
 use crate::lights::{Emitter, Light, WorldSphere, quadric_area};
 use crate::materials::{Bsdf, Material, TexCtx, Textures};
+use crate::math::Ray;
 use crate::math::frame::coordinate_system;
 use crate::sampling::Distribution1D;
-use crate::scene::{AreaLightDesc, Film, Geometry as ShapeGeometry, Integrator, SceneDescription};
+use crate::scene::{
+    AlphaRule, AreaLightDesc, Film, Geometry as ShapeGeometry, Integrator, SceneDescription, ShapeAlpha, TexValue,
+};
 use crate::shapes::MeshFlags;
 use crate::spectrum::{Rgb, luminance};
 use glam::Vec3;
@@ -32,6 +35,10 @@ pub struct RenderScene {
     pub textures: Textures,
     world_shape_material: Vec<u32>,
     object_shape_material: Vec<Vec<u32>>,
+    world_shape_alpha: Vec<Option<ShapeAlpha>>,
+    object_shape_alpha: Vec<Vec<Option<ShapeAlpha>>>,
+    /// Whether any shape has an alpha mask (rays then check the shapes they hit).
+    has_alpha: bool,
     /// Per world shape (by `check --shapes` index): its emission, if it emits.
     pub emitters: Vec<Option<EmitterInfo>>,
     pub lights: Vec<Light>,
@@ -49,6 +56,10 @@ impl RenderScene {
         let world_shape_material = scene.shapes.iter().map(|s| s.material).collect();
         let object_shape_material =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.material).collect()).collect();
+        let world_shape_alpha: Vec<_> = scene.shapes.iter().map(|s| s.alpha).collect();
+        let object_shape_alpha: Vec<Vec<_>> =
+            scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.alpha).collect()).collect();
+        let has_alpha = world_shape_alpha.iter().chain(object_shape_alpha.iter().flatten()).any(|a| a.is_some());
         let bounds = scene.world_bounds();
         let world = match bounds {
             Some([lo, hi]) => {
@@ -79,6 +90,9 @@ impl RenderScene {
             textures,
             world_shape_material,
             object_shape_material,
+            world_shape_alpha,
+            object_shape_alpha,
+            has_alpha,
             emitters,
             lights,
             light_power,
@@ -94,6 +108,59 @@ impl RenderScene {
             (Some(o), s) => self.object_shape_material[o as usize][s as usize],
         };
         &self.materials[idx as usize]
+    }
+
+    /// The closest hit along the ray that no alpha mask cuts away.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let hit = self.geometry.intersect(ray)?;
+        if self.has_alpha { self.unmasked(ray, hit, false) } else { Some(hit) }
+    }
+
+    /// Whether anything that no alpha mask cuts away lies along the ray (shadow rays,
+    /// which v3's `shadowalpha` masks too).
+    pub fn intersect_p(&self, ray: &Ray) -> bool {
+        if !self.has_alpha {
+            return self.geometry.intersect_p(ray);
+        }
+        self.geometry.intersect(ray).is_some_and(|hit| self.unmasked(ray, hit, true).is_some())
+    }
+
+    /// `hit`, or if a mask cuts it away, the first hit beyond it that none cuts, found
+    /// by continuing the ray from each cut-away surface (as pbrt-v4 does). A ray through
+    /// more than [`MAX_ALPHA_SKIPS`] cut-away surfaces is taken to miss.
+    fn unmasked(&self, ray: &Ray, mut hit: Hit, shadow: bool) -> Option<Hit> {
+        let (mut r, mut t0) = (*ray, 0.0);
+        for _ in 0..MAX_ALPHA_SKIPS {
+            let Some(alpha) = self.alpha(&hit) else { return Some(Hit { t: t0 + hit.t, ..hit }) };
+            let si = self.geometry.interaction(&hit);
+            if !self.cuts(alpha, &si, &r, shadow) {
+                return Some(Hit { t: t0 + hit.t, ..hit });
+            }
+            t0 += hit.t;
+            r = Ray { t_max: r.t_max - hit.t, ..si.spawn_ray(r.d) };
+            hit = self.geometry.intersect(&r)?;
+        }
+        None
+    }
+
+    fn alpha(&self, hit: &Hit) -> Option<&ShapeAlpha> {
+        match self.geometry.shape_of(hit) {
+            (None, s) => self.world_shape_alpha[s as usize].as_ref(),
+            (Some(o), s) => self.object_shape_alpha[o as usize][s as usize].as_ref(),
+        }
+    }
+
+    /// Whether `alpha` cuts the surface away where ray `r` meets it.
+    fn cuts(&self, alpha: &ShapeAlpha, si: &SurfaceInteraction, r: &Ray, shadow: bool) -> bool {
+        let ctx = TexCtx { p: si.p.0, n: si.n.0, uv: si.uv };
+        let test = |v: &TexValue| {
+            let a = self.textures.float(*v, &ctx);
+            match alpha.rule {
+                AlphaRule::ZeroCuts => a == 0.0,
+                AlphaRule::Stochastic => a < 1.0 && (a <= 0.0 || ray_hash(r) > a),
+            }
+        };
+        test(&alpha.alpha) || (shadow && alpha.shadow.as_ref().is_some_and(test))
     }
 
     /// The BSDF at a hit (`None` for interfaces), in the shading frame.
@@ -129,6 +196,20 @@ impl RenderScene {
             _ => Vec3::ZERO,
         }
     }
+}
+
+/// Cut-away surfaces one ray may pass through before it is taken to miss.
+pub const MAX_ALPHA_SKIPS: u32 = 1024;
+
+/// A number in [0, 1) fixed by the ray's origin and direction (pbrt-v4's `HashFloat(o, d)`
+/// plays this part): a ray meets the same stochastic alpha decision every time.
+fn ray_hash(r: &Ray) -> f32 {
+    let mut h: u64 = 0x9e37_79b9_7f4a_7c15;
+    for x in r.o.0.to_array().into_iter().chain(r.d.0.to_array()) {
+        h = (h ^ x.to_bits() as u64).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        h ^= h >> 31;
+    }
+    (h >> 40) as f32 / (1u64 << 24) as f32
 }
 
 /// One light per emitting quadric and per non-degenerate triangle of emitting meshes

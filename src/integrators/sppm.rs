@@ -251,7 +251,7 @@ fn camera_path(scene: &RenderScene, pixel: [f32; 2], rng: &mut Rng, max_depth: u
     let (mut beta, mut ld) = (Vec3::ONE, Vec3::ZERO);
     let (mut specular_bounce, mut depth, mut passes) = (false, 0, 0);
     while depth < max_depth {
-        let Some(hit) = scene.geometry.intersect(&ray) else {
+        let Some(hit) = scene.intersect(&ray) else {
             // DEVIATION(pbrt): pbrt-v3 adds the environment to every escaped ray. After a
             // glossy bounce `direct_light` has already counted it (its BSDF-sampled MIS
             // half), so pbrt-v3 counts it twice; pbrt-v4 MIS-weights it instead.
@@ -332,7 +332,7 @@ fn direct_light(
         // then is the light's density needed (measured from the offset origin, so the
         // surface just left is never taken for the light).
         let ray = si.spawn_ray(Vector3(s.wi));
-        let li = match scene.geometry.intersect(&ray) {
+        let li = match scene.intersect(&ray) {
             Some(hit) => match scene.emitter(&hit) {
                 Some((_, l)) if l as usize == idx => {
                     let lsi = scene.geometry.interaction(&hit);
@@ -357,7 +357,7 @@ fn visible(scene: &RenderScene, si: &crate::interaction::SurfaceInteraction, ls:
         Some(p) => si.spawn_ray_to(Point3(p)),
         None => si.spawn_ray(Vector3(ls.wi)),
     };
-    !scene.geometry.intersect_p(&ray)
+    !scene.intersect_p(&ray)
 }
 
 /// One photon path; appends (pixel, β·f) for each visible point it reaches and returns
@@ -382,7 +382,7 @@ fn trace_photon(
     let mut ray = crate::math::Ray::new(e.ray.o, Vector3(d));
     let (mut depth, mut passes, mut hits) = (0, 0, 0);
     while depth < max_depth {
-        let Some(hit) = scene.geometry.intersect(&ray) else { break };
+        let Some(hit) = scene.intersect(&ray) else { break };
         hits += 1;
         let si = scene.geometry.interaction(&hit);
         let wi = -ray.d.0;

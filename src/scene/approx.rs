@@ -14,7 +14,6 @@ pub enum Approx {
     UnsupportedTexture,
     MissingImage,
     BumpMap,
-    AlphaMask,
     Motion,
     Camera,
     FilmType,
@@ -23,13 +22,12 @@ pub enum Approx {
 }
 
 impl Approx {
-    pub const ALL: [Approx; 11] = [
+    pub const ALL: [Approx; 10] = [
         Approx::DiffusePart,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
         Approx::MissingImage,
         Approx::BumpMap,
-        Approx::AlphaMask,
         Approx::Motion,
         Approx::Camera,
         Approx::FilmType,
@@ -45,7 +43,6 @@ impl Approx {
             Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
             Approx::MissingImage => "the image cannot be read; a constant 0.5 (a constant sky for maps) is used",
             Approx::BumpMap => "bump, displacement and normal maps are not supported; the surface is left smooth",
-            Approx::AlphaMask => "alpha masks are not supported; the shape is opaque",
             Approx::Motion => "animated transforms are not supported; the start transform is used",
             Approx::Camera => "this camera type is not supported; a perspective camera is used",
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",

@@ -23,7 +23,7 @@ use super::approx::Approx;
 use super::entities;
 use super::materials::MaterialDesc;
 use super::options::RenderOptions;
-use super::shapes::{self as shape_build, Built};
+use super::shapes::{self as shape_build, AlphaParams, Built};
 use super::textures::TextureDesc;
 use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped, mesh};
 use crate::imageio::RgbImage;
@@ -140,6 +140,8 @@ struct PendingShape {
     ctm: DMat4,
     reverse_orientation: bool,
     material: MaterialRef,
+    /// The names in scope at the statement (for an alpha texture).
+    scope: Rc<Scope>,
 }
 
 struct PendingObject {
@@ -159,6 +161,8 @@ struct Builder {
     render: RenderOptions,
     shapes: Vec<ShapeDesc>,
     shape_materials: Vec<MaterialRef>,
+    /// Per world shape: its alpha parameters and the scope to resolve them in.
+    shape_alphas: Vec<Option<(AlphaParams, Rc<Scope>)>>,
     meshes: Vec<crate::shapes::TriangleMesh>,
     objects: Vec<PendingObject>,
     object_names: HashMap<String, u32>,
@@ -216,6 +220,7 @@ impl Builder {
             render: RenderOptions::default(),
             shapes: Vec::new(),
             shape_materials: Vec::new(),
+            shape_alphas: Vec::new(),
             meshes: Vec::new(),
             objects: Vec::new(),
             object_names: HashMap::new(),
@@ -621,6 +626,7 @@ impl Builder {
             ctm: self.gs.ctm[0],
             reverse_orientation: self.gs.reverse_orientation,
             material: self.gs.material.clone(),
+            scope: self.gs.scope.clone(),
         };
         match self.current_object {
             Some(obj) => {
@@ -634,18 +640,24 @@ impl Builder {
             }
             None => {
                 let area_light = self.gs.area_light;
-                if let Some(shape) = self.build_shape(&pending, area_light)? {
+                if let Some((shape, alpha)) = self.build_shape(&pending, area_light)? {
                     self.shapes.push(shape);
                     self.shape_materials.push(pending.material);
+                    self.shape_alphas.push(alpha.map(|a| (a, pending.scope)));
                 }
             }
         }
         Ok(())
     }
 
-    /// Geometry, transform and flags; the material is resolved later. `None` when the
-    /// shape type is unsupported (warned and listed as skipped).
-    fn build_shape(&mut self, s: &PendingShape, area_light: Option<u32>) -> Res<Option<ShapeDesc>> {
+    /// Geometry, transform and flags, and the alpha parameters; the material and alpha
+    /// are resolved later. `None` when the shape type is unsupported (warned and listed
+    /// as skipped).
+    fn build_shape(
+        &mut self,
+        s: &PendingShape,
+        area_light: Option<u32>,
+    ) -> Res<Option<(ShapeDesc, Option<AlphaParams>)>> {
         let (p, at) = (&s.entity.params, s.entity.name_span);
         let resolve = |n: &str| self.reader.resolve_path(n);
         let mut warn = Vec::new();
@@ -656,9 +668,7 @@ impl Builder {
             self.skip(at, what, "this shape type is not supported".into());
             return Ok(None);
         };
-        if let Some(alpha) = shape_build::alpha_mask(p)? {
-            self.note(alpha, format!("\"alpha\" of Shape \"{}\"", s.entity.name), Approx::AlphaMask);
-        }
+        let alpha = shape_build::alpha_params(p)?;
         typed::finish_params(p, &mut self.warnings)?;
         let geometry = match built {
             Built::Quadric(q) => Geometry::Quadric(q),
@@ -674,13 +684,15 @@ impl Builder {
             }
         };
         let area_light = area_light.map(|a| self.use_area_light(a));
-        Ok(Some(ShapeDesc {
+        let shape = ShapeDesc {
             geometry,
             object_to_world: s.ctm,
             reverse_orientation: s.reverse_orientation,
             material: 0,
             area_light,
-        }))
+            alpha: None,
+        };
+        Ok(Some((shape, alpha)))
     }
 
     fn object_begin(&mut self, name: String, span: Span) -> Res<()> {
@@ -847,6 +859,11 @@ impl Builder {
         for (shape, m) in self.shapes.iter_mut().zip(resolved) {
             shape.material = m;
         }
+        for (i, a) in std::mem::take(&mut self.shape_alphas).into_iter().enumerate() {
+            if let Some((a, scope)) = a {
+                self.shapes[i].alpha = self.resolve_alpha(&a, scope)?;
+            }
+        }
         let lights = self.build_lights()?;
         let area_lights = self.build_area_lights()?;
         let mut approx = Vec::new();
@@ -942,8 +959,11 @@ impl Builder {
             let pending = std::mem::take(&mut self.objects[i].shapes);
             let mut shapes = Vec::with_capacity(pending.len());
             for s in &pending {
-                if let Some(mut shape) = self.build_shape(s, None)? {
+                if let Some((mut shape, alpha)) = self.build_shape(s, None)? {
                     shape.material = self.resolve_material(&s.material)?;
+                    if let Some(a) = alpha {
+                        shape.alpha = self.resolve_alpha(&a, s.scope.clone())?;
+                    }
                     shapes.push(shape);
                 }
             }

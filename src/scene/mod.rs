@@ -57,6 +57,28 @@ pub struct ShapeDesc {
     pub material: u32,
     /// Index into [`SceneDescription::area_lights`].
     pub area_light: Option<u32>,
+    /// Where the shape is cut away, if anywhere.
+    pub alpha: Option<ShapeAlpha>,
+}
+
+/// A shape's alpha mask: rays pass through where it cuts the surface away.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShapeAlpha {
+    /// Tested by every ray.
+    pub alpha: TexValue,
+    /// v3 `shadowalpha`: tested by shadow rays only, as well as `alpha`.
+    pub shadow: Option<TexValue>,
+    pub rule: AlphaRule,
+}
+
+/// What an alpha value means.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AlphaRule {
+    /// pbrt-v3: 0 cuts, anything else is opaque.
+    ZeroCuts,
+    /// pbrt-v4: a ray passes with probability 1 − α (decided by a hash of the ray, so
+    /// the same ray always gets the same answer).
+    Stochastic,
 }
 
 impl ShapeDesc {

@@ -160,14 +160,19 @@ fn positive(p: &ParamList, name: &str, default: f32, span: Span) -> Res<f32> {
     Ok(v)
 }
 
-/// The span of an `alpha`/`shadowalpha` mask other than a constant 1, if any (masks
-/// are not supported: the shape is opaque).
-pub fn alpha_mask(p: &ParamList) -> Res<Option<Span>> {
-    for name in ["alpha", "shadowalpha"] {
-        match p.float_or_texture(name)? {
-            None | Some(FloatValue::Const(1.0)) => {}
-            Some(_) => return Ok(p.named(name).map(|x| x.span)),
-        }
-    }
-    Ok(None)
+/// A shape's `alpha` and (v3) `shadowalpha` as written: a constant or a float texture's
+/// name, each with its span. Resolved once the file is read (`builder::typed`).
+#[derive(Clone, Debug, Default)]
+pub struct AlphaParams {
+    pub alpha: Option<(FloatValue, Span)>,
+    pub shadow: Option<(FloatValue, Span)>,
+}
+
+/// The shape's alpha parameters, `None` when neither is given.
+pub fn alpha_params(p: &ParamList) -> Res<Option<AlphaParams>> {
+    let get = |name: &str| -> Res<Option<(FloatValue, Span)>> {
+        Ok(p.float_or_texture(name)?.map(|v| (v, p.named(name).map(|x| x.value_span).unwrap_or_default())))
+    };
+    let a = AlphaParams { alpha: get("alpha")?, shadow: get("shadowalpha")? };
+    Ok((a.alpha.is_some() || a.shadow.is_some()).then_some(a))
 }

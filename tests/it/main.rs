@@ -1,5 +1,6 @@
 //! The one integration-test binary (one link step keeps 2-core CI fast).
 
+mod alpha;
 mod bad_inputs;
 mod camera_image;
 mod common;

@@ -229,14 +229,9 @@ fn unsupported_shapes_are_skipped_with_one_warning() {
     assert_eq!(s.skipped.len(), 1);
     assert_eq!((s.skipped[0].line, s.skipped[0].column, s.skipped[0].what.as_str()), (2, 7, "Shape \"curve\""));
     let msgs: Vec<&str> = s.warnings.iter().map(|w| w.message.as_str()).collect();
-    assert_eq!(
-        msgs,
-        [
-            "Shape \"curve\": this shape type is not supported",
-            "\"alpha\" of Shape \"sphere\": alpha masks are not supported; the shape is opaque"
-        ]
-    );
-    assert_eq!(s.approximated.len(), 1);
-    assert_eq!((s.approximated[0].line, s.approximated[0].column), (3, 16));
+    assert_eq!(msgs, ["Shape \"curve\": this shape type is not supported"]);
+    // The sphere's alpha is a mask now (v4 file: stochastic), nothing approximated.
+    assert!(s.approximated.is_empty());
+    assert_eq!(s.shapes[0].alpha.map(|a| a.alpha), Some(pbrt_sppm::scene::TexValue::Const(glam::Vec3::splat(0.5))));
     assert!(root().exists());
 }

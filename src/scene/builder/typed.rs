@@ -7,14 +7,16 @@ use super::{Builder, Res, Scope};
 use crate::imageio::RgbImage;
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
-use crate::parser::params::ParamList;
+use crate::parser::params::{FloatValue, ParamList};
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::scene::approx::Approx;
 use crate::scene::lights::{self, LightContext, LightDesc};
 use crate::scene::materials::{self, MaterialDesc, Resolver, TexValue};
+use crate::scene::shapes::AlphaParams;
 use crate::scene::textures::{self, TextureDesc, TextureKind, TextureSite};
 use crate::scene::values::SpectrumContext;
+use crate::scene::{AlphaRule, ShapeAlpha};
 use glam::Vec3;
 use std::rc::Rc;
 use std::sync::Arc;
@@ -185,6 +187,30 @@ impl Builder {
         let b = self.built_textures.len() as u32 - 1;
         self.textures[i as usize].built = Some(Some(b));
         Ok(b)
+    }
+}
+
+impl Builder {
+    /// A shape's alpha mask as the file's version reads it; `None` when it never cuts.
+    pub(super) fn resolve_alpha(&mut self, a: &AlphaParams, scope: Rc<Scope>) -> Res<Option<ShapeAlpha>> {
+        let rule = if self.syntax() == Syntax::V3 { AlphaRule::ZeroCuts } else { AlphaRule::Stochastic };
+        let mut r = Scoped { b: self, scope, depth: 0 };
+        let mut value = |v: &Option<(FloatValue, Span)>| -> Res<Option<TexValue>> {
+            Ok(match v {
+                None => None,
+                Some((FloatValue::Texture(name), at)) => Some(TexValue::Texture(r.texture(name, true, *at)?)),
+                // A constant that never cuts is no mask at all.
+                Some((FloatValue::Const(c), _)) => match rule {
+                    AlphaRule::ZeroCuts => (*c == 0.0).then_some(TexValue::Const(Vec3::ZERO)),
+                    AlphaRule::Stochastic => (*c < 1.0).then_some(TexValue::Const(Vec3::splat(*c))),
+                },
+            })
+        };
+        let (alpha, shadow) = (value(&a.alpha)?, value(&a.shadow)?);
+        Ok(match (alpha, shadow) {
+            (None, None) => None,
+            (alpha, shadow) => Some(ShapeAlpha { alpha: alpha.unwrap_or(TexValue::Const(Vec3::ONE)), shadow, rule }),
+        })
     }
 }
 

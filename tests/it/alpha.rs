@@ -1,0 +1,77 @@
+//! Alpha masks: which rays pass through a shape, for each version's rule.
+
+use crate::common::scene;
+use pbrt_sppm::math::{Point3, Ray, Vector3};
+use pbrt_sppm::render::RenderScene;
+
+/// A quad at z = 0 (x, y in [-1, 1], uv over it) with `params`, in front of an opaque
+/// quad at z = 1, in a file of syntax `v3` or v4.
+fn two_quads(v3: bool, params: &str, textures: &str) -> RenderScene {
+    let (pt, uv) = if v3 { ("point", "float uv") } else { ("point3", "point2 uv") };
+    let text = format!(
+        "WorldBegin\n{textures}\n\
+         Shape \"trianglemesh\" \"{pt} P\" [-1 -1 0 1 -1 0 1 1 0 -1 1 0] \"integer indices\" [0 1 2 0 2 3] \
+         \"{uv}\" [0 0 1 0 1 1 0 1] {params}\n\
+         Shape \"trianglemesh\" \"{pt} P\" [-1 -1 1 1 -1 1 1 1 1 -1 1 1] \"integer indices\" [0 1 2 0 2 3]\n{}",
+        if v3 { "WorldEnd\n" } else { "" }
+    );
+    RenderScene::new(scene(&text))
+}
+
+fn ray_at(x: f32, y: f32) -> Ray {
+    Ray::new(Point3::new(x, y, -1.0), Vector3::new(0.0, 0.0, 1.0))
+}
+
+/// The z of the surface the ray through (x, y) stops at, if any.
+fn stop(s: &RenderScene, x: f32, y: f32) -> Option<f32> {
+    s.intersect(&ray_at(x, y)).map(|h| s.geometry.interaction(&h).p.0.z)
+}
+
+#[test]
+fn v3_alpha_zero_cuts_and_anything_else_is_opaque() {
+    assert_eq!(stop(&two_quads(true, "\"float alpha\" 0", ""), 0.1, 0.2), Some(1.0));
+    assert_eq!(stop(&two_quads(true, "\"float alpha\" 0.5", ""), 0.1, 0.2), Some(0.0));
+    // A texture: 0 on the left half (u < 0.5), 0.3 on the right.
+    let tex = "Texture \"half\" \"float\" \"checkerboard\" \"float uscale\" 2 \"float tex1\" 0 \"float tex2\" 0.3";
+    let s = two_quads(true, "\"texture alpha\" \"half\"", tex);
+    assert_eq!(stop(&s, -0.5, 0.0), Some(1.0));
+    assert_eq!(stop(&s, 0.5, 0.0), Some(0.0));
+    // t is in units of the original ray's direction, beyond the cut-away surface.
+    let hit = s.intersect(&ray_at(-0.5, 0.0)).expect("the back quad");
+    assert!((hit.t - 2.0).abs() < 1e-4, "{}", hit.t);
+}
+
+#[test]
+fn v3_shadowalpha_masks_shadow_rays_only() {
+    let s = two_quads(true, "\"float shadowalpha\" 0", "");
+    assert_eq!(stop(&s, 0.0, 0.0), Some(0.0), "camera and photon rays still hit it");
+    let to_middle = Ray { o: Point3::new(0.0, 0.0, -1.0), d: Vector3::new(0.0, 0.0, 1.5), t_max: 1.0 };
+    assert!(!s.intersect_p(&to_middle), "a shadow ray passes through");
+    let plain = two_quads(true, "", "");
+    assert!(plain.intersect_p(&to_middle));
+}
+
+#[test]
+fn v4_alpha_lets_a_fraction_of_rays_through() {
+    let s = two_quads(false, "\"float alpha\" 0.25", "");
+    let n = 4000;
+    let through = (0..n).filter(|i| stop(&s, -0.9 + 1.8 * (*i as f32 + 0.5) / n as f32, 0.37) == Some(1.0)).count();
+    let frac = through as f64 / n as f64;
+    assert!((frac - 0.75).abs() < 0.04, "{frac} of the rays passed, not 3/4");
+    // The same ray gets the same answer.
+    let r = ray_at(0.123, 0.456);
+    assert_eq!(s.intersect(&r), s.intersect(&r));
+    assert_eq!(stop(&two_quads(false, "\"float alpha\" 0", ""), 0.0, 0.0), Some(1.0));
+    assert_eq!(stop(&two_quads(false, "\"float alpha\" 1", ""), 0.0, 0.0), Some(0.0));
+}
+
+#[test]
+fn v4_alpha_cuts_quadrics_and_instances() {
+    let text = "WorldBegin\n\
+        ObjectBegin \"ball\"\nShape \"sphere\" \"float radius\" 1 \"float alpha\" 0\nObjectEnd\n\
+        ObjectInstance \"ball\"\n\
+        Translate 0 0 3\nShape \"sphere\" \"float radius\" 1\n";
+    let s = RenderScene::new(scene(text));
+    let hit = s.intersect(&Ray::new(Point3::new(0.0, 0.0, -5.0), Vector3::new(0.0, 0.0, 1.0))).expect("a hit");
+    assert!((s.geometry.interaction(&hit).p.0.z - 2.0).abs() < 1e-4, "the instanced ball is cut away");
+}
