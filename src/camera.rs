@@ -10,6 +10,7 @@
 //! of the shorter axis. Raster (0, 0) is the top-left pixel corner and y grows
 //! downward. With `LookAt`, world +x appears on the image's left (pbrt's orientation).
 
+use crate::math::ray::RayDifferential;
 use crate::math::{Point3, Ray, Vector3};
 use crate::scene::{Camera as CameraDesc, CameraKind, Film};
 use glam::{DMat4, DVec3, Vec2};
@@ -58,6 +59,20 @@ impl Camera {
     fn screen(&self, p_raster: [f32; 2]) -> [f32; 2] {
         let [x0, x1, y0, y1] = self.window;
         [x0 + p_raster[0] / self.resolution[0] * (x1 - x0), y1 - p_raster[1] / self.resolution[1] * (y1 - y0)]
+    }
+
+    /// The ray through `p_raster` and its differentials: the rays through the same lens
+    /// point from one pixel over in x and in y, their offsets scaled by `scale`.
+    pub fn generate_ray_differential(
+        &self,
+        p_raster: [f32; 2],
+        u_lens: [f32; 2],
+        scale: f32,
+    ) -> (Ray, RayDifferential) {
+        let ray = self.generate_ray(p_raster, u_lens);
+        let rx = self.generate_ray([p_raster[0] + 1.0, p_raster[1]], u_lens);
+        let ry = self.generate_ray([p_raster[0], p_raster[1] + 1.0], u_lens);
+        (ray, RayDifferential { rx, ry }.scaled(&ray, scale))
     }
 
     /// A world-space ray through raster position `p_raster`; `u_lens` picks the lens

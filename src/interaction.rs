@@ -6,6 +6,7 @@
 //! the side the ray goes to, then one more ulp away, so a ray never re-hits the surface
 //! it leaves.
 
+use crate::math::ray::RayDifferential;
 use crate::math::{Normal3, Point3, Ray, Vector3};
 use glam::Vec3;
 
@@ -37,6 +38,12 @@ pub struct SurfaceInteraction {
     pub dndu: Normal3,
     pub dndv: Normal3,
     pub shading: Shading,
+    /// (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y) across the image, from a camera ray's
+    /// differentials; zero when the ray had none.
+    pub duv_dxy: [f32; 4],
+    /// ∂p/∂x and ∂p/∂y across the image (zero likewise).
+    pub dpdx: Vec3,
+    pub dpdy: Vec3,
 }
 
 /// The origin for a ray leaving `p` in direction `w`.
@@ -58,6 +65,35 @@ pub fn offset_ray_origin(p: Point3, p_error: Vec3, n: Normal3, w: Vector3) -> Po
 }
 
 impl SurfaceInteraction {
+    /// Sets `duv_dxy` from the differentials of the ray that hit here (pbrt's
+    /// `ComputeDifferentials`): where they meet the tangent plane, then the (u, v)
+    /// offsets that reach those points, solved in the two axes the normal leaves best
+    /// conditioned. Left zero where that fails.
+    pub fn compute_differentials(&mut self, rd: &RayDifferential) {
+        let (p, n) = (self.p.0, self.n.0);
+        let on_plane = |r: &Ray| {
+            let t = -(n.dot(r.o.0) - n.dot(p)) / n.dot(r.d.0);
+            t.is_finite().then(|| r.o.0 + t * r.d.0 - p)
+        };
+        let (Some(dpdx), Some(dpdy)) = (on_plane(&rd.rx), on_plane(&rd.ry)) else { return };
+        (self.dpdx, self.dpdy) = (dpdx, dpdy);
+        let [a, b] = match n.abs() {
+            m if m.x > m.y && m.x > m.z => [1, 2],
+            m if m.y > m.z => [0, 2],
+            _ => [0, 1],
+        };
+        let (du, dv) = (self.dpdu.0, self.dpdv.0);
+        let det = du[a] * dv[b] - dv[a] * du[b];
+        if det.abs() < 1e-10 {
+            return;
+        }
+        let solve = |d: Vec3| [(dv[b] * d[a] - dv[a] * d[b]) / det, (du[a] * d[b] - du[b] * d[a]) / det];
+        let ([dudx, dvdx], [dudy, dvdy]) = (solve(dpdx), solve(dpdy));
+        if [dudx, dvdx, dudy, dvdy].iter().all(|x| x.is_finite()) {
+            self.duv_dxy = [dudx, dvdx, dudy, dvdy];
+        }
+    }
+
     pub fn spawn_ray(&self, d: Vector3) -> Ray {
         Ray::new(offset_ray_origin(self.p, self.p_error, self.n, d), d)
     }
@@ -109,6 +145,9 @@ impl SurfaceInteraction {
                 dndu: nrm(self.shading.dndu),
                 dndv: nrm(self.shading.dndv),
             },
+            duv_dxy: self.duv_dxy,
+            dpdx: self.dpdx,
+            dpdy: self.dpdy,
         }
     }
 }

@@ -152,7 +152,7 @@ impl RenderScene {
 
     /// Whether `alpha` cuts the surface away where ray `r` meets it.
     fn cuts(&self, alpha: &ShapeAlpha, si: &SurfaceInteraction, r: &Ray, shadow: bool) -> bool {
-        let ctx = TexCtx { p: si.p.0, n: si.n.0, uv: si.uv };
+        let ctx = TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, ..TexCtx::default() };
         let test = |v: &TexValue| {
             let a = self.textures.float(*v, &ctx);
             match alpha.rule {
@@ -165,15 +165,18 @@ impl RenderScene {
 
     /// The BSDF at a hit (`None` for interfaces), in the shading frame.
     pub fn bsdf(&self, hit: &Hit, si: &SurfaceInteraction) -> Option<Bsdf> {
-        let ns = si.shading.n.0;
-        let dpdu = si.shading.dpdu.0;
+        let material = self.material(hit);
+        let (ns, dpdu) = match material.bump {
+            Some(d) => bump(&self.textures, d, si),
+            None => (si.shading.n.0, si.shading.dpdu.0),
+        };
         let mut ss = (dpdu - ns * ns.dot(dpdu)).normalize_or_zero();
         if ss == Vec3::ZERO {
             ss = coordinate_system(ns).0;
         }
         let ts = ns.cross(ss);
-        let ctx = TexCtx { p: si.p.0, n: si.n.0, uv: si.uv };
-        self.material(hit).bsdf(&self.textures, &ctx, [ss, ts, ns], si.n.0)
+        let ctx = TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, dpdx: si.dpdx, dpdy: si.dpdy };
+        material.bsdf(&self.textures, &ctx, [ss, ts, ns], si.n.0)
     }
 
     /// The emitting world shape hit, and which of its lights (for MIS).
@@ -195,6 +198,36 @@ impl RenderScene {
             Some((e, _)) if e.two_sided || si.n.0.dot(w) > 0.0 => e.l,
             _ => Vec3::ZERO,
         }
+    }
+}
+
+/// The shading normal and ∂p/∂u after displacing the surface by the float texture `d`
+/// along its shading normal (pbrt's `Bump`). d is differenced over half the pixel
+/// footprint in u and in v where the camera ray's differentials give one, else over
+/// .0005 (pbrt's steps). The normal stays on the side of the geometric one.
+fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction) -> (Vec3, Vec3) {
+    let [dudx, dvdx, dudy, dvdy] = si.duv_dxy;
+    let step = |a: f32, b: f32| match 0.5 * (a.abs() + b.abs()) {
+        0.0 => 0.0005,
+        s => s,
+    };
+    let (du, dv) = (step(dudx, dudy), step(dvdx, dvdy));
+    let sh = &si.shading;
+    let (p, [u, v]) = (si.p.0, si.uv);
+    let n = sh.dpdu.0.cross(sh.dpdv.0);
+    let at = |p: Vec3, uv: [f32; 2], n: Vec3| {
+        textures.float(d, &TexCtx { p, n: n.normalize_or_zero(), uv, dpdx: si.dpdx, dpdy: si.dpdy })
+    };
+    let d_u = at(p + du * sh.dpdu.0, [u + du, v], n + du * si.dndu.0);
+    let d_v = at(p + dv * sh.dpdv.0, [u, v + dv], n + dv * si.dndv.0);
+    let d0 = at(p, [u, v], si.n.0);
+    let dpdu = sh.dpdu.0 + (d_u - d0) / du * sh.n.0 + d0 * sh.dndu.0;
+    let dpdv = sh.dpdv.0 + (d_v - d0) / dv * sh.n.0 + d0 * sh.dndv.0;
+    let ns = dpdu.cross(dpdv).normalize_or_zero();
+    match ns {
+        Vec3::ZERO => (sh.n.0, sh.dpdu.0),
+        ns if ns.dot(si.n.0) < 0.0 => (-ns, dpdu),
+        ns => (ns, dpdu),
     }
 }
 

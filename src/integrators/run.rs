@@ -45,6 +45,7 @@ impl RenderScene {
             return Err(format!("the radius must be positive, not {radius}"));
         }
         let mut sppm = super::sppm::Sppm::new(self, photons, radius, settings.seed.unwrap_or(i.seed))?;
+        sppm.differential_scale = super::sppm::differential_scale(iterations, i.differential_floor);
         let [x0, x1, y0, y1] = self.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
         if let Some(r) = &settings.reference

@@ -71,7 +71,15 @@ pub struct Sppm<'a> {
     pub photons_per_iteration: u64,
     max_depth: u32,
     seed: u64,
+    /// How much camera rays' differentials are scaled (pbrt scales them down as the
+    /// iterations that share a pixel grow; see [`crate::scene::Integrator`]).
+    pub differential_scale: f32,
     pub stats: Stats,
+}
+
+/// max(floor, 1/√iterations).
+pub fn differential_scale(iterations: u32, floor: f32) -> f32 {
+    (1.0 / (iterations.max(1) as f32).sqrt()).max(floor)
 }
 
 fn power_heuristic(f: f32, g: f32) -> f32 {
@@ -100,6 +108,7 @@ impl<'a> Sppm<'a> {
             photons_per_iteration,
             max_depth: scene.integrator.max_depth,
             seed,
+            differential_scale: differential_scale(scene.integrator.iterations, scene.integrator.differential_floor),
             stats: Stats::default(),
         })
     }
@@ -131,10 +140,11 @@ impl<'a> Sppm<'a> {
     fn camera_pass(&mut self) {
         let (scene, width, origin, iter, seed, max_depth) =
             (self.scene, self.width, self.origin, self.iteration as u64, self.seed, self.max_depth);
+        let diff_scale = self.differential_scale;
         self.pixels.par_iter_mut().enumerate().for_each(|(i, px)| {
             let (x, y) = (origin.0 as usize + i % width, origin.1 as usize + i / width);
             let mut rng = Rng::new(hash(&[seed, x as u64, y as u64, iter, 0]));
-            let (ld, vp) = camera_path(scene, [x as f32, y as f32], &mut rng, max_depth);
+            let (ld, vp) = camera_path(scene, [x as f32, y as f32], &mut rng, max_depth, diff_scale);
             px.ld += ld.as_dvec3();
             px.vp = vp;
         });
@@ -245,9 +255,18 @@ fn surface(
 }
 
 /// A camera path: (direct and emitted light gathered, the visible point).
-fn camera_path(scene: &RenderScene, pixel: [f32; 2], rng: &mut Rng, max_depth: u32) -> (Rgb, Option<VisiblePoint>) {
+fn camera_path(
+    scene: &RenderScene,
+    pixel: [f32; 2],
+    rng: &mut Rng,
+    max_depth: u32,
+    diff_scale: f32,
+) -> (Rgb, Option<VisiblePoint>) {
     let u = rng.uniform2();
-    let mut ray = scene.camera.generate_ray([pixel[0] + u[0], pixel[1] + u[1]], rng.uniform2());
+    let (mut ray, diff) =
+        scene.camera.generate_ray_differential([pixel[0] + u[0], pixel[1] + u[1]], rng.uniform2(), diff_scale);
+    // As in pbrt, only the camera ray has differentials: rays spawned later have none.
+    let mut diff = Some(diff);
     let (mut beta, mut ld) = (Vec3::ONE, Vec3::ZERO);
     let (mut specular_bounce, mut depth, mut passes) = (false, 0, 0);
     while depth < max_depth {
@@ -262,7 +281,10 @@ fn camera_path(scene: &RenderScene, pixel: [f32; 2], rng: &mut Rng, max_depth: u
             }
             break;
         };
-        let si = scene.geometry.interaction(&hit);
+        let mut si = scene.geometry.interaction(&hit);
+        if let Some(d) = diff.take() {
+            si.compute_differentials(&d);
+        }
         let bsdf = match surface(scene, &hit, &si, &mut ray, &mut passes) {
             Surface::Bsdf(b) => b,
             Surface::PassedThrough => continue,

@@ -24,6 +24,17 @@ pub struct BsdfSample {
     pub specular: bool,
 }
 
+/// How lobes combine where the shading normal differs from the geometric one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Convention {
+    /// pbrt-v3: the geometric normal says whether a pair of directions reflects or
+    /// transmits, and only lobes of that kind count; diffuse and glossy reflection lobes
+    /// then take any pair (pbrt-v3's `f` has no hemisphere test).
+    PbrtV3,
+    /// pbrt-v4: every lobe decides by the shading normal alone.
+    PbrtV4,
+}
+
 /// Lobes with their shading frame and the geometric normal.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bsdf {
@@ -31,6 +42,7 @@ pub struct Bsdf {
     ts: Vec3,
     ns: Vec3,
     ng: Vec3,
+    convention: Convention,
     lobes: Lobes,
 }
 
@@ -46,13 +58,13 @@ enum Lobes {
 impl Bsdf {
     /// A BSDF of the given lobes (extra ones past [`MAX_LOBES`] are dropped; materials
     /// never make more).
-    pub fn new(frame: [Vec3; 3], ng: Vec3, lobes: &[Lobe]) -> Bsdf {
+    pub fn new(frame: [Vec3; 3], ng: Vec3, lobes: &[Lobe], convention: Convention) -> Bsdf {
         let lobes = match &lobes[..lobes.len().min(MAX_LOBES)] {
             [] => Lobes::None,
             [one] => Lobes::One(*one),
             many => Lobes::Many(many.into()),
         };
-        Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng, lobes }
+        Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng, convention, lobes }
     }
 
     pub fn lobes(&self) -> &[Lobe] {
@@ -94,13 +106,17 @@ impl Bsdf {
         self.lobes().iter().any(|l| l.sides().1)
     }
 
-    /// The sum of the lobes on the side the geometric normal puts the pair on (pbrt's
-    /// rule, which stops light leaking through shading normals).
+    /// The sum of the lobes, combined by the [`Convention`].
     fn f_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
-        let reflect = wo.dot(self.ng) * wi.dot(self.ng) > 0.0;
         let (o, i) = (self.local(wo), self.local(wi));
-        let counts = |l: &Lobe| if reflect { l.sides().0 } else { l.sides().1 };
-        self.lobes().iter().filter(|l| counts(l)).map(|l| l.f(o, i, mode)).sum()
+        match self.convention {
+            Convention::PbrtV3 => {
+                let reflect = wo.dot(self.ng) * wi.dot(self.ng) > 0.0;
+                let counts = |l: &Lobe| if reflect { l.sides().0 } else { l.sides().1 };
+                self.lobes().iter().filter(|l| counts(l)).map(|l| l.f(o, i, mode, false)).sum()
+            }
+            Convention::PbrtV4 => self.lobes().iter().map(|l| l.f(o, i, mode, true)).sum(),
+        }
     }
 
     /// f(ωo, ωi) for radiance (camera paths and the photons they gather).
@@ -158,7 +174,12 @@ mod tests {
 
     #[test]
     fn dielectric_sampling_conserves_energy_at_normal_incidence() {
-        let b = Bsdf::new(frame(), Vec3::Z, &[Lobe::FresnelSpecular { r: Vec3::ONE, t: Vec3::ONE, eta: 1.5 }]);
+        let b = Bsdf::new(
+            frame(),
+            Vec3::Z,
+            &[Lobe::FresnelSpecular { r: Vec3::ONE, t: Vec3::ONE, eta: 1.5 }],
+            Convention::PbrtV3,
+        );
         let wo = Vec3::Z;
         let r = b.sample_f(wo, [0.5, 0.5], 0.0, TransportMode::Importance).unwrap();
         let t = b.sample_f(wo, [0.5, 0.5], 0.99, TransportMode::Importance).unwrap();
@@ -172,15 +193,12 @@ mod tests {
 
     #[test]
     fn rough_conductor_sampling_matches_its_pdf_and_conserves_energy() {
-        let b = Bsdf::new(
-            frame(),
-            Vec3::Z,
-            &[Lobe::MicrofacetReflection {
-                r: Vec3::ONE,
-                dist: TrowbridgeReitz::new([0.3, 0.3]),
-                fresnel: Fresnel::Conductor { eta: Vec3::splat(0.2), k: Vec3::splat(3.9) },
-            }],
-        );
+        let lobe = Lobe::MicrofacetReflection {
+            r: Vec3::ONE,
+            dist: TrowbridgeReitz::new([0.3, 0.3]),
+            fresnel: Fresnel::Conductor { eta: Vec3::splat(0.2), k: Vec3::splat(3.9) },
+        };
+        let b = Bsdf::new(frame(), Vec3::Z, &[lobe], Convention::PbrtV3);
         let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
         let mut rng = crate::sampling::Rng::new(11);
         let (mut albedo, mut n) = (0.0, 0);
@@ -197,7 +215,7 @@ mod tests {
 
     #[test]
     fn lambert_reflects_only_on_the_geometric_side() {
-        let b = Bsdf::new(frame(), Vec3::Z, &[Lobe::Lambert(Vec3::splat(0.5))]);
+        let b = Bsdf::new(frame(), Vec3::Z, &[Lobe::Lambert(Vec3::splat(0.5))], Convention::PbrtV3);
         assert_eq!(b.f(Vec3::Z, Vec3::new(0.0, 0.6, 0.8)).x, 0.5 * FRAC_1_PI);
         assert_eq!(b.f(Vec3::Z, Vec3::new(0.0, 0.6, -0.8)).x, 0.0);
         let s = b.sample_f(Vec3::new(0.0, 0.0, -1.0), [0.3, 0.7], 0.0, TransportMode::Radiance).unwrap();

@@ -106,14 +106,21 @@ impl Lobe {
         }
     }
 
-    pub fn f(&self, o: Vec3, i: Vec3, mode: TransportMode) -> Rgb {
+    /// f(o, i) in the shading frame. With `sided` the reflection lobes are zero for
+    /// pairs on opposite sides of the shading normal and transmission ones for pairs on
+    /// the same side (pbrt-v4); without, only microfacet transmission tests sides, as in
+    /// pbrt-v3, whose `BSDF` has already chosen lobes by the geometric normal.
+    pub fn f(&self, o: Vec3, i: Vec3, mode: TransportMode, sided: bool) -> Rgb {
+        let same = same_hemisphere(o, i);
         match *self {
-            Lobe::Lambert(r) if same_hemisphere(o, i) => r * FRAC_1_PI,
-            Lobe::LambertTransmission(t) if !same_hemisphere(o, i) => t * FRAC_1_PI,
-            Lobe::OrenNayar { r, a, b } if same_hemisphere(o, i) => r * FRAC_1_PI * oren_nayar(o, i, a, b),
-            Lobe::MicrofacetReflection { r, dist, fresnel } => microfacet_reflection(o, i, r, dist, fresnel),
+            Lobe::Lambert(r) if same || !sided => r * FRAC_1_PI,
+            Lobe::LambertTransmission(t) if !same || !sided => t * FRAC_1_PI,
+            Lobe::OrenNayar { r, a, b } if same || !sided => r * FRAC_1_PI * oren_nayar(o, i, a, b),
+            Lobe::MicrofacetReflection { r, dist, fresnel } if same || !sided => {
+                microfacet_reflection(o, i, r, dist, fresnel)
+            }
             Lobe::MicrofacetTransmission { t, dist, eta } => microfacet_transmission(o, i, t, dist, eta, mode),
-            Lobe::FresnelBlend { rd, rs, dist } => fresnel_blend(o, i, rd, rs, dist),
+            Lobe::FresnelBlend { rd, rs, dist } if same || !sided => fresnel_blend(o, i, rd, rs, dist),
             _ => Vec3::ZERO,
         }
     }
@@ -190,7 +197,7 @@ impl Lobe {
             }
         };
         let pdf = self.pdf(o, i);
-        (pdf > 0.0).then(|| LobeSample { wi: i, f: self.f(o, i, mode), pdf })
+        (pdf > 0.0).then(|| LobeSample { wi: i, f: self.f(o, i, mode, true), pdf })
     }
 }
 
@@ -228,7 +235,7 @@ pub fn oren_nayar_ab(sigma_degrees: f32) -> (f32, f32) {
 
 fn microfacet_reflection(o: Vec3, i: Vec3, r: Rgb, dist: TrowbridgeReitz, fresnel: Fresnel) -> Rgb {
     let (co, ci) = (o.z.abs(), i.z.abs());
-    if co == 0.0 || ci == 0.0 || !same_hemisphere(o, i) {
+    if co == 0.0 || ci == 0.0 {
         return Vec3::ZERO;
     }
     let wh = o + i;
@@ -276,9 +283,6 @@ fn transmission_pdf(o: Vec3, i: Vec3, dist: TrowbridgeReitz, eta: f32) -> f32 {
 }
 
 fn fresnel_blend(o: Vec3, i: Vec3, rd: Rgb, rs: Rgb, dist: TrowbridgeReitz) -> Rgb {
-    if !same_hemisphere(o, i) {
-        return Vec3::ZERO;
-    }
     let diffuse = (28.0 / (23.0 * std::f32::consts::PI))
         * rd
         * (Vec3::ONE - rs)
@@ -325,7 +329,7 @@ mod tests {
                 by_lobe += (s.f.x * s.wi.z.abs() / s.pdf) as f64;
             }
             let i = uniform_sphere(rng.uniform2());
-            by_sphere += (l.f(o, i, mode).x * i.z.abs()) as f64 * 4.0 * std::f64::consts::PI;
+            by_sphere += (l.f(o, i, mode, true).x * i.z.abs()) as f64 * 4.0 * std::f64::consts::PI;
         }
         (by_lobe / n as f64, by_sphere / n as f64)
     }
@@ -352,7 +356,7 @@ mod tests {
     fn rough_transmission_scales_radiance_by_the_relative_index() {
         let l = Lobe::MicrofacetTransmission { t: Vec3::ONE, dist: TrowbridgeReitz::new([0.2, 0.2]), eta: 1.5 };
         let (o, i) = (Vec3::new(0.1, 0.0, 0.99).normalize(), Vec3::new(-0.05, 0.02, -0.99).normalize());
-        let (rad, imp) = (l.f(o, i, TransportMode::Radiance).x, l.f(o, i, TransportMode::Importance).x);
+        let (rad, imp) = (l.f(o, i, TransportMode::Radiance, true).x, l.f(o, i, TransportMode::Importance, true).x);
         assert!(rad > 0.0 && (rad / imp - 1.0 / 2.25).abs() < 1e-4, "{rad} {imp}");
     }
 

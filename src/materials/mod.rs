@@ -16,7 +16,7 @@ pub mod microfacet;
 pub mod noise;
 mod textures;
 
-pub use bsdf::{Bsdf, BsdfSample, TransportMode};
+pub use bsdf::{Bsdf, BsdfSample, Convention, TransportMode};
 use lobes::{Lobe, MAX_LOBES, oren_nayar_ab};
 use microfacet::{Fresnel, TrowbridgeReitz};
 pub use textures::{TexCtx, Textures, lookup};
@@ -33,15 +33,21 @@ pub struct Material {
     /// (`Spectrum::Clamp()`), so a v3 `Kd` above 1 reflects more than it receives, as
     /// in pbrt-v3; pbrt-v4's clamp to [0, 1].
     max_reflectance: f32,
+    /// The version whose rules its BSDF follows where shading normals bend.
+    convention: Convention,
+    /// The bump map (a float texture), if any.
+    pub bump: Option<TexValue>,
 }
 
-/// pbrt-v3's material types (the rest are pbrt-v4's).
+/// pbrt-v3's material types (the rest are pbrt-v4's): their BSDFs follow pbrt-v3.
 const V3_TYPES: [&str; 8] = ["matte", "plastic", "uber", "translucent", "substrate", "glass", "metal", "mirror"];
 
 impl Material {
     pub fn from_desc(m: &MaterialDesc) -> Material {
         let v3 = V3_TYPES.contains(&m.ty.as_str());
-        Material { kind: m.kind.clone(), max_reflectance: if v3 { f32::INFINITY } else { 1.0 } }
+        let (max_reflectance, convention) =
+            if v3 { (f32::INFINITY, Convention::PbrtV3) } else { (1.0, Convention::PbrtV4) };
+        Material { kind: m.kind.clone(), max_reflectance, convention, bump: m.bump }
     }
 
     pub fn kind(&self) -> &MaterialKind {
@@ -54,11 +60,11 @@ impl Material {
         if let MaterialKind::Diffuse { reflectance } = &self.kind {
             // The common case, without the lobe list's set-up.
             let lambert = lambert(inputs.refl(*reflectance));
-            return Some(Bsdf::new(frame, ng, lambert.as_slice()));
+            return Some(Bsdf::new(frame, ng, lambert.as_slice(), self.convention));
         }
         let mut lobes = Lobes::default();
         self.lobes(&inputs, &mut lobes)?;
-        Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n]))
+        Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n], self.convention))
     }
 
     fn lobes(&self, i: &Inputs, out: &mut Lobes) -> Option<()> {

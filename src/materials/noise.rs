@@ -2,10 +2,9 @@
 //! same permutation, gradients and quintic weights, so noise textures match pbrt's
 //! images feature for feature).
 //!
-//! pbrt limits the octaves by the ray differentials' footprint; we have no
-//! differentials, so every octave up to the texture's `octaves` is summed (pbrt's own
-//! count at the sub-pixel footprints of an SPPM run differs from that by at most the
-//! last octave, whose weight is ω^octaves).
+//! As in pbrt, octaves finer than the footprint the ray differentials give (in texture
+//! space, `dpdx`, `dpdy`) are left out, the last one faded in; without differentials
+//! every octave is summed.
 
 use glam::Vec3;
 
@@ -67,26 +66,50 @@ pub fn noise2(x: f32, y: f32) -> f32 {
     noise(Vec3::new(x, y, 0.5))
 }
 
-/// Σ ωⁱ·noise(λⁱ·p) over `octaves` octaves, λ = 1.99.
-pub fn fbm(p: Vec3, omega: f32, octaves: u32) -> f32 {
+/// How many octaves the footprint leaves, as a real number in [0, `max`]: pbrt's
+/// −1 − ½·log₂ max(|dpdx|², |dpdy|²) (a zero footprint keeps them all).
+fn octave_count(dpdx: Vec3, dpdy: Vec3, max: u32) -> f32 {
+    let len2 = dpdx.length_squared().max(dpdy.length_squared());
+    (-1.0 - 0.5 * len2.log2()).clamp(0.0, max as f32)
+}
+
+fn smooth_step(a: f32, b: f32, x: f32) -> f32 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Σ ωⁱ·noise(λⁱ·p), λ = 1.99, over the octaves the footprint leaves (at most
+/// `octaves`), the last partial one faded in (pbrt's `FBm`).
+pub fn fbm(p: Vec3, dpdx: Vec3, dpdy: Vec3, omega: f32, octaves: u32) -> f32 {
+    let n = octave_count(dpdx, dpdy, octaves);
+    let whole = n.floor() as u32;
     let (mut sum, mut lambda, mut o) = (0.0, 1.0, 1.0);
-    for _ in 0..octaves {
+    for _ in 0..whole {
         sum += o * noise(lambda * p);
         lambda *= 1.99;
         o *= omega;
     }
-    sum
+    sum + o * smooth_step(0.3, 0.7, n - whole as f32) * noise(lambda * p)
 }
 
-/// Σ ωⁱ·|noise(λⁱ·p)|, plus pbrt's 0.2·ωⁿ for the (empty) partial octave.
-pub fn turbulence(p: Vec3, omega: f32, octaves: u32) -> f32 {
+/// Σ ωⁱ·|noise(λⁱ·p)| as [`fbm`] counts octaves, the partial one blended from 0.2
+/// and each octave left out counted as 0.2 (pbrt's `Turbulence`, its constants kept).
+pub fn turbulence(p: Vec3, dpdx: Vec3, dpdy: Vec3, omega: f32, octaves: u32) -> f32 {
+    let n = octave_count(dpdx, dpdy, octaves);
+    let whole = n.floor() as u32;
     let (mut sum, mut lambda, mut o) = (0.0, 1.0, 1.0);
-    for _ in 0..octaves {
+    for _ in 0..whole {
         sum += o * noise(lambda * p).abs();
         lambda *= 1.99;
         o *= omega;
     }
-    sum + o * 0.2
+    let t = smooth_step(0.3, 0.7, n - whole as f32);
+    sum += o * ((1.0 - t) * 0.2 + t * noise(lambda * p).abs());
+    for _ in whole..octaves {
+        sum += o * 0.2;
+        o *= omega;
+    }
+    sum
 }
 
 #[cfg(test)]
@@ -126,9 +149,23 @@ mod tests {
 
     #[test]
     fn octaves_add_up() {
+        let (p, z) = (Vec3::new(0.3, 1.7, -2.2), Vec3::ZERO);
+        assert_eq!(fbm(p, z, z, 0.5, 1), noise(p));
+        assert!((fbm(p, z, z, 0.5, 2) - (noise(p) + 0.5 * noise(1.99 * p))).abs() < 1e-6);
+        assert!((turbulence(p, z, z, 0.5, 1) - (noise(p).abs() + 0.1)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_wide_footprint_drops_octaves() {
         let p = Vec3::new(0.3, 1.7, -2.2);
-        assert_eq!(fbm(p, 0.5, 1), noise(p));
-        assert!((fbm(p, 0.5, 2) - (noise(p) + 0.5 * noise(1.99 * p))).abs() < 1e-6);
-        assert!((turbulence(p, 0.5, 1) - (noise(p).abs() + 0.1)).abs() < 1e-6);
+        // |dpdx|² = 2⁻⁶: −1 + 3 = 2 octaves exactly, nothing partial.
+        let d = Vec3::new(0.125, 0.0, 0.0);
+        assert_eq!(fbm(p, d, Vec3::ZERO, 0.5, 8), fbm(p, Vec3::ZERO, Vec3::ZERO, 0.5, 2));
+        // A footprint wider than the coarsest octave leaves none; turbulence then counts
+        // 0.2 for the (empty) partial octave and 0.2·ωⁱ for each left out, as pbrt does.
+        let wide = Vec3::splat(10.0);
+        assert_eq!(fbm(p, wide, wide, 0.5, 8), 0.0);
+        let t: f32 = 0.2 + (0..3).map(|i| 0.2 * 0.5f32.powi(i)).sum::<f32>();
+        assert!((turbulence(p, wide, wide, 0.5, 3) - t).abs() < 1e-6);
     }
 }

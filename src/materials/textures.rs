@@ -12,12 +12,15 @@ use crate::spectrum::Rgb;
 use glam::{Mat4, Vec3};
 use std::f32::consts::PI;
 
-/// Where a texture is looked up: the world-space point, the geometric normal and (u, v).
+/// Where a texture is looked up: the world-space point, the geometric normal, (u, v),
+/// and the point's change across a pixel (zero without ray differentials).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TexCtx {
     pub p: Vec3,
     pub n: Vec3,
     pub uv: [f32; 2],
+    pub dpdx: Vec3,
+    pub dpdy: Vec3,
 }
 
 /// Every texture of a scene, by the indices [`TexValue::Texture`] names.
@@ -74,16 +77,21 @@ impl Textures {
             TextureKind::Dots { dot, background, map } => {
                 get(if inside_dot(map_2d(map, ctx)) { *dot } else { *background })
             }
-            TextureKind::Fbm { map, octaves: o } => Vec3::splat(fbm(map.transform_point3(ctx.p), o.omega, o.octaves)),
+            TextureKind::Fbm { map, octaves: o } => {
+                let (p, dx, dy) = map_3d(map, ctx);
+                Vec3::splat(fbm(p, dx, dy, o.omega, o.octaves))
+            }
             TextureKind::Wrinkled { map, octaves: o } => {
-                Vec3::splat(turbulence(map.transform_point3(ctx.p), o.omega, o.octaves))
+                let (p, dx, dy) = map_3d(map, ctx);
+                Vec3::splat(turbulence(p, dx, dy, o.omega, o.octaves))
             }
             TextureKind::Windy { map } => {
-                let p = map.transform_point3(ctx.p);
-                Vec3::splat(fbm(0.1 * p, 0.5, 3).abs() * fbm(p, 0.5, 6))
+                let (p, dx, dy) = map_3d(map, ctx);
+                Vec3::splat(fbm(0.1 * p, 0.1 * dx, 0.1 * dy, 0.5, 3).abs() * fbm(p, dx, dy, 0.5, 6))
             }
             TextureKind::Marble { map, octaves: o, scale, variation } => {
-                marble(map, ctx.p, o.omega, o.octaves, *scale, *variation)
+                let (p, dx, dy) = map_3d(map, ctx);
+                marble(p * *scale, dx * *scale, dy * *scale, o.omega, o.octaves, *variation)
             }
             TextureKind::Uv { map } => {
                 let [s, t] = map_2d(map, ctx);
@@ -91,6 +99,11 @@ impl Textures {
             }
         }
     }
+}
+
+/// The point and its footprint in texture space.
+fn map_3d(m: &Mat4, ctx: &TexCtx) -> (Vec3, Vec3, Vec3) {
+    (m.transform_point3(ctx.p), m.transform_vector3(ctx.dpdx), m.transform_vector3(ctx.dpdy))
 }
 
 /// (s, t) at a hit.
@@ -133,7 +146,7 @@ fn inside_dot([s, t]: [f32; 2]) -> bool {
 // DEVIATION(pbrt): pbrt-v3 picks the spline segment with `min(1, ⌊6t⌋)`, which
 // evaluates the Bézier far outside [0, 1] (colours beyond 10, or negative); we use
 // pbrt-v4's `min(⌊6t⌋, 5)` for both versions.
-fn marble(map: &Mat4, p: Vec3, omega: f32, octaves: u32, scale: f32, variation: f32) -> Rgb {
+fn marble(p: Vec3, dpdx: Vec3, dpdy: Vec3, omega: f32, octaves: u32, variation: f32) -> Rgb {
     const C: [[f32; 3]; 9] = [
         [0.58, 0.58, 0.6],
         [0.58, 0.58, 0.6],
@@ -145,8 +158,7 @@ fn marble(map: &Mat4, p: Vec3, omega: f32, octaves: u32, scale: f32, variation: 
         [0.2, 0.2, 0.33],
         [0.58, 0.58, 0.6],
     ];
-    let p = scale * map.transform_point3(p);
-    let m = p.y + variation * fbm(p, omega, octaves);
+    let m = p.y + variation * fbm(p, dpdx, dpdy, omega, octaves);
     let t = 0.5 + 0.5 * m.sin();
     let segments = C.len() - 3;
     let first = ((t * segments as f32).floor().max(0.0) as usize).min(segments - 1);
@@ -190,7 +202,7 @@ mod tests {
     use crate::scene::{Octaves, UvMapping};
 
     fn at(p: Vec3, uv: [f32; 2]) -> TexCtx {
-        TexCtx { p, n: Vec3::Z, uv }
+        TexCtx { p, n: Vec3::Z, uv, ..TexCtx::default() }
     }
 
     fn c(v: f32) -> TexValue {
@@ -259,7 +271,7 @@ mod tests {
     #[test]
     fn direction_mix_weighs_by_the_normal() {
         let t = Textures(vec![TextureKind::DirectionMix { tex1: c(1.0), tex2: c(0.0), dir: Vec3::Z }]);
-        let v = |n: Vec3| t.float(TexValue::Texture(0), &TexCtx { p: Vec3::ZERO, n, uv: [0.0; 2] });
+        let v = |n: Vec3| t.float(TexValue::Texture(0), &TexCtx { n, ..TexCtx::default() });
         assert_eq!(v(Vec3::Z), 1.0);
         assert_eq!(v(-Vec3::Z), 1.0);
         assert!((v(Vec3::new(0.6, 0.0, 0.8)) - 0.8).abs() < 1e-6);

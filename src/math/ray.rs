@@ -17,3 +17,23 @@ impl Ray {
         self.o + self.d * t
     }
 }
+
+/// The rays through the next pixel over in x and in y, for a camera ray: how its
+/// footprint grows (pbrt's `RayDifferential`, scaled as pbrt's SPPM scales it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayDifferential {
+    pub rx: Ray,
+    pub ry: Ray,
+}
+
+impl RayDifferential {
+    /// Offsets scaled by `s` about the main ray (pbrt's `ScaleDifferentials`).
+    pub fn scaled(&self, main: &Ray, s: f32) -> RayDifferential {
+        let scale = |r: &Ray| Ray {
+            o: Point3(main.o.0 + (r.o.0 - main.o.0) * s),
+            d: Vector3(main.d.0 + (r.d.0 - main.d.0) * s),
+            t_max: r.t_max,
+        };
+        RayDifferential { rx: scale(&self.rx), ry: scale(&self.ry) }
+    }
+}

@@ -42,7 +42,7 @@ impl Approx {
             Approx::UnsupportedMaterial => "this material type is not supported; rendered as diffuse 0.5",
             Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
             Approx::MissingImage => "the image cannot be read; a constant 0.5 (a constant sky for maps) is used",
-            Approx::BumpMap => "bump, displacement and normal maps are not supported; the surface is left smooth",
+            Approx::BumpMap => "normal maps are not supported; the surface is left smooth",
             Approx::Motion => "animated transforms are not supported; the start transform is used",
             Approx::Camera => "this camera type is not supported; a perspective camera is used",
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",

@@ -123,6 +123,9 @@ pub struct MaterialDesc {
     /// The `MakeNamedMaterial` name, if any.
     pub name: Option<String>,
     pub kind: MaterialKind,
+    /// A float texture displacing the surface along its shading normal (v3 `bumpmap`,
+    /// v4 `displacement`): it tilts the shading normal, as pbrt's bump mapping does.
+    pub bump: Option<TexValue>,
 }
 
 /// What building materials and textures needs from the scene builder.
@@ -157,7 +160,6 @@ pub(super) fn float(p: &ParamList, name: &str, default: f32, range: Range, r: &m
 
 /// The material of type `ty`; unsupported types become grey diffuse (noted).
 pub fn material(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
-    bump_maps(ty, p, r);
     Ok(match ty {
         "matte" => {
             let sigma = float(p, "sigma", 0.0, Range::NonNegative, r)?;
@@ -211,13 +213,20 @@ pub fn material(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<
     })
 }
 
-fn bump_maps(ty: &str, p: &ParamList, r: &mut dyn Resolver) {
-    for name in ["bumpmap", "displacement", "normalmap"] {
-        if let Some(param) = p.named(name) {
-            param.mark_used();
-            r.approximate(param.span, format!("\"{name}\" of material \"{ty}\""), Approx::BumpMap);
-        }
+/// The material's bump map (`bumpmap` in v3, `displacement` in v4; either is read in
+/// either version). `normalmap` images are not supported (noted).
+pub fn bump_map(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<Option<TexValue>> {
+    if let Some(param) = p.named("normalmap") {
+        param.mark_used();
+        r.approximate(param.span, format!("\"normalmap\" of material \"{ty}\""), Approx::BumpMap);
     }
+    let name = if p.named("bumpmap").is_some() { "bumpmap" } else { "displacement" };
+    Ok(match values::float_or_texture(p, name, Range::Any)? {
+        None => None,
+        // A constant displacement moves the whole surface and tilts nothing.
+        Some((FloatValue::Const(_), _)) => None,
+        Some((FloatValue::Texture(t), at)) => Some(TexValue::Texture(r.texture(&t, true, at)?)),
+    })
 }
 
 /// v3 `glass` (`eta`, else `index`; `Kr`, `Kt`) and v4 `dielectric` (`eta` a float or

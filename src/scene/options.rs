@@ -78,6 +78,9 @@ pub struct Integrator {
     pub photons_per_iteration: u64,
     pub radius: f32,
     pub seed: u64,
+    /// Camera rays' differentials are scaled by max(this, 1/√iterations): pbrt-v3
+    /// scales them by 1/√iterations, pbrt-v4 by at least 1/8.
+    pub differential_floor: f32,
 }
 
 /// The option-block statements as read (last one of each kind wins).
@@ -327,6 +330,7 @@ impl RenderOptions {
             photons_per_iteration: photons,
             radius,
             seed,
+            differential_floor: if syntax == Syntax::V4 { 0.125 } else { 0.0 },
         })
     }
 

@@ -139,10 +139,11 @@ impl Builder {
         let at = span.unwrap_or_default();
         let kind = {
             let mut r = Scoped { b: self, scope, depth: 0 };
-            materials::material(&ty, &params, at, &mut r)?
+            (materials::material(&ty, &params, at, &mut r)?, materials::bump_map(&ty, &params, &mut r)?)
         };
+        let (kind, bump) = kind;
         finish_params(&params, &mut self.warnings)?;
-        self.built_materials.push(MaterialDesc { ty, name, kind });
+        self.built_materials.push(MaterialDesc { ty, name, kind, bump });
         let b = self.built_materials.len() as u32 - 1;
         self.materials[i as usize].built = Some(b);
         Ok(b)
