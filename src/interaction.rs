@@ -38,12 +38,6 @@ pub struct SurfaceInteraction {
     pub dndu: Normal3,
     pub dndv: Normal3,
     pub shading: Shading,
-    /// (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y) across the image, from a camera ray's
-    /// differentials; zero when the ray had none.
-    pub duv_dxy: [f32; 4],
-    /// ∂p/∂x and ∂p/∂y across the image (zero likewise).
-    pub dpdx: Vec3,
-    pub dpdy: Vec3,
 }
 
 /// The origin for a ray leaving `p` in direction `w`.
@@ -65,35 +59,6 @@ pub fn offset_ray_origin(p: Point3, p_error: Vec3, n: Normal3, w: Vector3) -> Po
 }
 
 impl SurfaceInteraction {
-    /// Sets `duv_dxy` from the differentials of the ray that hit here (pbrt's
-    /// `ComputeDifferentials`): where they meet the tangent plane, then the (u, v)
-    /// offsets that reach those points, solved in the two axes the normal leaves best
-    /// conditioned. Left zero where that fails.
-    pub fn compute_differentials(&mut self, rd: &RayDifferential) {
-        let (p, n) = (self.p.0, self.n.0);
-        let on_plane = |r: &Ray| {
-            let t = -(n.dot(r.o.0) - n.dot(p)) / n.dot(r.d.0);
-            t.is_finite().then(|| r.o.0 + t * r.d.0 - p)
-        };
-        let (Some(dpdx), Some(dpdy)) = (on_plane(&rd.rx), on_plane(&rd.ry)) else { return };
-        (self.dpdx, self.dpdy) = (dpdx, dpdy);
-        let [a, b] = match n.abs() {
-            m if m.x > m.y && m.x > m.z => [1, 2],
-            m if m.y > m.z => [0, 2],
-            _ => [0, 1],
-        };
-        let (du, dv) = (self.dpdu.0, self.dpdv.0);
-        let det = du[a] * dv[b] - dv[a] * du[b];
-        if det.abs() < 1e-10 {
-            return;
-        }
-        let solve = |d: Vec3| [(dv[b] * d[a] - dv[a] * d[b]) / det, (du[a] * d[b] - du[b] * d[a]) / det];
-        let ([dudx, dvdx], [dudy, dvdy]) = (solve(dpdx), solve(dpdy));
-        if [dudx, dvdx, dudy, dvdy].iter().all(|x| x.is_finite()) {
-            self.duv_dxy = [dudx, dvdx, dudy, dvdy];
-        }
-    }
-
     pub fn spawn_ray(&self, d: Vector3) -> Ray {
         Ray::new(offset_ray_origin(self.p, self.p_error, self.n, d), d)
     }
@@ -145,9 +110,89 @@ impl SurfaceInteraction {
                 dndu: nrm(self.shading.dndu),
                 dndv: nrm(self.shading.dndv),
             },
-            duv_dxy: self.duv_dxy,
-            dpdx: self.dpdx,
-            dpdy: self.dpdy,
         }
+    }
+}
+
+/// How a hit point moves across one pixel: ∂p/∂x and ∂p/∂y, from the camera ray's
+/// differentials (pbrt's `ComputeDifferentials`). Zero without differentials.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Footprint {
+    pub dpdx: Vec3,
+    pub dpdy: Vec3,
+}
+
+impl Footprint {
+    /// Where the differential rays meet the hit's tangent plane; zero where they run
+    /// parallel to it.
+    pub fn new(si: &SurfaceInteraction, rd: &RayDifferential) -> Footprint {
+        let (p, n) = (si.p.0, si.n.0);
+        let on_plane = |r: &Ray| {
+            let t = -(n.dot(r.o.0) - n.dot(p)) / n.dot(r.d.0);
+            t.is_finite().then(|| r.o.0 + t * r.d.0 - p)
+        };
+        match (on_plane(&rd.rx), on_plane(&rd.ry)) {
+            (Some(dpdx), Some(dpdy)) => Footprint { dpdx, dpdy },
+            _ => Footprint::default(),
+        }
+    }
+
+    /// (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y) at `si`: the (u, v) offsets that reach `dpdx` and
+    /// `dpdy`, solved in the two axes the normal leaves best conditioned (pbrt's rule);
+    /// zero where that fails.
+    pub fn duv_dxy(&self, si: &SurfaceInteraction) -> [f32; 4] {
+        let [a, b] = match si.n.0.abs() {
+            m if m.x > m.y && m.x > m.z => [1, 2],
+            m if m.y > m.z => [0, 2],
+            _ => [0, 1],
+        };
+        let (du, dv) = (si.dpdu.0, si.dpdv.0);
+        let det = du[a] * dv[b] - dv[a] * du[b];
+        if det.abs() < 1e-10 {
+            return [0.0; 4];
+        }
+        let solve = |d: Vec3| [(dv[b] * d[a] - dv[a] * d[b]) / det, (du[a] * d[b] - du[b] * d[a]) / det];
+        let ([dudx, dvdx], [dudy, dvdy]) = (solve(self.dpdx), solve(self.dpdy));
+        let all = [dudx, dvdx, dudy, dvdy];
+        if all.iter().all(|x| x.is_finite()) { all } else { [0.0; 4] }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hit at the origin of the plane z = 0 with p(u, v) = (2u, 3v, 0).
+    fn plane_hit() -> SurfaceInteraction {
+        SurfaceInteraction {
+            n: Normal3(Vec3::Z),
+            dpdu: Vector3(Vec3::new(2.0, 0.0, 0.0)),
+            dpdv: Vector3(Vec3::new(0.0, 3.0, 0.0)),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn footprint_follows_the_differential_rays_to_the_tangent_plane() {
+        let si = plane_hit();
+        // Rays one pixel over start 0.1 to the side and lean: they meet z = 0 at
+        // (0.1 + 0.05, 0, 0) and (0, 0.2 − 0.1, 0).
+        let rx = Ray::new(Point3::new(0.1, 0.0, 1.0), Vector3::new(0.05, 0.0, -1.0));
+        let ry = Ray::new(Point3::new(0.0, 0.2, 2.0), Vector3::new(0.0, -0.05, -1.0));
+        let fp = Footprint::new(&si, &RayDifferential { rx, ry });
+        assert!((fp.dpdx - Vec3::new(0.15, 0.0, 0.0)).length() < 1e-6, "{:?}", fp.dpdx);
+        assert!((fp.dpdy - Vec3::new(0.0, 0.1, 0.0)).length() < 1e-6, "{:?}", fp.dpdy);
+        let [dudx, dvdx, dudy, dvdy] = fp.duv_dxy(&si);
+        assert!((dudx - 0.075).abs() < 1e-6 && dvdx.abs() < 1e-6, "{dudx} {dvdx}");
+        assert!(dudy.abs() < 1e-6 && (dvdy - 0.1 / 3.0).abs() < 1e-6, "{dudy} {dvdy}");
+    }
+
+    #[test]
+    fn rays_parallel_to_the_plane_give_no_footprint() {
+        let si = plane_hit();
+        let flat = Ray::new(Point3::new(0.0, 0.0, 1.0), Vector3::new(1.0, 0.0, 0.0));
+        let fp = Footprint::new(&si, &RayDifferential { rx: flat, ry: flat });
+        assert_eq!(fp, Footprint::default());
+        assert_eq!(fp.duv_dxy(&si), [0.0; 4]);
     }
 }

@@ -4,7 +4,7 @@
 
 use crate::accel::{Geometry, Hit, LocalHit};
 use crate::camera::Camera;
-use crate::interaction::SurfaceInteraction;
+use crate::interaction::{Footprint, SurfaceInteraction};
 use crate::lights::{Emitter, Light, WorldSphere, quadric_area};
 use crate::materials::{Bsdf, Material, TexCtx, Textures};
 use crate::math::Ray;
@@ -39,6 +39,9 @@ pub struct RenderScene {
     object_shape_alpha: Vec<Vec<Option<ShapeAlpha>>>,
     /// Whether any shape has an alpha mask (rays then check the shapes they hit).
     has_alpha: bool,
+    /// Whether shading uses a pixel's footprint (bump maps, noise textures): camera
+    /// rays then carry differentials.
+    pub needs_differentials: bool,
     /// Per world shape (by `check --shapes` index): its emission, if it emits.
     pub emitters: Vec<Option<EmitterInfo>>,
     pub lights: Vec<Light>,
@@ -52,6 +55,7 @@ impl RenderScene {
     pub fn new(mut scene: SceneDescription) -> RenderScene {
         let camera = Camera::new(&scene.camera, &scene.film);
         let textures = Textures::new(&scene.textures);
+        let needs_differentials = textures.use_footprint() || scene.materials.iter().any(|m| m.bump.is_some());
         let materials: Vec<Material> = scene.materials.iter().map(Material::from_desc).collect();
         let world_shape_material = scene.shapes.iter().map(|s| s.material).collect();
         let object_shape_material =
@@ -93,6 +97,7 @@ impl RenderScene {
             world_shape_alpha,
             object_shape_alpha,
             has_alpha,
+            needs_differentials,
             emitters,
             lights,
             light_power,
@@ -111,6 +116,7 @@ impl RenderScene {
     }
 
     /// The closest hit along the ray that no alpha mask cuts away.
+    #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let hit = self.geometry.intersect(ray)?;
         if self.has_alpha { self.unmasked(ray, hit, false) } else { Some(hit) }
@@ -118,6 +124,7 @@ impl RenderScene {
 
     /// Whether anything that no alpha mask cuts away lies along the ray (shadow rays,
     /// which v3's `shadowalpha` masks too).
+    #[inline]
     pub fn intersect_p(&self, ray: &Ray) -> bool {
         if !self.has_alpha {
             return self.geometry.intersect_p(ray);
@@ -128,6 +135,8 @@ impl RenderScene {
     /// `hit`, or if a mask cuts it away, the first hit beyond it that none cuts, found
     /// by continuing the ray from each cut-away surface (as pbrt-v4 does). A ray through
     /// more than [`MAX_ALPHA_SKIPS`] cut-away surfaces is taken to miss.
+    #[cold]
+    #[inline(never)]
     fn unmasked(&self, ray: &Ray, mut hit: Hit, shadow: bool) -> Option<Hit> {
         let (mut r, mut t0) = (*ray, 0.0);
         for _ in 0..MAX_ALPHA_SKIPS {
@@ -164,10 +173,12 @@ impl RenderScene {
     }
 
     /// The BSDF at a hit (`None` for interfaces), in the shading frame.
-    pub fn bsdf(&self, hit: &Hit, si: &SurfaceInteraction) -> Option<Bsdf> {
+    /// `fp`: how the point moves across a pixel, where the camera ray's differentials
+    /// say (bump maps and noise textures use it).
+    pub fn bsdf(&self, hit: &Hit, si: &SurfaceInteraction, fp: &Footprint) -> Option<Bsdf> {
         let material = self.material(hit);
         let (ns, dpdu) = match material.bump {
-            Some(d) => bump(&self.textures, d, si),
+            Some(d) => bump(&self.textures, d, si, fp),
             None => (si.shading.n.0, si.shading.dpdu.0),
         };
         let mut ss = (dpdu - ns * ns.dot(dpdu)).normalize_or_zero();
@@ -175,8 +186,8 @@ impl RenderScene {
             ss = coordinate_system(ns).0;
         }
         let ts = ns.cross(ss);
-        let ctx = TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, dpdx: si.dpdx, dpdy: si.dpdy };
-        material.bsdf(&self.textures, &ctx, [ss, ts, ns], si.n.0)
+        let ctx = || TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, dpdx: fp.dpdx, dpdy: fp.dpdy };
+        material.bsdf(&self.textures, ctx, [ss, ts, ns], si.n.0)
     }
 
     /// The emitting world shape hit, and which of its lights (for MIS).
@@ -205,8 +216,8 @@ impl RenderScene {
 /// along its shading normal (pbrt's `Bump`). d is differenced over half the pixel
 /// footprint in u and in v where the camera ray's differentials give one, else over
 /// .0005 (pbrt's steps). The normal stays on the side of the geometric one.
-fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction) -> (Vec3, Vec3) {
-    let [dudx, dvdx, dudy, dvdy] = si.duv_dxy;
+fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction, fp: &Footprint) -> (Vec3, Vec3) {
+    let [dudx, dvdx, dudy, dvdy] = fp.duv_dxy(si);
     let step = |a: f32, b: f32| match 0.5 * (a.abs() + b.abs()) {
         0.0 => 0.0005,
         s => s,
@@ -216,7 +227,7 @@ fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction) -> (Vec3, Vec
     let (p, [u, v]) = (si.p.0, si.uv);
     let n = sh.dpdu.0.cross(sh.dpdv.0);
     let at = |p: Vec3, uv: [f32; 2], n: Vec3| {
-        textures.float(d, &TexCtx { p, n: n.normalize_or_zero(), uv, dpdx: si.dpdx, dpdy: si.dpdy })
+        textures.float(d, &TexCtx { p, n: n.normalize_or_zero(), uv, dpdx: fp.dpdx, dpdy: fp.dpdy })
     };
     let d_u = at(p + du * sh.dpdu.0, [u + du, v], n + du * si.dndu.0);
     let d_v = at(p + dv * sh.dpdv.0, [u, v + dv], n + dv * si.dndv.0);

@@ -11,6 +11,7 @@
 //! (seed, iteration, photon), and photon contributions are summed in a fixed order, so
 //! any thread count gives a bit-identical image.
 
+use crate::interaction::Footprint;
 use crate::lights::Light;
 use crate::materials::{Bsdf, TransportMode};
 use crate::math::{Point3, Vector3};
@@ -240,10 +241,11 @@ fn surface(
     scene: &RenderScene,
     hit: &crate::accel::Hit,
     si: &crate::interaction::SurfaceInteraction,
+    fp: &Footprint,
     ray: &mut crate::math::Ray,
     passes: &mut u32,
 ) -> Surface {
-    if let Some(b) = scene.bsdf(hit, si) {
+    if let Some(b) = scene.bsdf(hit, si, fp) {
         return Surface::Bsdf(b);
     }
     *passes += 1;
@@ -263,10 +265,15 @@ fn camera_path(
     diff_scale: f32,
 ) -> (Rgb, Option<VisiblePoint>) {
     let u = rng.uniform2();
-    let (mut ray, diff) =
-        scene.camera.generate_ray_differential([pixel[0] + u[0], pixel[1] + u[1]], rng.uniform2(), diff_scale);
+    let (p_raster, u_lens) = ([pixel[0] + u[0], pixel[1] + u[1]], rng.uniform2());
     // As in pbrt, only the camera ray has differentials: rays spawned later have none.
-    let mut diff = Some(diff);
+    // Scenes whose shading never reads a footprint skip them.
+    let (mut ray, mut diff) = if scene.needs_differentials {
+        let (ray, diff) = scene.camera.generate_ray_differential(p_raster, u_lens, diff_scale);
+        (ray, Some(diff))
+    } else {
+        (scene.camera.generate_ray(p_raster, u_lens), None)
+    };
     let (mut beta, mut ld) = (Vec3::ONE, Vec3::ZERO);
     let (mut specular_bounce, mut depth, mut passes) = (false, 0, 0);
     while depth < max_depth {
@@ -281,11 +288,9 @@ fn camera_path(
             }
             break;
         };
-        let mut si = scene.geometry.interaction(&hit);
-        if let Some(d) = diff.take() {
-            si.compute_differentials(&d);
-        }
-        let bsdf = match surface(scene, &hit, &si, &mut ray, &mut passes) {
+        let si = scene.geometry.interaction(&hit);
+        let fp = diff.take().map(|d| Footprint::new(&si, &d)).unwrap_or_default();
+        let bsdf = match surface(scene, &hit, &si, &fp, &mut ray, &mut passes) {
             Surface::Bsdf(b) => b,
             Surface::PassedThrough => continue,
             Surface::Abandon => break,
@@ -422,7 +427,7 @@ fn trace_photon(
                 out.push((pixel, beta * vp.bsdf.f(vp.wo, wi)));
             });
         }
-        let bsdf = match surface(scene, &hit, &si, &mut ray, &mut passes) {
+        let bsdf = match surface(scene, &hit, &si, &Footprint::default(), &mut ray, &mut passes) {
             Surface::Bsdf(b) => b,
             Surface::PassedThrough => continue,
             Surface::Abandon => break,

@@ -41,8 +41,11 @@ pub struct Bsdf {
     ss: Vec3,
     ts: Vec3,
     ns: Vec3,
+    /// The geometric normal under [`Convention::PbrtV3`], the only one that reads it;
+    /// zero under [`Convention::PbrtV4`]. (Folding the convention in keeps a BSDF at 96
+    /// bytes, which visible points store and paths copy: a separate flag made the
+    /// benchmark scene 1–2% slower.)
     ng: Vec3,
-    convention: Convention,
     lobes: Lobes,
 }
 
@@ -64,7 +67,8 @@ impl Bsdf {
             [one] => Lobes::One(*one),
             many => Lobes::Many(many.into()),
         };
-        Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng, convention, lobes }
+        let ng = if convention == Convention::PbrtV3 { ng } else { Vec3::ZERO };
+        Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng, lobes }
     }
 
     pub fn lobes(&self) -> &[Lobe] {
@@ -73,6 +77,10 @@ impl Bsdf {
             Lobes::One(l) => std::slice::from_ref(l),
             Lobes::Many(l) => l,
         }
+    }
+
+    pub fn convention(&self) -> Convention {
+        if self.ng == Vec3::ZERO { Convention::PbrtV4 } else { Convention::PbrtV3 }
     }
 
     pub fn shading_normal(&self) -> Vec3 {
@@ -109,7 +117,7 @@ impl Bsdf {
     /// The sum of the lobes, combined by the [`Convention`].
     fn f_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
         let (o, i) = (self.local(wo), self.local(wi));
-        match self.convention {
+        match self.convention() {
             Convention::PbrtV3 => {
                 let reflect = wo.dot(self.ng) * wi.dot(self.ng) > 0.0;
                 let counts = |l: &Lobe| if reflect { l.sides().0 } else { l.sides().1 };

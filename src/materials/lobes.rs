@@ -111,16 +111,16 @@ impl Lobe {
     /// the same side (pbrt-v4); without, only microfacet transmission tests sides, as in
     /// pbrt-v3, whose `BSDF` has already chosen lobes by the geometric normal.
     pub fn f(&self, o: Vec3, i: Vec3, mode: TransportMode, sided: bool) -> Rgb {
-        let same = same_hemisphere(o, i);
+        // Tested only when asked, and only by the lobes that use it.
+        let same = || !sided || same_hemisphere(o, i);
+        let opposite = || !sided || !same_hemisphere(o, i);
         match *self {
-            Lobe::Lambert(r) if same || !sided => r * FRAC_1_PI,
-            Lobe::LambertTransmission(t) if !same || !sided => t * FRAC_1_PI,
-            Lobe::OrenNayar { r, a, b } if same || !sided => r * FRAC_1_PI * oren_nayar(o, i, a, b),
-            Lobe::MicrofacetReflection { r, dist, fresnel } if same || !sided => {
-                microfacet_reflection(o, i, r, dist, fresnel)
-            }
+            Lobe::Lambert(r) if same() => r * FRAC_1_PI,
+            Lobe::LambertTransmission(t) if opposite() => t * FRAC_1_PI,
+            Lobe::OrenNayar { r, a, b } if same() => r * FRAC_1_PI * oren_nayar(o, i, a, b),
+            Lobe::MicrofacetReflection { r, dist, fresnel } if same() => microfacet_reflection(o, i, r, dist, fresnel),
             Lobe::MicrofacetTransmission { t, dist, eta } => microfacet_transmission(o, i, t, dist, eta, mode),
-            Lobe::FresnelBlend { rd, rs, dist } if same || !sided => fresnel_blend(o, i, rd, rs, dist),
+            Lobe::FresnelBlend { rd, rs, dist } if same() => fresnel_blend(o, i, rd, rs, dist),
             _ => Vec3::ZERO,
         }
     }

@@ -55,7 +55,9 @@ impl Material {
     }
 
     /// The BSDF at a hit (`None` for interfaces).
-    pub fn bsdf(&self, textures: &Textures, ctx: &TexCtx, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
+    /// The BSDF at a hit (`None` for interfaces); `ctx` says where textured inputs are
+    /// looked up (made only when one is).
+    pub fn bsdf(&self, textures: &Textures, ctx: impl Fn() -> TexCtx, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
         let inputs = Inputs { textures, ctx, max_reflectance: self.max_reflectance };
         if let MaterialKind::Diffuse { reflectance } = &self.kind {
             // The common case, without the lobe list's set-up.
@@ -67,7 +69,7 @@ impl Material {
         Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n], self.convention))
     }
 
-    fn lobes(&self, i: &Inputs, out: &mut Lobes) -> Option<()> {
+    fn lobes(&self, i: &Inputs<impl Fn() -> TexCtx>, out: &mut Lobes) -> Option<()> {
         match &self.kind {
             MaterialKind::Diffuse { reflectance } => {
                 lambert(i.refl(*reflectance)).into_iter().for_each(|l| out.push(l))
@@ -161,24 +163,27 @@ fn dielectric(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], out: &mut Lobes) {
 }
 
 /// Texture inputs at one hit.
-struct Inputs<'a> {
+struct Inputs<'a, C: Fn() -> TexCtx> {
     textures: &'a Textures,
-    ctx: &'a TexCtx,
+    ctx: C,
     max_reflectance: f32,
 }
 
-impl Inputs<'_> {
+impl<C: Fn() -> TexCtx> Inputs<'_, C> {
     /// A reflectance (or transmittance), clamped as the material's version does.
     fn refl(&self, v: TexValue) -> Rgb {
         self.rgb(v).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance))
     }
 
     fn rgb(&self, v: TexValue) -> Rgb {
-        self.textures.eval(v, self.ctx)
+        match v {
+            TexValue::Const(c) => c,
+            TexValue::Texture(_) => self.textures.eval(v, &(self.ctx)()),
+        }
     }
 
     fn float(&self, v: TexValue) -> f32 {
-        self.textures.float(v, self.ctx)
+        self.rgb(v).x
     }
 
     fn alpha(&self, roughness: &[TexValue; 2], remap: RoughnessRemap) -> [f32; 2] {

@@ -32,6 +32,14 @@ impl Textures {
         Textures(descs.iter().map(|t| t.kind.clone()).collect())
     }
 
+    /// Whether some texture reads the footprint (`dpdx`, `dpdy`): the noise textures.
+    pub fn use_footprint(&self) -> bool {
+        self.0.iter().any(|t| {
+            matches!(t, TextureKind::Fbm { .. } | TextureKind::Wrinkled { .. } | TextureKind::Windy { .. })
+                || matches!(t, TextureKind::Marble { .. })
+        })
+    }
+
     pub fn eval(&self, v: TexValue, ctx: &TexCtx) -> Rgb {
         match v {
             TexValue::Const(c) => c,

@@ -199,9 +199,6 @@ impl QuadricShape {
             dndu: shading.dndu,
             dndv: shading.dndv,
             shading,
-            duv_dxy: [0.0; 4],
-            dpdx: Vec3::ZERO,
-            dpdy: Vec3::ZERO,
         }
     }
 }

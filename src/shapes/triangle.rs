@@ -404,9 +404,6 @@ impl TriangleMesh {
             dndu: Normal3::default(),
             dndv: Normal3::default(),
             shading: Shading { n: Normal3(n), dpdu: Vector3(dpdu), dpdv: Vector3(dpdv), ..Default::default() },
-            duv_dxy: [0.0; 4],
-            dpdx: Vec3::ZERO,
-            dpdy: Vec3::ZERO,
         };
         if self.n.is_some() || self.s.is_some() {
             self.shading_geometry(tri, hit, flags, &mut si);

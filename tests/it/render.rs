@@ -275,7 +275,7 @@ fn metal_roughness_follows_each_versions_remapping() {
         .iter()
         .map(|m| {
             let frame = [glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z];
-            let bsdf = m.bsdf(&rs.textures, &at_uv([0.5, 0.5]), frame, glam::Vec3::Z).expect("a surface");
+            let bsdf = m.bsdf(&rs.textures, || at_uv([0.5, 0.5]), frame, glam::Vec3::Z).expect("a surface");
             match bsdf.lobes() {
                 [Lobe::MicrofacetReflection { dist, .. }] => Some(dist.ax),
                 [Lobe::SpecularReflection { .. }] => None,
@@ -351,7 +351,7 @@ fn glass_is_smooth_at_roughness_zero_in_both_versions() {
     let lobes: Vec<Vec<Lobe>> = rs
         .materials
         .iter()
-        .map(|m| m.bsdf(&rs.textures, &at_uv([0.5, 0.5]), frame, glam::Vec3::Z).expect("a surface").lobes().to_vec())
+        .map(|m| m.bsdf(&rs.textures, || at_uv([0.5, 0.5]), frame, glam::Vec3::Z).expect("a surface").lobes().to_vec())
         .collect();
     assert!(matches!(lobes[0][..], [Lobe::FresnelSpecular { .. }]), "{:?}", lobes[0]);
     assert!(matches!(lobes[1][..], [Lobe::FresnelSpecular { .. }]), "{:?}", lobes[1]);
