@@ -366,6 +366,10 @@ fn material(m: &MaterialDesc, textures: &Textures, index: usize, notes: &mut Vec
             MaterialOut::Diffuse { reflectance: one(*reflectance, notes) }
         }
         MaterialKind::Interface => MaterialOut::None,
+        MaterialKind::Mix { .. } => {
+            notes.push(note("", &what, "mix: no Mitsuba equivalent is exported yet; exported as grey diffuse"));
+            MaterialOut::Diffuse { reflectance: [0.5; 3] }
+        }
     }
 }
 

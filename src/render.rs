@@ -6,12 +6,13 @@ use crate::accel::{Geometry, Hit, LocalHit};
 use crate::camera::Camera;
 use crate::interaction::{Footprint, SurfaceInteraction};
 use crate::lights::{Emitter, Light, WorldSphere, quadric_area};
-use crate::materials::{Bsdf, Material, TexCtx, Textures};
+use crate::materials::{Bsdf, LobeList, Material, TexCtx, Textures};
 use crate::math::Ray;
 use crate::math::frame::coordinate_system;
 use crate::sampling::Distribution1D;
 use crate::scene::{
-    AlphaRule, AreaLightDesc, Film, Geometry as ShapeGeometry, Integrator, SceneDescription, ShapeAlpha, TexValue,
+    AlphaRule, AreaLightDesc, Film, Geometry as ShapeGeometry, Integrator, MaterialKind, MixRule, SceneDescription,
+    ShapeAlpha, TexValue,
 };
 use crate::shapes::MeshFlags;
 use crate::spectrum::{Rgb, luminance};
@@ -176,7 +177,8 @@ impl RenderScene {
     /// `fp`: how the point moves across a pixel, where the camera ray's differentials
     /// say (bump maps and noise textures use it).
     pub fn bsdf(&self, hit: &Hit, si: &SurfaceInteraction, fp: &Footprint) -> Option<Bsdf> {
-        let material = self.material(hit);
+        let ctx = || TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, dpdx: fp.dpdx, dpdy: fp.dpdy };
+        let material = self.chosen(self.material(hit), &ctx);
         let (ns, dpdu) = match material.bump {
             Some(d) => bump(&self.textures, d, si, fp),
             None => (si.shading.n.0, si.shading.dpdu.0),
@@ -186,8 +188,41 @@ impl RenderScene {
             ss = coordinate_system(ns).0;
         }
         let ts = ns.cross(ss);
-        let ctx = || TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, dpdx: fp.dpdx, dpdy: fp.dpdy };
+        if let MaterialKind::Mix { .. } = material.kind() {
+            let mut lobes = LobeList::default();
+            self.add_mixed(material, Vec3::ONE, &ctx, &mut lobes, 0);
+            return Some(lobes.bsdf([ss, ts, ns], si.n.0));
+        }
         material.bsdf(&self.textures, ctx, [ss, ts, ns], si.n.0)
+    }
+
+    /// `m`, or for a pbrt-v4 `mix`, the material it picks here (repeatedly, for mixes
+    /// of mixes): the second with probability `amount`, decided by a hash of the point
+    /// and the two materials so the same point always picks the same one.
+    fn chosen<'a>(&'a self, mut m: &'a Material, ctx: &impl Fn() -> TexCtx) -> &'a Material {
+        for _ in 0..MAX_MIX_DEPTH {
+            let MaterialKind::Mix { materials, amount, rule: MixRule::Choose } = m.kind() else { break };
+            let a = self.textures.float(*amount, &ctx());
+            let pick = a >= 1.0
+                || (a > 0.0 && hash_unit(&[ctx().p, Vec3::new(materials[0] as f32, materials[1] as f32, 0.0)]) < a);
+            m = &self.materials[materials[pick as usize] as usize];
+        }
+        m
+    }
+
+    /// Appends the lobes of pbrt-v3 mix `m`'s parts, each scaled by its share of `w`.
+    fn add_mixed(&self, m: &Material, w: Rgb, ctx: &impl Fn() -> TexCtx, out: &mut LobeList, depth: u32) {
+        let m = self.chosen(m, ctx);
+        match m.kind() {
+            MaterialKind::Mix { materials, amount, .. } if depth < MAX_MIX_DEPTH => {
+                let s1 = self.textures.eval(*amount, &ctx()).max(Vec3::ZERO);
+                let s2 = (Vec3::ONE - s1).max(Vec3::ZERO);
+                for (k, s) in [(0, s1), (1, s2)] {
+                    self.add_mixed(&self.materials[materials[k] as usize], w * s, ctx, out, depth + 1);
+                }
+            }
+            _ => m.add_lobes(&self.textures, ctx, w, out),
+        }
     }
 
     /// The emitting world shape hit, and which of its lights (for MIS).
@@ -242,18 +277,26 @@ fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction, fp: &Footprin
     }
 }
 
+/// Mixes of mixes are followed this deep (the scene has no cycles; this bounds the work).
+const MAX_MIX_DEPTH: u32 = 16;
+
+/// A number in [0, 1) fixed by the given vectors' bits.
+fn hash_unit(v: &[Vec3]) -> f32 {
+    let mut h: u64 = 0x9e37_79b9_7f4a_7c15;
+    for x in v.iter().flat_map(|v| v.to_array()) {
+        h = (h ^ x.to_bits() as u64).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        h ^= h >> 31;
+    }
+    (h >> 40) as f32 / (1u64 << 24) as f32
+}
+
 /// Cut-away surfaces one ray may pass through before it is taken to miss.
 pub const MAX_ALPHA_SKIPS: u32 = 1024;
 
 /// A number in [0, 1) fixed by the ray's origin and direction (pbrt-v4's `HashFloat(o, d)`
 /// plays this part): a ray meets the same stochastic alpha decision every time.
 fn ray_hash(r: &Ray) -> f32 {
-    let mut h: u64 = 0x9e37_79b9_7f4a_7c15;
-    for x in r.o.0.to_array().into_iter().chain(r.d.0.to_array()) {
-        h = (h ^ x.to_bits() as u64).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        h ^= h >> 31;
-    }
-    (h >> 40) as f32 / (1u64 << 24) as f32
+    hash_unit(&[r.o.0, r.d.0])
 }
 
 /// One light per emitting quadric and per non-degenerate triangle of emitting meshes

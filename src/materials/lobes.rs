@@ -10,7 +10,7 @@ use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
 /// The most lobes one material makes (v3 `uber` with opacity: five).
-pub const MAX_LOBES: usize = 5;
+pub const MAX_LOBES: usize = 8;
 
 /// One scattering lobe.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,7 +32,8 @@ pub enum Lobe {
     /// Rough refraction from air into index `eta` (pbrt-v3 `MicrofacetTransmission`).
     MicrofacetTransmission { t: Rgb, dist: TrowbridgeReitz, eta: f32 },
     /// Ashikhmin–Shirley diffuse + glossy (pbrt `FresnelBlend`, `substrate`).
-    FresnelBlend { rd: Rgb, rs: Rgb, dist: TrowbridgeReitz },
+    /// `scale` multiplies the whole lobe (a `mix` weight: f is not linear in rd, rs).
+    FresnelBlend { rd: Rgb, rs: Rgb, dist: TrowbridgeReitz, scale: Rgb },
 }
 
 /// What kind of scattering a lobe does (pbrt's `BxDFType`).
@@ -106,6 +107,21 @@ impl Lobe {
         }
     }
 
+    /// The lobe with f multiplied by `w` (pbrt-v3's `ScaledBxDF`): its colour scaled.
+    pub fn scaled(self, w: Rgb) -> Lobe {
+        match self {
+            Lobe::Lambert(r) => Lobe::Lambert(w * r),
+            Lobe::LambertTransmission(t) => Lobe::LambertTransmission(w * t),
+            Lobe::OrenNayar { r, a, b } => Lobe::OrenNayar { r: w * r, a, b },
+            Lobe::SpecularReflection { r, fresnel } => Lobe::SpecularReflection { r: w * r, fresnel },
+            Lobe::SpecularTransmission { t, eta } => Lobe::SpecularTransmission { t: w * t, eta },
+            Lobe::FresnelSpecular { r, t, eta } => Lobe::FresnelSpecular { r: w * r, t: w * t, eta },
+            Lobe::MicrofacetReflection { r, dist, fresnel } => Lobe::MicrofacetReflection { r: w * r, dist, fresnel },
+            Lobe::MicrofacetTransmission { t, dist, eta } => Lobe::MicrofacetTransmission { t: w * t, dist, eta },
+            Lobe::FresnelBlend { rd, rs, dist, scale } => Lobe::FresnelBlend { rd, rs, dist, scale: w * scale },
+        }
+    }
+
     /// f(o, i) in the shading frame. With `sided` the reflection lobes are zero for
     /// pairs on opposite sides of the shading normal and transmission ones for pairs on
     /// the same side (pbrt-v4); without, only microfacet transmission tests sides, as in
@@ -120,7 +136,7 @@ impl Lobe {
             Lobe::OrenNayar { r, a, b } if same() => r * FRAC_1_PI * oren_nayar(o, i, a, b),
             Lobe::MicrofacetReflection { r, dist, fresnel } if same() => microfacet_reflection(o, i, r, dist, fresnel),
             Lobe::MicrofacetTransmission { t, dist, eta } => microfacet_transmission(o, i, t, dist, eta, mode),
-            Lobe::FresnelBlend { rd, rs, dist } if same() => fresnel_blend(o, i, rd, rs, dist),
+            Lobe::FresnelBlend { rd, rs, dist, scale } if same() => scale * fresnel_blend(o, i, rd, rs, dist),
             _ => Vec3::ZERO,
         }
     }
@@ -313,7 +329,7 @@ mod tests {
             Lobe::MicrofacetReflection { r: Vec3::ONE, dist, fresnel: Fresnel::Dielectric { eta: 1.5 } },
             Lobe::MicrofacetReflection { r: Vec3::ONE, dist, fresnel: Fresnel::Coat { eta: 1.5 } },
             Lobe::MicrofacetTransmission { t: Vec3::ONE, dist, eta: 1.5 },
-            Lobe::FresnelBlend { rd: Vec3::splat(0.5), rs: Vec3::splat(0.2), dist },
+            Lobe::FresnelBlend { rd: Vec3::splat(0.5), rs: Vec3::splat(0.2), dist, scale: Vec3::ONE },
         ]
     }
 

@@ -69,6 +69,16 @@ impl Material {
         Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n], self.convention))
     }
 
+    /// Appends this material's lobes at a hit, each scaled by `weight` (a v3 `mix`
+    /// part); interfaces and mixes add none.
+    pub fn add_lobes(&self, textures: &Textures, ctx: impl Fn() -> TexCtx, weight: Rgb, out: &mut LobeList) {
+        let inputs = Inputs { textures, ctx, max_reflectance: self.max_reflectance };
+        let start = out.0.n;
+        if self.lobes(&inputs, &mut out.0).is_some() {
+            out.0.list[start..out.0.n].iter_mut().for_each(|l| *l = l.scaled(weight));
+        }
+    }
+
     fn lobes(&self, i: &Inputs<impl Fn() -> TexCtx>, out: &mut Lobes) -> Option<()> {
         match &self.kind {
             MaterialKind::Diffuse { reflectance } => {
@@ -133,10 +143,11 @@ impl Material {
                 let (rd, rs) = (i.refl(*kd), i.refl(*ks));
                 if rd != Vec3::ZERO || rs != Vec3::ZERO {
                     let dist = TrowbridgeReitz::new(i.alpha(roughness, *remap));
-                    out.push(Lobe::FresnelBlend { rd, rs, dist });
+                    out.push(Lobe::FresnelBlend { rd, rs, dist, scale: Vec3::ONE });
                 }
             }
-            MaterialKind::Interface => return None,
+            // Mixes are resolved by the scene, which holds their materials.
+            MaterialKind::Interface | MaterialKind::Mix { .. } => return None,
         }
         Some(())
     }
@@ -199,6 +210,18 @@ impl RoughnessRemap {
             RoughnessRemap::V3 => microfacet::roughness_to_alpha_v3(r),
             RoughnessRemap::V4 => r.max(0.0).sqrt(),
         }
+    }
+}
+
+/// Lobes gathered from the parts of a pbrt-v3 `mix` (at most [`MAX_LOBES`], as
+/// pbrt-v3's BSDF holds at most 8).
+#[derive(Default)]
+pub struct LobeList(Lobes);
+
+impl LobeList {
+    /// Their BSDF, combined as pbrt-v3 combines them.
+    pub fn bsdf(&self, frame: [Vec3; 3], ng: Vec3) -> Bsdf {
+        Bsdf::new(frame, ng, &self.0.list[..self.0.n], Convention::PbrtV3)
     }
 }
 

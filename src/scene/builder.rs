@@ -120,6 +120,8 @@ struct PendingMaterial {
     span: Option<Span>,
     scope: Rc<Scope>,
     built: Option<u32>,
+    /// Being built: a `mix` that reaches it again is a cycle.
+    building: bool,
 }
 
 struct PendingTexture {
@@ -201,6 +203,7 @@ impl Builder {
             span: None,
             scope: Rc::default(),
             built: None,
+            building: false,
         };
         Builder {
             reader,
@@ -777,6 +780,7 @@ impl Builder {
             span: Some(span),
             scope: self.gs.scope.clone(),
             built: None,
+            building: false,
         });
         self.materials.len() as u32 - 1
     }

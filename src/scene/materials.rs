@@ -12,6 +12,8 @@
 //! Material "translucent" "rgb reflect" [.5 .5 .5] "rgb transmit" [.5 .5 .5]
 //! Material "substrate" "float uroughness" .05 "float vroughness" .2
 //! Material "matte" "float sigma" 20                   # Oren–Nayar
+//! Material "mix" "string namedmaterial1" "a" "string namedmaterial2" "b" "color amount" [.3 .3 .3]  # v3
+//! Material "mix" "string materials" ["a" "b"] "float amount" .3                                  # v4
 //! Material "coateddiffuse"                            # approximated: its diffuse part
 //! Material "" / "none" / "interface"                # no surface: paths pass through
 //! ```
@@ -22,6 +24,7 @@
 use super::approx::Approx;
 use super::values::{self, Range, Res, SpectrumContext, SpectrumOrTexture};
 use crate::imageio::RgbImage;
+use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::spectrum::Rgb;
@@ -114,6 +117,24 @@ pub enum MaterialKind {
     },
     /// No surface: rays continue straight through.
     Interface,
+    /// Two materials (built indices) mixed by `amount`.
+    Mix {
+        materials: [u32; 2],
+        amount: TexValue,
+        rule: MixRule,
+    },
+}
+
+/// How `mix` combines its two materials.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MixRule {
+    /// pbrt-v3 (`namedmaterial1`, `namedmaterial2`, spectrum `amount`): the BSDF holds
+    /// both materials' lobes, the first's scaled by amount and the second's by
+    /// 1 − amount.
+    Blend,
+    /// pbrt-v4 (`string materials [a b]`, float `amount`): each hit takes the second
+    /// material with probability amount, else the first.
+    Choose,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -134,6 +155,8 @@ pub trait Resolver {
     /// the parameter naming it.
     fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<u32>;
     fn approximate(&mut self, at: Span, what: String, how: Approx);
+    /// The named material `name`, built on first use (for `mix`); its built index.
+    fn named_material(&mut self, name: &str, at: Span) -> Res<u32>;
     fn spectra(&self) -> SpectrumContext<'_>;
     /// An image for `imagemap` (cached); errors are plain messages.
     fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String>;
@@ -205,6 +228,7 @@ pub fn material(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<
             MaterialKind::Diffuse { reflectance }
         }
         "" | "none" | "interface" => MaterialKind::Interface,
+        "mix" => mix(p, at, r)?,
         _ => {
             p.mark_all_used();
             r.approximate(at, format!("material \"{ty}\""), Approx::UnsupportedMaterial);
@@ -304,6 +328,29 @@ fn conductor(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<MaterialKind>
     let roughness = roughness(p, if v3 { 0.01 } else { 0.0 }, r)?;
     let remap = if v3 { remap_v3(p)? } else { remap_v4(p)? };
     Ok(MaterialKind::Conductor { eta, k, roughness, remap })
+}
+
+/// v3 `mix` (`namedmaterial1`/`namedmaterial2`, spectrum `amount`) or v4 `mix`
+/// (`string materials` [two names], float `amount`).
+fn mix(p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
+    let names_at = |n: &str| p.named(n).map_or(at, |x| x.value_span);
+    if let Some(list) = p.array("materials", ParamType::String)? {
+        let names = list.strings();
+        let [a, b] = names else {
+            let msg = format!("mix needs two \"materials\", not {}", names.len());
+            return Err(Diagnostic::error(list.value_span, msg));
+        };
+        let materials = [r.named_material(a, list.value_span)?, r.named_material(b, list.value_span)?];
+        let amount = float(p, "amount", 0.5, Range::Any, r)?;
+        return Ok(MaterialKind::Mix { materials, amount, rule: MixRule::Choose });
+    }
+    let named = |n: &str, r: &mut dyn Resolver| -> Res<u32> {
+        let name = p.string(n)?.ok_or_else(|| Diagnostic::error(at, format!("mix needs \"string {n}\"")))?;
+        r.named_material(&name, names_at(n))
+    };
+    let materials = [named("namedmaterial1", r)?, named("namedmaterial2", r)?];
+    let amount = spectrum(p, "amount", 0.5, r)?;
+    Ok(MaterialKind::Mix { materials, amount, rule: MixRule::Blend })
 }
 
 /// The coat parameters of `coateddiffuse`, which we draw as its diffuse part: read

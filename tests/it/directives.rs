@@ -441,3 +441,34 @@ fn an_import_that_leaves_a_block_open_is_closed_at_its_end() {
     assert_eq!(s.shapes[1].object_to_world, glam::DMat4::IDENTITY);
     assert!(warnings(&s).iter().any(|w| w.contains("never closed in the imported file")), "{:?}", s.warnings);
 }
+
+#[test]
+fn mix_names_its_materials_and_may_not_mix_itself() {
+    use pbrt_sppm::scene::{MaterialKind, MixRule};
+    let s = scene(
+        r#"WorldBegin
+        MakeNamedMaterial "a" "string type" "diffuse"
+        MakeNamedMaterial "b" "string type" "conductor"
+        MakeNamedMaterial "m" "string type" "mix" "string materials" ["a" "b"] "float amount" 0.25
+        NamedMaterial "m"
+        Shape "sphere""#,
+    );
+    let m = &s.materials[s.shapes[0].material as usize];
+    let MaterialKind::Mix { materials, rule, .. } = &m.kind else { panic!("{:?}", m.kind) };
+    assert_eq!(*rule, MixRule::Choose);
+    let tys: Vec<&str> = materials.iter().map(|&i| s.materials[i as usize].ty.as_str()).collect();
+    assert_eq!(tys, ["diffuse", "conductor"]);
+    let e = crate::common::load(
+        "WorldBegin\nMakeNamedMaterial \"m\" \"string type\" \"mix\" \"string materials\" [\"m\" \"m\"]\n\
+         NamedMaterial \"m\"\nShape \"sphere\"",
+    )
+    .unwrap_err()
+    .one_line();
+    assert!(e.contains(":2:") && e.ends_with("error: material \"m\" mixes itself"), "{e}");
+    let e = crate::common::load(
+        "WorldBegin\nMaterial \"mix\" \"string namedmaterial1\" \"nope\" \"string namedmaterial2\" \"nope\"\nShape \"sphere\"",
+    )
+    .unwrap_err()
+    .one_line();
+    assert!(e.ends_with("error: named material \"nope\" is not defined"), "{e}");
+}

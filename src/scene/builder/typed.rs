@@ -133,6 +133,7 @@ impl Builder {
         if let Some(b) = m.built {
             return Ok(b);
         }
+        m.building = true;
         let params = std::mem::take(&mut m.params);
         let (name, span, scope, ty) = (m.name.clone(), m.span, m.scope.clone(), m.ty.clone());
         params.mark_known(&["type"]);
@@ -146,6 +147,7 @@ impl Builder {
         self.built_materials.push(MaterialDesc { ty, name, kind, bump });
         let b = self.built_materials.len() as u32 - 1;
         self.materials[i as usize].built = Some(b);
+        self.materials[i as usize].building = false;
         Ok(b)
     }
 
@@ -251,6 +253,15 @@ impl Resolver for Scoped<'_> {
 
     fn approximate(&mut self, at: Span, what: String, how: Approx) {
         self.b.note(at, what, how);
+    }
+
+    fn named_material(&mut self, name: &str, at: Span) -> Res<u32> {
+        let found = self.scope.materials.get(name).or_else(|| self.b.global_materials.get(name)).copied();
+        let i = found.ok_or_else(|| Diagnostic::error(at, format!("named material \"{name}\" is not defined")))?;
+        if self.b.materials[i as usize].building {
+            return Err(Diagnostic::error(at, format!("material \"{name}\" mixes itself")));
+        }
+        self.b.build_material(i)
     }
 
     fn spectra(&self) -> SpectrumContext<'_> {
