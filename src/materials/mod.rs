@@ -64,7 +64,7 @@ impl Material {
             let lambert = lambert(inputs.refl(*reflectance));
             return Some(Bsdf::new(frame, ng, lambert.as_slice(), self.convention));
         }
-        let mut lobes = Lobes::default();
+        let mut lobes = Lobes::<MATERIAL_LOBES>::default();
         self.lobes(&inputs, &mut lobes)?;
         Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n], self.convention))
     }
@@ -79,7 +79,7 @@ impl Material {
         }
     }
 
-    fn lobes(&self, i: &Inputs<impl Fn() -> TexCtx>, out: &mut Lobes) -> Option<()> {
+    fn lobes<const N: usize>(&self, i: &Inputs<impl Fn() -> TexCtx>, out: &mut Lobes<N>) -> Option<()> {
         match &self.kind {
             MaterialKind::Diffuse { reflectance } => {
                 lambert(i.refl(*reflectance)).into_iter().for_each(|l| out.push(l))
@@ -160,7 +160,7 @@ fn lambert(r: Rgb) -> Option<Lobe> {
 
 /// Smooth glass is one Fresnel-weighted lobe; rough glass is pbrt-v3's pair of
 /// microfacet reflection and transmission lobes.
-fn dielectric(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], out: &mut Lobes) {
+fn dielectric<const N: usize>(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], out: &mut Lobes<N>) {
     if r == Vec3::ZERO && t == Vec3::ZERO {
         return;
     }
@@ -216,7 +216,7 @@ impl RoughnessRemap {
 /// Lobes gathered from the parts of a pbrt-v3 `mix` (at most [`MAX_LOBES`], as
 /// pbrt-v3's BSDF holds at most 8).
 #[derive(Default)]
-pub struct LobeList(Lobes);
+pub struct LobeList(Lobes<MAX_LOBES>);
 
 impl LobeList {
     /// Their BSDF, combined as pbrt-v3 combines them.
@@ -225,11 +225,20 @@ impl LobeList {
     }
 }
 
-/// The lobes one hit's material makes.
-#[derive(Default)]
-struct Lobes {
-    list: [Lobe; MAX_LOBES],
+/// The most lobes one material makes (uber's five); a list this long is set up for
+/// every hit, so it is no longer than that.
+const MATERIAL_LOBES: usize = 5;
+
+/// Lobes made at one hit, at most `N`.
+struct Lobes<const N: usize> {
+    list: [Lobe; N],
     n: usize,
+}
+
+impl<const N: usize> Default for Lobes<N> {
+    fn default() -> Self {
+        Lobes { list: [Lobe::default(); N], n: 0 }
+    }
 }
 
 impl Default for Lobe {
@@ -238,9 +247,9 @@ impl Default for Lobe {
     }
 }
 
-impl Lobes {
+impl<const N: usize> Lobes<N> {
     fn push(&mut self, l: Lobe) {
-        if self.n < MAX_LOBES {
+        if self.n < N {
             self.list[self.n] = l;
             self.n += 1;
         }
