@@ -203,8 +203,8 @@ impl RenderScene {
         for _ in 0..MAX_MIX_DEPTH {
             let MaterialKind::Mix { materials, amount, rule: MixRule::Choose } = m.kind() else { break };
             let a = self.textures.float(*amount, &ctx());
-            let pick = a >= 1.0
-                || (a > 0.0 && hash_unit(&[ctx().p, Vec3::new(materials[0] as f32, materials[1] as f32, 0.0)]) < a);
+            let [x, y, z] = bits(ctx().p);
+            let pick = a >= 1.0 || (a > 0.0 && hash_unit(&[x, y, z, materials[0] as u64, materials[1] as u64]) < a);
             m = &self.materials[materials[pick as usize] as usize];
         }
         m
@@ -280,14 +280,14 @@ fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction, fp: &Footprin
 /// Mixes of mixes are followed this deep (the scene has no cycles; this bounds the work).
 const MAX_MIX_DEPTH: u32 = 16;
 
-/// A number in [0, 1) fixed by the given vectors' bits.
-fn hash_unit(v: &[Vec3]) -> f32 {
-    let mut h: u64 = 0x9e37_79b9_7f4a_7c15;
-    for x in v.iter().flat_map(|v| v.to_array()) {
-        h = (h ^ x.to_bits() as u64).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        h ^= h >> 31;
-    }
-    (h >> 40) as f32 / (1u64 << 24) as f32
+/// A number in [0, 1) fixed by the given words (floats by their bits).
+fn hash_unit(words: &[u64]) -> f32 {
+    (crate::sampling::hash(words) >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// The bits of a vector's coordinates, for [`hash_unit`].
+fn bits(v: Vec3) -> [u64; 3] {
+    v.to_array().map(|x| x.to_bits() as u64)
 }
 
 /// Cut-away surfaces one ray may pass through before it is taken to miss.
@@ -296,7 +296,8 @@ pub const MAX_ALPHA_SKIPS: u32 = 1024;
 /// A number in [0, 1) fixed by the ray's origin and direction (pbrt-v4's `HashFloat(o, d)`
 /// plays this part): a ray meets the same stochastic alpha decision every time.
 fn ray_hash(r: &Ray) -> f32 {
-    hash_unit(&[r.o.0, r.d.0])
+    let ([ox, oy, oz], [dx, dy, dz]) = (bits(r.o.0), bits(r.d.0));
+    hash_unit(&[ox, oy, oz, dx, dy, dz])
 }
 
 /// One light per emitting quadric and per non-degenerate triangle of emitting meshes

@@ -44,8 +44,7 @@ impl RenderScene {
         if !(radius > 0.0 && radius.is_finite()) {
             return Err(format!("the radius must be positive, not {radius}"));
         }
-        let mut sppm = super::sppm::Sppm::new(self, photons, radius, settings.seed.unwrap_or(i.seed))?;
-        sppm.differential_scale = super::sppm::differential_scale(iterations, i.differential_floor);
+        let mut sppm = super::sppm::Sppm::new(self, iterations, photons, radius, settings.seed.unwrap_or(i.seed))?;
         let [x0, x1, y0, y1] = self.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
         if let Some(r) = &settings.reference

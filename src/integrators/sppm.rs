@@ -74,12 +74,12 @@ pub struct Sppm<'a> {
     seed: u64,
     /// How much camera rays' differentials are scaled (pbrt scales them down as the
     /// iterations that share a pixel grow; see [`crate::scene::Integrator`]).
-    pub differential_scale: f32,
+    differential_scale: f32,
     pub stats: Stats,
 }
 
 /// max(floor, 1/√iterations).
-pub fn differential_scale(iterations: u32, floor: f32) -> f32 {
+fn differential_scale(iterations: u32, floor: f32) -> f32 {
     (1.0 / (iterations.max(1) as f32).sqrt()).max(floor)
 }
 
@@ -90,7 +90,15 @@ fn power_heuristic(f: f32, g: f32) -> f32 {
 
 impl<'a> Sppm<'a> {
     /// Fails (rather than aborting) when the pixels' state does not fit in memory.
-    pub fn new(scene: &'a RenderScene, photons_per_iteration: u64, radius: f32, seed: u64) -> Result<Sppm<'a>, String> {
+    /// `iterations`: how many the run plans, which sets the camera rays' differential
+    /// scale as pbrt sets it.
+    pub fn new(
+        scene: &'a RenderScene,
+        iterations: u32,
+        photons_per_iteration: u64,
+        radius: f32,
+        seed: u64,
+    ) -> Result<Sppm<'a>, String> {
         let [x0, x1, y0, y1] = scene.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
         let pixel = Pixel { radius: radius as f64, ld: DVec3::ZERO, tau: DVec3::ZERO, n: 0.0, vp: None };
@@ -109,7 +117,7 @@ impl<'a> Sppm<'a> {
             photons_per_iteration,
             max_depth: scene.integrator.max_depth,
             seed,
-            differential_scale: differential_scale(scene.integrator.iterations, scene.integrator.differential_floor),
+            differential_scale: differential_scale(iterations, scene.integrator.differential_floor),
             stats: Stats::default(),
         })
     }

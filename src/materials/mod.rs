@@ -54,7 +54,6 @@ impl Material {
         &self.kind
     }
 
-    /// The BSDF at a hit (`None` for interfaces).
     /// The BSDF at a hit (`None` for interfaces); `ctx` says where textured inputs are
     /// looked up (made only when one is).
     pub fn bsdf(&self, textures: &Textures, ctx: impl Fn() -> TexCtx, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {

@@ -34,10 +34,8 @@ impl Textures {
 
     /// Whether some texture reads the footprint (`dpdx`, `dpdy`): the noise textures.
     pub fn use_footprint(&self) -> bool {
-        self.0.iter().any(|t| {
-            matches!(t, TextureKind::Fbm { .. } | TextureKind::Wrinkled { .. } | TextureKind::Windy { .. })
-                || matches!(t, TextureKind::Marble { .. })
-        })
+        use TextureKind as K;
+        self.0.iter().any(|t| matches!(t, K::Fbm { .. } | K::Wrinkled { .. } | K::Windy { .. } | K::Marble { .. }))
     }
 
     pub fn eval(&self, v: TexValue, ctx: &TexCtx) -> Rgb {
