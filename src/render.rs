@@ -178,7 +178,10 @@ impl RenderScene {
     /// say (bump maps and noise textures use it).
     pub fn bsdf(&self, hit: &Hit, si: &SurfaceInteraction, fp: &Footprint) -> Option<Bsdf> {
         let ctx = || TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, dpdx: fp.dpdx, dpdy: fp.dpdy };
-        let material = self.chosen(self.material(hit), &ctx);
+        let material = match self.material(hit) {
+            m if matches!(m.kind(), MaterialKind::Mix { rule: MixRule::Choose, .. }) => self.chosen(m, &ctx),
+            m => m,
+        };
         let (ns, dpdu) = match material.bump {
             Some(d) => bump(&self.textures, d, si, fp),
             None => (si.shading.n.0, si.shading.dpdu.0),
@@ -199,6 +202,7 @@ impl RenderScene {
     /// `m`, or for a pbrt-v4 `mix`, the material it picks here (repeatedly, for mixes
     /// of mixes): the second with probability `amount`, decided by a hash of the point
     /// and the two materials so the same point always picks the same one.
+    #[inline(never)]
     fn chosen<'a>(&'a self, mut m: &'a Material, ctx: &impl Fn() -> TexCtx) -> &'a Material {
         for _ in 0..MAX_MIX_DEPTH {
             let MaterialKind::Mix { materials, amount, rule: MixRule::Choose } = m.kind() else { break };

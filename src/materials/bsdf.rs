@@ -117,14 +117,18 @@ impl Bsdf {
     /// The sum of the lobes, combined by the [`Convention`].
     fn f_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
         let (o, i) = (self.local(wo), self.local(wi));
-        match self.convention() {
-            Convention::PbrtV3 => {
-                let reflect = wo.dot(self.ng) * wi.dot(self.ng) > 0.0;
-                let counts = |l: &Lobe| if reflect { l.sides().0 } else { l.sides().1 };
-                self.lobes().iter().filter(|l| counts(l)).map(|l| l.f(o, i, mode, false)).sum()
+        let v3 = self.convention() == Convention::PbrtV3;
+        let reflect = wo.dot(self.ng) * wi.dot(self.ng) > 0.0;
+        let mut f = Vec3::ZERO;
+        for l in self.lobes() {
+            let (r, t) = l.sides();
+            if !v3 {
+                f += l.f(o, i, mode, true);
+            } else if (reflect && r) || (!reflect && t) {
+                f += l.f(o, i, mode, false);
             }
-            Convention::PbrtV4 => self.lobes().iter().map(|l| l.f(o, i, mode, true)).sum(),
         }
+        f
     }
 
     /// f(ωo, ωi) for radiance (camera paths and the photons they gather).

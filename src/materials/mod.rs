@@ -56,6 +56,7 @@ impl Material {
 
     /// The BSDF at a hit (`None` for interfaces); `ctx` says where textured inputs are
     /// looked up (made only when one is).
+    #[inline]
     pub fn bsdf(&self, textures: &Textures, ctx: impl Fn() -> TexCtx, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
         let inputs = Inputs { textures, ctx, max_reflectance: self.max_reflectance };
         if let MaterialKind::Diffuse { reflectance } = &self.kind {
@@ -63,8 +64,13 @@ impl Material {
             let lambert = lambert(inputs.refl(*reflectance));
             return Some(Bsdf::new(frame, ng, lambert.as_slice(), self.convention));
         }
+        self.layered_bsdf(&inputs, frame, ng)
+    }
+
+    #[inline(never)]
+    fn layered_bsdf(&self, inputs: &Inputs<impl Fn() -> TexCtx>, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
         let mut lobes = Lobes::<MATERIAL_LOBES>::default();
-        self.lobes(&inputs, &mut lobes)?;
+        self.lobes(inputs, &mut lobes)?;
         Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n], self.convention))
     }
 

@@ -356,6 +356,7 @@ fn any<const CMP: i32>(e: [std::arch::x86_64::__m256; 3]) -> u32 {
 }
 
 impl TriangleMesh {
+    #[inline]
     fn uvs(&self, tri: usize) -> [glam::Vec2; 3] {
         match &self.uv {
             Some(uv) => {
