@@ -361,9 +361,22 @@ fn material(m: &MaterialDesc, textures: &Textures, index: usize, notes: &mut Vec
         | MaterialKind::Plastic { kd: reflectance, .. }
         | MaterialKind::Uber { kd: reflectance, .. }
         | MaterialKind::Translucent { kd: reflectance, .. }
-        | MaterialKind::Substrate { kd: reflectance, .. } => {
+        | MaterialKind::Substrate { kd: reflectance, .. }
+        | MaterialKind::DiffuseTransmission { reflectance, .. } => {
             notes.push(note("", &what, "no Mitsuba equivalent is exported yet; exported as its diffuse part"));
             MaterialOut::Diffuse { reflectance: one(*reflectance, notes) }
+        }
+        MaterialKind::Coated(c) => {
+            notes.push(note(
+                "",
+                &what,
+                "coated: no Mitsuba equivalent is exported yet; exported as its diffuse base (grey over a conductor)",
+            ));
+            let reflectance = match c.base {
+                crate::scene::CoatBase::Diffuse { reflectance } => one(reflectance, notes),
+                _ => [0.5; 3],
+            };
+            MaterialOut::Diffuse { reflectance }
         }
         MaterialKind::Interface => MaterialOut::None,
         MaterialKind::Mix { .. } => {

@@ -380,7 +380,8 @@ fn direct_light(
         if li != Vec3::ZERO {
             let light_pdf = light.pdf_li(&scene.geometry, ray.o.0, s.wi);
             if light_pdf > 0.0 {
-                ld += s.f * s.wi.dot(ns).abs() * li * power_heuristic(s.pdf, light_pdf) / s.pdf;
+                let bsdf_pdf = if s.proportional { bsdf.pdf(wo, s.wi) } else { s.pdf };
+                ld += s.f * s.wi.dot(ns).abs() * li * power_heuristic(bsdf_pdf, light_pdf) / s.pdf;
             }
         }
     }

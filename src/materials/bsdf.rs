@@ -3,6 +3,7 @@
 //! density averages every lobe's and the value sums every lobe on the side (reflection
 //! or transmission) the geometric normal says the pair is on.
 
+use super::layered::Layered;
 use super::lobes::{Kind, Lobe, MAX_LOBES};
 use crate::spectrum::Rgb;
 use glam::Vec3;
@@ -22,6 +23,9 @@ pub struct BsdfSample {
     pub f: Rgb,
     pub pdf: f32,
     pub specular: bool,
+    /// `pdf` is only proportional to the density (a layered material's walk): MIS
+    /// weights then take [`Bsdf::pdf`].
+    pub proportional: bool,
 }
 
 /// How lobes combine where the shading normal differs from the geometric one.
@@ -56,6 +60,8 @@ enum Lobes {
     None,
     One(Lobe),
     Many(Box<[Lobe]>),
+    /// pbrt-v4's coated materials, estimated by random walks.
+    Layered(Box<Layered>),
 }
 
 impl Bsdf {
@@ -71,9 +77,14 @@ impl Bsdf {
         Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng, lobes }
     }
 
+    /// A pbrt-v4 coated material's BSDF (two-sided; pbrt-v4's convention).
+    pub fn layered(frame: [Vec3; 3], layered: Layered) -> Bsdf {
+        Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng: Vec3::ZERO, lobes: Lobes::Layered(Box::new(layered)) }
+    }
+
     pub fn lobes(&self) -> &[Lobe] {
         match &self.lobes {
-            Lobes::None => &[],
+            Lobes::None | Lobes::Layered(_) => &[],
             Lobes::One(l) => std::slice::from_ref(l),
             Lobes::Many(l) => l,
         }
@@ -101,12 +112,18 @@ impl Bsdf {
 
     /// Whether the BSDF has a diffuse lobe (SPPM stores visible points there).
     pub fn is_diffuse(&self) -> bool {
-        self.has(Kind::Diffuse)
+        match &self.lobes {
+            Lobes::Layered(l) => l.is_diffuse(),
+            _ => self.has(Kind::Diffuse),
+        }
     }
 
     /// Whether it has a glossy lobe (SPPM stores a visible point there at the last depth).
     pub fn is_glossy(&self) -> bool {
-        self.has(Kind::Glossy)
+        match &self.lobes {
+            Lobes::Layered(l) => l.is_glossy(),
+            _ => self.has(Kind::Glossy),
+        }
     }
 
     /// Whether some lobe transmits (light from behind the surface reaches the front).
@@ -117,6 +134,9 @@ impl Bsdf {
     /// The sum of the lobes, combined by the [`Convention`].
     fn f_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
         let (o, i) = (self.local(wo), self.local(wi));
+        if let Lobes::Layered(l) = &self.lobes {
+            return if o.z == 0.0 { Vec3::ZERO } else { l.f(o, i, mode) };
+        }
         let v3 = self.convention() == Convention::PbrtV3;
         let reflect = wo.dot(self.ng) * wi.dot(self.ng) > 0.0;
         let mut f = Vec3::ZERO;
@@ -138,6 +158,9 @@ impl Bsdf {
 
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let (o, i) = (self.local(wo), self.local(wi));
+        if let Lobes::Layered(l) = &self.lobes {
+            return if o.z == 0.0 { 0.0 } else { l.pdf(o, i, TransportMode::Radiance) };
+        }
         let n = self.lobes().len().max(1) as f32;
         self.lobes().iter().map(|l| l.pdf(o, i)).sum::<f32>() / n
     }
@@ -145,6 +168,9 @@ impl Bsdf {
     /// Samples ωi for ωo; `u_lobe` chooses the lobe and then, rescaled, between a
     /// lobe's parts (a dielectric's reflection or refraction).
     pub fn sample_f(&self, wo: Vec3, u: [f32; 2], u_lobe: f32, mode: TransportMode) -> Option<BsdfSample> {
+        if let Lobes::Layered(l) = &self.lobes {
+            return self.sample_layered(l, wo, u, u_lobe, mode);
+        }
         let n = self.lobes().len();
         if n == 0 {
             return None;
@@ -156,13 +182,23 @@ impl Bsdf {
         let s = lobe.sample(o, u, u_rest, mode)?;
         let wi = self.world(s.wi);
         if lobe.kind() == Kind::Specular {
-            return Some(BsdfSample { wi, f: s.f, pdf: s.pdf / n as f32, specular: true });
+            return Some(BsdfSample { wi, f: s.f, pdf: s.pdf / n as f32, specular: true, proportional: false });
         }
         let others: f32 =
             self.lobes().iter().enumerate().filter(|&(k, _)| k != pick).map(|(_, l)| l.pdf(o, s.wi)).sum();
         let pdf = (s.pdf + others) / n as f32;
         let f = self.f_mode(wo, wi, mode);
-        (pdf > 0.0).then_some(BsdfSample { wi, f, pdf, specular: false })
+        (pdf > 0.0).then_some(BsdfSample { wi, f, pdf, specular: false, proportional: false })
+    }
+
+    fn sample_layered(&self, l: &Layered, wo: Vec3, u: [f32; 2], uc: f32, mode: TransportMode) -> Option<BsdfSample> {
+        let o = self.local(wo);
+        if o.z == 0.0 {
+            return None;
+        }
+        let s = l.sample(o, uc, u, mode)?;
+        let ok = s.f != Vec3::ZERO && s.pdf > 0.0 && s.wi.z != 0.0;
+        ok.then(|| BsdfSample { wi: self.world(s.wi), f: s.f, pdf: s.pdf, specular: s.specular, proportional: true })
     }
 }
 

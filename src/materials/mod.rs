@@ -11,6 +11,7 @@
 //! (`textures`).
 
 mod bsdf;
+pub mod layered;
 pub mod lobes;
 pub mod microfacet;
 pub mod noise;
@@ -21,9 +22,10 @@ use lobes::{Lobe, MAX_LOBES, oren_nayar_ab};
 use microfacet::{Fresnel, TrowbridgeReitz};
 pub use textures::{TexCtx, Textures, lookup};
 
-use crate::scene::{MaterialDesc, MaterialKind, RoughnessRemap, TexValue};
+use crate::scene::{CoatBase, Coated, MaterialDesc, MaterialKind, RoughnessRemap, TexValue};
 use crate::spectrum::Rgb;
 use glam::Vec3;
+use layered::{Base, Coat, Layered};
 
 /// A material ready to shade: the scene's description, its inputs evaluated at each hit.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,6 +71,9 @@ impl Material {
 
     #[inline(never)]
     fn layered_bsdf(&self, inputs: &Inputs<impl Fn() -> TexCtx>, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
+        if let MaterialKind::Coated(c) = &self.kind {
+            return Some(Bsdf::layered(frame, coated(c, inputs)));
+        }
         let mut lobes = Lobes::<MATERIAL_LOBES>::default();
         self.lobes(inputs, &mut lobes)?;
         Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n], self.convention))
@@ -96,6 +101,22 @@ impl Material {
                     (a, b) => out.push_nonzero(r, |r| Lobe::OrenNayar { r, a, b }),
                 }
             }
+            MaterialKind::DiffuseTransmission { reflectance, transmittance, scale } => {
+                let s = i.float(*scale);
+                out.push_nonzero(i.refl_scaled(*reflectance, s), Lobe::Lambert);
+                out.push_nonzero(i.refl_scaled(*transmittance, s), Lobe::LambertTransmission);
+            }
+            // Only inside a pbrt-v3 mix, which holds lobes: the base alone (noted).
+            MaterialKind::Coated(c) => match coated(c, i).bottom {
+                Base::Diffuse(r) => out.push_nonzero(r, Lobe::Lambert),
+                Base::Conductor { eta, k, dist, smooth } => {
+                    let fresnel = Fresnel::Conductor { eta, k };
+                    out.push(match smooth {
+                        true => Lobe::SpecularReflection { r: Vec3::ONE, fresnel },
+                        false => Lobe::MicrofacetReflection { r: Vec3::ONE, dist, fresnel },
+                    })
+                }
+            },
             MaterialKind::Mirror { reflectance } => {
                 out.push(Lobe::SpecularReflection { r: i.rgb(*reflectance), fresnel: Fresnel::One })
             }
@@ -158,6 +179,37 @@ impl Material {
     }
 }
 
+/// A coated material's layers at a hit (pbrt-v4's `CoatedDiffuseMaterial::GetBxDF`
+/// and `CoatedConductorMaterial::GetBxDF`).
+fn coated(c: &Coated, i: &Inputs<impl Fn() -> TexCtx>) -> Layered {
+    let alpha = |r: &[TexValue; 2]| i.alpha(r, c.remap);
+    let smooth = |a: [f32; 2]| a[0].max(a[1]) < 1e-3;
+    let a = alpha(&c.coat_roughness);
+    let top = Coat { eta: c.coat_eta, dist: TrowbridgeReitz::new(a), smooth: smooth(a) };
+    let conductor = |eta: Rgb, k: Rgb, r: &[TexValue; 2]| {
+        let a = alpha(r);
+        Base::Conductor { eta: eta / c.coat_eta, k: k / c.coat_eta, dist: TrowbridgeReitz::new(a), smooth: smooth(a) }
+    };
+    let bottom = match &c.base {
+        CoatBase::Diffuse { reflectance } => Base::Diffuse(i.refl(*reflectance)),
+        CoatBase::Conductor { eta, k, roughness } => conductor(*eta, *k, roughness),
+        CoatBase::Reflectance { reflectance, roughness } => {
+            // pbrt-v4 keeps r below 1, where k would be infinite.
+            let r = i.rgb(*reflectance).clamp(Vec3::ZERO, Vec3::splat(0.9999));
+            conductor(Vec3::ONE, 2.0 * r.powf(0.5) / (Vec3::ONE - r).max(Vec3::ZERO).powf(0.5), roughness)
+        }
+    };
+    Layered {
+        top,
+        bottom,
+        thickness: i.float(c.thickness).max(f32::MIN_POSITIVE),
+        albedo: i.rgb(c.albedo).clamp(Vec3::ZERO, Vec3::ONE),
+        g: i.float(c.g).clamp(-1.0, 1.0),
+        max_depth: c.max_depth,
+        n_samples: c.n_samples,
+    }
+}
+
 /// A Lambertian lobe, or none for a black reflectance (pbrt adds no lobe then).
 fn lambert(r: Rgb) -> Option<Lobe> {
     (r != Vec3::ZERO).then_some(Lobe::Lambert(r))
@@ -189,6 +241,11 @@ impl<C: Fn() -> TexCtx> Inputs<'_, C> {
     /// A reflectance (or transmittance), clamped as the material's version does.
     fn refl(&self, v: TexValue) -> Rgb {
         self.rgb(v).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance))
+    }
+
+    /// `v` times `s`, clamped as a reflectance.
+    fn refl_scaled(&self, v: TexValue, s: f32) -> Rgb {
+        (s * self.rgb(v)).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance))
     }
 
     fn rgb(&self, v: TexValue) -> Rgb {

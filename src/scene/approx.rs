@@ -2,14 +2,14 @@
 //! text `check`, the renderer and the README all use (a test holds the README to it).
 //!
 //! ```text
-//! Material "coateddiffuse" "rgb reflectance" [.4 .1 .1]  # approximated: its diffuse part
+//! Material "mix" "string namedmaterial1" "coated" ...     # approximated: the coat's base only
 //! Texture "t" "float" "ptex"                             # approximated: a constant 0.5
 //! ```
 
 /// One way of rendering something other than as written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Approx {
-    DiffusePart,
+    CoatInBlend,
     UnsupportedMaterial,
     UnsupportedTexture,
     MissingImage,
@@ -23,7 +23,7 @@ pub enum Approx {
 
 impl Approx {
     pub const ALL: [Approx; 10] = [
-        Approx::DiffusePart,
+        Approx::CoatInBlend,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
         Approx::MissingImage,
@@ -38,7 +38,7 @@ impl Approx {
     /// How it is rendered instead (the README lists these texts).
     pub fn how(self) -> &'static str {
         match self {
-            Approx::DiffusePart => "rendered as its diffuse part; the glossy coat or specular layer is left out",
+            Approx::CoatInBlend => "a pbrt-v3 mix blends lobes: its coated part adds only the base under the coat",
             Approx::UnsupportedMaterial => "this material type is not supported; rendered as diffuse 0.5",
             Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
             Approx::MissingImage => "the image cannot be read; a constant 0.5 (a constant sky for maps) is used",

@@ -14,7 +14,9 @@
 //! Material "matte" "float sigma" 20                   # Oren–Nayar
 //! Material "mix" "string namedmaterial1" "a" "string namedmaterial2" "b" "color amount" [.3 .3 .3]  # v3
 //! Material "mix" "string materials" ["a" "b"] "float amount" .3                                  # v4
-//! Material "coateddiffuse"                            # approximated: its diffuse part
+//! Material "coateddiffuse" "rgb reflectance" [.4 .1 .1] "float roughness" .05      # v4
+//! Material "coatedconductor" "spectrum conductor.eta" "metal-Au-eta" "spectrum conductor.k" "metal-Au-k"
+//! Material "diffusetransmission" "rgb reflectance" [.3 .3 .3] "rgb transmittance" [.5 .5 .5]
 //! Material "" / "none" / "interface"                # no surface: paths pass through
 //! ```
 //! What we render differently from the file (a material drawn as its diffuse part, rough
@@ -96,6 +98,13 @@ pub enum MaterialKind {
         roughness: [TexValue; 2],
         remap: RoughnessRemap,
     },
+    /// pbrt-v4 `diffusetransmission`: Lambertian reflection and transmission, both
+    /// multiplied by `scale` and clamped to [0, 1].
+    DiffuseTransmission {
+        reflectance: TexValue,
+        transmittance: TexValue,
+        scale: TexValue,
+    },
     /// A perfect mirror tinted by `reflectance` (`mirror`, `conductor "reflectance"`).
     Mirror {
         reflectance: TexValue,
@@ -115,6 +124,8 @@ pub enum MaterialKind {
         roughness: [TexValue; 2],
         remap: RoughnessRemap,
     },
+    /// pbrt-v4 `coateddiffuse` / `coatedconductor`: a dielectric coat over a base.
+    Coated(Box<Coated>),
     /// No surface: rays continue straight through.
     Interface,
     /// Two materials (built indices) mixed by `amount`.
@@ -122,6 +133,42 @@ pub enum MaterialKind {
         materials: [u32; 2],
         amount: TexValue,
         rule: MixRule,
+    },
+}
+
+/// The inputs of a pbrt-v4 coated material (`thickness`, `albedo`, `g`, `maxdepth`,
+/// `nsamples` as pbrt-v4 names them; the coat is `roughness`/`eta` for
+/// `coateddiffuse`, `interface.roughness`/`interface.eta` for `coatedconductor`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coated {
+    pub coat_eta: f32,
+    pub coat_roughness: [TexValue; 2],
+    pub base: CoatBase,
+    pub thickness: TexValue,
+    pub albedo: TexValue,
+    pub g: TexValue,
+    pub max_depth: u32,
+    pub n_samples: u32,
+    pub remap: RoughnessRemap,
+}
+
+/// What lies under a coat.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CoatBase {
+    Diffuse {
+        reflectance: TexValue,
+    },
+    /// A conductor of index η + ik (relative to air; pbrt-v4 divides by the coat's).
+    Conductor {
+        eta: Rgb,
+        k: Rgb,
+        roughness: [TexValue; 2],
+    },
+    /// A conductor given by its reflectance at normal incidence (pbrt-v4 turns it into
+    /// η = 1, k = 2√r / √(1 − r)).
+    Reflectance {
+        reflectance: TexValue,
+        roughness: [TexValue; 2],
     },
 }
 
@@ -157,6 +204,8 @@ pub trait Resolver {
     fn approximate(&mut self, at: Span, what: String, how: Approx);
     /// The named material `name`, built on first use (for `mix`); its built index.
     fn named_material(&mut self, name: &str, at: Span) -> Res<u32>;
+    /// What a built material (a [`Resolver::named_material`] index) is.
+    fn material_kind(&self, built: u32) -> Option<&MaterialKind>;
     fn spectra(&self) -> SpectrumContext<'_>;
     /// An image for `imagemap` (cached); errors are plain messages.
     fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String>;
@@ -222,10 +271,20 @@ pub fn material(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<
             }
         }
         "coateddiffuse" => {
-            let reflectance = spectrum(p, "reflectance", 0.5, r)?;
-            check_coat(p, r)?;
-            r.approximate(at, format!("material \"{ty}\""), Approx::DiffusePart);
-            MaterialKind::Diffuse { reflectance }
+            let base = CoatBase::Diffuse { reflectance: spectrum(p, "reflectance", 0.5, r)? };
+            coated(p, "", base, r)?
+        }
+        "coatedconductor" => {
+            let base = coat_base(p, at, r)?;
+            coated(p, "interface.", base, r)?
+        }
+        "diffusetransmission" => {
+            let scale = float(p, "scale", 1.0, Range::Any, r)?;
+            MaterialKind::DiffuseTransmission {
+                reflectance: spectrum(p, "reflectance", 0.25, r)?,
+                transmittance: spectrum(p, "transmittance", 0.25, r)?,
+                scale,
+            }
         }
         "" | "none" | "interface" => MaterialKind::Interface,
         "mix" => mix(p, at, r)?,
@@ -350,24 +409,75 @@ fn mix(p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
     };
     let materials = [named("namedmaterial1", r)?, named("namedmaterial2", r)?];
     let amount = spectrum(p, "amount", 0.5, r)?;
+    if materials.iter().any(|&m| matches!(r.material_kind(m), Some(MaterialKind::Coated(_)))) {
+        r.approximate(at, "pbrt-v4 coated material in a pbrt-v3 mix".into(), Approx::CoatInBlend);
+    }
     Ok(MaterialKind::Mix { materials, amount, rule: MixRule::Blend })
 }
 
-/// The coat parameters of `coateddiffuse`, which we draw as its diffuse part: read
-/// (so a bad value is still an error) and covered by the material's note.
-fn check_coat(p: &ParamList, r: &mut dyn Resolver) -> Res<()> {
-    spectrum(p, "albedo", 0.0, r)?;
-    roughness(p, 0.0, r)?;
-    for name in ["eta", "index", "thickness", "g"] {
-        if values::given(p, name, &[ParamType::Float, ParamType::Texture]) {
-            float(p, name, 0.0, Range::Any, r)?;
-        } else {
-            values::rgb(p, name, &r.spectra(), Range::Any)?;
+/// A coated material's coat and layer; `prefix` is where the coat's own parameters
+/// live (`interface.` for `coatedconductor`).
+fn coated(p: &ParamList, prefix: &str, base: CoatBase, r: &mut dyn Resolver) -> Res<MaterialKind> {
+    let coat_eta = coat_eta(p, &format!("{prefix}eta"), r)?;
+    let coat_roughness = prefixed_roughness(p, prefix, r)?;
+    let thickness = float(p, "thickness", 0.01, Range::Any, r)?;
+    let albedo = spectrum(p, "albedo", 0.0, r)?;
+    let g = float(p, "g", 0.0, Range::Any, r)?;
+    let count = |name: &str, default: i32| -> Res<u32> {
+        match p.int(name)? {
+            None => Ok(default as u32),
+            Some(v) if (1..=MAX_LAYER_COUNT).contains(&v) => Ok(v as u32),
+            Some(v) => {
+                let at = p.named(name).map_or_else(Span::default, |x| x.value_span);
+                Err(Diagnostic::error(at, format!("\"{name}\" must be in 1..={MAX_LAYER_COUNT}, not {v}")))
+            }
         }
+    };
+    let (max_depth, n_samples) = (count("maxdepth", 10)?, count("nsamples", 1)?);
+    let remap = remap_v4(p)?;
+    let c = Coated { coat_eta, coat_roughness, base, thickness, albedo, g, max_depth, n_samples, remap };
+    Ok(MaterialKind::Coated(Box::new(c)))
+}
+
+/// The most random-walk steps (`maxdepth`) or walks (`nsamples`) a coated material may
+/// ask for: each BSDF evaluation costs up to their product.
+const MAX_LAYER_COUNT: i32 = 1000;
+
+/// A coat's index: a float, or a spectrum taken as one index (its luminance-weighted
+/// mean, as for `dielectric`); 0 means 1 (pbrt-v4).
+fn coat_eta(p: &ParamList, name: &str, r: &mut dyn Resolver) -> Res<f32> {
+    let eta = if values::given(p, name, &[ParamType::Float]) {
+        p.float(name)?.unwrap_or(1.5)
+    } else {
+        values::rgb(p, name, &r.spectra(), Range::NonNegative)?.map_or(1.5, crate::spectrum::luminance)
+    };
+    Ok(if eta == 0.0 { 1.0 } else { eta.abs() })
+}
+
+/// `{prefix}roughness`, overridden per direction by `{prefix}uroughness`/`vroughness`.
+fn prefixed_roughness(p: &ParamList, prefix: &str, r: &mut dyn Resolver) -> Res<[TexValue; 2]> {
+    let both = float(p, &format!("{prefix}roughness"), 0.0, Range::NonNegative, r)?;
+    let one = |dir: &str, r: &mut dyn Resolver| -> Res<TexValue> {
+        let name = format!("{prefix}{dir}roughness");
+        Ok(if p.named(&name).is_some() { float(p, &name, 0.0, Range::NonNegative, r)? } else { both })
+    };
+    Ok([one("u", r)?, one("v", r)?])
+}
+
+/// `coatedconductor`'s base: `conductor.eta`/`conductor.k` (copper by default) or a
+/// `reflectance`, never both (pbrt-v4's error).
+fn coat_base(p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<CoatBase> {
+    let roughness = prefixed_roughness(p, "conductor.", r)?;
+    if p.named("reflectance").is_some() {
+        if p.named("conductor.eta").is_some() || p.named("conductor.k").is_some() {
+            let msg = "coatedconductor takes \"reflectance\" or \"conductor.eta\"/\"conductor.k\", not both";
+            return Err(Diagnostic::error(at, msg));
+        }
+        return Ok(CoatBase::Reflectance { reflectance: spectrum(p, "reflectance", 0.0, r)?, roughness });
     }
-    for name in ["maxdepth", "nsamples"] {
-        p.int(name)?;
-    }
-    p.bool("remaproughness")?;
-    Ok(())
+    let spectra = r.spectra();
+    let named = |n: &str| crate::spectrum::named_spectrum(n).unwrap_or(Vec3::ONE);
+    let eta = values::rgb(p, "conductor.eta", &spectra, Range::Positive)?.unwrap_or_else(|| named("metal-Cu-eta"));
+    let k = values::rgb(p, "conductor.k", &spectra, Range::NonNegative)?.unwrap_or_else(|| named("metal-Cu-k"));
+    Ok(CoatBase::Conductor { eta, k, roughness })
 }

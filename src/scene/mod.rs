@@ -28,7 +28,7 @@ use glam::{DMat4, DVec3};
 pub use approx::Approx;
 pub use builder::{LoadOptions, load_scene, load_scene_from_bytes};
 pub use lights::{AreaLightDesc, EnvMapDesc, LightDesc, LightKind};
-pub use materials::{MaterialDesc, MaterialKind, MixRule, RoughnessRemap, TexValue};
+pub use materials::{CoatBase, Coated, MaterialDesc, MaterialKind, MixRule, RoughnessRemap, TexValue};
 pub use options::{Camera, CameraKind, Film, Integrator};
 pub use textures::{Mapping2D, Octaves, TextureDesc, TextureKind, TextureSite, UvMapping, Wrap};
 

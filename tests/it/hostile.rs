@@ -395,12 +395,15 @@ fn imgtool_rejects_unknown_flags_and_keeps_its_promises() {
 #[test]
 fn approximations_are_listed_and_the_readme_names_every_kind() {
     let s = crate::common::scene(
-        "WorldBegin Material \"coateddiffuse\" Shape \"disk\" Texture \"f\" \"float\" \"ptex\" \
+        "WorldBegin MakeNamedMaterial \"c\" \"string type\" \"coateddiffuse\" \
+         MakeNamedMaterial \"m\" \"string type\" \"matte\" \
+         Material \"mix\" \"string namedmaterial1\" \"c\" \"string namedmaterial2\" \"m\" Shape \"disk\" \
+         Texture \"f\" \"float\" \"ptex\" \
          Material \"matte\" \"texture sigma\" \"f\" Shape \"disk\" Material \"weird\" Shape \"disk\"",
     );
     let how: Vec<&str> = s.approximated.iter().map(|a| a.how.as_str()).collect();
     use pbrt_sppm::scene::Approx;
-    assert_eq!(how, [Approx::DiffusePart.how(), Approx::UnsupportedTexture.how(), Approx::UnsupportedMaterial.how()]);
+    assert_eq!(how, [Approx::CoatInBlend.how(), Approx::UnsupportedTexture.how(), Approx::UnsupportedMaterial.how()]);
     let json = pbrt_sppm::check::report(&s, false);
     assert_eq!(json["approximated"].as_array().map(Vec::len), Some(3));
     assert_eq!(json["approximated"][0]["line"], 1);

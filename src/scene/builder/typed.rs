@@ -12,7 +12,7 @@ use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::scene::approx::Approx;
 use crate::scene::lights::{self, LightContext, LightDesc};
-use crate::scene::materials::{self, MaterialDesc, Resolver, TexValue};
+use crate::scene::materials::{self, MaterialDesc, MaterialKind, Resolver, TexValue};
 use crate::scene::shapes::AlphaParams;
 use crate::scene::textures::{self, TextureDesc, TextureKind, TextureSite};
 use crate::scene::values::SpectrumContext;
@@ -262,6 +262,10 @@ impl Resolver for Scoped<'_> {
             return Err(Diagnostic::error(at, format!("material \"{name}\" mixes itself")));
         }
         self.b.build_material(i)
+    }
+
+    fn material_kind(&self, built: u32) -> Option<&MaterialKind> {
+        self.b.built_materials.get(built as usize).map(|m| &m.kind)
     }
 
     fn spectra(&self) -> SpectrumContext<'_> {
