@@ -182,9 +182,10 @@ impl RenderScene {
             m if matches!(m.kind(), MaterialKind::Mix { rule: MixRule::Choose, .. }) => self.chosen(m, &ctx),
             m => m,
         };
-        let (ns, dpdu) = match material.bump {
-            Some(d) => bump(&self.textures, d, si, fp),
-            None => (si.shading.n.0, si.shading.dpdu.0),
+        let (ns, dpdu) = match (&material.normal_map, material.bump) {
+            (Some(img), _) => normal_map(img, si),
+            (None, Some(d)) => bump(&self.textures, d, si, fp),
+            (None, None) => (si.shading.n.0, si.shading.dpdu.0),
         };
         let mut ss = (dpdu - ns * ns.dot(dpdu)).normalize_or_zero();
         if ss == Vec3::ZERO {
@@ -279,6 +280,24 @@ fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction, fp: &Footprin
         ns if ns.dot(si.n.0) < 0.0 => (-ns, dpdu),
         ns => (ns, dpdu),
     }
+}
+
+/// The shading normal and ∂p/∂u that normal map `img` gives (pbrt-v4's `NormalMap`):
+/// its RGB at (u, 1 − v), repeating, read as a normal in the frame of the shading ∂p/∂u
+/// and normal. The normal stays on the side of the geometric one.
+fn normal_map(img: &crate::imageio::RgbImage, si: &SurfaceInteraction) -> (Vec3, Vec3) {
+    let sh = &si.shading;
+    let rgb = crate::materials::lookup(img, si.uv[0], 1.0 - si.uv[1], crate::scene::Wrap::Repeat, true);
+    let local = (2.0 * rgb - Vec3::ONE).normalize_or_zero();
+    let (n, dpdu) = (sh.n.0, sh.dpdu.0);
+    let s = (dpdu - n * n.dot(dpdu)).normalize_or_zero();
+    if local == Vec3::ZERO || s == Vec3::ZERO {
+        return (n, dpdu);
+    }
+    let t = n.cross(s);
+    let ns = (s * local.x + t * local.y + n * local.z).normalize();
+    let dpdu = (dpdu - ns * ns.dot(dpdu)).normalize_or_zero() * dpdu.length();
+    if ns.dot(si.n.0) < 0.0 { (-ns, dpdu) } else { (ns, dpdu) }
 }
 
 /// Mixes of mixes are followed this deep (the scene has no cycles; this bounds the work).

@@ -39,6 +39,8 @@ pub struct Material {
     convention: Convention,
     /// The bump map (a float texture), if any.
     pub bump: Option<TexValue>,
+    /// The normal map (tangent-space normals as stored), if any; it wins over `bump`.
+    pub normal_map: Option<std::sync::Arc<crate::imageio::RgbImage>>,
 }
 
 /// pbrt-v3's material types (the rest are pbrt-v4's): their BSDFs follow pbrt-v3.
@@ -49,7 +51,8 @@ impl Material {
         let v3 = V3_TYPES.contains(&m.ty.as_str());
         let (max_reflectance, convention) =
             if v3 { (f32::INFINITY, Convention::PbrtV3) } else { (1.0, Convention::PbrtV4) };
-        Material { kind: m.kind.clone(), max_reflectance, convention, bump: m.bump }
+        let normal_map = m.normal_map.clone();
+        Material { kind: m.kind.clone(), max_reflectance, convention, bump: m.bump, normal_map }
     }
 
     pub fn kind(&self) -> &MaterialKind {

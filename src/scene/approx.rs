@@ -13,7 +13,6 @@ pub enum Approx {
     UnsupportedMaterial,
     UnsupportedTexture,
     MissingImage,
-    BumpMap,
     Motion,
     Camera,
     FilmType,
@@ -22,12 +21,11 @@ pub enum Approx {
 }
 
 impl Approx {
-    pub const ALL: [Approx; 10] = [
+    pub const ALL: [Approx; 9] = [
         Approx::CoatInBlend,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
         Approx::MissingImage,
-        Approx::BumpMap,
         Approx::Motion,
         Approx::Camera,
         Approx::FilmType,
@@ -41,8 +39,9 @@ impl Approx {
             Approx::CoatInBlend => "a pbrt-v3 mix blends lobes: its coated part adds only the base under the coat",
             Approx::UnsupportedMaterial => "this material type is not supported; rendered as diffuse 0.5",
             Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
-            Approx::MissingImage => "the image cannot be read; a constant 0.5 (a constant sky for maps) is used",
-            Approx::BumpMap => "normal maps are not supported; the surface is left smooth",
+            Approx::MissingImage => {
+                "the image cannot be read; a constant 0.5 is used (a constant sky for environment maps, a smooth surface for normal maps)"
+            }
             Approx::Motion => "animated transforms are not supported; the start transform is used",
             Approx::Camera => "this camera type is not supported; a perspective camera is used",
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",

@@ -194,6 +194,9 @@ pub struct MaterialDesc {
     /// A float texture displacing the surface along its shading normal (v3 `bumpmap`,
     /// v4 `displacement`): it tilts the shading normal, as pbrt's bump mapping does.
     pub bump: Option<TexValue>,
+    /// A v4 `normalmap` image, which replaces the bump map when both are given (as in
+    /// pbrt-v4).
+    pub normal_map: Option<Arc<RgbImage>>,
 }
 
 /// What building materials and textures needs from the scene builder.
@@ -296,13 +299,24 @@ pub fn material(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<
     })
 }
 
-/// The material's bump map (`bumpmap` in v3, `displacement` in v4; either is read in
-/// either version). `normalmap` images are not supported (noted).
-pub fn bump_map(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<Option<TexValue>> {
-    if let Some(param) = p.named("normalmap") {
-        param.mark_used();
-        r.approximate(param.span, format!("\"normalmap\" of material \"{ty}\""), Approx::BumpMap);
+/// The material's normal map (v4 `normalmap`, an RGB image of tangent-space normals,
+/// its values as stored: no sRGB decoding). An image that cannot be read leaves the
+/// surface smooth (noted).
+pub fn normal_map(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<Option<Arc<RgbImage>>> {
+    let Some(file) = p.string("normalmap")? else { return Ok(None) };
+    let at = p.named("normalmap").map_or_else(Span::default, |x| x.value_span);
+    match r.image(&file) {
+        Ok(img) => Ok(Some(super::textures::stored_values(&file, img))),
+        Err(e) => {
+            r.approximate(at, format!("\"normalmap\" of material \"{ty}\" ({e})"), Approx::MissingImage);
+            Ok(None)
+        }
     }
+}
+
+/// The material's bump map (`bumpmap` in v3, `displacement` in v4; either is read in
+/// either version).
+pub fn bump_map(p: &ParamList, r: &mut dyn Resolver) -> Res<Option<TexValue>> {
     let name = if p.named("bumpmap").is_some() { "bumpmap" } else { "displacement" };
     Ok(match values::float_or_texture(p, name, Range::Any)? {
         None => None,
@@ -327,7 +341,8 @@ fn dielectric(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<MaterialKind
         }
     };
     let (kr, kt) = if ty == "glass" { (spectrum(p, "Kr", 1.0, r)?, spectrum(p, "Kt", 1.0, r)?) } else { one_one() };
-    let roughness = roughness(p, 0.0, r)?;
+    // pbrt-v3's glass reads only `uroughness`/`vroughness`: its `roughness` is unused.
+    let roughness = if ty == "glass" { uv_roughness(p, r)? } else { roughness(p, 0.0, r)? };
     let remap = if ty == "glass" { remap_v3(p)? } else { remap_v4(p)? };
     Ok(MaterialKind::Dielectric { eta, kr, kt, roughness, remap })
 }
@@ -452,6 +467,11 @@ fn coat_eta(p: &ParamList, name: &str, r: &mut dyn Resolver) -> Res<f32> {
         values::rgb(p, name, &r.spectra(), Range::NonNegative)?.map_or(1.5, crate::spectrum::luminance)
     };
     Ok(if eta == 0.0 { 1.0 } else { eta.abs() })
+}
+
+/// `uroughness` and `vroughness` alone (0 by default).
+fn uv_roughness(p: &ParamList, r: &mut dyn Resolver) -> Res<[TexValue; 2]> {
+    Ok([float(p, "uroughness", 0.0, Range::NonNegative, r)?, float(p, "vroughness", 0.0, Range::NonNegative, r)?])
 }
 
 /// `{prefix}roughness`, overridden per direction by `{prefix}uroughness`/`vroughness`.

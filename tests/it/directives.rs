@@ -472,3 +472,17 @@ fn mix_names_its_materials_and_may_not_mix_itself() {
     .one_line();
     assert!(e.ends_with("error: named material \"nope\" is not defined"), "{e}");
 }
+
+#[test]
+fn v3_glass_ignores_roughness_as_pbrt_v3_does_and_v4_dielectric_reads_it() {
+    use pbrt_sppm::scene::{MaterialKind, TexValue};
+    let s = scene("WorldBegin\nMaterial \"glass\" \"float roughness\" .3 \"float vroughness\" .2\nShape \"disk\"\n");
+    let w: Vec<&str> = s.warnings.iter().map(|w| w.message.as_str()).collect();
+    assert_eq!(w, ["parameter \"float roughness\" is not used"]);
+    let MaterialKind::Dielectric { roughness, .. } = &s.materials[0].kind else { panic!("{:?}", s.materials[0]) };
+    assert_eq!(*roughness, [TexValue::Const(glam::Vec3::ZERO), TexValue::Const(glam::Vec3::splat(0.2))]);
+    let s = scene("WorldBegin\nMaterial \"dielectric\" \"float roughness\" .3\nShape \"disk\"\n");
+    assert!(s.warnings.is_empty());
+    let MaterialKind::Dielectric { roughness, .. } = &s.materials[0].kind else { panic!("{:?}", s.materials[0]) };
+    assert_eq!(*roughness, [TexValue::Const(glam::Vec3::splat(0.3)); 2]);
+}

@@ -82,3 +82,15 @@ fn coated_materials_and_diffuse_transmission_match_pbrt_v4() {
     // pbrt-v4's own 128-iteration image: worst tile 0.80%, relMSE 2.4e-3.
     assert_matches_pbrt("v4-coated", 0.04);
 }
+
+#[test]
+fn a_mirror_box_reflects_light_and_caustics_as_in_pbrt_v3() {
+    // pbrt-v3's own 64-iteration image: worst tile 0.87%, relMSE 6.5e-4.
+    assert_matches_pbrt("v3-mirror-box", 0.02);
+}
+
+#[test]
+fn normal_maps_shade_as_in_pbrt_v4() {
+    // pbrt-v4's own 64-iteration image: worst tile 1.58%, relMSE 5.8e-4.
+    assert_matches_pbrt("v4-normalmap", 0.04);
+}

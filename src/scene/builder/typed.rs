@@ -140,11 +140,12 @@ impl Builder {
         let at = span.unwrap_or_default();
         let kind = {
             let mut r = Scoped { b: self, scope, depth: 0 };
-            (materials::material(&ty, &params, at, &mut r)?, materials::bump_map(&ty, &params, &mut r)?)
+            let kind = materials::material(&ty, &params, at, &mut r)?;
+            (kind, materials::bump_map(&params, &mut r)?, materials::normal_map(&ty, &params, &mut r)?)
         };
-        let (kind, bump) = kind;
+        let (kind, bump, normal_map) = kind;
         finish_params(&params, &mut self.warnings)?;
-        self.built_materials.push(MaterialDesc { ty, name, kind, bump });
+        self.built_materials.push(MaterialDesc { ty, name, kind, bump, normal_map });
         let b = self.built_materials.len() as u32 - 1;
         self.materials[i as usize].built = Some(b);
         self.materials[i as usize].building = false;
