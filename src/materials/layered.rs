@@ -213,10 +213,10 @@ impl Coat {
         let Some((wm, etap)) = self.half(o, i) else { return 0.0 };
         let Some((pr, pt)) = self.split(fr_dielectric(o.dot(wm), 1.0, self.eta), allow) else { return 0.0 };
         if same_hemisphere(o, i) {
-            self.dist.pdf_wh(wm) / (4.0 * o.dot(wm).abs()) * pr / (pr + pt)
+            self.dist.pdf_wh(o, wm) / (4.0 * o.dot(wm).abs()) * pr / (pr + pt)
         } else {
             let denom = (i.dot(wm) + o.dot(wm) / etap).powi(2);
-            self.dist.pdf_wh(wm) * i.dot(wm).abs() / denom * pt / (pr + pt)
+            self.dist.pdf_wh(o, wm) * i.dot(wm).abs() / denom * pt / (pr + pt)
         }
     }
 
@@ -242,7 +242,7 @@ impl Coat {
         }
         let fr = fr_dielectric(o.dot(wm), 1.0, self.eta);
         let (pr, pt) = self.split(fr, allow)?;
-        let (d, pdf_wm) = (self.dist.d(wm), self.dist.pdf_wh(wm));
+        let (d, pdf_wm) = (self.dist.d(wm), self.dist.pdf_wh(o, wm));
         if uc < pr / (pr + pt) {
             let wi = reflect(o, wm);
             if !same_hemisphere(o, wi) {
@@ -299,7 +299,7 @@ impl Base {
             Base::Conductor { smooth: true, .. } => 0.0,
             Base::Conductor { dist, .. } => {
                 let wm = face_forward((o + i).normalize_or_zero());
-                dist.pdf_wh(wm) / (4.0 * o.dot(wm).abs())
+                dist.pdf_wh(o, wm) / (4.0 * o.dot(wm).abs())
             }
         }
     }
@@ -326,7 +326,7 @@ impl Base {
                 if !same_hemisphere(o, wi) || wi.z == 0.0 {
                     return None;
                 }
-                let pdf = dist.pdf_wh(wm) / (4.0 * o.dot(wm).abs());
+                let pdf = dist.pdf_wh(o, wm) / (4.0 * o.dot(wm).abs());
                 let f =
                     dist.d(wm) * fr_conductor(o.dot(wm).abs(), eta, k) * dist.g(o, wi) / (4.0 * wi.z.abs() * o.z.abs());
                 Some(Sample { f, wi, pdf, specular: false })

@@ -148,13 +148,13 @@ impl Lobe {
             Lobe::MicrofacetReflection { dist, .. } if same_hemisphere(o, i) => {
                 let wh = (o + i).normalize_or_zero();
                 let d = o.dot(wh);
-                if d == 0.0 { 0.0 } else { dist.pdf_wh(wh) / (4.0 * d.abs()) }
+                if d == 0.0 { 0.0 } else { dist.pdf_wh(o, wh) / (4.0 * d.abs()) }
             }
             Lobe::MicrofacetTransmission { dist, eta, .. } => transmission_pdf(o, i, dist, eta),
             Lobe::FresnelBlend { dist, .. } if same_hemisphere(o, i) => {
                 let wh = (o + i).normalize_or_zero();
                 let d = o.dot(wh);
-                let glossy = if d == 0.0 { 0.0 } else { dist.pdf_wh(wh) / (4.0 * d.abs()) };
+                let glossy = if d == 0.0 { 0.0 } else { dist.pdf_wh(o, wh) / (4.0 * d.abs()) };
                 0.5 * (i.z.abs() * FRAC_1_PI + glossy)
             }
             _ => 0.0,
@@ -294,8 +294,7 @@ fn transmission_pdf(o: Vec3, i: Vec3, dist: TrowbridgeReitz, eta: f32) -> f32 {
     let Some((wh, rel)) = refraction_half(o, i, eta) else { return 0.0 };
     let denom = o.dot(wh) + rel * i.dot(wh);
     let dwh_dwi = (rel * rel * i.dot(wh) / (denom * denom)).abs();
-    // `sample_wh` turns the normal towards `o`; either orientation is the same facet.
-    dist.pdf_wh(wh) * dwh_dwi
+    dist.pdf_wh(o, wh) * dwh_dwi
 }
 
 fn fresnel_blend(o: Vec3, i: Vec3, rd: Rgb, rs: Rgb, dist: TrowbridgeReitz) -> Rgb {

@@ -128,26 +128,79 @@ impl TrowbridgeReitz {
         1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
     }
 
-    /// A microfacet normal in the hemisphere of `wo`, with density D·|cos θh|.
-    // DEVIATION(pbrt): pbrt-v3 samples visible normals by default; sampling all
-    // normals is unbiased with the matching pdf, only noisier at grazing angles.
-    pub fn sample_wh(&self, wo: Vec3, u: [f32; 2]) -> Vec3 {
-        let phi = if self.ax == self.ay {
-            2.0 * PI * u[1]
-        } else {
-            (self.ay / self.ax * (2.0 * PI * u[1] + 0.5 * PI).tan()).atan() + if u[1] > 0.5 { PI } else { 0.0 }
-        };
-        let (sp, cp) = phi.sin_cos();
-        let alpha2 = 1.0 / (cp * cp / (self.ax * self.ax) + sp * sp / (self.ay * self.ay));
-        let tan2 = alpha2 * u[0] / (1.0 - u[0]).max(1e-7);
-        let cos_t = 1.0 / (1.0 + tan2).sqrt();
-        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-        let wh = Vec3::new(sin_t * cp, sin_t * sp, cos_t);
-        if wh.z * wo.z < 0.0 { -wh } else { wh }
+    /// Smith's masking of one direction.
+    fn g1(&self, w: Vec3) -> f32 {
+        1.0 / (1.0 + self.lambda(w))
     }
 
-    /// The density of [`TrowbridgeReitz::sample_wh`] (over microfacet normals).
-    pub fn pdf_wh(&self, wh: Vec3) -> f32 {
-        self.d(wh) * wh.z.abs()
+    /// A microfacet normal visible from `wo`, in its hemisphere, with density
+    /// [`TrowbridgeReitz::pdf_wh`] (pbrt-v4's `Sample_wm`: visible normals, which pbrt-v3
+    /// samples too, so few samples carry large weights at grazing angles).
+    pub fn sample_wh(&self, wo: Vec3, u: [f32; 2]) -> Vec3 {
+        let w = if wo.z < 0.0 { -wo } else { wo };
+        let wh = Vec3::new(self.ax * w.x, self.ay * w.y, w.z).normalize_or_zero();
+        let t1 = if wh.z < 0.99999 { Vec3::Z.cross(wh).normalize() } else { Vec3::X };
+        let t2 = wh.cross(t1);
+        let (r, phi) = (u[0].sqrt(), 2.0 * PI * u[1]);
+        let (px, py) = (r * phi.cos(), r * phi.sin());
+        let h = (1.0 - px * px).max(0.0).sqrt();
+        let s = 0.5 * (1.0 + wh.z);
+        let py = (1.0 - s) * h + s * py;
+        let pz = (1.0 - px * px - py * py).max(0.0).sqrt();
+        let nh = px * t1 + py * t2 + pz * wh;
+        let wm = Vec3::new(self.ax * nh.x, self.ay * nh.y, nh.z.max(1e-6)).normalize();
+        if wo.z < 0.0 { -wm } else { wm }
+    }
+
+    /// The density of [`TrowbridgeReitz::sample_wh`] for `wo` (over microfacet normals):
+    /// G1(ωo) · D(ωh) · max(0, ωo·ωh) / |cos θo|, with ωh taken on ωo's side (either
+    /// orientation is the same facet). Facets facing away from ωo are never sampled.
+    pub fn pdf_wh(&self, wo: Vec3, wh: Vec3) -> f32 {
+        if wo.z == 0.0 {
+            return 0.0;
+        }
+        let wh = if wh.z * wo.z < 0.0 { -wh } else { wh };
+        self.g1(wo) / wo.z.abs() * self.d(wh) * wo.dot(wh).max(0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// E[h(ωh)] over `sample_wh`'s samples, and ∫ h·pdf_wh by quadrature.
+    fn sampled_and_integrated(d: TrowbridgeReitz, wo: Vec3, h: impl Fn(Vec3) -> f32) -> (f64, f64) {
+        let mut rng = crate::sampling::Rng::new(17);
+        let n = 400_000;
+        let sampled = (0..n).map(|_| h(d.sample_wh(wo, rng.uniform2())) as f64).sum::<f64>() / n as f64;
+        let (nt, np) = (600, 1200);
+        let mut integral = 0.0;
+        for a in 0..nt {
+            let theta = (a as f64 + 0.5) / nt as f64 * std::f64::consts::FRAC_PI_2;
+            for b in 0..np {
+                let phi = (b as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
+                let z = if wo.z < 0.0 { -theta.cos() } else { theta.cos() };
+                let w = Vec3::new((theta.sin() * phi.cos()) as f32, (theta.sin() * phi.sin()) as f32, z as f32);
+                let dw = theta.sin() * (std::f64::consts::FRAC_PI_2 / nt as f64) * (std::f64::consts::TAU / np as f64);
+                integral += (h(w) * d.pdf_wh(wo, w)) as f64 * dw;
+            }
+        }
+        (sampled, integral)
+    }
+
+    #[test]
+    fn visible_normals_are_sampled_with_the_stated_density() {
+        let d = TrowbridgeReitz::new([0.15, 0.5]);
+        for wo in [Vec3::new(0.6, 0.3, 0.74).normalize(), Vec3::new(-0.2, 0.9, -0.4).normalize()] {
+            for (name, h) in [
+                ("1", &(|_: Vec3| 1.0f32) as &dyn Fn(Vec3) -> f32),
+                ("x²", &|w: Vec3| w.x * w.x),
+                ("y > 0", &|w: Vec3| (w.y > 0.0) as u8 as f32),
+                ("|z|³", &|w: Vec3| w.z.abs().powi(3)),
+            ] {
+                let (s, i) = sampled_and_integrated(d, wo, h);
+                assert!((s - i).abs() < 0.01 * i.abs().max(0.05), "{name} for {wo}: sampled {s}, integrated {i}");
+            }
+        }
     }
 }

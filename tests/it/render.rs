@@ -345,7 +345,7 @@ fn glass_is_smooth_at_roughness_zero_in_both_versions() {
     // v3's remapping takes roughness 0 to α ≈ 0.047; pbrt-v3 still treats it as smooth.
     let rs = RenderScene::new(scene(
         "WorldBegin Material \"glass\" Shape \"sphere\" Material \"dielectric\" Shape \"sphere\" \
-         Material \"glass\" \"float roughness\" 0.01 Shape \"sphere\"",
+         Material \"glass\" \"float uroughness\" 0.01 \"float vroughness\" 0.01 Shape \"sphere\"",
     ));
     let frame = [glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z];
     let lobes: Vec<Vec<Lobe>> = rs
