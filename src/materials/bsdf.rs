@@ -1,7 +1,8 @@
 //! A BSDF: up to [`MAX_LOBES`] lobes in one shading frame, combined as pbrt-v3's `BSDF`
 //! combines its BxDFs. Sampling picks a lobe uniformly; for a non-specular pick the
 //! density averages every lobe's and the value sums every lobe on the side (reflection
-//! or transmission) the geometric normal says the pair is on.
+//! or transmission) the geometric normal says the pair is on. pbrt-v4's coated materials
+//! take the place of the lobes with their layered random walk (`layered`).
 
 use super::layered::Layered;
 use super::lobes::{Kind, Lobe, MAX_LOBES};
