@@ -16,6 +16,7 @@ use crate::lights::Light;
 use crate::materials::{Bsdf, TransportMode};
 use crate::math::{Point3, Vector3};
 use crate::render::RenderScene;
+use crate::sampling::power_heuristic;
 use crate::sampling::{Rng, hash};
 use crate::spectrum::{Rgb, luminance};
 use glam::{DVec3, Vec3};
@@ -81,11 +82,6 @@ pub struct Sppm<'a> {
 /// max(floor, 1/√iterations).
 fn differential_scale(iterations: u32, floor: f32) -> f32 {
     (1.0 / (iterations.max(1) as f32).sqrt()).max(floor)
-}
-
-fn power_heuristic(f: f32, g: f32) -> f32 {
-    let (f2, g2) = (f * f, g * g);
-    if f2.is_infinite() { 1.0 } else { f2 / (f2 + g2) }
 }
 
 impl<'a> Sppm<'a> {

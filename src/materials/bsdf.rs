@@ -17,6 +17,16 @@ pub enum TransportMode {
     Importance,
 }
 
+impl TransportMode {
+    /// The other quantity: paths traced backwards (pbrt-v4's `!mode`).
+    pub fn adjoint(self) -> TransportMode {
+        match self {
+            TransportMode::Radiance => TransportMode::Importance,
+            TransportMode::Importance => TransportMode::Radiance,
+        }
+    }
+}
+
 /// A sampled direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BsdfSample {

@@ -16,8 +16,9 @@
 //! `DielectricBxDF`, `DiffuseBxDF` and `ConductorBxDF`, in the local shading frame.
 
 use super::bsdf::TransportMode;
+use super::lobes::{self, reflect, same_hemisphere};
 use super::microfacet::{TrowbridgeReitz, fr_conductor, fr_dielectric};
-use crate::sampling::{Rng, cosine_hemisphere, hash};
+use crate::sampling::{Rng, cosine_hemisphere, hash, power_heuristic};
 use crate::spectrum::Rgb;
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -91,46 +92,16 @@ pub struct LayeredSample {
     pub specular: bool,
 }
 
-fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
-    a.z * b.z > 0.0
-}
-
-fn flip(o: TransportMode) -> TransportMode {
-    match o {
-        TransportMode::Radiance => TransportMode::Importance,
-        TransportMode::Importance => TransportMode::Radiance,
-    }
-}
-
-fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
-    -wo + 2.0 * wo.dot(n) * n
-}
-
 /// pbrt-v4's `Refract`: `wi` through a surface of normal `n` with relative index `eta`
 /// (below over above); from below, η and `n` flip. The refracted direction and the
 /// relative index it used.
-fn refract(wi: Vec3, mut n: Vec3, mut eta: f32) -> Option<(Vec3, f32)> {
-    let mut cos_i = n.dot(wi);
-    if cos_i < 0.0 {
-        eta = 1.0 / eta;
-        cos_i = -cos_i;
-        n = -n;
-    }
-    let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return None;
-    }
-    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-    Some((-wi / eta + (cos_i / eta - cos_t) * n, eta))
+fn refract(wi: Vec3, n: Vec3, eta: f32) -> Option<(Vec3, f32)> {
+    let (n, eta) = if n.dot(wi) < 0.0 { (-n, 1.0 / eta) } else { (n, eta) };
+    lobes::refract(wi, n, 1.0 / eta).map(|w| (w, eta))
 }
 
 fn face_forward(v: Vec3) -> Vec3 {
     if v.z < 0.0 { -v } else { v }
-}
-
-fn power_heuristic(f: f32, g: f32) -> f32 {
-    let (f2, g2) = (f * f, g * g);
-    if f2.is_infinite() { 1.0 } else { f2 / (f2 + g2) }
 }
 
 /// Transmittance through the layer (unit extinction) across `dz` along `w`.
@@ -415,7 +386,7 @@ impl Layered {
         let mut rng = seed(o, i, 0);
         for _ in 0..self.n_samples {
             let Some(wos) = enter.sample(o, &mut rng, mode, Allow::Transmission) else { continue };
-            let Some(wis) = exit.sample(i, &mut rng, flip(mode), Allow::Transmission) else { continue };
+            let Some(wis) = exit.sample(i, &mut rng, mode.adjoint(), Allow::Transmission) else { continue };
             f += self.walk(i, wos, wis, (exit, non_exit, exit_z), mode, &mut rng);
         }
         f / n
@@ -602,7 +573,7 @@ impl Layered {
 /// leave through `t` again.
 fn trt_pdf(t: Side, r: Side, o: Vec3, i: Vec3, mode: TransportMode, rng: &mut Rng) -> f32 {
     let wos = t.sample(o, rng, mode, Allow::Transmission);
-    let wis = t.sample(i, rng, flip(mode), Allow::Transmission);
+    let wis = t.sample(i, rng, mode.adjoint(), Allow::Transmission);
     let (Some(wos), Some(wis)) = (wos, wis) else { return 0.0 };
     if t.specular() {
         return r.pdf(-wos.wi, -wis.wi, Allow::All);
@@ -619,7 +590,7 @@ fn trt_pdf(t: Side, r: Side, o: Vec3, i: Vec3, mode: TransportMode, rng: &mut Rn
 /// One estimate of the density of paths through both interfaces.
 fn tt_pdf(to: Side, ti: Side, o: Vec3, i: Vec3, mode: TransportMode, rng: &mut Rng) -> f32 {
     let Some(wos) = to.sample(o, rng, mode, Allow::All).filter(|s| !same_hemisphere(o, s.wi)) else { return 0.0 };
-    let Some(wis) = ti.sample(i, rng, flip(mode), Allow::All).filter(|s| !same_hemisphere(i, s.wi)) else {
+    let Some(wis) = ti.sample(i, rng, mode.adjoint(), Allow::All).filter(|s| !same_hemisphere(i, s.wi)) else {
         return 0.0;
     };
     if to.specular() {

@@ -51,11 +51,11 @@ pub struct LobeSample {
     pub pdf: f32,
 }
 
-fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
+pub(super) fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
     a.z * b.z > 0.0
 }
 
-fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
+pub(super) fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
     -wo + 2.0 * wo.dot(n) * n
 }
 

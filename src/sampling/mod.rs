@@ -48,6 +48,13 @@ impl Rng {
     }
 }
 
+/// Veach's power heuristic (β = 2): the MIS weight of a sample drawn with density `f`
+/// against another strategy's density `g`.
+pub fn power_heuristic(f: f32, g: f32) -> f32 {
+    let (f2, g2) = (f * f, g * g);
+    if f2.is_infinite() { 1.0 } else { f2 / (f2 + g2) }
+}
+
 /// Cosine-weighted direction about +z.
 pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
     let d = crate::camera::concentric_disk(u);
