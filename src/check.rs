@@ -89,6 +89,7 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
 fn counts(scene: &SceneDescription) -> Value {
     let mut n = [0u64; 6];
     let (mut meshes, mut triangles, mut emitters) = (0u64, 0u64, 0u64);
+    let (mut patch_meshes, mut patches) = (0u64, 0u64);
     for p in scene.placed_shapes() {
         let tris = scene.triangle_count(p.shape) as u64;
         match &p.shape.geometry {
@@ -97,17 +98,23 @@ fn counts(scene: &SceneDescription) -> Value {
                 meshes += 1;
                 triangles += tris;
             }
+            Geometry::Patches { .. } => {
+                patch_meshes += 1;
+                patches += scene.prim_count(p.shape) as u64;
+            }
         }
-        // pbrt makes one light per emissive shape (one per triangle for meshes);
-        // area lights inside object definitions are ignored.
+        // pbrt makes one light per emissive shape (one per triangle or patch for
+        // meshes); area lights inside object definitions are ignored.
         if p.shape.area_light.is_some() && p.instance.is_none() {
-            emitters += if tris > 0 { tris } else { 1 };
+            emitters += scene.prim_count(p.shape) as u64;
         }
     }
     json!({
         "sphere": n[0], "cylinder": n[1], "disk": n[2], "cone": n[3], "paraboloid": n[4], "hyperboloid": n[5],
         "trianglemesh": meshes,
         "triangles": triangles,
+        "bilinearmesh": patch_meshes,
+        "patches": patches,
         "instances": scene.instances.len(),
         "lights": scene.lights.len() as u64 + emitters,
         "materials": scene.materials.len(),
@@ -128,22 +135,24 @@ fn quadric_slot(q: &Quadric) -> usize {
 fn shape(scene: &SceneDescription, index: usize, p: &PlacedShape) -> Value {
     let s = p.shape;
     let linear = DMat3::from_mat4(p.object_to_world);
-    let (params, area) = match &s.geometry {
-        Geometry::Quadric(q) => (quadric_params(q), q.world_area(linear)),
+    let params = match &s.geometry {
+        Geometry::Quadric(q) => quadric_params(q),
         Geometry::Mesh { mesh, filename, .. } => {
             let m = &scene.meshes[*mesh as usize];
-            // Mesh vertices are stored transformed by the shape's own CTM already.
-            let extra = DMat3::from_mat4(p.object_to_world * s.object_to_world.inverse());
-            let params = json!({
+            json!({
                 "filename": filename,
                 "vertices": m.p.len(),
                 "normals": m.n.is_some(),
                 "tangents": m.s.is_some(),
                 "uv": m.uv.is_some(),
-            });
-            (params, if p.instance.is_some() { m.area_under(extra) } else { m.area() })
+            })
+        }
+        Geometry::Patches { mesh } => {
+            let m = &scene.patches[*mesh as usize];
+            json!({ "vertices": m.p.len(), "normals": m.n.is_some(), "uv": m.uv.is_some() })
         }
     };
+    let area = scene.placed_area(p);
     let mut v = json!({
         "index": index,
         "kind": s.kind(),
@@ -156,8 +165,10 @@ fn shape(scene: &SceneDescription, index: usize, p: &PlacedShape) -> Value {
         "material": s.material,
         "area_light": s.area_light,
     });
-    if let Geometry::Mesh { mesh, .. } = &s.geometry {
-        v["triangles"] = json!(scene.meshes[*mesh as usize].triangle_count());
+    match &s.geometry {
+        Geometry::Mesh { .. } => v["triangles"] = json!(scene.prim_count(s)),
+        Geometry::Patches { .. } => v["patches"] = json!(scene.prim_count(s)),
+        Geometry::Quadric(_) => {}
     }
     if let Some(i) = p.instance {
         v["instance"] = json!(i);

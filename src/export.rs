@@ -36,7 +36,8 @@ use crate::lights::Light;
 use crate::materials::{TexCtx, Textures};
 use crate::math::transform::row_major;
 use crate::scene::{
-    CameraKind, Geometry, LightDesc, LightKind, MaterialDesc, MaterialKind, SceneDescription, ShapeDesc, TexValue,
+    CameraKind, Geometry, LightDesc, LightKind, MaterialDesc, MaterialKind, Metal, PlacedShape, SceneDescription,
+    ShapeDesc, TexValue,
 };
 use crate::shapes::{Quadric, TriangleMesh};
 use crate::spectrum::Rgb;
@@ -347,7 +348,11 @@ fn material(m: &MaterialDesc, textures: &Textures, index: usize, notes: &mut Vec
                 transmittance: one(*kt, notes),
             }
         }
-        MaterialKind::Conductor { eta, k, roughness, remap } => {
+        MaterialKind::Conductor { metal, roughness, remap } => {
+            let (eta, k) = match metal {
+                Metal::EtaK { eta, k } => (*eta, *k),
+                Metal::Reflectance(r) => Metal::eta_k_of_reflectance(Vec3::from(one(*r, notes))),
+            };
             let alpha = roughness.map(|r| remap.alpha(one(r, notes)[0]));
             if alpha[0] < 1e-3 && alpha[1] < 1e-3 {
                 return MaterialOut::Conductor { eta: eta.to_array(), k: k.to_array() };
@@ -437,10 +442,7 @@ fn shape(scene: &SceneDescription, s: &ShapeDesc, world: bool, index: u32, notes
         if a.two_sided {
             notes.push(note("", &format!("shape {index}"), "two-sided area light: Mitsuba's emit on one side"));
         }
-        let area = match &s.geometry {
-            Geometry::Quadric(q) => q.world_area(DMat3::from_mat4(s.object_to_world)),
-            Geometry::Mesh { mesh, .. } => scene.meshes[*mesh as usize].area(),
-        };
+        let area = scene.placed_area(&PlacedShape { shape: s, object_to_world: s.object_to_world, instance: None });
         Emission { radiance: crate::render::area_emission(a, area).to_array(), two_sided: a.two_sided }
     });
     let geometry = match &s.geometry {
@@ -448,9 +450,16 @@ fn shape(scene: &SceneDescription, s: &ShapeDesc, world: bool, index: u32, notes
         Geometry::Mesh { mesh, .. } => {
             mesh_out(&scene.meshes[*mesh as usize], s.reverse_orientation, s.swaps_handedness())
         }
+        Geometry::Patches { mesh } => {
+            let m = &scene.patches[*mesh as usize];
+            mesh_out(&m.to_triangles(PATCH_CELLS), s.reverse_orientation, s.swaps_handedness())
+        }
     };
     ShapeOut { geometry, material: s.material, emission, shape_index: index }
 }
+
+/// Cells per side when a curved bilinear patch is exported as triangles.
+const PATCH_CELLS: usize = 8;
 
 /// Mitsuba's sphere, cylinder and disk for full shapes under a rotation, uniform scale
 /// and translation; a mesh otherwise.

@@ -1,20 +1,18 @@
 //! The render-ready scene: geometry and BVHs, camera, materials per shape, lights (area
-//! lights one per quadric or triangle), the photon-source distribution, and the world's
+//! lights one per quadric, triangle or patch), the photon-source distribution, and the world's
 //! bounding sphere. Built once from a [`SceneDescription`]; `integrators` renders it.
 
-use crate::accel::{Geometry, Hit, LocalHit};
+use crate::accel::{Geometry, Hit};
 use crate::camera::Camera;
 use crate::interaction::{Footprint, SurfaceInteraction};
-use crate::lights::{Emitter, Light, WorldSphere, quadric_area};
+use crate::lights::{Light, WorldSphere};
 use crate::materials::{Bsdf, LobeList, Material, TexCtx, Textures};
 use crate::math::Ray;
 use crate::math::frame::coordinate_system;
 use crate::sampling::Distribution1D;
 use crate::scene::{
-    AlphaRule, AreaLightDesc, Film, Geometry as ShapeGeometry, Integrator, MaterialKind, MixRule, SceneDescription,
-    ShapeAlpha, TexValue,
+    AlphaRule, AreaLightDesc, Film, Integrator, MaterialKind, MixRule, SceneDescription, ShapeAlpha, TexValue,
 };
-use crate::shapes::MeshFlags;
 use crate::spectrum::{Rgb, luminance};
 use glam::Vec3;
 
@@ -74,17 +72,13 @@ impl RenderScene {
             None => WorldSphere { center: Vec3::ZERO, radius: 1.0 },
         };
         let mut lights: Vec<Light> = scene.lights.iter().map(Light::from_desc).collect();
-        let shape_info: Vec<(ShapeGeometry, Option<u32>, bool, bool)> = scene
-            .shapes
-            .iter()
-            .map(|s| (s.geometry.clone(), s.area_light, s.reverse_orientation, s.swaps_handedness()))
-            .collect();
+        let shape_area_lights: Vec<Option<u32>> = scene.shapes.iter().map(|s| s.area_light).collect();
         let area_params = scene.area_lights.clone();
         let film = scene.film.clone();
         let integrator = scene.integrator.clone();
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
         let geometry = Geometry::new(&mut scene);
-        let emitters = area_lights(&geometry, &shape_info, &area_params, &mut lights);
+        let emitters = area_lights(&geometry, &shape_area_lights, &area_params, &mut lights);
         let light_power = Distribution1D::new(&lights.iter().map(|l| l.power(world) as f64).collect::<Vec<_>>());
         RenderScene {
             geometry,
@@ -236,11 +230,7 @@ impl RenderScene {
             return None; // area lights inside object definitions are ignored, as in pbrt
         }
         let info = (*self.emitters.get(hit.shape_index as usize)?)?;
-        let light = match hit.local {
-            LocalHit::Triangle { tri, .. } => info.first_light + tri,
-            LocalHit::Quadric(..) => info.first_light,
-        };
-        Some((info, light))
+        Some((info, info.first_light + hit.local.prim()))
     }
 
     /// Radiance leaving a hit surface toward `w` (area lights).
@@ -323,47 +313,25 @@ fn ray_hash(r: &Ray) -> f32 {
     hash_unit(&[ox, oy, oz, dx, dy, dz])
 }
 
-/// One light per emitting quadric and per non-degenerate triangle of emitting meshes
-/// (world shapes).
+/// One light per primitive of each emitting world shape: a quadric, each triangle of
+/// a mesh, each patch of a bilinear mesh.
 fn area_lights(
     g: &Geometry,
-    shapes: &[(ShapeGeometry, Option<u32>, bool, bool)],
+    area_lights: &[Option<u32>],
     params: &[AreaLightDesc],
     lights: &mut Vec<Light>,
 ) -> Vec<Option<EmitterInfo>> {
-    let mut emitters = vec![None; shapes.len()];
-    let mut quadric = 0u32;
-    for (i, (geom, area, ro, swaps)) in shapes.iter().enumerate() {
-        let this_quadric = quadric;
-        if let ShapeGeometry::Quadric(_) = geom {
-            quadric += 1;
-        }
+    let mut emitters = vec![None; area_lights.len()];
+    for (i, area) in area_lights.iter().enumerate() {
         let Some(a) = area else { continue };
         let desc = &params[*a as usize];
         let first_light = lights.len() as u32;
-        let mut shape_lights = Vec::new();
-        match geom {
-            ShapeGeometry::Quadric(_) => {
-                let sampler = g.quadrics[this_quadric as usize].sampler();
-                let area = quadric_area(g, this_quadric);
-                let emitter = Emitter::Quadric { index: this_quadric, sampler };
-                shape_lights.push((emitter, area));
-            }
-            ShapeGeometry::Mesh { mesh, .. } => {
-                let m = &g.meshes[*mesh as usize];
-                let flags = MeshFlags { reverse_orientation: *ro, swaps_handedness: *swaps };
-                for t in 0..m.triangle_count() {
-                    let [a, b, c] = m.vertices(t);
-                    let area = (0.5 * (b - a).cross(c - a).length()) as f32;
-                    // The BVH dropped zero-area triangles; one whose area underflows in
-                    // f32 still keeps its slot (lights are found by triangle) but emits
-                    // nothing.
-                    shape_lights.push((Emitter::Triangle { mesh: *mesh, tri: t as u32, flags }, area));
-                }
-            }
-        }
-        let l = area_emission(desc, shape_lights.iter().map(|(_, a)| *a as f64).sum());
-        for (emitter, area) in shape_lights {
+        let pieces = g.shapes.pieces(g.world_shape(i));
+        let l = area_emission(desc, pieces.iter().map(|(_, a)| *a).sum());
+        for (emitter, area) in pieces {
+            // The BVH dropped zero-area primitives; one whose area underflows in f32
+            // still keeps its slot (lights are found by primitive) but emits nothing.
+            let area = area as f32;
             let l = if area > 0.0 { l } else { Vec3::ZERO };
             lights.push(Light::Area { emitter, l, two_sided: desc.two_sided, area });
         }

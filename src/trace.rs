@@ -64,8 +64,10 @@ impl Tracer {
             "shape": self.kinds.get(hit.shape_index as usize).copied().unwrap_or("?"),
             "shape_index": hit.shape_index,
         });
-        if let LocalHit::Triangle { mesh, tri, .. } = hit.local {
-            out["triangle"] = json!(self.geometry.triangle_id(mesh, tri));
+        match hit.local {
+            LocalHit::Triangle { mesh, tri, .. } => out["triangle"] = json!(self.geometry.triangle_id(mesh, tri)),
+            LocalHit::Patch { patch, .. } => out["patch"] = json!(patch),
+            LocalHit::Quadric(..) => {}
         }
         out
     }

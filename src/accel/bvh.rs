@@ -166,7 +166,7 @@ const BINS: usize = 12;
 /// on large scenes, and a leaf's triangles are fetched together, so leaves of a few
 /// triangles pay: with 8-wide nodes this gives 18 bytes of BVH per triangle (2.0
 /// gave 35) at the same speed on large meshes and small ones. Quadrics cost more
-/// (`accel::QUADRIC_COST`), so they still get leaves of their own.
+/// (`shapes::set::QUADRIC_COST`), so they still get leaves of their own.
 const TRAVERSAL_COST: f32 = 4.0;
 /// The most primitives in a leaf, unless the caller asks for another limit.
 const MAX_LEAF: usize = 8;

@@ -1,4 +1,4 @@
-//! The render-ready geometry of a scene: quadrics and meshes, one BVH over the world
+//! The render-ready geometry of a scene: its [`ShapeSet`], one BVH over the world
 //! shapes, one per instanced object, and a top-level BVH over instances. Instances
 //! share their object's BVH and geometry; only a transform is stored per instance.
 
@@ -13,30 +13,21 @@ use crate::interaction::SurfaceInteraction;
 use crate::math::float::gamma;
 use crate::math::{Bounds3, Point3, Ray, Vector3};
 use crate::scene::{Geometry as ShapeGeometry, SceneDescription, ShapeDesc};
+pub use crate::shapes::{LocalHit, ShapeRef};
 use crate::shapes::{
-    MeshFlags, QuadricHit, QuadricShape, TriangleHit, TriangleMesh, WatertightRay, edge_candidates, watertight,
+    MeshFlags, QuadricShape, ShapeSet, TriangleHit, TriangleMesh, WatertightRay, edge_candidates, watertight,
 };
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// A quadric's intersection cost in triangle tests, for SAH: its root solve with
-/// error bounds and its partial-shape checks take several times a triangle's.
-pub const QUADRIC_COST: f32 = 8.0;
 /// An instance's, for the top-level SAH: a ray transform and a whole traversal.
 const INSTANCE_COST: f32 = 16.0;
 /// A triangle's in a leaf block, relative to a node visit: its leaf's memory is one
 /// trip, so larger leaves pay (and their blocks share more vertices).
 const BLOCK_TRIANGLE_COST: f32 = 0.5;
 
-/// A shape of a BVH: a quadric or a whole mesh.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ShapeRef {
-    Quadric(u32),
-    Mesh { mesh: u32, flags: MeshFlags },
-}
-
-/// A BVH leaf entry: a shape, and the triangle for meshes (8 bytes).
+/// A BVH leaf entry: a shape, and its primitive (triangle, patch) (8 bytes).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Prim {
     shape: u32,
@@ -70,13 +61,6 @@ pub struct Instance {
     pub index: u32,
 }
 
-/// Which primitive a ray hit, and what finishing the interaction needs.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LocalHit {
-    Quadric(u32, QuadricHit),
-    Triangle { mesh: u32, tri: u32, flags: MeshFlags, hit: TriangleHit },
-}
-
 /// The closest hit of a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -91,8 +75,7 @@ pub struct Hit {
 
 /// Everything rays can hit.
 pub struct Geometry {
-    pub quadrics: Vec<QuadricShape>,
-    pub meshes: Vec<TriangleMesh>,
+    pub shapes: ShapeSet,
     pub instances: Vec<Instance>,
     world: Blas,
     objects: Vec<Blas>,
@@ -105,15 +88,14 @@ pub struct Geometry {
 }
 
 fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>) -> ShapeRef {
+    let flags = MeshFlags { reverse_orientation: s.reverse_orientation, swaps_handedness: s.swaps_handedness() };
     match &s.geometry {
         ShapeGeometry::Quadric(q) => {
             quadrics.push(QuadricShape::new(q.clone(), s.object_to_world, s.reverse_orientation));
             ShapeRef::Quadric(quadrics.len() as u32 - 1)
         }
-        ShapeGeometry::Mesh { mesh, .. } => ShapeRef::Mesh {
-            mesh: *mesh,
-            flags: MeshFlags { reverse_orientation: s.reverse_orientation, swaps_handedness: s.swaps_handedness() },
-        },
+        ShapeGeometry::Mesh { mesh, .. } => ShapeRef::Mesh { mesh: *mesh, flags },
+        ShapeGeometry::Patches { mesh, .. } => ShapeRef::Patches { mesh: *mesh, flags },
     }
 }
 
@@ -168,30 +150,22 @@ macro_rules! with_isa {
 }
 
 impl Blas {
-    fn build(shapes: Vec<ShapeRef>, quadrics: &[QuadricShape], meshes: &[TriangleMesh]) -> Blas {
+    fn build(shapes: Vec<ShapeRef>, set: &ShapeSet) -> Blas {
         let mut prims = Vec::new();
         let mut bounds = Vec::new();
-        for (i, s) in shapes.iter().enumerate() {
-            match s {
-                ShapeRef::Quadric(q) => {
-                    prims.push(Prim { shape: i as u32, tri: u32::MAX });
-                    bounds.push(quadrics[*q as usize].bounds());
-                }
-                ShapeRef::Mesh { mesh, .. } => {
-                    let m = &meshes[*mesh as usize];
-                    // Zero-area triangles are left out: `localize` then drops them from
-                    // the mesh, and the map back to file numbers skips them.
-                    for t in (0..m.triangle_count()).filter(|&t| !m.is_degenerate(t)) {
-                        prims.push(Prim { shape: i as u32, tri: t as u32 });
-                        bounds.push(m.triangle_bounds(t));
-                    }
+        for (i, &s) in shapes.iter().enumerate() {
+            // Zero-area primitives are left out: `localize` then drops such triangles
+            // from their mesh, and the map back to file numbers skips them.
+            for k in 0..set.prim_count(s) {
+                if let Some(b) = set.prim_bounds(s, k) {
+                    prims.push(Prim { shape: i as u32, tri: k as u32 });
+                    bounds.push(b);
                 }
             }
         }
-        let is_quadric = |i: usize| matches!(shapes[prims[i].shape as usize], ShapeRef::Quadric(_));
-        let cost = |i| if is_quadric(i) { QUADRIC_COST } else { 1.0 };
+        let cost = |i: usize| ShapeSet::prim_cost(shapes[prims[i].shape as usize]);
         let single_mesh = match shapes.as_slice() {
-            [ShapeRef::Mesh { mesh, flags }] if LeafBlocks::fit(meshes[*mesh as usize].triangle_count()) => {
+            [ShapeRef::Mesh { mesh, flags }] if LeafBlocks::fit(set.meshes[*mesh as usize].triangle_count()) => {
                 Some((*mesh, *flags))
             }
             _ => None,
@@ -315,14 +289,14 @@ impl Blas {
                 .count();
             let (found, step) = match (self.shapes[prim.shape as usize], run) {
                 (ShapeRef::Mesh { mesh, flags }, 2..) => {
-                    let m = &g.meshes[mesh as usize];
+                    let m = &g.shapes.meshes[mesh as usize];
                     let first = prim.tri as usize;
                     let triangle = |k| (m.corners(first + k), (first + k) as u32);
                     let candidates = edge_candidates::<KX, KY, KZ>(&m.corner_lanes(first), wr) & ((1 << run) - 1);
                     let hit = hit_candidates::<KX, KY, KZ, ANY>(candidates, triangle, wr, &mut t_max);
                     (hit.map(|(tri, hit)| (hit.t, LocalHit::Triangle { mesh, tri, flags, hit })), run)
                 }
-                _ => (self.hit_prim::<KX, KY, KZ>(g, prim, ray, wr, t_max), 1),
+                (s, _) => (g.shapes.intersect::<KX, KY, KZ>(s, prim.tri, ray, wr, t_max), 1),
             };
             i += step;
             if let Some((t, local)) = found {
@@ -334,27 +308,6 @@ impl Blas {
             }
         }
         best
-    }
-
-    #[inline(always)]
-    fn hit_prim<const KX: usize, const KY: usize, const KZ: usize>(
-        &self,
-        g: &Geometry,
-        prim: Prim,
-        ray: &Ray,
-        wr: &WatertightRay,
-        t_max: f32,
-    ) -> Option<(f32, LocalHit)> {
-        match self.shapes[prim.shape as usize] {
-            ShapeRef::Quadric(q) => {
-                let h = g.quadrics[q as usize].intersect_t(ray, t_max)?;
-                Some((h.t, LocalHit::Quadric(q, h)))
-            }
-            ShapeRef::Mesh { mesh, flags } => {
-                let hit = watertight::<KX, KY, KZ>(g.meshes[mesh as usize].corners(prim.tri as usize), wr, t_max)?;
-                Some((hit.t, LocalHit::Triangle { mesh, tri: prim.tri, flags, hit }))
-            }
-        }
     }
 }
 
@@ -410,19 +363,21 @@ fn instance_bounds(m: &DMat4, b: Bounds3) -> Bounds3 {
 impl Geometry {
     /// Builds the acceleration structures, taking the scene's meshes.
     pub fn new(scene: &mut SceneDescription) -> Geometry {
-        let mut meshes = std::mem::take(&mut scene.meshes);
-        let mut quadrics = Vec::new();
-        let world_shapes: Vec<ShapeRef> = scene.shapes.iter().map(|s| shape_ref(s, &mut quadrics)).collect();
+        let mut set = ShapeSet {
+            meshes: std::mem::take(&mut scene.meshes),
+            patches: std::mem::take(&mut scene.patches),
+            quadrics: Vec::new(),
+        };
+        let world_shapes: Vec<ShapeRef> = scene.shapes.iter().map(|s| shape_ref(s, &mut set.quadrics)).collect();
         let object_shapes: Vec<Vec<ShapeRef>> =
-            scene.objects.iter().map(|o| o.shapes.iter().map(|s| shape_ref(s, &mut quadrics)).collect()).collect();
-        let mut world = Blas::build(world_shapes, &quadrics, &meshes);
-        let mut objects: Vec<Blas> =
-            object_shapes.into_par_iter().map(|shapes| Blas::build(shapes, &quadrics, &meshes)).collect();
-        let mut triangle_ids = vec![Vec::new(); meshes.len()];
+            scene.objects.iter().map(|o| o.shapes.iter().map(|s| shape_ref(s, &mut set.quadrics)).collect()).collect();
+        let mut world = Blas::build(world_shapes, &set);
+        let mut objects: Vec<Blas> = object_shapes.into_par_iter().map(|shapes| Blas::build(shapes, &set)).collect();
+        let mut triangle_ids = vec![Vec::new(); set.meshes.len()];
         for blas in std::iter::once(&mut world).chain(objects.iter_mut()) {
-            blas.localize(&mut meshes, &mut triangle_ids);
+            blas.localize(&mut set.meshes, &mut triangle_ids);
         }
-        for m in &meshes {
+        for m in &set.meshes {
             hugepages::advise(&m.p);
             hugepages::advise(&m.indices);
         }
@@ -453,7 +408,7 @@ impl Geometry {
             .collect();
         let (tlas, order) = Bvh::build(&bounds, |_| INSTANCE_COST);
         instances = order.iter().map(|&k| instances[k as usize].clone()).collect();
-        Geometry { quadrics, meshes, instances, world, objects, tlas, triangle_ids, avx: Avx::detect() }
+        Geometry { shapes: set, instances, world, objects, tlas, triangle_ids, avx: Avx::detect() }
     }
 
     /// Whether BVH traversal uses AVX2, as it does by default where the processor has it.
@@ -500,12 +455,7 @@ impl Geometry {
 
     /// The full interaction of a hit, in render space.
     pub fn interaction(&self, hit: &Hit) -> SurfaceInteraction {
-        let si = match hit.local {
-            LocalHit::Quadric(q, h) => self.quadrics[q as usize].interaction(&h),
-            LocalHit::Triangle { mesh, tri, flags, hit: h } => {
-                self.meshes[mesh as usize].interaction(tri as usize, &h, flags)
-            }
-        };
+        let si = self.shapes.interaction(&hit.local);
         match hit.instance {
             Some(k) => {
                 SurfaceInteraction { t: hit.t, ..si.transformed_f64(&self.instances[k as usize].render_from_instance) }
@@ -524,6 +474,11 @@ impl Geometry {
                 (Some(inst.object), hit.shape_index - inst.first_shape_index)
             }
         }
+    }
+
+    /// World shape `index` (in scene order).
+    pub fn world_shape(&self, index: usize) -> ShapeRef {
+        self.world.shapes[index]
     }
 
     /// The file's number of stored triangle `tri` of mesh `mesh`.

@@ -24,20 +24,12 @@ use crate::math::frame::coordinate_system;
 use crate::math::{Normal3, Point3, Ray, Vector3};
 use crate::sampling::{uniform_cone, uniform_sphere};
 use crate::scene::{LightDesc, LightKind};
-use crate::shapes::sampling::area_to_solid_angle;
-use crate::shapes::{MeshFlags, QuadricSampler, ShapeSample};
+use crate::shapes::Piece;
 use crate::spectrum::{Rgb, luminance};
 use envmap::EnvMap;
-use glam::{DMat3, Vec3};
+use glam::Vec3;
 use std::f32::consts::PI;
 use std::sync::Arc;
-
-/// Where an area light sits.
-#[derive(Clone, Debug)]
-pub enum Emitter {
-    Quadric { index: u32, sampler: QuadricSampler },
-    Triangle { mesh: u32, tri: u32, flags: MeshFlags },
-}
 
 #[derive(Clone, Debug)]
 pub enum Light {
@@ -63,7 +55,8 @@ pub enum Light {
         map: Option<Arc<EnvMap>>,
     },
     Area {
-        emitter: Emitter,
+        /// The primitive that emits (one light per triangle or patch, as in pbrt).
+        emitter: Piece,
         l: Rgb,
         two_sided: bool,
         area: f32,
@@ -152,23 +145,6 @@ impl Light {
         })
     }
 
-    /// A point on an area light as seen from `p` (solid-angle pdf), or by area.
-    fn area_sample(emitter: &Emitter, g: &Geometry, reference: Option<Vec3>, u: [f32; 2]) -> Option<ShapeSample> {
-        match (emitter, reference) {
-            (Emitter::Quadric { index, sampler }, Some(r)) => {
-                g.quadrics[*index as usize].sample_solid_angle(sampler, Point3(r), u)
-            }
-            (Emitter::Quadric { index, sampler }, None) => Some(g.quadrics[*index as usize].sample_area(sampler, u)),
-            (Emitter::Triangle { mesh, tri, flags }, r) => {
-                let s = g.meshes[*mesh as usize].sample_triangle(*tri as usize, u, *flags);
-                match r {
-                    Some(r) => area_to_solid_angle(s, Point3(r)),
-                    None => Some(s),
-                }
-            }
-        }
-    }
-
     /// Incident light at `p` from this light.
     pub fn sample_li(&self, g: &Geometry, p: Vec3, u: [f32; 2]) -> Option<LightSample> {
         match self {
@@ -205,7 +181,7 @@ impl Light {
                 (pdf > 0.0).then(|| LightSample { wi, li: env.le(wi), pdf, p_light: None, delta: false })
             }
             Light::Area { emitter, l, two_sided, .. } => {
-                let s = Self::area_sample(emitter, g, Some(p), u)?;
+                let s = g.shapes.sample_piece(emitter, Some(Point3(p)), u)?;
                 let d = s.p.0 - p;
                 let wi = d.normalize_or_zero();
                 let facing = *two_sided || s.n.0.dot(-wi) > 0.0;
@@ -225,12 +201,7 @@ impl Light {
         match self {
             Light::Infinite { map: None, .. } => 1.0 / (4.0 * PI),
             Light::Infinite { map: Some(env), .. } => env.pdf(wi),
-            Light::Area { emitter: Emitter::Quadric { index, sampler }, .. } => {
-                g.quadrics[*index as usize].pdf_solid_angle(sampler, Point3(p), Vector3(wi))
-            }
-            Light::Area { emitter: Emitter::Triangle { mesh, tri, .. }, .. } => {
-                g.meshes[*mesh as usize].pdf_triangle_solid_angle(*tri as usize, Point3(p), Vector3(wi))
-            }
+            Light::Area { emitter, .. } => g.shapes.pdf_piece(emitter, Point3(p), Vector3(wi)),
             _ => 0.0,
         }
     }
@@ -280,7 +251,7 @@ impl Light {
                 Some(Emission { ray, n: d, pdf_pos: 1.0 / (PI * r * r), pdf_dir, le })
             }
             Light::Area { emitter, l, two_sided, .. } => {
-                let s = Self::area_sample(emitter, g, None, u1)?;
+                let s = g.shapes.sample_piece(emitter, None, u1)?;
                 let n = s.n.0;
                 // Cosine-weighted about n; two-sided lights pick a side with probability ½.
                 let (mut u2, mut side) = (u2, 1.0);
@@ -314,10 +285,4 @@ impl Light {
             _ => Vec3::ZERO,
         }
     }
-}
-
-/// World area of an emitting quadric.
-pub fn quadric_area(g: &Geometry, index: u32) -> f32 {
-    let q = &g.quadrics[index as usize];
-    q.quadric.world_area(DMat3::from_mat4(q.render_from_object)) as f32
 }

@@ -22,7 +22,7 @@ use lobes::{Lobe, MAX_LOBES, oren_nayar_ab};
 use microfacet::{Fresnel, TrowbridgeReitz};
 pub use textures::{TexCtx, Textures, lookup};
 
-use crate::scene::{CoatBase, Coated, MaterialDesc, MaterialKind, RoughnessRemap, TexValue};
+use crate::scene::{CoatBase, Coated, MaterialDesc, MaterialKind, Metal, RoughnessRemap, TexValue};
 use crate::spectrum::Rgb;
 use glam::Vec3;
 use layered::{Base, Coat, Layered};
@@ -131,8 +131,9 @@ impl Material {
                 let alpha = if alpha.iter().all(|a| *a < 1e-3) { [0.0; 2] } else { alpha };
                 dielectric(i.float(*eta), i.refl(*kr), i.refl(*kt), alpha, out)
             }
-            MaterialKind::Conductor { eta, k, roughness, remap } => {
-                let fresnel = Fresnel::Conductor { eta: *eta, k: *k };
+            MaterialKind::Conductor { metal, roughness, remap } => {
+                let (eta, k) = i.eta_k(metal);
+                let fresnel = Fresnel::Conductor { eta, k };
                 let alpha = i.alpha(roughness, *remap);
                 if alpha[0] < 1e-3 && alpha[1] < 1e-3 {
                     out.push(Lobe::SpecularReflection { r: Vec3::ONE, fresnel });
@@ -195,11 +196,9 @@ fn coated(c: &Coated, i: &Inputs<impl Fn() -> TexCtx>) -> Layered {
     };
     let bottom = match &c.base {
         CoatBase::Diffuse { reflectance } => Base::Diffuse(i.refl(*reflectance)),
-        CoatBase::Conductor { eta, k, roughness } => conductor(*eta, *k, roughness),
-        CoatBase::Reflectance { reflectance, roughness } => {
-            // pbrt-v4 keeps r below 1, where k would be infinite.
-            let r = i.rgb(*reflectance).clamp(Vec3::ZERO, Vec3::splat(0.9999));
-            conductor(Vec3::ONE, 2.0 * r.powf(0.5) / (Vec3::ONE - r).max(Vec3::ZERO).powf(0.5), roughness)
+        CoatBase::Conductor { metal, roughness } => {
+            let (eta, k) = i.eta_k(metal);
+            conductor(eta, k, roughness)
         }
     };
     Layered {
@@ -264,6 +263,14 @@ impl<C: Fn() -> TexCtx> Inputs<'_, C> {
 
     fn alpha(&self, roughness: &[TexValue; 2], remap: RoughnessRemap) -> [f32; 2] {
         roughness.map(|r| remap.alpha(self.float(r)))
+    }
+
+    /// A conductor's η and k here.
+    fn eta_k(&self, metal: &Metal) -> (Rgb, Rgb) {
+        match metal {
+            Metal::EtaK { eta, k } => (*eta, *k),
+            Metal::Reflectance(r) => Metal::eta_k_of_reflectance(self.rgb(*r)),
+        }
     }
 }
 

@@ -166,6 +166,7 @@ struct Builder {
     /// Per world shape: its alpha parameters and the scope to resolve them in.
     shape_alphas: Vec<Option<(AlphaParams, Rc<Scope>)>>,
     meshes: Vec<crate::shapes::TriangleMesh>,
+    patches: Vec<crate::shapes::PatchMesh>,
     objects: Vec<PendingObject>,
     object_names: HashMap<String, u32>,
     current_object: Option<u32>,
@@ -225,6 +226,7 @@ impl Builder {
             shape_materials: Vec::new(),
             shape_alphas: Vec::new(),
             meshes: Vec::new(),
+            patches: Vec::new(),
             objects: Vec::new(),
             object_names: HashMap::new(),
             current_object: None,
@@ -685,6 +687,16 @@ impl Builder {
                 self.meshes.push(m);
                 Geometry::Mesh { mesh: self.meshes.len() as u32 - 1, kind, filename }
             }
+            Built::Patches(mut m) => {
+                mesh::transform_patches(&mut m, &s.ctm);
+                let where_ = p.named("P").map_or(at, |x| x.span);
+                mesh::validate_patches(&m).map_err(|e| Diagnostic::error(where_, e))?;
+                if let Some(w) = mesh::degenerate_patches_warning(&m) {
+                    self.warnings.push(Diagnostic::warning(where_, w));
+                }
+                self.patches.push(m);
+                Geometry::Patches { mesh: self.patches.len() as u32 - 1 }
+            }
         };
         let area_light = area_light.map(|a| self.use_area_light(a));
         let shape = ShapeDesc {
@@ -908,6 +920,7 @@ impl Builder {
             objects,
             instances,
             meshes: std::mem::take(&mut self.meshes),
+            patches: std::mem::take(&mut self.patches),
             lights,
             area_lights,
             materials: std::mem::take(&mut self.built_materials),

@@ -105,7 +105,7 @@ pub enum MaterialKind {
         transmittance: TexValue,
         scale: TexValue,
     },
-    /// A perfect mirror tinted by `reflectance` (`mirror`, `conductor "reflectance"`).
+    /// A perfect mirror tinted by `reflectance` (`mirror`).
     Mirror {
         reflectance: TexValue,
     },
@@ -119,8 +119,7 @@ pub enum MaterialKind {
     },
     /// A conductor; smooth when both roughnesses give α below 10⁻³.
     Conductor {
-        eta: Rgb,
-        k: Rgb,
+        metal: Metal,
         roughness: [TexValue; 2],
         remap: RoughnessRemap,
     },
@@ -158,18 +157,30 @@ pub enum CoatBase {
     Diffuse {
         reflectance: TexValue,
     },
-    /// A conductor of index η + ik (relative to air; pbrt-v4 divides by the coat's).
+    /// A conductor (relative to air; pbrt-v4 divides η and k by the coat's index).
     Conductor {
-        eta: Rgb,
-        k: Rgb,
+        metal: Metal,
         roughness: [TexValue; 2],
     },
-    /// A conductor given by its reflectance at normal incidence (pbrt-v4 turns it into
-    /// η = 1, k = 2√r / √(1 − r)).
-    Reflectance {
-        reflectance: TexValue,
-        roughness: [TexValue; 2],
-    },
+}
+
+/// A conductor's optical constants.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Metal {
+    /// Index η + ik.
+    EtaK { eta: Rgb, k: Rgb },
+    /// pbrt-v4's `reflectance`: the reflectance at normal incidence, turned into η = 1,
+    /// k = 2√r / √(1 − r) where it is evaluated.
+    Reflectance(TexValue),
+}
+
+impl Metal {
+    /// pbrt-v4's η and k for a reflectance r at normal incidence (r kept below 1,
+    /// where k would be infinite).
+    pub fn eta_k_of_reflectance(r: Rgb) -> (Rgb, Rgb) {
+        let r = r.clamp(Vec3::ZERO, Vec3::splat(0.9999));
+        (Vec3::ONE, 2.0 * r.powf(0.5) / (Vec3::ONE - r).powf(0.5))
+    }
 }
 
 /// How `mix` combines its two materials.
@@ -278,7 +289,7 @@ pub fn material(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<
             coated(p, "", base, r)?
         }
         "coatedconductor" => {
-            let base = coat_base(p, at, r)?;
+            let base = coat_base(p, r)?;
             coated(p, "interface.", base, r)?
         }
         "diffusetransmission" => {
@@ -388,20 +399,29 @@ fn roughness(p: &ParamList, default: f32, r: &mut dyn Resolver) -> Res<[TexValue
 /// v3 `metal` (copper by default, roughness 0.01 through v3's remapping) and v4
 /// `conductor` (roughness 0, √ remapping, or a `reflectance`).
 fn conductor(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<MaterialKind> {
-    if ty == "conductor" && p.named("reflectance").is_some() {
-        let reflectance = spectrum(p, "reflectance", 1.0, r)?;
-        let _ = roughness(p, 0.0, r)?;
-        let _ = p.bool("remaproughness")?;
-        return Ok(MaterialKind::Mirror { reflectance });
+    let v3 = ty == "metal";
+    let metal = if v3 { metal(p, "", None, r)? } else { metal(p, "", Some(ty), r)? };
+    let roughness = roughness(p, if v3 { 0.01 } else { 0.0 }, r)?;
+    let remap = if v3 { remap_v3(p)? } else { remap_v4(p)? };
+    Ok(MaterialKind::Conductor { metal, roughness, remap })
+}
+
+/// `{prefix}eta` / `{prefix}k` (copper by default), or, for the v4 material `v4`, a
+/// `reflectance` instead (never both: pbrt-v4's error).
+fn metal(p: &ParamList, prefix: &str, v4: Option<&str>, r: &mut dyn Resolver) -> Res<Metal> {
+    let (eta_name, k_name) = (format!("{prefix}eta"), format!("{prefix}k"));
+    if let (Some(ty), Some(refl)) = (v4, p.named("reflectance")) {
+        if p.named(&eta_name).is_some() || p.named(&k_name).is_some() {
+            let msg = format!("{ty} takes \"reflectance\" or \"{eta_name}\"/\"{k_name}\", not both");
+            return Err(Diagnostic::error(refl.span, msg));
+        }
+        return Ok(Metal::Reflectance(spectrum(p, "reflectance", 0.0, r)?));
     }
     let spectra = r.spectra();
     let named = |n: &str| crate::spectrum::named_spectrum(n).unwrap_or(Vec3::ONE);
-    let eta = values::rgb(p, "eta", &spectra, Range::Positive)?.unwrap_or_else(|| named("metal-Cu-eta"));
-    let k = values::rgb(p, "k", &spectra, Range::NonNegative)?.unwrap_or_else(|| named("metal-Cu-k"));
-    let v3 = ty == "metal";
-    let roughness = roughness(p, if v3 { 0.01 } else { 0.0 }, r)?;
-    let remap = if v3 { remap_v3(p)? } else { remap_v4(p)? };
-    Ok(MaterialKind::Conductor { eta, k, roughness, remap })
+    let eta = values::rgb(p, &eta_name, &spectra, Range::Positive)?.unwrap_or_else(|| named("metal-Cu-eta"));
+    let k = values::rgb(p, &k_name, &spectra, Range::NonNegative)?.unwrap_or_else(|| named("metal-Cu-k"));
+    Ok(Metal::EtaK { eta, k })
 }
 
 /// v3 `mix` (`namedmaterial1`/`namedmaterial2`, spectrum `amount`) or v4 `mix`
@@ -486,18 +506,7 @@ fn prefixed_roughness(p: &ParamList, prefix: &str, r: &mut dyn Resolver) -> Res<
 
 /// `coatedconductor`'s base: `conductor.eta`/`conductor.k` (copper by default) or a
 /// `reflectance`, never both (pbrt-v4's error).
-fn coat_base(p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<CoatBase> {
+fn coat_base(p: &ParamList, r: &mut dyn Resolver) -> Res<CoatBase> {
     let roughness = prefixed_roughness(p, "conductor.", r)?;
-    if p.named("reflectance").is_some() {
-        if p.named("conductor.eta").is_some() || p.named("conductor.k").is_some() {
-            let msg = "coatedconductor takes \"reflectance\" or \"conductor.eta\"/\"conductor.k\", not both";
-            return Err(Diagnostic::error(at, msg));
-        }
-        return Ok(CoatBase::Reflectance { reflectance: spectrum(p, "reflectance", 0.0, r)?, roughness });
-    }
-    let spectra = r.spectra();
-    let named = |n: &str| crate::spectrum::named_spectrum(n).unwrap_or(Vec3::ONE);
-    let eta = values::rgb(p, "conductor.eta", &spectra, Range::Positive)?.unwrap_or_else(|| named("metal-Cu-eta"));
-    let k = values::rgb(p, "conductor.k", &spectra, Range::NonNegative)?.unwrap_or_else(|| named("metal-Cu-k"));
-    Ok(CoatBase::Conductor { eta, k, roughness })
+    Ok(CoatBase::Conductor { metal: metal(p, "conductor.", Some("coatedconductor"), r)?, roughness })
 }

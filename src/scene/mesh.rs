@@ -1,19 +1,22 @@
-//! `Shape "trianglemesh"` parameters to a [`TriangleMesh`], with pbrt's validity checks.
+//! `Shape "trianglemesh"` parameters to a [`TriangleMesh`] and v4's `"bilinearmesh"` to a
+//! [`PatchMesh`], with pbrt's validity checks.
 //!
 //! ```text
 //! Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  1 1 0  0 1 0] "integer indices" [0 1 2 0 2 3]
 //!       "normal N" [...] "vector3 S" [...] "point2 uv" [...] "integer faceIndices" [0 0]
 //! # v3 also: "float uv" [...], "point2 st" / "float st" [...]
+//! Shape "bilinearmesh" "point3 P" [0 0 0  1 0 0  0 1 0  1 1 0] "integer indices" [0 1 2 3]
+//!       "normal N" [...] "point2 uv" [...] "integer faceIndices" [0]
 //! ```
-//! `indices` may be left out when there are exactly three points. A count that is not
-//! a multiple of 3 drops the extras (warning); an index out of range is an error.
-//! `N`/`S` with the wrong count are ignored (warning); `uv` with too few entries is
-//! ignored, with too many the extras are dropped (warnings).
+//! `indices` may be left out when there are exactly three points (four for a patch). A
+//! count that is not a multiple of 3 (4) drops the extras (warning); an index out of
+//! range is an error. `N`/`S` with the wrong count are ignored (warning); `uv` with too
+//! few entries is ignored, with too many the extras are dropped (warnings).
 
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::shapes::TriangleMesh;
+use crate::shapes::{PatchMesh, TriangleMesh};
 use glam::{DMat3, DMat4, DVec3};
 
 fn triples(v: &[f32]) -> Vec<[f32; 3]> {
@@ -22,50 +25,90 @@ fn triples(v: &[f32]) -> Vec<[f32; 3]> {
 
 /// Reads the mesh arrays of a `trianglemesh` statement.
 pub fn from_params(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Result<TriangleMesh, Diagnostic> {
-    let positions =
-        p.array("P", ParamType::Point3)?.ok_or_else(|| Diagnostic::error(span, "trianglemesh needs \"point3 P\""))?;
+    let (positions, indices) = points_and_indices(p, "trianglemesh", 3, span, warn)?;
+    let n_p = positions.len();
+    let mut mesh = TriangleMesh { p: positions, indices, ..Default::default() };
+    mesh.n = per_vertex(p, "N", ParamType::Normal3, n_p, warn)?;
+    mesh.s = per_vertex(p, "S", ParamType::Vector3, n_p, warn)?;
+    mesh.uv = uvs(p, n_p, warn)?;
+    mesh.face_indices = face_indices(p, mesh.triangle_count(), "triangles", warn)?;
+    p.mark_known(&["discarddegenerateUVs"]);
+    Ok(mesh)
+}
+
+/// Reads the arrays of a v4 `bilinearmesh` statement.
+pub fn patches_from_params(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Result<PatchMesh, Diagnostic> {
+    let (positions, indices) = points_and_indices(p, "bilinearmesh", 4, span, warn)?;
+    let n_p = positions.len();
+    let mut mesh = PatchMesh { p: positions, indices, ..Default::default() };
+    mesh.n = per_vertex(p, "N", ParamType::Normal3, n_p, warn)?;
+    mesh.uv = uvs(p, n_p, warn)?;
+    mesh.face_indices = face_indices(p, mesh.patch_count(), "patches", warn)?;
+    // pbrt-v4 draws emission from this image's distribution; that changes only the
+    // sampling density, not the image, so it is read past.
+    p.mark_known(&["emissionfilename"]);
+    Ok(mesh)
+}
+
+/// `P` and `indices` (`arity` per face; may be left out for a single face).
+fn points_and_indices(
+    p: &ParamList,
+    shape: &str,
+    arity: usize,
+    span: Span,
+    warn: &mut Vec<Diagnostic>,
+) -> Result<(Vec<[f32; 3]>, Vec<u32>), Diagnostic> {
+    let positions = p
+        .array("P", ParamType::Point3)?
+        .ok_or_else(|| Diagnostic::error(span, format!("{shape} needs \"point3 P\"")))?;
     let n_p = positions.values.len() / 3;
     let indices_span = p.find("indices", &[ParamType::Integer]).map(|i| i.value_span);
     let indices: Vec<i32> = match p.array("indices", ParamType::Integer)? {
         Some(i) => i.ints().to_vec(),
-        None if n_p == 3 => vec![0, 1, 2],
+        None if n_p == arity => (0..arity as i32).collect(),
         None => {
-            return Err(Diagnostic::error(
-                span,
-                "trianglemesh needs \"integer indices\" (only a single triangle of 3 points may leave them out)",
-            ));
+            let face = if arity == 3 { "triangle" } else { "patch" };
+            let msg = format!(
+                "{shape} needs \"integer indices\" (only a single {face} of {arity} points may leave them out)"
+            );
+            return Err(Diagnostic::error(span, msg));
         }
     };
-    let mut mesh = TriangleMesh { p: triples(positions.floats()), ..Default::default() };
-    mesh.indices = check_indices(indices, n_p, indices_span.unwrap_or(span), warn)?;
-    let per_vertex =
-        |name: &str, ty: ParamType, warn: &mut Vec<Diagnostic>| -> Result<Option<Vec<[f32; 3]>>, Diagnostic> {
-            let Some(a) = p.array(name, ty)? else { return Ok(None) };
-            if a.values.len() / 3 != n_p {
-                let msg =
-                    format!("\"{name}\" has {} entries but there are {n_p} vertices; ignored", a.values.len() / 3);
-                warn.push(Diagnostic::warning(a.span, msg));
-                return Ok(None);
-            }
-            Ok(Some(triples(a.floats())))
-        };
-    mesh.n = per_vertex("N", ParamType::Normal3, warn)?;
-    mesh.s = per_vertex("S", ParamType::Vector3, warn)?;
-    mesh.uv = uvs(p, n_p, warn)?;
-    if let Some(f) = p.array("faceIndices", ParamType::Integer)? {
-        if f.ints().len() == mesh.triangle_count() {
-            mesh.face_indices = Some(f.ints().to_vec());
-        } else {
-            let msg = format!(
-                "\"faceIndices\" has {} entries for {} triangles; ignored",
-                f.ints().len(),
-                mesh.triangle_count()
-            );
-            warn.push(Diagnostic::warning(f.span, msg));
-        }
+    let indices = check_face_indices(indices, arity, n_p, indices_span.unwrap_or(span), warn)?;
+    Ok((triples(positions.floats()), indices))
+}
+
+/// A per-vertex array of triples, ignored (warning) when its count is not `n_p`.
+fn per_vertex(
+    p: &ParamList,
+    name: &str,
+    ty: ParamType,
+    n_p: usize,
+    warn: &mut Vec<Diagnostic>,
+) -> Result<Option<Vec<[f32; 3]>>, Diagnostic> {
+    let Some(a) = p.array(name, ty)? else { return Ok(None) };
+    if a.values.len() / 3 != n_p {
+        let msg = format!("\"{name}\" has {} entries but there are {n_p} vertices; ignored", a.values.len() / 3);
+        warn.push(Diagnostic::warning(a.span, msg));
+        return Ok(None);
     }
-    p.mark_known(&["discarddegenerateUVs"]);
-    Ok(mesh)
+    Ok(Some(triples(a.floats())))
+}
+
+/// `faceIndices`, ignored (warning) unless there is one per face.
+fn face_indices(
+    p: &ParamList,
+    faces: usize,
+    what: &str,
+    warn: &mut Vec<Diagnostic>,
+) -> Result<Option<Vec<i32>>, Diagnostic> {
+    let Some(f) = p.array("faceIndices", ParamType::Integer)? else { return Ok(None) };
+    if f.ints().len() == faces {
+        return Ok(Some(f.ints().to_vec()));
+    }
+    let msg = format!("\"faceIndices\" has {} entries for {faces} {what}; ignored", f.ints().len());
+    warn.push(Diagnostic::warning(f.span, msg));
+    Ok(None)
 }
 
 /// `uv` as point2 (both versions), or v3's `float uv`, `point2 st`, `float st`.
@@ -93,16 +136,28 @@ fn uvs(p: &ParamList, n_p: usize, warn: &mut Vec<Diagnostic>) -> Result<Option<V
 
 /// Drops a trailing partial triangle (warning) and rejects out-of-range indices.
 pub fn check_indices(
-    mut idx: Vec<i32>,
+    idx: Vec<i32>,
     n_vertices: usize,
     span: Span,
     warn: &mut Vec<Diagnostic>,
 ) -> Result<Vec<u32>, Diagnostic> {
-    if !idx.len().is_multiple_of(3) {
-        let msg =
-            format!("{} vertex indices is not a multiple of 3; the last {} are ignored", idx.len(), idx.len() % 3);
+    check_face_indices(idx, 3, n_vertices, span, warn)
+}
+
+/// Drops a trailing partial face of `arity` corners (warning) and rejects out-of-range
+/// indices.
+fn check_face_indices(
+    mut idx: Vec<i32>,
+    arity: usize,
+    n_vertices: usize,
+    span: Span,
+    warn: &mut Vec<Diagnostic>,
+) -> Result<Vec<u32>, Diagnostic> {
+    if !idx.len().is_multiple_of(arity) {
+        let (n, extra) = (idx.len(), idx.len() % arity);
+        let msg = format!("{n} vertex indices is not a multiple of {arity}; the last {extra} are ignored");
         warn.push(Diagnostic::warning(span, msg));
-        idx.truncate(idx.len() / 3 * 3);
+        idx.truncate(idx.len() / arity * arity);
     }
     if let Some(&bad) = idx.iter().find(|&&i| i < 0 || i as usize >= n_vertices) {
         return Err(Diagnostic::error(
@@ -116,20 +171,29 @@ pub fn check_indices(
 /// Applies the shape's transform: points by `m`, tangents by its linear part, normals by
 /// the inverse transpose (as pbrt stores meshes, already transformed).
 pub fn transform(mesh: &mut TriangleMesh, m: &DMat4) {
+    transform_vertices(&mut mesh.p, mesh.s.as_deref_mut(), mesh.n.as_deref_mut(), m);
+}
+
+/// [`transform`] for a patch mesh.
+pub fn transform_patches(mesh: &mut PatchMesh, m: &DMat4) {
+    transform_vertices(&mut mesh.p, None, mesh.n.as_deref_mut(), m);
+}
+
+fn transform_vertices(p: &mut [[f32; 3]], s: Option<&mut [[f32; 3]]>, n: Option<&mut [[f32; 3]]>, m: &DMat4) {
     if *m == DMat4::IDENTITY {
         return;
     }
     let to = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
     let from = |a: &[f32; 3]| DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
-    for p in &mut mesh.p {
+    for p in p {
         *p = to(m.transform_point3(from(p)));
     }
     let linear = DMat3::from_mat4(*m);
-    if let Some(s) = &mut mesh.s {
+    if let Some(s) = s {
         s.iter_mut().for_each(|v| *v = to(linear * from(v)));
     }
     let normal = linear.inverse().transpose();
-    if let Some(n) = &mut mesh.n {
+    if let Some(n) = n {
         n.iter_mut().for_each(|v| *v = to(normal * from(v)));
     }
 }
@@ -139,18 +203,32 @@ const MAX_COORDINATE: f32 = 1e18;
 
 /// Rejects non-finite or overflowing vertex data, naming the first bad vertex.
 pub fn validate(mesh: &TriangleMesh) -> Result<(), String> {
+    validate_vertices(&mesh.p, mesh.n.as_deref(), mesh.s.as_deref(), mesh.uv.as_deref())
+}
+
+/// [`validate`] for a patch mesh.
+pub fn validate_patches(mesh: &PatchMesh) -> Result<(), String> {
+    validate_vertices(&mesh.p, mesh.n.as_deref(), None, mesh.uv.as_deref())
+}
+
+fn validate_vertices(
+    p: &[[f32; 3]],
+    n: Option<&[[f32; 3]]>,
+    s: Option<&[[f32; 3]]>,
+    uv: Option<&[[f32; 2]]>,
+) -> Result<(), String> {
     let bad = |v: &[f32]| v.iter().any(|x| !x.is_finite() || x.abs() > MAX_COORDINATE);
-    if let Some(i) = mesh.p.iter().position(|v| bad(v)) {
-        let [x, y, z] = mesh.p[i];
+    if let Some(i) = p.iter().position(|v| bad(v)) {
+        let [x, y, z] = p[i];
         return Err(format!(
             "vertex {i} is at ({x:?}, {y:?}, {z:?}): positions must be finite and within ±{MAX_COORDINATE:e}"
         ));
     }
     let non_finite = |v: &[f32]| v.iter().any(|x| !x.is_finite());
     let arrays: [(&str, Option<Vec<&[f32]>>); 3] = [
-        ("normal", mesh.n.as_ref().map(|a| a.iter().map(|v| &v[..]).collect())),
-        ("tangent", mesh.s.as_ref().map(|a| a.iter().map(|v| &v[..]).collect())),
-        ("uv", mesh.uv.as_ref().map(|a| a.iter().map(|v| &v[..]).collect())),
+        ("normal", n.map(|a| a.iter().map(|v| &v[..]).collect())),
+        ("tangent", s.map(|a| a.iter().map(|v| &v[..]).collect())),
+        ("uv", uv.map(|a| a.iter().map(|v| &v[..]).collect())),
     ];
     for (what, values) in arrays {
         if let Some(i) = values.as_ref().and_then(|v| v.iter().position(|x| non_finite(x))) {
@@ -158,6 +236,12 @@ pub fn validate(mesh: &TriangleMesh) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// One warning counting zero-area patches, which the renderer drops.
+pub fn degenerate_patches_warning(mesh: &PatchMesh) -> Option<String> {
+    let n = (0..mesh.patch_count()).filter(|&k| mesh.is_degenerate(k)).count();
+    (n > 0).then(|| format!("{n} of {} patches have zero area and are dropped", mesh.patch_count()))
 }
 
 /// One warning counting zero-area triangles, which the renderer drops.

@@ -22,17 +22,18 @@ pub mod values;
 use crate::math::bounds::transform_bounds;
 use crate::parser::Syntax;
 use crate::parser::error::Located;
-use crate::shapes::{Quadric, TriangleMesh};
+use crate::shapes::{PatchMesh, Quadric, TriangleMesh};
 use glam::{DMat4, DVec3};
 
 pub use approx::Approx;
 pub use builder::{LoadOptions, load_scene, load_scene_from_bytes};
 pub use lights::{AreaLightDesc, EnvMapDesc, LightDesc, LightKind};
-pub use materials::{CoatBase, Coated, MaterialDesc, MaterialKind, MixRule, RoughnessRemap, TexValue};
+pub use materials::{CoatBase, Coated, MaterialDesc, MaterialKind, Metal, MixRule, RoughnessRemap, TexValue};
 pub use options::{Camera, CameraKind, Film, Integrator};
 pub use textures::{Mapping2D, Octaves, TextureDesc, TextureKind, TextureSite, UvMapping, Wrap};
 
-/// A shape's geometry: a quadric, or a triangle mesh stored in [`SceneDescription::meshes`].
+/// A shape's geometry: a quadric, a triangle mesh stored in [`SceneDescription::meshes`]
+/// or a bilinear patch mesh stored in [`SceneDescription::patches`].
 #[derive(Clone, Debug, PartialEq)]
 pub enum Geometry {
     Quadric(Quadric),
@@ -41,6 +42,10 @@ pub enum Geometry {
         mesh: u32,
         kind: &'static str,
         filename: Option<String>,
+    },
+    /// v4's `bilinearmesh`.
+    Patches {
+        mesh: u32,
     },
 }
 
@@ -86,6 +91,7 @@ impl ShapeDesc {
         match &self.geometry {
             Geometry::Quadric(q) => q.name(),
             Geometry::Mesh { kind, .. } => kind,
+            Geometry::Patches { .. } => "bilinearmesh",
         }
     }
 
@@ -143,6 +149,7 @@ pub struct SceneDescription {
     pub objects: Vec<ObjectDesc>,
     pub instances: Vec<InstanceDesc>,
     pub meshes: Vec<TriangleMesh>,
+    pub patches: Vec<PatchMesh>,
     pub lights: Vec<LightDesc>,
     pub area_lights: Vec<AreaLightDesc>,
     pub materials: Vec<MaterialDesc>,
@@ -185,6 +192,22 @@ impl SceneDescription {
         match &s.geometry {
             Geometry::Quadric(q) => Some(transform_bounds(&s.object_to_world, q.object_bounds())),
             Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].bounds(),
+            Geometry::Patches { mesh } => self.patches[*mesh as usize].bounds(),
+        }
+    }
+
+    /// World area of one placed shape.
+    pub fn placed_area(&self, p: &PlacedShape) -> f64 {
+        let s = p.shape;
+        // Mesh vertices are stored transformed by the shape's own CTM already: an
+        // instance adds the map from there to the world.
+        let extra = || glam::DMat3::from_mat4(p.object_to_world * s.object_to_world.inverse());
+        match &s.geometry {
+            Geometry::Quadric(q) => q.world_area(glam::DMat3::from_mat4(p.object_to_world)),
+            Geometry::Mesh { mesh, .. } if p.instance.is_some() => self.meshes[*mesh as usize].area_under(extra()),
+            Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].area(),
+            Geometry::Patches { mesh } if p.instance.is_some() => self.patches[*mesh as usize].area_under(extra()),
+            Geometry::Patches { mesh } => self.patches[*mesh as usize].area(),
         }
     }
 
@@ -213,7 +236,17 @@ impl SceneDescription {
     pub fn triangle_count(&self, s: &ShapeDesc) -> usize {
         match &s.geometry {
             Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].triangle_count(),
-            Geometry::Quadric(_) => 0,
+            Geometry::Quadric(_) | Geometry::Patches { .. } => 0,
+        }
+    }
+
+    /// Primitives of a shape: one per triangle or patch, one for a quadric. An emitting
+    /// shape is that many lights.
+    pub fn prim_count(&self, s: &ShapeDesc) -> usize {
+        match &s.geometry {
+            Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].triangle_count(),
+            Geometry::Patches { mesh } => self.patches[*mesh as usize].patch_count(),
+            Geometry::Quadric(_) => 1,
         }
     }
 }

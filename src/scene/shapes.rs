@@ -5,6 +5,7 @@
 //! Shape "sphere" "float radius" 2 "float zmax" 1        # zmin defaults to -radius
 //! Shape "plymesh" "string filename" "geometry/mesh.ply"
 //! Shape "objmesh" "string filename" "model.obj"          # extension: OBJ through tobj
+//! Shape "bilinearmesh" "point3 P" [...] "integer indices" [...]   # v4
 //! ```
 
 use super::{mesh, obj, ply};
@@ -12,7 +13,9 @@ use crate::limits::Limits;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::shapes::{Cone, Cylinder, Disk, Hyperboloid, Paraboloid, Quadric, Sphere, TriangleMesh, loopsubdiv};
+use crate::shapes::{
+    Cone, Cylinder, Disk, Hyperboloid, Paraboloid, PatchMesh, Quadric, Sphere, TriangleMesh, loopsubdiv,
+};
 use glam::Vec3;
 use std::path::PathBuf;
 
@@ -20,6 +23,7 @@ use std::path::PathBuf;
 pub enum Built {
     Quadric(Quadric),
     Mesh { mesh: TriangleMesh, kind: &'static str, filename: Option<String> },
+    Patches(PatchMesh),
 }
 
 type Res<T> = Result<T, Diagnostic>;
@@ -80,6 +84,7 @@ pub fn build(
             let m = mesh::from_params(p, span, warn)?;
             Ok(Some(Built::Mesh { mesh: m, kind: "trianglemesh", filename: None }))
         }
+        "bilinearmesh" => Ok(Some(Built::Patches(mesh::patches_from_params(p, span, warn)?))),
         "loopsubdiv" => loop_subdiv(p, span, limits, warn).map(Some),
         "plymesh" | "objmesh" => file_mesh(ty, p, span, resolve, limits, warn).map(Some),
         _ => Ok(None),

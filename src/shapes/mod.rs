@@ -1,5 +1,6 @@
 //! Shapes with pbrt's parameters: the six quadrics (each with its defaults, clamps and
-//! swaps applied in `new`) and triangle meshes.
+//! swaps applied in `new`), triangle meshes and bilinear patch meshes. [`set`] is where
+//! the renderer dispatches on a shape's family.
 //!
 //! ```text
 //! Shape "sphere"      "float radius" 1 "float zmin" -1 "float zmax" 1 "float phimax" 360
@@ -8,11 +9,13 @@
 //! Shape "cone"        "float height" 1 "float radius" 1 "float phimax" 360            # v3
 //! Shape "paraboloid"  "float radius" 1 "float zmin" 0 "float zmax" 1 "float phimax" 360 # v3
 //! Shape "hyperboloid" "point p1" [0 0 0] "point p2" [1 1 1] "float phimax" 360        # v3
+//! Shape "bilinearmesh" "point3 P" [...] "integer indices" [...]                        # v4
 //! ```
 //! Every quadric is described by a parametric map p(u, v) on [0,1]² with z as its axis,
 //! φ = u·φmax. [`Quadric::point`], [`Quadric::dpdu`] and [`Quadric::dpdv`] evaluate it in
 //! `f64`; areas of transformed shapes integrate |dp/du × dp/dv| in world space.
 
+pub mod bilinear;
 pub mod cone;
 pub mod cylinder;
 pub mod disk;
@@ -21,9 +24,11 @@ pub mod loopsubdiv;
 pub mod paraboloid;
 pub mod quadric;
 pub mod sampling;
+pub mod set;
 pub mod sphere;
 pub mod triangle;
 
+pub use bilinear::{PatchHit, PatchMesh};
 pub use cone::Cone;
 pub use cylinder::Cylinder;
 pub use disk::Disk;
@@ -31,6 +36,7 @@ pub use hyperboloid::Hyperboloid;
 pub use paraboloid::Paraboloid;
 pub use quadric::{QuadricHit, QuadricShape};
 pub use sampling::{QuadricSampler, ShapeSample};
+pub use set::{LocalHit, Piece, ShapeRef, ShapeSet};
 pub use sphere::Sphere;
 #[cfg(target_arch = "x86_64")]
 pub use triangle::edge_candidates8;

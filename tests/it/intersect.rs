@@ -467,13 +467,13 @@ fn mesh_traversal_finds_the_closest_hit_of_all_triangles() {
         let verts: Vec<Vec3> = mesh.p.iter().map(|v| Vec3::from(*v)).collect();
         let tris: Vec<[u32; 3]> = mesh.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
         let mut g = pbrt_sppm::accel::Geometry::new(&mut s);
-        assert_eq!(g.quadrics.len(), with_sphere as usize);
+        assert_eq!(g.shapes.quadrics.len(), with_sphere as usize);
         for ray in sphere_probe_rays(&verts, &tris, &mut rng) {
             let brute = (0..mesh.triangle_count())
                 .filter_map(|t| mesh.intersect_triangle(t, &ray, f32::INFINITY))
                 .map(|h| h.t)
                 .fold(f32::INFINITY, f32::min);
-            let sphere = g.quadrics.first().and_then(|q| q.intersect_t(&ray, f32::INFINITY)).map(|h| h.t);
+            let sphere = g.shapes.quadrics.first().and_then(|q| q.intersect_t(&ray, f32::INFINITY)).map(|h| h.t);
             let hit = g.intersect(&ray);
             let got = hit.map_or(f32::INFINITY, |h| h.t);
             if sphere.is_some_and(|t| t <= brute) {
@@ -765,5 +765,40 @@ fn trace_reports_file_triangle_numbers_after_reordering() {
         let file_index = order.iter().position(|&t| t == quad_tri).unwrap_or(usize::MAX);
         let out = t.trace(&Ray::new(Point3::new(x as f32, y as f32, 1.0), Vector3::new(0.0, 0.0, -1.0)));
         assert_eq!(out["triangle"].as_u64(), Some(file_index as u64), "at ({x}, {y})");
+    }
+}
+
+/// Bilinear patches through `trace`: exact hits on a saddle z = u·v (moved, and
+/// instanced under a mirror), the patch number, (u, v) and the normal.
+#[test]
+fn trace_meets_bilinear_patches_exactly() {
+    let saddles = r#"Shape "bilinearmesh" "point3 P" [0 0 0  1 0 0  0 1 0  1 1 1  2 0 0  2 1 0]
+        "integer indices" [0 1 2 3  1 4 3 5]"#;
+    let world = format!("WorldBegin\nTranslate 0 0 5\n{saddles}\n");
+    let instanced = format!(
+        "WorldBegin\nObjectBegin \"s\"\n{saddles}\nObjectEnd\nTranslate 0 0 5\nScale 1 1 -1\nScale 1 1 -1\nObjectInstance \"s\"\n"
+    );
+    let mut rng = Rng::new(11);
+    for text in [world, instanced] {
+        let t = Tracer::new(scene(&text));
+        for _ in 0..200 {
+            let (x, y) = (2.0 * rng.uniform(), rng.uniform());
+            let out = t.trace(&Ray::new(Point3::new(x as f32, y as f32, 10.0), Vector3::new(0.0, 0.0, -1.0)));
+            assert_eq!(out["shape"], "bilinearmesh");
+            // Patch 0 is z = x·y; patch 1 (u = x − 1) is z = (1 − u)·y = (2 − x)·y.
+            let (patch, u, a) = if x < 1.0 { (0, x, x) } else { (1, x - 1.0, 2.0 - x) };
+            let z = a * y;
+            assert_eq!(out["patch"], patch, "at ({x}, {y})");
+            let t_hit = out["t"].as_f64().unwrap_or(f64::NAN);
+            assert!((t_hit - (5.0 - z)).abs() < 1e-5, "at ({x}, {y}): t {t_hit}, expected {}", 5.0 - z);
+            let uv = &out["uv"];
+            let (ou, ov) = (uv[0].as_f64().unwrap_or(f64::NAN), uv[1].as_f64().unwrap_or(f64::NAN));
+            assert!((ou - u).abs() < 1e-5 && (ov - y).abs() < 1e-5, "at ({x}, {y}): uv {uv}");
+            // ∂p/∂u × ∂p/∂v ∝ (∓y, −a, 1) on both patches.
+            let n = &out["n"];
+            let nz = n[2].as_f64().unwrap_or(f64::NAN);
+            let want = 1.0 / (1.0 + a * a + y * y).sqrt();
+            assert!((nz - want).abs() < 1e-4, "at ({x}, {y}): n {n}, expected z {want}");
+        }
     }
 }

@@ -235,3 +235,63 @@ fn unsupported_shapes_are_skipped_with_one_warning() {
     assert_eq!(s.shapes[0].alpha.map(|a| a.alpha), Some(pbrt_sppm::scene::TexValue::Const(glam::Vec3::splat(0.5))));
     assert!(root().exists());
 }
+
+/// Two saddle patches z = u·v side by side (the second shifted by 1 in x), sharing an
+/// edge.
+const SADDLES: &str = r#"Shape "bilinearmesh" "point3 P" [0 0 0  1 0 0  0 1 0  1 1 1  2 0 0  2 1 0]
+    "integer indices" [0 1 2 3  1 4 3 5]"#;
+
+#[test]
+fn bilinear_meshes_report_patches_areas_and_lights() {
+    // ∫∫ √(1 + u² + v²) over the unit square, per saddle (the second is a mirror image).
+    let saddle = 1.280_789_261_6;
+    let s = one(SADDLES);
+    assert_eq!(s["kind"], "bilinearmesh");
+    assert_eq!(s["patches"], 2);
+    assert_eq!(s["params"]["vertices"], 6);
+    assert!(close(num(&s["area"]), 2.0 * saddle, 1e-6), "{}", s["area"]);
+    let scaled = one(&format!("Scale 2 2 2\n{SADDLES}"));
+    assert!(close(num(&scaled["area"]), 8.0 * saddle, 1e-6), "{}", scaled["area"]);
+    // Inside an instance, the instance's scale counts too.
+    let r =
+        report(&format!("WorldBegin\nObjectBegin \"s\"\n{SADDLES}\nObjectEnd\nScale 3 3 3\nObjectInstance \"s\"\n"));
+    assert!(close(num(&r["shapes"][0]["area"]), 18.0 * saddle, 1e-6), "{}", r["shapes"][0]["area"]);
+    // One light per patch, as in pbrt-v4.
+    let r = report(&format!("WorldBegin\nAreaLightSource \"diffuse\"\n{SADDLES}\n"));
+    assert_eq!((r["counts"]["bilinearmesh"].clone(), r["counts"]["patches"].clone()), (json!(1), json!(2)));
+    assert_eq!(r["counts"]["lights"], 2);
+}
+
+#[test]
+fn bilinear_mesh_inputs_are_checked_as_pbrt_v4_checks_them() {
+    // One patch of four points may leave out its indices.
+    let s = one(r#"Shape "bilinearmesh" "point3 P" [0 0 0 1 0 0 0 1 0 1 1 0]"#);
+    assert_eq!((s["patches"].clone(), num(&s["area"])), (json!(1), 1.0));
+    // Extra indices are dropped with a warning; N of the wrong count is ignored.
+    let sc = scene(
+        "WorldBegin\nShape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"integer indices\" [0 1 2 3 0 1]\n\
+         \"normal N\" [0 0 1]",
+    );
+    let msgs: Vec<&str> = sc.warnings.iter().map(|w| w.message.as_str()).collect();
+    assert!(msgs.iter().any(|m| m.contains("not a multiple of 4; the last 2 are ignored")), "{msgs:?}");
+    assert!(msgs.iter().any(|m| m.contains("\"N\" has 1 entries")), "{msgs:?}");
+    assert_eq!(sc.patches[0].patch_count(), 1);
+    assert!(sc.patches[0].n.is_none());
+    // Errors, located.
+    for (text, wanted, col) in [
+        (
+            r#"Shape "bilinearmesh" "point3 P" [0 0 0 1 0 0 0 1 0 1 1 0] "integer indices" [0 1 2 4]"#,
+            "vertex index 4 is out of range",
+            77,
+        ),
+        (
+            r#"Shape "bilinearmesh" "point3 P" [0 0 0 1 0 0 0 1 0 1 1 0 2 2 2]"#,
+            "bilinearmesh needs \"integer indices\"",
+            7,
+        ),
+        (r#"Shape "bilinearmesh" "integer indices" [0 1 2 3]"#, "bilinearmesh needs \"point3 P\"", 7),
+    ] {
+        let e = load(&format!("WorldBegin\n{text}\n")).expect_err(text).to_string();
+        assert!(e.contains(wanted) && e.contains(&format!(":2:{col}:")), "{e}");
+    }
+}

@@ -1,0 +1,199 @@
+//! The render-ready shapes of a scene, and the one place that dispatches on a shape's
+//! family. Each family's own file owns its intersection, interaction and sampling; the
+//! BVH, the lights and the integrators reach them only through [`ShapeSet`].
+//!
+//! A shape is split into primitives for the BVH: a quadric is one, a triangle mesh one
+//! per triangle, a bilinear patch mesh one per patch. An area light is one light per
+//! primitive, as in pbrt.
+//!
+//! Adding a shape family: its file, a variant in [`ShapeRef`], [`LocalHit`] and
+//! [`Piece`], and an arm in each method below.
+
+use super::bilinear::{PatchHit, PatchMesh};
+use super::quadric::{QuadricHit, QuadricShape};
+use super::sampling::{QuadricSampler, ShapeSample, area_to_solid_angle};
+use super::triangle::{MeshFlags, TriangleHit, TriangleMesh, WatertightRay, watertight};
+use crate::interaction::SurfaceInteraction;
+use crate::math::{Bounds3, Point3, Ray, Vector3};
+
+/// A quadric's intersection cost in triangle tests, for SAH: its root solve with
+/// error bounds and its partial-shape checks take several times a triangle's.
+pub const QUADRIC_COST: f32 = 8.0;
+/// A bilinear patch's: one quadratic, two closest-approach solves.
+pub const PATCH_COST: f32 = 4.0;
+
+/// Every shape rays can hit, by family.
+#[derive(Default)]
+pub struct ShapeSet {
+    pub quadrics: Vec<QuadricShape>,
+    pub meshes: Vec<TriangleMesh>,
+    pub patches: Vec<PatchMesh>,
+}
+
+/// One shape of a BVH: an index into its family's list, and the orientation flags of
+/// meshes (whose vertices are stored transformed).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ShapeRef {
+    Quadric(u32),
+    Mesh { mesh: u32, flags: MeshFlags },
+    Patches { mesh: u32, flags: MeshFlags },
+}
+
+/// Which primitive a ray hit, and what finishing the interaction needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LocalHit {
+    Quadric(u32, QuadricHit),
+    Triangle { mesh: u32, tri: u32, flags: MeshFlags, hit: TriangleHit },
+    Patch { mesh: u32, patch: u32, flags: MeshFlags, hit: PatchHit },
+}
+
+impl LocalHit {
+    /// The primitive's number within its shape (0 for a quadric).
+    pub fn prim(&self) -> u32 {
+        match self {
+            LocalHit::Quadric(..) => 0,
+            LocalHit::Triangle { tri, .. } => *tri,
+            LocalHit::Patch { patch, .. } => *patch,
+        }
+    }
+}
+
+/// A primitive that emits as one area light, with what sampling it needs.
+#[derive(Clone, Debug)]
+pub enum Piece {
+    Quadric { index: u32, sampler: QuadricSampler },
+    Triangle { mesh: u32, tri: u32, flags: MeshFlags },
+    Patch { mesh: u32, patch: u32, flags: MeshFlags },
+}
+
+impl ShapeSet {
+    /// How many BVH primitives the shape has.
+    pub fn prim_count(&self, s: ShapeRef) -> usize {
+        match s {
+            ShapeRef::Quadric(_) => 1,
+            ShapeRef::Mesh { mesh, .. } => self.meshes[mesh as usize].triangle_count(),
+            ShapeRef::Patches { mesh, .. } => self.patches[mesh as usize].patch_count(),
+        }
+    }
+
+    /// A primitive's bounds; `None` for zero-area ones, which are never hit or sampled.
+    pub fn prim_bounds(&self, s: ShapeRef, prim: usize) -> Option<Bounds3> {
+        match s {
+            ShapeRef::Quadric(q) => Some(self.quadrics[q as usize].bounds()),
+            ShapeRef::Mesh { mesh, .. } => {
+                let m = &self.meshes[mesh as usize];
+                (!m.is_degenerate(prim)).then(|| m.triangle_bounds(prim))
+            }
+            ShapeRef::Patches { mesh, .. } => {
+                let m = &self.patches[mesh as usize];
+                (!m.is_degenerate(prim)).then(|| m.patch_bounds(prim))
+            }
+        }
+    }
+
+    /// A primitive's intersection cost in triangle tests, for SAH.
+    pub fn prim_cost(s: ShapeRef) -> f32 {
+        match s {
+            ShapeRef::Quadric(_) => QUADRIC_COST,
+            ShapeRef::Mesh { .. } => 1.0,
+            ShapeRef::Patches { .. } => PATCH_COST,
+        }
+    }
+
+    /// The hit of primitive `prim` of `s` before `t_max`. `wr` is the ray prepared for
+    /// the watertight triangle test with axes (KX, KY, KZ).
+    #[inline(always)]
+    pub fn intersect<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        s: ShapeRef,
+        prim: u32,
+        ray: &Ray,
+        wr: &WatertightRay,
+        t_max: f32,
+    ) -> Option<(f32, LocalHit)> {
+        match s {
+            ShapeRef::Quadric(q) => {
+                let h = self.quadrics[q as usize].intersect_t(ray, t_max)?;
+                Some((h.t, LocalHit::Quadric(q, h)))
+            }
+            ShapeRef::Mesh { mesh, flags } => {
+                let hit = watertight::<KX, KY, KZ>(self.meshes[mesh as usize].corners(prim as usize), wr, t_max)?;
+                Some((hit.t, LocalHit::Triangle { mesh, tri: prim, flags, hit }))
+            }
+            ShapeRef::Patches { mesh, flags } => {
+                let hit = self.patches[mesh as usize].intersect(prim as usize, ray, t_max)?;
+                Some((hit.t, LocalHit::Patch { mesh, patch: prim, flags, hit }))
+            }
+        }
+    }
+
+    /// The full interaction of a hit, in the space the shape is stored in.
+    pub fn interaction(&self, hit: &LocalHit) -> SurfaceInteraction {
+        match *hit {
+            LocalHit::Quadric(q, h) => self.quadrics[q as usize].interaction(&h),
+            LocalHit::Triangle { mesh, tri, flags, hit } => {
+                self.meshes[mesh as usize].interaction(tri as usize, &hit, flags)
+            }
+            LocalHit::Patch { mesh, patch, flags, hit } => {
+                self.patches[mesh as usize].interaction(patch as usize, &hit, flags)
+            }
+        }
+    }
+
+    /// The shape's emitting pieces with their areas, one per primitive. Zero-area
+    /// primitives keep their slot (lights are found by primitive number) with area 0.
+    pub fn pieces(&self, s: ShapeRef) -> Vec<(Piece, f64)> {
+        match s {
+            ShapeRef::Quadric(index) => {
+                let q = &self.quadrics[index as usize];
+                let area = q.quadric.world_area(glam::DMat3::from_mat4(q.render_from_object));
+                vec![(Piece::Quadric { index, sampler: q.sampler() }, area)]
+            }
+            ShapeRef::Mesh { mesh, flags } => {
+                let m = &self.meshes[mesh as usize];
+                (0..m.triangle_count())
+                    .map(|t| {
+                        let [a, b, c] = m.vertices(t);
+                        (Piece::Triangle { mesh, tri: t as u32, flags }, 0.5 * (b - a).cross(c - a).length())
+                    })
+                    .collect()
+            }
+            ShapeRef::Patches { mesh, flags } => {
+                let m = &self.patches[mesh as usize];
+                (0..m.patch_count()).map(|k| (Piece::Patch { mesh, patch: k as u32, flags }, m.patch_area(k))).collect()
+            }
+        }
+    }
+
+    /// A point on a piece: by solid angle as seen from `reference`, or by area.
+    pub fn sample_piece(&self, piece: &Piece, reference: Option<Point3>, u: [f32; 2]) -> Option<ShapeSample> {
+        let by_area = match piece {
+            Piece::Quadric { index, sampler } => {
+                let q = &self.quadrics[*index as usize];
+                return match reference {
+                    Some(r) => q.sample_solid_angle(sampler, r, u),
+                    None => Some(q.sample_area(sampler, u)),
+                };
+            }
+            Piece::Triangle { mesh, tri, flags } => {
+                self.meshes[*mesh as usize].sample_triangle(*tri as usize, u, *flags)
+            }
+            Piece::Patch { mesh, patch, flags } => self.patches[*mesh as usize].sample(*patch as usize, u, *flags)?,
+        };
+        match reference {
+            Some(r) => area_to_solid_angle(by_area, r),
+            None => Some(by_area),
+        }
+    }
+
+    /// The solid-angle density `sample_piece` gives direction `wi` from `p`.
+    pub fn pdf_piece(&self, piece: &Piece, p: Point3, wi: Vector3) -> f32 {
+        match piece {
+            Piece::Quadric { index, sampler } => self.quadrics[*index as usize].pdf_solid_angle(sampler, p, wi),
+            Piece::Triangle { mesh, tri, .. } => {
+                self.meshes[*mesh as usize].pdf_triangle_solid_angle(*tri as usize, p, wi)
+            }
+            Piece::Patch { mesh, patch, .. } => self.patches[*mesh as usize].pdf_solid_angle(*patch as usize, p, wi),
+        }
+    }
+}
