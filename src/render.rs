@@ -13,6 +13,7 @@ use crate::sampling::Distribution1D;
 use crate::scene::{
     AlphaRule, AreaLightDesc, Film, Integrator, MaterialKind, MixRule, SceneDescription, ShapeAlpha, TexValue,
 };
+use crate::shapes::ShapeSample;
 use crate::spectrum::{Rgb, luminance};
 use glam::Vec3;
 
@@ -151,6 +152,24 @@ impl RenderScene {
         match self.geometry.shape_of(hit) {
             (None, s) => self.world_shape_alpha[s as usize].as_ref(),
             (Some(o), s) => self.object_shape_alpha[o as usize][s as usize].as_ref(),
+        }
+    }
+
+    /// Whether the alpha mask of `light`'s shape cuts away the point drawn on it (pbrt-v4
+    /// masks sampled points of area lights by a hash of their position).
+    // DEVIATION(pbrt): pbrt-v3 ignores alpha on area lights, which then emit from
+    // their cut-away parts along light samples and photons (but not where rays hit
+    // them). pbrt-v4 also masks the emission of a hit by alpha, after the hit itself
+    // passed the ray's alpha test, counting a fractional alpha twice there and once
+    // on light samples. Here the mask applies once either way.
+    pub fn emission_masked(&self, light: &Light, surface: Option<&ShapeSample>) -> bool {
+        let (Light::Area { shape, .. }, Some(s)) = (light, surface) else { return false };
+        let Some(alpha) = &self.world_shape_alpha[*shape as usize] else { return false };
+        let ctx = TexCtx { p: s.p.0, n: s.n.0, uv: s.uv, ..TexCtx::default() };
+        let a = self.textures.float(alpha.alpha, &ctx);
+        match alpha.rule {
+            AlphaRule::ZeroCuts => a == 0.0,
+            AlphaRule::Stochastic => a < 1.0 && (a <= 0.0 || hash_unit(&bits(s.p.0)) > a),
         }
     }
 
@@ -333,7 +352,7 @@ fn area_lights(
             // still keeps its slot (lights are found by primitive) but emits nothing.
             let area = area as f32;
             let l = if area > 0.0 { l } else { Vec3::ZERO };
-            lights.push(Light::Area { emitter, l, two_sided: desc.two_sided, area });
+            lights.push(Light::Area { emitter, shape: i as u32, l, two_sided: desc.two_sided, area });
         }
         emitters[i] = Some(EmitterInfo { l, two_sided: desc.two_sided, first_light });
     }

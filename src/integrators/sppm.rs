@@ -348,7 +348,9 @@ fn direct_light(
     let (u_light, u_bsdf, u_lobe) = (rng.uniform2(), rng.uniform2(), rng.uniform());
     let ns = bsdf.shading_normal();
     let mut ld = Vec3::ZERO;
-    if let Some(ls) = light.sample_li(&scene.geometry, si.p.0, u_light) {
+    if let Some(ls) = light.sample_li(&scene.geometry, si.p.0, u_light)
+        && !scene.emission_masked(light, ls.surface.as_ref())
+    {
         let f = bsdf.f(wo, ls.wi) * ls.wi.dot(ns).abs();
         if f != Vec3::ZERO && ls.li != Vec3::ZERO && visible(scene, si, &ls) {
             let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi)) };
@@ -406,6 +408,9 @@ fn trace_photon(
     let light: &Light = &scene.lights[li];
     let (u1, u2) = (rng.uniform2(), rng.uniform2());
     let Some(e) = light.sample_le(&scene.geometry, scene.world, u1, u2) else { return 0 };
+    if scene.emission_masked(light, e.surface.as_ref()) {
+        return 0;
+    }
     if e.pdf_pos <= 0.0 || e.pdf_dir <= 0.0 || e.le == Vec3::ZERO {
         return 0;
     }

@@ -24,7 +24,7 @@ use crate::math::frame::coordinate_system;
 use crate::math::{Normal3, Point3, Ray, Vector3};
 use crate::sampling::{uniform_cone, uniform_sphere};
 use crate::scene::{LightDesc, LightKind};
-use crate::shapes::Piece;
+use crate::shapes::{Piece, ShapeSample};
 use crate::spectrum::{Rgb, luminance};
 use envmap::EnvMap;
 use glam::Vec3;
@@ -57,6 +57,8 @@ pub enum Light {
     Area {
         /// The primitive that emits (one light per triangle or patch, as in pbrt).
         emitter: Piece,
+        /// The world shape it belongs to (whose alpha mask applies).
+        shape: u32,
         l: Rgb,
         two_sided: bool,
         area: f32,
@@ -73,6 +75,8 @@ pub struct LightSample {
     /// The point to test visibility against; `None` for directions to infinity.
     pub p_light: Option<Vec3>,
     pub delta: bool,
+    /// The point drawn on an area light (its alpha mask may cut it away).
+    pub surface: Option<ShapeSample>,
 }
 
 /// A photon leaving a light.
@@ -83,6 +87,8 @@ pub struct Emission {
     pub pdf_pos: f32,
     pub pdf_dir: f32,
     pub le: Rgb,
+    /// The point drawn on an area light (its alpha mask may cut it away).
+    pub surface: Option<ShapeSample>,
 }
 
 /// The scene's bounding sphere (for distant and infinite lights).
@@ -157,6 +163,7 @@ impl Light {
                     pdf: 1.0,
                     p_light: Some(*lp),
                     delta: true,
+                    surface: None,
                 })
             }
             Light::Spot { p: lp, frame, i, cos_total, cos_start, smooth } => {
@@ -170,15 +177,19 @@ impl Light {
                     pdf: 1.0,
                     p_light: Some(*lp),
                     delta: true,
+                    surface: None,
                 })
             }
-            Light::Distant { w, l } => Some(LightSample { wi: *w, li: *l, pdf: 1.0, p_light: None, delta: true }),
+            Light::Distant { w, l } => {
+                Some(LightSample { wi: *w, li: *l, pdf: 1.0, p_light: None, delta: true, surface: None })
+            }
             Light::Infinite { l, map: None } => {
-                Some(LightSample { wi: uniform_sphere(u), li: *l, pdf: 1.0 / (4.0 * PI), p_light: None, delta: false })
+                let (wi, pdf) = (uniform_sphere(u), 1.0 / (4.0 * PI));
+                Some(LightSample { wi, li: *l, pdf, p_light: None, delta: false, surface: None })
             }
             Light::Infinite { map: Some(env), .. } => {
                 let (wi, pdf) = env.sample(u)?;
-                (pdf > 0.0).then(|| LightSample { wi, li: env.le(wi), pdf, p_light: None, delta: false })
+                (pdf > 0.0).then(|| LightSample { wi, li: env.le(wi), pdf, p_light: None, delta: false, surface: None })
             }
             Light::Area { emitter, l, two_sided, .. } => {
                 let s = g.shapes.sample_piece(emitter, Some(Point3(p)), u)?;
@@ -191,6 +202,7 @@ impl Light {
                     pdf: s.pdf,
                     p_light: Some(s.p.0),
                     delta: false,
+                    surface: Some(s),
                 })
             }
         }
@@ -218,6 +230,7 @@ impl Light {
                     pdf_pos: 1.0,
                     pdf_dir: 1.0 / (4.0 * PI),
                     le: *i,
+                    surface: None,
                 })
             }
             Light::Spot { p, frame, i, cos_total, cos_start, smooth } => {
@@ -225,14 +238,14 @@ impl Light {
                 let d = frame[0] * l.x + frame[1] * l.y + frame[2] * l.z;
                 let le = *i * Self::spot_falloff(frame, d, *cos_total, *cos_start, *smooth);
                 let pdf_dir = 1.0 / (2.0 * PI * (1.0 - cos_total));
-                Some(Emission { ray: Ray::new(Point3(*p), Vector3(d)), n: d, pdf_pos: 1.0, pdf_dir, le })
+                Some(Emission { ray: Ray::new(Point3(*p), Vector3(d)), n: d, pdf_pos: 1.0, pdf_dir, le, surface: None })
             }
             Light::Distant { w, l } => {
                 let (a, b) = coordinate_system(*w);
                 let cd = crate::camera::concentric_disk(u1);
                 let o = world.center + r * (cd.x * a + cd.y * b) + r * *w;
                 let ray = Ray::new(Point3(o), Vector3(-*w));
-                Some(Emission { ray, n: -*w, pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0, le: *l })
+                Some(Emission { ray, n: -*w, pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0, le: *l, surface: None })
             }
             Light::Infinite { l, map } => {
                 // w points toward the environment; photons travel along d = −w.
@@ -248,7 +261,7 @@ impl Light {
                 let cd = crate::camera::concentric_disk(u2);
                 let o = world.center + r * (cd.x * a + cd.y * b) + r * w;
                 let ray = Ray::new(Point3(o), Vector3(d));
-                Some(Emission { ray, n: d, pdf_pos: 1.0 / (PI * r * r), pdf_dir, le })
+                Some(Emission { ray, n: d, pdf_pos: 1.0 / (PI * r * r), pdf_dir, le, surface: None })
             }
             Light::Area { emitter, l, two_sided, .. } => {
                 let s = g.shapes.sample_piece(emitter, None, u1)?;
@@ -272,7 +285,7 @@ impl Light {
                 }
                 let p_error = crate::math::float::gamma(8) * s.p.0.abs() + Vec3::splat(1e-30);
                 let o = offset_ray_origin(s.p, p_error, Normal3(n), Vector3(d));
-                Some(Emission { ray: Ray::new(o, Vector3(d)), n, pdf_pos: s.pdf, pdf_dir, le: *l })
+                Some(Emission { ray: Ray::new(o, Vector3(d)), n, pdf_pos: s.pdf, pdf_dir, le: *l, surface: Some(s) })
             }
         }
     }

@@ -326,7 +326,8 @@ impl PatchMesh {
             None if flags.reverse_orientation ^ flags.swaps_handedness => n = -n,
             None => {}
         }
-        Some(ShapeSample { p: Point3(p), n: Normal3(n), pdf: Self::uv_pdf(c, uv) / jacobian })
+        let st = self.st(patch, uv).0.to_array();
+        Some(ShapeSample { p: Point3(p), n: Normal3(n), uv: st, pdf: Self::uv_pdf(c, uv) / jacobian })
     }
 
     /// Solid-angle density of `sample` (converted at `reference`) along `wi`.

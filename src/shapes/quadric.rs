@@ -149,6 +149,11 @@ impl QuadricShape {
         local(&self.quadric, hit.p_obj, hit.phi).uv
     }
 
+    /// (u, v) of an object-space point on the surface.
+    pub fn uv_of_object_point(&self, p_obj: DVec3) -> [f64; 2] {
+        local(&self.quadric, p_obj, phi_of(p_obj.x, p_obj.y)).uv
+    }
+
     /// Full differential geometry at a hit found by [`QuadricShape::intersect_t`].
     pub fn interaction(&self, hit: &QuadricHit) -> SurfaceInteraction {
         let l = local(&self.quadric, hit.p_obj, hit.phi);

@@ -20,11 +20,13 @@ use crate::math::{Normal3, Point3, Ray, Vector3};
 use glam::{DMat3, DVec3};
 use std::f64::consts::TAU;
 
-/// A sampled point with its normal and density (w.r.t. area or solid angle).
+/// A sampled point with its normal, texture coordinates (for alpha masks) and density
+/// (w.r.t. area or solid angle).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShapeSample {
     pub p: Point3,
     pub n: Normal3,
+    pub uv: [f32; 2],
     pub pdf: f32,
 }
 
@@ -148,7 +150,8 @@ impl QuadricShape {
             None => self.pdf_area_uv(s, uv),
             Some(p_uv) => p_uv / self.area_element(uv[0], uv[1]),
         };
-        ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), pdf: pdf as f32 }
+        let uv = uv.map(|x| x as f32);
+        ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), uv, pdf: pdf as f32 }
     }
 
     /// The world centre and radius of a full sphere under a similarity transform.
@@ -193,7 +196,8 @@ impl QuadricShape {
             n = -n;
         }
         let pdf = 1.0 / (TAU * (1.0 - cos_max));
-        Some(ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), pdf: pdf as f32 })
+        let uv = self.uv_of_object_point(self.render_from_object.inverse().transform_point3(p)).map(|x| x as f32);
+        Some(ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), uv, pdf: pdf as f32 })
     }
 
     /// The solid-angle density of [`QuadricShape::sample_solid_angle`] for direction `wi`
@@ -257,7 +261,9 @@ impl TriangleMesh {
             n = -n;
         }
         let area = 0.5 * (p1 - p0).cross(p2 - p0).length();
-        ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), pdf: (1.0 / area) as f32 }
+        let [t0, t1, t2] = self.uvs(tri);
+        let uv = (b0 as f32 * t0 + b1 as f32 * t1 + b2 as f32 * t2).to_array();
+        ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), uv, pdf: (1.0 / area) as f32 }
     }
 
     /// Solid-angle density of area-sampling triangle `tri` from `reference` along `wi`.

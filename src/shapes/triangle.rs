@@ -356,8 +356,9 @@ fn any<const CMP: i32>(e: [std::arch::x86_64::__m256; 3]) -> u32 {
 }
 
 impl TriangleMesh {
+    /// The texture coordinates of a triangle's corners (pbrt's defaults without `uv`).
     #[inline]
-    fn uvs(&self, tri: usize) -> [glam::Vec2; 3] {
+    pub(super) fn uvs(&self, tri: usize) -> [glam::Vec2; 3] {
         match &self.uv {
             Some(uv) => {
                 let i = &self.indices[3 * tri..3 * tri + 3];

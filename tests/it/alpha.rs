@@ -1,6 +1,7 @@
 //! Alpha masks: which rays pass through a shape, for each version's rule.
 
 use crate::common::scene;
+use pbrt_sppm::integrators::RenderSettings;
 use pbrt_sppm::math::{Point3, Ray, Vector3};
 use pbrt_sppm::render::RenderScene;
 
@@ -74,4 +75,61 @@ fn v4_alpha_cuts_quadrics_and_instances() {
     let s = RenderScene::new(scene(text));
     let hit = s.intersect(&Ray::new(Point3::new(0.0, 0.0, -5.0), Vector3::new(0.0, 0.0, 1.0))).expect("a hit");
     assert!((s.geometry.interaction(&hit).p.0.z - 2.0).abs() < 1e-4, "the instanced ball is cut away");
+}
+
+/// An emitting quad at z = 1 facing down over a diffuse floor, with the light's alpha
+/// `params`, in a file of syntax `v3` or v4; 16×16 pixels looking down at the floor.
+fn masked_light(v3: bool, params: &str, textures: &str) -> RenderScene {
+    let (pt, uv) = if v3 { ("point", "float uv") } else { ("point3", "point2 uv") };
+    let film = if v3 { "image" } else { "rgb" };
+    let text = format!(
+        "LookAt 0 -3 4  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 40\n\
+         Film \"{film}\" \"integer xresolution\" 16 \"integer yresolution\" 16\n\
+         Integrator \"sppm\" \"integer photonsperiteration\" 2000\n\
+         Sampler \"halton\" \"integer pixelsamples\" 4\n\
+         WorldBegin\n{textures}\n\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [5 5 5]\n\
+         Shape \"trianglemesh\" \"{pt} P\" [-1 -1 1 -1 1 1 1 1 1 1 -1 1] \"integer indices\" [0 1 2 0 2 3] \
+         \"{uv}\" [0 0 0 1 1 1 1 0] {params}\nAttributeEnd\n\
+         Shape \"trianglemesh\" \"{pt} P\" [-4 -4 0 4 -4 0 4 4 0 -4 4 0] \"integer indices\" [0 1 2 0 2 3]\n{}",
+        if v3 { "WorldEnd\n" } else { "" }
+    );
+    RenderScene::new(scene(&text))
+}
+
+/// The fraction of light samples from the middle of the floor that the light's alpha
+/// mask cuts away (the quad is two lights, one per triangle, of equal area).
+fn masked_fraction(s: &RenderScene) -> f64 {
+    assert_eq!(s.lights.len(), 2);
+    let mut rng = pbrt_sppm::sampling::Rng::new(5);
+    let n = 4000;
+    let masked = (0..n)
+        .filter(|k| {
+            let light = &s.lights[k % 2];
+            let ls = light.sample_li(&s.geometry, glam::Vec3::ZERO, rng.uniform2()).expect("a sample");
+            s.emission_masked(light, ls.surface.as_ref())
+        })
+        .count();
+    masked as f64 / n as f64
+}
+
+#[test]
+fn alpha_cuts_area_light_emission_where_it_cuts_the_surface() {
+    let half = "Texture \"half\" \"float\" \"checkerboard\" \"float uscale\" 2 \"float tex1\" 0 \"float tex2\" 1";
+    for v3 in [true, false] {
+        let f = masked_fraction(&masked_light(v3, "\"texture alpha\" \"half\"", half));
+        assert!((f - 0.5).abs() < 0.03, "v3 {v3}: {f} of the light's samples cut, not half");
+        assert_eq!(masked_fraction(&masked_light(v3, "", "")), 0.0);
+    }
+    // v4: α = 0.25 keeps a quarter of the emitting points.
+    let f = masked_fraction(&masked_light(false, "\"float alpha\" 0.25", ""));
+    assert!((f - 0.75).abs() < 0.03, "{f}");
+    // A light cut away entirely lights nothing: no light samples and no photons.
+    for v3 in [true, false] {
+        let image =
+            masked_light(v3, "\"float alpha\" 0", "").render(&RenderSettings::default()).expect("renders").image;
+        assert!(image.pixels.iter().all(|p| *p == [0.0; 3]), "v3 {v3}: a cut-away light lit the floor");
+        let lit = masked_light(v3, "", "").render(&RenderSettings::default()).expect("renders").image;
+        assert!(lit.pixels.iter().flatten().sum::<f32>() > 0.0);
+    }
 }
