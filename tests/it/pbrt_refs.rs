@@ -11,7 +11,7 @@ use pbrt_sppm::render::RenderScene;
 /// Renders `pbrt-scenes/verify/{name}.pbrt` at the scene's own budget and requires the
 /// worst tile's channel means within `bound` of `tests/data/pbrt-ref/{name}.exr`
 /// (relMSE is printed beside it).
-fn assert_matches_pbrt(name: &str, bound: f64) {
+pub fn assert_matches_pbrt(name: &str, bound: f64) {
     let scene = load_file(&root().join(format!("pbrt-scenes/verify/{name}.pbrt"))).expect("the scene loads");
     let ours = RenderScene::new(scene).render(&RenderSettings::default()).expect("renders").image;
     let reference = read_image(&root().join(format!("tests/data/pbrt-ref/{name}.exr"))).expect("the reference");

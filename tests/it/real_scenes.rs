@@ -101,3 +101,15 @@ fn buddha_fractal_instances_one_mesh_25250_times() {
     assert_eq!(s.meshes[1].triangle_count(), 29_890);
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
 }
+
+/// `pbrt-scenes/verify/v4-killeroo.pbrt` reads the killeroo's `loopsubdiv` control mesh
+/// from ../shared/scenes.
+#[test]
+#[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
+fn the_killeroo_renders_as_in_pbrt_v4() {
+    if shared().is_none() {
+        return;
+    }
+    // pbrt-v4's own 128-iteration image: worst tile 0.70%, relMSE 2.7e-4.
+    crate::pbrt_refs::assert_matches_pbrt("v4-killeroo", 0.04);
+}
