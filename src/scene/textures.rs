@@ -345,8 +345,9 @@ fn image_texture(p: &ParamList, at: Span, site: &TextureSite, r: &mut dyn Resolv
     let mut image = match r.image(&name) {
         Ok(img) => img,
         Err(e) => {
+            // pbrt-v3 stands in a one-texel image of value `scale` (pbrt-v4 aborts).
             r.approximate(name_at, format!("imagemap ({e})"), Approx::MissingImage);
-            return Ok(TextureKind::Constant(TexValue::Const(Vec3::splat(0.5))));
+            return Ok(TextureKind::Constant(TexValue::Const(Vec3::splat(scale))));
         }
     };
     let linear = gamma == Some(false) || encoding.as_deref() == Some("linear");

@@ -225,14 +225,24 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
          Material \"diffuse\" \"texture reflectance\" \"gone\" Shape \"disk\"",
     )
     .unwrap();
-    // An image that cannot be read is drawn as 0.5, and noted where it is named.
+    // An image that cannot be read is drawn as its `scale` (pbrt-v3's one-texel stand-in;
+    // 1 by default), and noted where it is named.
     let s = crate::common::load_file(&path).unwrap();
     assert_eq!(s.approximated.len(), 1, "{:?}", s.approximated);
     let a = &s.approximated[0];
     assert!(a.what.contains("missing.png") && (a.line, a.column) == (1, 67), "{a:?}");
     let rs = RenderScene::new(s);
     let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
-    assert_eq!(rs.textures.eval(*kd, &at_uv([0.3, 0.3])).to_array(), [0.5; 3]);
+    assert_eq!(rs.textures.eval(*kd, &at_uv([0.3, 0.3])).to_array(), [1.0; 3]);
+    std::fs::write(
+        &path,
+        "WorldBegin Texture \"gone\" \"spectrum\" \"imagemap\" \"string filename\" \"missing.png\" \"float scale\" 0.3 \
+         Material \"diffuse\" \"texture reflectance\" \"gone\" Shape \"disk\"",
+    )
+    .unwrap();
+    let rs = RenderScene::new(crate::common::load_file(&path).unwrap());
+    let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
+    assert_eq!(rs.textures.eval(*kd, &at_uv([0.3, 0.3])).to_array(), [0.3; 3]);
 }
 
 #[test]
