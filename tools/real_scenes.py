@@ -9,7 +9,7 @@ quick and like for like: the resolution divided by --shrink, and the Integrator
 replaced by SPPM with the scene's own maxdepth, radius and photon count (capped) and
 --iterations iterations (pbrt renders a non-SPPM integrator otherwise, which converges
 to the same image only for some of them). The copy lives in a temporary folder whose
-other files are links to the scene's own.
+other files are links to those of the scene's collection.
 
     python3 tools/real_scenes.py [--iterations 16] [--shrink 4] [--photons 100000]
 """
@@ -58,9 +58,10 @@ def shrink(text, factor):
 
 def prepared_copy(scene, tmp, check, args):
     """A linked copy of the scene's folder with the main file rewritten."""
-    folder = Path(tmp) / scene.parent.name
-    shutil.copytree(scene.parent, folder, copy_function=os.symlink)
-    target = folder / scene.name
+    rel = scene.relative_to(SHARED / "scenes")
+    collection = SHARED / "scenes" / rel.parts[0]
+    shutil.copytree(collection, Path(tmp) / rel.parts[0], copy_function=os.symlink)
+    target = Path(tmp) / rel
     text = scene.read_text(errors="replace")
     integ = check["integrator"]
     v3 = check["syntax"] == "v3"

@@ -40,7 +40,7 @@ impl Approx {
             Approx::UnsupportedMaterial => "this material type is not supported; rendered as diffuse 0.5",
             Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
             Approx::MissingImage => {
-                "the image cannot be read; as in pbrt-v3, an image texture is the constant `scale` (1 by default), an environment map a constant sky, a normal map a smooth surface"
+                "the image cannot be read; as in pbrt-v3, an image texture is a grey texel of 0.5 (sRGB-decoded where `gamma` is on, as it is for PNG and TGA) times `scale`, an environment map a constant sky, a normal map a smooth surface"
             }
             Approx::Motion => "animated transforms are not supported; the start transform is used",
             Approx::Camera => "this camera type is not supported; a perspective camera is used",

@@ -345,9 +345,13 @@ fn image_texture(p: &ParamList, at: Span, site: &TextureSite, r: &mut dyn Resolv
     let mut image = match r.image(&name) {
         Ok(img) => img,
         Err(e) => {
-            // pbrt-v3 stands in a one-texel image of value `scale` (pbrt-v4 aborts).
+            // pbrt-v3 stands in one grey texel, converted as the file's texels would be
+            // (pbrt-v4 aborts).
             r.approximate(name_at, format!("imagemap ({e})"), Approx::MissingImage);
-            return Ok(TextureKind::Constant(TexValue::Const(Vec3::splat(scale))));
+            let lower = name.to_ascii_lowercase();
+            let gamma = gamma.unwrap_or(lower.ends_with(".png") || lower.ends_with(".tga"));
+            let grey = if gamma { crate::imageio::from_srgb(0.5) } else { 0.5 };
+            return Ok(TextureKind::Constant(TexValue::Const(Vec3::splat(scale * grey))));
         }
     };
     let linear = gamma == Some(false) || encoding.as_deref() == Some("linear");

@@ -225,24 +225,28 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
          Material \"diffuse\" \"texture reflectance\" \"gone\" Shape \"disk\"",
     )
     .unwrap();
-    // An image that cannot be read is drawn as its `scale` (pbrt-v3's one-texel stand-in;
-    // 1 by default), and noted where it is named.
+    // An image that cannot be read is pbrt-v3's stand-in, a grey texel of 0.5 converted
+    // as the file's would be (PNG: sRGB-decoded) times `scale`, and noted where it is
+    // named.
     let s = crate::common::load_file(&path).unwrap();
     assert_eq!(s.approximated.len(), 1, "{:?}", s.approximated);
     let a = &s.approximated[0];
     assert!(a.what.contains("missing.png") && (a.line, a.column) == (1, 67), "{a:?}");
     let rs = RenderScene::new(s);
     let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
-    assert_eq!(rs.textures.eval(*kd, &at_uv([0.3, 0.3])).to_array(), [1.0; 3]);
+    let grey = pbrt_sppm::imageio::from_srgb(0.5);
+    assert!((grey - 0.214).abs() < 1e-3);
+    assert_eq!(rs.textures.eval(*kd, &at_uv([0.3, 0.3])).to_array(), [grey; 3]);
     std::fs::write(
         &path,
-        "WorldBegin Texture \"gone\" \"spectrum\" \"imagemap\" \"string filename\" \"missing.png\" \"float scale\" 0.3 \
+        "WorldBegin Texture \"gone\" \"spectrum\" \"imagemap\" \"string filename\" \"missing.exr\" \"float scale\" 0.3 \
          Material \"diffuse\" \"texture reflectance\" \"gone\" Shape \"disk\"",
     )
     .unwrap();
     let rs = RenderScene::new(crate::common::load_file(&path).unwrap());
     let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
-    assert_eq!(rs.textures.eval(*kd, &at_uv([0.3, 0.3])).to_array(), [0.3; 3]);
+    // An EXR is read linear: 0.5 · scale.
+    assert_eq!(rs.textures.eval(*kd, &at_uv([0.3, 0.3])).to_array(), [0.3 * 0.5; 3]);
 }
 
 #[test]
