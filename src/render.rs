@@ -162,7 +162,13 @@ impl RenderScene {
     // them). pbrt-v4 also masks the emission of a hit by alpha, after the hit itself
     // passed the ray's alpha test, counting a fractional alpha twice there and once
     // on light samples. Here the mask applies once either way.
+    #[inline]
     pub fn emission_masked(&self, light: &Light, surface: Option<&ShapeSample>) -> bool {
+        self.has_alpha && self.emission_masked_by_alpha(light, surface)
+    }
+
+    #[inline(never)]
+    fn emission_masked_by_alpha(&self, light: &Light, surface: Option<&ShapeSample>) -> bool {
         let (Light::Area { shape, .. }, Some(s)) = (light, surface) else { return false };
         let Some(alpha) = &self.world_shape_alpha[*shape as usize] else { return false };
         let ctx = TexCtx { p: s.p.0, n: s.n.0, uv: s.uv, ..TexCtx::default() };
