@@ -224,15 +224,16 @@ impl PatchMesh {
                 (dpdu, dpdv) = (dpds, dpdt);
             }
         }
-        // Second fundamental form: only ∂²p/∂u∂v is nonzero on a bilinear patch.
+        // Only ∂²p/∂u∂v is nonzero on a bilinear patch.
         let d2p_duv = (p00 - p01) + (p11 - p10);
-        let (e, f, g) = (dpdu.dot(dpdu), dpdu.dot(dpdv), dpdv.dot(dpdv));
+        // First fundamental form E, F, G; of the second, only f (e = g = 0).
+        let (e1, f1, g1) = (dpdu.dot(dpdu), dpdu.dot(dpdv), dpdv.dot(dpdv));
         let n = dpdu.cross(dpdv).normalize_or_zero();
-        let ff = n.dot(d2p_duv);
-        let egf2 = e * g - f * f;
+        let f2 = n.dot(d2p_duv);
+        let egf2 = e1 * g1 - f1 * f1;
         let inv = if egf2 == 0.0 { 0.0 } else { 1.0 / egf2 };
-        let dndu = (ff * f * inv) * dpdu + (-ff * e * inv) * dpdv;
-        let dndv = (-ff * g * inv) * dpdu + (ff * f * inv) * dpdv;
+        let dndu = (f2 * f1 * inv) * dpdu + (-f2 * e1 * inv) * dpdv;
+        let dndv = (-f2 * g1 * inv) * dpdu + (f2 * f1 * inv) * dpdv;
         let (dndu, dndv) = (dndu * duds + dndv * dvds, dndu * dudt + dndv * dvdt);
         let p_error = gamma(6) * (p00.abs() + p01.abs() + p10.abs() + p11.abs());
         let n = if flags.reverse_orientation ^ flags.swaps_handedness { -n } else { n };
