@@ -172,23 +172,23 @@ impl RenderScene {
         let (Light::Area { shape, .. }, Some(s)) = (light, surface) else { return false };
         let Some(alpha) = &self.world_shape_alpha[*shape as usize] else { return false };
         let ctx = TexCtx { p: s.p.0, n: s.n.0, uv: s.uv, ..TexCtx::default() };
-        let a = self.textures.float(alpha.alpha, &ctx);
-        match alpha.rule {
+        self.alpha_cuts(&alpha.alpha, alpha.rule, &ctx, || hash_unit(&bits(s.p.0)))
+    }
+
+    /// Whether alpha `v` cuts the surface at `ctx` under `rule`; `hash` in [0, 1) makes
+    /// the stochastic rule's choice.
+    fn alpha_cuts(&self, v: &TexValue, rule: AlphaRule, ctx: &TexCtx, hash: impl Fn() -> f32) -> bool {
+        let a = self.textures.float(*v, ctx);
+        match rule {
             AlphaRule::ZeroCuts => a == 0.0,
-            AlphaRule::Stochastic => a < 1.0 && (a <= 0.0 || hash_unit(&bits(s.p.0)) > a),
+            AlphaRule::Stochastic => a < 1.0 && (a <= 0.0 || hash() > a),
         }
     }
 
     /// Whether `alpha` cuts the surface away where ray `r` meets it.
     fn cuts(&self, alpha: &ShapeAlpha, si: &SurfaceInteraction, r: &Ray, shadow: bool) -> bool {
         let ctx = TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, ..TexCtx::default() };
-        let test = |v: &TexValue| {
-            let a = self.textures.float(*v, &ctx);
-            match alpha.rule {
-                AlphaRule::ZeroCuts => a == 0.0,
-                AlphaRule::Stochastic => a < 1.0 && (a <= 0.0 || ray_hash(r) > a),
-            }
-        };
+        let test = |v: &TexValue| self.alpha_cuts(v, alpha.rule, &ctx, || ray_hash(r));
         test(&alpha.alpha) || (shadow && alpha.shadow.as_ref().is_some_and(test))
     }
 

@@ -92,9 +92,13 @@ impl PatchMesh {
         integrate_unit_square(|u, v| (e_u + v * twist).cross(e_v + u * twist).length())
     }
 
-    /// Zero area (from the stored corners): never hit, never sampled.
+    /// Zero area (from the stored corners): never hit, never sampled. ∂p/∂u × ∂p/∂v is
+    /// affine in (u, v), e_u×e_v + u·(e_u×twist) + v·(twist×e_v), so the area is zero
+    /// exactly when those three vectors are.
     pub fn is_degenerate(&self, patch: usize) -> bool {
-        self.patch_area(patch) == 0.0
+        let [p00, p10, p01, p11] = self.corners64(patch);
+        let (e_u, e_v, twist) = (p10 - p00, p01 - p00, p00 - p01 - p10 + p11);
+        [e_u.cross(e_v), e_u.cross(twist), twist.cross(e_v)].iter().all(|c| *c == DVec3::ZERO)
     }
 
     /// Total area.
@@ -264,18 +268,21 @@ impl PatchMesh {
     /// The interpolated vertex normal at (u, v), when the mesh has normals and it is
     /// not zero.
     fn normal_at(&self, patch: usize, [u, v]: [f32; 2]) -> Option<Vec3> {
+        let [n00, n10, n01, n11] = self.corner_normals(patch)?;
+        lerp3(u, lerp3(v, n00, n01), lerp3(v, n10, n11)).try_normalize()
+    }
+
+    /// The vertex normals at p00, p10, p01, p11, when the mesh has normals.
+    fn corner_normals(&self, patch: usize) -> Option<[Vec3; 4]> {
         let ns = self.n.as_ref()?;
         let i = &self.indices[4 * patch..4 * patch + 4];
-        let [n00, n10, n01, n11] = [0, 1, 2, 3].map(|k| Vec3::from(ns[i[k] as usize]));
-        lerp3(u, lerp3(v, n00, n01), lerp3(v, n10, n11)).try_normalize()
+        Some([0, 1, 2, 3].map(|k| Vec3::from(ns[i[k] as usize])))
     }
 
     /// Vertex normals decide the front side and tilt the shading frame (pbrt-v4 rotates
     /// ∂p/∂u and ∂p/∂v from the geometric normal to the shading one).
     fn shading_geometry(&self, patch: usize, [u, v]: [f32; 2], ns: Vec3, d: [f32; 4], si: &mut SurfaceInteraction) {
-        let Some(normals) = &self.n else { return };
-        let i = &self.indices[4 * patch..4 * patch + 4];
-        let [n00, n10, n01, n11] = [0, 1, 2, 3].map(|k| Vec3::from(normals[i[k] as usize]));
+        let Some([n00, n10, n01, n11]) = self.corner_normals(patch) else { return };
         let dndu = lerp3(v, n10, n11) - lerp3(v, n00, n01);
         let dndv = lerp3(u, n01, n11) - lerp3(u, n00, n10);
         let [duds, dudt, dvds, dvdt] = d;
