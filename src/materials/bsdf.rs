@@ -145,21 +145,25 @@ impl Bsdf {
     /// The sum of the lobes, combined by the [`Convention`].
     fn f_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
         let (o, i) = (self.local(wo), self.local(wi));
-        if let Lobes::Layered(l) = &self.lobes {
-            return if o.z == 0.0 { Vec3::ZERO } else { l.f(o, i, mode) };
-        }
         let v3 = self.convention() == Convention::PbrtV3;
         let reflect = wo.dot(self.ng) * wi.dot(self.ng) > 0.0;
-        let mut f = Vec3::ZERO;
-        for l in self.lobes() {
+        let counts = |l: &Lobe| {
             let (r, t) = l.sides();
-            if !v3 {
-                f += l.f(o, i, mode, true);
-            } else if (reflect && r) || (!reflect && t) {
-                f += l.f(o, i, mode, false);
+            !v3 || (reflect && r) || (!reflect && t)
+        };
+        match &self.lobes {
+            Lobes::None => Vec3::ZERO,
+            Lobes::One(l) if counts(l) => l.f(o, i, mode, !v3),
+            Lobes::One(_) => Vec3::ZERO,
+            Lobes::Many(ls) => ls.iter().filter(|l| counts(l)).map(|l| l.f(o, i, mode, !v3)).sum(),
+            Lobes::Layered(l) => {
+                if o.z == 0.0 {
+                    Vec3::ZERO
+                } else {
+                    l.f(o, i, mode)
+                }
             }
         }
-        f
     }
 
     /// f(ωo, ωi) for radiance (camera paths and the photons they gather).

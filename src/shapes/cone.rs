@@ -3,6 +3,7 @@
 //! p(u, v) = (r(1 − v) cosφ, r(1 − v) sinφ, v·h): base circle at z = 0, apex at z = h.
 
 use super::phi_max_radians;
+use super::quadric::{E, Local, QuadricSurface};
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -36,5 +37,43 @@ impl Cone {
     pub fn dpdv(&self, u: f64, _v: f64) -> DVec3 {
         let (phi, r) = (u * self.phi_max as f64, self.radius as f64);
         DVec3::new(-r * phi.cos(), -r * phi.sin(), self.height as f64)
+    }
+}
+
+impl QuadricSurface for Cone {
+    /// F = x² + y² − k(z − h)², k = (r/h)².
+    fn coefficients(&self, [ox, oy, oz]: [E; 3], [dx, dy, dz]: [E; 3]) -> (E, E, E) {
+        let k = E::from(self.radius as f64 / self.height as f64);
+        let k = k * k;
+        let oz_h = oz - E::from(self.height as f64);
+        (
+            dx * dx + dy * dy - k * dz * dz,
+            (dx * ox + dy * oy - k * dz * oz_h) * 2.0,
+            ox * ox + oy * oy - k * oz_h * oz_h,
+        )
+    }
+
+    fn implicit(&self, p: DVec3) -> (f64, DVec3) {
+        let k = (self.radius as f64 / self.height as f64).powi(2);
+        let zh = p.z - self.height as f64;
+        (p.x * p.x + p.y * p.y - k * zh * zh, DVec3::new(2.0 * p.x, 2.0 * p.y, -2.0 * k * zh))
+    }
+
+    fn ranges(&self) -> (f64, f64, f64) {
+        let h = self.height as f64;
+        (h.min(0.0), h.max(0.0), self.phi_max as f64)
+    }
+
+    fn local(&self, p: DVec3, phi: f64) -> Local {
+        let (pm, h) = (self.phi_max as f64, self.height as f64);
+        let v = p.z / h;
+        Local {
+            uv: [phi / pm, v],
+            dpdu: DVec3::new(-pm * p.y, pm * p.x, 0.0),
+            dpdv: DVec3::new(-p.x / (1.0 - v), -p.y / (1.0 - v), h),
+            d2_uu: -pm * pm * DVec3::new(p.x, p.y, 0.0),
+            d2_uv: pm / (1.0 - v) * DVec3::new(p.y, -p.x, 0.0),
+            d2_vv: DVec3::ZERO,
+        }
     }
 }

@@ -3,6 +3,7 @@
 //! p(u, v) = (r cosφ, r sinφ, zmin + v·(zmax − zmin)).
 
 use super::phi_max_radians;
+use super::quadric::{E, Local, QuadricSurface};
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -36,5 +37,44 @@ impl Cylinder {
 
     pub fn dpdv(&self, _u: f64, _v: f64) -> DVec3 {
         DVec3::new(0.0, 0.0, self.z_max as f64 - self.z_min as f64)
+    }
+}
+
+impl QuadricSurface for Cylinder {
+    fn coefficients(&self, [ox, oy, _]: [E; 3], [dx, dy, _]: [E; 3]) -> (E, E, E) {
+        let r = self.radius as f64;
+        (dx * dx + dy * dy, (dx * ox + dy * oy) * 2.0, ox * ox + oy * oy - E::from(r * r))
+    }
+
+    fn implicit(&self, p: DVec3) -> (f64, DVec3) {
+        let r = self.radius as f64;
+        (p.x * p.x + p.y * p.y - r * r, DVec3::new(2.0 * p.x, 2.0 * p.y, 0.0))
+    }
+
+    fn ranges(&self) -> (f64, f64, f64) {
+        (self.z_min as f64, self.z_max as f64, self.phi_max as f64)
+    }
+
+    /// Radial re-projection.
+    fn refine(&self, p: DVec3) -> DVec3 {
+        let k = self.radius as f64 / (p.x * p.x + p.y * p.y).sqrt();
+        DVec3::new(p.x * k, p.y * k, p.z)
+    }
+
+    fn residual(&self, p: DVec3) -> f64 {
+        ((p.x * p.x + p.y * p.y).sqrt() - self.radius as f64).abs()
+    }
+
+    fn local(&self, p: DVec3, phi: f64) -> Local {
+        let pm = self.phi_max as f64;
+        let dz = self.z_max as f64 - self.z_min as f64;
+        Local {
+            uv: [phi / pm, (p.z - self.z_min as f64) / dz],
+            dpdu: DVec3::new(-pm * p.y, pm * p.x, 0.0),
+            dpdv: DVec3::new(0.0, 0.0, dz),
+            d2_uu: -pm * pm * DVec3::new(p.x, p.y, 0.0),
+            d2_uv: DVec3::ZERO,
+            d2_vv: DVec3::ZERO,
+        }
     }
 }

@@ -3,6 +3,7 @@
 //! p(u, v) = (ρ cosφ, ρ sinφ, h) with ρ = r − v·(r − ri): v = 0 on the outer rim.
 
 use super::phi_max_radians;
+use super::quadric::{E, Local, QuadricSurface, at, phi_of};
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -38,5 +39,60 @@ impl Disk {
     pub fn dpdv(&self, u: f64, _v: f64) -> DVec3 {
         let phi = u * self.phi_max as f64;
         (self.inner_radius as f64 - self.radius as f64) * DVec3::new(phi.cos(), phi.sin(), 0.0)
+    }
+}
+
+impl QuadricSurface for Disk {
+    /// F = z − h is linear (a = 0); [`Disk::hit`] solves it directly.
+    fn coefficients(&self, [_, _, oz]: [E; 3], [_, _, dz]: [E; 3]) -> (E, E, E) {
+        (E::from(0.0), dz, oz - E::from(self.height as f64))
+    }
+
+    fn implicit(&self, p: DVec3) -> (f64, DVec3) {
+        (p.z - self.height as f64, DVec3::Z)
+    }
+
+    fn ranges(&self) -> (f64, f64, f64) {
+        (self.height as f64, self.height as f64, self.phi_max as f64)
+    }
+
+    fn residual(&self, p: DVec3) -> f64 {
+        (p.z - self.height as f64).abs()
+    }
+
+    /// The plane z = h, then the annulus and φ tests; the point is put exactly on the
+    /// plane.
+    fn hit(&self, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3, f64)> {
+        let h = self.height as f64;
+        if d[2].value() == 0.0 {
+            return None;
+        }
+        let t = (E::from(h) - o[2]) / d[2];
+        if t.lower() <= 0.0 || t.upper() >= t_max {
+            return None;
+        }
+        let mut p = at(o, d, t.value());
+        let dist2 = p.x * p.x + p.y * p.y;
+        let (r, ri) = (self.radius as f64, self.inner_radius as f64);
+        if dist2 > r * r || dist2 < ri * ri {
+            return None;
+        }
+        p.z = h;
+        let phi = phi_of(p.x, p.y);
+        (phi <= self.phi_max as f64).then_some((t.value(), p, phi))
+    }
+
+    fn local(&self, p: DVec3, phi: f64) -> Local {
+        let (pm, r, ri) = (self.phi_max as f64, self.radius as f64, self.inner_radius as f64);
+        let rho = (p.x * p.x + p.y * p.y).sqrt();
+        let dpdv = if rho > 0.0 { DVec3::new(p.x, p.y, 0.0) * ((ri - r) / rho) } else { DVec3::new(ri - r, 0.0, 0.0) };
+        Local {
+            uv: [phi / pm, (r - rho) / (r - ri)],
+            dpdu: DVec3::new(-pm * p.y, pm * p.x, 0.0),
+            dpdv,
+            d2_uu: DVec3::ZERO,
+            d2_uv: DVec3::ZERO,
+            d2_vv: DVec3::ZERO,
+        }
     }
 }

@@ -7,6 +7,7 @@
 //! refit loop never ends when the segment's line meets the axis, including for the
 //! default parameters, so such input is rejected here.
 
+use super::quadric::{E, Local, QuadricSurface, phi_of};
 use super::{integrate_unit_interval, phi_max_radians};
 use glam::{DVec3, Vec3};
 
@@ -103,6 +104,71 @@ impl Hyperboloid {
         let (d, phi) = ((self.p2 - self.p1).as_dvec3(), u * self.phi_max as f64);
         let (s, c) = phi.sin_cos();
         DVec3::new(d.x * c - d.y * s, d.x * s + d.y * c, d.z)
+    }
+}
+
+impl Hyperboloid {
+    /// The swept surface as ρ²(v) = α v² + β v + γ with v = (z − z1)/Δz: returns
+    /// (α, β, γ, z1, Δz).
+    fn sweep(&self) -> (f64, f64, f64, f64, f64) {
+        let (p1, p2) = (self.p1.as_dvec3(), self.p2.as_dvec3());
+        let dl = p2 - p1;
+        (dl.x * dl.x + dl.y * dl.y, 2.0 * (p1.x * dl.x + p1.y * dl.y), p1.x * p1.x + p1.y * p1.y, p1.z, dl.z)
+    }
+}
+
+/// Intersected as the surface the segment sweeps (F = x² + y² − ρ²(v)), not pbrt's
+/// implicit fit: see the module notes of `quadric`.
+impl QuadricSurface for Hyperboloid {
+    fn coefficients(&self, [ox, oy, oz]: [E; 3], [dx, dy, dz]: [E; 3]) -> (E, E, E) {
+        let (al, be, ga, z1, dzl) = self.sweep();
+        let (al, be, ga) = (E::from(al), E::from(be), E::from(ga));
+        let v0 = (oz - E::from(z1)) / E::from(dzl);
+        let vd = dz / E::from(dzl);
+        (
+            dx * dx + dy * dy - al * vd * vd,
+            (dx * ox + dy * oy - al * v0 * vd) * 2.0 - be * vd,
+            ox * ox + oy * oy - al * v0 * v0 - be * v0 - ga,
+        )
+    }
+
+    fn implicit(&self, p: DVec3) -> (f64, DVec3) {
+        let (al, be, ga, z1, dzl) = self.sweep();
+        let v = (p.z - z1) / dzl;
+        let f = p.x * p.x + p.y * p.y - (al * v * v + be * v + ga);
+        (f, DVec3::new(2.0 * p.x, 2.0 * p.y, -(2.0 * al * v + be) / dzl))
+    }
+
+    fn ranges(&self) -> (f64, f64, f64) {
+        (self.z_min as f64, self.z_max as f64, self.phi_max as f64)
+    }
+
+    /// φ is measured from the profile point p_r(v) at the hit's height.
+    fn accept(&self, p: DVec3) -> Option<f64> {
+        let (z0, z1, phi_max) = self.ranges();
+        if p.z < z0 || p.z > z1 {
+            return None;
+        }
+        let pr = self.profile((p.z - self.p1.z as f64) / (self.p2.z as f64 - self.p1.z as f64));
+        let phi = phi_of(pr.x * p.x + pr.y * p.y, pr.x * p.y - pr.y * p.x);
+        (phi <= phi_max).then_some(phi)
+    }
+
+    fn local(&self, p: DVec3, phi: f64) -> Local {
+        let pm = self.phi_max as f64;
+        let (p1, p2) = (self.p1.as_dvec3(), self.p2.as_dvec3());
+        let v = (p.z - p1.z) / (p2.z - p1.z);
+        let (sin_phi, cos_phi) = phi.sin_cos();
+        let dl = p2 - p1;
+        let dpdv = DVec3::new(dl.x * cos_phi - dl.y * sin_phi, dl.x * sin_phi + dl.y * cos_phi, dl.z);
+        Local {
+            uv: [phi / pm, v],
+            dpdu: DVec3::new(-pm * p.y, pm * p.x, 0.0),
+            dpdv,
+            d2_uu: -pm * pm * DVec3::new(p.x, p.y, 0.0),
+            d2_uv: pm * DVec3::new(-dpdv.y, dpdv.x, 0.0),
+            d2_vv: DVec3::ZERO,
+        }
     }
 }
 

@@ -15,6 +15,21 @@
 //! φ = u·φmax. [`Quadric::point`], [`Quadric::dpdu`] and [`Quadric::dpdv`] evaluate it in
 //! `f64`; areas of transformed shapes integrate |dp/du × dp/dv| in world space.
 
+/// `match` on a [`Quadric`], binding each kind's shape to the same name: the one place
+/// that turns a quadric into its own file's code.
+macro_rules! dispatch_quadric {
+    ($q:expr, $s:ident => $e:expr) => {
+        match $q {
+            $crate::shapes::Quadric::Sphere($s) => $e,
+            $crate::shapes::Quadric::Cylinder($s) => $e,
+            $crate::shapes::Quadric::Disk($s) => $e,
+            $crate::shapes::Quadric::Cone($s) => $e,
+            $crate::shapes::Quadric::Paraboloid($s) => $e,
+            $crate::shapes::Quadric::Hyperboloid($s) => $e,
+        }
+    };
+}
+
 pub mod bilinear;
 pub mod cone;
 pub mod cylinder;
@@ -60,19 +75,6 @@ pub enum Quadric {
     Hyperboloid(Hyperboloid),
 }
 
-macro_rules! dispatch {
-    ($self:ident, $s:ident => $e:expr) => {
-        match $self {
-            Quadric::Sphere($s) => $e,
-            Quadric::Cylinder($s) => $e,
-            Quadric::Disk($s) => $e,
-            Quadric::Cone($s) => $e,
-            Quadric::Paraboloid($s) => $e,
-            Quadric::Hyperboloid($s) => $e,
-        }
-    };
-}
-
 impl Quadric {
     /// The shape's name in scene files.
     pub fn name(&self) -> &'static str {
@@ -87,21 +89,21 @@ impl Quadric {
     }
 
     pub fn phi_max(&self) -> f64 {
-        dispatch!(self, s => s.phi_max as f64)
+        dispatch_quadric!(self, s => s.phi_max as f64)
     }
 
     /// Object-space bounds, pbrt's (not tightened for φmax < 360°).
     pub fn object_bounds(&self) -> [DVec3; 2] {
-        dispatch!(self, s => s.object_bounds())
+        dispatch_quadric!(self, s => s.object_bounds())
     }
 
     /// Object-space surface area.
     pub fn area(&self) -> f64 {
-        dispatch!(self, s => s.area())
+        dispatch_quadric!(self, s => s.area())
     }
 
     pub fn point(&self, u: f64, v: f64) -> DVec3 {
-        dispatch!(self, s => s.point(u, v))
+        dispatch_quadric!(self, s => s.point(u, v))
     }
 
     /// ∂p/∂u = φmax · (−y, x, 0) for every quadric.
@@ -111,7 +113,7 @@ impl Quadric {
     }
 
     pub fn dpdv(&self, u: f64, v: f64) -> DVec3 {
-        dispatch!(self, s => s.dpdv(u, v))
+        dispatch_quadric!(self, s => s.dpdv(u, v))
     }
 
     /// Surface area after the linear map `m` (the upper 3×3 of object-to-world).

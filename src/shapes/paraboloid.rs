@@ -4,6 +4,7 @@
 //! z = zmin + v·(zmax − zmin), ρ = r·sqrt(z / zmax): the radius is r at z = zmax.
 
 use super::phi_max_radians;
+use super::quadric::{E, Local, QuadricSurface};
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -45,5 +46,36 @@ impl Paraboloid {
         let phi = u * self.phi_max as f64;
         let k = self.radius as f64 / (2.0 * (z * z1).sqrt());
         (z1 - z0) * DVec3::new(k * phi.cos(), k * phi.sin(), 1.0)
+    }
+}
+
+impl QuadricSurface for Paraboloid {
+    /// F = k(x² + y²) − z, k = zmax/r².
+    fn coefficients(&self, [ox, oy, oz]: [E; 3], [dx, dy, dz]: [E; 3]) -> (E, E, E) {
+        let r = self.radius as f64;
+        let k = E::from(self.z_max as f64) / E::from(r * r);
+        (k * (dx * dx + dy * dy), k * (dx * ox + dy * oy) * 2.0 - dz, k * (ox * ox + oy * oy) - oz)
+    }
+
+    fn implicit(&self, p: DVec3) -> (f64, DVec3) {
+        let k = self.z_max as f64 / (self.radius as f64).powi(2);
+        (k * (p.x * p.x + p.y * p.y) - p.z, DVec3::new(2.0 * k * p.x, 2.0 * k * p.y, -1.0))
+    }
+
+    fn ranges(&self) -> (f64, f64, f64) {
+        (self.z_min as f64, self.z_max as f64, self.phi_max as f64)
+    }
+
+    fn local(&self, p: DVec3, phi: f64) -> Local {
+        let (pm, z0, z1) = (self.phi_max as f64, self.z_min as f64, self.z_max as f64);
+        let dz = z1 - z0;
+        Local {
+            uv: [phi / pm, (p.z - z0) / dz],
+            dpdu: DVec3::new(-pm * p.y, pm * p.x, 0.0),
+            dpdv: dz * DVec3::new(p.x / (2.0 * p.z), p.y / (2.0 * p.z), 1.0),
+            d2_uu: -pm * pm * DVec3::new(p.x, p.y, 0.0),
+            d2_uv: dz * pm * DVec3::new(-p.y / (2.0 * p.z), p.x / (2.0 * p.z), 0.0),
+            d2_vv: -dz * dz * DVec3::new(p.x / (4.0 * p.z * p.z), p.y / (4.0 * p.z * p.z), 0.0),
+        }
     }
 }

@@ -4,6 +4,7 @@
 //! so v = 0 at zmin and v = 1 at zmax.
 
 use super::phi_max_radians;
+use super::quadric::{E, Local, QuadricSurface};
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -63,5 +64,52 @@ impl Sphere {
         let z = r * theta.cos();
         let (a, b) = self.theta_range();
         (b - a) * DVec3::new(z * phi.cos(), z * phi.sin(), -r * theta.sin())
+    }
+}
+
+impl QuadricSurface for Sphere {
+    fn coefficients(&self, [ox, oy, oz]: [E; 3], [dx, dy, dz]: [E; 3]) -> (E, E, E) {
+        let r = self.radius as f64;
+        (dx * dx + dy * dy + dz * dz, (dx * ox + dy * oy + dz * oz) * 2.0, ox * ox + oy * oy + oz * oz - E::from(r * r))
+    }
+
+    fn implicit(&self, p: DVec3) -> (f64, DVec3) {
+        let r = self.radius as f64;
+        (p.length_squared() - r * r, 2.0 * p)
+    }
+
+    fn ranges(&self) -> (f64, f64, f64) {
+        (self.z_min as f64, self.z_max as f64, self.phi_max as f64)
+    }
+
+    /// Radial re-projection; a point on the axis is nudged off it, as pbrt does, so φ
+    /// is defined.
+    fn refine(&self, p: DVec3) -> DVec3 {
+        let mut p = p * (self.radius as f64 / p.length());
+        if p.x == 0.0 && p.y == 0.0 {
+            p.x = 1e-5 * self.radius as f64;
+        }
+        p
+    }
+
+    fn residual(&self, p: DVec3) -> f64 {
+        (p.length() - self.radius as f64).abs()
+    }
+
+    fn local(&self, p: DVec3, phi: f64) -> Local {
+        let (r, pm) = (self.radius as f64, self.phi_max as f64);
+        let (ta, tb) = self.theta_range();
+        let theta = (p.z / r).clamp(-1.0, 1.0).acos();
+        let zr = (p.x * p.x + p.y * p.y).sqrt();
+        let (cos_phi, sin_phi) = (p.x / zr, p.y / zr);
+        let dt = tb - ta;
+        Local {
+            uv: [phi / pm, (theta - ta) / dt],
+            dpdu: DVec3::new(-pm * p.y, pm * p.x, 0.0),
+            dpdv: dt * DVec3::new(p.z * cos_phi, p.z * sin_phi, -r * theta.sin()),
+            d2_uu: -pm * pm * DVec3::new(p.x, p.y, 0.0),
+            d2_uv: dt * p.z * pm * DVec3::new(-sin_phi, cos_phi, 0.0),
+            d2_vv: -dt * dt * p,
+        }
     }
 }
