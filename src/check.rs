@@ -147,9 +147,9 @@ fn shape(scene: &SceneDescription, index: usize, p: &PlacedShape) -> Value {
                 "uv": m.uv.is_some(),
             })
         }
-        Geometry::Patches { mesh } => {
+        Geometry::Patches { mesh, filename, .. } => {
             let m = &scene.patches[*mesh as usize];
-            json!({ "vertices": m.p.len(), "normals": m.n.is_some(), "uv": m.uv.is_some() })
+            json!({ "filename": filename, "vertices": m.p.len(), "normals": m.n.is_some(), "uv": m.uv.is_some() })
         }
     };
     let area = scene.placed_area(p);

@@ -450,7 +450,7 @@ fn shape(scene: &SceneDescription, s: &ShapeDesc, world: bool, index: u32, notes
         Geometry::Mesh { mesh, .. } => {
             mesh_out(&scene.meshes[*mesh as usize], s.reverse_orientation, s.swaps_handedness())
         }
-        Geometry::Patches { mesh } => {
+        Geometry::Patches { mesh, .. } => {
             let m = &scene.patches[*mesh as usize];
             mesh_out(&m.to_triangles(PATCH_CELLS), s.reverse_orientation, s.swaps_handedness())
         }

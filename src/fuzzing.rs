@@ -46,7 +46,9 @@ pub fn builder(data: &[u8]) {
 
 /// The PLY reader.
 pub fn ply(data: &[u8]) {
-    let _ = crate::scene::ply::parse(data);
+    for quads in [crate::scene::ply::Quads::Split, crate::scene::ply::Quads::Patches] {
+        let _ = crate::scene::ply::parse(data, quads);
+    }
 }
 
 /// The image readers: the first byte picks PNG (odd) or EXR (even).

@@ -25,7 +25,7 @@ use super::materials::MaterialDesc;
 use super::options::RenderOptions;
 use super::shapes::{self as shape_build, AlphaParams, Built};
 use super::textures::TextureDesc;
-use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped, mesh};
+use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped, mesh, ply};
 use crate::imageio::RgbImage;
 use crate::limits::Limits;
 use crate::parser::Syntax;
@@ -165,6 +165,9 @@ struct Builder {
     shape_materials: Vec<MaterialRef>,
     /// Per world shape: its alpha parameters and the scope to resolve them in.
     shape_alphas: Vec<Option<(AlphaParams, Rc<Scope>)>>,
+    /// World `plymesh` shapes read before the file's version was known: where each
+    /// goes in `shapes`, and what it needs to be built at the end.
+    deferred_shapes: Vec<(usize, PendingShape, Option<u32>)>,
     meshes: Vec<crate::shapes::TriangleMesh>,
     patches: Vec<crate::shapes::PatchMesh>,
     objects: Vec<PendingObject>,
@@ -225,6 +228,7 @@ impl Builder {
             shapes: Vec::new(),
             shape_materials: Vec::new(),
             shape_alphas: Vec::new(),
+            deferred_shapes: Vec::new(),
             meshes: Vec::new(),
             patches: Vec::new(),
             objects: Vec::new(),
@@ -645,11 +649,35 @@ impl Builder {
             }
             None => {
                 let area_light = self.gs.area_light;
-                if let Some((shape, alpha)) = self.build_shape(&pending, area_light)? {
-                    self.shapes.push(shape);
-                    self.shape_materials.push(pending.material);
-                    self.shape_alphas.push(alpha.map(|a| (a, pending.scope)));
+                if pending.entity.name == "plymesh" && self.known_syntax().is_none() {
+                    // How its quads are read depends on the file's version, not known yet.
+                    self.deferred_shapes.push((self.shapes.len(), pending, area_light));
+                    return Ok(());
                 }
+                for (shape, alpha) in self.build_shape(&pending, area_light)? {
+                    self.shapes.push(shape);
+                    self.shape_materials.push(pending.material.clone());
+                    self.shape_alphas.push(alpha.map(|a| (a, pending.scope.clone())));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The file's pbrt version, if known yet: given on the command line, or settled by
+    /// what has been read so far.
+    fn known_syntax(&self) -> Option<Syntax> {
+        self.opts.syntax.or(self.syntax).or(self.reader.evidence.as_ref().map(|e| e.0))
+    }
+
+    /// Builds the world shapes whose reading waited for the file's version, each in its
+    /// place in file order.
+    fn build_deferred_shapes(&mut self) -> Res<()> {
+        for (at, pending, area_light) in std::mem::take(&mut self.deferred_shapes).into_iter().rev() {
+            for (k, (shape, alpha)) in self.build_shape(&pending, area_light)?.into_iter().enumerate() {
+                self.shapes.insert(at + k, shape);
+                self.shape_materials.insert(at + k, pending.material.clone());
+                self.shape_alphas.insert(at + k, alpha.map(|a| (a, pending.scope.clone())));
             }
         }
         Ok(())
@@ -658,48 +686,27 @@ impl Builder {
     /// Geometry, transform and flags, and the alpha parameters; the material and alpha
     /// are resolved later. `None` when the shape type is unsupported (warned and listed
     /// as skipped).
-    fn build_shape(
-        &mut self,
-        s: &PendingShape,
-        area_light: Option<u32>,
-    ) -> Res<Option<(ShapeDesc, Option<AlphaParams>)>> {
+    fn build_shape(&mut self, s: &PendingShape, area_light: Option<u32>) -> Res<Vec<(ShapeDesc, Option<AlphaParams>)>> {
         let (p, at) = (&s.entity.params, s.entity.name_span);
         let resolve = |n: &str| self.reader.resolve_path(n);
+        let quads = match self.known_syntax() {
+            Some(Syntax::V3) => ply::Quads::Split,
+            _ => ply::Quads::Patches,
+        };
         let mut warn = Vec::new();
-        let built = shape_build::build(&s.entity.name, p, at, &resolve, &self.reader.limits, &mut warn);
+        let built = shape_build::build(&s.entity.name, p, at, &resolve, quads, &self.reader.limits, &mut warn);
         self.warnings.append(&mut warn);
         let Some(built) = built? else {
             let what = format!("Shape \"{}\"", s.entity.name);
             self.skip(at, what, "this shape type is not supported".into());
-            return Ok(None);
+            return Ok(Vec::new());
         };
         let alpha = shape_build::alpha_params(p)?;
         typed::finish_params(p, &mut self.warnings)?;
-        let geometry = match built {
-            Built::Quadric(q) => Geometry::Quadric(q),
-            Built::Mesh { mesh: mut m, kind, filename } => {
-                mesh::transform(&mut m, &s.ctm);
-                let where_ = p.named("P").or(p.named("filename")).map_or(at, |x| x.span);
-                mesh::validate(&m).map_err(|e| Diagnostic::error(where_, e))?;
-                if let Some(w) = mesh::degenerate_warning(&m) {
-                    self.warnings.push(Diagnostic::warning(where_, w));
-                }
-                self.meshes.push(m);
-                Geometry::Mesh { mesh: self.meshes.len() as u32 - 1, kind, filename }
-            }
-            Built::Patches(mut m) => {
-                mesh::transform_patches(&mut m, &s.ctm);
-                let where_ = p.named("P").map_or(at, |x| x.span);
-                mesh::validate_patches(&m).map_err(|e| Diagnostic::error(where_, e))?;
-                if let Some(w) = mesh::degenerate_patches_warning(&m) {
-                    self.warnings.push(Diagnostic::warning(where_, w));
-                }
-                self.patches.push(m);
-                Geometry::Patches { mesh: self.patches.len() as u32 - 1 }
-            }
-        };
+        let mut geometries = Vec::new();
+        self.add_geometry(built, s, &mut geometries)?;
         let area_light = area_light.map(|a| self.use_area_light(a));
-        let shape = ShapeDesc {
+        let shape = |geometry| ShapeDesc {
             geometry,
             object_to_world: s.ctm,
             reverse_orientation: s.reverse_orientation,
@@ -707,7 +714,40 @@ impl Builder {
             area_light,
             alpha: None,
         };
-        Ok(Some((shape, alpha)))
+        Ok(geometries.into_iter().map(|g| (shape(g), alpha.clone())).collect())
+    }
+
+    /// Transforms and checks built geometry, stores its meshes, and appends what shapes
+    /// refer to.
+    fn add_geometry(&mut self, built: Built, s: &PendingShape, out: &mut Vec<Geometry>) -> Res<()> {
+        let (p, at) = (&s.entity.params, s.entity.name_span);
+        let where_ = p.named("P").or(p.named("filename")).map_or(at, |x| x.span);
+        let geometry = match built {
+            Built::Quadric(q) => Geometry::Quadric(q),
+            Built::Mesh { mesh: mut m, kind, filename } => {
+                mesh::transform(&mut m, &s.ctm);
+                mesh::validate(&m).map_err(|e| Diagnostic::error(where_, e))?;
+                if let Some(w) = mesh::degenerate_warning(&m) {
+                    self.warnings.push(Diagnostic::warning(where_, w));
+                }
+                self.meshes.push(m);
+                Geometry::Mesh { mesh: self.meshes.len() as u32 - 1, kind, filename }
+            }
+            Built::Patches { mesh: mut m, kind, filename } => {
+                mesh::transform_patches(&mut m, &s.ctm);
+                mesh::validate_patches(&m).map_err(|e| Diagnostic::error(where_, e))?;
+                if let Some(w) = mesh::degenerate_patches_warning(&m) {
+                    self.warnings.push(Diagnostic::warning(where_, w));
+                }
+                self.patches.push(m);
+                Geometry::Patches { mesh: self.patches.len() as u32 - 1, kind, filename }
+            }
+            Built::Several(parts) => {
+                return parts.into_iter().try_for_each(|b| self.add_geometry(b, s, out));
+            }
+        };
+        out.push(geometry);
+        Ok(())
     }
 
     fn object_begin(&mut self, name: String, span: Span) -> Res<()> {
@@ -863,6 +903,7 @@ impl Builder {
     fn finish(&mut self) -> Res<SceneDescription> {
         let syntax = self.opts.syntax.or(self.reader.evidence.as_ref().map(|e| e.0)).unwrap_or(Syntax::V4);
         self.syntax = Some(syntax);
+        self.build_deferred_shapes()?;
         self.materials[0].ty = if syntax == Syntax::V3 { "matte" } else { "diffuse" }.into();
         let uses = self.resolve_instances()?;
         let (objects, remap) = self.build_objects()?;
@@ -976,7 +1017,7 @@ impl Builder {
             let pending = std::mem::take(&mut self.objects[i].shapes);
             let mut shapes = Vec::with_capacity(pending.len());
             for s in &pending {
-                if let Some((mut shape, alpha)) = self.build_shape(s, None)? {
+                for (mut shape, alpha) in self.build_shape(s, None)? {
                     shape.material = self.resolve_material(&s.material)?;
                     if let Some(a) = alpha {
                         shape.alpha = self.resolve_alpha(&a, s.scope.clone())?;

@@ -43,9 +43,12 @@ pub enum Geometry {
         kind: &'static str,
         filename: Option<String>,
     },
-    /// v4's `bilinearmesh`.
+    /// Bilinear patches; `kind` is `bilinearmesh`, or `plymesh` for a pbrt-v4 PLY
+    /// file's quads.
     Patches {
         mesh: u32,
+        kind: &'static str,
+        filename: Option<String>,
     },
 }
 
@@ -90,8 +93,7 @@ impl ShapeDesc {
     pub fn kind(&self) -> &'static str {
         match &self.geometry {
             Geometry::Quadric(q) => q.name(),
-            Geometry::Mesh { kind, .. } => kind,
-            Geometry::Patches { .. } => "bilinearmesh",
+            Geometry::Mesh { kind, .. } | Geometry::Patches { kind, .. } => kind,
         }
     }
 
@@ -192,7 +194,7 @@ impl SceneDescription {
         match &s.geometry {
             Geometry::Quadric(q) => Some(transform_bounds(&s.object_to_world, q.object_bounds())),
             Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].bounds(),
-            Geometry::Patches { mesh } => self.patches[*mesh as usize].bounds(),
+            Geometry::Patches { mesh, .. } => self.patches[*mesh as usize].bounds(),
         }
     }
 
@@ -206,8 +208,8 @@ impl SceneDescription {
             Geometry::Quadric(q) => q.world_area(glam::DMat3::from_mat4(p.object_to_world)),
             Geometry::Mesh { mesh, .. } if p.instance.is_some() => self.meshes[*mesh as usize].area_under(extra()),
             Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].area(),
-            Geometry::Patches { mesh } if p.instance.is_some() => self.patches[*mesh as usize].area_under(extra()),
-            Geometry::Patches { mesh } => self.patches[*mesh as usize].area(),
+            Geometry::Patches { mesh, .. } if p.instance.is_some() => self.patches[*mesh as usize].area_under(extra()),
+            Geometry::Patches { mesh, .. } => self.patches[*mesh as usize].area(),
         }
     }
 
@@ -245,7 +247,7 @@ impl SceneDescription {
     pub fn prim_count(&self, s: &ShapeDesc) -> usize {
         match &s.geometry {
             Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].triangle_count(),
-            Geometry::Patches { mesh } => self.patches[*mesh as usize].patch_count(),
+            Geometry::Patches { mesh, .. } => self.patches[*mesh as usize].patch_count(),
             Geometry::Quadric(_) => 1,
         }
     }

@@ -3,15 +3,16 @@
 //! Reads ASCII and both binary byte orders. Vertex properties `x y z` (required),
 //! `nx ny nz`, and texture coordinates from the first pair present of `u v`, `s t`,
 //! `texture_u texture_v`, `texture_s texture_t`; faces from `vertex_indices` (or
-//! `vertex_index`) lists of 3 or 4 entries, quads split as pbrt-v3 does: (a,b,c), (d,a,c);
-//! optional `face_indices`. The header is read here, and every count in it checked
+//! `vertex_index`) lists of 3 or 4 entries; optional `face_indices`. A quad (a,b,c,d) is
+//! split as pbrt-v3 splits it, (a,b,c) and (d,a,c), or for pbrt-v4 files kept as the
+//! bilinear patch with corners p00 = a, p10 = b, p01 = d, p11 = c, as pbrt-v4 keeps it. The header is read here, and every count in it checked
 //! against the bytes that follow, before anything is allocated; ASCII payloads then go
 //! through ply-rs and binary payloads are decoded straight from the bytes.
 //!
 //! Errors name the element: `face 12 has 5 vertices (pbrt reads triangles and quads)`.
 
 use crate::limits::Limits;
-use crate::shapes::TriangleMesh;
+use crate::shapes::{PatchMesh, TriangleMesh};
 use ply_rs::parser::Parser;
 use ply_rs::ply::{
     Addable, ElementDef, Encoding, Header, Property, PropertyAccess, PropertyDef, PropertyType, ScalarType,
@@ -34,21 +35,43 @@ struct Collected {
     tris: Vec<i64>,
     /// `face_indices` per triangle, when the file has them.
     tri_ids: Vec<i32>,
+    /// Quads kept whole: four vertex indices each, in patch order (p00 p10 p01 p11).
+    quads: Vec<i64>,
+    quad_ids: Vec<i32>,
+    /// Whether quads are split into triangles (pbrt-v3) or kept (pbrt-v4).
+    split_quads: bool,
     faces: usize,
 }
 
+/// What a PLY file holds: its triangles, and its quads when they are kept as patches.
+/// Both index the same vertices.
+#[derive(Clone, Debug, Default)]
+pub struct PlyMesh {
+    pub triangles: TriangleMesh,
+    pub patches: Option<PatchMesh>,
+}
+
+/// How a file's quads are read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quads {
+    /// Two triangles each (pbrt-v3).
+    Split,
+    /// One bilinear patch each (pbrt-v4).
+    Patches,
+}
+
 /// Loads a PLY file. Errors are plain messages; the caller adds the location.
-pub fn load(path: &std::path::Path, limits: &Limits) -> Result<TriangleMesh, String> {
-    parse(&crate::limits::read_file(path, limits)?)
+pub fn load(path: &std::path::Path, quads: Quads, limits: &Limits) -> Result<PlyMesh, String> {
+    parse(&crate::limits::read_file(path, limits)?, quads)
 }
 
 /// Parses a PLY file's bytes (already decompressed).
-pub fn parse(bytes: &[u8]) -> Result<TriangleMesh, String> {
+pub fn parse(bytes: &[u8], quads: Quads) -> Result<PlyMesh, String> {
     let (header, body) = read_header(bytes)?;
     check_header(&header)?;
     check_counts(&header, body.len())?;
     let mut reader = body;
-    let mut got = Collected::default();
+    let mut got = Collected { split_quads: quads == Quads::Split, ..Collected::default() };
     match header.encoding {
         Encoding::Ascii => read_ascii(&mut reader, &header, &mut got)?,
         Encoding::BinaryLittleEndian => read_binary::<false>(reader, &header, &mut got)?,
@@ -173,29 +196,37 @@ fn check_header(header: &Header) -> Result<(), String> {
     }
 }
 
-fn build(header: &Header, got: Collected) -> Result<TriangleMesh, String> {
+fn build(header: &Header, got: Collected) -> Result<PlyMesh, String> {
     let names = vertex_property_names(header);
     let has = |n: &str| names.contains(&n);
-    let mut mesh = TriangleMesh { p: got.vertices.iter().map(|v| [v[0], v[1], v[2]]).collect(), ..Default::default() };
-    if has("nx") && has("ny") && has("nz") {
-        mesh.n = Some(got.vertices.iter().map(|v| [v[3], v[4], v[5]]).collect());
-    }
+    let p: Vec<[f32; 3]> = got.vertices.iter().map(|v| [v[0], v[1], v[2]]).collect();
+    let n = (has("nx") && has("ny") && has("nz")).then(|| got.vertices.iter().map(|v| [v[3], v[4], v[5]]).collect());
     let uv_pair = [(6, "u", "v"), (8, "s", "t"), (10, "texture_u", "texture_v"), (12, "texture_s", "texture_t")]
         .into_iter()
         .find(|(_, a, b)| has(a) && has(b));
-    if let Some((slot, _, _)) = uv_pair {
-        mesh.uv = Some(got.vertices.iter().map(|v| [v[slot], v[slot + 1]]).collect());
-    }
-    let n_v = mesh.p.len() as i64;
-    if let Some(k) = got.tris.iter().position(|&i| i < 0 || i >= n_v) {
-        let bad = got.tris[k];
-        return Err(format!("triangle {} has vertex index {bad}, but there are {n_v} vertices", k / 3));
-    }
-    mesh.indices = got.tris.iter().map(|&i| i as u32).collect();
-    if got.tri_ids.len() == mesh.triangle_count() && got.faces > 0 {
-        mesh.face_indices = Some(got.tri_ids);
-    }
-    Ok(mesh)
+    let uv: Option<Vec<[f32; 2]>> =
+        uv_pair.map(|(slot, _, _)| got.vertices.iter().map(|v| [v[slot], v[slot + 1]]).collect());
+    let n_v = p.len() as i64;
+    let check = |list: &[i64], per: usize, what: &str| match list.iter().position(|&i| i < 0 || i >= n_v) {
+        Some(k) => Err(format!("{what} {} has vertex index {}, but there are {n_v} vertices", k / per, list[k])),
+        None => Ok(list.iter().map(|&i| i as u32).collect::<Vec<u32>>()),
+    };
+    let indices = check(&got.tris, 3, "triangle")?;
+    let quads = check(&got.quads, 4, "quad")?;
+    // DEVIATION(pbrt): pbrt-v4 hands the whole per-face list to both the triangles and
+    // the patches of a mixed file, each indexing it by its own primitive number; here
+    // each primitive keeps its own face's index.
+    let ids = |ids: Vec<i32>, count: usize| (ids.len() == count && got.faces > 0).then_some(ids);
+    let patches = (!quads.is_empty()).then(|| PatchMesh {
+        p: p.clone(),
+        n: n.clone(),
+        uv: uv.clone(),
+        face_indices: ids(got.quad_ids, quads.len() / 4),
+        indices: quads,
+    });
+    let face_indices = ids(got.tri_ids, indices.len() / 3);
+    let triangles = TriangleMesh { p, indices, n, uv, face_indices, ..Default::default() };
+    Ok(PlyMesh { triangles, patches })
 }
 
 // ---- ASCII, through ply-rs -------------------------------------------------------
@@ -299,19 +330,20 @@ fn read_ascii(reader: &mut impl BufRead, header: &Header, got: &mut Collected) -
     Ok(())
 }
 
-/// Triangles (a,b,c), and for quads also (d,a,c) as pbrt-v3 splits them.
+/// A triangle (a,b,c); a quad (a,b,c,d) as (a,b,c) and (d,a,c), or as the patch
+/// (a,b,d,c).
 fn push_face(got: &mut Collected, f: &[i64], id: Option<i64>) -> Result<(), String> {
-    let tris: &[[usize; 3]] = match f.len() {
-        3 => &[[0, 1, 2]],
-        4 => &[[0, 1, 2], [3, 0, 2]],
+    let (list, ids, order): (_, _, &[usize]) = match f.len() {
+        3 => (&mut got.tris, &mut got.tri_ids, &[0, 1, 2]),
+        4 if got.split_quads => (&mut got.tris, &mut got.tri_ids, &[0, 1, 2, 3, 0, 2]),
+        4 => (&mut got.quads, &mut got.quad_ids, &[0, 1, 3, 2]),
         n => return Err(format!("face {} has {n} vertices (pbrt reads triangles and quads)", got.faces)),
     };
     got.faces += 1;
-    for t in tris {
-        got.tris.extend(t.iter().map(|&k| f[k]));
-        if let Some(id) = id {
-            got.tri_ids.push(id as i32);
-        }
+    list.extend(order.iter().map(|&k| f[k]));
+    if let Some(id) = id {
+        // One per primitive: a split quad's two triangles share its id.
+        ids.extend(std::iter::repeat_n(id as i32, order.len() / 3));
     }
     Ok(())
 }

@@ -22,18 +22,30 @@ use std::path::PathBuf;
 /// What a `Shape` statement produced.
 pub enum Built {
     Quadric(Quadric),
-    Mesh { mesh: TriangleMesh, kind: &'static str, filename: Option<String> },
-    Patches(PatchMesh),
+    Mesh {
+        mesh: TriangleMesh,
+        kind: &'static str,
+        filename: Option<String>,
+    },
+    Patches {
+        mesh: PatchMesh,
+        kind: &'static str,
+        filename: Option<String>,
+    },
+    /// A pbrt-v4 PLY file of triangles and quads: two shapes, as in pbrt-v4.
+    Several(Vec<Built>),
 }
 
 type Res<T> = Result<T, Diagnostic>;
 
-/// Builds a shape's geometry in object space; `resolve` maps scene-relative file names.
+/// Builds a shape's geometry in object space; `resolve` maps scene-relative file names;
+/// `quads` says how a PLY file's quads are read (the file's pbrt version decides).
 pub fn build(
     ty: &str,
     p: &ParamList,
     span: Span,
     resolve: &dyn Fn(&str) -> PathBuf,
+    quads: ply::Quads,
     limits: &Limits,
     warn: &mut Vec<Diagnostic>,
 ) -> Res<Option<Built>> {
@@ -84,9 +96,12 @@ pub fn build(
             let m = mesh::from_params(p, span, warn)?;
             Ok(Some(Built::Mesh { mesh: m, kind: "trianglemesh", filename: None }))
         }
-        "bilinearmesh" => Ok(Some(Built::Patches(mesh::patches_from_params(p, span, warn)?))),
+        "bilinearmesh" => {
+            let m = mesh::patches_from_params(p, span, warn)?;
+            Ok(Some(Built::Patches { mesh: m, kind: "bilinearmesh", filename: None }))
+        }
         "loopsubdiv" => loop_subdiv(p, span, limits, warn).map(Some),
-        "plymesh" | "objmesh" => file_mesh(ty, p, span, resolve, limits, warn).map(Some),
+        "plymesh" | "objmesh" => file_mesh(ty, p, span, resolve, quads, limits, warn).map(Some),
         _ => Ok(None),
     }
 }
@@ -121,6 +136,7 @@ fn file_mesh(
     p: &ParamList,
     span: Span,
     resolve: &dyn Fn(&str) -> PathBuf,
+    quads: ply::Quads,
     limits: &Limits,
     warn: &mut Vec<Diagnostic>,
 ) -> Res<Built> {
@@ -128,23 +144,30 @@ fn file_mesh(
         p.string("filename")?.ok_or_else(|| Diagnostic::error(span, format!("{ty} needs \"string filename\"")))?;
     let at = p.named("filename").map_or(span, |f| f.value_span);
     let path = resolve(&name);
-    let mut m = if ty == "plymesh" {
-        ply::load(&path, limits).map_err(|e| {
-            // Read errors name the file already; format errors get its name first.
-            Diagnostic::error(at, if e.starts_with("cannot read") { e } else { format!("{name}: {e}") })
-        })?
-    } else {
-        obj::load(&path, limits).map_err(|e| Diagnostic::error(at, e))?
-    };
     if let Some(d) = p.named("displacement") {
         d.mark_used();
         warn.push(Diagnostic::warning(d.span, "displacement is not supported; the mesh is used undisplaced"));
     }
     p.mark_known(&["edgelength"]);
-    // A PLY with fewer than 3 points but no faces is simply empty.
-    m.indices.truncate(m.indices.len() / 3 * 3);
-    let kind = if ty == "plymesh" { "plymesh" } else { "objmesh" };
-    Ok(Built::Mesh { mesh: m, kind, filename: Some(name) })
+    if ty == "objmesh" {
+        let mesh = obj::load(&path, limits).map_err(|e| Diagnostic::error(at, e))?;
+        return Ok(Built::Mesh { mesh, kind: "objmesh", filename: Some(name) });
+    }
+    let m = ply::load(&path, quads, limits).map_err(|e| {
+        // Read errors name the file already; format errors get its name first.
+        Diagnostic::error(at, if e.starts_with("cannot read") { e } else { format!("{name}: {e}") })
+    })?;
+    let tris = Built::Mesh { mesh: m.triangles, kind: "plymesh", filename: Some(name.clone()) };
+    Ok(match m.patches {
+        None => tris,
+        Some(mesh) => {
+            let patches = Built::Patches { mesh, kind: "plymesh", filename: Some(name) };
+            match &tris {
+                Built::Mesh { mesh, .. } if mesh.indices.is_empty() => patches,
+                _ => Built::Several(vec![tris, patches]),
+            }
+        }
+    })
 }
 
 fn f(p: &ParamList, name: &str, default: f32) -> Res<f32> {

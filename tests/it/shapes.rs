@@ -158,13 +158,65 @@ fn plymesh_ascii_binary_quads_and_uv_names() {
     let m = &s.meshes[0];
     assert_eq!((m.p.len(), m.triangle_count()), (42, 80));
     assert!(m.n.is_some() && m.uv.is_some());
-    let s = scene(r#"WorldBegin Shape "plymesh" "string filename" "../../../pbrt-scenes/v3/geometry/slab_be.ply""#);
+    // Only the WorldEnd after the shape says this is a pbrt-v3 file: quads are split.
+    let slab = r#"Shape "plymesh" "string filename" "../../../pbrt-scenes/v3/geometry/slab_be.ply""#;
+    let s = scene(&format!("WorldBegin {slab} WorldEnd"));
+    assert!(s.patches.is_empty());
     let m = &s.meshes[0];
     assert_eq!((m.p.len(), m.triangle_count()), (25, 32), "16 quads split in two");
     // Quad (a,b,c,d) = (0,1,6,5) becomes (0,1,6) and (5,0,6).
     assert_eq!(&m.indices[..6], [0, 1, 6, 5, 0, 6]);
     assert_eq!(m.uv.as_ref().unwrap()[6], [0.25, 0.25], "s t names");
     assert_eq!(&m.face_indices.as_ref().unwrap()[..4], [0, 0, 1, 1]);
+    // pbrt-v4 keeps each quad as the bilinear patch (a, b, d, c).
+    let s = scene(&format!("WorldBegin {slab}"));
+    assert!(s.meshes.is_empty());
+    let m = &s.patches[0];
+    assert_eq!((m.p.len(), m.patch_count()), (25, 16));
+    assert_eq!(&m.indices[..4], [0, 1, 5, 6]);
+    assert_eq!(m.uv.as_ref().unwrap()[6], [0.25, 0.25]);
+    assert_eq!(&m.face_indices.as_ref().unwrap()[..2], [0, 1]);
+}
+
+/// A PLY of one triangle and one non-planar quad, ASCII.
+fn mixed_ply(dir: &std::path::Path) {
+    std::fs::create_dir_all(dir).unwrap();
+    let text = "ply\nformat ascii 1.0\nelement vertex 7\nproperty float x\nproperty float y\nproperty float z\n\
+                element face 2\nproperty list uchar int vertex_indices\nend_header\n\
+                5 0 0\n6 0 0\n5 1 0\n0 0 0\n1 0 0\n1 1 1\n0 1 0\n3 0 1 2\n4 3 4 5 6\n";
+    std::fs::write(dir.join("mixed.ply"), text).unwrap();
+}
+
+#[test]
+fn v4_ply_of_triangles_and_quads_is_two_shapes_in_file_order() {
+    let dir = std::env::temp_dir().join(format!("pbrt-sppm-mixed-ply-{}", std::process::id()));
+    mixed_ply(&dir);
+    let world = "WorldBegin\nShape \"sphere\"\nShape \"plymesh\" \"string filename\" \"mixed.ply\"\nShape \"disk\"\n";
+    let report_of = |text: &str| {
+        let path = dir.join("scene.pbrt");
+        std::fs::write(&path, text).unwrap();
+        let s = crate::common::load_file(&path).unwrap_or_else(|e| panic!("{e}"));
+        pbrt_sppm::check::report(&s, true)
+    };
+    // No version evidence before the shape: read at the end, as pbrt-v4 (the default).
+    let r = report_of(world);
+    let kinds: Vec<_> = r["shapes"].as_array().unwrap().iter().map(|s| s["kind"].clone()).collect();
+    assert_eq!(kinds, [json!("sphere"), json!("plymesh"), json!("plymesh"), json!("disk")]);
+    let shapes = r["shapes"].as_array().unwrap();
+    assert_eq!((shapes[1]["triangles"].clone(), shapes[2]["patches"].clone()), (json!(1), json!(1)));
+    assert_eq!(shapes[2]["params"]["filename"], "mixed.ply");
+    assert_eq!((r["counts"]["triangles"].clone(), r["counts"]["patches"].clone()), (json!(1), json!(1)));
+    // The quad (0,0,0) (1,0,0) (1,1,1) (0,1,0) is twisted: the patch z = uv is not the
+    // two triangles, and its area (∫∫ sqrt(1 + u² + v²)) is smaller than theirs (√2).
+    let patch_area = num(&shapes[2]["area"]);
+    assert!(close(patch_area, 1.2808, 1e-4), "{patch_area}");
+    // pbrt-v3 splits it.
+    let r = report_of(&format!("{world}WorldEnd\n"));
+    let shapes = r["shapes"].as_array().unwrap();
+    assert_eq!(shapes.len(), 3);
+    assert_eq!(shapes[1]["triangles"], 3);
+    let split_area = num(&shapes[1]["area"]) - 0.5;
+    assert!(close(split_area, 2f64.sqrt(), 1e-6), "{split_area}");
 }
 
 /// Writes a PLY with the given format and texture-coordinate names and loads it.
