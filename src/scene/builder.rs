@@ -683,9 +683,10 @@ impl Builder {
         Ok(())
     }
 
-    /// Geometry, transform and flags, and the alpha parameters; the material and alpha
-    /// are resolved later. `None` when the shape type is unsupported (warned and listed
-    /// as skipped).
+    /// Geometry, transform and flags, and the alpha parameters, one entry per shape made
+    /// (a pbrt-v4 PLY file of triangles and quads makes two); the material and alpha are
+    /// resolved later. Empty when the shape type is unsupported (warned and listed as
+    /// skipped).
     fn build_shape(&mut self, s: &PendingShape, area_light: Option<u32>) -> Res<Vec<(ShapeDesc, Option<AlphaParams>)>> {
         let (p, at) = (&s.entity.params, s.entity.name_span);
         let resolve = |n: &str| self.reader.resolve_path(n);
