@@ -727,19 +727,13 @@ impl Builder {
             Built::Quadric(q) => Geometry::Quadric(q),
             Built::Mesh { mesh: mut m, kind, filename } => {
                 mesh::transform(&mut m, &s.ctm);
-                mesh::validate(&m).map_err(|e| Diagnostic::error(where_, e))?;
-                if let Some(w) = mesh::degenerate_warning(&m) {
-                    self.warnings.push(Diagnostic::warning(where_, w));
-                }
+                self.check_mesh(where_, mesh::validate(&m), mesh::degenerate_warning(&m))?;
                 self.meshes.push(m);
                 Geometry::Mesh { mesh: self.meshes.len() as u32 - 1, kind, filename }
             }
             Built::Patches { mesh: mut m, kind, filename } => {
                 mesh::transform_patches(&mut m, &s.ctm);
-                mesh::validate_patches(&m).map_err(|e| Diagnostic::error(where_, e))?;
-                if let Some(w) = mesh::degenerate_patches_warning(&m) {
-                    self.warnings.push(Diagnostic::warning(where_, w));
-                }
+                self.check_mesh(where_, mesh::validate_patches(&m), mesh::degenerate_patches_warning(&m))?;
                 self.patches.push(m);
                 Geometry::Patches { mesh: self.patches.len() as u32 - 1, kind, filename }
             }
@@ -748,6 +742,13 @@ impl Builder {
             }
         };
         out.push(geometry);
+        Ok(())
+    }
+
+    /// An invalid mesh is a located error; a degenerate one a located warning.
+    fn check_mesh(&mut self, at: Span, valid: Result<(), String>, degenerate: Option<String>) -> Res<()> {
+        valid.map_err(|e| Diagnostic::error(at, e))?;
+        self.warnings.extend(degenerate.map(|w| Diagnostic::warning(at, w)));
         Ok(())
     }
 

@@ -5,9 +5,11 @@
 //! `texture_u texture_v`, `texture_s texture_t`; faces from `vertex_indices` (or
 //! `vertex_index`) lists of 3 or 4 entries; optional `face_indices`. A quad (a,b,c,d) is
 //! split as pbrt-v3 splits it, (a,b,c) and (d,a,c), or for pbrt-v4 files kept as the
-//! bilinear patch with corners p00 = a, p10 = b, p01 = d, p11 = c, as pbrt-v4 keeps it. The header is read here, and every count in it checked
-//! against the bytes that follow, before anything is allocated; ASCII payloads then go
-//! through ply-rs and binary payloads are decoded straight from the bytes.
+//! bilinear patch with corners p00 = a, p10 = b, p01 = d, p11 = c, as pbrt-v4 keeps it.
+//!
+//! The header is read here, and every count in it checked against the bytes that
+//! follow, before anything is allocated; ASCII payloads then go through ply-rs and
+//! binary payloads are decoded straight from the bytes.
 //!
 //! Errors name the element: `face 12 has 5 vertices (pbrt reads triangles and quads)`.
 
@@ -44,7 +46,8 @@ struct Collected {
 }
 
 /// What a PLY file holds: its triangles, and its quads when they are kept as patches.
-/// Both index the same vertices.
+/// Both index the file's vertex list (a file of quads only leaves the triangle mesh
+/// empty, vertices and all).
 #[derive(Clone, Debug, Default)]
 pub struct PlyMesh {
     pub triangles: TriangleMesh,
@@ -217,16 +220,18 @@ fn build(header: &Header, got: Collected) -> Result<PlyMesh, String> {
     // the patches of a mixed file, each indexing it by its own primitive number; here
     // each primitive keeps its own face's index.
     let ids = |ids: Vec<i32>, count: usize| (ids.len() == count && got.faces > 0).then_some(ids);
-    let patches = (!quads.is_empty()).then(|| PatchMesh {
-        p: p.clone(),
-        n: n.clone(),
-        uv: uv.clone(),
-        face_indices: ids(got.quad_ids, quads.len() / 4),
-        indices: quads,
-    });
     let face_indices = ids(got.tri_ids, indices.len() / 3);
-    let triangles = TriangleMesh { p, indices, n, uv, face_indices, ..Default::default() };
-    Ok(PlyMesh { triangles, patches })
+    let mut triangles = TriangleMesh { p, indices, n, uv, face_indices, ..Default::default() };
+    if quads.is_empty() {
+        return Ok(PlyMesh { triangles, patches: None });
+    }
+    // A file of quads only hands its vertices over; a mixed one shares copies.
+    let (p, n, uv) = match triangles.indices.is_empty() {
+        true => (std::mem::take(&mut triangles.p), triangles.n.take(), triangles.uv.take()),
+        false => (triangles.p.clone(), triangles.n.clone(), triangles.uv.clone()),
+    };
+    let face_indices = ids(got.quad_ids, quads.len() / 4);
+    Ok(PlyMesh { triangles, patches: Some(PatchMesh { p, indices: quads, n, uv, face_indices }) })
 }
 
 // ---- ASCII, through ply-rs -------------------------------------------------------
@@ -333,17 +338,18 @@ fn read_ascii(reader: &mut impl BufRead, header: &Header, got: &mut Collected) -
 /// A triangle (a,b,c); a quad (a,b,c,d) as (a,b,c) and (d,a,c), or as the patch
 /// (a,b,d,c).
 fn push_face(got: &mut Collected, f: &[i64], id: Option<i64>) -> Result<(), String> {
-    let (list, ids, order): (_, _, &[usize]) = match f.len() {
-        3 => (&mut got.tris, &mut got.tri_ids, &[0, 1, 2]),
-        4 if got.split_quads => (&mut got.tris, &mut got.tri_ids, &[0, 1, 2, 3, 0, 2]),
-        4 => (&mut got.quads, &mut got.quad_ids, &[0, 1, 3, 2]),
+    // (indices, ids, the face's corners in their order, primitives made)
+    let (list, ids, order, prims): (_, _, &[usize], _) = match f.len() {
+        3 => (&mut got.tris, &mut got.tri_ids, &[0, 1, 2], 1),
+        4 if got.split_quads => (&mut got.tris, &mut got.tri_ids, &[0, 1, 2, 3, 0, 2], 2),
+        4 => (&mut got.quads, &mut got.quad_ids, &[0, 1, 3, 2], 1),
         n => return Err(format!("face {} has {n} vertices (pbrt reads triangles and quads)", got.faces)),
     };
     got.faces += 1;
     list.extend(order.iter().map(|&k| f[k]));
     if let Some(id) = id {
         // One per primitive: a split quad's two triangles share its id.
-        ids.extend(std::iter::repeat_n(id as i32, order.len() / 3));
+        ids.extend(std::iter::repeat_n(id as i32, prims));
     }
     Ok(())
 }

@@ -157,15 +157,13 @@ fn file_mesh(
         // Read errors name the file already; format errors get its name first.
         Diagnostic::error(at, if e.starts_with("cannot read") { e } else { format!("{name}: {e}") })
     })?;
+    let has_triangles = !m.triangles.indices.is_empty();
     let tris = Built::Mesh { mesh: m.triangles, kind: "plymesh", filename: Some(name.clone()) };
     Ok(match m.patches {
         None => tris,
         Some(mesh) => {
             let patches = Built::Patches { mesh, kind: "plymesh", filename: Some(name) };
-            match &tris {
-                Built::Mesh { mesh, .. } if mesh.indices.is_empty() => patches,
-                _ => Built::Several(vec![tris, patches]),
-            }
+            if has_triangles { Built::Several(vec![tris, patches]) } else { patches }
         }
     })
 }

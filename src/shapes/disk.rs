@@ -3,7 +3,7 @@
 //! p(u, v) = (ρ cosφ, ρ sinφ, h) with ρ = r − v·(r − ri): v = 0 on the outer rim.
 
 use super::phi_max_radians;
-use super::quadric::{E, Local, QuadricSurface, at, phi_of};
+use super::quadric::{E, Local, QuadricSurface, at};
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -60,8 +60,8 @@ impl QuadricSurface for Disk {
         (p.z - self.height as f64).abs()
     }
 
-    /// The plane z = h, then the annulus and φ tests; the point is put exactly on the
-    /// plane.
+    /// The plane z = h, then the annulus test; the point is put exactly on the plane
+    /// before the shared range test.
     fn hit(&self, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3, f64)> {
         let h = self.height as f64;
         if d[2].value() == 0.0 {
@@ -78,8 +78,7 @@ impl QuadricSurface for Disk {
             return None;
         }
         p.z = h;
-        let phi = phi_of(p.x, p.y);
-        (phi <= self.phi_max as f64).then_some((t.value(), p, phi))
+        self.accept(p).map(|phi| (t.value(), p, phi))
     }
 
     fn local(&self, p: DVec3, phi: f64) -> Local {
