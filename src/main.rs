@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use pbrt_sppm::limits::Limits;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::parser::error::LoadError;
+use pbrt_sppm::sampling::SamplerKind;
 use pbrt_sppm::scene::{LoadOptions, SceneDescription, load_scene, load_scene_from_bytes};
 use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
@@ -87,6 +88,10 @@ struct RenderArgs {
     /// The seed every random number derives from (default: the Integrator's `seed`).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u64, 0>)]
     seed: Option<u64>,
+    /// What drives camera and photon paths: `sobol` (scrambled low-discrepancy points,
+    /// the default) or `random` (independent random numbers).
+    #[arg(long, value_parser = parse_sampler)]
+    sampler: Option<SamplerKind>,
     /// SPPM iterations (at least 1), overriding the scene's.
     #[arg(long, visible_alias = "iterations", allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
     spp: Option<u32>,
@@ -120,6 +125,14 @@ fn parse_syntax(s: &str) -> Result<Syntax, String> {
         "v3" => Ok(Syntax::V3),
         "v4" => Ok(Syntax::V4),
         _ => Err(format!("expected v3 or v4, not \"{s}\"")),
+    }
+}
+
+fn parse_sampler(s: &str) -> Result<SamplerKind, String> {
+    match s {
+        "sobol" => Ok(SamplerKind::Sobol),
+        "random" => Ok(SamplerKind::Random),
+        _ => Err(format!("expected sobol or random, not \"{s}\"")),
     }
 }
 
@@ -288,6 +301,7 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         photons: args.photons,
         radius: args.radius,
         seed: args.seed,
+        sampler: args.sampler.unwrap_or_default(),
         quick: args.quick,
         time_limit: args.time_limit.map(f64::from),
         reference,

@@ -12,6 +12,7 @@ pub struct RenderSettings {
     pub photons: Option<u64>,
     pub radius: Option<f32>,
     pub seed: Option<u64>,
+    pub sampler: crate::sampling::SamplerKind,
     /// Divide the iteration count by 16 (pbrt-v3's `--quick`).
     pub quick: bool,
     /// Stop after the iteration that passes this many seconds.
@@ -44,7 +45,14 @@ impl RenderScene {
         if !(radius > 0.0 && radius.is_finite()) {
             return Err(format!("the radius must be positive, not {radius}"));
         }
-        let mut sppm = super::sppm::Sppm::new(self, iterations, photons, radius, settings.seed.unwrap_or(i.seed))?;
+        let mut sppm = super::sppm::Sppm::new(
+            self,
+            iterations,
+            photons,
+            radius,
+            settings.seed.unwrap_or(i.seed),
+            settings.sampler,
+        )?;
         let [x0, x1, y0, y1] = self.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
         if let Some(r) = &settings.reference

@@ -7,9 +7,10 @@
 //! Integrator "sppm" "integer numiterations" 64 "integer maxdepth" 5
 //!            "integer photonsperiteration" -1 "float radius" 1 "integer seed" 0
 //! ```
-//! Every random number comes from a generator seeded by (seed, pixel, iteration) or
-//! (seed, iteration, photon), and photon contributions are summed in a fixed order, so
-//! any thread count gives a bit-identical image.
+//! Camera paths draw from a pixel's scrambled Sobol' sequences (index: the iteration),
+//! or with `--sampler random` from a generator seeded by (seed, pixel, iteration);
+//! photons from a generator seeded by (seed, iteration, photon). Photon contributions
+//! are summed in a fixed order, so any thread count gives a bit-identical image.
 
 use crate::interaction::Footprint;
 use crate::lights::Light;
@@ -17,7 +18,7 @@ use crate::materials::{Bsdf, TransportMode};
 use crate::math::{Point3, Vector3};
 use crate::render::RenderScene;
 use crate::sampling::power_heuristic;
-use crate::sampling::{Rng, hash};
+use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash};
 use crate::spectrum::{Rgb, luminance};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -73,6 +74,7 @@ pub struct Sppm<'a> {
     pub photons_per_iteration: u64,
     max_depth: u32,
     seed: u64,
+    sampler: SamplerKind,
     /// How much camera rays' differentials are scaled (pbrt scales them down as the
     /// iterations that share a pixel grow; see [`crate::scene::Integrator`]).
     differential_scale: f32,
@@ -94,6 +96,7 @@ impl<'a> Sppm<'a> {
         photons_per_iteration: u64,
         radius: f32,
         seed: u64,
+        sampler: SamplerKind,
     ) -> Result<Sppm<'a>, String> {
         let [x0, x1, y0, y1] = scene.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
@@ -113,6 +116,7 @@ impl<'a> Sppm<'a> {
             photons_per_iteration,
             max_depth: scene.integrator.max_depth,
             seed,
+            sampler,
             differential_scale: differential_scale(iterations, scene.integrator.differential_floor),
             stats: Stats::default(),
         })
@@ -144,12 +148,22 @@ impl<'a> Sppm<'a> {
     /// emitted and directly reflected light on the way.
     fn camera_pass(&mut self) {
         let (scene, width, origin, iter, seed, max_depth) =
-            (self.scene, self.width, self.origin, self.iteration as u64, self.seed, self.max_depth);
-        let diff_scale = self.differential_scale;
+            (self.scene, self.width, self.origin, self.iteration, self.seed, self.max_depth);
+        let (diff_scale, kind) = (self.differential_scale, self.sampler);
         self.pixels.par_iter_mut().enumerate().for_each(|(i, px)| {
             let (x, y) = (origin.0 as usize + i % width, origin.1 as usize + i / width);
-            let mut rng = Rng::new(hash(&[seed, x as u64, y as u64, iter, 0]));
-            let (ld, vp) = camera_path(scene, [x as f32, y as f32], &mut rng, max_depth, diff_scale);
+            let pixel = [x as f32, y as f32];
+            // Low discrepancy: the pixel's iterations are the points of one sequence.
+            let (ld, vp) = match kind {
+                SamplerKind::Sobol => {
+                    let mut s = SobolSample::new(hash(&[seed, x as u64, y as u64, 0]), iter);
+                    camera_path(scene, pixel, &mut s, max_depth, diff_scale)
+                }
+                SamplerKind::Random => {
+                    let mut rng = Rng::new(hash(&[seed, x as u64, y as u64, iter as u64, 0]));
+                    camera_path(scene, pixel, &mut rng, max_depth, diff_scale)
+                }
+            };
             px.ld += ld.as_dvec3();
             px.vp = vp;
         });
@@ -173,6 +187,9 @@ impl<'a> Sppm<'a> {
                 let mut out = Vec::new();
                 let mut hits = 0;
                 for k in c * PHOTON_CHUNK as u64..((c + 1) * PHOTON_CHUNK as u64).min(total) {
+                    // Independent numbers for photons under either sampler: padded
+                    // Sobol' points gained nothing measurable here and made some
+                    // regions' photon density noisier (see docs/sampling.md).
                     let mut rng = Rng::new(hash(&[seed, iter, k, 1]));
                     hits += trace_photon(scene, grid, pixels, &mut rng, max_depth, &mut out);
                 }
@@ -264,12 +281,12 @@ fn surface(
 fn camera_path(
     scene: &RenderScene,
     pixel: [f32; 2],
-    rng: &mut Rng,
+    sampler: &mut impl Sampler,
     max_depth: u32,
     diff_scale: f32,
 ) -> (Rgb, Option<VisiblePoint>) {
-    let u = rng.uniform2();
-    let (p_raster, u_lens) = ([pixel[0] + u[0], pixel[1] + u[1]], rng.uniform2());
+    let u = sampler.get2d();
+    let (p_raster, u_lens) = ([pixel[0] + u[0], pixel[1] + u[1]], sampler.get2d());
     // As in pbrt, only the camera ray has differentials: rays spawned later have none.
     // Scenes whose shading never reads a footprint skip them.
     let (mut ray, mut diff) = if scene.needs_differentials {
@@ -303,7 +320,7 @@ fn camera_path(
         if depth == 0 || specular_bounce {
             ld += beta * scene.emitted(&hit, &si, wo);
         }
-        ld += beta * direct_light(scene, &si, &bsdf, wo, rng);
+        ld += beta * direct_light(scene, &si, &bsdf, wo, sampler);
         // pbrt: a visible point at diffuse surfaces, or glossy ones at the last depth.
         if bsdf.is_diffuse() || (bsdf.is_glossy() && depth + 1 == max_depth) {
             return (ld, Some(VisiblePoint { p: si.p.0, wo, ng: si.n.0, bsdf, beta }));
@@ -311,12 +328,12 @@ fn camera_path(
         if depth + 1 >= max_depth {
             break;
         }
-        let Some(s) = bsdf.sample_f(wo, rng.uniform2(), rng.uniform(), TransportMode::Radiance) else { break };
+        let Some(s) = bsdf.sample_f(wo, sampler.get2d(), sampler.get1d(), TransportMode::Radiance) else { break };
         beta *= s.f * s.wi.dot(bsdf.shading_normal()).abs() / s.pdf;
         specular_bounce = s.specular;
         if luminance(beta) < 0.25 {
             let q = (1.0 - luminance(beta)).max(0.0);
-            if rng.uniform() < q {
+            if sampler.get1d() < q {
                 break;
             }
             beta /= 1.0 - q;
@@ -337,15 +354,15 @@ fn direct_light(
     si: &crate::interaction::SurfaceInteraction,
     bsdf: &Bsdf,
     wo: Vec3,
-    rng: &mut Rng,
+    sampler: &mut impl Sampler,
 ) -> Rgb {
     let n = scene.lights.len();
     if n == 0 {
         return Vec3::ZERO;
     }
-    let idx = ((rng.uniform() * n as f32) as usize).min(n - 1);
+    let idx = ((sampler.get1d() * n as f32) as usize).min(n - 1);
     let light = &scene.lights[idx];
-    let (u_light, u_bsdf, u_lobe) = (rng.uniform2(), rng.uniform2(), rng.uniform());
+    let (u_light, u_bsdf, u_lobe) = (sampler.get2d(), sampler.get2d(), sampler.get1d());
     let ns = bsdf.shading_normal();
     let mut ld = Vec3::ZERO;
     if let Some(ls) = light.sample_li(&scene.geometry, si.p.0, u_light)
@@ -400,13 +417,13 @@ fn trace_photon(
     scene: &RenderScene,
     grid: &Grid,
     pixels: &[Pixel],
-    rng: &mut Rng,
+    sampler: &mut impl Sampler,
     max_depth: u32,
     out: &mut Vec<(u32, Vec3)>,
 ) -> u64 {
-    let Some((li, light_pdf)) = scene.light_power.sample(rng.uniform()) else { return 0 };
+    let Some((li, light_pdf)) = scene.light_power.sample(sampler.get1d()) else { return 0 };
     let light: &Light = &scene.lights[li];
-    let (u1, u2) = (rng.uniform2(), rng.uniform2());
+    let (u1, u2) = (sampler.get2d(), sampler.get2d());
     let Some(e) = light.sample_le(&scene.geometry, scene.world, u1, u2) else { return 0 };
     if scene.emission_masked(light, e.surface.as_ref()) {
         return 0;
@@ -442,10 +459,10 @@ fn trace_photon(
             Surface::PassedThrough => continue,
             Surface::Abandon => break,
         };
-        let Some(s) = bsdf.sample_f(wi, rng.uniform2(), rng.uniform(), TransportMode::Importance) else { break };
+        let Some(s) = bsdf.sample_f(wi, sampler.get2d(), sampler.get1d(), TransportMode::Importance) else { break };
         let bnew = beta * s.f * s.wi.dot(bsdf.shading_normal()).abs() / s.pdf;
         let q = (1.0 - luminance(bnew) / luminance(beta).max(1e-30)).max(0.0);
-        if rng.uniform() < q {
+        if sampler.get1d() < q {
             break;
         }
         beta = bnew / (1.0 - q);

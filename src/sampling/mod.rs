@@ -1,10 +1,24 @@
 //! Random numbers and sampling helpers.
 //!
-//! Every sample is drawn from a generator seeded by a hash of what it is for (pixel and
-//! iteration, or iteration and photon index, plus the scene seed), so the thread count
-//! never changes which samples are drawn.
+//! Every sample is drawn from a sequence or generator seeded by a hash of what it is for
+//! (pixel and iteration, or iteration and photon index, plus the scene seed), so the
+//! thread count never changes which samples are drawn.
 
 use glam::Vec3;
+
+mod sobol;
+pub use sobol::{Sampler, SobolSample};
+
+/// Which numbers drive camera paths (`--sampler`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol' points ([`SobolSample`]), a pixel's iterations being
+    /// successive points: less noise per iteration.
+    #[default]
+    Sobol,
+    /// Independent random numbers, one generator per path.
+    Random,
+}
 
 /// A small, fast generator (PCG-XSH-RR 64/32).
 #[derive(Clone, Debug)]

@@ -1,0 +1,184 @@
+//! Owen-scrambled Sobol' points, padded dimension by dimension.
+//!
+//! Every 1D or 2D sample a path asks for is its own small low-discrepancy sequence: the
+//! first one or two Sobol' dimensions, indexed by the sample's index (the iteration for
+//! a pixel, the photon's number within an iteration), with the index shuffled and the
+//! values Owen-scrambled by seeds hashed from (stream, dimension). Shuffling the index
+//! decorrelates one dimension from the next; because the shuffle and the scramble are
+//! nested uniform scrambles, any aligned block of 2^m indices is still a (0, m, 2)-net
+//! in each 2D pair. This is Burley's construction ("Practical hash-based Owen
+//! scrambling", JCGT 2020), the same idea as pbrt-v4's `PaddedSobolSampler`, but it
+//! needs no sample count up front, so a render with a time limit keeps its
+//! stratification.
+//!
+//! Only two Sobol' dimensions are used, so no table of direction numbers is needed.
+
+use super::hash;
+
+/// Where a path's random numbers come from.
+pub trait Sampler {
+    /// Uniform in [0, 1).
+    fn get1d(&mut self) -> f32;
+    /// Uniform in [0, 1)².
+    fn get2d(&mut self) -> [f32; 2];
+}
+
+impl Sampler for super::Rng {
+    fn get1d(&mut self) -> f32 {
+        self.uniform()
+    }
+
+    fn get2d(&mut self) -> [f32; 2] {
+        self.uniform2()
+    }
+}
+
+/// One point of a padded, scrambled Sobol' sequence: its `index` within the sequence
+/// `stream`; each call to `get1d`/`get2d` moves on to the next dimension.
+#[derive(Clone, Debug)]
+pub struct SobolSample {
+    stream: u64,
+    index: u32,
+    dimension: u64,
+}
+
+impl SobolSample {
+    pub fn new(stream: u64, index: u32) -> SobolSample {
+        SobolSample { stream, index, dimension: 0 }
+    }
+
+    /// Seeds for the next dimension: (index shuffle, first value, second value).
+    fn next_seeds(&mut self) -> (u32, u32, u32) {
+        let h = hash(&[self.stream, self.dimension]);
+        self.dimension += 1;
+        let h2 = hash(&[h]);
+        (h as u32, (h >> 32) as u32, h2 as u32)
+    }
+}
+
+impl Sampler for SobolSample {
+    fn get1d(&mut self) -> f32 {
+        let (shuffle, s0, _) = self.next_seeds();
+        let i = nested_uniform_scramble(self.index, shuffle);
+        to_unit(nested_uniform_scramble(sobol0(i), s0))
+    }
+
+    fn get2d(&mut self) -> [f32; 2] {
+        let (shuffle, s0, s1) = self.next_seeds();
+        let i = nested_uniform_scramble(self.index, shuffle);
+        [to_unit(nested_uniform_scramble(sobol0(i), s0)), to_unit(nested_uniform_scramble(sobol1(i), s1))]
+    }
+}
+
+/// The first Sobol' dimension: the base-2 radical inverse (van der Corput).
+fn sobol0(i: u32) -> u32 {
+    i.reverse_bits()
+}
+
+/// The second Sobol' dimension (primitive polynomial x + 1): its generator matrix is
+/// Pascal's triangle mod 2, built column by column as v ← v ⊕ (v >> 1).
+fn sobol1(mut i: u32) -> u32 {
+    let (mut x, mut v) = (0u32, 1u32 << 31);
+    while i != 0 {
+        if i & 1 != 0 {
+            x ^= v;
+        }
+        i >>= 1;
+        v ^= v >> 1;
+    }
+    x
+}
+
+/// A random permutation of 32-bit fractions in which each bit flips depending only on
+/// the bits above it (Owen scrambling; hash from Vegdahl's improvement of Laine and
+/// Karras's). Applied to an index, it maps each aligned block of 2^m to another.
+fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    let mut v = x.reverse_bits();
+    v ^= v.wrapping_mul(0x3d20_adea);
+    v = v.wrapping_add(seed);
+    v = v.wrapping_mul((seed >> 16) | 1);
+    v ^= v.wrapping_mul(0x0552_6c56);
+    v ^= v.wrapping_mul(0x53a2_2864);
+    v.reverse_bits()
+}
+
+fn to_unit(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every aligned block of 2^m consecutive indices puts exactly one point in each
+    /// cell of every 2^a × 2^(m−a) grid (a (0, m, 2)-net), for any stream and dimension.
+    #[test]
+    fn blocks_are_nets_in_every_dimension_pair() {
+        for stream in [0u64, 1, 0xdead_beef] {
+            for m in [4u32, 6, 8] {
+                for block in [0u32, 3] {
+                    let mut points: Vec<SobolSample> =
+                        (0..1u32 << m).map(|k| SobolSample::new(stream, (block << m) + k)).collect();
+                    for _dimension in 0..5 {
+                        let uv: Vec<[f32; 2]> = points.iter_mut().map(|s| s.get2d()).collect();
+                        for a in 0..=m {
+                            let (nx, ny) = (1usize << a, 1usize << (m - a));
+                            let mut seen = vec![false; nx * ny];
+                            for p in &uv {
+                                let cell = (p[0] * nx as f32) as usize + nx * (p[1] * ny as f32) as usize;
+                                assert!(!seen[cell], "stream {stream} m {m} block {block} grid {nx}x{ny}");
+                                seen[cell] = true;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// 1D samples of one block are stratified: one in each of 2^m equal intervals.
+    #[test]
+    fn one_dimensional_blocks_are_stratified() {
+        let m = 7;
+        let mut points: Vec<SobolSample> = (0..1u32 << m).map(|k| SobolSample::new(42, k)).collect();
+        for _ in 0..4 {
+            let mut seen = vec![false; 1 << m];
+            for s in &mut points {
+                let cell = (s.get1d() * (1 << m) as f32) as usize;
+                assert!(!seen[cell]);
+                seen[cell] = true;
+            }
+        }
+    }
+
+    /// Successive dimensions of one point are not correlated (the shuffles differ), and
+    /// different streams give different points.
+    #[test]
+    fn dimensions_and_streams_are_decorrelated() {
+        let n = 4096u32;
+        let (mut sxy, mut sx, mut sy, mut sxx, mut syy) = (0f64, 0f64, 0f64, 0f64, 0f64);
+        for k in 0..n {
+            let mut s = SobolSample::new(7, k);
+            let (x, y) = (s.get1d() as f64, s.get1d() as f64);
+            sxy += x * y;
+            sx += x;
+            sy += y;
+            sxx += x * x;
+            syy += y * y;
+        }
+        let nf = n as f64;
+        let cov = sxy / nf - sx * sy / (nf * nf);
+        let corr = cov / ((sxx / nf - (sx / nf).powi(2)) * (syy / nf - (sy / nf).powi(2))).sqrt();
+        assert!(corr.abs() < 0.05, "correlation {corr}");
+        assert_ne!(SobolSample::new(1, 5).get2d(), SobolSample::new(2, 5).get2d());
+    }
+
+    #[test]
+    fn sobol_matches_the_known_second_dimension() {
+        // Sobol' dimension 2 in index (not Gray-code) order: v = 1/2, 3/4, 5/8, 15/16, …
+        let want = [0.0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875];
+        for (i, w) in want.iter().enumerate() {
+            assert_eq!(sobol1(i as u32) as f64 / 2f64.powi(32), *w, "index {i}");
+        }
+    }
+}
