@@ -13,8 +13,6 @@
 //!
 //! Only two Sobol' dimensions are used, so no table of direction numbers is needed.
 
-use super::hash;
-
 /// Where a path's random numbers come from.
 pub trait Sampler {
     /// Uniform in [0, 1).
@@ -38,68 +36,106 @@ impl Sampler for super::Rng {
 #[derive(Clone, Debug)]
 pub struct SobolSample {
     stream: u64,
-    index: u32,
+    /// The index, bit-reversed once (the scrambles work on reversed values).
+    reversed_index: u32,
     dimension: u64,
 }
 
 impl SobolSample {
     pub fn new(stream: u64, index: u32) -> SobolSample {
-        SobolSample { stream, index, dimension: 0 }
+        SobolSample { stream, reversed_index: index.reverse_bits(), dimension: 0 }
     }
 
-    /// Seeds for the next dimension: (index shuffle, first value, second value).
+    /// Seeds for the next dimension: (index shuffle, first value, second value). One
+    /// splitmix64 step per dimension: this runs for every number a camera path draws.
     fn next_seeds(&mut self) -> (u32, u32, u32) {
-        let h = hash(&[self.stream, self.dimension]);
         self.dimension += 1;
-        let h2 = hash(&[h]);
-        (h as u32, (h >> 32) as u32, h2 as u32)
+        let h = mix64(self.stream.wrapping_add(self.dimension.wrapping_mul(0x9e37_79b9_7f4a_7c15)));
+        (h as u32, (h >> 32) as u32, (h.wrapping_mul(0xd1b5_4a32_d192_ed03) >> 32) as u32)
+    }
+
+    /// The shuffled index (a nested uniform scramble of the index).
+    fn shuffled(&self, seed: u32) -> u32 {
+        laine_karras(self.reversed_index, seed).reverse_bits()
     }
 }
 
+// The first Sobol' dimension is the radical inverse, reverse(i), so its Owen scramble
+// reverse(laine_karras(reverse(reverse(i)))) is reverse(laine_karras(i)).
 impl Sampler for SobolSample {
     fn get1d(&mut self) -> f32 {
         let (shuffle, s0, _) = self.next_seeds();
-        let i = nested_uniform_scramble(self.index, shuffle);
-        to_unit(nested_uniform_scramble(sobol0(i), s0))
+        let i = self.shuffled(shuffle);
+        to_unit(laine_karras(i, s0).reverse_bits())
     }
 
     fn get2d(&mut self) -> [f32; 2] {
         let (shuffle, s0, s1) = self.next_seeds();
-        let i = nested_uniform_scramble(self.index, shuffle);
-        [to_unit(nested_uniform_scramble(sobol0(i), s0)), to_unit(nested_uniform_scramble(sobol1(i), s1))]
+        let i = self.shuffled(shuffle);
+        [to_unit(laine_karras(i, s0).reverse_bits()), to_unit(laine_karras(sobol1_reversed(i), s1).reverse_bits())]
     }
 }
 
-/// The first Sobol' dimension: the base-2 radical inverse (van der Corput).
-fn sobol0(i: u32) -> u32 {
-    i.reverse_bits()
+fn mix64(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
 }
 
-/// The second Sobol' dimension (primitive polynomial x + 1): its generator matrix is
-/// Pascal's triangle mod 2, built column by column as v ← v ⊕ (v >> 1).
-fn sobol1(mut i: u32) -> u32 {
-    let (mut x, mut v) = (0u32, 1u32 << 31);
-    while i != 0 {
-        if i & 1 != 0 {
-            x ^= v;
+/// The second Sobol' dimension (primitive polynomial x + 1), bit-reversed: its
+/// generator matrix is Pascal's triangle mod 2, column k being v_k with v_0 = 2^31 and
+/// v_k = v_(k−1) ⊕ (v_(k−1) >> 1); reversed, r_0 = 1 and r_k = r_(k−1) ⊕ (r_(k−1) << 1).
+/// Looked up a byte of the index at a time (the shuffled index has bits everywhere).
+fn sobol1_reversed(i: u32) -> u32 {
+    let t = &SOBOL1_REVERSED;
+    t[0][(i & 255) as usize]
+        ^ t[1][((i >> 8) & 255) as usize]
+        ^ t[2][((i >> 16) & 255) as usize]
+        ^ t[3][(i >> 24) as usize]
+}
+
+/// `SOBOL1_REVERSED[b][x]`: the XOR of r_(8b+j) over the set bits j of x.
+static SOBOL1_REVERSED: [[u32; 256]; 4] = sobol1_tables();
+
+const fn sobol1_tables() -> [[u32; 256]; 4] {
+    let mut columns = [0u32; 32];
+    let mut r = 1u32;
+    let mut k = 0;
+    while k < 32 {
+        columns[k] = r;
+        r ^= r << 1;
+        k += 1;
+    }
+    let mut t = [[0u32; 256]; 4];
+    let mut b = 0;
+    while b < 4 {
+        let mut x = 1;
+        while x < 256 {
+            // Each entry adds its lowest set bit's column to the entry without it.
+            let low = (x as u32).trailing_zeros() as usize;
+            t[b][x] = t[b][x & (x - 1)] ^ columns[8 * b + low];
+            x += 1;
         }
-        i >>= 1;
-        v ^= v >> 1;
+        b += 1;
     }
-    x
+    t
 }
 
-/// A random permutation of 32-bit fractions in which each bit flips depending only on
-/// the bits above it (Owen scrambling; hash from Vegdahl's improvement of Laine and
-/// Karras's). Applied to an index, it maps each aligned block of 2^m to another.
-fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
-    let mut v = x.reverse_bits();
+/// The second dimension in plain order (for tests).
+#[cfg(test)]
+fn sobol1(i: u32) -> u32 {
+    sobol1_reversed(i).reverse_bits()
+}
+
+/// A hash in which each bit depends only on the bits below it (Vegdahl's improvement of
+/// Laine and Karras's): on a bit-reversed value, an Owen scramble.
+fn laine_karras(mut v: u32, seed: u32) -> u32 {
     v ^= v.wrapping_mul(0x3d20_adea);
     v = v.wrapping_add(seed);
     v = v.wrapping_mul((seed >> 16) | 1);
     v ^= v.wrapping_mul(0x0552_6c56);
     v ^= v.wrapping_mul(0x53a2_2864);
-    v.reverse_bits()
+    v
 }
 
 fn to_unit(x: u32) -> f32 {
@@ -179,6 +215,19 @@ mod tests {
         let want = [0.0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875];
         for (i, w) in want.iter().enumerate() {
             assert_eq!(sobol1(i as u32) as f64 / 2f64.powi(32), *w, "index {i}");
+        }
+        // The byte tables against the matrix applied bit by bit, over every byte.
+        let direct = |mut i: u32| {
+            let (mut x, mut v) = (0u32, 1u32 << 31);
+            while i != 0 {
+                x ^= v * (i & 1);
+                i >>= 1;
+                v ^= v >> 1;
+            }
+            x
+        };
+        for i in [0x0000_0100u32, 0x00ff_0000, 0x8000_0001, 0xdead_beef, u32::MAX, 12_345_678] {
+            assert_eq!(sobol1(i), direct(i), "index {i:#x}");
         }
     }
 }
