@@ -1,8 +1,8 @@
 //! Owen-scrambled Sobol' points, padded dimension by dimension.
 //!
 //! Every 1D or 2D sample a path asks for is its own small low-discrepancy sequence: the
-//! first one or two Sobol' dimensions, indexed by the sample's index (the iteration for
-//! a pixel, the photon's number within an iteration), with the index shuffled and the
+//! first one or two Sobol' dimensions, indexed by the sample's index (for a camera
+//! path, the iteration; the pixel picks the stream), with the index shuffled and the
 //! values Owen-scrambled by seeds hashed from (stream, dimension). Shuffling the index
 //! decorrelates one dimension from the next; because the shuffle and the scramble are
 //! nested uniform scrambles, any aligned block of 2^m indices is still a (0, m, 2)-net
