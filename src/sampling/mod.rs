@@ -7,7 +7,7 @@
 use glam::Vec3;
 
 mod sobol;
-pub use sobol::{Sampler, SobolSample};
+pub use sobol::SobolSample;
 
 /// Which numbers drive camera paths (`--sampler`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -31,11 +31,35 @@ pub fn hash(words: &[u64]) -> u64 {
     let mut h = 0x9e37_79b9_7f4a_7c15u64;
     for &w in words {
         h ^= w.wrapping_add(0x9e37_79b9_7f4a_7c15).wrapping_add(h << 6).wrapping_add(h >> 2);
-        h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        h ^= h >> 31;
+        h = mix64(h);
     }
     h
+}
+
+/// The splitmix64 finaliser: every output bit depends on every input bit.
+pub(crate) fn mix64(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
+/// Where a path's random numbers come from: a generator ([`Rng`]) or a point of a
+/// low-discrepancy sequence ([`SobolSample`]).
+pub trait Sampler {
+    /// Uniform in [0, 1).
+    fn get1d(&mut self) -> f32;
+    /// Uniform in [0, 1)².
+    fn get2d(&mut self) -> [f32; 2];
+}
+
+impl Sampler for Rng {
+    fn get1d(&mut self) -> f32 {
+        self.uniform()
+    }
+
+    fn get2d(&mut self) -> [f32; 2] {
+        self.uniform2()
+    }
 }
 
 impl Rng {

@@ -13,23 +13,7 @@
 //!
 //! Only two Sobol' dimensions are used, so no table of direction numbers is needed.
 
-/// Where a path's random numbers come from.
-pub trait Sampler {
-    /// Uniform in [0, 1).
-    fn get1d(&mut self) -> f32;
-    /// Uniform in [0, 1)².
-    fn get2d(&mut self) -> [f32; 2];
-}
-
-impl Sampler for super::Rng {
-    fn get1d(&mut self) -> f32 {
-        self.uniform()
-    }
-
-    fn get2d(&mut self) -> [f32; 2] {
-        self.uniform2()
-    }
-}
+use super::{Sampler, mix64};
 
 /// One point of a padded, scrambled Sobol' sequence: its `index` within the sequence
 /// `stream`; each call to `get1d`/`get2d` moves on to the next dimension.
@@ -74,12 +58,6 @@ impl Sampler for SobolSample {
         let i = self.shuffled(shuffle);
         [to_unit(laine_karras(i, s0).reverse_bits()), to_unit(laine_karras(sobol1_reversed(i), s1).reverse_bits())]
     }
-}
-
-fn mix64(mut x: u64) -> u64 {
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^ (x >> 31)
 }
 
 /// The second Sobol' dimension (primitive polynomial x + 1), bit-reversed: its
