@@ -4,7 +4,10 @@
 //! cargo run --release --bin pbrt-bench -- parse [--runs 5] [--dir target/bench-data]
 //! cargo run --release --bin pbrt-bench -- rays [--runs 5] [--dir target/bench-data] [--dump] [--sse]
 //! cargo run --release --bin pbrt-bench -- sppm [--runs 3] [SCENE.pbrt ...]
+//! cargo run --release --bin pbrt-bench -- converge [SCENE.pbrt[@half] ...] [--runs 3] ...
 //! ```
+//! `converge` measures error against wall time beside pbrt-v3 and pbrt-v4 (see
+//! `converge.rs`).
 //! `sppm` renders each scene (default: the bundled `pbrt-scenes/v3/*.pbrt` scenes) at 1
 //! and 2 threads and prints the median seconds per iteration and per million photons.
 //! `rays` builds a 1M-triangle bumpy sphere (through a binary PLY, as a scene would),
@@ -19,6 +22,11 @@
 //! 1M-triangle binary PLY, and a scene with 25,000 instances of a 30,000-triangle PLY,
 //! then loads each `--runs` times, every run in a fresh process so its peak memory
 //! (VmHWM) is its own, and prints the median time, MB/s and peak memory.
+
+mod converge;
+// pbrt-imgtool also reads ERRORS.csv files with it; here only drawing is used.
+#[allow(dead_code)]
+mod plot;
 
 use pbrt_sppm::scene::{LoadOptions, load_scene};
 use std::io::Write;
@@ -45,6 +53,7 @@ fn main() -> ExitCode {
             let scenes: Vec<PathBuf> = args[2..].iter().filter(|a| a.ends_with(".pbrt")).map(PathBuf::from).collect();
             sppm_bench(scenes, runs)
         }
+        Some("converge") => converge::main(&args[2..]),
         Some("--once") => match args.get(2) {
             Some(scene) => once(Path::new(scene)),
             None => usage(),
@@ -54,7 +63,7 @@ fn main() -> ExitCode {
 }
 
 fn usage() -> ExitCode {
-    eprintln!("usage: pbrt-bench parse|rays|sppm [--runs N] [--dir DIR] [--dump] [--sse] [SCENE.pbrt ...]");
+    eprintln!("usage: pbrt-bench parse|rays|sppm|converge [--runs N] [--dir DIR] [--dump] [--sse] [SCENE.pbrt ...]");
     ExitCode::FAILURE
 }
 

@@ -4,6 +4,7 @@ mod alpha;
 mod bad_inputs;
 mod camera_image;
 mod common;
+mod converge;
 mod directives;
 mod fuzz_regressions;
 mod hostile;

@@ -1,0 +1,662 @@
+//! `pbrt-bench converge`: error against wall time, ours beside pbrt-v3 and pbrt-v4.
+//!
+//! ```text
+//! pbrt-bench converge [SCENE.pbrt[@half] ...] [--runs 3] [--iterations 4,16,64]
+//!                     [--reference-iterations N] [--peers DIR] [--out DIR] [--nthreads 2]
+//! ```
+//! For each scene, every round runs each peer found in `--peers` (`pbrt-v3`, `pbrt-v4`)
+//! once per iteration count of the ladder (default: the scene's count over 4, over 2 and
+//! as written), then ours once with a time limit just past the slowest peer run of that
+//! round, writing `ERRORS.csv`. Times are whole processes (loading, rendering, writing);
+//! our per-iteration times get the same loading and writing time added. With `--runs R`
+//! rounds, each figure is the median over the rounds, with the range beside it.
+//!
+//! Error is relMSE against a reference that neither side's samples are part of: ours at
+//! `--reference-iterations` (default 32 × the longest rung) with a seed of its own. A
+//! pbrt reference would flatter pbrt: pbrt's samples do not depend on the iteration
+//! count, so its short run is the start of its long one. The peer rows show how far each
+//! peer's mean sits from the reference's, so a systematic difference is visible.
+//! pbrt-v4 does not read v3 files; it renders `pbrt-v4 --upgrade`'s translation, against
+//! a reference we render from that same translation.
+//!
+//! "ours" is, at each peer time, the error of the image our run held then: the last
+//! iteration finished by that time. The ratio ours/peer is the headline: below 1/3 meets
+//! the project's target. The scene files are rewritten into `--out` (iteration count,
+//! `@half` resolution) beside links to everything else in the scene's folder, so
+//! relative paths still resolve. References are cached in `--out/refs` under a hash of
+//! the rewritten file; delete them to rebuild.
+//!
+//! Per scene this writes `converge.md` (the table), one `ERRORS.csv`-shaped file per
+//! renderer and `converge.png` (all curves, log-log).
+
+use crate::plot::{Series, draw};
+use pbrt_sppm::imageio::{RgbImage, metrics, read_image, write_text};
+use pbrt_sppm::parser::lexer::{Lexer, Token, TokenKind, decode_string};
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode, Stdio};
+use std::time::Instant;
+
+type Res<T> = Result<T, String>;
+
+/// A scene of the suite, at its own or at half resolution.
+struct SceneSpec {
+    path: PathBuf,
+    half: bool,
+}
+
+struct Options {
+    scenes: Vec<SceneSpec>,
+    runs: usize,
+    ladder: Option<Vec<u32>>,
+    reference_iterations: Option<u32>,
+    peers: PathBuf,
+    out: PathBuf,
+    nthreads: usize,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum PeerKind {
+    V3,
+    V4,
+}
+
+struct Peer {
+    kind: PeerKind,
+    exe: PathBuf,
+}
+
+impl Peer {
+    fn name(&self) -> &'static str {
+        match self.kind {
+            PeerKind::V3 => "pbrt-v3",
+            PeerKind::V4 => "pbrt-v4",
+        }
+    }
+}
+
+/// One scene rewritten for every renderer.
+struct Prepared {
+    label: String,
+    dir: PathBuf,
+    ladder: Vec<u32>,
+    /// Our input: the scene at its resolution, iterations as written.
+    ours: PathBuf,
+    /// pbrt-v3's inputs, one per rung (pbrt-v3 has no iteration flag).
+    v3: Vec<PathBuf>,
+    /// pbrt-v4's input (the upgraded file for a v3 scene).
+    v4: Option<PathBuf>,
+    /// Our reference for `ours` and `v3`, its file, and the one for `v4`.
+    reference: RgbImage,
+    reference_file: PathBuf,
+    reference_v4: Option<RgbImage>,
+}
+
+/// A point on a curve: median seconds over the rounds, their range, and relMSE.
+#[derive(Clone, Copy)]
+struct Point {
+    iterations: u32,
+    seconds: f64,
+    low: f64,
+    high: f64,
+    relmse: f64,
+    /// The image's mean over the reference's (peers only).
+    mean_ratio: f64,
+}
+
+pub fn main(args: &[String]) -> ExitCode {
+    let result = options(args).and_then(|o| {
+        let ours = our_binary()?;
+        let peers = find_peers(&o.peers);
+        let mut summary = String::new();
+        for spec in &o.scenes {
+            summary.push_str(&bench_scene(&o, spec, &ours, &peers)?);
+        }
+        println!("\n## Summary (ours/peer relMSE at the peer's wall time)\n\n{summary}");
+        Ok(())
+    });
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("pbrt-bench converge: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn options(args: &[String]) -> Res<Options> {
+    let mut o = Options {
+        scenes: Vec::new(),
+        runs: 3,
+        ladder: None,
+        reference_iterations: None,
+        peers: PathBuf::from("../shared/peers"),
+        out: PathBuf::from("target/converge"),
+        nthreads: 2,
+    };
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut value = || it.next().ok_or_else(|| format!("{a} needs a value"));
+        match a.as_str() {
+            "--runs" => o.runs = positive(a, value()?)? as usize,
+            "--nthreads" => o.nthreads = positive(a, value()?)? as usize,
+            "--reference-iterations" => o.reference_iterations = Some(positive(a, value()?)?),
+            "--iterations" => {
+                let v: Res<Vec<u32>> = value()?.split(',').map(|s| positive(a, s)).collect();
+                o.ladder = Some(v?);
+            }
+            "--peers" => o.peers = PathBuf::from(value()?),
+            "--out" => o.out = PathBuf::from(value()?),
+            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
+            s => {
+                let (path, half) = s.strip_suffix("@half").map_or((s, false), |p| (p, true));
+                o.scenes.push(SceneSpec { path: PathBuf::from(path), half });
+            }
+        }
+    }
+    if o.scenes.is_empty() {
+        o.scenes = default_suite();
+    }
+    Ok(o)
+}
+
+fn positive(flag: &str, s: &str) -> Res<u32> {
+    s.trim().parse::<u32>().ok().filter(|&n| n > 0).ok_or_else(|| format!("{flag}: '{s}' is not a positive integer"))
+}
+
+/// The bundled scenes, and caustic-glass f16-9a (full and half) when the shared scenes are there.
+fn default_suite() -> Vec<SceneSpec> {
+    let mut v: Vec<SceneSpec> = ["v3/sppm-bench", "v3/cornell-glass", "v3/caustic-ring", "verify/v3-caustic"]
+        .iter()
+        .map(|n| SceneSpec { path: PathBuf::from(format!("pbrt-scenes/{n}.pbrt")), half: false })
+        .collect();
+    let f16 = PathBuf::from("../shared/scenes/pbrt-v3-scenes/caustic-glass/f16-9a.pbrt");
+    if f16.exists() {
+        v.push(SceneSpec { path: f16.clone(), half: true });
+        v.push(SceneSpec { path: f16, half: false });
+    }
+    v
+}
+
+fn our_binary() -> Res<PathBuf> {
+    let exe = std::env::current_exe().map_err(|e| format!("where am I: {e}"))?;
+    let ours = exe.with_file_name("pbrt-sppm");
+    if ours.exists() {
+        Ok(ours)
+    } else {
+        Err(format!("{} is missing: build it with `cargo build --release`", ours.display()))
+    }
+}
+
+fn find_peers(dir: &Path) -> Vec<Peer> {
+    let mut peers = Vec::new();
+    for (kind, name) in [(PeerKind::V3, "pbrt-v3"), (PeerKind::V4, "pbrt-v4")] {
+        // Absolute: peers run inside the scene's folder.
+        if let Some(exe) = dir.join(name).canonicalize().ok().filter(|e| e.is_file()) {
+            peers.push(Peer { kind, exe });
+        } else {
+            println!("{}: not found, left out", dir.join(name).display());
+        }
+    }
+    peers
+}
+
+/// Rewrites, renders references, runs the rounds and reports one scene.
+fn bench_scene(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<String> {
+    let p = prepare(o, spec, ours, peers)?;
+    let label = p.label.clone();
+    println!("\n## {label}\n");
+    let mut peer_times: Vec<Vec<Vec<(f64, f64, f64)>>> = vec![vec![Vec::new(); p.ladder.len()]; peers.len()];
+    let mut working: Vec<bool> = vec![true; peers.len()];
+    let mut our_runs = Vec::new();
+    for _ in 0..o.runs {
+        let mut slowest: f64 = 0.0;
+        for (k, peer) in peers.iter().enumerate() {
+            if !working[k] {
+                continue;
+            }
+            for (rung, &n) in p.ladder.iter().enumerate() {
+                match run_peer(&p, peer, rung, n, o.nthreads) {
+                    Ok(r) => {
+                        slowest = slowest.max(r.0);
+                        peer_times[k][rung].push(r);
+                    }
+                    Err(e) => {
+                        println!("{}: {e}; left out of this scene", peer.name());
+                        working[k] = false;
+                        break;
+                    }
+                }
+            }
+        }
+        let budget = (slowest > 0.0).then_some(slowest * 1.1);
+        our_runs.push(run_ours(o, &p, ours, budget)?);
+    }
+    let our_curve = our_curve(&our_runs);
+    let mut table = format!(
+        "{label}: {} rounds, {} threads, reference {}\n\n\
+         | renderer | iterations | seconds (range) | relMSE | mean / reference | ours at that time | ours / peer |\n\
+         |---|---|---|---|---|---|---|\n",
+        o.runs,
+        o.nthreads,
+        reference_note(o, &p)
+    );
+    let mut series = vec![curve_series("ours", &our_curve)];
+    let mut ratios = Vec::new();
+    for (k, peer) in peers.iter().enumerate().filter(|(k, _)| working[*k]) {
+        let points: Vec<Point> = (0..p.ladder.len()).map(|r| median_point(p.ladder[r], &peer_times[k][r])).collect();
+        for pt in &points {
+            let at = our_error_at(&our_curve, pt.seconds);
+            let ratio = at.map(|e| e / pt.relmse);
+            ratios.extend(ratio);
+            let _ = writeln!(
+                table,
+                "| {} | {} | {:.2} ({:.2}–{:.2}) | {:.3e} | {:.4} | {} | {} |",
+                peer.name(),
+                pt.iterations,
+                pt.seconds,
+                pt.low,
+                pt.high,
+                pt.relmse,
+                pt.mean_ratio,
+                at.map_or("not yet".into(), |e| format!("{e:.3e}")),
+                ratio.map_or("—".into(), |r| format!("{r:.2}"))
+            );
+        }
+        write_csv(&p.dir.join(format!("{}.csv", peer.name())), &points)?;
+        series.push(curve_series(peer.name(), &points));
+    }
+    for pt in [our_curve.first(), our_curve.last()].into_iter().flatten() {
+        let _ = writeln!(
+            table,
+            "| ours | {} | {:.2} ({:.2}–{:.2}) | {:.3e} | | | |",
+            pt.iterations, pt.seconds, pt.low, pt.high, pt.relmse
+        );
+    }
+    write_csv(&p.dir.join("ours.csv"), &our_curve)?;
+    draw(&series, "seconds (whole process)", "relmse", &p.dir.join("converge.png"))?;
+    write_text(&p.dir.join("converge.md"), &table).map_err(|e| e.to_string())?;
+    println!("{table}");
+    Ok(summary_line(&label, &ratios))
+}
+
+fn summary_line(label: &str, ratios: &[f64]) -> String {
+    if ratios.is_empty() {
+        return format!("- {label}: no peer to compare with\n");
+    }
+    let (lo, hi) = ratios.iter().fold((f64::MAX, f64::MIN), |(a, b), &r| (a.min(r), b.max(r)));
+    format!("- {label}: {lo:.2}–{hi:.2}\n")
+}
+
+fn reference_note(o: &Options, p: &Prepared) -> String {
+    let n = o.reference_iterations.unwrap_or(32 * p.ladder.iter().max().copied().unwrap_or(1));
+    format!("ours at {n} iterations, another seed")
+}
+
+fn curve_series(label: &str, points: &[Point]) -> Series {
+    Series { label: label.into(), points: points.iter().map(|p| (p.seconds, p.relmse)).collect() }
+}
+
+fn write_csv(path: &Path, points: &[Point]) -> Res<()> {
+    let mut s = String::from("iteration,seconds,photons,mse,rmse,relmse\n");
+    for p in points {
+        let _ = writeln!(s, "{},{:.6},0,0,0,{:e}", p.iterations, p.seconds, p.relmse);
+    }
+    write_text(path, &s).map_err(|e| e.to_string())
+}
+
+/// The median time (and range) over rounds; relMSE and mean of the median-time round.
+fn median_point(iterations: u32, runs: &[(f64, f64, f64)]) -> Point {
+    let mut v = runs.to_vec();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mid = v.get(v.len() / 2).copied().unwrap_or((f64::NAN, f64::NAN, f64::NAN));
+    Point {
+        iterations,
+        seconds: mid.0,
+        low: v.first().map_or(f64::NAN, |r| r.0),
+        high: v.last().map_or(f64::NAN, |r| r.0),
+        relmse: mid.1,
+        mean_ratio: mid.2,
+    }
+}
+
+/// Our error at a wall time: that of the last iteration finished by then.
+fn our_error_at(curve: &[Point], seconds: f64) -> Option<f64> {
+    curve.iter().take_while(|p| p.seconds <= seconds).last().map(|p| p.relmse)
+}
+
+/// Per iteration, the median whole-process time over our rounds (relMSE is the same in
+/// every round: the image is deterministic).
+fn our_curve(runs: &[Vec<(u32, f64, f64)>]) -> Vec<Point> {
+    let longest = runs.iter().map(Vec::len).max().unwrap_or(0);
+    (0..longest)
+        .map(|i| {
+            let at: Vec<(f64, f64, f64)> =
+                runs.iter().filter_map(|r| r.get(i)).map(|&(_, t, e)| (t, e, f64::NAN)).collect();
+            let it = runs.iter().find_map(|r| r.get(i)).map_or(0, |r| r.0);
+            median_point(it, &at)
+        })
+        .collect()
+}
+
+/// Makes the scene's folder in `--out`, its rewritten files and the references.
+fn prepare(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<Prepared> {
+    let src = std::fs::read_to_string(&spec.path).map_err(|e| format!("{}: {e}", spec.path.display()))?;
+    let stem = spec.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let label = if spec.half { format!("{stem}@half") } else { stem.clone() };
+    let dir = o.out.join(&label);
+    link_folder(&spec.path, &dir)?;
+    let at_res = rewrite(&src, None, spec.half).map_err(|e| format!("{}: {e}", spec.path.display()))?;
+    let ours_file = dir.join(format!("{stem}.converge.pbrt"));
+    write_text(&ours_file, &at_res).map_err(|e| e.to_string())?;
+    let written = scene_iterations(&ours_file)?;
+    let ladder = o.ladder.clone().unwrap_or_else(|| default_ladder(written));
+    let mut v3 = Vec::new();
+    for &n in &ladder {
+        let f = dir.join(format!("{stem}.converge.{n}.pbrt"));
+        write_text(&f, &rewrite(&at_res, Some(n), false)?).map_err(|e| e.to_string())?;
+        v3.push(f);
+    }
+    let top = ladder.iter().max().copied().unwrap_or(1);
+    let ref_n = o.reference_iterations.unwrap_or(32 * top);
+    let (reference_file, reference) = render_reference(o, ours, &ours_file, &at_res, ref_n)?;
+    let v4 = match peers.iter().find(|p| p.kind == PeerKind::V4) {
+        Some(peer) => v4_input(&peer.exe, &ours_file, &dir, &stem)?,
+        None => None,
+    };
+    let reference_v4 = match &v4 {
+        Some(f) if f != &ours_file => {
+            let text = std::fs::read_to_string(f).map_err(|e| e.to_string())?;
+            Some(render_reference(o, ours, f, &text, ref_n)?.1)
+        }
+        Some(_) => Some(reference.clone()),
+        None => None,
+    };
+    Ok(Prepared { label, dir, ladder, ours: ours_file, v3, v4, reference, reference_file, reference_v4 })
+}
+
+/// N/4, N/2 and N (distinct, at least 1).
+fn default_ladder(n: u32) -> Vec<u32> {
+    let mut v = vec![(n / 4).max(1), (n / 2).max(1), n.max(1)];
+    v.dedup();
+    v
+}
+
+fn scene_iterations(file: &Path) -> Res<u32> {
+    let opts = pbrt_sppm::scene::LoadOptions::default();
+    let scene = pbrt_sppm::scene::load_scene(file, &opts).map_err(|e| e.one_line())?;
+    Ok(scene.integrator.iterations)
+}
+
+/// `dir` gets a link to every entry of the scene's folder (so `Include`, meshes and
+/// textures resolve as they did), except earlier rewritten files.
+fn link_folder(scene: &Path, dir: &Path) -> Res<()> {
+    let folder = scene.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let folder = folder.canonicalize().map_err(|e| format!("{}: {e}", folder.display()))?;
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let entries = std::fs::read_dir(&folder).map_err(|e| format!("{}: {e}", folder.display()))?;
+    for entry in entries.flatten() {
+        let link = dir.join(entry.file_name());
+        if link.symlink_metadata().is_ok() {
+            continue;
+        }
+        symlink(&entry.path(), &link).map_err(|e| format!("{}: {e}", link.display()))?;
+    }
+    Ok(())
+}
+
+#[cfg(unix)]
+fn symlink(target: &Path, link: &Path) -> std::io::Result<()> {
+    std::os::unix::fs::symlink(target, link)
+}
+
+#[cfg(not(unix))]
+fn symlink(target: &Path, link: &Path) -> std::io::Result<()> {
+    std::fs::copy(target, link).map(|_| ())
+}
+
+/// The file pbrt-v4 reads: the scene itself if pbrt-v4 takes it, else its `--upgrade`.
+fn v4_input(v4: &Path, file: &Path, dir: &Path, stem: &str) -> Res<Option<PathBuf>> {
+    let syntax = {
+        let scene =
+            pbrt_sppm::scene::load_scene(file, &pbrt_sppm::scene::LoadOptions::default()).map_err(|e| e.one_line())?;
+        scene.syntax
+    };
+    if syntax == pbrt_sppm::parser::Syntax::V4 {
+        return Ok(Some(file.to_path_buf()));
+    }
+    let out = Command::new(v4)
+        .arg("--upgrade")
+        .arg(file.file_name().unwrap_or_default())
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("{}: {e}", v4.display()))?;
+    if !out.status.success() {
+        println!("pbrt-v4 --upgrade failed: {}", last_line(&out.stderr));
+        return Ok(None);
+    }
+    let upgraded = dir.join(format!("{stem}.converge.v4.pbrt"));
+    std::fs::write(&upgraded, &out.stdout).map_err(|e| format!("{}: {e}", upgraded.display()))?;
+    // One iteration first: a translation pbrt-v4 refuses is not worth a reference.
+    let trial = Command::new(v4)
+        .args(["--quiet", "--nthreads", "1", "--spp", "1", "--outfile", "trial-v4.exr"])
+        .arg(&upgraded)
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("{}: {e}", v4.display()))?;
+    if !trial.status.success() {
+        println!("pbrt-v4 cannot render its translation: {}", last_line(&trial.stderr));
+        return Ok(None);
+    }
+    Ok(Some(upgraded))
+}
+
+/// Our image of `file` at `n` iterations with a seed of its own, cached by content.
+fn render_reference(o: &Options, ours: &Path, file: &Path, text: &str, n: u32) -> Res<(PathBuf, RgbImage)> {
+    let key = pbrt_sppm::sampling::hash(&[fnv(text.as_bytes()), n as u64]);
+    let refs = o.out.join("refs");
+    std::fs::create_dir_all(&refs).map_err(|e| format!("{}: {e}", refs.display()))?;
+    let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let path = refs.join(format!("{stem}-{n}-{key:016x}.exr"));
+    if !path.exists() {
+        println!("rendering the reference {} ({n} iterations)", path.display());
+        let t = Instant::now();
+        let status = Command::new(ours)
+            .arg("render")
+            .arg(file)
+            .args(["--quiet", "--seed", "1000003", "--spp", &n.to_string(), "--nthreads", &o.nthreads.to_string()])
+            .arg("--outfile")
+            .arg(&path)
+            .stdin(Stdio::null())
+            .status()
+            .map_err(|e| format!("{}: {e}", ours.display()))?;
+        if !status.success() {
+            return Err(format!("the reference render of {} failed", file.display()));
+        }
+        println!("  {:.1} s", t.elapsed().as_secs_f64());
+    }
+    let image = read_image(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok((path, image))
+}
+
+fn fnv(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf29ce484222325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x100000001b3))
+}
+
+fn last_line(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("").to_string()
+}
+
+/// One peer run: (wall seconds, relMSE, mean / reference mean).
+fn run_peer(p: &Prepared, peer: &Peer, rung: usize, n: u32, nthreads: usize) -> Res<(f64, f64, f64)> {
+    let out = p.dir.join(format!("{}-{n}.exr", peer.name()));
+    let mut cmd = Command::new(&peer.exe);
+    cmd.args(["--quiet", "--nthreads", &nthreads.to_string(), "--outfile"]).arg(&out);
+    let reference = match peer.kind {
+        PeerKind::V3 => {
+            cmd.arg(&p.v3[rung]);
+            &p.reference
+        }
+        PeerKind::V4 => {
+            let file = p.v4.as_ref().ok_or("no input pbrt-v4 reads")?;
+            cmd.args(["--spp", &n.to_string()]).arg(file);
+            p.reference_v4.as_ref().ok_or("no pbrt-v4 reference")?
+        }
+    };
+    let _ = std::fs::remove_file(&out);
+    let t = Instant::now();
+    let done = cmd.current_dir(&p.dir).stdin(Stdio::null()).output().map_err(|e| e.to_string())?;
+    let seconds = t.elapsed().as_secs_f64();
+    if !done.status.success() {
+        return Err(format!("exit {:?}: {}", done.status.code(), last_line(&done.stderr)));
+    }
+    let img = read_image(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let (e, m) = compare(&img, reference)?;
+    Ok((seconds, e, m))
+}
+
+/// relMSE and the ratio of mean values (all channels) against the reference.
+fn compare(img: &RgbImage, reference: &RgbImage) -> Res<(f64, f64)> {
+    if (img.width, img.height) != (reference.width, reference.height) {
+        return Err(format!(
+            "the image is {}x{}, the reference {}x{}",
+            img.width, img.height, reference.width, reference.height
+        ));
+    }
+    let mean = |px: &[[f32; 3]]| px.iter().map(|p| p.iter().map(|&c| c as f64).sum::<f64>()).sum::<f64>();
+    let ratio = mean(&img.pixels) / mean(&reference.pixels).max(1e-300);
+    Ok((metrics::relmse(&img.pixels, &reference.pixels), ratio))
+}
+
+/// One run of ours: per iteration (iteration, whole-process seconds, relMSE).
+fn run_ours(o: &Options, p: &Prepared, ours: &Path, budget: Option<f64>) -> Res<Vec<(u32, f64, f64)>> {
+    let csv = p.dir.join("ours-errors.csv");
+    let top = p.ladder.iter().max().copied().unwrap_or(1);
+    let mut cmd = Command::new(ours);
+    cmd.arg("render").arg(&p.ours).args(["--quiet", "--nthreads", &o.nthreads.to_string()]);
+    cmd.arg("--outfile").arg(p.dir.join("ours.exr"));
+    cmd.arg("--mse-reference-image").arg(&p.reference_file).arg("--mse-reference-out").arg(&csv);
+    match budget {
+        // Far more iterations than needed; the time limit ends the run.
+        Some(t) => cmd.args(["--spp", &(64 * top).to_string(), "--time-limit", &format!("{t:.3}")]),
+        None => cmd.args(["--spp", &top.to_string()]),
+    };
+    let t = Instant::now();
+    let done = cmd.stdin(Stdio::null()).output().map_err(|e| e.to_string())?;
+    let wall = t.elapsed().as_secs_f64();
+    if !done.status.success() {
+        return Err(format!("pbrt-sppm on {}: {}", p.ours.display(), last_line(&done.stderr)));
+    }
+    let rows = read_errors(&csv)?;
+    // Loading and writing, which ERRORS.csv leaves out, are added to every row.
+    let overhead = wall - rows.last().map_or(0.0, |r| r.1);
+    Ok(rows.into_iter().map(|(i, s, e)| (i, s + overhead, e)).collect())
+}
+
+fn read_errors(path: &Path) -> Res<Vec<(u32, f64, f64)>> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut rows = Vec::new();
+    for (n, line) in text.lines().enumerate().skip(1).filter(|(_, l)| !l.trim().is_empty()) {
+        let f: Vec<&str> = line.split(',').collect();
+        let bad = || format!("{}:{}: bad row", path.display(), n + 1);
+        let it = f.first().and_then(|s| s.parse().ok()).ok_or_else(bad)?;
+        let s = f.get(1).and_then(|s| s.parse().ok()).ok_or_else(bad)?;
+        let e = f.get(5).and_then(|s| s.parse().ok()).ok_or_else(bad)?;
+        rows.push((it, s, e));
+    }
+    Ok(rows)
+}
+
+/// The scene text with `numiterations` set on every `Integrator` and, for `half`, the
+/// `Film`'s resolution halved. Token-exact: comments, layout and everything else stay.
+fn rewrite(src: &str, iterations: Option<u32>, half: bool) -> Res<String> {
+    let tokens = tokens(src)?;
+    let text = |t: &Token| &src[t.start as usize..t.end as usize];
+    let is_directive = |t: &Token| t.kind == TokenKind::Word && text(t).starts_with(|c: char| c.is_ascii_uppercase());
+    let mut edits: Vec<(usize, usize, String)> = Vec::new();
+    let (mut integrators, mut films) = (0, 0);
+    for (i, t) in tokens.iter().enumerate() {
+        let name = match (text(t), iterations) {
+            ("Integrator", Some(_)) | ("Film", _) if is_directive(t) => text(t),
+            _ => continue,
+        };
+        if name == "Film" && !half {
+            continue;
+        }
+        let Some(kind) = tokens.get(i + 1).filter(|t| t.kind == TokenKind::Str) else {
+            return Err(format!("{name} without a type"));
+        };
+        let end = tokens[i + 1..].iter().position(is_directive).map_or(tokens.len(), |k| i + 1 + k);
+        let params = params(src, &tokens[i + 2..end]);
+        if let ("Integrator", Some(n)) = (name, iterations) {
+            integrators += 1;
+            match params.iter().find(|p| p.0 == "numiterations") {
+                Some(p) => edits.push((p.1, p.2, format!("[ {n} ]"))),
+                None => {
+                    edits.push((kind.end as usize, kind.end as usize, format!(" \"integer numiterations\" [ {n} ]")))
+                }
+            }
+        } else {
+            films += 1;
+            for axis in ["xresolution", "yresolution"] {
+                let p = params.iter().find(|p| p.0 == axis).ok_or_else(|| format!("Film has no {axis} to halve"))?;
+                let v: u32 = p.3.parse().map_err(|_| format!("Film {axis} '{}' is not an integer", p.3))?;
+                edits.push((p.1, p.2, format!("[ {} ]", (v / 2).max(1))));
+            }
+        }
+    }
+    if iterations.is_some() && integrators == 0 {
+        return Err("no Integrator directive in the main file".into());
+    }
+    if half && films == 0 {
+        return Err("no Film directive in the main file".into());
+    }
+    edits.sort_by_key(|e| e.0);
+    let mut out = String::with_capacity(src.len() + 64);
+    let mut at = 0;
+    for (start, end, new) in edits {
+        out.push_str(&src[at..start]);
+        out.push_str(&new);
+        at = end;
+    }
+    out.push_str(&src[at..]);
+    Ok(out)
+}
+
+fn tokens(src: &str) -> Res<Vec<Token>> {
+    let mut lexer = Lexer::new(src.as_bytes());
+    let mut v = Vec::new();
+    while let Some(t) = lexer.next_significant().map_err(|e| format!("byte {}: {}", e.offset, e.message))? {
+        v.push(t);
+    }
+    Ok(v)
+}
+
+/// A directive's parameters: (name, value start, value end, first value's text).
+fn params(src: &str, tokens: &[Token]) -> Vec<(String, usize, usize, String)> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < tokens.len() {
+        let t = tokens[i];
+        i += 1;
+        if t.kind != TokenKind::Str {
+            continue;
+        }
+        let decl = decode_string(&src.as_bytes()[t.start as usize..t.end as usize]);
+        let Some(name) = decl.split_whitespace().nth(1).map(str::to_string) else { continue };
+        let Some(first) = tokens.get(i) else { break };
+        let (last, value) = if first.kind == TokenKind::LBracket {
+            let close =
+                tokens[i..].iter().position(|t| t.kind == TokenKind::RBracket).map_or(tokens.len() - 1, |k| i + k);
+            (close, tokens.get(i + 1).filter(|_| close > i + 1).copied())
+        } else {
+            (i, Some(*first))
+        };
+        let text = value.map_or(String::new(), |v| src[v.start as usize..v.end as usize].to_string());
+        out.push((name, first.start as usize, tokens[last].end as usize, text));
+        i = last + 1;
+    }
+    out
+}
