@@ -26,6 +26,8 @@ use std::time::Instant;
 
 const GAMMA: f64 = 2.0 / 3.0;
 const PHOTON_CHUNK: usize = 1024;
+/// Pixel ranges photon deposits are grouped into for the parallel reduction.
+const DEPOSIT_RANGES: usize = 64;
 /// Interfaces crossed by one path before it is abandoned (guards against loops).
 const MAX_PASSES: u32 = 64;
 
@@ -181,33 +183,31 @@ impl<'a> Sppm<'a> {
             (self.scene, &self.pixels, self.iteration as u64, self.seed, self.max_depth);
         let total = self.photons_per_iteration;
         let chunks = total.div_ceil(PHOTON_CHUNK as u64);
-        let results: Vec<(Vec<(u32, Vec3)>, u64)> = (0..chunks)
+        let span = n.div_ceil(DEPOSIT_RANGES).max(1);
+        let results: Vec<Deposits> = (0..chunks)
             .into_par_iter()
             .map(|c| {
                 let mut out = Vec::new();
                 let mut hits = 0;
                 for k in c * PHOTON_CHUNK as u64..((c + 1) * PHOTON_CHUNK as u64).min(total) {
-                    // Independent numbers for photons under either sampler: padded
-                    // Sobol' points gained nothing measurable here and made some
-                    // regions' photon density noisier (see docs/sampling.md).
+                    // Independent numbers for photons under either sampler: Sobol'
+                    // points, padded per iteration or as one five-dimensional sequence
+                    // over the whole render, gained nothing measurable (docs/sampling.md).
                     let mut rng = Rng::new(hash(&[seed, iter, k, 1]));
                     hits += trace_photon(scene, grid, pixels, &mut rng, max_depth, &mut out);
                 }
-                (out, hits)
+                Deposits::by_range(out, span, hits)
             })
             .collect();
         // Each pixel sums its contributions in a fixed order (chunk by chunk, photon by
-        // photon); pixel ranges are summed in parallel, each scanning every chunk.
-        self.stats.photon_hits += results.iter().map(|r| r.1).sum::<u64>();
-        let span = n.div_ceil(rayon::current_num_threads().max(1) * 4).max(1);
-        phi.par_chunks_mut(span).zip(m.par_chunks_mut(span)).enumerate().for_each(|(c, (phi, m))| {
-            let lo = c * span;
-            for (out, _) in &results {
-                for &(pixel, f) in out {
-                    if let Some(i) = (pixel as usize).checked_sub(lo).filter(|&i| i < phi.len()) {
-                        phi[i] += f.as_dvec3();
-                        m[i] += 1;
-                    }
+        // photon), whatever the thread count; pixel ranges are summed in parallel.
+        self.stats.photon_hits += results.iter().map(|r| r.hits).sum::<u64>();
+        phi.par_chunks_mut(span).zip(m.par_chunks_mut(span)).enumerate().for_each(|(r, (phi, m))| {
+            let lo = r * span;
+            for d in &results {
+                for &(pixel, f) in d.range(r) {
+                    phi[pixel as usize - lo] += f.as_dvec3();
+                    m[pixel as usize - lo] += 1;
                 }
             }
         });
@@ -244,6 +244,40 @@ impl<'a> Sppm<'a> {
                 (l * scale).as_vec3().to_array()
             })
             .collect()
+    }
+}
+
+/// One photon chunk's deposits (pixel, flux), grouped by pixel range with the photon
+/// order kept, so the reduction reads each deposit once.
+struct Deposits {
+    entries: Vec<(u32, Vec3)>,
+    /// Range r holds `entries[starts[r]..starts[r + 1]]`.
+    starts: [u32; DEPOSIT_RANGES + 1],
+    hits: u64,
+}
+
+impl Deposits {
+    /// A stable counting sort by `pixel / span`.
+    fn by_range(out: Vec<(u32, Vec3)>, span: usize, hits: u64) -> Deposits {
+        let mut starts = [0u32; DEPOSIT_RANGES + 1];
+        for d in &out {
+            starts[d.0 as usize / span + 1] += 1;
+        }
+        for r in 0..DEPOSIT_RANGES {
+            starts[r + 1] += starts[r];
+        }
+        let mut next = starts;
+        let mut entries = vec![(0, Vec3::ZERO); out.len()];
+        for d in out {
+            let r = d.0 as usize / span;
+            entries[next[r] as usize] = d;
+            next[r] += 1;
+        }
+        Deposits { entries, starts, hits }
+    }
+
+    fn range(&self, r: usize) -> &[(u32, Vec3)] {
+        &self.entries[self.starts[r] as usize..self.starts[r + 1] as usize]
     }
 }
 
