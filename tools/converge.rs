@@ -204,47 +204,69 @@ fn find_peers(dir: &Path) -> Vec<Peer> {
 /// Rewrites, renders references, runs the rounds and reports one scene.
 fn bench_scene(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<String> {
     let p = prepare(o, spec, ours, peers)?;
-    let label = p.label.clone();
-    println!("\n## {label}\n");
-    let mut peer_times: Vec<Vec<Vec<(f64, f64, f64)>>> = vec![vec![Vec::new(); p.ladder.len()]; peers.len()];
-    let mut working: Vec<bool> = vec![true; peers.len()];
-    let mut our_runs = Vec::new();
+    println!("\n## {}\n", p.label);
+    let rounds = run_rounds(o, &p, ours, peers)?;
+    report(o, &p, peers, &rounds)
+}
+
+/// Every round's measurements: per peer and rung (seconds, relMSE, mean ratio), which
+/// peers rendered the scene, and our per-iteration curves.
+struct Rounds {
+    peer_runs: Vec<Vec<Vec<(f64, f64, f64)>>>,
+    working: Vec<bool>,
+    our_runs: Vec<Vec<(u32, f64, f64)>>,
+}
+
+/// Alternates peers and ours, round after round, so drift in the machine's speed
+/// touches both sides alike.
+fn run_rounds(o: &Options, p: &Prepared, ours: &Path, peers: &[Peer]) -> Res<Rounds> {
+    let mut r = Rounds {
+        peer_runs: vec![vec![Vec::new(); p.ladder.len()]; peers.len()],
+        working: vec![true; peers.len()],
+        our_runs: Vec::new(),
+    };
     for _ in 0..o.runs {
         let mut slowest: f64 = 0.0;
         for (k, peer) in peers.iter().enumerate() {
-            if !working[k] {
-                continue;
-            }
             for (rung, &n) in p.ladder.iter().enumerate() {
-                match run_peer(&p, peer, rung, n, o.nthreads) {
-                    Ok(r) => {
-                        slowest = slowest.max(r.0);
-                        peer_times[k][rung].push(r);
+                if !r.working[k] {
+                    break;
+                }
+                match run_peer(p, peer, rung, n, o.nthreads) {
+                    Ok(m) => {
+                        slowest = slowest.max(m.0);
+                        r.peer_runs[k][rung].push(m);
                     }
                     Err(e) => {
                         println!("{}: {e}; left out of this scene", peer.name());
-                        working[k] = false;
-                        break;
+                        r.working[k] = false;
                     }
                 }
             }
         }
         let budget = (slowest > 0.0).then_some(slowest * 1.1);
-        our_runs.push(run_ours(o, &p, ours, budget)?);
+        r.our_runs.push(run_ours(o, p, ours, budget)?);
     }
-    let our_curve = our_curve(&our_runs);
+    Ok(r)
+}
+
+/// The table (printed and written), the CSVs and the plot; returns the summary line.
+fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<String> {
+    let our_curve = our_curve(&rounds.our_runs);
     let mut table = format!(
-        "{label}: {} rounds, {} threads, reference {}\n\n\
+        "{}: {} rounds, {} threads, reference {}\n\n\
          | renderer | iterations | seconds (range) | relMSE | mean / reference | ours at that time | ours / peer |\n\
          |---|---|---|---|---|---|---|\n",
+        p.label,
         o.runs,
         o.nthreads,
-        reference_note(o, &p)
+        reference_note(o, p)
     );
     let mut series = vec![curve_series("ours", &our_curve)];
     let mut ratios = Vec::new();
-    for (k, peer) in peers.iter().enumerate().filter(|(k, _)| working[*k]) {
-        let points: Vec<Point> = (0..p.ladder.len()).map(|r| median_point(p.ladder[r], &peer_times[k][r])).collect();
+    for (k, peer) in peers.iter().enumerate().filter(|(k, _)| rounds.working[*k]) {
+        let runs = &rounds.peer_runs[k];
+        let points: Vec<Point> = p.ladder.iter().zip(runs).map(|(&n, r)| median_point(n, r)).collect();
         for pt in &points {
             let at = our_error_at(&our_curve, pt.seconds);
             let ratio = at.map(|e| e / pt.relmse);
@@ -277,7 +299,7 @@ fn bench_scene(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Re
     draw(&series, "seconds (whole process)", "relmse", &p.dir.join("converge.png"))?;
     write_text(&p.dir.join("converge.md"), &table).map_err(|e| e.to_string())?;
     println!("{table}");
-    Ok(summary_line(&label, &ratios))
+    Ok(summary_line(&p.label, &ratios))
 }
 
 fn summary_line(label: &str, ratios: &[f64]) -> String {
