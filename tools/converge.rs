@@ -29,8 +29,9 @@
 //! Per scene this writes `converge.md` (the table), one `ERRORS.csv`-shaped file per
 //! renderer and `converge.png` (all curves, log-log).
 
-use crate::plot::{Series, draw};
+use crate::plot::{Series, draw, read_columns};
 use pbrt_sppm::imageio::{RgbImage, metrics, read_image, write_text};
+use pbrt_sppm::integrators::{ErrorRow, errors_csv};
 use pbrt_sppm::parser::lexer::{Lexer, Token, TokenKind, decode_string};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -89,6 +90,7 @@ struct Prepared {
     /// Our reference for `ours` and `v3`, its file, and the one for `v4`.
     reference: RgbImage,
     reference_file: PathBuf,
+    reference_iterations: u32,
     reference_v4: Option<RgbImage>,
 }
 
@@ -254,13 +256,10 @@ fn run_rounds(o: &Options, p: &Prepared, ours: &Path, peers: &[Peer]) -> Res<Rou
 fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<String> {
     let our_curve = our_curve(&rounds.our_runs);
     let mut table = format!(
-        "{}: {} rounds, {} threads, reference {}\n\n\
+        "{}: {} rounds, {} threads, reference ours at {} iterations, another seed\n\n\
          | renderer | iterations | seconds (range) | relMSE | mean / reference | ours at that time | ours / peer |\n\
          |---|---|---|---|---|---|---|\n",
-        p.label,
-        o.runs,
-        o.nthreads,
-        reference_note(o, p)
+        p.label, o.runs, o.nthreads, p.reference_iterations
     );
     let mut series = vec![curve_series("ours", &our_curve)];
     let mut ratios = Vec::new();
@@ -310,21 +309,23 @@ fn summary_line(label: &str, ratios: &[f64]) -> String {
     format!("- {label}: {lo:.2}–{hi:.2}\n")
 }
 
-fn reference_note(o: &Options, p: &Prepared) -> String {
-    let n = o.reference_iterations.unwrap_or(32 * p.ladder.iter().max().copied().unwrap_or(1));
-    format!("ours at {n} iterations, another seed")
-}
-
 fn curve_series(label: &str, points: &[Point]) -> Series {
     Series { label: label.into(), points: points.iter().map(|p| (p.seconds, p.relmse)).collect() }
 }
 
 fn write_csv(path: &Path, points: &[Point]) -> Res<()> {
-    let mut s = String::from("iteration,seconds,photons,mse,rmse,relmse\n");
-    for p in points {
-        let _ = writeln!(s, "{},{:.6},0,0,0,{:e}", p.iterations, p.seconds, p.relmse);
-    }
-    write_text(path, &s).map_err(|e| e.to_string())
+    let rows: Vec<ErrorRow> = points
+        .iter()
+        .map(|p| ErrorRow {
+            iteration: p.iterations,
+            seconds: p.seconds,
+            photons: 0,
+            mse: 0.0,
+            rmse: 0.0,
+            relmse: p.relmse,
+        })
+        .collect();
+    write_text(path, &errors_csv(&rows)).map_err(|e| e.to_string())
 }
 
 /// The median time (and range) over rounds; relMSE and mean of the median-time round.
@@ -348,15 +349,14 @@ fn our_error_at(curve: &[Point], seconds: f64) -> Option<f64> {
 }
 
 /// Per iteration, the median whole-process time over our rounds (relMSE is the same in
-/// every round: the image is deterministic).
+/// every round: the image is deterministic). Only iterations every round reached: a
+/// median over fewer rounds there would let the curve step back in time.
 fn our_curve(runs: &[Vec<(u32, f64, f64)>]) -> Vec<Point> {
-    let longest = runs.iter().map(Vec::len).max().unwrap_or(0);
-    (0..longest)
+    let common = runs.iter().map(Vec::len).min().unwrap_or(0);
+    (0..common)
         .map(|i| {
-            let at: Vec<(f64, f64, f64)> =
-                runs.iter().filter_map(|r| r.get(i)).map(|&(_, t, e)| (t, e, f64::NAN)).collect();
-            let it = runs.iter().find_map(|r| r.get(i)).map_or(0, |r| r.0);
-            median_point(it, &at)
+            let at: Vec<(f64, f64, f64)> = runs.iter().map(|r| (r[i].1, r[i].2, f64::NAN)).collect();
+            median_point(runs[0][i].0, &at)
         })
         .collect()
 }
@@ -371,7 +371,7 @@ fn prepare(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<Pr
     let at_res = rewrite(&src, None, spec.half).map_err(|e| format!("{}: {e}", spec.path.display()))?;
     let ours_file = dir.join(format!("{stem}.converge.pbrt"));
     write_text(&ours_file, &at_res).map_err(|e| e.to_string())?;
-    let written = scene_iterations(&ours_file)?;
+    let (written, syntax) = scene_facts(&ours_file)?;
     let ladder = o.ladder.clone().unwrap_or_else(|| default_ladder(written));
     let mut v3 = Vec::new();
     for &n in &ladder {
@@ -380,21 +380,33 @@ fn prepare(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<Pr
         v3.push(f);
     }
     let top = ladder.iter().max().copied().unwrap_or(1);
-    let ref_n = o.reference_iterations.unwrap_or(32 * top);
-    let (reference_file, reference) = render_reference(o, ours, &ours_file, &at_res, ref_n)?;
+    let reference_iterations = o.reference_iterations.unwrap_or(32 * top);
+    let (reference_file, reference) = render_reference(o, ours, &ours_file, &at_res, reference_iterations)?;
     let v4 = match peers.iter().find(|p| p.kind == PeerKind::V4) {
-        Some(peer) => v4_input(&peer.exe, &ours_file, &dir, &stem)?,
+        Some(_) if syntax == pbrt_sppm::parser::Syntax::V4 => Some(ours_file.clone()),
+        Some(peer) => v4_upgrade(&peer.exe, &ours_file, &dir, &stem)?,
         None => None,
     };
     let reference_v4 = match &v4 {
         Some(f) if f != &ours_file => {
             let text = std::fs::read_to_string(f).map_err(|e| e.to_string())?;
-            Some(render_reference(o, ours, f, &text, ref_n)?.1)
+            Some(render_reference(o, ours, f, &text, reference_iterations)?.1)
         }
         Some(_) => Some(reference.clone()),
         None => None,
     };
-    Ok(Prepared { label, dir, ladder, ours: ours_file, v3, v4, reference, reference_file, reference_v4 })
+    Ok(Prepared {
+        label,
+        dir,
+        ladder,
+        ours: ours_file,
+        v3,
+        v4,
+        reference,
+        reference_file,
+        reference_iterations,
+        reference_v4,
+    })
 }
 
 /// N/4, N/2 and N (distinct, at least 1).
@@ -404,10 +416,11 @@ fn default_ladder(n: u32) -> Vec<u32> {
     v
 }
 
-fn scene_iterations(file: &Path) -> Res<u32> {
+/// The scene's iteration count and syntax (one load serves both).
+fn scene_facts(file: &Path) -> Res<(u32, pbrt_sppm::parser::Syntax)> {
     let opts = pbrt_sppm::scene::LoadOptions::default();
     let scene = pbrt_sppm::scene::load_scene(file, &opts).map_err(|e| e.one_line())?;
-    Ok(scene.integrator.iterations)
+    Ok((scene.integrator.iterations, scene.syntax))
 }
 
 /// `dir` gets a link to every entry of the scene's folder (so `Include`, meshes and
@@ -437,23 +450,9 @@ fn symlink(target: &Path, link: &Path) -> std::io::Result<()> {
     std::fs::copy(target, link).map(|_| ())
 }
 
-/// The file pbrt-v4 reads: the scene itself if pbrt-v4 takes it, else its `--upgrade`.
-fn v4_input(v4: &Path, file: &Path, dir: &Path, stem: &str) -> Res<Option<PathBuf>> {
-    let syntax = {
-        let scene =
-            pbrt_sppm::scene::load_scene(file, &pbrt_sppm::scene::LoadOptions::default()).map_err(|e| e.one_line())?;
-        scene.syntax
-    };
-    if syntax == pbrt_sppm::parser::Syntax::V4 {
-        return Ok(Some(file.to_path_buf()));
-    }
-    let out = Command::new(v4)
-        .arg("--upgrade")
-        .arg(file.file_name().unwrap_or_default())
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .output()
-        .map_err(|e| format!("{}: {e}", v4.display()))?;
+/// pbrt-v4's translation of a v3 scene, if it can render it.
+fn v4_upgrade(v4: &Path, file: &Path, dir: &Path, stem: &str) -> Res<Option<PathBuf>> {
+    let out = output(Command::new(v4).arg("--upgrade").arg(file.file_name().unwrap_or_default()).current_dir(dir))?;
     if !out.status.success() {
         println!("pbrt-v4 --upgrade failed: {}", last_line(&out.stderr));
         return Ok(None);
@@ -461,18 +460,23 @@ fn v4_input(v4: &Path, file: &Path, dir: &Path, stem: &str) -> Res<Option<PathBu
     let upgraded = dir.join(format!("{stem}.converge.v4.pbrt"));
     std::fs::write(&upgraded, &out.stdout).map_err(|e| format!("{}: {e}", upgraded.display()))?;
     // One iteration first: a translation pbrt-v4 refuses is not worth a reference.
-    let trial = Command::new(v4)
-        .args(["--quiet", "--nthreads", "1", "--spp", "1", "--outfile", "trial-v4.exr"])
-        .arg(&upgraded)
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .output()
-        .map_err(|e| format!("{}: {e}", v4.display()))?;
+    let trial = output(
+        Command::new(v4)
+            .args(["--quiet", "--nthreads", "1", "--spp", "1", "--outfile", "trial-v4.exr"])
+            .arg(&upgraded)
+            .current_dir(dir),
+    )?;
     if !trial.status.success() {
         println!("pbrt-v4 cannot render its translation: {}", last_line(&trial.stderr));
         return Ok(None);
     }
     Ok(Some(upgraded))
+}
+
+/// Runs a command to completion with no input, its output captured.
+fn output(cmd: &mut Command) -> Res<std::process::Output> {
+    let exe = cmd.get_program().to_string_lossy().into_owned();
+    cmd.stdin(Stdio::null()).output().map_err(|e| format!("{exe}: {e}"))
 }
 
 /// Our image of `file` at `n` iterations with a seed of its own, cached by content.
@@ -529,7 +533,7 @@ fn run_peer(p: &Prepared, peer: &Peer, rung: usize, n: u32, nthreads: usize) -> 
     };
     let _ = std::fs::remove_file(&out);
     let t = Instant::now();
-    let done = cmd.current_dir(&p.dir).stdin(Stdio::null()).output().map_err(|e| e.to_string())?;
+    let done = output(cmd.current_dir(&p.dir))?;
     let seconds = t.elapsed().as_secs_f64();
     if !done.status.success() {
         return Err(format!("exit {:?}: {}", done.status.code(), last_line(&done.stderr)));
@@ -566,7 +570,7 @@ fn run_ours(o: &Options, p: &Prepared, ours: &Path, budget: Option<f64>) -> Res<
         None => cmd.args(["--spp", &top.to_string()]),
     };
     let t = Instant::now();
-    let done = cmd.stdin(Stdio::null()).output().map_err(|e| e.to_string())?;
+    let done = output(&mut cmd)?;
     let wall = t.elapsed().as_secs_f64();
     if !done.status.success() {
         return Err(format!("pbrt-sppm on {}: {}", p.ours.display(), last_line(&done.stderr)));
@@ -578,17 +582,8 @@ fn run_ours(o: &Options, p: &Prepared, ours: &Path, budget: Option<f64>) -> Res<
 }
 
 fn read_errors(path: &Path) -> Res<Vec<(u32, f64, f64)>> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut rows = Vec::new();
-    for (n, line) in text.lines().enumerate().skip(1).filter(|(_, l)| !l.trim().is_empty()) {
-        let f: Vec<&str> = line.split(',').collect();
-        let bad = || format!("{}:{}: bad row", path.display(), n + 1);
-        let it = f.first().and_then(|s| s.parse().ok()).ok_or_else(bad)?;
-        let s = f.get(1).and_then(|s| s.parse().ok()).ok_or_else(bad)?;
-        let e = f.get(5).and_then(|s| s.parse().ok()).ok_or_else(bad)?;
-        rows.push((it, s, e));
-    }
-    Ok(rows)
+    let rows = read_columns(path, &["iteration", "seconds", "relmse"])?;
+    Ok(rows.into_iter().map(|r| (r[0] as u32, r[1], r[2])).collect())
 }
 
 /// The scene text with `numiterations` set on every `Integrator` and, for `half`, the

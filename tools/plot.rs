@@ -20,29 +20,36 @@ pub struct Series {
 
 /// Reads `x` and `metric` columns, keeping the rows where both are positive (log axes).
 pub fn read_series(path: &Path, x: &str, metric: &str) -> Result<Series, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').map(str::trim).collect();
-    let column = |name: &str| {
-        header.iter().position(|h| *h == name).ok_or_else(|| format!("{}: no '{name}' column", path.display()))
-    };
-    let (xi, yi) = (column(x)?, column(metric)?);
-    let mut points = Vec::new();
-    for (n, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        let value = |i: usize| -> Result<f64, String> {
-            fields.get(i).and_then(|f| f.parse().ok()).ok_or_else(|| format!("{}:{}: bad row", path.display(), n + 2))
-        };
-        let (px, py) = (value(xi)?, value(yi)?);
-        if px > 0.0 && py > 0.0 && px.is_finite() && py.is_finite() {
-            points.push((px, py));
-        }
-    }
+    let points: Vec<(f64, f64)> = read_columns(path, &[x, metric])?
+        .into_iter()
+        .map(|row| (row[0], row[1]))
+        .filter(|&(px, py)| px > 0.0 && py > 0.0 && px.is_finite() && py.is_finite())
+        .collect();
     if points.is_empty() {
         return Err(format!("{}: no rows with positive {x} and {metric}", path.display()));
     }
     let label = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     Ok(Series { label, points })
+}
+
+/// The named columns of every row of an `ERRORS.csv`-shaped file, in the order named.
+pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').map(str::trim).collect();
+    let columns: Vec<usize> = names
+        .iter()
+        .map(|name| {
+            header.iter().position(|h| h == name).ok_or_else(|| format!("{}: no '{name}' column", path.display()))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut rows = Vec::new();
+    for (n, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let row = columns.iter().map(|&i| fields.get(i).and_then(|f| f.parse().ok()));
+        rows.push(row.collect::<Option<Vec<f64>>>().ok_or_else(|| format!("{}:{}: bad row", path.display(), n + 2))?);
+    }
+    Ok(rows)
 }
 
 /// Registers the bundled font once (plotters' `ab_glyph` backend has no system fonts).
