@@ -1,7 +1,7 @@
 //! `pbrt-bench`: benchmarks (speed lives here, never in tests).
 //!
 //! ```text
-//! cargo run --release --bin pbrt-bench -- parse [--runs 5] [--dir target/bench-data]
+//! cargo run --release --bin pbrt-bench -- parse [--runs 5] [--dir target/bench-data] [--peers ../shared/peers]
 //! cargo run --release --bin pbrt-bench -- rays [--runs 5] [--dir target/bench-data] [--dump] [--sse]
 //! cargo run --release --bin pbrt-bench -- sppm [--runs 3] [SCENE.pbrt ...]
 //! cargo run --release --bin pbrt-bench -- converge [SCENE.pbrt[@half] ...] [--runs 3] ...
@@ -21,7 +21,9 @@
 //! `parse` generates a 50 MB scene with one inline `trianglemesh`, a scene naming a
 //! 1M-triangle binary PLY, and a scene with 25,000 instances of a 30,000-triangle PLY,
 //! then loads each `--runs` times, every run in a fresh process so its peak memory
-//! (VmHWM) is its own, and prints the median time, MB/s and peak memory.
+//! (VmHWM) is its own, and prints the median whole-process time, MB/s and peak memory.
+//! When `--peers` holds `pbrt-v3`, it reads the same files in alternate runs (A B A B):
+//! they have no `WorldEnd`, so pbrt-v3 parses and creates the shapes, then stops.
 
 mod converge;
 // pbrt-imgtool also reads ERRORS.csv files with it; here only drawing is used.
@@ -41,7 +43,8 @@ fn main() -> ExitCode {
         Some("parse") => {
             let runs = flag("--runs").and_then(|r| r.parse().ok()).unwrap_or(5);
             let dir = PathBuf::from(flag("--dir").unwrap_or_else(|| "target/bench-data".into()));
-            parse_bench(&dir, runs)
+            let peers = PathBuf::from(flag("--peers").unwrap_or_else(|| "../shared/peers".into()));
+            parse_bench(&dir, runs, &peers)
         }
         Some("rays") => {
             let runs = flag("--runs").and_then(|r| r.parse().ok()).unwrap_or(5);
@@ -92,7 +95,7 @@ fn peak_kib() -> u64 {
         .unwrap_or(0)
 }
 
-fn parse_bench(dir: &Path, runs: usize) -> ExitCode {
+fn parse_bench(dir: &Path, runs: usize, peers: &Path) -> ExitCode {
     if let Err(e) = std::fs::create_dir_all(dir) {
         eprintln!("{}: {e}", dir.display());
         return ExitCode::FAILURE;
@@ -102,34 +105,115 @@ fn parse_bench(dir: &Path, runs: usize) -> ExitCode {
         ("plymesh, 1M triangles (binary)", ensure(dir, "ply1m.pbrt", write_ply_scene)),
         ("25,000 instances of a 30k-triangle PLY", ensure(dir, "instances.pbrt", write_instances)),
     ];
-    println!("{:<42} {:>9} {:>10} {:>10} {:>11}", "case", "MB", "median s", "MB/s", "peak MiB");
+    let pbrt_v3 = std::path::absolute(peers.join("pbrt-v3")).ok().filter(|p| p.is_file());
+    match &pbrt_v3 {
+        Some(p) => println!("pbrt-v3: {} (whole process, parse and shapes: the files have no WorldEnd)", p.display()),
+        None => println!("pbrt-v3: not found in {}; only ours is timed", peers.display()),
+    }
+    println!(
+        "{:<40} {:>6} {:>8} {:>7} {:>9} {:>10} {:>7} {:>9} {:>6}",
+        "case", "MB", "ours s", "MB/s", "peak MiB", "pbrt-v3 s", "MB/s", "peak MiB", "ratio"
+    );
     for (name, scene) in cases {
         let Ok((scene, bytes)) = scene else {
             eprintln!("could not write the {name} input");
             return ExitCode::FAILURE;
         };
-        let mut times = Vec::new();
-        let mut peak = 0;
+        let (mut ours, mut peer) = (Vec::new(), Vec::new());
+        // A B A B: both renderers see the same drift in the machine's speed.
         for _ in 0..runs {
-            let out = Command::new(std::env::current_exe().unwrap_or_else(|_| "pbrt-bench".into()))
-                .args(["--once", &scene.to_string_lossy()])
-                .output();
-            let Ok(out) = out else { return ExitCode::FAILURE };
-            let text = String::from_utf8_lossy(&out.stdout);
-            let v: Vec<f64> = text.split_whitespace().filter_map(|x| x.parse().ok()).collect();
-            if v.len() < 2 {
-                eprintln!("{name}: {}", String::from_utf8_lossy(&out.stderr));
-                return ExitCode::FAILURE;
+            match load_once(&scene) {
+                Ok(r) => ours.push(r),
+                Err(e) => {
+                    eprintln!("{name}: {e}");
+                    return ExitCode::FAILURE;
+                }
             }
-            times.push(v[0]);
-            peak = peak.max(v[1] as u64);
+            if let Some(exe) = &pbrt_v3 {
+                match pbrt_v3_parse(exe, &scene) {
+                    Ok(r) => peer.push(r),
+                    Err(e) => {
+                        eprintln!("{name}: pbrt-v3: {e}");
+                        return ExitCode::FAILURE;
+                    }
+                }
+            }
         }
-        times.sort_by(f64::total_cmp);
-        let median = times[times.len() / 2];
         let mb = bytes as f64 / 1e6;
-        println!("{name:<42} {mb:>9.1} {median:>10.3} {:>10.1} {:>11.1}", mb / median, peak as f64 / 1024.0);
+        let (t, kib) = median_and_peak(&mut ours);
+        print!("{name:<40} {mb:>6.1} {t:>8.3} {:>7.1} {:>9.1}", mb / t, kib as f64 / 1024.0);
+        if peer.is_empty() {
+            println!();
+        } else {
+            let (tp, kp) = median_and_peak(&mut peer);
+            println!(" {tp:>10.3} {:>7.1} {:>9.1} {:>5.2}x", mb / tp, kp as f64 / 1024.0, tp / t);
+        }
     }
     ExitCode::SUCCESS
+}
+
+/// The median seconds and the largest peak memory (KiB) of some runs.
+fn median_and_peak(runs: &mut [(f64, u64)]) -> (f64, u64) {
+    runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    (runs[runs.len() / 2].0, runs.iter().map(|r| r.1).max().unwrap_or(0))
+}
+
+/// Loads a scene in a fresh process of ours (so its peak memory is its own); the
+/// process's wall time from outside, as pbrt-v3's is measured.
+fn load_once(scene: &Path) -> Result<(f64, u64), String> {
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let start = Instant::now();
+    let out = Command::new(exe).args(["--once", &scene.to_string_lossy()]).output().map_err(|e| e.to_string())?;
+    let secs = start.elapsed().as_secs_f64();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let v: Vec<f64> = text.split_whitespace().filter_map(|x| x.parse().ok()).collect();
+    match v.as_slice() {
+        [_, kib, ..] if out.status.success() => Ok((secs, *kib as u64)),
+        _ => Err(String::from_utf8_lossy(&out.stderr).into_owned()),
+    }
+}
+
+/// pbrt-v3 reads a scene without `WorldEnd` (it parses, creates every shape, and
+/// stops before building the accelerator or rendering); its wall time and peak memory.
+fn pbrt_v3_parse(exe: &Path, scene: &Path) -> Result<(f64, u64), String> {
+    let out = std::env::temp_dir().join(format!("pbrt-bench-{}.exr", std::process::id()));
+    let start = Instant::now();
+    let mut child = Command::new(exe)
+        .args(["--quiet", "--nthreads", "2", "--outfile"])
+        .arg(&out)
+        .arg(scene)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .map_err(|e| e.to_string())?;
+    let (status, kib) = wait_with_peak(&mut child)?;
+    let secs = start.elapsed().as_secs_f64();
+    if !status.success() {
+        return Err(format!("exited with {status}"));
+    }
+    Ok((secs, kib))
+}
+
+/// Waits for a child; its peak resident memory (KiB) from the kernel's accounting.
+fn wait_with_peak(child: &mut std::process::Child) -> Result<(std::process::ExitStatus, u64), String> {
+    #[cfg(target_os = "linux")]
+    {
+        let (mut status, mut usage) = (0i32, std::mem::MaybeUninit::<libc::rusage>::zeroed());
+        // SAFETY: wait4 writes the status and usage of our own child into the pointers.
+        let pid = unsafe { libc::wait4(child.id() as i32, &mut status, 0, usage.as_mut_ptr()) };
+        if pid < 0 {
+            return Err(std::io::Error::last_os_error().to_string());
+        }
+        // SAFETY: wait4 succeeded, so it filled the struct.
+        let usage = unsafe { usage.assume_init() };
+        use std::os::unix::process::ExitStatusExt;
+        Ok((std::process::ExitStatus::from_raw(status), usage.ru_maxrss as u64))
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        child.wait().map(|s| (s, 0)).map_err(|e| e.to_string())
+    }
 }
 
 /// Writes an input once; returns the scene path and the bytes a load reads.

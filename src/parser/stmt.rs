@@ -551,6 +551,11 @@ impl StatementReader {
             return None;
         }
         let frame = self.stack.last_mut()?;
+        if let Some(close) = parallel_numbers(&frame.text[frame.pos..], &mut sink.values) {
+            let close = frame.pos + close;
+            frame.pos = close + 1;
+            return Some(Span { file: frame.file, start: close as u32, end: close as u32 + 1 });
+        }
         let mut lexer = Lexer::at(&frame.text, frame.pos);
         loop {
             let before = lexer.position();
@@ -688,6 +693,60 @@ pub fn resolve_relative(base: &Path, name: &str) -> PathBuf {
 /// Plain decimals with at most 8 significant digits and 10 fraction digits take Clinger's
 /// exact path: the digits (≤ 2²⁴) and the power of ten (≤ 10¹⁰) are both exact in `f32`,
 /// so one division rounds correctly. Everything else goes to the standard parser.
+/// Number lists at least this long (in bytes) are parsed in parallel pieces.
+const PARALLEL_LIST_BYTES: usize = 1 << 20;
+const PIECE_BYTES: usize = 1 << 18;
+
+/// A long list of plain numbers (`text` starts inside its brackets) parsed by pieces on
+/// all threads: the text up to the first `]` is cut at whitespace and each piece's
+/// words are parsed alone. Returns the offset of that `]`, or `None`, having pushed
+/// nothing, when any word is not a number of the list's kind (a comment, a string, a
+/// bracket, a bad number): the sequential reader then meets it and reports it.
+fn parallel_numbers(text: &[u8], values: &mut Values) -> Option<usize> {
+    use rayon::prelude::*;
+    let close = memchr::memchr(b']', text)?;
+    if close < PARALLEL_LIST_BYTES {
+        return None;
+    }
+    let pieces = pieces_at_spaces(&text[..close], PIECE_BYTES);
+    fn parse_all<T: Send>(pieces: &[&[u8]], parse: fn(&[u8]) -> Option<T>, out: &mut Vec<T>) -> Option<()> {
+        let parts: Vec<Vec<T>> = pieces.par_iter().map(|p| words(p).map(parse).collect()).collect::<Option<_>>()?;
+        out.reserve(parts.iter().map(Vec::len).sum());
+        parts.into_iter().for_each(|p| out.extend(p));
+        Some(())
+    }
+    match values {
+        Values::Floats(v) => parse_all(&pieces, parse_f32, v)?,
+        Values::Ints(v) => parse_all(&pieces, parse_int, v)?,
+        _ => return None,
+    }
+    Some(close)
+}
+
+/// `text` cut into pieces of about `size` bytes, each ending just before a whitespace
+/// byte (so no word is split).
+fn pieces_at_spaces(text: &[u8], size: usize) -> Vec<&[u8]> {
+    let mut pieces = Vec::with_capacity(text.len() / size + 1);
+    let mut rest = text;
+    while rest.len() > size {
+        let cut = rest[size..].iter().position(|&c| is_space(c)).map_or(rest.len(), |k| size + k);
+        let (piece, tail) = rest.split_at(cut);
+        pieces.push(piece);
+        rest = tail;
+    }
+    pieces.push(rest);
+    pieces
+}
+
+/// The whitespace-separated words of `text` (pbrt's whitespace: space, tab, CR, LF).
+fn words(text: &[u8]) -> impl Iterator<Item = &[u8]> {
+    text.split(|&c| is_space(c)).filter(|w| !w.is_empty())
+}
+
+fn is_space(c: u8) -> bool {
+    matches!(c, b' ' | b'\t' | b'\r' | b'\n')
+}
+
 pub fn parse_f32(b: &[u8]) -> Option<f32> {
     fast_f32(b).or_else(|| std::str::from_utf8(b).ok()?.parse().ok())
 }

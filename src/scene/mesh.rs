@@ -246,6 +246,7 @@ pub fn degenerate_patches_warning(mesh: &PatchMesh) -> Option<String> {
 
 /// One warning counting zero-area triangles, which the renderer drops.
 pub fn degenerate_warning(mesh: &TriangleMesh) -> Option<String> {
-    let n = (0..mesh.triangle_count()).filter(|&t| mesh.is_degenerate(t)).count();
+    use rayon::prelude::*;
+    let n = (0..mesh.triangle_count()).into_par_iter().filter(|&t| mesh.is_degenerate(t)).count();
     (n > 0).then(|| format!("{n} of {} triangles have zero area and are dropped", mesh.triangle_count()))
 }

@@ -124,3 +124,50 @@ fn errors_show_the_source_line_and_a_caret() {
          \tShape \"sphere\" \"float radius\" [ x ]\n  \t                                ^"
     );
 }
+
+/// A mesh list long enough for the parallel reader (over 1 MB of text), with numbers in
+/// every form the fast path and the exact path take, and mixed whitespace.
+fn long_mesh(n: usize, tail: &str) -> (String, Vec<[f32; 3]>) {
+    let forms = ["{}", "+{}", "{}e0", "{}E-0", "{}\t", "{}\r\n"];
+    let (mut text, mut expect) = (String::from("WorldBegin Shape \"trianglemesh\" \"point3 P\" [\n"), Vec::new());
+    for i in 0..n {
+        let v = [i as f32 * 0.001, -(i as f32) * 0.25, 1.0 / (1 + i) as f32];
+        for (k, x) in v.iter().enumerate() {
+            let form = forms[(i + k) % forms.len()].replace("+{}", if x.is_sign_negative() { "{}" } else { "+{}" });
+            text += &form.replace("{}", &format!("{x}"));
+            text.push(' ');
+        }
+        expect.push(v);
+    }
+    text += tail;
+    text += "] \"integer indices\" [0 1 2]\n";
+    (text, expect)
+}
+
+#[test]
+fn long_number_lists_read_in_parallel_pieces_match_the_sequential_reader() {
+    let (text, _) = long_mesh(60_000, "");
+    assert!(text.len() > 1 << 20, "the list must take the parallel path");
+    let s = scene(&text);
+    // A comment in the list sends the whole list through the sequential reader.
+    let (seq, _) = long_mesh(60_000, "# the sequential reader\n");
+    let s_seq = scene(&seq);
+    assert_eq!(s.meshes[0].p.len(), 60_000);
+    let bits = |p: &[[f32; 3]]| p.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&s.meshes[0].p), bits(&s_seq.meshes[0].p));
+    let (_, expect) = long_mesh(60_000, "");
+    assert_eq!(bits(&s.meshes[0].p), bits(&expect));
+}
+
+#[test]
+fn a_bad_number_deep_in_a_long_list_is_reported_at_its_line_and_column() {
+    let (mut text, _) = long_mesh(60_000, "");
+    let at = text.len() / 2;
+    let at = at + text[at..].find(' ').unwrap_or(0);
+    text.insert_str(at, " 1.5x");
+    let line = 1 + text[..at].matches('\n').count();
+    let column = at - text[..at].rfind('\n').map_or(0, |k| k + 1) + 2;
+    let e = crate::common::load(&text).unwrap_err().to_string();
+    assert!(e.contains(&format!(":{line}:{column}: error:")), "{e}");
+    assert!(e.contains("expected a number, found '1.5x'"), "{e}");
+}
