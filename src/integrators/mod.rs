@@ -1,7 +1,8 @@
 //! Integrators. pbrt-sppm renders with stochastic progressive photon mapping only:
-//! [`sppm`] holds its passes, [`run`] the render loop, [`report`] `ERRORS.csv` and
+//! [`sppm`] holds its passes, [`grid`] the photon lookup grid, [`run`] the render loop, [`report`] `ERRORS.csv` and
 //! progress. Data flows one way: the render-ready scene (`render`) in, an image out.
 
+pub mod grid;
 pub mod report;
 pub mod run;
 pub mod sppm;

@@ -12,6 +12,7 @@
 //! photons from a generator seeded by (seed, iteration, photon). Photon contributions
 //! are summed in a fixed order, so any thread count gives a bit-identical image.
 
+use super::grid::{Grid, Grouped, Site};
 use crate::interaction::Footprint;
 use crate::lights::Light;
 use crate::materials::{Bsdf, TransportMode};
@@ -130,7 +131,7 @@ impl<'a> Sppm<'a> {
         self.camera_pass();
         let t1 = Instant::now();
         self.stats.visible_points += self.pixels.iter().filter(|p| p.vp.is_some()).count() as u64;
-        let grid = Grid::build(&self.pixels);
+        let grid = Grid::build(&self.sites());
         let t2 = Instant::now();
         let (phi, m) = self.photon_pass(grid.as_ref());
         let t3 = Instant::now();
@@ -184,7 +185,7 @@ impl<'a> Sppm<'a> {
         let total = self.photons_per_iteration;
         let chunks = total.div_ceil(PHOTON_CHUNK as u64);
         let span = n.div_ceil(DEPOSIT_RANGES).max(1);
-        let results: Vec<Deposits> = (0..chunks)
+        let results: Vec<(Grouped<(u32, Vec3)>, u64)> = (0..chunks)
             .into_par_iter()
             .map(|c| {
                 let mut out = Vec::new();
@@ -196,16 +197,16 @@ impl<'a> Sppm<'a> {
                     let mut rng = Rng::new(hash(&[seed, iter, k, 1]));
                     hits += trace_photon(scene, grid, pixels, &mut rng, max_depth, &mut out);
                 }
-                Deposits::by_range(out, span, hits)
+                (Grouped::new(out, DEPOSIT_RANGES, |d| d.0 as usize / span), hits)
             })
             .collect();
         // Each pixel sums its contributions in a fixed order (chunk by chunk, photon by
         // photon), whatever the thread count; pixel ranges are summed in parallel.
-        self.stats.photon_hits += results.iter().map(|r| r.hits).sum::<u64>();
+        self.stats.photon_hits += results.iter().map(|r| r.1).sum::<u64>();
         phi.par_chunks_mut(span).zip(m.par_chunks_mut(span)).enumerate().for_each(|(r, (phi, m))| {
             let lo = r * span;
-            for d in &results {
-                for &(pixel, f) in d.range(r) {
+            for (d, _) in &results {
+                for &(pixel, f) in d.group(r) {
                     phi[pixel as usize - lo] += f.as_dvec3();
                     m[pixel as usize - lo] += 1;
                 }
@@ -213,6 +214,15 @@ impl<'a> Sppm<'a> {
         });
         self.stats.photon_paths += total;
         (phi, m)
+    }
+
+    /// Where photons are gathered: each pixel's visible point, if it can reflect.
+    fn sites(&self) -> Vec<Option<Site>> {
+        let site = |p: &Pixel| {
+            let vp = p.vp.as_ref().filter(|vp| vp.beta != Vec3::ZERO)?;
+            Some(Site { p: vp.p, radius: p.radius as f32 })
+        };
+        self.pixels.par_iter().map(site).collect()
     }
 
     /// Phase 4: the progressive radius and flux update.
@@ -244,40 +254,6 @@ impl<'a> Sppm<'a> {
                 (l * scale).as_vec3().to_array()
             })
             .collect()
-    }
-}
-
-/// One photon chunk's deposits (pixel, flux), grouped by pixel range with the photon
-/// order kept, so the reduction reads each deposit once.
-struct Deposits {
-    entries: Vec<(u32, Vec3)>,
-    /// Range r holds `entries[starts[r]..starts[r + 1]]`.
-    starts: [u32; DEPOSIT_RANGES + 1],
-    hits: u64,
-}
-
-impl Deposits {
-    /// A stable counting sort by `pixel / span`.
-    fn by_range(out: Vec<(u32, Vec3)>, span: usize, hits: u64) -> Deposits {
-        let mut starts = [0u32; DEPOSIT_RANGES + 1];
-        for d in &out {
-            starts[d.0 as usize / span + 1] += 1;
-        }
-        for r in 0..DEPOSIT_RANGES {
-            starts[r + 1] += starts[r];
-        }
-        let mut next = starts;
-        let mut entries = vec![(0, Vec3::ZERO); out.len()];
-        for d in out {
-            let r = d.0 as usize / span;
-            entries[next[r] as usize] = d;
-            next[r] += 1;
-        }
-        Deposits { entries, starts, hits }
-    }
-
-    fn range(&self, r: usize) -> &[(u32, Vec3)] {
-        &self.entries[self.starts[r] as usize..self.starts[r + 1] as usize]
     }
 }
 
@@ -507,107 +483,4 @@ fn trace_photon(
         depth += 1;
     }
     hits
-}
-
-/// Visible points binned into a uniform grid: (cell, pixel) pairs grouped by a hash
-/// of the cell with a counting sort (pixel order within a bucket, so deterministic).
-pub struct Grid {
-    lo: Vec3,
-    inv_cell: Vec3,
-    res: [u64; 3],
-    /// Bucket b holds `entries[offsets[b]..offsets[b + 1]]`.
-    offsets: Vec<u32>,
-    entries: Vec<(u64, u32)>,
-}
-
-impl Grid {
-    /// `None` when no pixel has a visible point.
-    pub fn build(pixels: &[Pixel]) -> Option<Grid> {
-        let (mut lo, mut hi, mut max_r) = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0f32);
-        for p in pixels {
-            if let Some(vp) = &p.vp
-                && vp.beta != Vec3::ZERO
-            {
-                let r = p.radius as f32;
-                lo = lo.min(vp.p - r);
-                hi = hi.max(vp.p + r);
-                max_r = max_r.max(r);
-            }
-        }
-        if max_r <= 0.0 || lo.x > hi.x {
-            return None;
-        }
-        let diag = hi - lo;
-        let max_diag = diag.max_element().max(f32::MIN_POSITIVE);
-        // Cells twice the largest radius: each r-box overlaps at most 2 cells per axis.
-        let base = (max_diag / (2.0 * max_r)).clamp(1.0, (1u32 << 20) as f32);
-        let res = [0, 1, 2].map(|a| ((base * diag[a] / max_diag) as u64).clamp(1, 1 << 20));
-        let inv_cell =
-            Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32) / diag.max(Vec3::splat(f32::MIN_POSITIVE));
-        let mut grid = Grid { lo, inv_cell, res, offsets: Vec::new(), entries: Vec::new() };
-        // Every cell each visible point's r-box overlaps (one pass, no per-pixel
-        // allocation: this runs once per iteration over all pixels).
-        let mut entries: Vec<(u64, u32)> = Vec::with_capacity(4 * pixels.len());
-        for (i, p) in pixels.iter().enumerate() {
-            if let Some(vp) = &p.vp
-                && vp.beta != Vec3::ZERO
-            {
-                let r = p.radius as f32;
-                let (a, b) = (grid.cell(vp.p - r), grid.cell(vp.p + r));
-                for z in a[2]..=b[2] {
-                    for y in a[1]..=b[1] {
-                        for x in a[0]..=b[0] {
-                            entries.push((grid.key([x, y, z]), i as u32));
-                        }
-                    }
-                }
-            }
-        }
-        // Counting sort by bucket: count, prefix sums, scatter (stable).
-        let buckets = entries.len().next_power_of_two().max(1);
-        let mut offsets = vec![0u32; buckets + 1];
-        for e in &entries {
-            offsets[Grid::bucket(e.0, buckets) + 1] += 1;
-        }
-        for b in 0..buckets {
-            offsets[b + 1] += offsets[b];
-        }
-        let mut next = offsets.clone();
-        let mut sorted = vec![(0u64, 0u32); entries.len()];
-        for e in entries {
-            let b = Grid::bucket(e.0, buckets);
-            sorted[next[b] as usize] = e;
-            next[b] += 1;
-        }
-        grid.offsets = offsets;
-        grid.entries = sorted;
-        Some(grid)
-    }
-
-    fn bucket(key: u64, buckets: usize) -> usize {
-        (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 32) as usize & (buckets - 1)
-    }
-
-    fn cell(&self, p: Vec3) -> [u64; 3] {
-        let c = (p - self.lo) * self.inv_cell;
-        [0, 1, 2].map(|a| (c[a].max(0.0) as u64).min(self.res[a] - 1))
-    }
-
-    fn key(&self, c: [u64; 3]) -> u64 {
-        c[0] + self.res[0] * (c[1] + self.res[1] * c[2])
-    }
-
-    /// Calls `f` for every pixel binned in the cell containing `p` (none outside).
-    pub fn gather(&self, p: Vec3, mut f: impl FnMut(u32)) {
-        let c = (p - self.lo) * self.inv_cell;
-        if (0..3).any(|a| c[a] < 0.0 || c[a] >= self.res[a] as f32) {
-            return;
-        }
-        let key = self.key(self.cell(p));
-        let b = Grid::bucket(key, self.offsets.len() - 1);
-        let range = self.offsets[b] as usize..self.offsets[b + 1] as usize;
-        for e in self.entries[range].iter().filter(|e| e.0 == key) {
-            f(e.1);
-        }
-    }
 }

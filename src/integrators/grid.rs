@@ -1,0 +1,253 @@
+//! The SPPM photon lookup grid: visible points binned into a uniform grid, its cells
+//! hashed into buckets. Built in parallel and deterministically: every bucket lists its
+//! (cell, pixel) pairs in pixel order whatever the thread count, so photons find their
+//! visible points in the same order and the image is bit-identical.
+//!
+//! The build is a two-level stable counting sort. Pixels are cut into fixed chunks;
+//! each chunk lists its pairs grouped by the top bits of the bucket ("super buckets").
+//! Then each super bucket, in parallel, gathers its pairs chunk by chunk and sorts
+//! them by bucket into its own slice of the table.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Pixels per build chunk.
+const CHUNK: usize = 8192;
+/// Super buckets (a power of two): the parallel grain of the second sort level.
+const SUPER: usize = 256;
+
+/// A visible point as the grid sees it: where, and how far photons reach it from.
+#[derive(Clone, Copy, Debug)]
+pub struct Site {
+    pub p: Vec3,
+    pub radius: f32,
+}
+
+/// Items in groups, each group keeping the items' order (a stable counting sort).
+pub struct Grouped<T> {
+    items: Vec<T>,
+    /// Group g holds `items[starts[g]..starts[g + 1]]`.
+    starts: Vec<u32>,
+}
+
+impl<T: Copy + Default> Grouped<T> {
+    pub fn new(items: Vec<T>, groups: usize, group: impl Fn(&T) -> usize) -> Grouped<T> {
+        let mut starts = vec![0u32; groups + 1];
+        for it in &items {
+            starts[group(it) + 1] += 1;
+        }
+        for g in 0..groups {
+            starts[g + 1] += starts[g];
+        }
+        let mut next = starts.clone();
+        let mut sorted = vec![T::default(); items.len()];
+        for it in items {
+            let g = group(&it);
+            sorted[next[g] as usize] = it;
+            next[g] += 1;
+        }
+        Grouped { items: sorted, starts }
+    }
+
+    pub fn group(&self, g: usize) -> &[T] {
+        &self.items[self.starts[g] as usize..self.starts[g + 1] as usize]
+    }
+}
+
+/// Visible points binned into a uniform grid: (cell, pixel) pairs grouped by a hash
+/// of the cell (pixel order within a bucket, so deterministic).
+pub struct Grid {
+    lo: Vec3,
+    inv_cell: Vec3,
+    res: [u64; 3],
+    /// Bucket b holds `entries[offsets[b]..offsets[b + 1]]`.
+    offsets: Vec<u32>,
+    entries: Vec<(u64, u32)>,
+}
+
+impl Grid {
+    /// `sites[i]` is pixel i's visible point, if photons should reach it. `None` when
+    /// there is none.
+    pub fn build(sites: &[Option<Site>]) -> Option<Grid> {
+        let (lo, hi, max_r) = bounds(sites)?;
+        let diag = hi - lo;
+        let max_diag = diag.max_element().max(f32::MIN_POSITIVE);
+        // Cells twice the largest radius: each r-box overlaps at most 2 cells per axis.
+        let base = (max_diag / (2.0 * max_r)).clamp(1.0, (1u32 << 20) as f32);
+        let res = [0, 1, 2].map(|a| ((base * diag[a] / max_diag) as u64).clamp(1, 1 << 20));
+        let inv_cell =
+            Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32) / diag.max(Vec3::splat(f32::MIN_POSITIVE));
+        let mut grid = Grid { lo, inv_cell, res, offsets: Vec::new(), entries: Vec::new() };
+        let total: usize =
+            sites.par_chunks(CHUNK).map(|c| c.iter().flatten().map(|s| grid.overlap_count(s)).sum::<usize>()).sum();
+        let buckets = total.next_power_of_two().max(SUPER);
+        let shift = buckets.trailing_zeros() - SUPER.trailing_zeros();
+        let chunks: Vec<Grouped<(u64, u32)>> = sites
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let mut out = Vec::new();
+                for (k, s) in chunk.iter().enumerate() {
+                    if let Some(s) = s {
+                        grid.overlapped_cells(s, |key| out.push((key, (c * CHUNK + k) as u32)));
+                    }
+                }
+                Grouped::new(out, SUPER, |e| bucket(e.0, buckets) >> shift)
+            })
+            .collect();
+        (grid.offsets, grid.entries) = sort_by_bucket(&chunks, total, buckets);
+        Some(grid)
+    }
+
+    fn cell(&self, p: Vec3) -> [u64; 3] {
+        let c = (p - self.lo) * self.inv_cell;
+        [0, 1, 2].map(|a| (c[a].max(0.0) as u64).min(self.res[a] - 1))
+    }
+
+    fn key(&self, c: [u64; 3]) -> u64 {
+        c[0] + self.res[0] * (c[1] + self.res[1] * c[2])
+    }
+
+    /// How many cells a site's r-box overlaps.
+    fn overlap_count(&self, s: &Site) -> usize {
+        let (a, b) = (self.cell(s.p - s.radius), self.cell(s.p + s.radius));
+        (0..3).map(|k| (b[k] - a[k] + 1) as usize).product()
+    }
+
+    /// Calls `f` with the key of every cell a site's r-box overlaps.
+    fn overlapped_cells(&self, s: &Site, mut f: impl FnMut(u64)) {
+        let (a, b) = (self.cell(s.p - s.radius), self.cell(s.p + s.radius));
+        for z in a[2]..=b[2] {
+            for y in a[1]..=b[1] {
+                for x in a[0]..=b[0] {
+                    f(self.key([x, y, z]));
+                }
+            }
+        }
+    }
+
+    /// Calls `f` for every pixel binned in the cell containing `p` (none outside).
+    pub fn gather(&self, p: Vec3, mut f: impl FnMut(u32)) {
+        let c = (p - self.lo) * self.inv_cell;
+        if (0..3).any(|a| c[a] < 0.0 || c[a] >= self.res[a] as f32) {
+            return;
+        }
+        let key = self.key(self.cell(p));
+        let b = bucket(key, self.offsets.len() - 1);
+        let range = self.offsets[b] as usize..self.offsets[b + 1] as usize;
+        for e in self.entries[range].iter().filter(|e| e.0 == key) {
+            f(e.1);
+        }
+    }
+}
+
+fn bucket(key: u64, buckets: usize) -> usize {
+    (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 32) as usize & (buckets - 1)
+}
+
+/// The box around every site's r-ball, and the largest radius; `None` without sites.
+fn bounds(sites: &[Option<Site>]) -> Option<(Vec3, Vec3, f32)> {
+    let empty = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0f32);
+    let join = |a: (Vec3, Vec3, f32), b: (Vec3, Vec3, f32)| (a.0.min(b.0), a.1.max(b.1), a.2.max(b.2));
+    let (lo, hi, max_r) = sites
+        .par_chunks(CHUNK)
+        .map(|c| c.iter().flatten().fold(empty, |acc, s| join(acc, (s.p - s.radius, s.p + s.radius, s.radius))))
+        .reduce(|| empty, join);
+    (max_r > 0.0 && lo.x <= hi.x).then_some((lo, hi, max_r))
+}
+
+/// The second level: each super bucket gathers its pairs from the chunks in order and
+/// sorts them by bucket into its own slice of the table. Returns (offsets, entries).
+fn sort_by_bucket(chunks: &[Grouped<(u64, u32)>], total: usize, buckets: usize) -> (Vec<u32>, Vec<(u64, u32)>) {
+    let mut entries = vec![(0u64, 0u32); total];
+    let mut offsets = vec![0u32; buckets + 1];
+    offsets[buckets] = total as u32;
+    let mut slices = Vec::with_capacity(SUPER);
+    let (mut rest, mut start) = (entries.as_mut_slice(), 0usize);
+    for s in 0..SUPER {
+        let size: usize = chunks.iter().map(|c| c.group(s).len()).sum();
+        let (mine, tail) = rest.split_at_mut(size);
+        slices.push((s, start, mine));
+        (rest, start) = (tail, start + size);
+    }
+    slices.into_par_iter().zip(offsets[..buckets].par_chunks_mut(buckets / SUPER)).for_each(
+        |((s, start, out), offs)| {
+            let mask = offs.len() - 1;
+            let low = |key: u64| bucket(key, buckets) & mask;
+            for e in chunks.iter().flat_map(|c| c.group(s)) {
+                offs[low(e.0)] += 1;
+            }
+            let mut at = start as u32;
+            for o in offs.iter_mut() {
+                (*o, at) = (at, at + *o);
+            }
+            let mut next = offs.to_vec();
+            for e in chunks.iter().flat_map(|c| c.group(s)) {
+                let b = low(e.0);
+                out[(next[b] - start as u32) as usize] = *e;
+                next[b] += 1;
+            }
+        },
+    );
+    (offsets, entries)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    fn sites(n: usize, seed: u64) -> Vec<Option<Site>> {
+        let mut rng = Rng::new(seed);
+        (0..n)
+            .map(|_| {
+                let p = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform() * 0.1) * 10.0;
+                // Some pixels without a visible point, radii over two orders of magnitude.
+                (rng.uniform() > 0.1).then(|| Site { p, radius: 0.01 + 0.3 * rng.uniform().powi(4) })
+            })
+            .collect()
+    }
+
+    #[test]
+    fn gather_finds_every_site_whose_ball_holds_the_point_once_in_pixel_order() {
+        let sites = sites(3 * CHUNK + 17, 5);
+        let Some(grid) = Grid::build(&sites) else { panic!("no grid") };
+        let mut rng = Rng::new(9);
+        for _ in 0..2000 {
+            let p = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform() * 0.1) * 10.0;
+            let mut found = Vec::new();
+            grid.gather(p, |i| found.push(i));
+            assert!(found.windows(2).all(|w| w[0] < w[1]), "not in pixel order or repeated: {found:?}");
+            for (i, s) in sites.iter().enumerate() {
+                if let Some(s) = s
+                    && (s.p - p).length() < s.radius
+                {
+                    assert!(found.contains(&(i as u32)), "site {i} at {:?} r {} missed for {p:?}", s.p, s.radius);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_table_is_the_same_for_any_thread_count() {
+        let sites = sites(5 * CHUNK, 3);
+        let build = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
+            pool.install(|| Grid::build(&sites)).ok_or("no grid".to_string())
+        };
+        let (Ok(a), Ok(b)) = (build(1), build(3)) else { panic!("no grid") };
+        assert_eq!(a.offsets, b.offsets);
+        assert_eq!(a.entries, b.entries);
+        // Within a bucket, pairs are in pixel order.
+        for w in a.offsets.windows(2) {
+            let bucket = &a.entries[w[0] as usize..w[1] as usize];
+            assert!(bucket.windows(2).all(|e| e[0].1 <= e[1].1));
+        }
+    }
+
+    #[test]
+    fn no_sites_no_grid() {
+        assert!(Grid::build(&[None, None]).is_none());
+        assert!(Grid::build(&[]).is_none());
+    }
+}
