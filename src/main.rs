@@ -2,6 +2,7 @@
 //! `export --mitsuba SCENE`. A scene named `-` is read from standard input.
 
 use clap::{Parser, Subcommand};
+use pbrt_sppm::integrators::adaptive::PhotonSampling;
 use pbrt_sppm::limits::Limits;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::parser::error::LoadError;
@@ -92,6 +93,11 @@ struct RenderArgs {
     /// the default) or `random` (independent random numbers).
     #[arg(long, value_parser = parse_sampler)]
     sampler: Option<SamplerKind>,
+    /// How photon paths are drawn: `uniform` (independent photons, as pbrt; the
+    /// default) or `adaptive` (Markov chains over paths that reach what the camera
+    /// sees, for scenes where most photons land out of view).
+    #[arg(long, value_parser = parse_photon_sampling)]
+    photon_sampling: Option<PhotonSampling>,
     /// SPPM iterations (at least 1), overriding the scene's.
     #[arg(long, visible_alias = "iterations", allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
     spp: Option<u32>,
@@ -125,6 +131,14 @@ fn parse_syntax(s: &str) -> Result<Syntax, String> {
         "v3" => Ok(Syntax::V3),
         "v4" => Ok(Syntax::V4),
         _ => Err(format!("expected v3 or v4, not \"{s}\"")),
+    }
+}
+
+fn parse_photon_sampling(s: &str) -> Result<PhotonSampling, String> {
+    match s {
+        "uniform" => Ok(PhotonSampling::Uniform),
+        "adaptive" => Ok(PhotonSampling::Adaptive),
+        _ => Err(format!("expected uniform or adaptive, not \"{s}\"")),
     }
 }
 
@@ -302,6 +316,7 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         radius: args.radius,
         seed: args.seed,
         sampler: args.sampler.unwrap_or_default(),
+        photon_sampling: args.photon_sampling.unwrap_or_default(),
         quick: args.quick,
         time_limit: args.time_limit.map(f64::from),
         reference,
@@ -378,6 +393,14 @@ fn print_stats(out: &pbrt_sppm::integrators::RenderOutput) {
         s.photon_paths,
         s.photon_hits
     );
+    if s.photon_uniform > 0 {
+        let wasted = 1.0 - s.photon_uniform_deposited as f64 / s.photon_uniform as f64;
+        say!("stats: {:.3}% of uniform photon paths reached no visible point", 100.0 * wasted);
+    }
+    if s.photon_mutations > 0 {
+        let rate = s.photon_accepted as f64 / s.photon_mutations as f64;
+        say!("stats: adaptive photons: {} mutations, {:.3} accepted", s.photon_mutations, rate);
+    }
 }
 
 /// Writes the Mitsuba export; what cannot go over is also warned about on stderr.

@@ -126,18 +126,22 @@ impl Grid {
         }
     }
 
-    /// Calls `f` for every pixel binned in the cell containing `p` (none outside).
-    pub fn gather(&self, p: Vec3, mut f: impl FnMut(u32)) {
+    /// Calls `f` for every pixel binned in the cell containing `p` (none outside);
+    /// whether there was any.
+    pub fn gather(&self, p: Vec3, mut f: impl FnMut(u32)) -> bool {
         let c = (p - self.lo) * self.inv_cell;
         if (0..3).any(|a| c[a] < 0.0 || c[a] >= self.res[a] as f32) {
-            return;
+            return false;
         }
         let key = self.key(self.cell(p));
         let b = bucket(key, self.offsets.len() - 1);
         let range = self.offsets[b] as usize..self.offsets[b + 1] as usize;
+        let mut any = false;
         for e in self.entries[range].iter().filter(|e| e.0 == key) {
             f(e.1);
+            any = true;
         }
+        any
     }
 }
 

@@ -13,6 +13,8 @@ pub struct RenderSettings {
     pub radius: Option<f32>,
     pub seed: Option<u64>,
     pub sampler: crate::sampling::SamplerKind,
+    /// How photon paths are drawn (`--photon-sampling`).
+    pub photon_sampling: super::adaptive::PhotonSampling,
     /// Divide the iteration count by 16 (pbrt-v3's `--quick`).
     pub quick: bool,
     /// Stop after the iteration that passes this many seconds.
@@ -51,7 +53,7 @@ impl RenderScene {
             photons,
             radius,
             settings.seed.unwrap_or(i.seed),
-            settings.sampler,
+            (settings.sampler, settings.photon_sampling),
         )?;
         let [x0, x1, y0, y1] = self.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);

@@ -12,6 +12,7 @@
 //! photons from a generator seeded by (seed, iteration, photon). Photon contributions
 //! are summed in a fixed order, so any thread count gives a bit-identical image.
 
+use super::adaptive::{self, Chain, Deposit, PhotonSampling};
 use super::grid::{Grid, Grouped, Site};
 use crate::interaction::Footprint;
 use crate::lights::Light;
@@ -62,6 +63,13 @@ pub struct Stats {
     pub camera_rays: u64,
     pub photon_paths: u64,
     pub photon_hits: u64,
+    /// Uniform photon paths, and those that reached a visible point (the rest were
+    /// wasted). With the uniform sampler every path is uniform.
+    pub photon_uniform: u64,
+    pub photon_uniform_deposited: u64,
+    /// Adaptive photon tracing: mutations proposed and accepted.
+    pub photon_mutations: u64,
+    pub photon_accepted: u64,
     /// Visible points stored, over all iterations.
     pub visible_points: u64,
     pub iterations: u32,
@@ -78,6 +86,8 @@ pub struct Sppm<'a> {
     max_depth: u32,
     seed: u64,
     sampler: SamplerKind,
+    /// Adaptive photon tracing's chains (`None`: uniform photons).
+    chains: Option<Vec<Chain>>,
     /// How much camera rays' differentials are scaled (pbrt scales them down as the
     /// iterations that share a pixel grow; see [`crate::scene::Integrator`]).
     differential_scale: f32,
@@ -99,7 +109,7 @@ impl<'a> Sppm<'a> {
         photons_per_iteration: u64,
         radius: f32,
         seed: u64,
-        sampler: SamplerKind,
+        (sampler, photon_sampling): (SamplerKind, PhotonSampling),
     ) -> Result<Sppm<'a>, String> {
         let [x0, x1, y0, y1] = scene.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
@@ -120,6 +130,7 @@ impl<'a> Sppm<'a> {
             max_depth: scene.integrator.max_depth,
             seed,
             sampler,
+            chains: (photon_sampling == PhotonSampling::Adaptive).then(|| Chain::new_set(seed)),
             differential_scale: differential_scale(iterations, scene.integrator.differential_floor),
             stats: Stats::default(),
         })
@@ -175,45 +186,59 @@ impl<'a> Sppm<'a> {
     /// Phase 3: trace photons; returns per-pixel flux Φ and photon counts M.
     fn photon_pass(&mut self, grid: Option<&Grid>) -> (Vec<DVec3>, Vec<u64>) {
         let n = self.pixels.len();
-        let (mut phi, mut m) = (vec![DVec3::ZERO; n], vec![0u64; n]);
+        let (phi, m) = (vec![DVec3::ZERO; n], vec![0u64; n]);
         let Some(grid) = grid else { return (phi, m) };
         if self.scene.lights.is_empty() || self.scene.light_power.is_empty() {
             return (phi, m);
         }
+        let (scene, pixels, max_depth) = (self.scene, &self.pixels, self.max_depth);
+        let trace = |s: &mut adaptive::PrimarySample, out: &mut Vec<Deposit>| {
+            let path = trace_photon(scene, grid, pixels, s, max_depth, out);
+            (path.hits, path.near)
+        };
+        let (deposits, weight, counts) = match &mut self.chains {
+            Some(chains) => adaptive::pass(chains, self.photons_per_iteration, &trace),
+            None => self.uniform_photons(grid),
+        };
+        let s = &mut self.stats;
+        s.photon_paths += counts.traced;
+        s.photon_hits += counts.hits;
+        s.photon_uniform += counts.uniform;
+        s.photon_uniform_deposited += counts.uniform_deposited;
+        s.photon_mutations += counts.mutations;
+        s.photon_accepted += counts.accepted;
+        sum_deposits(deposits, weight, phi, m)
+    }
+
+    /// Independent photons, in chunks of a fixed size; each chunk's deposits in
+    /// photon order.
+    fn uniform_photons(&self, grid: &Grid) -> (Vec<Vec<Deposit>>, f32, adaptive::Counts) {
         let (scene, pixels, iter, seed, max_depth) =
             (self.scene, &self.pixels, self.iteration as u64, self.seed, self.max_depth);
         let total = self.photons_per_iteration;
         let chunks = total.div_ceil(PHOTON_CHUNK as u64);
-        let span = n.div_ceil(DEPOSIT_RANGES).max(1);
-        let results: Vec<(Grouped<(u32, Vec3)>, u64)> = (0..chunks)
+        let results: Vec<(Vec<Deposit>, adaptive::Counts)> = (0..chunks)
             .into_par_iter()
             .map(|c| {
-                let mut out = Vec::new();
-                let mut hits = 0;
+                let (mut out, mut n) = (Vec::new(), adaptive::Counts::default());
                 for k in c * PHOTON_CHUNK as u64..((c + 1) * PHOTON_CHUNK as u64).min(total) {
                     // Independent numbers for photons under either sampler: Sobol'
                     // points, padded per iteration or as one five-dimensional sequence
                     // over the whole render, gained nothing measurable (docs/sampling.md).
                     let mut rng = Rng::new(hash(&[seed, iter, k, 1]));
-                    hits += trace_photon(scene, grid, pixels, &mut rng, max_depth, &mut out);
+                    let before = out.len();
+                    let path = trace_photon(scene, grid, pixels, &mut rng, max_depth, &mut out);
+                    n.hits += path.hits;
+                    n.uniform_visible += path.near as u64;
+                    n.uniform_deposited += (out.len() > before) as u64;
                 }
-                (Grouped::new(out, DEPOSIT_RANGES, |d| d.0 as usize / span), hits)
+                n.uniform = (total - c * PHOTON_CHUNK as u64).min(PHOTON_CHUNK as u64);
+                n.traced = n.uniform;
+                (out, n)
             })
             .collect();
-        // Each pixel sums its contributions in a fixed order (chunk by chunk, photon by
-        // photon), whatever the thread count; pixel ranges are summed in parallel.
-        self.stats.photon_hits += results.iter().map(|r| r.1).sum::<u64>();
-        phi.par_chunks_mut(span).zip(m.par_chunks_mut(span)).enumerate().for_each(|(r, (phi, m))| {
-            let lo = r * span;
-            for (d, _) in &results {
-                for &(pixel, f) in d.group(r) {
-                    phi[pixel as usize - lo] += f.as_dvec3();
-                    m[pixel as usize - lo] += 1;
-                }
-            }
-        });
-        self.stats.photon_paths += total;
-        (phi, m)
+        let counts = results.iter().fold(adaptive::Counts::default(), |a, r| a.plus(r.1));
+        (results.into_iter().map(|r| r.0).collect(), 1.0, counts)
     }
 
     /// Where photons are gathered: each pixel's visible point, if it can reflect.
@@ -255,6 +280,25 @@ impl<'a> Sppm<'a> {
             })
             .collect()
     }
+}
+
+/// Φ and M per pixel from lists of deposits, each deposit's flux times `weight`. Each
+/// pixel sums its contributions in a fixed order (list by list, deposit by deposit),
+/// whatever the thread count; the lists are grouped by pixel range first, so that
+/// pixel ranges are summed in parallel and each deposit is read once.
+fn sum_deposits(lists: Vec<Vec<Deposit>>, weight: f32, mut phi: Vec<DVec3>, mut m: Vec<u64>) -> (Vec<DVec3>, Vec<u64>) {
+    let span = phi.len().div_ceil(DEPOSIT_RANGES).max(1);
+    let grouped: Vec<Grouped<Deposit>> =
+        lists.into_par_iter().map(|l| Grouped::new(l, DEPOSIT_RANGES, |d| d.0 as usize / span)).collect();
+    let w = weight as f64;
+    phi.par_chunks_mut(span).zip(m.par_chunks_mut(span)).enumerate().for_each(|(r, (phi, m))| {
+        let lo = r * span;
+        for &(pixel, f) in grouped.iter().flat_map(|g| g.group(r)) {
+            phi[pixel as usize - lo] += w * f.as_dvec3();
+            m[pixel as usize - lo] += 1;
+        }
+    });
+    (phi, m)
 }
 
 /// What a path finds at a hit.
@@ -421,8 +465,17 @@ fn visible(scene: &RenderScene, si: &crate::interaction::SurfaceInteraction, ls:
     !scene.intersect_p(&ray)
 }
 
-/// One photon path; appends (pixel, β·f) for each visible point it reaches and returns
-/// the number of surface hits.
+/// What tracing a photon path found.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PhotonPath {
+    /// Surfaces hit.
+    pub hits: u64,
+    /// Whether the path met a grid cell holding a visible point (a superset of the
+    /// paths that deposit: what adaptive photon tracing calls visible).
+    pub near: bool,
+}
+
+/// One photon path; appends (pixel, β·f) for each visible point it reaches.
 fn trace_photon(
     scene: &RenderScene,
     grid: &Grid,
@@ -430,28 +483,28 @@ fn trace_photon(
     sampler: &mut impl Sampler,
     max_depth: u32,
     out: &mut Vec<(u32, Vec3)>,
-) -> u64 {
-    let Some((li, light_pdf)) = scene.light_power.sample(sampler.get1d()) else { return 0 };
+) -> PhotonPath {
+    let Some((li, light_pdf)) = scene.light_power.sample(sampler.get1d()) else { return PhotonPath::default() };
     let light: &Light = &scene.lights[li];
     let (u1, u2) = (sampler.get2d(), sampler.get2d());
-    let Some(e) = light.sample_le(&scene.geometry, scene.world, u1, u2) else { return 0 };
+    let Some(e) = light.sample_le(&scene.geometry, scene.world, u1, u2) else { return PhotonPath::default() };
     if scene.emission_masked(light, e.surface.as_ref()) {
-        return 0;
+        return PhotonPath::default();
     }
     if e.pdf_pos <= 0.0 || e.pdf_dir <= 0.0 || e.le == Vec3::ZERO {
-        return 0;
+        return PhotonPath::default();
     }
     let d = e.ray.d.0.normalize();
     let mut beta = e.le * e.n.dot(d).abs() / (light_pdf * e.pdf_pos * e.pdf_dir);
     let mut ray = crate::math::Ray::new(e.ray.o, Vector3(d));
-    let (mut depth, mut passes, mut hits) = (0, 0, 0);
+    let (mut depth, mut passes, mut hits, mut near) = (0, 0, 0, false);
     while depth < max_depth {
         let Some(hit) = scene.intersect(&ray) else { break };
         hits += 1;
         let si = scene.geometry.interaction(&hit);
         let wi = -ray.d.0;
         if depth > 0 {
-            grid.gather(si.p.0, |pixel| {
+            near |= grid.gather(si.p.0, |pixel| {
                 let Some(vp) = &pixels[pixel as usize].vp else { return };
                 let r = pixels[pixel as usize].radius as f32;
                 // DEVIATION(pbrt): photons arriving from behind an opaque visible
@@ -482,5 +535,5 @@ fn trace_photon(
         ray = si.spawn_ray(Vector3(s.wi));
         depth += 1;
     }
-    hits
+    PhotonPath { hits, near }
 }

@@ -5,6 +5,7 @@
 use crate::common::{root, scene};
 use pbrt_sppm::imageio::metrics::relmse;
 use pbrt_sppm::imageio::read_image;
+use pbrt_sppm::integrators::adaptive::PhotonSampling;
 use pbrt_sppm::integrators::{ERRORS_HEADER, RenderSettings};
 use pbrt_sppm::render::RenderScene;
 use pbrt_sppm::sampling::SamplerKind;
@@ -92,8 +93,9 @@ fn one_sided_lights_follow_pbrt_orientation_under_mirrors() {
 #[test]
 fn the_same_seed_gives_identical_pixels_for_any_thread_count() {
     let text = std::fs::read_to_string(root().join("pbrt-scenes/v3/cornell-glass.pbrt")).unwrap();
-    let run = |threads: usize, sampler: SamplerKind| {
-        let s = RenderSettings { iterations: Some(2), photons: Some(5000), sampler, ..Default::default() };
+    let run = |threads: usize, sampler: SamplerKind, photon_sampling| {
+        let s =
+            RenderSettings { iterations: Some(2), photons: Some(5000), sampler, photon_sampling, ..Default::default() };
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let sc = RenderScene::new(
             pbrt_sppm::scene::load_scene_from_bytes(
@@ -106,16 +108,22 @@ fn the_same_seed_gives_identical_pixels_for_any_thread_count() {
         pool.install(|| sc.render(&s).unwrap().image.pixels)
     };
     for sampler in [SamplerKind::Sobol, SamplerKind::Random] {
-        let (one, two) = (run(1, sampler), run(2, sampler));
+        let (one, two) = (run(1, sampler, PhotonSampling::Uniform), run(2, sampler, PhotonSampling::Uniform));
         let same = one.iter().zip(&two).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits));
         assert!(same, "{sampler:?}: images differ");
     }
-    assert_ne!(run(2, SamplerKind::Sobol), run(2, SamplerKind::Random), "the samplers draw different numbers");
+    let (one, two) =
+        (run(1, SamplerKind::Sobol, PhotonSampling::Adaptive), run(2, SamplerKind::Sobol, PhotonSampling::Adaptive));
+    let same = one.iter().zip(&two).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits));
+    assert!(same, "adaptive photons: images differ");
+    let uniform = run(2, SamplerKind::Sobol, PhotonSampling::Uniform);
+    assert_ne!(uniform, run(2, SamplerKind::Random, PhotonSampling::Uniform), "the samplers draw different numbers");
+    assert_ne!(uniform, two, "adaptive photons are other photons");
     let s = RenderSettings { iterations: Some(2), photons: Some(5000), ..Default::default() };
     let other_seed = RenderScene::new(scene(&text.replace("WorldBegin", "Option \"seed\" 5 WorldBegin")))
         .render(&RenderSettings { seed: Some(5), ..s.clone() })
         .unwrap();
-    assert_ne!(run(2, SamplerKind::Sobol), other_seed.image.pixels, "another seed gives other samples");
+    assert_ne!(uniform, other_seed.image.pixels, "another seed gives other samples");
 }
 
 /// A pixel's iterations are successive points of stratified sequences, so soft shadows
@@ -140,6 +148,41 @@ fn sobol_camera_paths_have_less_error_than_random_ones_at_equal_iterations() {
     let (sobol, random) = (error(SamplerKind::Sobol), error(SamplerKind::Random));
     eprintln!("relMSE at 16 iterations, sum of 3 seeds: Sobol' {sobol:.3e}, random {random:.3e}");
     assert!(sobol < 0.5 * random, "relMSE with Sobol' points {sobol:.3e}, with random numbers {random:.3e}");
+}
+
+/// The keyhole room: light enters through a small hole, so about one uniform photon in
+/// five thousand reaches what the camera sees. Adaptive photon tracing must give the
+/// same image (its mean) with much less error for the same number of photon steps.
+#[test]
+fn adaptive_photons_match_uniform_ones_with_less_error_where_few_photons_are_seen() {
+    let text = std::fs::read_to_string(root().join("pbrt-scenes/v3/keyhole.pbrt")).expect("keyhole scene");
+    let sc = RenderScene::new(scene(&text.replace("[ 128 ]", "[ 24 ]")));
+    let render = |photon_sampling, iterations, photons, seed| {
+        let s = RenderSettings {
+            iterations: Some(iterations),
+            photons: Some(photons),
+            seed: Some(seed),
+            photon_sampling,
+            ..Default::default()
+        };
+        sc.render(&s).expect("renders")
+    };
+    let reference = render(PhotonSampling::Uniform, 32, 400_000, 99).image.pixels;
+    let (mut uniform, mut adaptive, mut means) = (0.0, 0.0, 0.0);
+    for seed in 1..=2 {
+        uniform += relmse(&render(PhotonSampling::Uniform, 8, 100_000, seed).image.pixels, &reference);
+        let out = render(PhotonSampling::Adaptive, 8, 100_000, seed);
+        adaptive += relmse(&out.image.pixels, &reference);
+        means += mean(&out.image.pixels) / 2.0;
+        let s = &out.stats;
+        assert!(s.photon_uniform_deposited * 1000 < s.photon_uniform, "the scene is not hard enough: {s:?}");
+        let rate = s.photon_accepted as f64 / s.photon_mutations as f64;
+        assert!((0.15..0.35).contains(&rate), "acceptance {rate}");
+    }
+    let r = mean(&reference);
+    assert!((means - r).abs() < 0.06 * r, "adaptive mean {means}, reference {r}");
+    eprintln!("relMSE, sum of 2 seeds: uniform {uniform:.3e}, adaptive {adaptive:.3e}");
+    assert!(adaptive < uniform / 3.0, "adaptive {adaptive:.3e}, uniform {uniform:.3e}");
 }
 
 #[test]
