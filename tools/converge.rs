@@ -3,6 +3,7 @@
 //! ```text
 //! pbrt-bench converge [SCENE.pbrt[@half] ...] [--runs 3] [--iterations 4,16,64]
 //!                     [--reference-iterations N] [--peers DIR] [--out DIR] [--nthreads 2]
+//!                     [--ours-args "--photon-sampling adaptive"]
 //! ```
 //! For each scene, every round runs each peer found in `--peers` (`pbrt-v3`, `pbrt-v4`)
 //! once per iteration count of the ladder (default: the scene's count over 4, over 2 and
@@ -25,6 +26,9 @@
 //! `@half` resolution) beside links to everything else in the scene's folder, so
 //! relative paths still resolve. References are cached in `--out/refs` under a hash of
 //! the rewritten file; delete them to rebuild.
+//!
+//! `--ours-args` passes options to our timed runs only (not to the reference), so one
+//! of our settings can be set beside the peers; give each setting its own `--out`.
 //!
 //! Per scene this writes `converge.md` (the table), one `ERRORS.csv`-shaped file per
 //! renderer and `converge.png` (all curves, log-log).
@@ -54,6 +58,8 @@ struct Options {
     peers: PathBuf,
     out: PathBuf,
     nthreads: usize,
+    /// Extra options for our timed runs.
+    ours_args: Vec<String>,
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -135,6 +141,7 @@ fn options(args: &[String]) -> Res<Options> {
         peers: PathBuf::from("../shared/peers"),
         out: PathBuf::from("target/converge"),
         nthreads: 2,
+        ours_args: Vec::new(),
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -149,6 +156,7 @@ fn options(args: &[String]) -> Res<Options> {
             }
             "--peers" => o.peers = PathBuf::from(value()?),
             "--out" => o.out = PathBuf::from(value()?),
+            "--ours-args" => o.ours_args = value()?.split_whitespace().map(String::from).collect(),
             s if s.starts_with("--") => return Err(format!("unknown option {s}")),
             s => {
                 let (path, half) = s.strip_suffix("@half").map_or((s, false), |p| (p, true));
@@ -256,10 +264,14 @@ fn run_rounds(o: &Options, p: &Prepared, ours: &Path, peers: &[Peer]) -> Res<Rou
 fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<String> {
     let our_curve = our_curve(&rounds.our_runs);
     let mut table = format!(
-        "{}: {} rounds, {} threads, reference ours at {} iterations, another seed\n\n\
+        "{}: {} rounds, {} threads, reference ours at {} iterations, another seed{}\n\n\
          | renderer | iterations | seconds (range) | relMSE | mean / reference | ours at that time | ours / peer |\n\
          |---|---|---|---|---|---|---|\n",
-        p.label, o.runs, o.nthreads, p.reference_iterations
+        p.label,
+        o.runs,
+        o.nthreads,
+        p.reference_iterations,
+        if o.ours_args.is_empty() { String::new() } else { format!("; ours with {}", o.ours_args.join(" ")) }
     );
     let mut series = vec![curve_series("ours", &our_curve)];
     let mut ratios = Vec::new();
@@ -454,7 +466,7 @@ fn symlink(target: &Path, link: &Path) -> std::io::Result<()> {
 fn v4_upgrade(v4: &Path, file: &Path, dir: &Path, stem: &str) -> Res<Option<PathBuf>> {
     let out = output(Command::new(v4).arg("--upgrade").arg(file.file_name().unwrap_or_default()).current_dir(dir))?;
     if !out.status.success() {
-        println!("pbrt-v4 --upgrade failed: {}", last_line(&out.stderr));
+        println!("pbrt-v4 --upgrade failed: {}", error_line(&out.stderr));
         return Ok(None);
     }
     let upgraded = dir.join(format!("{stem}.converge.v4.pbrt"));
@@ -467,7 +479,7 @@ fn v4_upgrade(v4: &Path, file: &Path, dir: &Path, stem: &str) -> Res<Option<Path
             .current_dir(dir),
     )?;
     if !trial.status.success() {
-        println!("pbrt-v4 cannot render its translation: {}", last_line(&trial.stderr));
+        println!("pbrt-v4 cannot render its translation: {}", error_line(&trial.stderr));
         return Ok(None);
     }
     Ok(Some(upgraded))
@@ -511,8 +523,12 @@ fn fnv(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf29ce484222325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x100000001b3))
 }
 
-fn last_line(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("").to_string()
+/// The line of a program's output that says what went wrong: the first with "error",
+/// else the last (clap ends with a pointer to `--help`).
+fn error_line(bytes: &[u8]) -> String {
+    let text = String::from_utf8_lossy(bytes);
+    let error = text.lines().find(|l| l.contains("error"));
+    error.or_else(|| text.lines().rev().find(|l| !l.trim().is_empty())).unwrap_or("").to_string()
 }
 
 /// One peer run: (wall seconds, relMSE, mean / reference mean).
@@ -536,7 +552,7 @@ fn run_peer(p: &Prepared, peer: &Peer, rung: usize, n: u32, nthreads: usize) -> 
     let done = output(cmd.current_dir(&p.dir))?;
     let seconds = t.elapsed().as_secs_f64();
     if !done.status.success() {
-        return Err(format!("exit {:?}: {}", done.status.code(), last_line(&done.stderr)));
+        return Err(format!("exit {:?}: {}", done.status.code(), error_line(&done.stderr)));
     }
     let img = read_image(&out).map_err(|e| format!("{}: {e}", out.display()))?;
     let (e, m) = compare(&img, reference)?;
@@ -562,7 +578,7 @@ fn run_ours(o: &Options, p: &Prepared, ours: &Path, budget: Option<f64>) -> Res<
     let top = p.ladder.iter().max().copied().unwrap_or(1);
     let mut cmd = Command::new(ours);
     cmd.arg("render").arg(&p.ours).args(["--quiet", "--nthreads", &o.nthreads.to_string()]);
-    cmd.arg("--outfile").arg(p.dir.join("ours.exr"));
+    cmd.arg("--outfile").arg(p.dir.join("ours.exr")).args(&o.ours_args);
     cmd.arg("--mse-reference-image").arg(&p.reference_file).arg("--mse-reference-out").arg(&csv);
     match budget {
         // Far more iterations than needed; the time limit ends the run.
@@ -573,7 +589,7 @@ fn run_ours(o: &Options, p: &Prepared, ours: &Path, budget: Option<f64>) -> Res<
     let done = output(&mut cmd)?;
     let wall = t.elapsed().as_secs_f64();
     if !done.status.success() {
-        return Err(format!("pbrt-sppm on {}: {}", p.ours.display(), last_line(&done.stderr)));
+        return Err(format!("pbrt-sppm on {}: {}", p.ours.display(), error_line(&done.stderr)));
     }
     let rows = read_errors(&csv)?;
     // Loading and writing, which ERRORS.csv leaves out, are added to every row.

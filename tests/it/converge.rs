@@ -146,3 +146,21 @@ fn converge_refuses_what_it_cannot_rewrite_or_parse() {
     assert_eq!(code, Some(1));
     assert!(stderr.contains("unknown option --frobnicate"), "{stderr}");
 }
+
+#[test]
+fn ours_args_reach_our_timed_runs_only() {
+    let d = dir("args");
+    let scene = write_scene(&d);
+    let (out, peers) = (d.join("out"), d.join("no-peers"));
+    let common = ["--peers", peers.to_str().unwrap(), "--out", out.to_str().unwrap(), "--runs", "1"];
+    let spec = format!("{}@half", scene.display());
+    // A bad option fails our run, not the reference before it.
+    let (code, stdout, stderr) = converge(&[&common[..], &["--ours-args", "--frobnicate", &spec]].concat());
+    assert_eq!(code, Some(1), "{stdout}");
+    assert!(stdout.contains("rendering the reference"), "{stdout}");
+    assert!(stderr.contains("frobnicate"), "{stderr}");
+    let (code, stdout, stderr) =
+        converge(&[&common[..], &["--ours-args", "--photon-sampling adaptive", &spec]].concat());
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(stdout.contains("ours with --photon-sampling adaptive"), "{stdout}");
+}
