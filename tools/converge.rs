@@ -167,6 +167,8 @@ fn options(args: &[String]) -> Res<Options> {
     if o.scenes.is_empty() {
         o.scenes = default_suite();
     }
+    // Peers run inside the scene's folder under --out: their paths must not be relative.
+    o.out = std::path::absolute(&o.out).map_err(|e| format!("--out {}: {e}", o.out.display()))?;
     Ok(o)
 }
 

@@ -68,7 +68,12 @@ fn fake_peers(d: &Path) -> PathBuf {
 }
 
 fn converge(args: &[&str]) -> (Option<i32>, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_pbrt-bench")).arg("converge").args(args).output().unwrap();
+    converge_in(&std::env::current_dir().unwrap(), args)
+}
+
+fn converge_in(cwd: &Path, args: &[&str]) -> (Option<i32>, String, String) {
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_pbrt-bench")).arg("converge").args(args).current_dir(cwd).output().unwrap();
     (
         out.status.code(),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -159,8 +164,19 @@ fn ours_args_reach_our_timed_runs_only() {
     assert_eq!(code, Some(1), "{stdout}");
     assert!(stdout.contains("rendering the reference"), "{stdout}");
     assert!(stderr.contains("frobnicate"), "{stderr}");
-    let (code, stdout, stderr) =
-        converge(&[&common[..], &["--ours-args", "--photon-sampling adaptive", &spec]].concat());
-    assert_eq!(code, Some(0), "{stderr}");
+    // Relative paths for --out, the peers and the scene: peers run in the scene's
+    // folder under --out, so the tool must not hand them paths relative to here.
+    // (The scene's folder must not hold --out: its links would make any path work.)
+    fake_peers(&d);
+    std::fs::create_dir_all(d.join("scenes")).unwrap();
+    write_scene(&d.join("scenes"));
+    let args = ["--peers", "peers", "--out", "rel-out", "--runs", "1", "--iterations", "2"];
+    let (code, stdout, stderr) = converge_in(
+        &d,
+        &[&args[..], &["--ours-args", "--photon-sampling adaptive", "scenes/scene.pbrt@half"]].concat(),
+    );
+    assert_eq!(code, Some(0), "{stdout}\n{stderr}");
     assert!(stdout.contains("ours with --photon-sampling adaptive"), "{stdout}");
+    assert!(stdout.contains("| pbrt-v3 | 2 |"), "{stdout}");
+    assert!(d.join("rel-out/scene@half/pbrt-v3-2.exr").exists());
 }
