@@ -1,7 +1,7 @@
 //! Stochastic progressive photon mapping (pbrt-v3 `SPPMIntegrator`), one function per
-//! phase: camera pass (visible points and direct light), grid build ((cell, pixel)
-//! pairs grouped by a counting sort), photon pass (parallel, deterministic), per-pixel
-//! update (γ = 2/3, f64 accumulators), image.
+//! phase: camera pass (visible points and direct light), grid build ([`super::grid`]),
+//! photon pass (parallel, deterministic), per-pixel update (γ = 2/3, f64
+//! accumulators), image.
 //!
 //! ```text
 //! Integrator "sppm" "integer numiterations" 64 "integer maxdepth" 5
@@ -9,8 +9,10 @@
 //! ```
 //! Camera paths draw from a pixel's scrambled Sobol' sequences (index: the iteration),
 //! or with `--sampler random` from a generator seeded by (seed, pixel, iteration);
-//! photons from a generator seeded by (seed, iteration, photon). Photon contributions
-//! are summed in a fixed order, so any thread count gives a bit-identical image.
+//! photons from a generator seeded by (seed, iteration, photon), or with
+//! `--photon-sampling adaptive` from [`super::adaptive`]'s Markov chains. Photon
+//! contributions are summed in a fixed order, so any thread count gives a bit-identical
+//! image.
 
 use super::adaptive::{self, Chain, Deposit, PhotonSampling};
 use super::grid::{Grid, Grouped, Site};
