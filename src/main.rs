@@ -390,16 +390,17 @@ fn print_stats(out: &pbrt_sppm::integrators::RenderOutput) {
     say!(
         "stats: {} camera paths, {} photon paths, {} photon hits, peak memory {peak}",
         s.camera_rays,
-        s.photon_paths,
-        s.photon_hits
+        s.photons.traced,
+        s.photons.hits
     );
-    if s.photon_uniform > 0 {
-        let wasted = 1.0 - s.photon_uniform_deposited as f64 / s.photon_uniform as f64;
+    let p = &s.photons;
+    if p.uniform > 0 {
+        let wasted = 1.0 - p.uniform_deposited as f64 / p.uniform as f64;
         say!("stats: {:.3}% of uniform photon paths reached no visible point", 100.0 * wasted);
     }
-    if s.photon_mutations > 0 {
-        let rate = s.photon_accepted as f64 / s.photon_mutations as f64;
-        say!("stats: adaptive photons: {} mutations, {:.3} accepted", s.photon_mutations, rate);
+    if p.mutations > 0 {
+        let rate = p.accepted as f64 / p.mutations as f64;
+        say!("stats: adaptive photons: {} mutations, {:.3} accepted", p.mutations, rate);
     }
 }
 

@@ -539,7 +539,7 @@ fn sppm_bench(mut scenes: Vec<PathBuf>, runs: usize) -> ExitCode {
                     return ExitCode::FAILURE;
                 };
                 times.push(out.seconds);
-                (iters, photons) = (out.stats.iterations, out.stats.photon_paths);
+                (iters, photons) = (out.stats.iterations, out.stats.photons.traced);
             }
             let t = median(times);
             let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();

@@ -86,9 +86,10 @@ pub struct Chain {
     mutations: u64,
 }
 
-/// What one iteration of the chains did.
+/// What a photon pass did (uniform photons, or the chains), summed over a render in
+/// [`super::sppm::Stats`].
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Counts {
+pub struct PhotonCounts {
     /// Uniform photons traced, those that were visible (V = 1) and those that
     /// deposited.
     pub uniform: u64,
@@ -105,8 +106,8 @@ pub struct Counts {
     pub hits: u64,
 }
 
-impl Counts {
-    pub fn plus(mut self, o: Counts) -> Counts {
+impl PhotonCounts {
+    pub fn plus(mut self, o: PhotonCounts) -> PhotonCounts {
         self.uniform += o.uniform;
         self.uniform_visible += o.uniform_visible;
         self.uniform_deposited += o.uniform_deposited;
@@ -137,11 +138,11 @@ impl Chain {
     /// `steps` steps; returns the recorded deposits (in step order) and the counts.
     /// `trace` follows one path, appending its deposits; it returns the surfaces hit
     /// and whether the path is visible.
-    fn run<F>(&mut self, steps: u64, trace: &F) -> (Vec<Deposit>, Counts)
+    fn run<F>(&mut self, steps: u64, trace: &F) -> (Vec<Deposit>, PhotonCounts)
     where
         F: Fn(&mut PrimarySample, &mut Vec<Deposit>) -> (u64, bool),
     {
-        let mut n = Counts::default();
+        let mut n = PhotonCounts::default();
         let mut path = |u: &mut Vec<f32>, rng: &mut Rng, out: &mut Vec<Deposit>| {
             out.clear();
             n.traced += 1;
@@ -208,17 +209,17 @@ impl Chain {
 /// records. Dividing by the records made rather than by the steps keeps a chain that
 /// has no visible path yet (at the start, or when the visible points move) from
 /// darkening the image.
-pub fn pass<F>(chains: &mut [Chain], total: u64, trace: &F) -> (Vec<Vec<Deposit>>, f32, Counts)
+pub fn pass<F>(chains: &mut [Chain], total: u64, trace: &F) -> (Vec<Vec<Deposit>>, f32, PhotonCounts)
 where
     F: Fn(&mut PrimarySample, &mut Vec<Deposit>) -> (u64, bool) + Sync,
 {
     let k = chains.len() as u64;
-    let results: Vec<(Vec<Deposit>, Counts)> = chains
+    let results: Vec<(Vec<Deposit>, PhotonCounts)> = chains
         .par_iter_mut()
         .enumerate()
         .map(|(c, chain)| chain.run(total / k + ((c as u64) < total % k) as u64, trace))
         .collect();
-    let counts = results.iter().fold(Counts::default(), |a, r| a.plus(r.1));
+    let counts = results.iter().fold(PhotonCounts::default(), |a, r| a.plus(r.1));
     let weight = match counts.recorded {
         0 => 0.0,
         r => (counts.uniform_visible as f64 / counts.uniform as f64 * total as f64 / r as f64) as f32,

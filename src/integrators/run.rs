@@ -74,7 +74,7 @@ impl RenderScene {
                 errors.push(ErrorRow {
                     iteration: it + 1,
                     seconds,
-                    photons: sppm.stats.photon_paths,
+                    photons: sppm.stats.photons.traced,
                     mse,
                     rmse: mse.sqrt(),
                     relmse: metrics::relmse(&img, &refpx),

@@ -14,7 +14,7 @@
 //! contributions are summed in a fixed order, so any thread count gives a bit-identical
 //! image.
 
-use super::adaptive::{self, Chain, Deposit, PhotonSampling};
+use super::adaptive::{self, Chain, Deposit, PhotonCounts, PhotonSampling};
 use super::grid::{Grid, Grouped, Site};
 use crate::interaction::Footprint;
 use crate::lights::Light;
@@ -63,15 +63,9 @@ pub struct Stats {
     pub photon_seconds: f64,
     pub update_seconds: f64,
     pub camera_rays: u64,
-    pub photon_paths: u64,
-    pub photon_hits: u64,
-    /// Uniform photon paths, and those that reached a visible point (the rest were
-    /// wasted). With the uniform sampler every path is uniform.
-    pub photon_uniform: u64,
-    pub photon_uniform_deposited: u64,
-    /// Adaptive photon tracing: mutations proposed and accepted.
-    pub photon_mutations: u64,
-    pub photon_accepted: u64,
+    /// Photon paths traced, surfaces hit, uniform photons that deposited nothing
+    /// (wasted), adaptive mutations.
+    pub photons: PhotonCounts,
     /// Visible points stored, over all iterations.
     pub visible_points: u64,
     pub iterations: u32,
@@ -202,27 +196,21 @@ impl<'a> Sppm<'a> {
             Some(chains) => adaptive::pass(chains, self.photons_per_iteration, &trace),
             None => self.uniform_photons(grid),
         };
-        let s = &mut self.stats;
-        s.photon_paths += counts.traced;
-        s.photon_hits += counts.hits;
-        s.photon_uniform += counts.uniform;
-        s.photon_uniform_deposited += counts.uniform_deposited;
-        s.photon_mutations += counts.mutations;
-        s.photon_accepted += counts.accepted;
+        self.stats.photons = self.stats.photons.plus(counts);
         sum_deposits(deposits, weight, phi, m)
     }
 
     /// Independent photons, in chunks of a fixed size; each chunk's deposits in
     /// photon order.
-    fn uniform_photons(&self, grid: &Grid) -> (Vec<Vec<Deposit>>, f32, adaptive::Counts) {
+    fn uniform_photons(&self, grid: &Grid) -> (Vec<Vec<Deposit>>, f32, PhotonCounts) {
         let (scene, pixels, iter, seed, max_depth) =
             (self.scene, &self.pixels, self.iteration as u64, self.seed, self.max_depth);
         let total = self.photons_per_iteration;
         let chunks = total.div_ceil(PHOTON_CHUNK as u64);
-        let results: Vec<(Vec<Deposit>, adaptive::Counts)> = (0..chunks)
+        let results: Vec<(Vec<Deposit>, PhotonCounts)> = (0..chunks)
             .into_par_iter()
             .map(|c| {
-                let (mut out, mut n) = (Vec::new(), adaptive::Counts::default());
+                let (mut out, mut n) = (Vec::new(), PhotonCounts::default());
                 for k in c * PHOTON_CHUNK as u64..((c + 1) * PHOTON_CHUNK as u64).min(total) {
                     // Independent numbers for photons under either sampler: Sobol'
                     // points, padded per iteration or as one five-dimensional sequence
@@ -239,7 +227,7 @@ impl<'a> Sppm<'a> {
                 (out, n)
             })
             .collect();
-        let counts = results.iter().fold(adaptive::Counts::default(), |a, r| a.plus(r.1));
+        let counts = results.iter().fold(PhotonCounts::default(), |a, r| a.plus(r.1));
         (results.into_iter().map(|r| r.0).collect(), 1.0, counts)
     }
 

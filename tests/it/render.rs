@@ -174,9 +174,9 @@ fn adaptive_photons_match_uniform_ones_with_less_error_where_few_photons_are_see
         let out = render(PhotonSampling::Adaptive, 8, 100_000, seed);
         adaptive += relmse(&out.image.pixels, &reference);
         means += mean(&out.image.pixels) / 2.0;
-        let s = &out.stats;
-        assert!(s.photon_uniform_deposited * 1000 < s.photon_uniform, "the scene is not hard enough: {s:?}");
-        let rate = s.photon_accepted as f64 / s.photon_mutations as f64;
+        let s = &out.stats.photons;
+        assert!(s.uniform_deposited * 1000 < s.uniform, "the scene is not hard enough: {s:?}");
+        let rate = s.accepted as f64 / s.mutations as f64;
         assert!((0.15..0.35).contains(&rate), "acceptance {rate}");
     }
     let r = mean(&reference);
