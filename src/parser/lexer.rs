@@ -61,7 +61,8 @@ impl ParseError<&[u8]> for Failure {
 
 type LexResult<'a, O> = IResult<&'a [u8], O, Failure>;
 
-fn is_space(c: u8) -> bool {
+/// pbrt's whitespace: space, tab, CR and LF (not form feed or vertical tab).
+pub(crate) fn is_space(c: u8) -> bool {
     matches!(c, b' ' | b'\t' | b'\r' | b'\n')
 }
 

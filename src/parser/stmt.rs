@@ -17,7 +17,7 @@
 
 use super::Syntax;
 use super::error::Diagnostic;
-use super::lexer::{Lexer, TokenKind, decode_string};
+use super::lexer::{Lexer, TokenKind, decode_string, is_space};
 use super::params::{Param, ParamList, ParamType, Values};
 use super::source::{FileId, SourceMap, Span};
 use crate::limits::Limits;
@@ -688,11 +688,6 @@ pub fn resolve_relative(base: &Path, name: &str) -> PathBuf {
     if !joined.exists() && p.exists() { p.to_path_buf() } else { joined }
 }
 
-/// A correctly rounded `f32`, rounded once from the decimal text.
-///
-/// Plain decimals with at most 8 significant digits and 10 fraction digits take Clinger's
-/// exact path: the digits (≤ 2²⁴) and the power of ten (≤ 10¹⁰) are both exact in `f32`,
-/// so one division rounds correctly. Everything else goes to the standard parser.
 /// Number lists at least this long (in bytes) are parsed in parallel pieces.
 const PARALLEL_LIST_BYTES: usize = 1 << 20;
 const PIECE_BYTES: usize = 1 << 18;
@@ -743,10 +738,11 @@ fn words(text: &[u8]) -> impl Iterator<Item = &[u8]> {
     text.split(|&c| is_space(c)).filter(|w| !w.is_empty())
 }
 
-fn is_space(c: u8) -> bool {
-    matches!(c, b' ' | b'\t' | b'\r' | b'\n')
-}
-
+/// A correctly rounded `f32`, rounded once from the decimal text.
+///
+/// Plain decimals with at most 8 significant digits and 10 fraction digits take Clinger's
+/// exact path: the digits (≤ 2²⁴) and the power of ten (≤ 10¹⁰) are both exact in `f32`,
+/// so one division rounds correctly. Everything else goes to the standard parser.
 pub fn parse_f32(b: &[u8]) -> Option<f32> {
     fast_f32(b).or_else(|| std::str::from_utf8(b).ok()?.parse().ok())
 }
