@@ -7,9 +7,35 @@
 //! that raises it, never an out-of-memory abort. Files are read only when they are
 //! regular files (so `/dev/zero`, FIFOs and folders are refused) of at most
 //! `file-bytes`, and gzip streams are decompressed to at most `file-bytes` too.
+//!
+//! Every input file passes through [`read_file`], which also notes its name and a hash
+//! of its bytes ([`inputs_read`]): what a checkpoint's scene fingerprint is made of.
 
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// The files read so far in this process (see [`inputs_read`]).
+// A process-wide log rather than a parameter: every loader (Include, PLY, OBJ, images)
+// reaches the disk only through `read_file`, and only the command line reads the log.
+static INPUTS: Mutex<Vec<(PathBuf, u64)>> = Mutex::new(Vec::new());
+
+/// Every file read through [`read_file`] in this process, as (path made absolute,
+/// 64-bit XXH3 of its bytes as stored), sorted by path, each path once.
+pub fn inputs_read() -> Vec<(PathBuf, u64)> {
+    let mut v = INPUTS.lock().map(|l| l.clone()).unwrap_or_default();
+    v.sort();
+    v.dedup_by(|a, b| a.0 == b.0);
+    v
+}
+
+/// Notes a file read other than through [`read_file`] (a scene on standard input).
+pub fn note_input(path: &Path, bytes: &[u8]) {
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    if let Ok(mut log) = INPUTS.lock() {
+        log.push((abs, xxhash_rust::xxh3::xxh3_64(bytes)));
+    }
+}
 
 /// The limits in force for one run; `--limit NAME=N` changes one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -115,6 +141,7 @@ pub fn read_file(path: &Path, limits: &Limits) -> Result<Vec<u8>, String> {
     if raw.len() as u64 > limits.file_bytes {
         return Err(Limits::over(format!("\"{shown}\" grew while being read and"), "file-bytes", limits.file_bytes));
     }
+    note_input(path, &raw);
     if raw.starts_with(&[0x1f, 0x8b]) { gunzip(&raw, limits).map_err(|e| format!("\"{shown}\": {e}")) } else { Ok(raw) }
 }
 

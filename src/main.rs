@@ -3,14 +3,19 @@
 
 use clap::{Parser, Subcommand};
 use pbrt_sppm::integrators::adaptive::PhotonSampling;
+use pbrt_sppm::integrators::checkpoint::{Checkpoint, Every, Fingerprint};
+use pbrt_sppm::integrators::{CheckpointTarget, RenderSettings};
 use pbrt_sppm::limits::Limits;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::parser::error::LoadError;
+use pbrt_sppm::render::RenderScene;
 use pbrt_sppm::sampling::SamplerKind;
 use pbrt_sppm::scene::{LoadOptions, SceneDescription, load_scene, load_scene_from_bytes};
 use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 #[derive(Parser)]
 #[command(name = "pbrt-sppm", version, about = "Renders pbrt-v3/v4 scenes with stochastic progressive photon mapping")]
@@ -122,6 +127,21 @@ struct RenderArgs {
     /// Write the per-iteration errors (ERRORS.csv) here (needs --mse-reference-image).
     #[arg(long, requires = "mse_reference_image")]
     mse_reference_out: Option<PathBuf>,
+    /// Save the render's state to this file as it goes, at the end, and when
+    /// interrupted (Ctrl-C, SIGTERM), so that `--resume` can continue it.
+    #[arg(long, value_name = "FILE")]
+    checkpoint: Option<PathBuf>,
+    /// How often to save: a number of iterations (`10`) or a time (`90s`, `5m`, `2h`);
+    /// default 5m.
+    #[arg(long, value_name = "N|TIME", value_parser = parse_every)]
+    checkpoint_every: Option<Every>,
+    /// Continue the render saved in this checkpoint (made from the same scene files and
+    /// settings); it goes on saving there unless --checkpoint names another file.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
+    /// Write the image after iterations 1, 2, 4, 8, … as well as at the end.
+    #[arg(long)]
+    write_partial_images: bool,
     #[command(flatten)]
     common: Common,
 }
@@ -140,6 +160,10 @@ fn parse_photon_sampling(s: &str) -> Result<PhotonSampling, String> {
         "adaptive" => Ok(PhotonSampling::Adaptive),
         _ => Err(format!("expected uniform or adaptive, not \"{s}\"")),
     }
+}
+
+fn parse_every(s: &str) -> Result<Every, String> {
+    s.parse()
 }
 
 fn parse_sampler(s: &str) -> Result<SamplerKind, String> {
@@ -197,6 +221,7 @@ fn load(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> {
         if bytes.len() as u64 > max {
             return Err(fail(Path::new("<stdin>"), Limits::over("the scene", "file-bytes", max)));
         }
+        pbrt_sppm::limits::note_input(Path::new("<stdin>"), &bytes);
         // Relative names in a scene from standard input resolve against the current folder.
         load_scene_from_bytes(Path::new("<stdin>"), bytes, &opts)
     } else {
@@ -282,23 +307,11 @@ fn check_output(path: &Path, image: bool) -> Result<(), String> {
 /// Renders a loaded scene and writes the image (and ERRORS.csv).
 fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     use pbrt_sppm::imageio::{read_image, write_image};
-    use pbrt_sppm::integrators::{RenderSettings, errors_csv};
-    use pbrt_sppm::render::RenderScene;
+    use pbrt_sppm::integrators::errors_csv;
     let quiet = args.common.quiet;
     let (outfile, blame) = output_path(&scene, args);
-    if let Err(e) = check_output(&outfile, true) {
-        say!("{blame}: error: {e}");
-        return ExitCode::FAILURE;
-    }
-    if let Some(csv) = &args.mse_reference_out
-        && let Err(e) = check_output(csv, false)
-    {
-        say!("--mse-reference-out: error: {e}");
-        return ExitCode::FAILURE;
-    }
-    if let Err(e) = check_overrides(&scene, args) {
-        say!("{e}");
-        return ExitCode::FAILURE;
+    if let Err(code) = check_outputs(&scene, args, &outfile, &blame) {
+        return code;
     }
     if scene.lights.is_empty() && scene.area_lights.is_empty() && !quiet {
         say!("{}: warning: the scene has no lights; the image will be black", args.scene.display());
@@ -310,7 +323,7 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         },
         None => None,
     };
-    let settings = RenderSettings {
+    let mut settings = RenderSettings {
         iterations: args.spp,
         photons: args.photons,
         radius: args.radius,
@@ -321,13 +334,22 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         time_limit: args.time_limit.map(f64::from),
         reference,
         progress: std::io::stderr().is_terminal() && !quiet,
+        quiet,
+        partial_images: args.write_partial_images.then(|| outfile.clone()),
+        interrupt: Some(stop_on_signals(quiet)),
+        checkpoint: None,
     };
     let pool = match rayon::ThreadPoolBuilder::new().num_threads(args.nthreads.unwrap_or(0)).build() {
         Ok(p) => p,
         Err(e) => return fail(Path::new("--nthreads"), e),
     };
+    let syntax = format!("{:?}", scene.syntax).to_lowercase();
     let rs = RenderScene::new(scene);
-    let out = match pool.install(|| rs.render(&settings)) {
+    let resume = match checkpointing(&rs, args, &syntax, &mut settings) {
+        Ok(r) => r,
+        Err(code) => return code,
+    };
+    let out = match pool.install(|| rs.render_from(&settings, resume)) {
         Ok(o) => o,
         Err(e) => return fail(&args.scene, e),
     };
@@ -340,8 +362,85 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     {
         return fail(csv, e);
     }
-    if quiet {
-        return ExitCode::SUCCESS;
+    report(&out, args, &outfile)
+}
+
+/// Checks every output path before any work: the image, ERRORS.csv, the checkpoint.
+fn check_outputs(scene: &SceneDescription, args: &RenderArgs, outfile: &Path, blame: &str) -> Result<(), ExitCode> {
+    if let Err(e) = check_output(outfile, true) {
+        say!("{blame}: error: {e}");
+        return Err(ExitCode::FAILURE);
+    }
+    let others = [("--mse-reference-out", &args.mse_reference_out), ("--checkpoint", &args.checkpoint)];
+    for (flag, path) in others {
+        if let Some(p) = path
+            && let Err(e) = check_output(p, false)
+        {
+            say!("{flag}: error: {e}");
+            return Err(ExitCode::FAILURE);
+        }
+    }
+    if args.checkpoint_every.is_some() && args.checkpoint.is_none() && args.resume.is_none() {
+        say!("--checkpoint-every: error: it needs --checkpoint FILE (or --resume FILE)");
+        return Err(ExitCode::FAILURE);
+    }
+    check_overrides(scene, args).map_err(|e| {
+        say!("{e}");
+        ExitCode::FAILURE
+    })
+}
+
+/// Ctrl-C, SIGTERM and SIGHUP raise the returned flag: the render stops after the
+/// iteration under way, saves its checkpoint and writes its image. A second signal
+/// ends the process at once.
+fn stop_on_signals(quiet: bool) -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let raised = flag.clone();
+    let installed = ctrlc::set_handler(move || {
+        if raised.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        if !quiet {
+            eprintln!("\ninterrupted: finishing this iteration, then saving (interrupt again to quit at once)");
+        }
+    });
+    if let Err(e) = installed
+        && !quiet
+    {
+        say!("warning: cannot catch interrupts ({e}); an interrupted render will be lost");
+    }
+    flag
+}
+
+/// Sets up `--checkpoint` and reads `--resume`'s checkpoint, refusing one made from
+/// other scene files or settings.
+fn checkpointing(
+    rs: &RenderScene,
+    args: &RenderArgs,
+    syntax: &str,
+    settings: &mut RenderSettings,
+) -> Result<Option<Checkpoint>, ExitCode> {
+    let Some(path) = args.checkpoint.as_ref().or(args.resume.as_ref()) else { return Ok(None) };
+    let plan = rs.plan(settings).map_err(|e| fail(&args.scene, e))?;
+    let mut fingerprint = Fingerprint {
+        scene: std::path::absolute(&args.scene).unwrap_or_else(|_| args.scene.clone()).display().to_string(),
+        inputs: pbrt_sppm::limits::inputs_read().into_iter().map(|(p, h)| (p.display().to_string(), h)).collect(),
+        settings: plan.fingerprint_settings(),
+    };
+    fingerprint.settings.push(("syntax".into(), syntax.into()));
+    let every = args.checkpoint_every.unwrap_or_default();
+    settings.checkpoint = Some(CheckpointTarget { path: path.clone(), every, fingerprint: fingerprint.clone() });
+    let Some(resume) = &args.resume else { return Ok(None) };
+    let c = Checkpoint::read(resume).map_err(|e| fail(resume, e))?;
+    c.fingerprint.check(&fingerprint).map_err(|e| fail(resume, format!("cannot resume: {e}")))?;
+    Ok(Some(c))
+}
+
+/// The summary after a render; exit code 130 when it was interrupted.
+fn report(out: &pbrt_sppm::integrators::RenderOutput, args: &RenderArgs, outfile: &Path) -> ExitCode {
+    let code = if out.interrupted { ExitCode::from(130) } else { ExitCode::SUCCESS };
+    if args.common.quiet {
+        return code;
     }
     if out.stats.visible_points == 0 {
         say!(
@@ -350,16 +449,22 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         );
     }
     if args.stats {
-        print_stats(&out);
+        print_stats(out);
     }
+    let what = if out.interrupted { "interrupted after" } else { "rendered" };
     say!(
-        "rendered {} iterations ({} photons each) in {:.2} s -> {}",
+        "{what} {} iterations ({} photons each) in {:.2} s -> {}",
         out.stats.iterations,
         out.image.meta.photons_per_iteration.unwrap_or(0),
         out.seconds,
         outfile.display()
     );
-    ExitCode::SUCCESS
+    if out.interrupted
+        && let Some(c) = args.checkpoint.as_ref().or(args.resume.as_ref())
+    {
+        say!("continue with --resume {}", c.display());
+    }
+    code
 }
 
 /// Command-line values the scene's limits also bound.

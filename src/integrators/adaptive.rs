@@ -72,15 +72,19 @@ impl Sampler for PrimarySample<'_> {
     }
 }
 
-/// One Markov chain over visible photon paths.
-#[derive(Clone, Debug)]
+/// One Markov chain over visible photon paths. A checkpoint saves what carries over
+/// from one iteration to the next; the deposits and visibility are re-traced at the
+/// start of every iteration, so they are not saved.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Chain {
     rng: Rng,
     /// The current path's numbers; empty until a visible path is found.
     state: Vec<f32>,
     /// The current path's deposits against this iteration's visible points, and
     /// whether it is visible now.
+    #[serde(skip)]
     deposits: Vec<Deposit>,
+    #[serde(skip)]
     visible: bool,
     delta: f32,
     mutations: u64,
@@ -88,7 +92,7 @@ pub struct Chain {
 
 /// What a photon pass did (uniform photons, or the chains), summed over a render in
 /// [`super::sppm::Stats`].
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct PhotonCounts {
     /// Uniform photons traced, those that were visible (V = 1) and those that
     /// deposited.

@@ -1,7 +1,7 @@
 //! Reporting while rendering: `ERRORS.csv` rows (a fixed contract) and the progress bar.
 
 /// One `ERRORS.csv` row.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ErrorRow {
     pub iteration: u32,
     pub seconds: f64,

@@ -1,8 +1,18 @@
 //! The render loop: iterations of SPPM until the count or the time limit, with the
-//! error against a reference after each (`ERRORS.csv`) and a progress bar.
+//! error against a reference after each (`ERRORS.csv`), a progress bar, partial images,
+//! checkpoints, and a clean stop when interrupted.
 
+use super::adaptive::PhotonSampling;
+use super::checkpoint::{Checkpoint, Every, Fingerprint};
 use super::report::{ErrorRow, progress_bar};
+use super::sppm::Sppm;
+use crate::imageio::{ImageMeta, RgbImage, metrics};
 use crate::render::RenderScene;
+use crate::sampling::SamplerKind;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
 
 /// Command-line overrides and reporting for a render.
 #[derive(Clone, Debug, Default)]
@@ -12,88 +22,213 @@ pub struct RenderSettings {
     pub photons: Option<u64>,
     pub radius: Option<f32>,
     pub seed: Option<u64>,
-    pub sampler: crate::sampling::SamplerKind,
+    pub sampler: SamplerKind,
     /// How photon paths are drawn (`--photon-sampling`).
-    pub photon_sampling: super::adaptive::PhotonSampling,
+    pub photon_sampling: PhotonSampling,
     /// Divide the iteration count by 16 (pbrt-v3's `--quick`).
     pub quick: bool,
-    /// Stop after the iteration that passes this many seconds.
+    /// Stop once this many seconds have passed (the iteration under way is finished).
     pub time_limit: Option<f64>,
     /// Compare against this image after every iteration (`--mse-reference-image`).
-    pub reference: Option<crate::imageio::RgbImage>,
+    pub reference: Option<RgbImage>,
     /// Print a progress bar with ETA on stderr.
     pub progress: bool,
+    /// Print no warnings (a checkpoint or partial image that could not be written).
+    pub quiet: bool,
+    /// Save the state as it goes (`--checkpoint`).
+    pub checkpoint: Option<CheckpointTarget>,
+    /// Write the image here after iterations 1, 2, 4, 8, … (`--write-partial-images`).
+    pub partial_images: Option<PathBuf>,
+    /// Raised (by a signal handler) to stop after the iteration under way.
+    pub interrupt: Option<Arc<AtomicBool>>,
+}
+
+/// Where and how often a render saves its state, and what it was made from.
+#[derive(Clone, Debug)]
+pub struct CheckpointTarget {
+    pub path: PathBuf,
+    pub every: Every,
+    pub fingerprint: Fingerprint,
+}
+
+/// The settings a render runs with, the scene's defaults and the overrides combined.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    pub iterations: u32,
+    pub photons: u64,
+    pub radius: f32,
+    pub seed: u64,
+    pub sampler: SamplerKind,
+    pub photon_sampling: PhotonSampling,
+}
+
+impl Plan {
+    /// Every setting that changes the image, by name, for a checkpoint's fingerprint.
+    /// The iteration count is one: it sets the camera rays' differential scale.
+    pub fn fingerprint_settings(&self) -> Vec<(String, String)> {
+        [
+            ("pbrt-sppm", env!("CARGO_PKG_VERSION").to_string()),
+            ("iterations", self.iterations.to_string()),
+            ("photons", self.photons.to_string()),
+            ("radius", format!("{:?}", self.radius)),
+            ("seed", self.seed.to_string()),
+            ("sampler", format!("{:?}", self.sampler).to_lowercase()),
+            ("photon-sampling", format!("{:?}", self.photon_sampling).to_lowercase()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+    }
 }
 
 pub struct RenderOutput {
-    pub image: crate::imageio::RgbImage,
+    pub image: RgbImage,
     pub stats: super::sppm::Stats,
     pub errors: Vec<ErrorRow>,
     pub seconds: f64,
+    /// Stopped early by [`RenderSettings::interrupt`].
+    pub interrupted: bool,
+}
+
+/// The loop's bookkeeping beside the SPPM state.
+struct Progress {
+    start: Instant,
+    /// Seconds spent by the runs a checkpoint continues.
+    prior: f64,
+    errors: Vec<ErrorRow>,
+    saved: (u32, Instant),
+    /// The last checkpoint write failed (warned about once until one succeeds).
+    save_failed: bool,
+}
+
+impl Progress {
+    fn seconds(&self) -> f64 {
+        self.prior + self.start.elapsed().as_secs_f64()
+    }
 }
 
 impl RenderScene {
-    /// Renders with SPPM (scene loading excluded from the timings).
-    pub fn render(&self, settings: &RenderSettings) -> Result<RenderOutput, String> {
-        use crate::imageio::{ImageMeta, RgbImage, metrics};
-        let start = std::time::Instant::now();
+    /// The settings the render will run with.
+    pub fn plan(&self, settings: &RenderSettings) -> Result<Plan, String> {
         let i = &self.integrator;
         let mut iterations = settings.iterations.unwrap_or(i.iterations);
         if settings.quick {
             iterations = (iterations / 16).max(1);
         }
-        let photons = settings.photons.unwrap_or(i.photons_per_iteration).max(1);
         let radius = settings.radius.unwrap_or(i.radius);
         if !(radius > 0.0 && radius.is_finite()) {
             return Err(format!("the radius must be positive, not {radius}"));
         }
-        let mut sppm = super::sppm::Sppm::new(
-            self,
+        Ok(Plan {
             iterations,
-            photons,
+            photons: settings.photons.unwrap_or(i.photons_per_iteration).max(1),
             radius,
-            settings.seed.unwrap_or(i.seed),
-            (settings.sampler, settings.photon_sampling),
-        )?;
-        let [x0, x1, y0, y1] = self.film.pixel_bounds;
-        let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
-        if let Some(r) = &settings.reference
-            && (r.width, r.height) != (w, h)
-            && (r.width, r.height) != (self.film.x_resolution as usize, self.film.y_resolution as usize)
-        {
-            return Err(format!("the reference image is {}x{}, the render {w}x{h}", r.width, r.height));
+            seed: settings.seed.unwrap_or(i.seed),
+            sampler: settings.sampler,
+            photon_sampling: settings.photon_sampling,
+        })
+    }
+
+    /// Renders with SPPM (scene loading excluded from the timings).
+    pub fn render(&self, settings: &RenderSettings) -> Result<RenderOutput, String> {
+        self.render_from(settings, None)
+    }
+
+    /// Renders, continuing a checkpoint's state when given one (whose fingerprint the
+    /// caller has checked).
+    pub fn render_from(&self, settings: &RenderSettings, resume: Option<Checkpoint>) -> Result<RenderOutput, String> {
+        let plan = self.plan(settings)?;
+        self.check_reference(settings)?;
+        let p = &plan;
+        let mut sppm = Sppm::new(self, p.iterations, p.photons, p.radius, p.seed, (p.sampler, p.photon_sampling))?;
+        let now = Instant::now();
+        let mut progress = Progress { start: now, prior: 0.0, errors: Vec::new(), saved: (0, now), save_failed: false };
+        if let Some(c) = resume {
+            sppm.restore(c.iteration, &c.pixels, c.chains, c.stats)?;
+            (progress.prior, progress.errors, progress.saved.0) = (c.seconds, c.errors, c.iteration);
         }
-        let mut errors = Vec::new();
-        for it in 0..iterations {
+        let interrupted = loop {
+            if settings.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
+                break true;
+            }
+            let over_time = settings.time_limit.is_some_and(|t| progress.seconds() >= t);
+            if sppm.iteration >= plan.iterations || (sppm.iteration > 0 && over_time) {
+                break false;
+            }
             sppm.iterate();
-            let seconds = start.elapsed().as_secs_f64();
-            if let Some(r) = &settings.reference {
-                let img = sppm.image();
-                let refpx = crop_reference(r, self.film.pixel_bounds);
-                let mse = metrics::mse(&img, &refpx);
-                errors.push(ErrorRow {
-                    iteration: it + 1,
-                    seconds,
-                    photons: sppm.stats.photons.traced,
-                    mse,
-                    rmse: mse.sqrt(),
-                    relmse: metrics::relmse(&img, &refpx),
-                });
-            }
-            if settings.progress {
-                progress_bar(it + 1, iterations, seconds);
-            }
-            if settings.time_limit.is_some_and(|t| seconds >= t) {
-                break;
-            }
-        }
+            self.after_iteration(&sppm, settings, &plan, &mut progress);
+        };
         if settings.progress {
             eprintln!();
         }
-        let seconds = start.elapsed().as_secs_f64();
-        let image = RgbImage {
-            width: w,
-            height: h,
+        if let Some(t) = &settings.checkpoint
+            && progress.saved.0 != sppm.iteration
+        {
+            save(&sppm, t, &mut progress, settings.quiet);
+        }
+        let seconds = progress.seconds();
+        let image = self.image(&sppm, plan.photons, seconds);
+        Ok(RenderOutput { image, stats: sppm.stats.clone(), errors: progress.errors, seconds, interrupted })
+    }
+
+    /// The error row, progress bar, partial image and checkpoint due after an iteration.
+    fn after_iteration(&self, sppm: &Sppm, settings: &RenderSettings, plan: &Plan, progress: &mut Progress) {
+        let seconds = progress.seconds();
+        if let Some(r) = &settings.reference {
+            let img = sppm.image();
+            let refpx = crop_reference(r, self.film.pixel_bounds);
+            let mse = metrics::mse(&img, &refpx);
+            progress.errors.push(ErrorRow {
+                iteration: sppm.iteration,
+                seconds,
+                photons: sppm.stats.photons.traced,
+                mse,
+                rmse: mse.sqrt(),
+                relmse: metrics::relmse(&img, &refpx),
+            });
+        }
+        if settings.progress {
+            progress_bar(sppm.iteration, plan.iterations, seconds);
+        }
+        if let Some(path) = &settings.partial_images
+            && sppm.iteration.is_power_of_two()
+            && let Err(e) = crate::imageio::write_image(path, &self.image(sppm, plan.photons, seconds))
+            && !settings.quiet
+        {
+            eprintln!("\n{}: warning: cannot write the partial image ({e}); rendering goes on", path.display());
+        }
+        if let Some(t) = &settings.checkpoint {
+            let due = match t.every {
+                Every::Iterations(n) => sppm.iteration.is_multiple_of(n),
+                Every::Seconds(s) => progress.saved.1.elapsed().as_secs_f64() >= s,
+            };
+            if due {
+                save(sppm, t, progress, settings.quiet);
+            }
+        }
+    }
+
+    /// Fails when a reference image's size fits neither the film nor its crop.
+    fn check_reference(&self, settings: &RenderSettings) -> Result<(), String> {
+        let [x0, x1, y0, y1] = self.film.pixel_bounds;
+        let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
+        match &settings.reference {
+            Some(r)
+                if (r.width, r.height) != (w, h)
+                    && (r.width, r.height) != (self.film.x_resolution as usize, self.film.y_resolution as usize) =>
+            {
+                Err(format!("the reference image is {}x{}, the render {w}x{h}", r.width, r.height))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// The current estimate as an image with the render's metadata.
+    fn image(&self, sppm: &Sppm, photons: u64, seconds: f64) -> RgbImage {
+        let [x0, x1, y0, y1] = self.film.pixel_bounds;
+        RgbImage {
+            width: (x1 - x0) as usize,
+            height: (y1 - y0) as usize,
             pixels: sppm.image(),
             origin: (x0 as i32, y0 as i32),
             full: (self.film.x_resolution as usize, self.film.y_resolution as usize),
@@ -104,14 +239,38 @@ impl RenderScene {
                 world_to_camera: Some(self.world_to_camera),
                 software: Some(format!("pbrt-sppm {}", env!("CARGO_PKG_VERSION"))),
             },
-        };
-        Ok(RenderOutput { image, stats: sppm.stats.clone(), errors, seconds })
+        }
+    }
+}
+
+/// Saves a checkpoint; a failure is a warning (the render goes on, and the previous
+/// checkpoint stays as it was).
+fn save(sppm: &Sppm, target: &CheckpointTarget, progress: &mut Progress, quiet: bool) {
+    let (pixels, chains) = sppm.save();
+    let c = Checkpoint {
+        fingerprint: target.fingerprint.clone(),
+        iteration: sppm.iteration,
+        seconds: progress.seconds(),
+        stats: sppm.stats.clone(),
+        errors: progress.errors.clone(),
+        pixels,
+        chains,
+    };
+    match c.write(&target.path) {
+        Ok(()) => (progress.saved, progress.save_failed) = ((sppm.iteration, Instant::now()), false),
+        Err(e) => {
+            if !quiet && !progress.save_failed {
+                let at = target.path.display();
+                eprintln!("\n{at}: warning: {e}; rendering goes on, the last good checkpoint is kept");
+            }
+            progress.save_failed = true;
+        }
     }
 }
 
 /// The reference's pixels under the render's data window (the reference may be the
 /// full image or already cropped).
-fn crop_reference(r: &crate::imageio::RgbImage, bounds: [u32; 4]) -> Vec<[f32; 3]> {
+fn crop_reference(r: &RgbImage, bounds: [u32; 4]) -> Vec<[f32; 3]> {
     let [x0, x1, y0, y1] = bounds.map(|v| v as usize);
     if r.width == x1 - x0 && r.height == y1 - y0 {
         return r.pixels.clone();

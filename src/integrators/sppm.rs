@@ -55,8 +55,17 @@ pub struct Pixel {
     pub vp: Option<VisiblePoint>,
 }
 
+/// One pixel's progressive state as a checkpoint saves it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelState {
+    pub radius: f64,
+    pub n: f64,
+    pub ld: [f64; 3],
+    pub tau: [f64; 3],
+}
+
 /// Timings and counts, for `--stats`.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Stats {
     pub camera_seconds: f64,
     pub grid_seconds: f64,
@@ -130,6 +139,36 @@ impl<'a> Sppm<'a> {
             differential_scale: differential_scale(iterations, scene.integrator.differential_floor),
             stats: Stats::default(),
         })
+    }
+
+    /// The state a checkpoint saves (see [`super::checkpoint`]).
+    pub fn save(&self) -> (Vec<PixelState>, Option<Vec<Chain>>) {
+        let px = |p: &Pixel| PixelState { radius: p.radius, n: p.n, ld: p.ld.to_array(), tau: p.tau.to_array() };
+        (self.pixels.iter().map(px).collect(), self.chains.clone())
+    }
+
+    /// Continues from a checkpoint's state after `iteration` iterations.
+    pub fn restore(
+        &mut self,
+        iteration: u32,
+        pixels: &[PixelState],
+        chains: Option<Vec<Chain>>,
+        stats: Stats,
+    ) -> Result<(), String> {
+        if pixels.len() != self.pixels.len() {
+            return Err(format!("the checkpoint holds {} pixels, the film {}", pixels.len(), self.pixels.len()));
+        }
+        if chains.is_some() != self.chains.is_some() {
+            return Err("the checkpoint's photon sampling differs from this run's".into());
+        }
+        for (p, s) in self.pixels.iter_mut().zip(pixels) {
+            (p.radius, p.n, p.ld, p.tau) = (s.radius, s.n, DVec3::from(s.ld), DVec3::from(s.tau));
+        }
+        if chains.is_some() {
+            self.chains = chains;
+        }
+        (self.iteration, self.stats) = (iteration, stats);
+        Ok(())
     }
 
     /// One full iteration: camera pass, grid, photons, update.

@@ -21,7 +21,7 @@ pub enum SamplerKind {
 }
 
 /// A small, fast generator (PCG-XSH-RR 64/32).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Rng {
     state: u64,
 }

@@ -3,6 +3,7 @@
 mod alpha;
 mod bad_inputs;
 mod camera_image;
+mod checkpoint;
 mod common;
 mod converge;
 mod directives;
