@@ -46,6 +46,11 @@ pub struct RenderScene {
     pub emitters: Vec<Option<EmitterInfo>>,
     pub lights: Vec<Light>,
     pub light_power: Distribution1D,
+    /// Photons carry their power divided by this (a power of two near the lights'
+    /// total power), so that lights far outside f32's range near 1 (an emitter of
+    /// 1e38) neither overflow nor lose precision; the deposits are multiplied back in
+    /// f64.
+    pub photon_scale: f64,
     pub world: WorldSphere,
     /// Row-major world-to-camera, for image metadata.
     pub world_to_camera: [f32; 16],
@@ -80,7 +85,9 @@ impl RenderScene {
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
         let geometry = Geometry::new(&mut scene);
         let emitters = area_lights(&geometry, &shape_area_lights, &area_params, &mut lights);
-        let light_power = Distribution1D::new(&lights.iter().map(|l| l.power(world) as f64).collect::<Vec<_>>());
+        let powers: Vec<f64> = lights.iter().map(|l| l.power(world)).collect();
+        let photon_scale = photon_scale(powers.iter().sum());
+        let light_power = Distribution1D::new(&powers);
         RenderScene {
             geometry,
             camera,
@@ -97,6 +104,7 @@ impl RenderScene {
             emitters,
             lights,
             light_power,
+            photon_scale,
             world,
             world_to_camera: m,
         }
@@ -376,4 +384,9 @@ pub fn area_emission(a: &AreaLightDesc, area: f64) -> Rgb {
         }
         _ => a.l,
     }
+}
+
+/// The power of two nearest `total` (1 for no light).
+fn photon_scale(total: f64) -> f64 {
+    if total > 0.0 && total.is_finite() { total.log2().round().clamp(-1000.0, 1000.0).exp2() } else { 1.0 }
 }

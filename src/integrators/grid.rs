@@ -66,6 +66,11 @@ pub struct Grid {
 }
 
 impl Grid {
+    /// (cell, pixel) pairs stored: at most 8 per site, whatever the radii.
+    pub fn entries(&self) -> usize {
+        self.entries.len()
+    }
+
     /// `sites[i]` is pixel i's visible point, if photons should reach it. `None` when
     /// there is none.
     pub fn build(sites: &[Option<Site>]) -> Option<Grid> {
@@ -210,6 +215,28 @@ mod tests {
                 (rng.uniform() > 0.1).then(|| Site { p, radius: 0.01 + 0.3 * rng.uniform().powi(4) })
             })
             .collect()
+    }
+
+    /// Sites spread over 1e-3…1e4 with radii far too large or far too small: at most 8
+    /// entries a site and no more than 2^20 cells an axis, so memory stays linear in the
+    /// pixels whatever the radius; and gathering still finds the sites it should.
+    #[test]
+    fn the_grid_stays_linear_in_the_sites_for_any_radius() {
+        let mut rng = Rng::new(4);
+        let pts: Vec<Vec3> = (0..5000)
+            .map(|_| Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()).map(|c| 10f32.powf(7.0 * c - 3.0)))
+            .collect();
+        for radius in [1e4, 1.0, 1e-9, f32::MIN_POSITIVE] {
+            let sites: Vec<Option<Site>> = pts.iter().map(|&p| Some(Site { p, radius })).collect();
+            let Some(grid) = Grid::build(&sites) else { panic!("no grid") };
+            assert!(grid.entries() <= 8 * sites.len(), "radius {radius}: {} entries", grid.entries());
+            assert!(grid.res.iter().all(|&r| r <= 1 << 20), "radius {radius}: {:?}", grid.res);
+            for (i, &p) in pts.iter().enumerate().step_by(97) {
+                let mut found = false;
+                grid.gather(p, |j| found |= j == i as u32);
+                assert!(found, "radius {radius}: site {i} at {p:?} not found at its own position");
+            }
+        }
     }
 
     #[test]

@@ -14,6 +14,9 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+/// The smallest initial radius: its square is a normal f32.
+pub const MIN_RADIUS: f32 = 1e-18;
+
 /// Command-line overrides and reporting for a render.
 #[derive(Clone, Debug, Default)]
 pub struct RenderSettings {
@@ -116,8 +119,10 @@ impl RenderScene {
             iterations = (iterations / 16).max(1);
         }
         let radius = settings.radius.unwrap_or(i.radius);
-        if !(radius > 0.0 && radius.is_finite()) {
-            return Err(format!("the radius must be positive, not {radius}"));
+        // The gather compares squared distances in f32: below 1e-18 the square leaves
+        // f32's normal range and no photon is ever found.
+        if !(radius >= MIN_RADIUS && radius.is_finite()) {
+            return Err(format!("the radius must be at least {MIN_RADIUS:e} and finite, not {radius}"));
         }
         Ok(Plan {
             iterations,
@@ -168,6 +173,7 @@ impl RenderScene {
         }
         let seconds = progress.seconds();
         let image = self.image(&sppm, plan.photons, seconds);
+        check_finite(&image)?;
         Ok(RenderOutput { image, stats: sppm.stats.clone(), errors: progress.errors, seconds, interrupted })
     }
 
@@ -192,7 +198,8 @@ impl RenderScene {
         }
         if let Some(path) = &settings.partial_images
             && sppm.iteration.is_power_of_two()
-            && let Err(e) = crate::imageio::write_image(path, &self.image(sppm, plan.photons, seconds))
+            && let image = self.image(sppm, plan.photons, seconds)
+            && let Err(e) = check_finite(&image).and_then(|()| crate::imageio::write_image(path, &image))
             && !settings.quiet
         {
             eprintln!("\n{}: warning: cannot write the partial image ({e}); rendering goes on", path.display());
@@ -265,6 +272,21 @@ fn save(sppm: &Sppm, target: &CheckpointTarget, progress: &mut Progress, quiet: 
             }
             progress.save_failed = true;
         }
+    }
+}
+
+/// Refuses to write an image with a value f32 cannot hold (no Inf or NaN is ever
+/// written): the scene's radiance times the Film's `scale` passed 3.4e38.
+// DEVIATION(pbrt): pbrt writes such pixels as Inf.
+fn check_finite(image: &RgbImage) -> Result<(), String> {
+    match image.pixels.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        Some(i) => Err(format!(
+            "pixel ({}, {}) is {:?}, beyond the range of 32-bit floats: lower the lights or the Film's \"scale\"",
+            image.origin.0 + (i % image.width) as i32,
+            image.origin.1 + (i / image.width) as i32,
+            image.pixels[i]
+        )),
+        None => Ok(()),
     }
 }
 

@@ -236,7 +236,7 @@ impl<'a> Sppm<'a> {
             None => self.uniform_photons(grid),
         };
         self.stats.photons = self.stats.photons.plus(counts);
-        sum_deposits(deposits, weight, phi, m)
+        sum_deposits(deposits, weight as f64 * self.scene.photon_scale, phi, m)
     }
 
     /// Independent photons, in chunks of a fixed size; each chunk's deposits in
@@ -315,11 +315,11 @@ impl<'a> Sppm<'a> {
 /// pixel sums its contributions in a fixed order (list by list, deposit by deposit),
 /// whatever the thread count; the lists are grouped by pixel range first, so that
 /// pixel ranges are summed in parallel and each deposit is read once.
-fn sum_deposits(lists: Vec<Vec<Deposit>>, weight: f32, mut phi: Vec<DVec3>, mut m: Vec<u64>) -> (Vec<DVec3>, Vec<u64>) {
+fn sum_deposits(lists: Vec<Vec<Deposit>>, weight: f64, mut phi: Vec<DVec3>, mut m: Vec<u64>) -> (Vec<DVec3>, Vec<u64>) {
     let span = phi.len().div_ceil(DEPOSIT_RANGES).max(1);
     let grouped: Vec<Grouped<Deposit>> =
         lists.into_par_iter().map(|l| Grouped::new(l, DEPOSIT_RANGES, |d| d.0 as usize / span)).collect();
-    let w = weight as f64;
+    let w = weight;
     phi.par_chunks_mut(span).zip(m.par_chunks_mut(span)).enumerate().for_each(|(r, (phi, m))| {
         let lo = r * span;
         for &(pixel, f) in grouped.iter().flat_map(|g| g.group(r)) {
@@ -524,7 +524,11 @@ fn trace_photon(
         return PhotonPath::default();
     }
     let d = e.ray.d.0.normalize();
-    let mut beta = e.le * e.n.dot(d).abs() / (light_pdf * e.pdf_pos * e.pdf_dir);
+    // DEVIATION(pbrt): the photon's power is formed in f64 and carried divided by a
+    // power of two near the lights' total power. pbrt's f32 β overflows for emitters
+    // past about 1e37 and silently drops those photons.
+    let pdf = light_pdf as f64 * e.pdf_pos as f64 * e.pdf_dir as f64;
+    let mut beta = (e.le.as_dvec3() * (e.n.dot(d).abs() as f64 / pdf / scene.photon_scale)).as_vec3();
     let mut ray = crate::math::Ray::new(e.ray.o, Vector3(d));
     let (mut depth, mut passes, mut hits, mut near) = (0, 0, 0, false);
     while depth < max_depth {

@@ -140,15 +140,21 @@ impl Light {
     }
 
     /// Total emitted power, for choosing photon sources (luminance).
-    pub fn power(&self, world: WorldSphere) -> f32 {
-        let r2 = world.radius * world.radius;
-        luminance(match self {
-            Light::Point { i, .. } => 4.0 * PI * *i,
-            Light::Spot { i, cos_total, cos_start, .. } => *i * 2.0 * PI * (1.0 - 0.5 * (cos_start + cos_total)),
-            Light::Distant { l, .. } | Light::Infinite { l, map: None } => *l * PI * r2,
-            Light::Infinite { map: Some(env), .. } => Vec3::splat(env.average_luminance * PI * r2),
-            Light::Area { l, two_sided, area, .. } => *l * *area * PI * if *two_sided { 2.0 } else { 1.0 },
-        })
+    pub fn power(&self, world: WorldSphere) -> f64 {
+        // In f64: a light bright enough for 4π·I to pass f32's range still has a power.
+        let r2 = (world.radius as f64).powi(2);
+        let lum = |c: Vec3| luminance(c) as f64;
+        match self {
+            Light::Point { i, .. } => 4.0 * std::f64::consts::PI * lum(*i),
+            Light::Spot { i, cos_total, cos_start, .. } => {
+                lum(*i) * 2.0 * std::f64::consts::PI * (1.0 - 0.5 * (cos_start + cos_total)) as f64
+            }
+            Light::Distant { l, .. } | Light::Infinite { l, map: None } => lum(*l) * std::f64::consts::PI * r2,
+            Light::Infinite { map: Some(env), .. } => env.average_luminance as f64 * std::f64::consts::PI * r2,
+            Light::Area { l, two_sided, area, .. } => {
+                lum(*l) * *area as f64 * std::f64::consts::PI * if *two_sided { 2.0 } else { 1.0 }
+            }
+        }
     }
 
     /// Incident light at `p` from this light.

@@ -172,8 +172,13 @@ fn an_unwritable_checkpoint_is_a_warning_and_the_last_good_one_is_kept() {
         assert!(start.elapsed() < Duration::from_secs(60), "no checkpoint was written");
         std::thread::sleep(Duration::from_millis(1));
     }
-    // The writer's temporary name taken by a folder: every later write fails.
-    std::fs::create_dir(d.join(format!(".c.ckpt.{}.tmp.ckpt", child.id()))).unwrap();
+    // The writer's temporary name taken by a folder: every later write fails. (Retried
+    // while a write in progress holds the name.)
+    let tmp = d.join(format!(".c.ckpt.{}.tmp.ckpt", child.id()));
+    while let Err(e) = std::fs::create_dir(&tmp) {
+        assert_eq!(e.kind(), std::io::ErrorKind::AlreadyExists, "{e}");
+        assert!(start.elapsed() < Duration::from_secs(60), "the temporary file never went away");
+    }
     let saved = Checkpoint::read(&d.join("c.ckpt")).unwrap().iteration;
     let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);

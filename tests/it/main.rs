@@ -18,5 +18,6 @@ mod real_scenes;
 mod render;
 mod sampling;
 mod shapes;
+mod stability;
 mod tokenizer;
 mod truncation;
