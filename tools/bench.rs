@@ -5,7 +5,10 @@
 //! cargo run --release --bin pbrt-bench -- rays [--runs 5] [--dir target/bench-data] [--dump] [--sse]
 //! cargo run --release --bin pbrt-bench -- sppm [--runs 3] [SCENE.pbrt ...]
 //! cargo run --release --bin pbrt-bench -- converge [SCENE.pbrt[@half] ...] [--runs 3] ...
+//! cargo run --release --bin pbrt-bench -- stress [--shapes 500] [--rays 500]
 //! ```
+//! `stress` counts self-intersections of spawned rays per shape family over scales,
+//! distances and transforms (see `stress.rs`).
 //! `converge` measures error against wall time beside pbrt-v3 and pbrt-v4 (see
 //! `converge.rs`).
 //! `sppm` renders each scene (default: the bundled `pbrt-scenes/v3/*.pbrt` scenes) at 1
@@ -26,6 +29,7 @@
 //! they have no `WorldEnd`, so pbrt-v3 parses and creates the shapes, then stops.
 
 mod converge;
+mod stress;
 // pbrt-imgtool also reads ERRORS.csv files with it; here only drawing is used.
 #[allow(dead_code)]
 mod plot;
@@ -57,6 +61,7 @@ fn main() -> ExitCode {
             sppm_bench(scenes, runs)
         }
         Some("converge") => converge::main(&args[2..]),
+        Some("stress") => stress::main(&args[2..]),
         Some("--once") => match args.get(2) {
             Some(scene) => once(Path::new(scene)),
             None => usage(),
@@ -66,7 +71,9 @@ fn main() -> ExitCode {
 }
 
 fn usage() -> ExitCode {
-    eprintln!("usage: pbrt-bench parse|rays|sppm|converge [--runs N] [--dir DIR] [--dump] [--sse] [SCENE.pbrt ...]");
+    eprintln!(
+        "usage: pbrt-bench parse|rays|sppm|converge|stress [--runs N] [--dir DIR] [--dump] [--sse] [SCENE.pbrt ...]"
+    );
     ExitCode::FAILURE
 }
 

@@ -103,3 +103,25 @@ fn a_hyperboloid_through_its_axis_is_a_located_error() {
     let text = err.to_string();
     assert!(text.contains("inline.pbrt:2:") && text.contains("meets the z axis"), "{text}");
 }
+
+/// `pbrt-bench stress` at a CI size: every shape family at scales 1e-6…1e6, 0 to 1e7
+/// from the origin, under plain, mirrored and sheared, and nearly singular transforms.
+/// No spawned ray may hit its own surface again; and most shapes must be found where f32
+/// can resolve them (else the count of 0 would prove nothing).
+#[test]
+fn spawned_rays_never_hit_their_own_surface_at_any_scale_or_distance() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-bench"))
+        .args(["stress", "--shapes", "40", "--rays", "60"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let summary: Vec<&str> = text.lines().skip_while(|l| !l.contains("under 50% hit at")).skip(1).collect();
+    assert_eq!(summary.len(), 7, "{text}");
+    for line in summary {
+        let cols: Vec<&str> = line.split_whitespace().collect();
+        let (rays, failures): (u64, u64) = (cols[1].parse().unwrap(), cols[2].parse().unwrap());
+        assert_eq!(failures, 0, "{line}");
+        assert!(rays > 100_000, "{line}: too few rays were spawned to prove anything");
+    }
+}
