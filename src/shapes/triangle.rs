@@ -246,6 +246,9 @@ pub fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
     if det == 0.0 || (p2 - p0).cross(p1 - p0).length_squared() == 0.0 {
         return None;
     }
+    // The x and y errors come from the shear, x + sx·z with |sx| ≤ 1, so they scale
+    // with z before it is divided by the direction's z.
+    let max_z = p0t.z.abs().max(p1t.z.abs()).max(p2t.z.abs());
     p0t.z *= r.shear.z;
     p1t.z *= r.shear.z;
     p2t.z *= r.shear.z;
@@ -262,8 +265,11 @@ pub fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
     let delta_z = gamma(3) * max_zt;
     let max_xt = p0t.x.abs().max(p1t.x.abs()).max(p2t.x.abs());
     let max_yt = p0t.y.abs().max(p1t.y.abs()).max(p2t.y.abs());
-    let delta_x = gamma(5) * (max_xt + max_zt);
-    let delta_y = gamma(5) * (max_yt + max_zt);
+    // DEVIATION(pbrt): pbrt bounds the x and y errors with the z already scaled by
+    // 1/d.z, which is off by the direction's length: with a direction of length 1e-5 a
+    // triangle of size 1e-6 could never be hit, and with a long one the bound shrinks.
+    let delta_x = gamma(5) * (max_xt + max_z);
+    let delta_y = gamma(5) * (max_yt + max_z);
     let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = e0.abs().max(e1.abs()).max(e2.abs());
     let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();

@@ -802,3 +802,17 @@ fn trace_meets_bilinear_patches_exactly() {
         }
     }
 }
+
+/// A triangle of size 1e-6 is hit whatever the length of the ray's direction: pbrt's
+/// error bound for the hit's t mixes a z divided by the direction's z into the x and y
+/// bounds, so a short direction made it reject every hit.
+#[test]
+fn tiny_triangles_are_hit_by_short_and_long_directions() {
+    let mesh = single_triangle([Vec3::ZERO, Vec3::new(1e-6, 0.0, 0.0), Vec3::new(0.0, 1e-6, 0.0)]);
+    for len in [1e-7, 1e-5, 1.0, 1e5] {
+        let ray = Ray::new(Point3::new(3e-7, 3e-7, 1e-5), Vector3::new(0.0, 0.0, -len));
+        let Some(hit) = mesh.intersect_triangle(0, &ray, f32::INFINITY) else { panic!("direction length {len}: missed") };
+        let dist = hit.t as f64 * len as f64;
+        assert!((dist - 1e-5).abs() < 1e-10, "direction length {len}: distance {dist}");
+    }
+}
