@@ -311,15 +311,14 @@ impl<'a> Sppm<'a> {
     }
 }
 
-/// Φ and M per pixel from lists of deposits, each deposit's flux times `weight`. Each
+/// Φ and M per pixel from lists of deposits, each deposit's flux times `w`. Each
 /// pixel sums its contributions in a fixed order (list by list, deposit by deposit),
 /// whatever the thread count; the lists are grouped by pixel range first, so that
 /// pixel ranges are summed in parallel and each deposit is read once.
-fn sum_deposits(lists: Vec<Vec<Deposit>>, weight: f64, mut phi: Vec<DVec3>, mut m: Vec<u64>) -> (Vec<DVec3>, Vec<u64>) {
+fn sum_deposits(lists: Vec<Vec<Deposit>>, w: f64, mut phi: Vec<DVec3>, mut m: Vec<u64>) -> (Vec<DVec3>, Vec<u64>) {
     let span = phi.len().div_ceil(DEPOSIT_RANGES).max(1);
     let grouped: Vec<Grouped<Deposit>> =
         lists.into_par_iter().map(|l| Grouped::new(l, DEPOSIT_RANGES, |d| d.0 as usize / span)).collect();
-    let w = weight;
     phi.par_chunks_mut(span).zip(m.par_chunks_mut(span)).enumerate().for_each(|(r, (phi, m))| {
         let lo = r * span;
         for &(pixel, f) in grouped.iter().flat_map(|g| g.group(r)) {

@@ -811,7 +811,9 @@ fn tiny_triangles_are_hit_by_short_and_long_directions() {
     let mesh = single_triangle([Vec3::ZERO, Vec3::new(1e-6, 0.0, 0.0), Vec3::new(0.0, 1e-6, 0.0)]);
     for len in [1e-7, 1e-5, 1.0, 1e5] {
         let ray = Ray::new(Point3::new(3e-7, 3e-7, 1e-5), Vector3::new(0.0, 0.0, -len));
-        let Some(hit) = mesh.intersect_triangle(0, &ray, f32::INFINITY) else { panic!("direction length {len}: missed") };
+        let Some(hit) = mesh.intersect_triangle(0, &ray, f32::INFINITY) else {
+            panic!("direction length {len}: missed")
+        };
         let dist = hit.t as f64 * len as f64;
         assert!((dist - 1e-5).abs() < 1e-10, "direction length {len}: distance {dist}");
     }
