@@ -130,20 +130,9 @@ impl std::str::FromStr for Every {
     }
 }
 
-/// Everything after the magic line but the pixels.
-#[derive(Serialize, Deserialize)]
-struct Header {
-    fingerprint: Fingerprint,
-    iteration: u32,
-    seconds: f64,
-    stats: Stats,
-    errors: Vec<ErrorRow>,
-    pixels: u64,
-    chains: Option<Vec<Chain>>,
-}
-
-/// A render's state between two iterations.
-#[derive(Clone, Debug)]
+/// A render's state between two iterations. All but the pixels go into the JSON
+/// header; the pixels follow it in binary.
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Checkpoint {
     pub fingerprint: Fingerprint,
     /// Iterations done.
@@ -152,22 +141,14 @@ pub struct Checkpoint {
     pub seconds: f64,
     pub stats: Stats,
     pub errors: Vec<ErrorRow>,
+    #[serde(skip)]
     pub pixels: Vec<PixelState>,
     pub chains: Option<Vec<Chain>>,
 }
 
 impl Checkpoint {
     fn to_bytes(&self) -> Result<Vec<u8>, String> {
-        let header = Header {
-            fingerprint: self.fingerprint.clone(),
-            iteration: self.iteration,
-            seconds: self.seconds,
-            stats: self.stats.clone(),
-            errors: self.errors.clone(),
-            pixels: self.pixels.len() as u64,
-            chains: self.chains.clone(),
-        };
-        let json = serde_json::to_vec(&header).map_err(|e| format!("cannot encode the checkpoint: {e}"))?;
+        let json = serde_json::to_vec(self).map_err(|e| format!("cannot encode the checkpoint: {e}"))?;
         let mut out = Vec::with_capacity(MAGIC.len() + 16 + json.len() + self.pixels.len() * PIXEL_BYTES);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&(json.len() as u64).to_le_bytes());
@@ -193,28 +174,20 @@ impl Checkpoint {
         let (len, rest) = body.split_at_checked(8).ok_or(damaged)?;
         let len = usize::try_from(u64::from_le_bytes(len.try_into().map_err(|_| damaged)?)).map_err(|_| damaged)?;
         let (json, pixels) = rest.split_at_checked(len).ok_or(damaged)?;
-        let h: Header =
+        let mut c: Checkpoint =
             serde_json::from_slice(json).map_err(|e| format!("the checkpoint's header is unreadable: {e}"))?;
-        if pixels.len() as u64 != h.pixels.saturating_mul(PIXEL_BYTES as u64) {
+        if !pixels.len().is_multiple_of(PIXEL_BYTES) {
             return Err(damaged.into());
         }
-        let f = |c: &[u8]| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]));
-        let pixels = pixels
+        let f = |c: &[u8], k: usize| f64::from_le_bytes(c[8 * k..8 * k + 8].try_into().unwrap_or([0; 8]));
+        c.pixels = pixels
             .chunks_exact(PIXEL_BYTES)
             .map(|c| {
-                let v: Vec<f64> = c.chunks_exact(8).map(f).collect();
+                let v: [f64; 8] = std::array::from_fn(|k| f(c, k));
                 PixelState { radius: v[0], n: v[1], ld: [v[2], v[3], v[4]], tau: [v[5], v[6], v[7]] }
             })
             .collect();
-        Ok(Checkpoint {
-            fingerprint: h.fingerprint,
-            iteration: h.iteration,
-            seconds: h.seconds,
-            stats: h.stats,
-            errors: h.errors,
-            pixels,
-            chains: h.chains,
-        })
+        Ok(c)
     }
 
     /// Writes the checkpoint beside `path`, flushes it to the disk and only then
