@@ -21,7 +21,7 @@
 
 use glam::{DMat4, DVec3, Vec3};
 use pbrt_sppm::math::{Point3, Ray, Vector3};
-use pbrt_sppm::sampling::hash;
+use pbrt_sppm::sampling::{Rng, hash, uniform_sphere};
 use pbrt_sppm::shapes::Quadric;
 use pbrt_sppm::shapes::triangle::TriangleMesh;
 use pbrt_sppm::shapes::{Cone, Cylinder, Disk, Hyperboloid, MeshFlags, Paraboloid, QuadricShape, sphere::Sphere};
@@ -32,20 +32,9 @@ const FAMILIES: [&str; 7] = ["sphere", "cylinder", "disk", "cone", "paraboloid",
 const KINDS: [&str; 3] = ["plain", "mirror+shear", "near-singular"];
 const DISTANCES: [f64; 3] = [0.0, 1e6, 1e7];
 
-/// A small generator (deterministic: a failure repeats).
-struct Rng(u64);
-
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn dir(&mut self) -> DVec3 {
-        let z = 1.0 - 2.0 * self.uniform();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let phi = std::f64::consts::TAU * self.uniform();
-        DVec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
+/// A random unit direction.
+fn dir(rng: &mut Rng) -> DVec3 {
+    uniform_sphere(rng.uniform2()).as_dvec3().normalize()
 }
 
 /// A shape under test: a quadric, or one triangle in world space.
@@ -76,10 +65,10 @@ impl Shape {
     /// A point on the surface, world space.
     fn point(&self, rng: &mut Rng) -> DVec3 {
         match self {
-            Shape::Quadric(_, q, m) => m.transform_point3(q.point(rng.uniform(), rng.uniform())),
+            Shape::Quadric(_, q, m) => m.transform_point3(q.point(rng.uniform() as f64, rng.uniform() as f64)),
             Shape::Triangle(m) => {
                 let [a, b, c] = m.vertices(0);
-                let (u, v) = (rng.uniform(), rng.uniform());
+                let (u, v) = (rng.uniform() as f64, rng.uniform() as f64);
                 let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
                 a + u * (b - a) + v * (c - a)
             }
@@ -103,8 +92,8 @@ fn unit_quadric(family: usize) -> Quadric {
 
 /// The transform, and the smallest size it leaves a unit shape with.
 fn transform(kind: usize, scale: f64, distance: f64, rng: &mut Rng) -> (DMat4, f64) {
-    let t = DMat4::from_translation(distance * rng.dir());
-    let r = DMat4::from_axis_angle(rng.dir(), std::f64::consts::TAU * rng.uniform());
+    let t = DMat4::from_translation(distance * dir(rng));
+    let r = DMat4::from_axis_angle(dir(rng), std::f64::consts::TAU * rng.uniform() as f64);
     let (x, smallest) = match kind {
         0 => (DMat4::IDENTITY, 1.0),
         1 => (
@@ -131,11 +120,11 @@ fn to_ray(o: DVec3, d: DVec3) -> Ray {
 
 /// (found, rays spawned, failures) for one random shape.
 fn one_shape(family: usize, kind: usize, scale: f64, distance: f64, rays: usize, seed: u64) -> (bool, u64, u64) {
-    let mut rng = Rng(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x2545_f491_4f6c_dd1d);
+    let mut rng = Rng::new(seed);
     let (m, smallest) = transform(kind, scale, distance, &mut rng);
     let shape = make(family, m);
     let target = shape.point(&mut rng);
-    let o = target + rng.dir() * 10.0 * scale;
+    let o = target + dir(&mut rng) * 10.0 * scale;
     let Some(si) = shape.intersect(&to_ray(o, target - o)) else { return (false, 0, 0) };
     let n = si.n.0.as_dvec3();
     // Which side is out, for the convex quadrics: away from the middle of the axis
@@ -160,7 +149,7 @@ fn one_shape(family: usize, kind: usize, scale: f64, distance: f64, rays: usize,
     let resolvable = err < 1e-4 * smallest.min(to_axis);
     let mut fails = 0;
     for _ in 0..rays {
-        let w = rng.dir();
+        let w = dir(&mut rng);
         let cos = w.dot(outward);
         let r = si.spawn_ray(Vector3(w.as_vec3()));
         let Some(t) = shape.hits(&r) else { continue };
