@@ -3,7 +3,7 @@
 //! p(u, v) = (r(1 − v) cosφ, r(1 − v) sinφ, v·h): base circle at z = 0, apex at z = h.
 
 use super::phi_max_radians;
-use super::quadric::{E, Local, QuadricSurface};
+use super::quadric::{E, Local, QuadricSurface, newton};
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -62,6 +62,17 @@ impl QuadricSurface for Cone {
     fn ranges(&self) -> (f64, f64, f64) {
         let h = self.height as f64;
         (h.min(0.0), h.max(0.0), self.phi_max as f64)
+    }
+
+    /// Newton steps, then a point that landed on the other nappe within 2^-20 of the
+    /// cone's size from the apex is the apex: a ray through the tip crosses both nappes
+    /// there, and the steps may settle on the wrong one.
+    fn refine(&self, p: DVec3) -> DVec3 {
+        let p = newton(self, p);
+        let (h, r) = (self.height as f64, self.radius as f64);
+        let apex = DVec3::new(0.0, 0.0, h);
+        let beyond = if h > 0.0 { p.z > h } else { p.z < h };
+        if beyond && (p - apex).length() <= (h.abs().max(r)) * 2f64.powi(-20) { apex } else { p }
     }
 
     fn local(&self, p: DVec3, phi: f64) -> Local {

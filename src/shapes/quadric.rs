@@ -118,9 +118,27 @@ impl QuadricShape {
         dispatch_quadric!(&self.quadric, s => s.local(p_obj, phi_of(p_obj.x, p_obj.y)).uv)
     }
 
+    /// The object-space derivatives at a hit. On the axis ∂p/∂u vanishes (a sphere's
+    /// pole, a cone's apex, a paraboloid's vertex, a disk's centre) and ∂p/∂v may be
+    /// infinite, so there they are those of the surface point 2^-20 away in v, at the
+    /// hit's φ: the limit of the frame along that meridian. (u, v) stay the hit's.
+    // DEVIATION(pbrt): pbrt moves only the sphere's pole hits (x = 1e-5 r); its cone,
+    // paraboloid and disk give a NaN normal there.
+    fn local_at(&self, hit: &QuadricHit) -> Local {
+        let l = dispatch_quadric!(&self.quadric, s => s.local(hit.p_obj, hit.phi));
+        let n = l.dpdu.cross(l.dpdv);
+        if n.is_finite() && n.length_squared() > 0.0 {
+            return l;
+        }
+        let [u, v] = l.uv;
+        let near = self.quadric.point(u, if v > 0.5 { v - 2f64.powi(-20) } else { v + 2f64.powi(-20) });
+        let moved = dispatch_quadric!(&self.quadric, s => s.local(near, hit.phi));
+        Local { uv: l.uv, ..moved }
+    }
+
     /// Full differential geometry at a hit found by [`QuadricShape::intersect_t`].
     pub fn interaction(&self, hit: &QuadricHit) -> SurfaceInteraction {
-        let l = dispatch_quadric!(&self.quadric, s => s.local(hit.p_obj, hit.phi));
+        let l = self.local_at(hit);
         let m = self.render_from_object;
         let m3 = DMat3::from_mat4(m);
         // The map is affine, so world derivatives of every order are m3 times the
@@ -172,6 +190,20 @@ impl QuadricShape {
     }
 }
 
+/// Newton steps along ∇F onto the surface F = 0.
+pub(super) fn newton<S: QuadricSurface + ?Sized>(s: &S, p: DVec3) -> DVec3 {
+    let mut p = p;
+    for _ in 0..8 {
+        let (f, g) = s.implicit(p);
+        let g2 = g.length_squared();
+        if g2 == 0.0 || f * f / g2 <= (1e-15 * p.length()).powi(2) {
+            break;
+        }
+        p -= g * (f / g2);
+    }
+    p
+}
+
 /// The point at parameter t along an object-space ray.
 pub(super) fn at(o: [E; 3], d: [E; 3], t: f64) -> DVec3 {
     DVec3::new(o[0].value() + t * d[0].value(), o[1].value() + t * d[1].value(), o[2].value() + t * d[2].value())
@@ -203,16 +235,7 @@ pub trait QuadricSurface {
     /// Moves a point near the surface onto it: Newton steps along ∇F (flat or narrow
     /// shapes need a few).
     fn refine(&self, p: DVec3) -> DVec3 {
-        let mut p = p;
-        for _ in 0..8 {
-            let (f, g) = self.implicit(p);
-            let g2 = g.length_squared();
-            if g2 == 0.0 || f * f / g2 <= (1e-15 * p.length()).powi(2) {
-                break;
-            }
-            p -= g * (f / g2);
-        }
-        p
+        newton(self, p)
     }
 
     /// An upper bound on the distance from p to the surface: |F|/|∇F| is the distance
@@ -233,10 +256,29 @@ pub trait QuadricSurface {
         (phi <= phi_max).then_some(phi)
     }
 
+    /// The roots of F(o + t d) = 0. A negative discriminant is tried again from the
+    /// point midway between the roots, where a, b and c no longer cancel.
+    // DEVIATION(pbrt): where two roots nearly meet without tangency (a ray through a
+    // cone's apex enters one nappe and leaves the other), b² − 4ac computed from the
+    // ray's origin cancels to a negative number and pbrt reports a miss.
+    fn roots(&self, o: [E; 3], d: [E; 3]) -> Option<(E, E)> {
+        let (a, b, c) = self.coefficients(o, d);
+        if let Some(roots) = E::quadratic(a, b, c) {
+            return Some(roots);
+        }
+        let mid = -b.value() / (2.0 * a.value());
+        if !mid.is_finite() {
+            return None;
+        }
+        let m = E::from(mid);
+        let (a, b, c) = self.coefficients([o[0] + d[0] * m, o[1] + d[1] * m, o[2] + d[2] * m], d);
+        let (t0, t1) = E::quadratic(a, b, c)?;
+        Some((t0 + m, t1 + m))
+    }
+
     /// The first hit (t, object-space point, φ) with 0 < t < t_max.
     fn hit(&self, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3, f64)> {
-        let (a, b, c) = self.coefficients(o, d);
-        let (t0, t1) = E::quadratic(a, b, c)?;
+        let (t0, t1) = self.roots(o, d)?;
         if t0.upper() > t_max || t1.lower() <= 0.0 {
             return None;
         }

@@ -273,7 +273,18 @@ pub fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
     let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = e0.abs().max(e1.abs()).max(e2.abs());
     let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
-    if t <= delta_t {
+    // t is the barycentric mix of the corners' distances along the ray, so when every
+    // corner is conservatively ahead, so is the hit, whatever the bound on t says.
+    // DEVIATION(pbrt): pbrt rejects on the bound alone, which grows as 1/det: a
+    // triangle nearly edge-on to the ray (the rim of a flattened closed mesh) was
+    // rejected even at t ≈ 1, and a ray through the edge it shares escaped the mesh.
+    let min_zt = p0t.z.min(p1t.z).min(p2t.z);
+    let ahead = min_zt > delta_z;
+    if t <= delta_t && !ahead {
+        return None;
+    }
+    let t = if ahead { t.clamp(min_zt, max_zt) } else { t };
+    if t > t_max {
         return None;
     }
     Some(TriangleHit { t, b: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })

@@ -818,3 +818,26 @@ fn tiny_triangles_are_hit_by_short_and_long_directions() {
         assert!((dist - 1e-5).abs() < 1e-10, "direction length {len}: distance {dist}");
     }
 }
+
+/// Two triangles from the rim of a closed sphere mesh flattened to 1e-4 of its width,
+/// and a ray from inside through the edge they share. The second is nearly edge-on to
+/// the ray, so pbrt's bound on t (which grows as 1/det) exceeded the hit's t ≈ 1 and
+/// rejected it, while the first rejects the ray by its edge signs: the ray escaped.
+/// Found by `pbrt-bench stress mesh`.
+#[test]
+fn a_ray_through_an_edge_beside_an_edge_on_triangle_hits_one_of_them() {
+    use pbrt_sppm::shapes::triangle::TriangleMesh;
+    let p = vec![
+        [0.007537955, 0.026097098, -0.0025699968],
+        [0.012732121, 0.04409266, -0.0043536266],
+        [0.001593595, 0.050868418, -0.00075396866],
+        [0.0006534868, 0.020805854, -0.00030321066],
+    ];
+    let mesh = TriangleMesh { p, indices: vec![0, 1, 2, 0, 2, 3], ..Default::default() };
+    let o = Vec3::new(-0.017363135, 0.011205157, 0.005608246);
+    let d = Vec3::new(0.020845063, 0.031794205, -0.006939109);
+    let ray = Ray::new(Point3(o), Vector3(d));
+    let hits: Vec<f32> = (0..2).filter_map(|k| mesh.intersect_triangle(k, &ray, f32::INFINITY)).map(|h| h.t).collect();
+    assert_eq!(hits.len(), 1, "{hits:?}");
+    assert!((hits[0] - 1.0).abs() < 1e-3, "{hits:?}");
+}

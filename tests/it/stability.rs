@@ -111,7 +111,7 @@ fn a_hyperboloid_through_its_axis_is_a_located_error() {
 #[test]
 fn spawned_rays_never_hit_their_own_surface_at_any_scale_or_distance() {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-bench"))
-        .args(["stress", "--shapes", "40", "--rays", "60"])
+        .args(["stress", "spawn", "--shapes", "40", "--rays", "60"])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -124,4 +124,106 @@ fn spawned_rays_never_hit_their_own_surface_at_any_scale_or_distance() {
         assert_eq!(failures, 0, "{line}");
         assert!(rays > 100_000, "{line}: too few rays were spawned to prove anything");
     }
+}
+
+/// The summary lines of a `pbrt-bench stress` part: those after the header line that
+/// contains `header`.
+fn stress_summary(args: &[&str], header: &str) -> Vec<Vec<String>> {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-bench")).arg("stress").args(args).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let lines: Vec<Vec<String>> = text
+        .lines()
+        .skip_while(|l| !l.contains(header))
+        .skip(1)
+        .map(|l| l.split_whitespace().map(String::from).collect())
+        .collect();
+    assert!(!lines.is_empty(), "no summary after {header:?}:\n{text}");
+    lines
+}
+
+/// `pbrt-bench stress mesh` at a CI size: rays from inside closed meshes, a third of
+/// them exactly at vertices and a third at edges, never escape, for world meshes and
+/// instances at every resolvable scale and distance.
+#[test]
+fn rays_from_inside_closed_meshes_never_escape_at_any_scale_or_distance() {
+    let rows = stress_summary(&["mesh", "--meshes", "4", "--rays", "300"], "escapes per 10^7");
+    let (rays, escapes): (u64, u64) = (rows[0][0].parse().unwrap(), rows[0][1].parse().unwrap());
+    assert_eq!(escapes, 0, "{:?}", rows[0]);
+    assert!(rays > 100_000, "{:?}: too few rays to prove anything", rows[0]);
+}
+
+/// `pbrt-bench stress grazing` at a CI size: rays tangent to every quadric, through
+/// rims, poles and apexes, under every transform. No hit may be invalid (a NaN or zero
+/// normal at a pole or apex was) or off the surface; hits and misses agree with the f64
+/// reference on all but at most 10^-4 of the rays it can judge.
+#[test]
+fn grazing_rays_on_every_quadric_agree_with_an_f64_reference() {
+    let rows = stress_summary(&["grazing", "--shapes", "10", "--rays", "40"], "grazing failures per 10^7");
+    assert_eq!(rows.len(), 6, "{rows:?}");
+    for r in rows {
+        let n: Vec<u64> = r[1..6].iter().map(|x| x.parse().unwrap()).collect();
+        let (judged, invalid, off, wrong) = (n[1], n[2], n[3], n[4]);
+        assert!(judged > 10_000, "{r:?}: too few judged rays");
+        assert_eq!((invalid, off), (0, 0), "{r:?}");
+        assert!(wrong * 10_000 <= judged, "{r:?}");
+    }
+}
+
+/// Hits exactly on the axis (a sphere's pole, a cone's apex, a paraboloid's vertex, a
+/// disk's centre) have a finite unit normal; all but the apex along the axis.
+#[test]
+fn hits_on_the_axis_have_a_unit_normal() {
+    use glam::{DMat4, Vec3};
+    use pbrt_sppm::math::{Point3, Ray, Vector3};
+    use pbrt_sppm::shapes::{Cone, Disk, Paraboloid, Quadric, QuadricShape, sphere::Sphere};
+    let cases = [
+        (Quadric::Sphere(Sphere::new(1.0, -1.0, 1.0, 360.0)), 1.0, true),
+        (Quadric::Cone(Cone::new(1.0, 1.0, 360.0)), 1.0, false),
+        (Quadric::Paraboloid(Paraboloid::new(1.0, 0.0, 1.0, 360.0)), 0.0, true),
+        (Quadric::Disk(Disk::new(0.5, 1.0, 0.0, 360.0)), 0.5, true),
+    ];
+    for (q, z, along_axis) in cases {
+        let s = QuadricShape::new(q.clone(), DMat4::IDENTITY, false);
+        let down = Ray::new(Point3(Vec3::new(0.0, 0.0, 3.0)), Vector3(Vec3::new(0.0, 0.0, -1.0)));
+        let up = Ray::new(Point3(Vec3::new(0.0, 0.0, -3.0)), Vector3(Vec3::new(0.0, 0.0, 1.0)));
+        for ray in [down, up] {
+            let Some(hit) = s.intersect_t(&ray, f32::INFINITY) else { continue };
+            if (hit.p_obj.z - z).abs() > 1e-9 {
+                continue;
+            }
+            let si = s.interaction(&hit);
+            let n = si.n.0;
+            assert!(n.is_finite() && (n.length() - 1.0).abs() < 1e-5, "{q:?}: {n:?}");
+            assert!(si.dpdu.0.is_finite() && si.dpdv.0.is_finite(), "{q:?}: {:?} {:?}", si.dpdu, si.dpdv);
+            if along_axis {
+                assert!(n.z.abs() > 0.999, "{q:?}: {n:?}");
+            }
+        }
+    }
+}
+
+/// Rays from inside a cone leaving through its apex (within f32's rounding of it) cross
+/// the surface there: the two nappes' roots nearly meet, and the discriminant's
+/// cancellation must not turn the crossing into a miss.
+#[test]
+fn rays_leaving_a_cone_through_its_apex_hit_it() {
+    use glam::{DMat4, DVec3};
+    use pbrt_sppm::math::{Point3, Ray, Vector3};
+    use pbrt_sppm::sampling::Rng;
+    use pbrt_sppm::shapes::{Cone, Quadric, QuadricShape};
+    let s = QuadricShape::new(Quadric::Cone(Cone::new(1.0, 1.0, 360.0)), DMat4::IDENTITY, false);
+    let mut rng = Rng::new(44);
+    let mut misses = 0;
+    for _ in 0..20_000 {
+        // Within 30° of the axis: inside the 45° cone, so the ray is inside it below
+        // the apex and outside above.
+        let (theta, phi) =
+            (std::f64::consts::FRAC_PI_6 * rng.uniform() as f64, std::f64::consts::TAU * rng.uniform() as f64);
+        let d = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+        let o = DVec3::Z - (0.5 + rng.uniform() as f64) * d;
+        let ray = Ray::new(Point3(o.as_vec3()), Vector3(d.as_vec3()));
+        misses += s.intersect_t(&ray, f32::INFINITY).is_none() as u32;
+    }
+    assert_eq!(misses, 0);
 }

@@ -1,9 +1,9 @@
-//! `pbrt-bench stress`: self-intersections of spawned rays per shape family, over
+//! `pbrt-bench stress spawn`: self-intersections of spawned rays per shape family, over
 //! scales 1e-6…1e6 and distances from the origin 0, 1e6 and 1e7, under plain, mirrored
 //! and sheared, and nearly singular transforms.
 //!
 //! ```text
-//! pbrt-bench stress [--shapes 500] [--rays 500]
+//! pbrt-bench stress spawn [--shapes 500] [--rays 500]
 //! ```
 //! For each case, random shapes of the family are placed by Translate(distance · a
 //! random direction) · Rotate(random) · X · Scale(scale), X the transform kind. A ray
@@ -19,23 +19,14 @@
 //! shape stands (a shape of 1e-6 at 1e7, where f32's spacing is 1), nothing can be hit,
 //! and the summary gives the largest scale where under half the shapes were found.
 
+use super::{DISTANCES, FAMILIES, KINDS, cases, dir, to_ray, transform};
 use glam::{DMat4, DVec3, Vec3};
-use pbrt_sppm::math::{Point3, Ray, Vector3};
-use pbrt_sppm::sampling::{Rng, hash, uniform_sphere};
-use pbrt_sppm::shapes::Quadric;
+use pbrt_sppm::math::{Ray, Vector3};
+use pbrt_sppm::sampling::{Rng, hash};
+use pbrt_sppm::shapes::sphere::Sphere;
 use pbrt_sppm::shapes::triangle::TriangleMesh;
-use pbrt_sppm::shapes::{Cone, Cylinder, Disk, Hyperboloid, MeshFlags, Paraboloid, QuadricShape, sphere::Sphere};
+use pbrt_sppm::shapes::{Cone, Cylinder, Disk, Hyperboloid, MeshFlags, Paraboloid, Quadric, QuadricShape};
 use rayon::prelude::*;
-use std::process::ExitCode;
-
-const FAMILIES: [&str; 7] = ["sphere", "cylinder", "disk", "cone", "paraboloid", "hyperboloid", "triangle"];
-const KINDS: [&str; 3] = ["plain", "mirror+shear", "near-singular"];
-const DISTANCES: [f64; 3] = [0.0, 1e6, 1e7];
-
-/// A random unit direction.
-fn dir(rng: &mut Rng) -> DVec3 {
-    uniform_sphere(rng.uniform2()).as_dvec3().normalize()
-}
 
 /// A shape under test: a quadric, or one triangle in world space.
 // One per case on the stack: boxing would only add an allocation.
@@ -90,21 +81,6 @@ fn unit_quadric(family: usize) -> Quadric {
     }
 }
 
-/// The transform, and the smallest size it leaves a unit shape with.
-fn transform(kind: usize, scale: f64, distance: f64, rng: &mut Rng) -> (DMat4, f64) {
-    let t = DMat4::from_translation(distance * dir(rng));
-    let r = DMat4::from_axis_angle(dir(rng), std::f64::consts::TAU * rng.uniform() as f64);
-    let (x, smallest) = match kind {
-        0 => (DMat4::IDENTITY, 1.0),
-        1 => (
-            DMat4::from_cols_array(&[-1.0, 0.0, 0.0, 0.0, 0.5, 1.0, 0.0, 0.0, 0.3, 0.2, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
-            0.5,
-        ),
-        _ => (DMat4::from_scale(DVec3::new(1.0, 1.0, 1e-4)), 1e-4),
-    };
-    (t * r * x * DMat4::from_scale(DVec3::splat(scale)), smallest * scale)
-}
-
 fn make(family: usize, m: DMat4) -> Shape {
     if family == 6 {
         let p = [DVec3::ZERO, DVec3::X, DVec3::Y].map(|v| m.transform_point3(v).as_vec3().to_array());
@@ -112,10 +88,6 @@ fn make(family: usize, m: DMat4) -> Shape {
     }
     let q = unit_quadric(family);
     Shape::Quadric(QuadricShape::new(q.clone(), m, false), q, m)
-}
-
-fn to_ray(o: DVec3, d: DVec3) -> Ray {
-    Ray::new(Point3(o.as_vec3()), Vector3(d.as_vec3()))
 }
 
 /// (found, rays spawned, failures) for one random shape.
@@ -160,15 +132,8 @@ fn one_shape(family: usize, kind: usize, scale: f64, distance: f64, rays: usize,
     (true, rays as u64, fails)
 }
 
-pub fn main(args: &[String]) -> ExitCode {
-    let flag = |name: &str, default: usize| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(default)
-    };
-    let (shapes, rays) = (flag("--shapes", 500), flag("--rays", 500));
+/// Prints the sweep and its summary; the summary follows the line naming "under 50% hit at".
+pub fn run(shapes: usize, rays: usize) {
     let scales: Vec<f64> = (-6..=6).map(|e| 10f64.powi(e)).collect();
     println!("{shapes} shapes a case, {rays} rays spawned from each; failures per 10^7 spawned rays");
     println!(
@@ -215,9 +180,8 @@ pub fn main(args: &[String]) -> ExitCode {
         "family", "rays", "failures", "per 10^7", "under 50% hit at"
     );
     for (family, n, fails, per, failing, below) in summary {
-        let cases = if failing.is_empty() { "none".to_string() } else { failing.join(" ") };
+        let cases = cases(&failing);
         let below = if below > 0.0 { format!("scale ≤ {below:.0e}") } else { "-".into() };
         println!("{family:<12} {n:>11} {fails:>9} {per:>10.2} {below:>16}   {cases}");
     }
-    ExitCode::SUCCESS
 }
