@@ -5,10 +5,11 @@
 //! cargo run --release --bin pbrt-bench -- rays [--runs 5] [--dir target/bench-data] [--dump] [--sse]
 //! cargo run --release --bin pbrt-bench -- sppm [--runs 3] [SCENE.pbrt ...]
 //! cargo run --release --bin pbrt-bench -- converge [SCENE.pbrt[@half] ...] [--runs 3] ...
-//! cargo run --release --bin pbrt-bench -- stress [--shapes 500] [--rays 500]
+//! cargo run --release --bin pbrt-bench -- stress [spawn|mesh|grazing|furnace] [--shapes N] [--rays N] ...
 //! ```
-//! `stress` counts self-intersections of spawned rays per shape family over scales,
-//! distances and transforms (see `stress.rs`).
+//! `stress` runs the numerical stress sweeps: self-intersections of spawned rays,
+//! escapes from closed meshes, grazing rays against an f64 reference, and a long
+//! progressive run (see `stress/mod.rs`).
 //! `converge` measures error against wall time beside pbrt-v3 and pbrt-v4 (see
 //! `converge.rs`).
 //! `sppm` renders each scene (default: the bundled `pbrt-scenes/v3/*.pbrt` scenes) at 1

@@ -1,7 +1,7 @@
 //! `pbrt-bench stress mesh`: rays that escape closed triangle meshes.
 //!
 //! ```text
-//! pbrt-bench stress mesh [--meshes 20] [--rays 3000]
+//! pbrt-bench stress mesh [--meshes 20] [--rays 5000]
 //! ```
 //! Each mesh is a closed UV sphere (24 × 16, shared poles and seam, every vertex at a
 //! random radius in [1, 1.5]) loaded from scene text, either as a world shape under

@@ -97,7 +97,7 @@ pub fn main(args: &[String]) -> ExitCode {
         spawn::run(flag("--shapes", 500), flag("--rays", 500));
     }
     if all || part == Some("mesh") {
-        mesh::run(flag("--meshes", 20), flag("--rays", 3000));
+        mesh::run(flag("--meshes", 20), flag("--rays", 5000));
     }
     if all || part == Some("grazing") {
         grazing::run(flag("--shapes", 100), flag("--rays", 400));
