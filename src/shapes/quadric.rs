@@ -256,8 +256,9 @@ pub trait QuadricSurface {
         (phi <= phi_max).then_some(phi)
     }
 
-    /// The roots of F(o + t d) = 0. A negative discriminant is tried again from the
-    /// point midway between the roots, where a, b and c no longer cancel.
+    /// The roots of F(o + t d) = 0. A negative discriminant that rounding could have
+    /// made negative is tried again from the point midway between the roots, where a,
+    /// b and c no longer cancel.
     // DEVIATION(pbrt): where two roots nearly meet without tangency (a ray through a
     // cone's apex enters one nappe and leaves the other), b² − 4ac computed from the
     // ray's origin cancels to a negative number and pbrt reports a miss.
@@ -265,6 +266,10 @@ pub trait QuadricSurface {
         let (a, b, c) = self.coefficients(o, d);
         if let Some(roots) = E::quadratic(a, b, c) {
             return Some(roots);
+        }
+        // Clear misses (most rays that reach a quadric's bounds) stop here.
+        if (b * b - a * c * 4.0).upper() < 0.0 {
+            return None;
         }
         let mid = -b.value() / (2.0 * a.value());
         if !mid.is_finite() {
