@@ -249,6 +249,31 @@ impl Counts {
 }
 
 /// The rays of one random placement of a family.
+/// Whether the reference's answer `base` for the world ray `(o, d)` stands: the same
+/// (a hit within 10^-2) with the origin moved by `eps` and the direction by 10^-6
+/// along each world axis, and a hit clear of a cut shape's seams by `tol`.
+fn judged(
+    reference: &Reference,
+    to_object: &impl Fn(DVec3, DVec3) -> (DVec3, DVec3),
+    (o, d): (DVec3, DVec3),
+    base: Option<DVec3>,
+    eps: f64,
+    tol: f64,
+) -> bool {
+    base.is_none_or(|b| reference.seam_margin(b) > tol)
+        && (0..12).all(|i| {
+            let mut shift = DVec3::ZERO;
+            shift[i / 2 % 3] = if i % 2 == 0 { 1.0 } else { -1.0 };
+            let (po, pd) =
+                if i < 6 { to_object(o + eps * shift, d) } else { to_object(o, d + 1e-6 * d.length() * shift) };
+            match (reference.hit(po, pd), base) {
+                (None, None) => true,
+                (Some(a), Some(b)) => (a - b).length() <= 1e-2,
+                _ => false,
+            }
+        })
+}
+
 /// One case of the sweep.
 #[derive(Clone, Copy)]
 struct Case {
@@ -283,21 +308,7 @@ fn one_shape(case: Case, rays: usize, seed: u64) -> Counts {
         let eps = (1e-5 * smallest).max(64.0 * ulp32(ow.abs().max_element()));
         // What the f32 world point's rounding allows, in object units.
         let tol = 1e-6 + 1e2 * ulp32(ow.abs().max_element() + scale) / smallest;
-        let judged = base.is_none_or(|b| reference.seam_margin(b) > tol)
-            && (0..12).all(|i| {
-                let mut shift = DVec3::ZERO;
-                shift[i / 2 % 3] = if i % 2 == 0 { 1.0 } else { -1.0 };
-                let (po, pd) = if i < 6 {
-                    to_object(ow + eps * shift, dw)
-                } else {
-                    to_object(ow, dw + 1e-6 * dw.length() * shift)
-                };
-                match (reference.hit(po, pd), base) {
-                    (None, None) => true,
-                    (Some(a), Some(b)) => (a - b).length() <= 1e-2,
-                    _ => false,
-                }
-            });
+        let judged = judged(&reference, &to_object, (ow, dw), base, eps, tol);
         let ours = s.intersect_t(&ray, f32::INFINITY);
         c.rays += 1;
         c.judged += judged as u64;
