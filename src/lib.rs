@@ -8,6 +8,7 @@ pub mod accel;
 pub mod camera;
 pub mod check;
 pub mod export;
+pub mod farm;
 pub mod fuzzing;
 pub mod imageio;
 pub mod integrators;

@@ -4,7 +4,9 @@
 use clap::{Parser, Subcommand};
 use pbrt_sppm::integrators::adaptive::PhotonSampling;
 use pbrt_sppm::integrators::checkpoint::{Checkpoint, Every, Fingerprint};
-use pbrt_sppm::integrators::{CheckpointTarget, RenderSettings};
+use pbrt_sppm::integrators::part::Part;
+use pbrt_sppm::integrators::passes::{DEFAULT_ALPHA, PassMode};
+use pbrt_sppm::integrators::{CheckpointTarget, Plan, RenderOutput, RenderSettings};
 use pbrt_sppm::limits::Limits;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::parser::error::LoadError;
@@ -54,6 +56,26 @@ enum Command {
         #[command(flatten)]
         common: Common,
     },
+    /// Add up the parts of a render (`render --partial`) into its image.
+    Merge {
+        /// The parts: files written by `render --partial` or `merge --partial`.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// The image to write (`.exr`, or `.png` for an 8-bit sRGB preview).
+        #[arg(long, required_unless_present = "partial")]
+        outfile: Option<PathBuf>,
+        /// Also write the merged part (all the passes summed), to merge with others later.
+        #[arg(long, value_name = "FILE.exr")]
+        partial: Option<PathBuf>,
+        /// Merge even when some passes of the render are in no part (a warning then).
+        #[arg(long)]
+        allow_gaps: bool,
+        /// Print no warnings and no summary.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Print the commands that render a scene in shards on a cluster and merge them.
+    Plan(PlanArgs),
     /// Intersect rays (`ox oy oz dx dy dz [tmax]` per line) with the scene; JSON lines out.
     Trace {
         /// The scene file (`-` reads standard input; then give the rays with --rays).
@@ -142,8 +164,58 @@ struct RenderArgs {
     /// Write the image after iterations 1, 2, 4, 8, … as well as at the end.
     #[arg(long)]
     write_partial_images: bool,
+    /// `classic` (pbrt's SPPM, the default) or `independent` (Knaus–Zwicker: each
+    /// pass's radius depends only on its index, so passes can be rendered apart and
+    /// merged).
+    #[arg(long, value_parser = parse_passes)]
+    passes: Option<bool>,
+    /// How fast independent passes' radius shrinks: r²_{i+1} = r²_i (i+α)/(i+1), 0 < α < 1
+    /// (default 2/3).
+    #[arg(long, value_parser = parse_alpha)]
+    alpha: Option<f64>,
+    /// Render only passes A to B−1 of the --spp planned (independent passes).
+    #[arg(long, value_name = "A..B", value_parser = parse_pass_range)]
+    pass_range: Option<std::ops::Range<u32>>,
+    /// Write the sum of the passes rendered to this EXR, for `pbrt-sppm merge`
+    /// (independent passes; the image itself is written only when --outfile is given).
+    #[arg(long, value_name = "FILE.exr")]
+    partial: Option<PathBuf>,
     #[command(flatten)]
     common: Common,
+}
+
+#[derive(clap::Args)]
+struct PlanArgs {
+    /// The scene file.
+    scene: PathBuf,
+    /// Plan for Slurm: an array job of shards, then a merge job once all succeed.
+    #[arg(long, required = true)]
+    slurm: bool,
+    /// The passes of the whole render (its --spp).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
+    passes: u32,
+    /// How many shards (array tasks) share them (at most --passes).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
+    shards: u32,
+    /// The folder the parts are written to, which every node must reach (default:
+    /// SCENE's name with `.parts`, beside it).
+    #[arg(long)]
+    parts: Option<PathBuf>,
+    /// The merged image (default: SCENE's name with `.exr`, beside it).
+    #[arg(long)]
+    outfile: Option<PathBuf>,
+    /// Cores per shard (sbatch --cpus-per-task; the shard renders with as many threads).
+    #[arg(long, default_value_t = 1, value_parser = parse_count::<u32, 1>)]
+    cpus_per_task: u32,
+    /// The pbrt-sppm the nodes run (default: this one).
+    #[arg(long)]
+    binary: Option<PathBuf>,
+    /// Write the script to this file instead of standard output.
+    #[arg(long)]
+    write: Option<PathBuf>,
+    /// Render options every shard gets, after `--` (such as `-- --photons 200000`).
+    #[arg(last = true)]
+    render_args: Vec<String>,
 }
 
 fn parse_syntax(s: &str) -> Result<Syntax, String> {
@@ -160,6 +232,26 @@ fn parse_photon_sampling(s: &str) -> Result<PhotonSampling, String> {
         "adaptive" => Ok(PhotonSampling::Adaptive),
         _ => Err(format!("expected uniform or adaptive, not \"{s}\"")),
     }
+}
+
+/// `independent` → true.
+fn parse_passes(s: &str) -> Result<bool, String> {
+    match s {
+        "classic" => Ok(false),
+        "independent" => Ok(true),
+        _ => Err(format!("expected classic or independent, not \"{s}\"")),
+    }
+}
+
+fn parse_alpha(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(a) if a > 0.0 && a < 1.0 => Ok(a),
+        _ => Err(format!("must be a number between 0 and 1 (exclusive), not {s}")),
+    }
+}
+
+fn parse_pass_range(s: &str) -> Result<std::ops::Range<u32>, String> {
+    pbrt_sppm::integrators::passes::parse_range(s)
 }
 
 fn parse_every(s: &str) -> Result<Every, String> {
@@ -190,7 +282,8 @@ fn parse_positive(s: &str) -> Result<f32, String> {
 
 /// `pbrt-sppm scene.pbrt ...` means `pbrt-sppm render scene.pbrt ...`.
 fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
-    const KNOWN: [&str; 9] = ["render", "check", "trace", "export", "help", "--help", "-h", "--version", "-V"];
+    const KNOWN: [&str; 11] =
+        ["render", "check", "trace", "export", "merge", "plan", "help", "--help", "-h", "--version", "-V"];
     if args.len() > 1 && !KNOWN.iter().any(|k| args[1] == *k) {
         args.insert(1, "render".into());
     }
@@ -273,6 +366,10 @@ fn main() -> ExitCode {
             Ok(s) => export(&s, &scene, output, common.quiet),
             Err(code) => code,
         },
+        Command::Merge { parts, outfile, partial, allow_gaps, quiet } => {
+            merge(&parts, outfile.as_deref(), partial.as_deref(), allow_gaps, quiet)
+        }
+        Command::Plan(args) => plan(&args),
         Command::Render(args) => match load(&args.scene, &args.common) {
             Ok(s) => render(s, &args),
             Err(code) => code,
@@ -310,9 +407,15 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     use pbrt_sppm::integrators::errors_csv;
     let quiet = args.common.quiet;
     let (outfile, blame) = output_path(&scene, args);
-    if let Err(code) = check_outputs(&scene, args, &outfile, &blame) {
+    // A shard writes its part; the image only when asked for by name.
+    let write_outfile = args.partial.is_none() || args.outfile.is_some();
+    if let Err(code) = check_outputs(&scene, args, write_outfile.then_some(&outfile), &blame) {
         return code;
     }
+    let passes = match pass_mode(args) {
+        Ok(p) => p,
+        Err(e) => return fail(Path::new("--passes"), e),
+    };
     if scene.lights.is_empty() && scene.area_lights.is_empty() && !quiet {
         say!("{}: warning: the scene has no lights; the image will be black", args.scene.display());
     }
@@ -338,6 +441,8 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         partial_images: args.write_partial_images.then(|| outfile.clone()),
         interrupt: Some(stop_on_signals(quiet)),
         checkpoint: None,
+        passes,
+        pass_range: args.pass_range.clone(),
     };
     let pool = match rayon::ThreadPoolBuilder::new().num_threads(args.nthreads.unwrap_or(0)).build() {
         Ok(p) => p,
@@ -345,7 +450,11 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     };
     let syntax = format!("{:?}", scene.syntax).to_lowercase();
     let rs = RenderScene::new(scene);
-    let resume = match checkpointing(&rs, args, &syntax, &mut settings) {
+    let fingerprint = match rs.plan(&settings) {
+        Ok(plan) => fingerprint(args, &plan, &syntax),
+        Err(e) => return fail(&args.scene, e),
+    };
+    let resume = match checkpointing(args, &fingerprint, &mut settings) {
         Ok(r) => r,
         Err(code) => return code,
     };
@@ -353,22 +462,81 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         Ok(o) => o,
         Err(e) => return fail(&args.scene, e),
     };
-    if let Err(e) = write_image(&outfile, &out.image) {
+    if write_outfile && let Err(e) = write_image(&outfile, &out.image) {
         say!("{blame}: error: {e}");
         return ExitCode::FAILURE;
+    }
+    if let Some(path) = &args.partial
+        && let Err(e) = write_part(&rs, &out, fingerprint, path)
+    {
+        return fail(Path::new("--partial"), e);
     }
     if let Some(csv) = &args.mse_reference_out
         && let Err(e) = pbrt_sppm::imageio::write_text(csv, &errors_csv(&out.errors))
     {
         return fail(csv, e);
     }
-    report(&out, args, &outfile)
+    report(&out, args, write_outfile.then_some(outfile.as_path()))
 }
 
-/// Checks every output path before any work: the image, ERRORS.csv, the checkpoint.
-fn check_outputs(scene: &SceneDescription, args: &RenderArgs, outfile: &Path, blame: &str) -> Result<(), ExitCode> {
-    if let Err(e) = check_output(outfile, true) {
+/// Classic SPPM unless asked for independent passes, which a pass range or a part
+/// implies.
+fn pass_mode(args: &RenderArgs) -> Result<PassMode, String> {
+    let sharded = args.pass_range.is_some() || args.partial.is_some();
+    let independent = match args.passes {
+        Some(false) if sharded => {
+            return Err("classic SPPM cannot be split: --pass-range and --partial need independent passes".into());
+        }
+        Some(i) => i,
+        None => sharded,
+    };
+    match (independent, args.alpha) {
+        (false, Some(_)) => Err("--alpha sets the radius of independent passes: add --passes independent".into()),
+        (false, None) => Ok(PassMode::Classic),
+        (true, alpha) => Ok(PassMode::Independent { alpha: alpha.unwrap_or(DEFAULT_ALPHA) }),
+    }
+}
+
+/// The part a shard writes: its passes' sums and what they belong to.
+fn write_part(rs: &RenderScene, out: &RenderOutput, fingerprint: Fingerprint, path: &Path) -> Result<(), String> {
+    let Some(sums) = out.pass_sums.clone() else { return Err("only independent passes make parts".into()) };
+    let img = &out.image;
+    let seed = fingerprint.settings.iter().find(|(k, _)| k == "seed").and_then(|(_, v)| v.parse().ok());
+    let part = Part {
+        fingerprint,
+        passes: out.passes.clone(),
+        seed: seed.unwrap_or(rs.integrator.seed),
+        photons: out.stats.photons.traced,
+        photons_per_pass: img.meta.photons_per_iteration.unwrap_or(0) as u64,
+        seconds: out.seconds,
+        width: img.width,
+        height: img.height,
+        origin: img.origin,
+        full: img.full,
+        world_to_camera: img.meta.world_to_camera,
+        sums,
+    };
+    part.write(path)
+}
+
+/// Checks every output path before any work: the image, the part, ERRORS.csv, the
+/// checkpoint.
+fn check_outputs(
+    scene: &SceneDescription,
+    args: &RenderArgs,
+    outfile: Option<&PathBuf>,
+    blame: &str,
+) -> Result<(), ExitCode> {
+    if let Some(outfile) = outfile
+        && let Err(e) = check_output(outfile, true)
+    {
         say!("{blame}: error: {e}");
+        return Err(ExitCode::FAILURE);
+    }
+    if let Some(p) = &args.partial
+        && let Err(e) = check_part_path(p)
+    {
+        say!("--partial: error: {e}");
         return Err(ExitCode::FAILURE);
     }
     let others = [("--mse-reference-out", &args.mse_reference_out), ("--checkpoint", &args.checkpoint)];
@@ -412,22 +580,38 @@ fn stop_on_signals(quiet: bool) -> Arc<AtomicBool> {
     flag
 }
 
-/// Sets up `--checkpoint` and reads `--resume`'s checkpoint, refusing one made from
-/// other scene files or settings.
-fn checkpointing(
-    rs: &RenderScene,
-    args: &RenderArgs,
-    syntax: &str,
-    settings: &mut RenderSettings,
-) -> Result<Option<Checkpoint>, ExitCode> {
-    let Some(path) = args.checkpoint.as_ref().or(args.resume.as_ref()) else { return Ok(None) };
-    let plan = rs.plan(settings).map_err(|e| fail(&args.scene, e))?;
+/// A part must be an EXR (it holds 32-bit floats and its metadata).
+fn check_part_path(p: &Path) -> Result<(), String> {
+    if !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+        return Err(format!("\"{}\": a part is an EXR file and must end in .exr", p.display()));
+    }
+    pbrt_sppm::imageio::check_writable(p)
+}
+
+/// What the render is made from: every file read and every setting that changes
+/// the image (the pass range excepted: the parts of one render differ in it).
+fn fingerprint(args: &RenderArgs, plan: &Plan, syntax: &str) -> Fingerprint {
     let mut fingerprint = Fingerprint {
         scene: std::path::absolute(&args.scene).unwrap_or_else(|_| args.scene.clone()).display().to_string(),
         inputs: pbrt_sppm::limits::inputs_read().into_iter().map(|(p, h)| (p.display().to_string(), h)).collect(),
         settings: plan.fingerprint_settings(),
     };
     fingerprint.settings.push(("syntax".into(), syntax.into()));
+    fingerprint
+}
+
+/// Sets up `--checkpoint` and reads `--resume`'s checkpoint, refusing one made from
+/// other scene files or settings, or for another pass range.
+fn checkpointing(
+    args: &RenderArgs,
+    fingerprint: &Fingerprint,
+    settings: &mut RenderSettings,
+) -> Result<Option<Checkpoint>, ExitCode> {
+    let Some(path) = args.checkpoint.as_ref().or(args.resume.as_ref()) else { return Ok(None) };
+    let mut fingerprint = fingerprint.clone();
+    if let Some(r) = &args.pass_range {
+        fingerprint.settings.push(("pass-range".into(), format!("{}..{}", r.start, r.end)));
+    }
     let every = args.checkpoint_every.unwrap_or_default();
     settings.checkpoint = Some(CheckpointTarget { path: path.clone(), every, fingerprint: fingerprint.clone() });
     let Some(resume) = &args.resume else { return Ok(None) };
@@ -437,7 +621,7 @@ fn checkpointing(
 }
 
 /// The summary after a render; exit code 130 when it was interrupted.
-fn report(out: &pbrt_sppm::integrators::RenderOutput, args: &RenderArgs, outfile: &Path) -> ExitCode {
+fn report(out: &RenderOutput, args: &RenderArgs, outfile: Option<&Path>) -> ExitCode {
     let code = if out.interrupted { ExitCode::from(130) } else { ExitCode::SUCCESS };
     if args.common.quiet {
         return code;
@@ -452,12 +636,16 @@ fn report(out: &pbrt_sppm::integrators::RenderOutput, args: &RenderArgs, outfile
         print_stats(out);
     }
     let what = if out.interrupted { "interrupted after" } else { "rendered" };
+    let done = match &out.pass_sums {
+        Some(_) => format!("independent passes {}", out.passes),
+        None => format!("{} iterations", out.stats.iterations),
+    };
+    let to: Vec<String> = outfile.into_iter().chain(args.partial.as_deref()).map(|p| p.display().to_string()).collect();
     say!(
-        "{what} {} iterations ({} photons each) in {:.2} s -> {}",
-        out.stats.iterations,
+        "{what} {done} ({} photons each) in {:.2} s -> {}",
         out.image.meta.photons_per_iteration.unwrap_or(0),
         out.seconds,
-        outfile.display()
+        to.join(", ")
     );
     if out.interrupted
         && let Some(c) = args.checkpoint.as_ref().or(args.resume.as_ref())
@@ -531,6 +719,138 @@ fn export(s: &SceneDescription, scene: &Path, output: Option<PathBuf>, quiet: bo
             Err(err) => fail(&path, err),
         },
         None => print(&text),
+    }
+}
+
+/// Reads parts, adds them up and writes the image (and the merged part).
+fn merge(paths: &[PathBuf], outfile: Option<&Path>, partial: Option<&Path>, allow_gaps: bool, quiet: bool) -> ExitCode {
+    use pbrt_sppm::integrators::part;
+    if let Some(p) = outfile
+        && let Err(e) = check_output(p, true)
+    {
+        return fail(Path::new("--outfile"), e);
+    }
+    if let Some(p) = partial
+        && let Err(e) = check_part_path(p)
+    {
+        return fail(Path::new("--partial"), e);
+    }
+    let mut parts = Vec::with_capacity(paths.len());
+    for p in paths {
+        match Part::read(p) {
+            Ok(part) => parts.push((p.clone(), part)),
+            Err(e) => return fail(Path::new("merge"), e),
+        }
+    }
+    let merged = match part::merge(parts, allow_gaps) {
+        Ok(m) => m,
+        Err(e) => return fail(Path::new("merge"), e),
+    };
+    let written = outfile.map(|p| (p, pbrt_sppm::imageio::write_image(p, &merged.part.image())));
+    let written = written.into_iter().chain(partial.map(|p| (p, merged.part.write(p))));
+    for (path, result) in written {
+        if let Err(e) = result {
+            return fail(path, e);
+        }
+    }
+    if !quiet {
+        merge_summary(&merged, paths.len(), outfile.or(partial).unwrap_or(Path::new("-")));
+    }
+    ExitCode::SUCCESS
+}
+
+fn merge_summary(m: &pbrt_sppm::integrators::part::Merged, files: usize, to: &Path) {
+    for d in &m.duplicates {
+        say!("{}: warning: the same passes as another part, and identical: counted once", d.display());
+    }
+    if !m.missing.ranges().is_empty() {
+        say!(
+            "merge: warning: passes {} are in no part; the image averages the {} passes there are",
+            m.missing,
+            m.part.passes.count()
+        );
+    }
+    say!(
+        "merged {files} parts: passes {} ({} photons traced, {:.2} s of rendering) -> {}",
+        m.part.passes,
+        m.part.photons,
+        m.part.seconds,
+        to.display()
+    );
+}
+
+/// Prints (or writes) the script that submits a render's shards and their merge.
+fn plan(args: &PlanArgs) -> ExitCode {
+    if let Some(w) = &args.write
+        && let Err(e) = check_output(w, false)
+    {
+        return fail(Path::new("--write"), e);
+    }
+    if let Err(e) = check_shard_options(args) {
+        return fail(Path::new("plan"), e);
+    }
+    // A scene that does not load fails here, not on every node.
+    let common = Common { syntax: None, limits: Vec::new(), quiet: true };
+    if let Err(code) = load(&args.scene, &common) {
+        return code;
+    }
+    let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf()).display().to_string();
+    let beside = |ext: &str| args.scene.with_extension(ext);
+    let binary = args.binary.clone().or_else(|| std::env::current_exe().ok()).unwrap_or_else(|| "pbrt-sppm".into());
+    let plan = pbrt_sppm::farm::ShardPlan::new(pbrt_sppm::farm::ShardPlan {
+        binary: absolute(&binary),
+        scene: absolute(&args.scene),
+        passes: args.passes,
+        shards: args.shards,
+        parts: absolute(&args.parts.clone().unwrap_or_else(|| beside("parts"))),
+        outfile: absolute(&args.outfile.clone().unwrap_or_else(|| beside("exr"))),
+        cpus_per_task: args.cpus_per_task,
+        render_args: args.render_args.clone(),
+    });
+    let script = match plan {
+        Ok(p) => p.slurm_script(),
+        Err(e) => return fail(Path::new("plan"), e),
+    };
+    match &args.write {
+        Some(w) => match pbrt_sppm::imageio::write_text(w, &script) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => fail(w, e),
+        },
+        None => print(&script),
+    }
+}
+
+/// The options after `--` must be render options that leave the split to the plan.
+fn check_shard_options(args: &PlanArgs) -> Result<(), String> {
+    let mut argv = vec!["pbrt-sppm".to_string(), "render".into(), args.scene.display().to_string()];
+    argv.extend(args.render_args.iter().cloned());
+    let parsed = Cli::try_parse_from(argv).map_err(|e| e.to_string().lines().next().unwrap_or_default().to_string())?;
+    let r = match parsed.command {
+        Command::Render(r) => r,
+        _ => return Err("the options after -- must be render options".into()),
+    };
+    let taken = [
+        ("--spp", r.spp.is_some()),
+        ("--pass-range", r.pass_range.is_some()),
+        ("--partial", r.partial.is_some()),
+        ("--outfile", r.outfile.is_some()),
+        ("--nthreads", r.nthreads.is_some()),
+        ("--passes", r.passes.is_some()),
+        ("--checkpoint", r.checkpoint.is_some()),
+        ("--resume", r.resume.is_some()),
+        ("--time-limit", r.time_limit.is_some()),
+        ("--write-partial-images", r.write_partial_images),
+        ("--mse-reference-image", r.mse_reference_image.is_some()),
+        ("--quick", r.quick),
+        ("--photon-sampling", r.photon_sampling == Some(PhotonSampling::Adaptive)),
+    ];
+    match taken.iter().find(|t| t.1) {
+        Some((flag, _)) => Err(format!(
+            "{flag} cannot be given to the shards: the plan sets the passes, the parts and the threads \
+             (--passes, --shards, --parts, --outfile, --cpus-per-task), and a shard must render all its passes \
+             with uniform photons"
+        )),
+        None => Ok(()),
     }
 }
 

@@ -6,6 +6,8 @@
 pub mod adaptive;
 pub mod checkpoint;
 pub mod grid;
+pub mod part;
+pub mod passes;
 pub mod report;
 pub mod run;
 pub mod sppm;

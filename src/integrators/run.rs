@@ -4,11 +4,13 @@
 
 use super::adaptive::PhotonSampling;
 use super::checkpoint::{Checkpoint, Every, Fingerprint};
+use super::passes::{PassMode, PassSet};
 use super::report::{ErrorRow, progress_bar};
 use super::sppm::Sppm;
 use crate::imageio::{ImageMeta, RgbImage, metrics};
 use crate::render::RenderScene;
 use crate::sampling::SamplerKind;
+use std::ops::Range;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -44,6 +46,11 @@ pub struct RenderSettings {
     pub partial_images: Option<PathBuf>,
     /// Raised (by a signal handler) to stop after the iteration under way.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// Classic SPPM or independent passes (`--passes`, `--alpha`).
+    pub passes: PassMode,
+    /// Render only these passes of the planned ones (`--pass-range A..B`; independent
+    /// passes only).
+    pub pass_range: Option<Range<u32>>,
 }
 
 /// Where and how often a render saves its state, and what it was made from.
@@ -63,6 +70,9 @@ pub struct Plan {
     pub seed: u64,
     pub sampler: SamplerKind,
     pub photon_sampling: PhotonSampling,
+    pub passes: PassMode,
+    /// The passes this run renders, within `0..iterations`.
+    pub range: Range<u32>,
 }
 
 impl Plan {
@@ -77,6 +87,7 @@ impl Plan {
             ("seed", self.seed.to_string()),
             ("sampler", format!("{:?}", self.sampler).to_lowercase()),
             ("photon-sampling", format!("{:?}", self.photon_sampling).to_lowercase()),
+            ("passes", self.passes.to_string()),
         ]
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
@@ -91,6 +102,11 @@ pub struct RenderOutput {
     pub seconds: f64,
     /// Stopped early by [`RenderSettings::interrupt`].
     pub interrupted: bool,
+    /// The passes rendered (fewer than planned after a time limit or an interrupt).
+    pub passes: PassSet,
+    /// With independent passes, the sum of the passes' estimates per pixel (see
+    /// [`super::sppm::Sppm::pass_sums`]).
+    pub pass_sums: Option<Vec<[f64; 3]>>,
 }
 
 /// The loop's bookkeeping beside the SPPM state.
@@ -124,7 +140,19 @@ impl RenderScene {
         if !(radius >= MIN_RADIUS && radius.is_finite()) {
             return Err(format!("the radius must be at least {MIN_RADIUS:e} and finite, not {radius}"));
         }
+        let range = settings.pass_range.clone().unwrap_or(0..iterations);
+        if range.end > iterations || range.start >= range.end {
+            return Err(format!(
+                "the pass range {}..{} does not fit in the render's {iterations} passes (0..{iterations}; set the total with --spp)",
+                range.start, range.end
+            ));
+        }
+        if range != (0..iterations) && !settings.passes.is_independent() {
+            return Err("a pass range needs independent passes (--passes independent)".into());
+        }
         Ok(Plan {
+            passes: settings.passes,
+            range,
             iterations,
             photons: settings.photons.unwrap_or(i.photons_per_iteration).max(1),
             radius,
@@ -145,7 +173,8 @@ impl RenderScene {
         let plan = self.plan(settings)?;
         self.check_reference(settings)?;
         let p = &plan;
-        let mut sppm = Sppm::new(self, p.iterations, p.photons, p.radius, p.seed, (p.sampler, p.photon_sampling))?;
+        let mut sppm = Sppm::new(self, p.iterations, p.photons, p.radius, p.seed, (p.sampler, p.photon_sampling))?
+            .with_passes(p.passes, p.range.start)?;
         let now = Instant::now();
         let mut progress = Progress { start: now, prior: 0.0, errors: Vec::new(), saved: (0, now), save_failed: false };
         if let Some(c) = resume {
@@ -157,7 +186,7 @@ impl RenderScene {
                 break true;
             }
             let over_time = settings.time_limit.is_some_and(|t| progress.seconds() >= t);
-            if sppm.iteration >= plan.iterations || (sppm.iteration > 0 && over_time) {
+            if sppm.iteration >= plan.range.end || (sppm.passes_done() > 0 && over_time) {
                 break false;
             }
             sppm.iterate();
@@ -174,7 +203,10 @@ impl RenderScene {
         let seconds = progress.seconds();
         let image = self.image(&sppm, plan.photons, seconds);
         check_finite(&image)?;
-        Ok(RenderOutput { image, stats: sppm.stats.clone(), errors: progress.errors, seconds, interrupted })
+        let passes = PassSet::from_range(sppm.first_pass()..sppm.iteration);
+        let pass_sums = plan.passes.is_independent().then(|| sppm.pass_sums().iter().map(|s| s.to_array()).collect());
+        let stats = sppm.stats.clone();
+        Ok(RenderOutput { image, stats, errors: progress.errors, seconds, interrupted, passes, pass_sums })
     }
 
     /// The error row, progress bar, partial image and checkpoint due after an iteration.
@@ -194,10 +226,10 @@ impl RenderScene {
             });
         }
         if settings.progress {
-            progress_bar(sppm.iteration, plan.iterations, seconds);
+            progress_bar(sppm.passes_done(), plan.range.len() as u32, seconds);
         }
         if let Some(path) = &settings.partial_images
-            && sppm.iteration.is_power_of_two()
+            && sppm.passes_done().is_power_of_two()
             && let image = self.image(sppm, plan.photons, seconds)
             && let Err(e) = check_finite(&image).and_then(|()| crate::imageio::write_image(path, &image))
             && !settings.quiet
@@ -241,7 +273,7 @@ impl RenderScene {
             full: (self.film.x_resolution as usize, self.film.y_resolution as usize),
             meta: ImageMeta {
                 render_time_seconds: Some(seconds as f32),
-                samples_per_pixel: Some(sppm.iteration as i32),
+                samples_per_pixel: Some(sppm.passes_done() as i32),
                 photons_per_iteration: Some(photons as i64),
                 world_to_camera: Some(self.world_to_camera),
                 software: Some(format!("pbrt-sppm {}", env!("CARGO_PKG_VERSION"))),

@@ -16,6 +16,7 @@
 
 use super::adaptive::{self, Chain, Deposit, PhotonCounts, PhotonSampling};
 use super::grid::{Grid, Grouped, Site};
+use super::passes::{self, PassMode};
 use crate::interaction::Footprint;
 use crate::lights::Light;
 use crate::materials::{Bsdf, TransportMode};
@@ -96,6 +97,12 @@ pub struct Sppm<'a> {
     /// How much camera rays' differentials are scaled (pbrt scales them down as the
     /// iterations that share a pixel grow; see [`crate::scene::Integrator`]).
     differential_scale: f32,
+    /// Classic SPPM or independent passes ([`super::passes`]).
+    passes: PassMode,
+    /// The first pass rendered (independent passes may start anywhere).
+    first: u32,
+    /// The first pass's radius.
+    r1: f64,
     pub stats: Stats,
 }
 
@@ -137,8 +144,36 @@ impl<'a> Sppm<'a> {
             sampler,
             chains: (photon_sampling == PhotonSampling::Adaptive).then(|| Chain::new_set(seed)),
             differential_scale: differential_scale(iterations, scene.integrator.differential_floor),
+            passes: PassMode::Classic,
+            first: 0,
+            r1: radius as f64,
             stats: Stats::default(),
         })
+    }
+
+    /// Renders independent passes from `first` on, or classic SPPM (whose first pass
+    /// is always 0).
+    pub fn with_passes(mut self, mode: PassMode, first: u32) -> Result<Sppm<'a>, String> {
+        if mode.is_independent() && self.chains.is_some() {
+            return Err("adaptive photon sampling carries its Markov chains from pass to pass, so it cannot \
+                        render independent passes; use --photon-sampling uniform"
+                .into());
+        }
+        if !mode.is_independent() && first != 0 {
+            return Err(format!("classic SPPM cannot start at pass {first}: pass ranges need --passes independent"));
+        }
+        (self.passes, self.first, self.iteration) = (mode, first, first);
+        Ok(self)
+    }
+
+    /// Passes rendered by this run (a resumed run counts those before it).
+    pub fn passes_done(&self) -> u32 {
+        self.iteration - self.first
+    }
+
+    /// The first pass this run renders.
+    pub fn first_pass(&self) -> u32 {
+        self.first
     }
 
     /// The state a checkpoint saves (see [`super::checkpoint`]).
@@ -174,6 +209,10 @@ impl<'a> Sppm<'a> {
     /// One full iteration: camera pass, grid, photons, update.
     pub fn iterate(&mut self) {
         let t = Instant::now();
+        if let PassMode::Independent { alpha } = self.passes {
+            let r = passes::radius(self.r1, alpha, self.iteration);
+            self.pixels.par_iter_mut().for_each(|p| p.radius = r);
+        }
         self.camera_pass();
         let t1 = Instant::now();
         self.stats.visible_points += self.pixels.iter().filter(|p| p.vp.is_some()).count() as u64;
@@ -279,8 +318,21 @@ impl<'a> Sppm<'a> {
         self.pixels.par_iter().map(site).collect()
     }
 
-    /// Phase 4: the progressive radius and flux update.
+    /// Phase 4: the progressive radius and flux update; with independent passes, the
+    /// pass's density estimate β·Φ/(π r²) is added to τ instead.
     fn update(&mut self, phi: &[DVec3], m: &[u64]) {
+        if self.passes.is_independent() {
+            self.pixels.par_iter_mut().enumerate().for_each(|(i, p)| {
+                if m[i] > 0
+                    && let Some(vp) = &p.vp
+                {
+                    p.tau += vp.beta.as_dvec3() * phi[i] / (std::f64::consts::PI * p.radius * p.radius);
+                    p.n += m[i] as f64;
+                }
+                p.vp = None;
+            });
+            return;
+        }
         self.pixels.par_iter_mut().enumerate().for_each(|(i, p)| {
             if m[i] > 0
                 && let Some(vp) = &p.vp
@@ -296,8 +348,13 @@ impl<'a> Sppm<'a> {
         });
     }
 
-    /// The current estimate: L = Ld/k + τ/(k·P·π·r²), times the film's scale.
+    /// The current estimate: L = Ld/k + τ/(k·P·π·r²), times the film's scale; with
+    /// independent passes, the sum of the passes' estimates over k.
     pub fn image(&self) -> Vec<[f32; 3]> {
+        if self.passes.is_independent() {
+            let k = self.passes_done().max(1) as f64;
+            return self.pass_sums().into_iter().map(|s| (s / k).as_vec3().to_array()).collect();
+        }
         let k = self.iteration.max(1) as f64;
         let np = self.photons_per_iteration.max(1) as f64;
         let scale = self.scene.film.scale as f64;
@@ -308,6 +365,14 @@ impl<'a> Sppm<'a> {
                 (l * scale).as_vec3().to_array()
             })
             .collect()
+    }
+
+    /// With independent passes, the sum of the passes' estimates Ld + τ/P per pixel,
+    /// times the film's scale: what a shard writes and a merge adds up.
+    pub fn pass_sums(&self) -> Vec<DVec3> {
+        let np = self.photons_per_iteration.max(1) as f64;
+        let scale = self.scene.film.scale as f64;
+        self.pixels.iter().map(|p| (p.ld + p.tau / np) * scale).collect()
     }
 }
 

@@ -1,0 +1,287 @@
+//! Shards of a render with independent passes, and their merge.
+//!
+//! ```text
+//! pbrt-sppm render scene.pbrt --spp 64 --pass-range 0..16 --partial a.part.exr
+//! pbrt-sppm render scene.pbrt --spp 64 --pass-range 16..64 --partial b.part.exr
+//! pbrt-sppm merge a.part.exr b.part.exr --outfile scene.exr
+//! ```
+//! A part is an EXR whose `R`, `G`, `B` hold the per-pixel *sum* of its passes'
+//! estimates as 32-bit floats, and `lo.R`, `lo.G`, `lo.B` what f32 rounding left of
+//! that f64 sum, so a merge adds the sums as the single-machine render does (to
+//! about 1e-14). Its header names what it belongs to:
+//!
+//! - `pbrtSppmPart`: the format's version (1);
+//! - `fingerprint`: JSON of the scene's input files with their hashes and every
+//!   setting that changes the image (the checkpoint's [`Fingerprint`]);
+//! - `sceneFingerprint`: a hash of the input files' contents and those settings;
+//! - `seed`, `passes` (such as `0..16` or `0..4,8..12`), `photons` (paths traced);
+//! - the usual `samplesPerPixel` (passes), `photonsPerIteration`,
+//!   `renderTimeSeconds`, `worldToCamera`, `software`.
+//!
+//! [`merge`] refuses parts of other scenes or settings, reports passes missing from
+//! `0..N` (an error unless gaps are allowed) and passes given twice (always an error,
+//! except the same passes in identical files, which count once), and averages.
+
+use super::checkpoint::Fingerprint;
+use super::passes::PassSet;
+use crate::imageio::{ImageMeta, RgbImage, atomically};
+use exr::prelude::*;
+use std::path::{Path, PathBuf};
+
+type Res<T> = std::result::Result<T, String>;
+
+const VERSION: &str = "1";
+/// Channel names, in the order EXR stores them (sorted).
+const CHANNELS: [&str; 6] = ["B", "G", "R", "lo.B", "lo.G", "lo.R"];
+
+/// The passes of one shard, summed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Part {
+    pub fingerprint: Fingerprint,
+    pub passes: PassSet,
+    pub seed: u64,
+    /// Photon paths traced over these passes.
+    pub photons: u64,
+    pub photons_per_pass: u64,
+    pub seconds: f64,
+    pub width: usize,
+    pub height: usize,
+    /// The data window's corner in the display window, and the display window's size.
+    pub origin: (i32, i32),
+    pub full: (usize, usize),
+    pub world_to_camera: Option<[f32; 16]>,
+    /// Per pixel, the sum of the passes' estimates.
+    pub sums: Vec<[f64; 3]>,
+}
+
+impl Part {
+    /// The passes the whole render plans (the fingerprint's `iterations`).
+    pub fn planned(&self) -> Res<u32> {
+        let s = self.fingerprint.settings.iter().find(|(k, _)| k == "iterations");
+        s.and_then(|(_, v)| v.parse().ok()).ok_or_else(|| "the part does not say how many passes the render has".into())
+    }
+
+    /// The average of the passes: the image the part stands for.
+    pub fn image(&self) -> RgbImage {
+        let k = self.passes.count().max(1) as f64;
+        RgbImage {
+            width: self.width,
+            height: self.height,
+            pixels: self.sums.iter().map(|s| s.map(|c| (c / k) as f32)).collect(),
+            origin: self.origin,
+            full: self.full,
+            meta: ImageMeta {
+                render_time_seconds: Some(self.seconds as f32),
+                samples_per_pixel: Some(self.passes.count().min(i32::MAX as u64) as i32),
+                photons_per_iteration: Some(self.photons_per_pass as i64),
+                world_to_camera: self.world_to_camera,
+                software: Some(format!("pbrt-sppm {}", env!("CARGO_PKG_VERSION"))),
+            },
+        }
+    }
+
+    /// A short hash of the input files' contents and the settings: equal for every
+    /// part of one render, wherever its files were.
+    pub fn scene_fingerprint(&self) -> String {
+        let mut inputs: Vec<u64> = self.fingerprint.inputs.iter().map(|i| i.1).collect();
+        inputs.sort_unstable();
+        let text = format!("{inputs:?}{:?}", self.fingerprint.settings);
+        format!("{:016x}", xxhash_rust::xxh3::xxh3_64(text.as_bytes()))
+    }
+
+    pub fn write(&self, path: &Path) -> Res<()> {
+        let fail = |e: exr::error::Error| format!("cannot write \"{}\": {e}", path.display());
+        let json = serde_json::to_string(&self.fingerprint).map_err(|e| e.to_string())?;
+        let mut attrs = LayerAttributes::named("");
+        attrs.layer_position = Vec2(self.origin.0, self.origin.1);
+        attrs.software_name = Some(Text::from(format!("pbrt-sppm {}", env!("CARGO_PKG_VERSION")).as_str()));
+        attrs.world_to_camera = self.world_to_camera;
+        let text = |s: &str| AttributeValue::Text(Text::from_slice_unchecked(s.as_bytes()));
+        let entries = [
+            ("pbrtSppmPart", text(VERSION)),
+            ("fingerprint", text(&json)),
+            ("sceneFingerprint", text(&self.scene_fingerprint())),
+            ("seed", text(&self.seed.to_string())),
+            ("passes", text(&self.passes.to_string())),
+            ("photons", text(&self.photons.to_string())),
+            ("photonsPerIteration", text(&self.photons_per_pass.to_string())),
+            ("renderTimeSeconds", AttributeValue::F32(self.seconds as f32)),
+            ("renderTimeSecondsF64", text(&format!("{:?}", self.seconds))),
+            ("samplesPerPixel", AttributeValue::I32(self.passes.count().min(i32::MAX as u64) as i32)),
+        ];
+        for (k, v) in entries {
+            attrs.other.insert(Text::from(k), v);
+        }
+        let channels: SmallVec<[AnyChannel<FlatSamples>; 4]> =
+            CHANNELS.iter().map(|name| AnyChannel::new(*name, FlatSamples::F32(self.channel(name)))).collect();
+        let layer = Layer::new((self.width, self.height), attrs, Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels));
+        let mut image = Image::from_layer(layer);
+        image.attributes.display_window = IntegerBounds::new((0, 0), self.full);
+        atomically(path, |tmp| image.write().to_file(tmp).map_err(fail))
+    }
+
+    /// One channel's samples: the f32 nearest each sum (`R`) or what it leaves (`lo.R`).
+    fn channel(&self, name: &str) -> Vec<f32> {
+        let c = match name.trim_start_matches("lo.") {
+            "R" => 0,
+            "G" => 1,
+            _ => 2,
+        };
+        let lo = name.starts_with("lo.");
+        self.sums.iter().map(|s| if lo { (s[c] - s[c] as f32 as f64) as f32 } else { s[c] as f32 }).collect()
+    }
+
+    pub fn read(path: &Path) -> Res<Part> {
+        let bytes = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
+        decode(&bytes).map_err(|e| format!("\"{}\": {e}", path.display()))
+    }
+}
+
+fn decode(bytes: &[u8]) -> Res<Part> {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| format!("not a readable EXR ({e})"))?;
+    let layer = &image.layer_data;
+    let a = &layer.attributes;
+    let text = |k: &str| match a.other.get(&Text::from(k)) {
+        Some(AttributeValue::Text(t)) => Ok(String::from_utf8_lossy(t.bytes()).into_owned()),
+        _ => Err(format!("the header has no text \"{k}\"")),
+    };
+    match text("pbrtSppmPart") {
+        Ok(v) if v == VERSION => {}
+        Ok(v) => return Err(format!("a part of format {v}, which this pbrt-sppm cannot read (it reads {VERSION})")),
+        Err(_) => return Err("not a part of a render (made by render --partial)".into()),
+    }
+    let number = |k: &str| text(k).and_then(|t| t.parse::<u64>().map_err(|_| format!("\"{k}\" is not a number: {t}")));
+    let fingerprint = serde_json::from_str(&text("fingerprint")?).map_err(|e| format!("bad \"fingerprint\": {e}"))?;
+    let passes: PassSet = text("passes")?.parse()?;
+    let seconds = text("renderTimeSecondsF64")?.parse().map_err(|_| "bad \"renderTimeSecondsF64\"".to_string())?;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let display = image.attributes.display_window;
+    let part = Part {
+        fingerprint,
+        passes,
+        seed: number("seed")?,
+        photons: number("photons")?,
+        photons_per_pass: number("photonsPerIteration")?,
+        seconds,
+        width: w,
+        height: h,
+        origin: (a.layer_position.x() - display.position.x(), a.layer_position.y() - display.position.y()),
+        full: (display.size.width(), display.size.height()),
+        world_to_camera: a.world_to_camera,
+        sums: sums(&layer.channel_data.list, w * h)?,
+    };
+    match text("sceneFingerprint")? {
+        f if f == part.scene_fingerprint() => Ok(part),
+        _ => Err("the header's \"sceneFingerprint\" does not match its \"fingerprint\" (an edited file?)".into()),
+    }
+}
+
+/// The f64 sums from the six channels.
+fn sums(list: &[AnyChannel<FlatSamples>], n: usize) -> Res<Vec<[f64; 3]>> {
+    let get = |name: &str| -> Res<&Vec<f32>> {
+        match list.iter().find(|c| c.name == *name).map(|c| &c.sample_data) {
+            Some(FlatSamples::F32(v)) if v.len() == n => Ok(v),
+            Some(_) => Err(format!("channel \"{name}\" is not 32-bit float")),
+            None => Err(format!("channel \"{name}\" is missing")),
+        }
+    };
+    let [b, g, r, lb, lg, lr] = [
+        get(CHANNELS[0])?,
+        get(CHANNELS[1])?,
+        get(CHANNELS[2])?,
+        get(CHANNELS[3])?,
+        get(CHANNELS[4])?,
+        get(CHANNELS[5])?,
+    ];
+    Ok((0..n).map(|i| [r[i] as f64 + lr[i] as f64, g[i] as f64 + lg[i] as f64, b[i] as f64 + lb[i] as f64]).collect())
+}
+
+/// What a merge made, and what it noticed on the way.
+pub struct Merged {
+    /// All the parts' passes, summed (itself a part: merges can be merged).
+    pub part: Part,
+    /// Passes of `0..N` no part holds.
+    pub missing: PassSet,
+    /// Files skipped because an identical file with the same passes came first.
+    pub duplicates: Vec<PathBuf>,
+}
+
+/// Adds up parts of one render. Parts of another scene or other settings, parts of
+/// another size, and passes given twice are errors; missing passes are an error
+/// unless `allow_gaps`.
+pub fn merge(parts: Vec<(PathBuf, Part)>, allow_gaps: bool) -> Res<Merged> {
+    let mut it = parts.into_iter();
+    let Some((first_path, first)) = it.next() else { return Err("no parts to merge".into()) };
+    let planned = first.planned()?;
+    let mut kept: Vec<(PathBuf, Part)> = vec![(first_path, first)];
+    let mut duplicates = Vec::new();
+    for (path, part) in it {
+        let (p0, base) = &kept[0];
+        belongs(base, &part).map_err(|e| {
+            format!("\"{}\" is not a part of the same render as \"{}\": {e}", path.display(), p0.display())
+        })?;
+        match kept.iter().find(|(_, k)| k.passes.intersection(&part.passes).count() > 0) {
+            Some((_, k)) if k.passes == part.passes && k.sums == part.sums => duplicates.push(path),
+            Some((other, k)) => {
+                let both = k.passes.intersection(&part.passes);
+                return Err(format!(
+                    "\"{}\" and \"{}\" both hold passes {both}; a pass must be merged once (remove one of them)",
+                    other.display(),
+                    path.display()
+                ));
+            }
+            None => kept.push((path, part)),
+        }
+    }
+    let (passes, missing) = coverage(&kept, planned);
+    if !missing.ranges().is_empty() && !allow_gaps {
+        return Err(format!(
+            "passes {missing} of 0..{planned} are in no part (re-run those shards, or merge with --allow-gaps)"
+        ));
+    }
+    let mut sums = vec![[0f64; 3]; kept[0].1.sums.len()];
+    for (_, p) in &kept {
+        sums.iter_mut().zip(&p.sums).for_each(|(s, v)| (0..3).for_each(|c| s[c] += v[c]));
+    }
+    let base = &kept[0].1;
+    let part = Part {
+        passes,
+        photons: kept.iter().map(|k| k.1.photons).sum(),
+        seconds: kept.iter().map(|k| k.1.seconds).sum(),
+        sums,
+        ..base.clone()
+    };
+    Ok(Merged { part, missing, duplicates })
+}
+
+fn coverage(parts: &[(PathBuf, Part)], planned: u32) -> (PassSet, PassSet) {
+    let all = parts.iter().fold(PassSet::default(), |a, p| a.union(&p.1.passes));
+    let missing = all.missing_from(planned);
+    (all, missing)
+}
+
+/// Why `b` cannot be merged with `a`, if it cannot.
+fn belongs(a: &Part, b: &Part) -> Res<()> {
+    a.fingerprint.check(&b.fingerprint)?;
+    b.fingerprint.check(&a.fingerprint)?;
+    if (a.width, a.height, a.origin, a.full) != (b.width, b.height, b.origin, b.full) {
+        return Err(format!(
+            "its image is {}x{} at {:?}, not {}x{} at {:?}",
+            b.width, b.height, b.origin, a.width, a.height, a.origin
+        ));
+    }
+    if (a.seed, a.photons_per_pass) != (b.seed, b.photons_per_pass) {
+        return Err(format!(
+            "it has seed {} and {} photons a pass, not {} and {}",
+            b.seed, b.photons_per_pass, a.seed, a.photons_per_pass
+        ));
+    }
+    Ok(())
+}
