@@ -63,3 +63,15 @@ pub fn missing_prerequisite(why: &str) {
     assert!(!ci || allowed, "cannot run under CI: {why} (set PBRT_SPPM_ALLOW_SKIP=1 to allow the skip)");
     eprintln!("SKIPPED: {why}");
 }
+
+/// A test that cannot run here and is not a failure for it (a service the machine
+/// cannot start): it says so on stderr and in `target/tmp/skipped-tests.txt`, which
+/// `.ci/run` prints after the test summary.
+pub fn skipped(test: &str, why: &str) {
+    use std::io::Write;
+    eprintln!("SKIPPED: {test}: {why}");
+    let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join("skipped-tests.txt");
+    if let Ok(mut f) = std::fs::OpenOptions::new().create(true).append(true).open(path) {
+        let _ = writeln!(f, "{test}: {why}");
+    }
+}

@@ -18,6 +18,8 @@ mod real_scenes;
 mod render;
 mod sampling;
 mod shapes;
+mod shards;
+mod slurm;
 mod stability;
 mod tokenizer;
 mod truncation;
