@@ -735,14 +735,7 @@ fn merge(paths: &[PathBuf], outfile: Option<&Path>, partial: Option<&Path>, allo
     {
         return fail(Path::new("--partial"), e);
     }
-    let mut parts = Vec::with_capacity(paths.len());
-    for p in paths {
-        match Part::read(p) {
-            Ok(part) => parts.push((p.clone(), part)),
-            Err(e) => return fail(Path::new("merge"), e),
-        }
-    }
-    let merged = match part::merge(parts, allow_gaps) {
+    let merged = match part::merge(paths, allow_gaps) {
         Ok(m) => m,
         Err(e) => return fail(Path::new("merge"), e),
     };

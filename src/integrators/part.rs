@@ -138,6 +138,18 @@ impl Part {
 }
 
 fn decode(bytes: &[u8]) -> Res<Part> {
+    // From the header alone: a part is never larger than a render may be.
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| format!("not a readable EXR ({e})"))?;
+    let size = meta.headers.first().map_or(Vec2(0, 0), |h| h.layer_size);
+    let max = crate::limits::Limits::default().pixels;
+    if (size.width() as u64).saturating_mul(size.height() as u64) > max {
+        return Err(crate::limits::Limits::over(
+            format!("the part's {}x{} pixels", size.width(), size.height()),
+            "pixels",
+            max,
+        ));
+    }
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -213,58 +225,82 @@ pub struct Merged {
     pub duplicates: Vec<PathBuf>,
 }
 
-/// Adds up parts of one render. Parts of another scene or other settings, parts of
+/// Adds up parts of one render, one file at a time (so a merge holds two parts in
+/// memory, whatever their number). Parts of another scene or other settings, parts of
 /// another size, and passes given twice are errors; missing passes are an error
 /// unless `allow_gaps`.
-pub fn merge(parts: Vec<(PathBuf, Part)>, allow_gaps: bool) -> Res<Merged> {
-    let mut it = parts.into_iter();
-    let Some((first_path, first)) = it.next() else { return Err("no parts to merge".into()) };
-    let planned = first.planned()?;
-    let mut kept: Vec<(PathBuf, Part)> = vec![(first_path, first)];
-    let mut duplicates = Vec::new();
-    for (path, part) in it {
-        let (p0, base) = &kept[0];
+pub fn merge(paths: &[PathBuf], allow_gaps: bool) -> Res<Merged> {
+    let mut merger: Option<Merger> = None;
+    for path in paths {
+        let part = Part::read(path)?;
+        match &mut merger {
+            None => merger = Some(Merger::new(path.clone(), part)),
+            Some(m) => m.add(path.clone(), part)?,
+        }
+    }
+    merger.ok_or_else(|| "no parts to merge".to_string())?.finish(allow_gaps)
+}
+
+/// The running sum of a merge.
+struct Merger {
+    /// The first part, its sums the running total.
+    base: (PathBuf, Part),
+    /// Every part kept: its file, passes and a hash of its sums (to tell a re-run
+    /// shard's identical part from a different one).
+    kept: Vec<(PathBuf, PassSet, u64)>,
+    duplicates: Vec<PathBuf>,
+}
+
+fn sums_hash(p: &Part) -> u64 {
+    let bytes: Vec<u8> = p.sums.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    xxhash_rust::xxh3::xxh3_64(&bytes)
+}
+
+impl Merger {
+    fn new(path: PathBuf, part: Part) -> Merger {
+        let kept = vec![(path.clone(), part.passes.clone(), sums_hash(&part))];
+        Merger { base: (path, part), kept, duplicates: Vec::new() }
+    }
+
+    fn add(&mut self, path: PathBuf, part: Part) -> Res<()> {
+        let (p0, base) = &self.base;
         belongs(base, &part).map_err(|e| {
             format!("\"{}\" is not a part of the same render as \"{}\": {e}", path.display(), p0.display())
         })?;
-        match kept.iter().find(|(_, k)| k.passes.intersection(&part.passes).count() > 0) {
-            Some((_, k)) if k.passes == part.passes && k.sums == part.sums => duplicates.push(path),
-            Some((other, k)) => {
-                let both = k.passes.intersection(&part.passes);
+        let hash = sums_hash(&part);
+        match self.kept.iter().find(|k| k.1.intersection(&part.passes).count() > 0) {
+            Some(k) if k.1 == part.passes && k.2 == hash => self.duplicates.push(path),
+            Some((other, passes, _)) => {
                 return Err(format!(
-                    "\"{}\" and \"{}\" both hold passes {both}; a pass must be merged once (remove one of them)",
+                    "\"{}\" and \"{}\" both hold passes {}; a pass must be merged once (remove one of them)",
                     other.display(),
-                    path.display()
+                    path.display(),
+                    passes.intersection(&part.passes)
                 ));
             }
-            None => kept.push((path, part)),
+            None => {
+                let total = &mut self.base.1;
+                total.sums.iter_mut().zip(&part.sums).for_each(|(s, v)| (0..3).for_each(|c| s[c] += v[c]));
+                total.passes = total.passes.union(&part.passes);
+                total.photons += part.photons;
+                total.seconds += part.seconds;
+                self.kept.push((path, part.passes, hash));
+            }
         }
+        Ok(())
     }
-    let (passes, missing) = coverage(&kept, planned);
-    if !missing.ranges().is_empty() && !allow_gaps {
-        return Err(format!(
-            "passes {missing} of 0..{planned} are in no part (re-run those shards, or merge with --allow-gaps)"
-        ));
-    }
-    let mut sums = vec![[0f64; 3]; kept[0].1.sums.len()];
-    for (_, p) in &kept {
-        sums.iter_mut().zip(&p.sums).for_each(|(s, v)| (0..3).for_each(|c| s[c] += v[c]));
-    }
-    let base = &kept[0].1;
-    let part = Part {
-        passes,
-        photons: kept.iter().map(|k| k.1.photons).sum(),
-        seconds: kept.iter().map(|k| k.1.seconds).sum(),
-        sums,
-        ..base.clone()
-    };
-    Ok(Merged { part, missing, duplicates })
-}
 
-fn coverage(parts: &[(PathBuf, Part)], planned: u32) -> (PassSet, PassSet) {
-    let all = parts.iter().fold(PassSet::default(), |a, p| a.union(&p.1.passes));
-    let missing = all.missing_from(planned);
-    (all, missing)
+    fn finish(self, allow_gaps: bool) -> Res<Merged> {
+        let part = self.base.1;
+        let planned = part.planned()?;
+        let missing = part.passes.missing_from(planned);
+        if !missing.ranges().is_empty() && !allow_gaps {
+            return Err(format!(
+                "passes {missing} of 0..{planned} are in no part (re-run those shards, or merge with --allow-gaps)"
+            ));
+        }
+        Ok(Merged { part, missing, duplicates: self.duplicates })
+    }
 }
 
 /// Why `b` cannot be merged with `a`, if it cannot.
