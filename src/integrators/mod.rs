@@ -1,7 +1,8 @@
 //! Integrators. pbrt-sppm renders with stochastic progressive photon mapping only:
 //! [`sppm`] holds its passes, [`grid`] the photon lookup grid, [`adaptive`] adaptive
 //! photon chains, [`run`] the render loop, [`checkpoint`] saved and resumed state,
-//! [`report`] `ERRORS.csv` and progress. Data flows one way: the render-ready scene (`render`) in, an image out.
+//! [`passes`] independent passes, [`part`] shard files and their merge, [`report`]
+//! `ERRORS.csv` and progress. Data flows one way: the render-ready scene (`render`) in, an image out.
 
 pub mod adaptive;
 pub mod checkpoint;

@@ -269,3 +269,27 @@ fn plan_prints_a_job_array_and_a_merge_that_waits_for_it() {
     let e = error(&d, &["plan", "--slurm", "--passes", "8", "--shards", "2", "bad.pbrt"]);
     assert!(e.contains("bad.pbrt:2:"), "{e}");
 }
+
+#[test]
+fn a_shard_stopped_early_and_resumed_writes_the_same_part() {
+    let d = dir("resume");
+    let whole = shard(&d, "1..5", "2");
+    let range = ["render", "scene.pbrt", "--pass-range", "1..5", "--partial", "r.part.exr", "-q"];
+    let mut first = range.to_vec();
+    first.extend(["--checkpoint", "c.ckpt", "--time-limit", "0.000001"]);
+    ok(&d, &first);
+    // Stopped after one pass: the part says so, and merge would report the gap.
+    let e = error(&d, &["merge", "r.part.exr", "--outfile", "x.exr"]);
+    assert!(e.contains("passes 0..1,2..6 of 0..6"), "{e}");
+    let mut resumed = range.to_vec();
+    resumed.extend(["--resume", "c.ckpt"]);
+    ok(&d, &resumed);
+    ok(&d, &["merge", "r.part.exr", "--outfile", "r.exr", "--allow-gaps"]);
+    ok(&d, &["merge", &whole, "--outfile", "w.exr", "--allow-gaps"]);
+    let bits = |f: &str| read_image(&d.join(f)).unwrap().pixels.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+    assert_eq!(bits("r.exr"), bits("w.exr"));
+    // The checkpoint belongs to its pass range.
+    let mut other = vec!["render", "scene.pbrt", "--pass-range", "2..5", "--partial", "o.part.exr"];
+    other.extend(["--resume", "c.ckpt"]);
+    assert!(error(&d, &other).contains("pass-range 1..5"));
+}
