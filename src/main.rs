@@ -450,10 +450,11 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     };
     let syntax = format!("{:?}", scene.syntax).to_lowercase();
     let rs = RenderScene::new(scene);
-    let fingerprint = match rs.plan(&settings) {
-        Ok(plan) => fingerprint(args, &plan, &syntax),
+    let plan = match rs.plan(&settings) {
+        Ok(plan) => plan,
         Err(e) => return fail(&args.scene, e),
     };
+    let fingerprint = fingerprint(args, &plan, &syntax);
     let resume = match checkpointing(args, &fingerprint, &mut settings) {
         Ok(r) => r,
         Err(code) => return code,
@@ -467,7 +468,7 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         return ExitCode::FAILURE;
     }
     if let Some(path) = &args.partial
-        && let Err(e) = write_part(&rs, &out, fingerprint, path)
+        && let Err(e) = write_part(&out, fingerprint, &plan, path)
     {
         return fail(Path::new("--partial"), e);
     }
@@ -498,16 +499,15 @@ fn pass_mode(args: &RenderArgs) -> Result<PassMode, String> {
 }
 
 /// The part a shard writes: its passes' sums and what they belong to.
-fn write_part(rs: &RenderScene, out: &RenderOutput, fingerprint: Fingerprint, path: &Path) -> Result<(), String> {
+fn write_part(out: &RenderOutput, fingerprint: Fingerprint, plan: &Plan, path: &Path) -> Result<(), String> {
     let Some(sums) = out.pass_sums.clone() else { return Err("only independent passes make parts".into()) };
     let img = &out.image;
-    let seed = fingerprint.settings.iter().find(|(k, _)| k == "seed").and_then(|(_, v)| v.parse().ok());
     let part = Part {
         fingerprint,
         passes: out.passes.clone(),
-        seed: seed.unwrap_or(rs.integrator.seed),
+        seed: plan.seed,
         photons: out.stats.photons.traced,
-        photons_per_pass: img.meta.photons_per_iteration.unwrap_or(0) as u64,
+        photons_per_pass: plan.photons,
         seconds: out.seconds,
         width: img.width,
         height: img.height,

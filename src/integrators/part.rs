@@ -90,6 +90,11 @@ impl Part {
     }
 
     pub fn write(&self, path: &Path) -> Res<()> {
+        if let Some(i) = self.sums.iter().position(|s| !s.iter().all(|c| (*c as f32).is_finite())) {
+            let (x, y) =
+                (self.origin.0 + (i % self.width.max(1)) as i32, self.origin.1 + (i / self.width.max(1)) as i32);
+            return Err(format!("the sum of the passes at pixel ({x}, {y}) is beyond the range of 32-bit floats"));
+        }
         let fail = |e: exr::error::Error| format!("cannot write \"{}\": {e}", path.display());
         let json = serde_json::to_string(&self.fingerprint).map_err(|e| e.to_string())?;
         let mut attrs = LayerAttributes::named("");

@@ -178,6 +178,13 @@ impl RenderScene {
         let now = Instant::now();
         let mut progress = Progress { start: now, prior: 0.0, errors: Vec::new(), saved: (0, now), save_failed: false };
         if let Some(c) = resume {
+            if !(plan.range.start..=plan.range.end).contains(&c.iteration) {
+                let r = &plan.range;
+                return Err(format!(
+                    "the checkpoint is at pass {}, outside this run's passes {}..{}",
+                    c.iteration, r.start, r.end
+                ));
+            }
             sppm.restore(c.iteration, &c.pixels, c.chains, c.stats)?;
             (progress.prior, progress.errors, progress.saved.0) = (c.seconds, c.errors, c.iteration);
         }

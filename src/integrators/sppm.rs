@@ -168,7 +168,7 @@ impl<'a> Sppm<'a> {
 
     /// Passes rendered by this run (a resumed run counts those before it).
     pub fn passes_done(&self) -> u32 {
-        self.iteration - self.first
+        self.iteration.saturating_sub(self.first)
     }
 
     /// The first pass this run renders.
