@@ -151,16 +151,13 @@ impl<'a> Sppm<'a> {
         })
     }
 
-    /// Renders independent passes from `first` on, or classic SPPM (whose first pass
-    /// is always 0).
+    /// Renders independent passes from `first` on, or classic SPPM (`first` 0; the
+    /// run's plan refuses a pass range for it).
     pub fn with_passes(mut self, mode: PassMode, first: u32) -> Result<Sppm<'a>, String> {
         if mode.is_independent() && self.chains.is_some() {
             return Err("adaptive photon sampling carries its Markov chains from pass to pass, so it cannot \
                         render independent passes; use --photon-sampling uniform"
                 .into());
-        }
-        if !mode.is_independent() && first != 0 {
-            return Err(format!("classic SPPM cannot start at pass {first}: pass ranges need --passes independent"));
         }
         (self.passes, self.first, self.iteration) = (mode, first, first);
         Ok(self)
