@@ -1,7 +1,8 @@
 //! `pbrt-sppm check SCENE --json [--shapes]`: the loaded scene as one JSON object.
 //!
 //! The layout is a contract (design.md §3): `syntax`, `camera`, `film`, `integrator`,
-//! `counts`, `world_bounds`, `warnings`, `skipped`, `approximated`, and with `--shapes` one entry per
+//! `counts`, `world_bounds`, `warnings`, `skipped`, `approximated`, `pbrt_bugs` (each
+//! pbrt bug the scene triggers, where, and whether `--fix` fixes it), and with `--shapes` one entry per
 //! created shape (world shapes in creation order, then each instance's shapes) with its
 //! parameters after defaults and clamps, row-major `object_to_world`, orientation flags,
 //! world-space area and bounds.
@@ -78,6 +79,8 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
         "warnings": scene.warnings,
         "skipped": scene.skipped,
         "approximated": scene.approximated,
+        "pbrt_bugs": scene.pbrt_bugs,
+        "fixes": scene.fixes.names(),
     });
     if with_shapes {
         let shapes: Vec<Value> = scene.placed_shapes().enumerate().map(|(k, p)| shape(scene, k, &p)).collect();

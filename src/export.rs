@@ -238,7 +238,7 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         what: a.what.clone(),
         why: format!("approximated by pbrt-sppm too: {}", a.how),
     }));
-    let textures = Textures::new(&scene.textures);
+    let textures = Textures::new(&scene.textures, scene.fixes);
     let materials = scene.materials.iter().enumerate().map(|(i, m)| material(m, &textures, i, &mut notes)).collect();
     let shapes = scene.shapes.iter().enumerate().map(|(i, s)| shape(scene, s, true, i as u32, &mut notes)).collect();
     let objects = scene

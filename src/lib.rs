@@ -9,6 +9,7 @@ pub mod camera;
 pub mod check;
 pub mod export;
 pub mod farm;
+pub mod fixes;
 pub mod fuzzing;
 pub mod imageio;
 pub mod integrators;

@@ -2,6 +2,7 @@
 //! `export --mitsuba SCENE`. A scene named `-` is read from standard input.
 
 use clap::{Parser, Subcommand};
+use pbrt_sppm::fixes::Fixes;
 use pbrt_sppm::integrators::adaptive::PhotonSampling;
 use pbrt_sppm::integrators::checkpoint::{Checkpoint, Every, Fingerprint};
 use pbrt_sppm::integrators::part::Part;
@@ -100,6 +101,10 @@ struct Common {
     /// Print no warnings and no summary (errors still go to standard error).
     #[arg(long, short)]
     quiet: bool,
+    /// Fix these pbrt bugs instead of rendering them as the file's pbrt does:
+    /// NAME,... or `all` (`--fix help` lists them; `check` says which a scene shows).
+    #[arg(long = "fix", value_name = "NAME,...|all|help", value_parser = parse_fixes)]
+    fixes: Option<Fixes>,
 }
 
 #[derive(clap::Args)]
@@ -218,6 +223,10 @@ struct PlanArgs {
     render_args: Vec<String>,
 }
 
+fn parse_fixes(s: &str) -> Result<Fixes, String> {
+    Fixes::parse(s)
+}
+
 fn parse_syntax(s: &str) -> Result<Syntax, String> {
     match s {
         "v3" => Ok(Syntax::V3),
@@ -290,6 +299,19 @@ fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::O
     args
 }
 
+/// Whether the arguments hold `--fix help` (or `--fix=help`), which lists the fixes
+/// whatever else is given.
+fn asks_fix_help(args: impl Iterator<Item = std::ffi::OsString>) -> bool {
+    let mut prev_fix = false;
+    for a in args {
+        if (prev_fix && a == "help") || a == "--fix=help" {
+            return true;
+        }
+        prev_fix = a == "--fix";
+    }
+    false
+}
+
 /// Writes a line to standard error; a closed stderr is not worth a panic.
 macro_rules! say {
     ($($t:tt)*) => {{
@@ -304,7 +326,8 @@ fn load(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> {
             return Err(fail(Path::new("--limit"), e));
         }
     }
-    let opts = LoadOptions { syntax: common.syntax, limits, ..Default::default() };
+    let fixes = common.fixes.unwrap_or_default();
+    let opts = LoadOptions { syntax: common.syntax, limits, fixes, ..Default::default() };
     let loaded = if scene.as_os_str() == "-" {
         let mut bytes = Vec::new();
         let max = limits.file_bytes;
@@ -348,6 +371,9 @@ fn print(text: &str) -> ExitCode {
 }
 
 fn main() -> ExitCode {
+    if asks_fix_help(std::env::args_os().skip(1)) {
+        return print(&Fixes::help());
+    }
     let cli = Cli::parse_from(with_default_subcommand(std::env::args_os().collect()));
     match cli.command {
         Command::Check { scene, json, shapes, common } => match load(&scene, &common) {
@@ -597,6 +623,7 @@ fn fingerprint(args: &RenderArgs, plan: &Plan, syntax: &str) -> Fingerprint {
         settings: plan.fingerprint_settings(),
     };
     fingerprint.settings.push(("syntax".into(), syntax.into()));
+    fingerprint.settings.push(("fix".into(), args.common.fixes.unwrap_or_default().names()));
     fingerprint
 }
 
@@ -783,7 +810,7 @@ fn plan(args: &PlanArgs) -> ExitCode {
         return fail(Path::new("plan"), e);
     }
     // A scene that does not load fails here, not on every node.
-    let common = Common { syntax: None, limits: Vec::new(), quiet: true };
+    let common = Common { syntax: None, limits: Vec::new(), quiet: true, fixes: None };
     if let Err(code) = load(&args.scene, &common) {
         return code;
     }
@@ -904,6 +931,16 @@ fn summary(s: &SceneDescription) -> String {
     }
     for a in &s.approximated {
         let _ = writeln!(out, "approximated {}:{}:{}: {} ({})", a.file, a.line, a.column, a.what, a.how);
+    }
+    for b in &s.pbrt_bugs {
+        let how = if b.fixed { "fixed (--fix)" } else { "rendered as pbrt does" };
+        let _ = writeln!(out, "pbrt bug    {}:{}:{}: {} ({how})", b.file, b.line, b.column, b.name);
+    }
+    if s.pbrt_bugs.iter().any(|b| !b.fixed) {
+        let _ = writeln!(
+            out,
+            "            (`--fix NAME` renders the physically right image; `--fix help` says what each changes)"
+        );
     }
     out
 }

@@ -4,17 +4,19 @@
 
 use crate::accel::{Geometry, Hit};
 use crate::camera::Camera;
+use crate::fixes::{Fix, Fixes};
 use crate::interaction::{Footprint, SurfaceInteraction};
 use crate::lights::{Light, WorldSphere};
 use crate::materials::{Bsdf, LobeList, Material, TexCtx, Textures};
 use crate::math::Ray;
 use crate::math::frame::coordinate_system;
+use crate::parser::Syntax;
 use crate::sampling::Distribution1D;
 use crate::scene::{
     AlphaRule, AreaLightDesc, Film, Integrator, MaterialKind, MixRule, SceneDescription, ShapeAlpha, TexValue,
 };
 use crate::shapes::ShapeSample;
-use crate::spectrum::{Rgb, luminance};
+use crate::spectrum::Rgb;
 use glam::Vec3;
 
 /// An emitting world shape: its radiance and where its lights start.
@@ -24,6 +26,29 @@ pub struct EmitterInfo {
     pub two_sided: bool,
     /// Index of its (first) light; meshes have one light per stored triangle after it.
     pub first_light: u32,
+    /// Each primitive's light has its own radiance (pbrt-v4's `power` on a mesh).
+    pub per_piece: bool,
+}
+
+/// Where alpha masks an area light's emission.
+#[derive(Clone, Copy, Debug)]
+struct AlphaEmission {
+    /// Light samples and photons drawn on a cut-away point (pbrt-v4, and the fix).
+    samples: bool,
+    /// A hit again by the position's hash, after the ray's own alpha test let it
+    /// through (pbrt-v4 only).
+    hits: bool,
+}
+
+impl AlphaEmission {
+    // DEVIATION(pbrt): appearance, `--fix area-alpha`. pbrt-v4 masks the emission of a
+    // hit by alpha after the hit itself passed the ray's alpha test, counting a
+    // fractional alpha twice there and once on light samples; the fix masks each
+    // emitted point once.
+    fn new(syntax: Syntax, fixes: Fixes) -> AlphaEmission {
+        let fixed = fixes.has(Fix::AreaAlpha);
+        AlphaEmission { samples: fixed || syntax == Syntax::V4, hits: !fixed && syntax == Syntax::V4 }
+    }
 }
 
 pub struct RenderScene {
@@ -39,6 +64,11 @@ pub struct RenderScene {
     object_shape_alpha: Vec<Vec<Option<ShapeAlpha>>>,
     /// Whether any shape has an alpha mask (rays then check the shapes they hit).
     has_alpha: bool,
+    alpha_rules: AlphaEmission,
+    /// The pbrt bugs fixed (`--fix`).
+    pub fixes: Fixes,
+    /// The file's pbrt version, whose integrator's rules the render follows.
+    pub syntax: Syntax,
     /// Whether shading uses a pixel's footprint (bump maps, noise textures): camera
     /// rays then carry differentials.
     pub needs_differentials: bool,
@@ -59,9 +89,9 @@ pub struct RenderScene {
 impl RenderScene {
     pub fn new(mut scene: SceneDescription) -> RenderScene {
         let camera = Camera::new(&scene.camera, &scene.film);
-        let textures = Textures::new(&scene.textures);
+        let textures = Textures::new(&scene.textures, scene.fixes);
         let needs_differentials = textures.use_footprint() || scene.materials.iter().any(|m| m.bump.is_some());
-        let materials: Vec<Material> = scene.materials.iter().map(Material::from_desc).collect();
+        let materials: Vec<Material> = scene.materials.iter().map(|m| Material::from_desc(m, scene.fixes)).collect();
         let world_shape_material = scene.shapes.iter().map(|s| s.material).collect();
         let object_shape_material =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.material).collect()).collect();
@@ -84,7 +114,8 @@ impl RenderScene {
         let integrator = scene.integrator.clone();
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
         let geometry = Geometry::new(&mut scene);
-        let emitters = area_lights(&geometry, &shape_area_lights, &area_params, &mut lights);
+        let spread_power = scene.syntax == Syntax::V3 || scene.fixes.has(Fix::MeshPower);
+        let emitters = area_lights(&geometry, &shape_area_lights, &area_params, spread_power, &mut lights);
         let powers: Vec<f64> = lights.iter().map(|l| l.power(world)).collect();
         let photon_scale = photon_scale(powers.iter().sum());
         let light_power = Distribution1D::new(&powers);
@@ -100,6 +131,9 @@ impl RenderScene {
             world_shape_alpha,
             object_shape_alpha,
             has_alpha,
+            alpha_rules: AlphaEmission::new(scene.syntax, scene.fixes),
+            fixes: scene.fixes,
+            syntax: scene.syntax,
             needs_differentials,
             emitters,
             lights,
@@ -163,24 +197,24 @@ impl RenderScene {
         }
     }
 
-    /// Whether the alpha mask of `light`'s shape cuts away the point drawn on it (pbrt-v4
-    /// masks sampled points of area lights by a hash of their position).
-    // DEVIATION(pbrt): pbrt-v3 ignores alpha on area lights, which then emit from
-    // their cut-away parts along light samples and photons (but not where rays hit
-    // them). pbrt-v4 also masks the emission of a hit by alpha, after the hit itself
-    // passed the ray's alpha test, counting a fractional alpha twice there and once
-    // on light samples. Here the mask applies once either way.
+    /// Whether the alpha mask of `light`'s shape cuts away the point drawn on it, for
+    /// light samples and photons (pbrt-v4 masks them by a hash of the position).
+    // DEVIATION(pbrt): appearance, `--fix area-alpha`. pbrt-v3 ignores alpha on area
+    // lights, which then emit from their cut-away parts along light samples and
+    // photons (but not where rays hit them); the fix masks them as pbrt-v4 does.
     #[inline]
     pub fn emission_masked(&self, light: &Light, surface: Option<&ShapeSample>) -> bool {
-        self.has_alpha && self.emission_masked_by_alpha(light, surface)
+        let (Light::Area { shape, .. }, Some(s)) = (light, surface) else { return false };
+        self.has_alpha && self.alpha_rules.samples && self.emission_masked_at(*shape, s.p.0, s.n.0, s.uv)
     }
 
+    /// Whether shape `shape`'s alpha cuts its emission away at a point (by a hash of
+    /// the position, as pbrt-v4's `AlphaMasked`).
     #[inline(never)]
-    fn emission_masked_by_alpha(&self, light: &Light, surface: Option<&ShapeSample>) -> bool {
-        let (Light::Area { shape, .. }, Some(s)) = (light, surface) else { return false };
-        let Some(alpha) = &self.world_shape_alpha[*shape as usize] else { return false };
-        let ctx = TexCtx { p: s.p.0, n: s.n.0, uv: s.uv, ..TexCtx::default() };
-        self.alpha_cuts(&alpha.alpha, alpha.rule, &ctx, || hash_unit(&bits(s.p.0)))
+    fn emission_masked_at(&self, shape: u32, p: Vec3, n: Vec3, uv: [f32; 2]) -> bool {
+        let Some(alpha) = &self.world_shape_alpha[shape as usize] else { return false };
+        let ctx = TexCtx { p, n, uv, ..TexCtx::default() };
+        self.alpha_cuts(&alpha.alpha, alpha.rule, &ctx, || hash_unit(&bits(p)))
     }
 
     /// Whether alpha `v` cuts the surface at `ctx` under `rule`; `hash` in [0, 1) makes
@@ -268,9 +302,16 @@ impl RenderScene {
 
     /// Radiance leaving a hit surface toward `w` (area lights).
     pub fn emitted(&self, hit: &Hit, si: &SurfaceInteraction, w: Vec3) -> Rgb {
-        match self.emitter(hit) {
-            Some((e, _)) if e.two_sided || si.n.0.dot(w) > 0.0 => e.l,
-            _ => Vec3::ZERO,
+        let Some((e, light)) = self.emitter(hit) else { return Vec3::ZERO };
+        if !(e.two_sided || si.n.0.dot(w) > 0.0) {
+            return Vec3::ZERO;
+        }
+        if self.has_alpha && self.alpha_rules.hits && self.emission_masked_at(hit.shape_index, si.p.0, si.n.0, si.uv) {
+            return Vec3::ZERO;
+        }
+        match (e.per_piece, &self.lights[light as usize]) {
+            (true, Light::Area { l, .. }) => *l,
+            _ => e.l,
         }
     }
 }
@@ -348,10 +389,16 @@ fn ray_hash(r: &Ray) -> f32 {
 
 /// One light per primitive of each emitting world shape: a quadric, each triangle of
 /// a mesh, each patch of a bilinear mesh.
+/// `spread_power`: v4's `power` is the whole shape's, not each primitive's.
+// DEVIATION(pbrt): appearance, `--fix mesh-power` (`spread_power`). pbrt-v4 applies
+// `power` to each triangle or patch of a mesh on its own, so a mesh of n of them emits
+// n times the power asked for, the smaller ones brighter; the fix spreads it over the
+// shape.
 fn area_lights(
     g: &Geometry,
     area_lights: &[Option<u32>],
     params: &[AreaLightDesc],
+    spread_power: bool,
     lights: &mut Vec<Light>,
 ) -> Vec<Option<EmitterInfo>> {
     let mut emitters = vec![None; area_lights.len()];
@@ -360,27 +407,30 @@ fn area_lights(
         let desc = &params[*a as usize];
         let first_light = lights.len() as u32;
         let pieces = g.shapes.pieces(g.world_shape(i));
+        let per_piece = !spread_power && desc.power.is_some() && pieces.len() > 1;
         let l = area_emission(desc, pieces.iter().map(|(_, a)| *a).sum());
         for (emitter, area) in pieces {
+            let l = if per_piece { area_emission(desc, area) } else { l };
             // The BVH dropped zero-area primitives; one whose area underflows in f32
             // still keeps its slot (lights are found by primitive) but emits nothing.
             let area = area as f32;
             let l = if area > 0.0 { l } else { Vec3::ZERO };
             lights.push(Light::Area { emitter, shape: i as u32, l, two_sided: desc.two_sided, area });
         }
-        emitters[i] = Some(EmitterInfo { l, two_sided: desc.two_sided, first_light });
+        emitters[i] = Some(EmitterInfo { l, two_sided: desc.two_sided, first_light, per_piece });
     }
     emitters
 }
 
 /// An area light's radiance on a shape of total area `area`, after v4's `power`.
-// DEVIATION(pbrt): pbrt-v4 applies `power` to each triangle of a mesh on its own, so a
-// mesh of n triangles emits n times the power asked for; we spread it over the shape.
+/// As in pbrt-v4, `power` scales the emission as read (the RGB's own brightness and
+/// `scale` stay; spectra were already normalised to luminance 1), so an `rgb L` of
+/// luminance y emits y·power watts (photometric).
 pub fn area_emission(a: &AreaLightDesc, area: f64) -> Rgb {
     match a.power {
         Some(w) if area > 0.0 => {
             let sides = if a.two_sided { 2.0 } else { 1.0 };
-            a.l * (w as f64 / (std::f64::consts::PI * sides * area * luminance(a.l).max(1e-9) as f64)) as f32
+            a.l * (w as f64 / (std::f64::consts::PI * sides * area)) as f32
         }
         _ => a.l,
     }

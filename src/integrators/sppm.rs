@@ -17,10 +17,12 @@
 use super::adaptive::{self, Chain, Deposit, PhotonCounts, PhotonSampling};
 use super::grid::{Grid, Grouped, Site};
 use super::passes::{self, PassMode};
+use crate::fixes::Fix;
 use crate::interaction::Footprint;
 use crate::lights::Light;
 use crate::materials::{Bsdf, TransportMode};
 use crate::math::{Point3, Vector3};
+use crate::parser::Syntax;
 use crate::render::RenderScene;
 use crate::sampling::power_heuristic;
 use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash};
@@ -441,12 +443,14 @@ fn camera_path(
     };
     let (mut beta, mut ld) = (Vec3::ONE, Vec3::ZERO);
     let (mut specular_bounce, mut depth, mut passes) = (false, 0, 0);
+    // DEVIATION(pbrt): appearance, `--fix sky-after-glossy`. pbrt-v3 adds infinite
+    // lights to every camera ray that escapes; after a glossy bounce `direct_light` has
+    // already counted them (its BSDF-sampled MIS half), so pbrt-v3 counts them twice.
+    // pbrt-v4, and the fix, count them once.
+    let sky_always = scene.syntax == Syntax::V3 && !scene.fixes.has(Fix::SkyAfterGlossy);
     while depth < max_depth {
         let Some(hit) = scene.intersect(&ray) else {
-            // DEVIATION(pbrt): pbrt-v3 adds the environment to every escaped ray. After a
-            // glossy bounce `direct_light` has already counted it (its BSDF-sampled MIS
-            // half), so pbrt-v3 counts it twice; pbrt-v4 MIS-weights it instead.
-            if depth == 0 || specular_bounce {
+            if depth == 0 || specular_bounce || sky_always {
                 for l in &scene.lights {
                     ld += beta * l.le_escaped(ray.d.0);
                 }
@@ -464,9 +468,13 @@ fn camera_path(
         if depth == 0 || specular_bounce {
             ld += beta * scene.emitted(&hit, &si, wo);
         }
-        ld += beta * direct_light(scene, &si, &bsdf, wo, sampler);
         // pbrt: a visible point at diffuse surfaces, or glossy ones at the last depth.
-        if bsdf.is_diffuse() || (bsdf.is_glossy() && depth + 1 == max_depth) {
+        let visible_point = bsdf.is_diffuse() || (bsdf.is_glossy() && depth + 1 == max_depth);
+        // pbrt-v4 follows the path one bounce past its visible point, so a light seen
+        // in a specular lobe there (a smooth coat) is reflected; pbrt-v3 stops.
+        let specular_too = visible_point && scene.syntax == Syntax::V4;
+        ld += beta * direct_light(scene, &si, &bsdf, wo, sampler, specular_too);
+        if visible_point {
             return (ld, Some(VisiblePoint { p: si.p.0, wo, ng: si.n.0, bsdf, beta }));
         }
         if depth + 1 >= max_depth {
@@ -492,13 +500,15 @@ fn camera_path(
 }
 
 /// Direct light from one uniformly chosen light, MIS of light and BSDF sampling
-/// (pbrt-v3 `UniformSampleOneLight`).
+/// (pbrt-v3 `UniformSampleOneLight`). `specular_too`: a specular BSDF sample counts
+/// too, alone (light sampling cannot find it), where the path ends here.
 fn direct_light(
     scene: &RenderScene,
     si: &crate::interaction::SurfaceInteraction,
     bsdf: &Bsdf,
     wo: Vec3,
     sampler: &mut impl Sampler,
+    specular_too: bool,
 ) -> Rgb {
     let n = scene.lights.len();
     if n == 0 {
@@ -520,7 +530,7 @@ fn direct_light(
     }
     if !light.is_delta()
         && let Some(s) = bsdf.sample_f(wo, u_bsdf, u_lobe, TransportMode::Radiance)
-        && !s.specular
+        && (specular_too || !s.specular)
     {
         // Trace first: the sample only counts where it reaches this light, and only
         // then is the light's density needed (measured from the offset origin, so the
@@ -536,7 +546,9 @@ fn direct_light(
             },
             None => light.le_escaped(s.wi),
         };
-        if li != Vec3::ZERO {
+        if li != Vec3::ZERO && s.specular {
+            ld += s.f * s.wi.dot(ns).abs() * li / s.pdf;
+        } else if li != Vec3::ZERO {
             let light_pdf = light.pdf_li(&scene.geometry, ray.o.0, s.wi);
             if light_pdf > 0.0 {
                 let bsdf_pdf = if s.proportional { bsdf.pdf(wo, s.wi) } else { s.pdf };
@@ -592,6 +604,7 @@ fn trace_photon(
     let mut beta = (e.le.as_dvec3() * (e.n.dot(d).abs() as f64 / pdf / scene.photon_scale)).as_vec3();
     let mut ray = crate::math::Ray::new(e.ray.o, Vector3(d));
     let (mut depth, mut passes, mut hits, mut near) = (0, 0, 0, false);
+    let skip_behind = scene.fixes.has(Fix::PhotonsBehind);
     while depth < max_depth {
         let Some(hit) = scene.intersect(&ray) else { break };
         hits += 1;
@@ -601,11 +614,12 @@ fn trace_photon(
             near |= grid.gather(si.p.0, |pixel| {
                 let Some(vp) = &pixels[pixel as usize].vp else { return };
                 let r = pixels[pixel as usize].radius as f32;
-                // DEVIATION(pbrt): photons arriving from behind an opaque visible
-                // point's surface are not counted; pbrt counts them in M (f = 0), which
-                // only shrinks the radius (Mitsuba #145). Transmitting surfaces count them.
+                // DEVIATION(pbrt): appearance, `--fix photons-behind`. pbrt counts photons
+                // that reach an opaque visible point from behind its surface in M (f is
+                // 0 there, or nearly), which only shrinks the radius (Mitsuba #145); the
+                // fix leaves them out. Transmitting surfaces count them either way.
                 let behind = wi.dot(vp.ng) * vp.wo.dot(vp.ng) <= 0.0;
-                if (vp.p - si.p.0).length_squared() > r * r || (behind && !vp.bsdf.transmits()) {
+                if (vp.p - si.p.0).length_squared() > r * r || (behind && skip_behind && !vp.bsdf.transmits()) {
                     return;
                 }
                 out.push((pixel, beta * vp.bsdf.f(vp.wo, wi)));

@@ -61,11 +61,16 @@ pub enum Fresnel {
     Dielectric {
         eta: f32,
     },
-    /// The coat of an opaque material: light always arrives through air.
-    // DEVIATION(pbrt): pbrt-v3's plastic builds `FresnelDielectric(1.5, 1)`, indices
-    // swapped, so its highlights turn totally reflecting past a 41.8° half-angle
-    // (pbrt-v3 #210, left unfixed there so old images stay the same).
+    /// The coat of an opaque material: light always arrives through air (pbrt-v3's
+    /// plastic with `--fix plastic-fresnel`).
     Coat {
+        eta: f32,
+    },
+    /// pbrt-v3's plastic: `FresnelDielectric(eta, 1)`, the indices swapped, so light
+    /// from the normal's side sees a dielectric of index 1/η and reflects totally past
+    /// a 41.8° half-angle (pbrt-v3 #210, left so there to keep old images the same).
+    // DEVIATION(pbrt): appearance, `--fix plastic-fresnel` uses `Coat` instead.
+    SwappedCoat {
         eta: f32,
     },
 }
@@ -78,6 +83,7 @@ impl Fresnel {
             Fresnel::Conductor { eta, k } => fr_conductor(cos_i, eta, k),
             Fresnel::Dielectric { eta } => Vec3::splat(fr_dielectric(cos_i, 1.0, eta)),
             Fresnel::Coat { eta } => Vec3::splat(fr_dielectric(cos_i.abs(), 1.0, eta)),
+            Fresnel::SwappedCoat { eta } => Vec3::splat(fr_dielectric(cos_i, eta, 1.0)),
         }
     }
 }

@@ -22,6 +22,7 @@ use lobes::{Lobe, MAX_LOBES, oren_nayar_ab};
 use microfacet::{Fresnel, TrowbridgeReitz};
 pub use textures::{TexCtx, Textures, lookup};
 
+use crate::fixes::{Fix, Fixes};
 use crate::scene::{CoatBase, Coated, MaterialDesc, MaterialKind, Metal, RoughnessRemap, TexValue};
 use crate::spectrum::Rgb;
 use glam::Vec3;
@@ -41,18 +42,20 @@ pub struct Material {
     pub bump: Option<TexValue>,
     /// The normal map (tangent-space normals as stored), if any; it wins over `bump`.
     pub normal_map: Option<std::sync::Arc<crate::imageio::RgbImage>>,
+    /// The pbrt bugs fixed (`--fix`).
+    fixes: Fixes,
 }
 
 /// pbrt-v3's material types (the rest are pbrt-v4's): their BSDFs follow pbrt-v3.
 const V3_TYPES: [&str; 8] = ["matte", "plastic", "uber", "translucent", "substrate", "glass", "metal", "mirror"];
 
 impl Material {
-    pub fn from_desc(m: &MaterialDesc) -> Material {
+    pub fn from_desc(m: &MaterialDesc, fixes: Fixes) -> Material {
         let v3 = V3_TYPES.contains(&m.ty.as_str());
         let (max_reflectance, convention) =
             if v3 { (f32::INFINITY, Convention::PbrtV3) } else { (1.0, Convention::PbrtV4) };
         let normal_map = m.normal_map.clone();
-        Material { kind: m.kind.clone(), max_reflectance, convention, bump: m.bump, normal_map }
+        Material { kind: m.kind.clone(), max_reflectance, convention, bump: m.bump, normal_map, fixes }
     }
 
     pub fn kind(&self) -> &MaterialKind {
@@ -63,7 +66,7 @@ impl Material {
     /// looked up (made only when one is).
     #[inline]
     pub fn bsdf(&self, textures: &Textures, ctx: impl Fn() -> TexCtx, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
-        let inputs = Inputs { textures, ctx, max_reflectance: self.max_reflectance };
+        let inputs = Inputs { textures, ctx, max_reflectance: self.max_reflectance, fixes: self.fixes };
         if let MaterialKind::Diffuse { reflectance } = &self.kind {
             // The common case, without the lobe list's set-up.
             let lambert = lambert(inputs.refl(*reflectance));
@@ -85,7 +88,7 @@ impl Material {
     /// Appends this material's lobes at a hit, each scaled by `weight` (a v3 `mix`
     /// part); interfaces and mixes add none.
     pub fn add_lobes(&self, textures: &Textures, ctx: impl Fn() -> TexCtx, weight: Rgb, out: &mut LobeList) {
-        let inputs = Inputs { textures, ctx, max_reflectance: self.max_reflectance };
+        let inputs = Inputs { textures, ctx, max_reflectance: self.max_reflectance, fixes: self.fixes };
         let start = out.0.n;
         if self.lobes(&inputs, &mut out.0).is_some() {
             out.0.list[start..out.0.n].iter_mut().for_each(|l| *l = l.scaled(weight));
@@ -129,7 +132,7 @@ impl Material {
                 let raw = roughness.map(|r| i.float(r));
                 let alpha = if raw == [0.0; 2] { raw } else { raw.map(|r| remap.alpha(r)) };
                 let alpha = if alpha.iter().all(|a| *a < 1e-3) { [0.0; 2] } else { alpha };
-                dielectric(i.float(*eta), i.refl(*kr), i.refl(*kt), alpha, out)
+                dielectric(i.float(*eta), i.refl(*kr), i.refl(*kt), alpha, self.convention, out)
             }
             MaterialKind::Conductor { metal, roughness, remap } => {
                 let (eta, k) = i.eta_k(metal);
@@ -144,7 +147,11 @@ impl Material {
             MaterialKind::Plastic { kd, ks, roughness, remap } => {
                 out.push_nonzero(i.refl(*kd), Lobe::Lambert);
                 let a = remap.alpha(i.float(*roughness));
-                let (dist, fresnel) = (TrowbridgeReitz::new([a, a]), Fresnel::Coat { eta: 1.5 });
+                let fresnel = match i.fixes.has(Fix::PlasticFresnel) {
+                    true => Fresnel::Coat { eta: 1.5 },
+                    false => Fresnel::SwappedCoat { eta: 1.5 },
+                };
+                let dist = TrowbridgeReitz::new([a, a]);
                 out.push_nonzero(i.refl(*ks), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
             }
             MaterialKind::Uber { kd, ks, kr, kt, roughness, eta, opacity, remap } => {
@@ -209,6 +216,7 @@ fn coated(c: &Coated, i: &Inputs<impl Fn() -> TexCtx>) -> Layered {
         g: i.float(c.g).clamp(-1.0, 1.0),
         max_depth: c.max_depth,
         n_samples: c.n_samples,
+        fixed_weights: i.fixes.has(Fix::LayeredWeights),
     }
 }
 
@@ -218,8 +226,8 @@ fn lambert(r: Rgb) -> Option<Lobe> {
 }
 
 /// Smooth glass is one Fresnel-weighted lobe; rough glass is pbrt-v3's pair of
-/// microfacet reflection and transmission lobes.
-fn dielectric<const N: usize>(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], out: &mut Lobes<N>) {
+/// microfacet reflection and transmission lobes, or pbrt-v4's single lobe.
+fn dielectric<const N: usize>(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], c: Convention, out: &mut Lobes<N>) {
     if r == Vec3::ZERO && t == Vec3::ZERO {
         return;
     }
@@ -228,6 +236,10 @@ fn dielectric<const N: usize>(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], out: &m
         return;
     }
     let dist = TrowbridgeReitz::new(alpha);
+    if c == Convention::PbrtV4 {
+        out.push(Lobe::RoughDielectric { r, t, dist, eta });
+        return;
+    }
     out.push_nonzero(r, |r| Lobe::MicrofacetReflection { r, dist, fresnel: Fresnel::Dielectric { eta } });
     out.push_nonzero(t, |t| Lobe::MicrofacetTransmission { t, dist, eta });
 }
@@ -237,6 +249,7 @@ struct Inputs<'a, C: Fn() -> TexCtx> {
     textures: &'a Textures,
     ctx: C,
     max_reflectance: f32,
+    fixes: Fixes,
 }
 
 impl<C: Fn() -> TexCtx> Inputs<'_, C> {

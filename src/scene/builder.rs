@@ -17,6 +17,7 @@
 //! references). Object definitions, materials, textures and area lights are built
 //! only when something uses them.
 
+mod bugs;
 mod typed;
 
 use super::approx::Approx;
@@ -48,6 +49,8 @@ pub struct LoadOptions {
     /// Files `Include`/`Import` read from memory instead of disk, by the name the scene
     /// gives (for fuzzing and tests).
     pub in_memory: HashMap<String, Arc<[u8]>>,
+    /// The pbrt bugs to fix (`--fix`); by default the file renders as its pbrt renders it.
+    pub fixes: crate::fixes::Fixes,
 }
 
 /// Reads, parses and builds a scene file.
@@ -160,6 +163,8 @@ struct Builder {
     stack: Vec<(PushKind, GraphicsState, Span)>,
     named_coords: HashMap<String, [DMat4; 2]>,
     in_world: bool,
+    /// The `WorldBegin` statement, if read.
+    world_begin: Option<Span>,
     render: RenderOptions,
     shapes: Vec<ShapeDesc>,
     shape_materials: Vec<MaterialRef>,
@@ -224,6 +229,7 @@ impl Builder {
             stack: Vec::new(),
             named_coords: HashMap::new(),
             in_world: false,
+            world_begin: None,
             render: RenderOptions::default(),
             shapes: Vec::new(),
             shape_materials: Vec::new(),
@@ -448,6 +454,7 @@ impl Builder {
             }
             K::WorldBegin => {
                 self.in_world = true;
+                self.world_begin = Some(span);
                 self.gs.ctm = [DMat4::IDENTITY; 2];
                 self.gs.active = [true; 2];
                 self.named_coords.insert("world".into(), self.gs.ctm);
@@ -923,6 +930,7 @@ impl Builder {
                 self.shapes[i].alpha = self.resolve_alpha(&a, scope)?;
             }
         }
+        let bugs = self.pbrt_bugs(syntax);
         let lights = self.build_lights()?;
         let area_lights = self.build_area_lights()?;
         let mut approx = Vec::new();
@@ -988,6 +996,8 @@ impl Builder {
                     Approximated { file: l.file, line: l.line, column: l.column, what, how }
                 })
                 .collect(),
+            pbrt_bugs: bugs::located(&bugs, self.opts.fixes, sources),
+            fixes: self.opts.fixes,
             limits: self.opts.limits,
         })
     }

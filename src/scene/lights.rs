@@ -137,7 +137,7 @@ pub fn light(ty: &str, p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightCont
             };
             let mut i = emission(p, "I", &ctx.spectra)?;
             if let Some(w) = power(p)? {
-                i *= w / (4.0 * std::f32::consts::PI * luminance(i).max(1e-9));
+                i *= w / (4.0 * std::f32::consts::PI);
             }
             LightKind::Point { position, i }
         }
@@ -149,7 +149,7 @@ pub fn light(ty: &str, p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightCont
             let mut i = emission(p, "I", &ctx.spectra)?;
             if let Some(w) = power(p)? {
                 let solid = 2.0 * std::f32::consts::PI * (1.0 - 0.5 * (cos_start + cos_total));
-                i *= w / (solid * luminance(i)).max(1e-9);
+                i *= w / solid.max(1e-9);
             }
             let position = m.transform_point3(from);
             LightKind::Spot { position, direction, i, cos_total, cos_start, smooth_falloff: ctx.syntax == Syntax::V4 }

@@ -163,6 +163,10 @@ pub struct SceneDescription {
     pub warnings: Vec<Located>,
     pub skipped: Vec<Skipped>,
     pub approximated: Vec<Approximated>,
+    /// The pbrt bugs this scene would show, at the statements that trigger them.
+    pub pbrt_bugs: Vec<crate::fixes::PbrtBug>,
+    /// The pbrt bugs the render fixes (`--fix`): none by default.
+    pub fixes: crate::fixes::Fixes,
     /// The limits the scene was loaded under (the renderer checks its overrides too).
     pub limits: crate::limits::Limits,
 }

@@ -165,6 +165,8 @@ pub enum TextureKind {
         octaves: Octaves,
         scale: f32,
         variation: f32,
+        /// pbrt-v3's colour spline segments (see `materials::textures::marble`).
+        v3_segments: bool,
     },
     /// (s, t) modulo 1 as red and green.
     Uv {
@@ -264,6 +266,7 @@ pub fn texture(
             octaves: octaves(p)?,
             scale: values::float(p, "scale", 1.0, Range::Any)?,
             variation: values::float(p, "variation", 0.2, Range::Any)?,
+            v3_segments: site.syntax == Syntax::V3,
         },
         "uv" if !is_float => TextureKind::Uv { map: mapping(p, site)? },
         _ => return Ok(None),

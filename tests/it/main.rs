@@ -7,6 +7,7 @@ mod checkpoint;
 mod common;
 mod converge;
 mod directives;
+mod fixes;
 mod fuzz_regressions;
 mod hostile;
 mod imgtool;

@@ -1,0 +1,109 @@
+//! Which pbrt bugs ([`crate::fixes`]) a scene would show, each at the statement that
+//! triggers it, for `check`. Read from the built materials, textures and shapes, so
+//! only what the scene uses is reported.
+
+use super::Builder;
+use crate::fixes::{Fix, Fixes, PbrtBug};
+use crate::parser::Syntax;
+use crate::parser::error::Located;
+use crate::parser::source::Span;
+use crate::scene::materials::{CoatBase, MaterialKind, TexValue};
+use crate::scene::textures::TextureKind;
+use crate::scene::{Geometry, ShapeDesc};
+
+impl Builder {
+    /// The bugs the scene triggers, in file order, one per (statement, fix). Called
+    /// once materials, textures and world shapes are built, before the lights are.
+    pub(super) fn pbrt_bugs(&self, syntax: Syntax) -> Vec<(Span, Fix)> {
+        let mut found = Vec::new();
+        for m in &self.materials {
+            let (Some(b), Some(at)) = (m.built, m.span) else { continue };
+            match &self.built_materials[b as usize].kind {
+                MaterialKind::Plastic { .. } if syntax == Syntax::V3 => found.push((at, Fix::PlasticFresnel)),
+                MaterialKind::Coated(c) if syntax == Syntax::V4 && rough(&c.coat_roughness) && rough_base(&c.base) => {
+                    found.push((at, Fix::LayeredWeights))
+                }
+                _ => {}
+            }
+        }
+        for t in &self.textures {
+            let Some(Some(b)) = t.built else { continue };
+            if syntax == Syntax::V3 && matches!(self.built_textures[b as usize].kind, TextureKind::Marble { .. }) {
+                found.push((t.span, Fix::MarblePalette));
+            }
+        }
+        if syntax == Syntax::V3 {
+            let skies = self.pending_lights.iter().filter(|(e, _)| e.name == "infinite");
+            found.extend(skies.map(|(e, _)| (e.name_span, Fix::SkyAfterGlossy)));
+        }
+        for s in self.shapes.iter().filter(|s| s.area_light.is_some()) {
+            self.area_light_bugs(s, syntax, &mut found);
+        }
+        if let Some(at) = self.photon_statement() {
+            found.push((at, Fix::PhotonsBehind));
+        }
+        found.sort_by_key(|(span, fix)| (span.file.0, span.start, *fix));
+        found.dedup();
+        found
+    }
+
+    /// `mesh-power` and `area-alpha` for one emitting world shape, at its
+    /// `AreaLightSource` statement.
+    fn area_light_bugs(&self, s: &ShapeDesc, syntax: Syntax, found: &mut Vec<(Span, Fix)>) {
+        let Some(i) = s.area_light else { return };
+        let Some(&entity) = self.area_lights_used.get(i as usize) else { return };
+        let e = &self.area_light_entities[entity as usize].0;
+        let pieces = match &s.geometry {
+            Geometry::Quadric(_) => 1,
+            Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].triangle_count(),
+            Geometry::Patches { mesh, .. } => self.patches[*mesh as usize].patch_count(),
+        };
+        if syntax == Syntax::V4 && pieces > 1 && e.params.named("power").is_some() {
+            found.push((e.name_span, Fix::MeshPower));
+        }
+        if s.alpha.is_some() {
+            found.push((e.name_span, Fix::AreaAlpha));
+        }
+    }
+
+    /// Where SPPM is asked for: the `Integrator` statement, or the first shape's
+    /// `WorldBegin` when there is none (`None` for a scene with nothing to render).
+    fn photon_statement(&self) -> Option<Span> {
+        if self.shapes.is_empty() && self.objects.is_empty() {
+            return None;
+        }
+        self.render.integrator.as_ref().map(|e| e.name_span).or(self.world_begin)
+    }
+}
+
+/// Whether a coat's roughness may be above pbrt-v4's smoothness threshold.
+fn rough(r: &[TexValue; 2]) -> bool {
+    r.iter().any(|v| !matches!(v, TexValue::Const(c) if c.x <= 0.0))
+}
+
+/// Whether the layer under a coat scatters other than specularly.
+fn rough_base(b: &CoatBase) -> bool {
+    match b {
+        CoatBase::Diffuse { .. } => true,
+        CoatBase::Conductor { roughness, .. } => rough(roughness),
+    }
+}
+
+/// The bugs found, located, each saying whether this run fixes it.
+pub(super) fn located(found: &[(Span, Fix)], fixes: Fixes, sources: &crate::parser::source::SourceMap) -> Vec<PbrtBug> {
+    found
+        .iter()
+        .map(|(span, fix)| {
+            let l = Located::resolve(sources, Some(*span), "");
+            let effect = fix.info().effect.split_whitespace().collect::<Vec<_>>().join(" ");
+            PbrtBug {
+                file: l.file,
+                line: l.line,
+                column: l.column,
+                name: fix.name().into(),
+                effect,
+                fixed: fixes.has(*fix),
+            }
+        })
+        .collect()
+}
