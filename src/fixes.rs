@@ -25,6 +25,8 @@ pub enum Fix {
     MeshPower,
     AreaAlpha,
     PhotonsBehind,
+    ShapeSampling,
+    NormalDerivatives,
 }
 
 /// Name, the pbrt versions that have the bug, and what fixing it changes.
@@ -36,7 +38,7 @@ pub struct FixInfo {
 }
 
 /// Every fix, in the order `--fix help` lists them.
-pub const FIXES: [FixInfo; 7] = [
+pub const FIXES: [FixInfo; 9] = [
     FixInfo {
         fix: Fix::PlasticFresnel,
         name: "plastic-fresnel",
@@ -63,7 +65,7 @@ pub const FIXES: [FixInfo; 7] = [
         name: "marble-palette",
         versions: "v3",
         effect: "marble's colour spline stays within its palette; pbrt-v3 picks the wrong segment and \
-                 evaluates colours far outside [0, 1] (values above 10 and below 0)",
+                 evaluates colours far outside [0, 1] (values of 10 and more)",
     },
     FixInfo {
         fix: Fix::MeshPower,
@@ -85,6 +87,23 @@ pub const FIXES: [FixInfo; 7] = [
         versions: "v3, v4",
         effect: "photons arriving from behind an opaque visible point are not counted; pbrt counts them \
                  with no flux, which shrinks the photon radius faster near edges and thin objects",
+    },
+    FixInfo {
+        fix: Fix::ShapeSampling,
+        name: "shape-sampling",
+        versions: "v3, v4",
+        effect: "sphere, disk and cylinder area lights are sampled over their own surface with its world-space \
+                 area; pbrt samples the whole sphere or disk however it is cut, uses the object-space area and \
+                 radius under a transform (a scaled sphere light is too dark or too bright), and flips sampled \
+                 normals by ReverseOrientation only (a mirrored one-sided light emits from its back)",
+    },
+    FixInfo {
+        fix: Fix::NormalDerivatives,
+        name: "normal-derivatives",
+        versions: "v3, v4",
+        effect: "bump maps on scaled or reversed quadrics use the true derivatives of the normal; pbrt \
+                 transforms them as normals (off by the scale) and ignores ReverseOrientation, which tilts \
+                 the bumps' shading there",
     },
 ];
 

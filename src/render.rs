@@ -114,8 +114,11 @@ impl RenderScene {
         let integrator = scene.integrator.clone();
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
         let geometry = Geometry::new(&mut scene);
-        let spread_power = scene.syntax == Syntax::V3 || scene.fixes.has(Fix::MeshPower);
-        let emitters = area_lights(&geometry, &shape_area_lights, &area_params, spread_power, &mut lights);
+        let rules = EmitterRules {
+            spread_power: scene.syntax == Syntax::V3 || scene.fixes.has(Fix::MeshPower),
+            pbrt_sampling: !scene.fixes.has(Fix::ShapeSampling),
+        };
+        let emitters = area_lights(&geometry, &shape_area_lights, &area_params, rules, &mut lights);
         let powers: Vec<f64> = lights.iter().map(|l| l.power(world)).collect();
         let photon_scale = photon_scale(powers.iter().sum());
         let light_power = Distribution1D::new(&powers);
@@ -389,16 +392,24 @@ fn ray_hash(r: &Ray) -> f32 {
 
 /// One light per primitive of each emitting world shape: a quadric, each triangle of
 /// a mesh, each patch of a bilinear mesh.
-/// `spread_power`: v4's `power` is the whole shape's, not each primitive's.
-// DEVIATION(pbrt): appearance, `--fix mesh-power` (`spread_power`). pbrt-v4 applies
-// `power` to each triangle or patch of a mesh on its own, so a mesh of n of them emits
-// n times the power asked for, the smaller ones brighter; the fix spreads it over the
-// shape.
+/// How area lights are made from their shapes.
+#[derive(Clone, Copy, Debug)]
+struct EmitterRules {
+    /// v4's `power` is the whole shape's, not each primitive's.
+    // DEVIATION(pbrt): appearance, `--fix mesh-power`. pbrt-v4 applies `power` to each
+    // triangle or patch of a mesh on its own, so a mesh of n of them emits n times the
+    // power asked for, the smaller ones brighter; the fix spreads it over the shape.
+    spread_power: bool,
+    /// Spheres, disks and cylinders are sampled as pbrt samples them (`--fix
+    /// shape-sampling` turns it off; see `shapes::pbrt_sampling`).
+    pbrt_sampling: bool,
+}
+
 fn area_lights(
     g: &Geometry,
     area_lights: &[Option<u32>],
     params: &[AreaLightDesc],
-    spread_power: bool,
+    rules: EmitterRules,
     lights: &mut Vec<Light>,
 ) -> Vec<Option<EmitterInfo>> {
     let mut emitters = vec![None; area_lights.len()];
@@ -406,8 +417,8 @@ fn area_lights(
         let Some(a) = area else { continue };
         let desc = &params[*a as usize];
         let first_light = lights.len() as u32;
-        let pieces = g.shapes.pieces(g.world_shape(i));
-        let per_piece = !spread_power && desc.power.is_some() && pieces.len() > 1;
+        let pieces = g.shapes.pieces(g.world_shape(i), rules.pbrt_sampling);
+        let per_piece = !rules.spread_power && desc.power.is_some() && pieces.len() > 1;
         let l = area_emission(desc, pieces.iter().map(|(_, a)| *a).sum());
         for (emitter, area) in pieces {
             let l = if per_piece { area_emission(desc, area) } else { l };

@@ -371,6 +371,8 @@ impl Geometry {
         let world_shapes: Vec<ShapeRef> = scene.shapes.iter().map(|s| shape_ref(s, &mut set.quadrics)).collect();
         let object_shapes: Vec<Vec<ShapeRef>> =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| shape_ref(s, &mut set.quadrics)).collect()).collect();
+        let pbrt_dndu = !scene.fixes.has(crate::fixes::Fix::NormalDerivatives);
+        set.quadrics.iter_mut().for_each(|q| q.pbrt_normal_derivatives = pbrt_dndu);
         let mut world = Blas::build(world_shapes, &set);
         let mut objects: Vec<Blas> = object_shapes.into_par_iter().map(|shapes| Blas::build(shapes, &set)).collect();
         let mut triangle_ids = vec![Vec::new(); set.meshes.len()];

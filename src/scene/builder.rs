@@ -930,7 +930,7 @@ impl Builder {
                 self.shapes[i].alpha = self.resolve_alpha(&a, scope)?;
             }
         }
-        let bugs = self.pbrt_bugs(syntax);
+        let bugs = self.pbrt_bugs(syntax, &objects);
         let lights = self.build_lights()?;
         let area_lights = self.build_area_lights()?;
         let mut approx = Vec::new();

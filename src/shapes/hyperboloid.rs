@@ -79,8 +79,10 @@ impl Hyperboloid {
     }
 
     /// φmax ∫₀¹ sqrt(Δz²(x² + y²) + (xΔx + yΔy)²) dv with (x, y) on the segment.
-    // DEVIATION(pbrt): pbrt-v3's closed form is wrong in general (26.18 instead of 10.77
-    // for p1 = (1,0,−1), p2 = (0,1,1)); we integrate the exact surface-of-revolution area.
+    // DEVIATION(pbrt): no image difference (only `check --shapes` shows it). pbrt-v3's
+    // closed form is wrong in general (26.18 instead of 10.77 for p1 = (1,0,−1),
+    // p2 = (0,1,1)); we integrate the exact surface-of-revolution area. pbrt-v3 cannot
+    // sample a hyperboloid (it aborts on an emitting one), so no image uses its area.
     pub fn area(&self) -> f64 {
         let (p1, d) = (self.p1.as_dvec3(), (self.p2 - self.p1).as_dvec3());
         self.phi_max as f64

@@ -37,6 +37,7 @@ pub mod disk;
 pub mod hyperboloid;
 pub mod loopsubdiv;
 pub mod paraboloid;
+mod pbrt_sampling;
 pub mod quadric;
 pub mod sampling;
 pub mod set;
@@ -119,8 +120,9 @@ impl Quadric {
     /// Surface area after the linear map `m` (the upper 3×3 of object-to-world).
     /// Similarity maps scale the closed form; any other map integrates
     /// |m·dp/du × m·dp/dv| over (u, v) by Gauss–Legendre quadrature.
-    // DEVIATION(pbrt): pbrt reports object-space areas (and uses them for light
-    // sampling pdfs) even under non-uniform scales; we use the true world-space area.
+    // DEVIATION(pbrt): pbrt reports object-space areas even under scales; `check`
+    // reports the true world-space area, and so does exact light sampling (pbrt's
+    // object-space one is the default: `--fix shape-sampling`, `pbrt_sampling`).
     pub fn world_area(&self, m: DMat3) -> f64 {
         match similarity_scale(m) {
             Some(s2) => s2 * self.area(),

@@ -38,6 +38,8 @@ pub struct QuadricShape {
     pub render_from_object: DMat4,
     pub object_from_render: DMat4,
     pub reverse_orientation: bool,
+    /// ∂n/∂u and ∂n/∂v as pbrt makes them (see [`QuadricShape::interaction`]).
+    pub pbrt_normal_derivatives: bool,
 }
 
 /// The cheap result of a ray–quadric test.
@@ -66,6 +68,7 @@ impl QuadricShape {
             object_from_render: render_from_object.inverse(),
             render_from_object,
             reverse_orientation,
+            pbrt_normal_derivatives: false,
         }
     }
 
@@ -143,9 +146,6 @@ impl QuadricShape {
         let m3 = DMat3::from_mat4(m);
         // The map is affine, so world derivatives of every order are m3 times the
         // object ones; Weingarten on those gives the derivatives of the world normal.
-        // DEVIATION(pbrt): pbrt transforms object-space ∂n/∂u as a normal (off by the
-        // scale under scaling) and does not flip it with ReverseOrientation; ours are the
-        // derivatives of the normal we report.
         let world = Local {
             uv: l.uv,
             dpdu: m3 * l.dpdu,
@@ -159,6 +159,15 @@ impl QuadricShape {
         let (mut dndu, mut dndv) = weingarten(&world);
         if self.reverse_orientation {
             (n, dndu, dndv) = (-n, -dndu, -dndv);
+        }
+        // DEVIATION(pbrt): appearance, `--fix normal-derivatives`. pbrt transforms the
+        // object-space ∂n/∂u and ∂n/∂v as normals (off by the scale under scaling) and
+        // does not flip them with ReverseOrientation, which bump maps then use; the fix
+        // uses the derivatives of the normal reported.
+        if self.pbrt_normal_derivatives {
+            let (du, dv) = weingarten(&l);
+            let normal_map = DMat3::from_mat4(self.object_from_render).transpose();
+            (dndu, dndv) = (normal_map * du, normal_map * dv);
         }
         let p = m.transform_point3(hit.p_obj);
         let p32 = p.as_vec3();

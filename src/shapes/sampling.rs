@@ -1,10 +1,12 @@
 //! Sampling points on shapes, by area and by solid angle from a reference point, with
 //! the matching densities.
 //!
-//! DEVIATION(pbrt): pbrt samples the *full* sphere and disk even for partial shapes
-//! (returning the partial shape's pdf), has no sampling for cones, paraboloids and
-//! hyperboloids, and uses object-space areas under any transform. Here every quadric is
-//! sampled over exactly its own surface with a density w.r.t. world-space area:
+//! DEVIATION(pbrt): appearance, `--fix shape-sampling` (pbrt's own sampling is in
+//! `pbrt_sampling`, the default for spheres, disks and cylinders). pbrt samples the
+//! *full* sphere and disk even for partial shapes (returning the partial shape's pdf),
+//! and uses object-space areas under any transform; it has no sampling for cones,
+//! paraboloids and hyperboloids (robustness: always this module's). Here every quadric
+//! is sampled over exactly its own surface with a density w.r.t. world-space area:
 //! - exactly uniform (pdf = 1/area) for spheres, cylinders, disks and cones under
 //!   similarity transforms (Archimedes for spheres, ρ² for disks, √ for cones);
 //! - otherwise from a table of the world-space area element J(u,v) = |M ∂p/∂u × M ∂p/∂v|
@@ -37,6 +39,9 @@ pub enum QuadricSampler {
     Uniform { area: f64 },
     /// Cells of (u,v): `nu × nv`, cumulative weights (J × cell size), their total.
     Table { nu: usize, nv: usize, cdf: Vec<f64>, total: f64 },
+    /// As pbrt samples spheres, disks and cylinders ([`super::pbrt_sampling`]), with
+    /// the object-space area.
+    Pbrt { object_area: f64 },
 }
 
 const TABLE_RES: usize = 32;
@@ -78,7 +83,7 @@ impl QuadricShape {
     /// (u, v) for two uniform numbers, and the density p(u, v) for table sampling.
     fn sample_uv(&self, s: &QuadricSampler, u: [f64; 2]) -> ([f64; 2], Option<f64>) {
         match s {
-            QuadricSampler::Uniform { .. } => (self.uniform_uv(u), None),
+            QuadricSampler::Uniform { .. } | QuadricSampler::Pbrt { .. } => (self.uniform_uv(u), None),
             QuadricSampler::Table { nu, nv, cdf, total } => {
                 let target = u[0] * total;
                 let cell = cdf.partition_point(|&c| c <= target).min(cdf.len() - 1);
@@ -119,6 +124,7 @@ impl QuadricShape {
     pub fn pdf_area_uv(&self, s: &QuadricSampler, uv: [f64; 2]) -> f64 {
         match s {
             QuadricSampler::Uniform { area } => 1.0 / area,
+            QuadricSampler::Pbrt { object_area } => 1.0 / object_area,
             QuadricSampler::Table { nu, nv, cdf, total } => {
                 let i = ((uv[0] * *nu as f64) as usize).min(nu - 1);
                 let j = ((uv[1] * *nv as f64) as usize).min(nv - 1);
@@ -144,6 +150,9 @@ impl QuadricShape {
 
     /// A point by area; `pdf` is w.r.t. world-space area.
     pub fn sample_area(&self, s: &QuadricSampler, u: [f32; 2]) -> ShapeSample {
+        if let QuadricSampler::Pbrt { object_area } = s {
+            return self.sample_area_pbrt(*object_area, u);
+        }
         let (uv, p_uv) = self.sample_uv(s, [u[0] as f64, u[1] as f64]);
         let (p, n) = self.point_normal(uv);
         let pdf = match p_uv {
@@ -166,6 +175,9 @@ impl QuadricShape {
     /// Full spheres seen from outside sample the cone they subtend (pbrt); everything
     /// else converts an area sample.
     pub fn sample_solid_angle(&self, s: &QuadricSampler, reference: Point3, u: [f32; 2]) -> Option<ShapeSample> {
+        if let QuadricSampler::Pbrt { object_area } = s {
+            return self.sample_solid_angle_pbrt(*object_area, reference, u);
+        }
         let r = reference.0.as_dvec3();
         if let Some((c, radius)) = self.full_sphere() {
             let d2 = (c - r).length_squared();
@@ -176,7 +188,7 @@ impl QuadricShape {
         area_to_solid_angle(self.sample_area(s, u), reference)
     }
 
-    fn sample_sphere_cone(&self, r: DVec3, c: DVec3, radius: f64, u: [f32; 2]) -> Option<ShapeSample> {
+    pub(super) fn sample_sphere_cone(&self, r: DVec3, c: DVec3, radius: f64, u: [f32; 2]) -> Option<ShapeSample> {
         let axis = (c - r).normalize();
         let d2 = (c - r).length_squared();
         let cos_max = (1.0 - radius * radius / d2).max(0.0).sqrt();
@@ -203,6 +215,9 @@ impl QuadricShape {
     /// The solid-angle density of [`QuadricShape::sample_solid_angle`] for direction `wi`
     /// (0 when the ray misses).
     pub fn pdf_solid_angle(&self, s: &QuadricSampler, reference: Point3, wi: Vector3) -> f32 {
+        if let QuadricSampler::Pbrt { object_area } = s {
+            return self.pdf_solid_angle_pbrt(*object_area, reference, wi);
+        }
         let ray = Ray::new(reference, wi);
         let Some(hit) = self.intersect_t(&ray, f32::INFINITY) else { return 0.0 };
         if let Some((c, radius)) = self.full_sphere() {

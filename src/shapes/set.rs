@@ -142,10 +142,19 @@ impl ShapeSet {
 
     /// The shape's emitting pieces with their areas, one per primitive. Zero-area
     /// primitives keep their slot (lights are found by primitive number) with area 0.
-    pub fn pieces(&self, s: ShapeRef) -> Vec<(Piece, f64)> {
+    /// `pbrt_sampling`: spheres, disks and cylinders are sampled as pbrt samples them,
+    /// with their object-space area (see `pbrt_sampling`).
+    pub fn pieces(&self, s: ShapeRef, pbrt_sampling: bool) -> Vec<(Piece, f64)> {
         match s {
             ShapeRef::Quadric(index) => {
                 let q = &self.quadrics[index as usize];
+                if pbrt_sampling && super::pbrt_sampling::pbrt_samples(&q.quadric) {
+                    let object_area = q.quadric.world_area(glam::DMat3::IDENTITY);
+                    return vec![(
+                        Piece::Quadric { index, sampler: QuadricSampler::Pbrt { object_area } },
+                        object_area,
+                    )];
+                }
                 let area = q.quadric.world_area(glam::DMat3::from_mat4(q.render_from_object));
                 vec![(Piece::Quadric { index, sampler: q.sampler() }, area)]
             }

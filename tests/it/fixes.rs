@@ -197,3 +197,39 @@ fn a_smooth_coat_reflects_an_area_light_as_in_pbrt_v4() {
     let l = rendered_mean(text, Fixes::NONE);
     assert!((0.035..0.045).contains(&l), "reflected {l}, expected about 0.04");
 }
+
+/// A sphere of radius 1 under `Scale 2` with `ReverseOrientation`: its world normal is
+/// −p/1 in object terms, so ∂n/∂u is −∂p/∂u (object). pbrt transforms the object ∂n/∂u
+/// (= ∂p/∂u) as a normal, halving it, and keeps its sign: half the size, the wrong way.
+#[test]
+fn pbrt_halves_and_keeps_the_sign_of_a_scaled_reversed_spheres_normal_derivative() {
+    use pbrt_sppm::math::{Point3, Ray, Vector3};
+    use pbrt_sppm::shapes::quadric::QuadricShape;
+    use pbrt_sppm::shapes::{Quadric, sphere::Sphere};
+    let m = glam::DMat4::from_scale(glam::DVec3::splat(2.0));
+    let q = Quadric::Sphere(Sphere::new(1.0, -1.0, 1.0, 360.0));
+    let mut shape = QuadricShape::new(q.clone(), m, true);
+    let ray = Ray::new(Point3::new(0.3, -5.0, 0.4), Vector3::new(0.0, 1.0, 0.0));
+    let fixed = shape.interaction(&shape.intersect_t(&ray, f32::INFINITY).unwrap());
+    shape.pbrt_normal_derivatives = true;
+    let pbrt = shape.interaction(&shape.intersect_t(&ray, f32::INFINITY).unwrap());
+    // The fix: the derivative of the reported normal, by finite differences in u.
+    let [u, v] = fixed.uv.map(f64::from);
+    let normal = |u: f64| -(m.transform_point3(q.point(u, v)) / 2.0);
+    let h = 1e-4;
+    let want = ((normal(u + h) - normal(u - h)) / (2.0 * h)).as_vec3();
+    assert!((fixed.dndu.0 - want).length() < 1e-3 * want.length(), "fixed {} vs {want}", fixed.dndu.0);
+    assert!((pbrt.dndu.0 + 0.5 * want).length() < 1e-3 * want.length(), "pbrt {} vs {}", pbrt.dndu.0, -0.5 * want);
+}
+
+#[test]
+fn check_reports_scaled_emitters_and_bumped_scaled_quadrics() {
+    let text = "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\"\nScale 2 2 2\nShape \"sphere\"\nAttributeEnd\n\
+                AttributeBegin\nAreaLightSource \"diffuse\"\nShape \"disk\" \"float innerradius\" 0.5\nAttributeEnd\n\
+                AttributeBegin\nAreaLightSource \"diffuse\"\nTranslate 3 0 0\nShape \"sphere\"\nAttributeEnd\n\
+                Texture \"b\" \"float\" \"fbm\"\nMaterial \"diffuse\" \"texture displacement\" \"b\"\n\
+                AttributeBegin\nScale 1 1 3\nShape \"cylinder\"\nAttributeEnd\nShape \"cylinder\"\n";
+    let got: Vec<(String, u64)> = bugs(text).into_iter().map(|b| (b.0, b.1)).collect();
+    let want = [("photons-behind", 1), ("shape-sampling", 3), ("shape-sampling", 8), ("normal-derivatives", 17)];
+    assert_eq!(got, want.map(|(n, l)| (n.to_string(), l)));
+}

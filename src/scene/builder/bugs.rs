@@ -7,14 +7,16 @@ use crate::fixes::{Fix, Fixes, PbrtBug};
 use crate::parser::Syntax;
 use crate::parser::error::Located;
 use crate::parser::source::Span;
-use crate::scene::materials::{CoatBase, MaterialKind, TexValue};
+use crate::scene::materials::{CoatBase, MaterialDesc, MaterialKind, TexValue};
 use crate::scene::textures::TextureKind;
-use crate::scene::{Geometry, ShapeDesc};
+use crate::scene::{Geometry, ObjectDesc, ShapeDesc};
+use crate::shapes::Quadric;
+use glam::DMat3;
 
 impl Builder {
     /// The bugs the scene triggers, in file order, one per (statement, fix). Called
     /// once materials, textures and world shapes are built, before the lights are.
-    pub(super) fn pbrt_bugs(&self, syntax: Syntax) -> Vec<(Span, Fix)> {
+    pub(super) fn pbrt_bugs(&self, syntax: Syntax, objects: &[ObjectDesc]) -> Vec<(Span, Fix)> {
         let mut found = Vec::new();
         for m in &self.materials {
             let (Some(b), Some(at)) = (m.built, m.span) else { continue };
@@ -38,6 +40,11 @@ impl Builder {
         }
         for s in self.shapes.iter().filter(|s| s.area_light.is_some()) {
             self.area_light_bugs(s, syntax, &mut found);
+        }
+        let shapes = self.shapes.iter().chain(objects.iter().flat_map(|o| o.shapes.iter()));
+        for s in shapes.filter(|s| bumped_quadric_pbrt_tilts(s, &self.built_materials)) {
+            let material = self.materials.iter().find(|m| m.built == Some(s.material)).and_then(|m| m.span);
+            found.extend(material.map(|at| (at, Fix::NormalDerivatives)));
         }
         if let Some(at) = self.photon_statement() {
             found.push((at, Fix::PhotonsBehind));
@@ -64,6 +71,12 @@ impl Builder {
         if s.alpha.is_some() {
             found.push((e.name_span, Fix::AreaAlpha));
         }
+        let two_sided = e.params.bool("twosided").ok().flatten().unwrap_or(false);
+        if let Geometry::Quadric(q) = &s.geometry
+            && pbrt_samples_differently(q, s, two_sided)
+        {
+            found.push((e.name_span, Fix::ShapeSampling));
+        }
     }
 
     /// Where SPPM is asked for: the `Integrator` statement, or the first shape's
@@ -74,6 +87,29 @@ impl Builder {
         }
         self.render.integrator.as_ref().map(|e| e.name_span).or(self.world_begin)
     }
+}
+
+/// Whether pbrt's sampling of an emitting quadric differs from the exact one: a cut
+/// sphere or disk, an area changed by the transform, or a mirrored one-sided light.
+fn pbrt_samples_differently(q: &Quadric, s: &ShapeDesc, two_sided: bool) -> bool {
+    let full = std::f32::consts::TAU * (1.0 - 1e-6);
+    let cut = match q {
+        Quadric::Sphere(sp) => sp.z_min > -sp.radius || sp.z_max < sp.radius || sp.phi_max < full,
+        Quadric::Disk(d) => d.inner_radius > 0.0 || d.phi_max < full,
+        Quadric::Cylinder(_) => false,
+        _ => return false,
+    };
+    let (object, world) = (q.world_area(DMat3::IDENTITY), q.world_area(DMat3::from_mat4(s.object_to_world)));
+    cut || (world - object).abs() > 1e-6 * object || (s.swaps_handedness() && !two_sided)
+}
+
+/// Whether a bump-mapped quadric's ∂n/∂u differs in pbrt: under a transform that is
+/// not rigid, or reversed.
+fn bumped_quadric_pbrt_tilts(s: &ShapeDesc, materials: &[MaterialDesc]) -> bool {
+    let bumped = materials.get(s.material as usize).is_some_and(|m| m.bump.is_some());
+    let rigid =
+        crate::shapes::similarity_scale(DMat3::from_mat4(s.object_to_world)).is_some_and(|k| (k - 1.0).abs() < 1e-9);
+    matches!(s.geometry, Geometry::Quadric(_)) && bumped && (s.reverse_orientation || !rigid)
 }
 
 /// Whether a coat's roughness may be above pbrt-v4's smoothness threshold.

@@ -1,0 +1,127 @@
+//! pbrt's own sampling of sphere, disk and cylinder area lights, which the renderer
+//! follows by default (`--fix shape-sampling` uses [`super::sampling`]'s exact sampling
+//! instead).
+//!
+//! ```text
+//! AttributeBegin
+//!   AreaLightSource "diffuse" "rgb L" [4 4 4]
+//!   Scale 2 2 2                                   # pbrt: object-space area, object radius
+//!   Shape "sphere" "float radius" 1 "float zmax" 0.5   # pbrt: samples the whole sphere
+//! AttributeEnd
+//! ```
+//!
+//! DEVIATION(pbrt): appearance, `--fix shape-sampling`. pbrt (v3 and v4) samples
+//! - a sphere over the *whole* sphere and a disk over the whole disk, whatever
+//!   `zmin`/`zmax`/`phimax`/`innerradius` cut away, with the density of the cut shape;
+//! - with the shape's *object-space* area (1/Area()) under any transform, and a sphere
+//!   seen from outside within the cone of its *object* radius around its world centre;
+//! - with normals flipped by `ReverseOrientation` only, not by a handedness swap.
+//!
+//! So a cut or scaled sphere light emits photons and light samples from where it has no
+//! surface, or too much or too little, and a mirrored one-sided light emits its light
+//! samples and photons from its back. Cylinders are sampled over their own surface, with
+//! the object-space area. (pbrt cannot sample cones, paraboloids and hyperboloids at
+//! all: it aborts; here they always use the exact sampling.)
+
+use super::Quadric;
+use super::quadric::QuadricShape;
+use super::sampling::{ShapeSample, area_to_solid_angle};
+use crate::math::{Normal3, Point3, Ray, Vector3};
+use glam::{DMat3, DVec3};
+use std::f64::consts::{FRAC_PI_4, PI, TAU};
+
+/// Whether pbrt can sample this quadric (it aborts for the others).
+pub fn pbrt_samples(q: &Quadric) -> bool {
+    matches!(q, Quadric::Sphere(_) | Quadric::Disk(_) | Quadric::Cylinder(_))
+}
+
+/// pbrt's `ConcentricSampleDisk`: a point of the unit disk.
+fn concentric_disk(u: [f64; 2]) -> (f64, f64) {
+    let (x, y) = (2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
+    if x == 0.0 && y == 0.0 {
+        return (0.0, 0.0);
+    }
+    let (r, theta) = if x.abs() > y.abs() { (x, FRAC_PI_4 * (y / x)) } else { (y, PI / 2.0 - FRAC_PI_4 * (x / y)) };
+    (r * theta.cos(), r * theta.sin())
+}
+
+impl QuadricShape {
+    /// The world normal of object normal `n` (as pbrt transforms normals), flipped by
+    /// `ReverseOrientation` alone.
+    fn pbrt_normal(&self, n: DVec3) -> DVec3 {
+        let inv_t = DMat3::from_mat4(self.object_from_render).transpose();
+        let n = (inv_t * n).normalize_or_zero();
+        if self.reverse_orientation { -n } else { n }
+    }
+
+    /// pbrt's `Shape::Sample(u)`: a point by (object-space) area.
+    pub(super) fn sample_area_pbrt(&self, object_area: f64, u: [f32; 2]) -> ShapeSample {
+        let u = [u[0] as f64, u[1] as f64];
+        let (p_obj, n_obj) = match &self.quadric {
+            Quadric::Sphere(s) => {
+                let z = 1.0 - 2.0 * u[0];
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let d = DVec3::new(r * (TAU * u[1]).cos(), r * (TAU * u[1]).sin(), z);
+                (d * s.radius as f64, d)
+            }
+            Quadric::Disk(d) => {
+                let (x, y) = concentric_disk(u);
+                (DVec3::new(x * d.radius as f64, y * d.radius as f64, d.height as f64), DVec3::Z)
+            }
+            Quadric::Cylinder(c) => {
+                let z = c.z_min as f64 + u[0] * (c.z_max as f64 - c.z_min as f64);
+                let phi = u[1] * c.phi_max as f64;
+                let r = c.radius as f64;
+                (DVec3::new(r * phi.cos(), r * phi.sin(), z), DVec3::new(phi.cos(), phi.sin(), 0.0))
+            }
+            _ => (DVec3::ZERO, DVec3::Z),
+        };
+        let p = self.render_from_object.transform_point3(p_obj);
+        let n = self.pbrt_normal(n_obj);
+        let uv = self.uv_of_object_point(p_obj).map(|x| x as f32);
+        let pdf = if object_area > 0.0 { (1.0 / object_area) as f32 } else { 0.0 };
+        ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), uv, pdf }
+    }
+
+    /// A sphere's world centre, its object radius, and whether `reference` lies within
+    /// that radius of the centre (pbrt's test for area sampling instead of the cone).
+    fn pbrt_sphere(&self, reference: Point3) -> Option<(DVec3, f64, bool)> {
+        let Quadric::Sphere(s) = &self.quadric else { return None };
+        let c = self.render_from_object.transform_point3(DVec3::ZERO);
+        let r = s.radius as f64;
+        Some((c, r, (c - reference.0.as_dvec3()).length_squared() <= r * r))
+    }
+
+    /// pbrt's `Shape::Sample(ref, u)`: a point with its solid-angle density.
+    pub(super) fn sample_solid_angle_pbrt(
+        &self,
+        object_area: f64,
+        reference: Point3,
+        u: [f32; 2],
+    ) -> Option<ShapeSample> {
+        match self.pbrt_sphere(reference) {
+            Some((c, r, false)) => {
+                // The point where the cone's ray meets the sphere of the object radius
+                // about the world centre, whatever the transform's scale.
+                let mut s = self.sample_sphere_cone(reference.0.as_dvec3(), c, r, u)?;
+                let n = (s.p.0.as_dvec3() - c).normalize_or_zero();
+                s.n = Normal3((if self.reverse_orientation { -n } else { n }).as_vec3());
+                Some(s)
+            }
+            _ => area_to_solid_angle(self.sample_area_pbrt(object_area, u), reference),
+        }
+    }
+
+    /// pbrt's `Shape::Pdf(ref, wi)` for a direction that reaches the shape.
+    pub(super) fn pdf_solid_angle_pbrt(&self, object_area: f64, reference: Point3, wi: Vector3) -> f32 {
+        let Some(hit) = self.intersect_t(&Ray::new(reference, wi), f32::INFINITY) else { return 0.0 };
+        if let Some((c, r, false)) = self.pbrt_sphere(reference) {
+            let cos_max = (1.0 - r * r / (c - reference.0.as_dvec3()).length_squared()).max(0.0).sqrt();
+            return (1.0 / (TAU * (1.0 - cos_max))) as f32;
+        }
+        let si = self.interaction(&hit);
+        let d = si.p.0.as_dvec3() - reference.0.as_dvec3();
+        let cos = si.n.0.as_dvec3().dot(-d.normalize()).abs();
+        if cos == 0.0 || object_area <= 0.0 { 0.0 } else { (d.length_squared() / (cos * object_area)) as f32 }
+    }
+}
