@@ -528,35 +528,62 @@ fn direct_light(
             ld += f * ls.li * w / ls.pdf;
         }
     }
-    if !light.is_delta()
+    let mut specular = Vec3::ZERO;
+    if (specular_too || !light.is_delta())
         && let Some(s) = bsdf.sample_f(wo, u_bsdf, u_lobe, TransportMode::Radiance)
-        && (specular_too || !s.specular)
     {
-        // Trace first: the sample only counts where it reaches this light, and only
-        // then is the light's density needed (measured from the offset origin, so the
-        // surface just left is never taken for the light).
-        let ray = si.spawn_ray(Vector3(s.wi));
-        let li = match scene.intersect(&ray) {
-            Some(hit) => match scene.emitter(&hit) {
-                Some((_, l)) if l as usize == idx => {
-                    let lsi = scene.geometry.interaction(&hit);
-                    scene.emitted(&hit, &lsi, -s.wi)
-                }
-                _ => Vec3::ZERO,
-            },
-            None => light.le_escaped(s.wi),
-        };
-        if li != Vec3::ZERO && s.specular {
-            ld += s.f * s.wi.dot(ns).abs() * li / s.pdf;
-        } else if li != Vec3::ZERO {
-            let light_pdf = light.pdf_li(&scene.geometry, ray.o.0, s.wi);
-            if light_pdf > 0.0 {
-                let bsdf_pdf = if s.proportional { bsdf.pdf(wo, s.wi) } else { s.pdf };
-                ld += s.f * s.wi.dot(ns).abs() * li * power_heuristic(bsdf_pdf, light_pdf) / s.pdf;
-            }
+        if !s.specular && !light.is_delta() {
+            ld += bsdf_strategy(scene, si, bsdf, wo, &s, (light, idx));
+        } else if s.specular && specular_too {
+            // Light sampling cannot find this direction: whatever emits along it counts
+            // in full, once (not through the light chosen above).
+            specular = s.f * s.wi.dot(ns).abs() * emitted_along(scene, si, s.wi) / s.pdf;
         }
     }
-    ld * n as f32
+    ld * n as f32 + specular
+}
+
+/// The BSDF-sampled half of [`direct_light`] for the chosen light, MIS-weighted.
+fn bsdf_strategy(
+    scene: &RenderScene,
+    si: &crate::interaction::SurfaceInteraction,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    s: &crate::materials::BsdfSample,
+    (light, idx): (&Light, usize),
+) -> Rgb {
+    // Trace first: the sample only counts where it reaches this light, and only then
+    // is the light's density needed (measured from the offset origin, so the surface
+    // just left is never taken for the light).
+    let ray = si.spawn_ray(Vector3(s.wi));
+    let li = match scene.intersect(&ray) {
+        Some(hit) => match scene.emitter(&hit) {
+            Some((_, l)) if l as usize == idx => {
+                let lsi = scene.geometry.interaction(&hit);
+                scene.emitted(&hit, &lsi, -s.wi)
+            }
+            _ => Vec3::ZERO,
+        },
+        None => light.le_escaped(s.wi),
+    };
+    if li == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let light_pdf = light.pdf_li(&scene.geometry, ray.o.0, s.wi);
+    if light_pdf <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let bsdf_pdf = if s.proportional { bsdf.pdf(wo, s.wi) } else { s.pdf };
+    s.f * s.wi.dot(bsdf.shading_normal()).abs() * li * power_heuristic(bsdf_pdf, light_pdf) / s.pdf
+}
+
+/// What every light sends back along the ray from `si` in direction `wi`: the area
+/// light it hits, or the infinite lights where it escapes.
+fn emitted_along(scene: &RenderScene, si: &crate::interaction::SurfaceInteraction, wi: Vec3) -> Rgb {
+    match scene.intersect(&si.spawn_ray(Vector3(wi))) {
+        Some(hit) => scene.emitted(&hit, &scene.geometry.interaction(&hit), -wi),
+        None => scene.lights.iter().map(|l| l.le_escaped(wi)).sum(),
+    }
 }
 
 fn visible(scene: &RenderScene, si: &crate::interaction::SurfaceInteraction, ls: &crate::lights::LightSample) -> bool {

@@ -930,6 +930,7 @@ impl Builder {
                 self.shapes[i].alpha = self.resolve_alpha(&a, scope)?;
             }
         }
+        self.drop_interface_emitters();
         let bugs = self.pbrt_bugs(syntax, &objects);
         let lights = self.build_lights()?;
         let area_lights = self.build_area_lights()?;

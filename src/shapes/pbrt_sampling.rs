@@ -89,7 +89,9 @@ impl QuadricShape {
         let Quadric::Sphere(s) = &self.quadric else { return None };
         let c = self.render_from_object.transform_point3(DVec3::ZERO);
         let r = s.radius as f64;
-        Some((c, r, (c - reference.0.as_dvec3()).length_squared() <= r * r))
+        // pbrt first moves the reference towards the centre by its error bound, so that
+        // points on the sphere itself count as inside; a relative margin does the same.
+        Some((c, r, (c - reference.0.as_dvec3()).length_squared() <= r * r * 1.0001))
     }
 
     /// pbrt's `Shape::Sample(ref, u)`: a point with its solid-angle density.

@@ -354,7 +354,10 @@ fn mitsuba_and_sppm_agree_on_a_small_diffuse_scene() {
     let dir = tempdir("render");
     let json = dir.join("scene.json");
     let bin = env!("CARGO_BIN_EXE_pbrt-sppm");
-    let out = run(Command::new(bin).args(["export", "--mitsuba", CHECK_SCENE, "-o"]).arg(&json).current_dir(root()));
+    let out = run(Command::new(bin)
+        .args(["export", "--mitsuba", CHECK_SCENE, "--fix", "all", "-o"])
+        .arg(&json)
+        .current_dir(root()));
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let theirs = dir.join("mitsuba.exr");
     let script = root().join("tools/mitsuba_reference.py");
@@ -401,7 +404,9 @@ fn mitsuba_reads_environment_maps_as_we_do() {
     )
     .unwrap();
     let bin = env!("CARGO_BIN_EXE_pbrt-sppm");
-    let out = run(Command::new(bin).args(["export", "--mitsuba", "env.pbrt", "-o", "env.json"]).current_dir(&dir));
+    let out = run(Command::new(bin)
+        .args(["export", "--mitsuba", "env.pbrt", "--fix", "all", "-o", "env.json"])
+        .current_dir(&dir));
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let script = root().join("tools/mitsuba_reference.py");
     let out =

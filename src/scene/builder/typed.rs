@@ -106,6 +106,24 @@ impl Builder {
         Ok(out)
     }
 
+    /// pbrt-v4 ignores an area light on a shape whose material is `interface` (or
+    /// `none`, `""`), with a warning; pbrt-v3 lets it emit.
+    pub(super) fn drop_interface_emitters(&mut self) {
+        if self.syntax() != Syntax::V4 {
+            return;
+        }
+        let interface = |m: u32| matches!(self.built_materials[m as usize].kind, MaterialKind::Interface);
+        let dropped: Vec<usize> = (0..self.shapes.len())
+            .filter(|&i| self.shapes[i].area_light.is_some() && interface(self.shapes[i].material))
+            .collect();
+        for i in dropped {
+            let Some(a) = self.shapes[i].area_light.take() else { continue };
+            let at = self.area_light_entities[self.area_lights_used[a as usize] as usize].0.name_span;
+            let why = "ignored on a shape with the \"interface\" material, as pbrt-v4 ignores it";
+            self.warnings.push(Diagnostic::warning(at, format!("AreaLightSource: {why}")));
+        }
+    }
+
     /// The area lights some world shape used, in the order of their indices.
     pub(super) fn build_area_lights(&mut self) -> Res<Vec<lights::AreaLightDesc>> {
         let used = std::mem::take(&mut self.area_lights_used);
