@@ -27,6 +27,7 @@ pub enum Fix {
     PhotonsBehind,
     ShapeSampling,
     NormalDerivatives,
+    HyperboloidSurface,
 }
 
 /// Name, the pbrt versions that have the bug, and what fixing it changes.
@@ -38,7 +39,7 @@ pub struct FixInfo {
 }
 
 /// Every fix, in the order `--fix help` lists them.
-pub const FIXES: [FixInfo; 9] = [
+pub const FIXES: [FixInfo; 10] = [
     FixInfo {
         fix: Fix::PlasticFresnel,
         name: "plastic-fresnel",
@@ -104,6 +105,14 @@ pub const FIXES: [FixInfo; 9] = [
         effect: "bump maps on scaled or reversed quadrics use the true derivatives of the normal; pbrt \
                  transforms them as normals (off by the scale) and ignores ReverseOrientation, which tilts \
                  the bumps' shading there",
+    },
+    FixInfo {
+        fix: Fix::HyperboloidSurface,
+        name: "hyperboloid-surface",
+        versions: "v3",
+        effect: "a hyperboloid is the surface its segment p1→p2 sweeps, which its (u,v), normals and \
+                 area describe; pbrt-v3 intersects an implicit fit that is that surface only when the \
+                 segment's closest approach to the axis is at z = 0 (pbrt-v3 #168)",
     },
 ];
 

@@ -2,7 +2,9 @@
 """Writes the small mesh files used by pbrt-scenes/ (our own geometry, no third-party data).
 
 icosphere.ply (ASCII, normals, u v), slab_be.ply (binary big-endian, quads, s t),
-cube.obj. Run from the repository root: python3 tools/make_meshes.py
+cube.obj, and pbrt-scenes/verify/geometry/swept-hyperboloid.ply (the surface a
+hyperboloid's segment sweeps, finely tessellated with its normals: the reference for
+`--fix hyperboloid-surface`). Run from the repository root: python3 tools/make_meshes.py
 """
 import math, struct, os
 
@@ -65,9 +67,40 @@ def write_obj(path):
         out.writelines(f"v {x} {y} {z}\n" for x, y, z in c)
         out.writelines("f " + " ".join(map(str, f)) + "\n" for f in faces)
 
+def write_swept_hyperboloid(path, p1=(0.9, 0.0, -0.2), p2=(-0.2, 0.7, 1.2), nu=96, nv=32):
+    """p(u, v) = rotate_z(2πu) · ((1 − v) p1 + v p2), with the normal ∂p/∂u × ∂p/∂v."""
+    pts, nrm = [], []
+    d = [b - a for a, b in zip(p1, p2)]
+    for j in range(nv + 1):
+        pr = [a + j / nv * e for a, e in zip(p1, d)]
+        for i in range(nu + 1):
+            c, s = math.cos(2 * math.pi * i / nu), math.sin(2 * math.pi * i / nu)
+            p = (pr[0] * c - pr[1] * s, pr[0] * s + pr[1] * c, pr[2])
+            du = (-p[1], p[0], 0.0)
+            dv = (d[0] * c - d[1] * s, d[0] * s + d[1] * c, d[2])
+            n = (du[1] * dv[2] - du[2] * dv[1], du[2] * dv[0] - du[0] * dv[2], du[0] * dv[1] - du[1] * dv[0])
+            length = math.sqrt(sum(x * x for x in n))
+            pts.append(p)
+            nrm.append(tuple(x / length for x in n))
+    faces = []
+    for j in range(nv):
+        for i in range(nu):
+            a = j * (nu + 1) + i
+            faces += [(a, a + 1, a + nu + 2), (a, a + nu + 2, a + nu + 1)]
+    header = (f"ply\nformat binary_little_endian 1.0\ncomment the surface the hyperboloid p1 {p1} p2 {p2} sweeps\n"
+              f"element vertex {len(pts)}\n" + "".join(f"property float {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz"))
+              + f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    with open(path, "wb") as out:
+        out.write(header.encode())
+        for p, n in zip(pts, nrm):
+            out.write(struct.pack("<6f", *p, *n))
+        for f in faces:
+            out.write(struct.pack("<B3i", 3, *f))
+
 if __name__ == "__main__":
     for d in ("pbrt-scenes/v3/geometry", "pbrt-scenes/v4/geometry"):
         os.makedirs(d, exist_ok=True)
         write_ascii_ply(f"{d}/icosphere.ply")
         write_binary_quads(f"{d}/slab_be.ply")
         write_obj(f"{d}/cube.obj")
+    write_swept_hyperboloid("pbrt-scenes/verify/geometry/swept-hyperboloid.ply")

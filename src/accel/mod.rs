@@ -372,7 +372,13 @@ impl Geometry {
         let object_shapes: Vec<Vec<ShapeRef>> =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| shape_ref(s, &mut set.quadrics)).collect()).collect();
         let pbrt_dndu = !scene.fixes.has(crate::fixes::Fix::NormalDerivatives);
-        set.quadrics.iter_mut().for_each(|q| q.pbrt_normal_derivatives = pbrt_dndu);
+        let pbrt_hyperboloid = !scene.fixes.has(crate::fixes::Fix::HyperboloidSurface);
+        for q in &mut set.quadrics {
+            q.pbrt_normal_derivatives = pbrt_dndu;
+            if let crate::shapes::Quadric::Hyperboloid(h) = &mut q.quadric {
+                h.implicit_fit = pbrt_hyperboloid;
+            }
+        }
         let mut world = Blas::build(world_shapes, &set);
         let mut objects: Vec<Blas> = object_shapes.into_par_iter().map(|shapes| Blas::build(shapes, &set)).collect();
         let mut triangle_ids = vec![Vec::new(); set.meshes.len()];

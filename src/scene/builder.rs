@@ -167,6 +167,8 @@ struct Builder {
     world_begin: Option<Span>,
     render: RenderOptions,
     shapes: Vec<ShapeDesc>,
+    /// Per world shape: its `Shape` statement's type name.
+    shape_spans: Vec<Span>,
     shape_materials: Vec<MaterialRef>,
     /// Per world shape: its alpha parameters and the scope to resolve them in.
     shape_alphas: Vec<Option<(AlphaParams, Rc<Scope>)>>,
@@ -232,6 +234,7 @@ impl Builder {
             world_begin: None,
             render: RenderOptions::default(),
             shapes: Vec::new(),
+            shape_spans: Vec::new(),
             shape_materials: Vec::new(),
             shape_alphas: Vec::new(),
             deferred_shapes: Vec::new(),
@@ -663,6 +666,7 @@ impl Builder {
                 }
                 for (shape, alpha) in self.build_shape(&pending, area_light)? {
                     self.shapes.push(shape);
+                    self.shape_spans.push(pending.entity.name_span);
                     self.shape_materials.push(pending.material.clone());
                     self.shape_alphas.push(alpha.map(|a| (a, pending.scope.clone())));
                 }
@@ -683,6 +687,7 @@ impl Builder {
         for (at, pending, area_light) in std::mem::take(&mut self.deferred_shapes).into_iter().rev() {
             for (k, (shape, alpha)) in self.build_shape(&pending, area_light)?.into_iter().enumerate() {
                 self.shapes.insert(at + k, shape);
+                self.shape_spans.insert(at + k, pending.entity.name_span);
                 self.shape_materials.insert(at + k, pending.material.clone());
                 self.shape_alphas.insert(at + k, alpha.map(|a| (a, pending.scope.clone())));
             }

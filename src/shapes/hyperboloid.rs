@@ -3,9 +3,11 @@
 //!
 //! The surface swept by the segment p1→p2 around the z axis:
 //! p_r(v) = (1 − v)·p1 + v·p2, p(u, v) = rotate_z(u·φmax) · p_r(v).
-//! pbrt also fits the implicit form a_h(x² + y²) − c_h z² = 1 (for intersection); its
-//! refit loop never ends when the segment's line meets the axis, including for the
-//! default parameters, so such input is rejected here.
+//! pbrt also fits the implicit form a_h(x² + y²) − c_h z² = 1 and intersects that
+//! (rendering's default here too; `--fix hyperboloid-surface` intersects the swept
+//! surface). Its refit loop never ends when the segment's line meets the axis,
+//! including for the default parameters, so such input is rejected here. Sampling (an
+//! emitting hyperboloid, which pbrt cannot sample) always uses the swept surface.
 
 use super::quadric::{E, Local, QuadricSurface, phi_of};
 use super::{integrate_unit_interval, phi_max_radians};
@@ -21,6 +23,9 @@ pub struct Hyperboloid {
     pub ah: f32,
     pub ch: f32,
     pub phi_max: f32,
+    /// Intersect pbrt-v3's implicit fit a_h(x² + y²) − c_h z² = 1 instead of the swept
+    /// surface (the render's default; `--fix hyperboloid-surface` clears it).
+    pub implicit_fit: bool,
 }
 
 impl Hyperboloid {
@@ -70,6 +75,7 @@ impl Hyperboloid {
             ah,
             ch,
             phi_max: phi_max_radians(phi_max_deg),
+            implicit_fit: false,
         })
     }
 
@@ -119,10 +125,32 @@ impl Hyperboloid {
     }
 }
 
-/// Intersected as the surface the segment sweeps (F = x² + y² − ρ²(v)), not pbrt's
-/// implicit fit: see the module notes of `quadric`.
+/// Whether the swept surface and pbrt-v3's implicit fit differ: the fit's residual at
+/// the segment's ends and middle, relative to its size.
+pub fn fit_differs(h: &Hyperboloid) -> bool {
+    let implicit = Hyperboloid { implicit_fit: true, ..h.clone() };
+    [0.0, 0.5, 1.0].iter().any(|&v| {
+        let p = h.point(0.0, v);
+        implicit.residual(p) > 1e-4 * (h.r_max as f64).max((h.z_max - h.z_min) as f64)
+    })
+}
+
+/// Intersected as the surface the segment sweeps (F = x² + y² − ρ²(v)), or as pbrt-v3's
+/// implicit fit (`implicit_fit`): see the module notes of `quadric`.
+// DEVIATION(pbrt): appearance, `--fix hyperboloid-surface`. pbrt-v3 intersects its
+// implicit fit, whose waist is at z = 0: it is the swept surface only when the
+// segment's closest approach to the axis is at z = 0 (pbrt-v3 #168), and elsewhere
+// pbrt's (u, v), normals and area describe a surface other than the one it hits.
 impl QuadricSurface for Hyperboloid {
     fn coefficients(&self, [ox, oy, oz]: [E; 3], [dx, dy, dz]: [E; 3]) -> (E, E, E) {
+        if self.implicit_fit {
+            let (ah, ch) = (E::from(self.ah as f64), E::from(self.ch as f64));
+            return (
+                ah * (dx * dx + dy * dy) - ch * dz * dz,
+                (ah * (dx * ox + dy * oy) - ch * dz * oz) * 2.0,
+                ah * (ox * ox + oy * oy) - ch * oz * oz - E::from(1.0),
+            );
+        }
         let (al, be, ga, z1, dzl) = self.sweep();
         let (al, be, ga) = (E::from(al), E::from(be), E::from(ga));
         let v0 = (oz - E::from(z1)) / E::from(dzl);
@@ -135,6 +163,11 @@ impl QuadricSurface for Hyperboloid {
     }
 
     fn implicit(&self, p: DVec3) -> (f64, DVec3) {
+        if self.implicit_fit {
+            let (ah, ch) = (self.ah as f64, self.ch as f64);
+            let f = ah * (p.x * p.x + p.y * p.y) - ch * p.z * p.z - 1.0;
+            return (f, DVec3::new(2.0 * ah * p.x, 2.0 * ah * p.y, -2.0 * ch * p.z));
+        }
         let (al, be, ga, z1, dzl) = self.sweep();
         let v = (p.z - z1) / dzl;
         let f = p.x * p.x + p.y * p.y - (al * v * v + be * v + ga);

@@ -17,10 +17,9 @@
 //! test for cones and paraboloids, pbrt-v3 #44). Hits are refined onto the surface in
 //! f64, so the stored f32 point is within about one ulp of the true surface; `p_error`
 //! bounds that, and spawned rays clear it.
-//! DEVIATION(pbrt): the hyperboloid is intersected as the surface swept by the segment
-//! p1→p2 (the surface its (u,v) and area describe); pbrt intersects an implicit form
-//! with its waist at z = 0, which differs unless the segment's closest approach to the
-//! axis is at z = 0 (pbrt-v3 #168).
+//! The hyperboloid is intersected as pbrt-v3 does, as its implicit fit, by default,
+//! and as the surface its segment sweeps with `--fix hyperboloid-surface` (see
+//! `hyperboloid`).
 
 use super::Quadric;
 use crate::interaction::{Shading, SurfaceInteraction};
@@ -139,6 +138,26 @@ impl QuadricShape {
         Local { uv: l.uv, ..moved }
     }
 
+    /// The geometric normal at an object-space hit: `n`, the normal of the (u, v)
+    /// parametrisation, unless the surface intersected is another one (pbrt-v3's
+    /// implicit hyperboloid), whose own normal, on `n`'s side, rays are spawned from.
+    // DEVIATION(pbrt): robustness. pbrt-v3 offsets rays from its hyperboloid along the
+    // parametrisation's normal, which is not the implicit surface's: rays leave on the
+    // wrong side of it and re-hit it. Its shading normal stays pbrt's.
+    fn geometric_normal(&self, p_obj: DVec3, n: DVec3) -> DVec3 {
+        let Quadric::Hyperboloid(h) = &self.quadric else { return n };
+        if !h.implicit_fit {
+            return n;
+        }
+        let (_, g) = h.implicit(p_obj);
+        let g = (DMat3::from_mat4(self.object_from_render).transpose() * g).normalize_or_zero();
+        match g.dot(n) {
+            d if g == DVec3::ZERO || !d.is_finite() => n,
+            d if d < 0.0 => -g,
+            _ => g,
+        }
+    }
+
     /// Full differential geometry at a hit found by [`QuadricShape::intersect_t`].
     pub fn interaction(&self, hit: &QuadricHit) -> SurfaceInteraction {
         let l = self.local_at(hit);
@@ -177,6 +196,7 @@ impl QuadricShape {
         let f64_slop = gamma64(16) * (m3.abs() * hit.p_obj.abs() + m.w_axis.truncate().abs() + p.abs()) + off_surface;
         let p_error = gamma(2) * p32.abs() + f64_slop.as_vec3() + Vec3::splat(f32::MIN_POSITIVE);
         let nv = Normal3(n.as_vec3());
+        let ng = Normal3(self.geometric_normal(hit.p_obj, n).as_vec3());
         let shading = Shading {
             n: nv,
             dpdu: Vector3(dpdu.as_vec3()),
@@ -189,7 +209,7 @@ impl QuadricShape {
             p_error,
             t: hit.t,
             uv: [l.uv[0] as f32, l.uv[1] as f32],
-            n: nv,
+            n: ng,
             dpdu: shading.dpdu,
             dpdv: shading.dpdv,
             dndu: shading.dndu,

@@ -250,3 +250,16 @@ fn check_reports_scaled_emitters_and_bumped_scaled_quadrics() {
     let want = [("photons-behind", 1), ("shape-sampling", 3), ("shape-sampling", 8), ("normal-derivatives", 17)];
     assert_eq!(got, want.map(|(n, l)| (n.to_string(), l)));
 }
+
+#[test]
+fn check_reports_hyperboloids_whose_implicit_fit_is_another_surface() {
+    let text = |p1: &str, p2: &str| {
+        format!("WorldBegin\nShape \"hyperboloid\" \"point p1\" [{p1}] \"point p2\" [{p2}]\nWorldEnd\n")
+    };
+    // Closest to the axis at z = 0.5: pbrt-v3's fit (waist at z = 0) is another surface.
+    let names: Vec<String> = bugs(&text("1 0 0", "0 1 1")).into_iter().map(|b| b.0).collect();
+    assert_eq!(names, ["photons-behind", "hyperboloid-surface"]);
+    // Closest at z = 0: the fit is the swept surface.
+    let names: Vec<String> = bugs(&text("1 0 -1", "0 1 1")).into_iter().map(|b| b.0).collect();
+    assert_eq!(names, ["photons-behind"]);
+}

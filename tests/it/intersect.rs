@@ -104,7 +104,11 @@ fn to_ray(o: DVec3, d: DVec3) -> Ray {
 ///   away from tangent.
 fn reintersect_one(kind: usize, seed: u64) -> Result<bool, String> {
     let mut rng = Rng::new(seed * 7 + kind as u64);
-    let q = random_quadric(kind, &mut rng);
+    let mut q = random_quadric(kind, &mut rng);
+    // Half the hyperboloids as pbrt-v3's implicit fit (what rendering intersects).
+    if let Quadric::Hyperboloid(h) = &mut q {
+        h.implicit_fit = seed % 2 == 1;
+    }
     let m = random_transform(&mut rng);
     let ro = rng.uniform() < 0.5;
     let shape = QuadricShape::new(q.clone(), m, ro);

@@ -12,8 +12,15 @@ use std::process::Command;
 
 const CHECK_SCENE: &str = "pbrt-scenes/v3/mitsuba-check.pbrt";
 
+/// The export and our tracer, with pbrt's bugs fixed: Mitsuba is compared with the
+/// physically right scene (a hyperboloid, for one, is exported as the surface it sweeps).
 fn export_of(text: &str) -> (Export, Tracer) {
-    (mitsuba(&scene(text), "inline"), Tracer::new(scene(text)))
+    let fixed = || {
+        let mut s = scene(text);
+        s.fixes = pbrt_sppm::fixes::Fixes::all();
+        s
+    };
+    (mitsuba(&fixed(), "inline"), Tracer::new(fixed()))
 }
 
 fn matrix(row_major: &[f64; 16]) -> DMat4 {

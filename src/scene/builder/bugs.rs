@@ -41,6 +41,13 @@ impl Builder {
         for s in self.shapes.iter().filter(|s| s.area_light.is_some()) {
             self.area_light_bugs(s, syntax, &mut found);
         }
+        for (s, at) in self.shapes.iter().zip(&self.shape_spans) {
+            if let Geometry::Quadric(Quadric::Hyperboloid(h)) = &s.geometry
+                && crate::shapes::hyperboloid::fit_differs(h)
+            {
+                found.push((*at, Fix::HyperboloidSurface));
+            }
+        }
         let shapes = self.shapes.iter().chain(objects.iter().flat_map(|o| o.shapes.iter()));
         for s in shapes.filter(|s| bumped_quadric_pbrt_tilts(s, &self.built_materials)) {
             let material = self.materials.iter().find(|m| m.built == Some(s.material)).and_then(|m| m.span);
