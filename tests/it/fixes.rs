@@ -263,3 +263,13 @@ fn check_reports_hyperboloids_whose_implicit_fit_is_another_surface() {
     let names: Vec<String> = bugs(&text("1 0 -1", "0 1 1")).into_iter().map(|b| b.0).collect();
     assert_eq!(names, ["photons-behind"]);
 }
+
+#[test]
+fn a_sky_over_matte_alone_triggers_nothing_in_v3() {
+    let matte = "WorldBegin\nLightSource \"infinite\"\nMaterial \"matte\"\nShape \"sphere\"\nWorldEnd\n";
+    let names: Vec<String> = bugs(matte).into_iter().map(|b| b.0).collect();
+    assert_eq!(names, ["photons-behind"]);
+    let metal = matte.replace("\"matte\"", "\"metal\"");
+    let names: Vec<String> = bugs(&metal).into_iter().map(|b| b.0).collect();
+    assert_eq!(names, ["photons-behind", "sky-after-glossy"]);
+}

@@ -34,7 +34,7 @@ impl Builder {
                 found.push((t.span, Fix::MarblePalette));
             }
         }
-        if syntax == Syntax::V3 {
+        if syntax == Syntax::V3 && self.built_materials.iter().any(|m| glossy(&m.kind)) {
             let skies = self.pending_lights.iter().filter(|(e, _)| e.name == "infinite");
             found.extend(skies.map(|(e, _)| (e.name_span, Fix::SkyAfterGlossy)));
         }
@@ -117,6 +117,16 @@ fn bumped_quadric_pbrt_tilts(s: &ShapeDesc, materials: &[MaterialDesc]) -> bool 
     let rigid =
         crate::shapes::similarity_scale(DMat3::from_mat4(s.object_to_world)).is_some_and(|k| (k - 1.0).abs() < 1e-9);
     matches!(s.geometry, Geometry::Quadric(_)) && bumped && (s.reverse_orientation || !rigid)
+}
+
+/// Whether a material may scatter glossily (where pbrt-v3 counts the sky twice).
+fn glossy(k: &MaterialKind) -> bool {
+    match k {
+        MaterialKind::Diffuse { .. } | MaterialKind::OrenNayar { .. } | MaterialKind::Mirror { .. } => false,
+        MaterialKind::Interface | MaterialKind::DiffuseTransmission { .. } => false,
+        MaterialKind::Dielectric { roughness, .. } => rough(roughness),
+        _ => true,
+    }
 }
 
 /// Whether a coat's roughness may be above pbrt-v4's smoothness threshold.
