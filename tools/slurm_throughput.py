@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Throughput of a sharded render on a one-node Slurm cluster, and the figures of the
-cost model in the README ("Rendering on many machines").
+cost model in docs/cluster.md.
 
     python3 tools/slurm_throughput.py [--scene pbrt-scenes/v3/caustic-ring.pbrt]
         [--passes 128] [--tasks 1,2,4] [--runs 3] [--out target/slurm-bench]

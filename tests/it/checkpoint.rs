@@ -112,7 +112,17 @@ fn a_render_killed_at_random_moments_and_resumed_matches_an_uninterrupted_one() 
         );
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         let args = [&["--mse-reference-out", "part.csv"], &reference[..], extra].concat();
-        let kills = kill_and_resume(&d, &args, seed, t);
+        // `t` was measured on a machine that may since have become less busy: if the
+        // runs finished before three kills landed, start over with shorter delays.
+        let (mut kills, mut t) = (0, t);
+        for _ in 0..4 {
+            ["c.ckpt", "part.exr", "part.csv"].iter().for_each(|f| drop(std::fs::remove_file(d.join(f))));
+            kills = kill_and_resume(&d, &args, seed, t);
+            if kills >= 3 {
+                break;
+            }
+            t /= 2;
+        }
         eprintln!("{name}: {kills} kills");
         assert!(kills >= 3, "{name}: only {kills} kills landed; the test proves nothing");
         assert!(pixels(&d.join("part.exr")) == pixels(&d.join("full.exr")), "{name}: resumed pixels differ");

@@ -1,4 +1,4 @@
-//! Numerical stability on stiff and extreme cases (README "Numerical stability"): the
+//! Numerical stability on stiff and extreme cases (`docs/stability.md`): the
 //! scenes of `pbrt-scenes/stress/`, emitters and film scales far from 1, and SPPM's own
 //! state over many iterations. Every image checked here has no NaN or Inf pixel.
 
