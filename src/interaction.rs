@@ -74,7 +74,7 @@ impl SurfaceInteraction {
     /// `p_error` in world space covers the rounding of the new point to f32, the old
     /// error mapped through `m`, and the f32 rounding a ray spawned from here meets when
     /// it is mapped back into instance space, so spawned rays clear the surface there.
-    // DEVIATION(pbrt): pbrt transforms instances in f32; the rounded matrix and its
+    // DEVIATION(pbrt): robustness. pbrt transforms instances in f32; the rounded matrix and its
     // rounded inverse do not compose to the identity, which lets spawned rays re-hit
     // mirrored or strongly scaled instances. Instances use f64 maps here.
     pub fn transformed_f64(&self, m: &glam::DMat4) -> SurfaceInteraction {

@@ -5,7 +5,7 @@
 //! SSE through glam. Both do the same operations in the same order and give the same
 //! bits; the caller picks with an [`Isa`] value.
 //!
-//! DEVIATION(pbrt): pbrt and the issue use flat 32-byte binary nodes.
+//! DEVIATION(pbrt): no image difference. pbrt and the issue use flat 32-byte binary nodes.
 //! Incoherent rays on large meshes wait on one dependent cache miss per node they
 //! visit, so the number of visits sets their speed: an 8-wide node visits a third as
 //! many levels as a binary one. Each node is 256 bytes (eight 32-byte child records:

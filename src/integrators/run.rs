@@ -316,7 +316,7 @@ fn save(sppm: &Sppm, target: &CheckpointTarget, progress: &mut Progress, quiet: 
 
 /// Refuses to write an image with a value f32 cannot hold (no Inf or NaN is ever
 /// written): the scene's radiance times the Film's `scale` passed 3.4e38.
-// DEVIATION(pbrt): pbrt writes such pixels as Inf.
+// DEVIATION(pbrt): robustness. pbrt writes such pixels as Inf.
 fn check_finite(image: &RgbImage) -> Result<(), String> {
     match image.pixels.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
         Some(i) => Err(format!(

@@ -624,7 +624,7 @@ fn trace_photon(
         return PhotonPath::default();
     }
     let d = e.ray.d.0.normalize();
-    // DEVIATION(pbrt): the photon's power is formed in f64 and carried divided by a
+    // DEVIATION(pbrt): robustness. The photon's power is formed in f64 and carried divided by a
     // power of two near the lights' total power. pbrt's f32 β overflows for emitters
     // past about 1e37 and silently drops those photons.
     let pdf = light_pdf as f64 * e.pdf_pos as f64 * e.pdf_dir as f64;

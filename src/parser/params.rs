@@ -351,8 +351,8 @@ impl ParamList {
     }
 
     /// One warning per parameter nobody looked up, at the parameter's own span.
-    // DEVIATION(pbrt): pbrt-v4 aborts on an unused parameter; we warn, as pbrt-v3 does,
-    // so that v3 files (and v3 shape-level material overrides) still load.
+    // DEVIATION(pbrt): input leniency (no valid scene renders differently). pbrt-v4 aborts on an unused parameter; we
+    // warn, as pbrt-v3 does, so that v3 files (and v3 shape-level material overrides) still load.
     pub fn report_unused(&self, out: &mut Vec<Diagnostic>) {
         for p in self.params.iter().filter(|p| !p.is_used()) {
             let hint = match p.wanted.get() {

@@ -594,8 +594,8 @@ impl StatementReader {
             },
             (Values::Ints(v), false) => match parse_int(bytes) {
                 Some(x) => v.push(x),
-                // DEVIATION(pbrt): pbrt-v4 rejects `5.0` for an integer; we truncate with a
-                // warning, as pbrt-v3 does silently.
+                // DEVIATION(pbrt): input leniency (no valid scene renders differently). pbrt-v4 rejects `5.0` for an
+                // integer; we truncate with a warning, as pbrt-v3 does silently.
                 None => match parse_f64(bytes).filter(|x| x.abs() < 2.147e9) {
                     Some(x) => {
                         v.push(x as i32);

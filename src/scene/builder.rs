@@ -504,7 +504,7 @@ impl Builder {
 
     // ---- transforms -------------------------------------------------------------
 
-    // DEVIATION(pbrt): pbrt composes the CTM in f32; we compose in f64 and round once
+    // DEVIATION(pbrt): robustness. pbrt composes the CTM in f32; we compose in f64 and round once
     // where geometry is stored, so long transform chains and far-away origins lose less.
     fn transform(&mut self, span: Span, f: impl Fn(usize) -> DMat4) -> Res<()> {
         for i in 0..2 {
@@ -898,9 +898,9 @@ impl Builder {
         Ok(())
     }
 
-    // DEVIATION(pbrt): pbrt-v3 scopes names and has no forward references; pbrt-v4 has
-    // forward references and no scoping. Real scenes of each version need their rule,
-    // so a name is looked up in scope first and then among all definitions.
+    // DEVIATION(pbrt): input leniency (no valid scene renders differently). pbrt-v3 scopes names and has no forward
+    // references; pbrt-v4 has forward references and no scoping. Real scenes of each version need their rule, so a name
+    // is looked up in scope first and then among all definitions.
     fn resolve_material(&mut self, r: &MaterialRef) -> Res<u32> {
         let idx = match r {
             MaterialRef::Pending(i) => *i,

@@ -216,9 +216,9 @@ fn build(header: &Header, got: Collected) -> Result<PlyMesh, String> {
     };
     let indices = check(&got.tris, 3, "triangle")?;
     let quads = check(&got.quads, 4, "quad")?;
-    // DEVIATION(pbrt): pbrt-v4 hands the whole per-face list to both the triangles and
-    // the patches of a mixed file, each indexing it by its own primitive number; here
-    // each primitive keeps its own face's index.
+    // DEVIATION(pbrt): no image difference (nothing rendered reads face indices). pbrt-v4 hands the whole per-face list
+    // to both the triangles and the patches of a mixed file, each indexing it by its own primitive number; here each
+    // primitive keeps its own face's index.
     let ids = |ids: Vec<i32>, count: usize| (ids.len() == count && got.faces > 0).then_some(ids);
     let face_indices = ids(got.tri_ids, indices.len() / 3);
     let mut triangles = TriangleMesh { p, indices, n, uv, face_indices, ..Default::default() };

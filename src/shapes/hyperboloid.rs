@@ -31,7 +31,7 @@ pub struct Hyperboloid {
 impl Hyperboloid {
     /// Follows pbrt-v3's constructor (swap when p2.z = 0, extrapolate until the implicit
     /// fit is finite), but with a bounded loop.
-    // DEVIATION(pbrt): pbrt-v3 loops forever for lines through the z axis (e.g. the
+    // DEVIATION(pbrt): robustness. pbrt-v3 loops forever for lines through the z axis (e.g. the
     // default p1/p2) and for flat segments in z = 0; we report an error instead.
     pub fn new(p1: Vec3, p2: Vec3, phi_max_deg: f32) -> Result<Hyperboloid, String> {
         let cross = p1.x * p2.y - p1.y * p2.x;

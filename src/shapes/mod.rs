@@ -120,7 +120,7 @@ impl Quadric {
     /// Surface area after the linear map `m` (the upper 3×3 of object-to-world).
     /// Similarity maps scale the closed form; any other map integrates
     /// |m·dp/du × m·dp/dv| over (u, v) by Gauss–Legendre quadrature.
-    // DEVIATION(pbrt): pbrt reports object-space areas even under scales; `check`
+    // DEVIATION(pbrt): no image difference. pbrt reports object-space areas even under scales; `check`
     // reports the true world-space area, and so does exact light sampling (pbrt's
     // object-space one is the default: `--fix shape-sampling`, `pbrt_sampling`).
     pub fn world_area(&self, m: DMat3) -> f64 {

@@ -12,7 +12,7 @@
 //! [`QuadricShape::interaction`] builds the full differential geometry for the closest
 //! hit only.
 //!
-//! DEVIATION(pbrt): the ray is taken to object space and the quadratic solved with
+//! DEVIATION(pbrt): robustness. The ray is taken to object space and the quadratic solved with
 //! [`EFloat64`] intervals (pbrt uses f32 `EFloat`, which fails pbrt's own reintersection
 //! test for cones and paraboloids, pbrt-v3 #44). Hits are refined onto the surface in
 //! f64, so the stored f32 point is within about one ulp of the true surface; `p_error`
@@ -124,7 +124,7 @@ impl QuadricShape {
     /// pole, a cone's apex, a paraboloid's vertex, a disk's centre) and ∂p/∂v may be
     /// infinite, so there they are those of the surface point 2^-20 away in v, at the
     /// hit's φ: the limit of the frame along that meridian. (u, v) stay the hit's.
-    // DEVIATION(pbrt): pbrt moves only the sphere's pole hits (x = 1e-5 r); its cone,
+    // DEVIATION(pbrt): robustness. pbrt moves only the sphere's pole hits (x = 1e-5 r); its cone,
     // paraboloid and disk give a NaN normal there.
     fn local_at(&self, hit: &QuadricHit) -> Local {
         let l = dispatch_quadric!(&self.quadric, s => s.local(hit.p_obj, hit.phi));
@@ -288,7 +288,7 @@ pub trait QuadricSurface {
     /// The roots of F(o + t d) = 0. A negative discriminant that rounding could have
     /// made negative is tried again from the point midway between the roots, where a,
     /// b and c no longer cancel.
-    // DEVIATION(pbrt): where two roots nearly meet without tangency (a ray through a
+    // DEVIATION(pbrt): robustness. Where two roots nearly meet without tangency (a ray through a
     // cone's apex enters one nappe and leaves the other), b² − 4ac computed from the
     // ray's origin cancels to a negative number and pbrt reports a miss.
     fn roots(&self, o: [E; 3], d: [E; 3]) -> Option<(E, E)> {

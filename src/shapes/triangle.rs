@@ -265,7 +265,7 @@ pub fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
     let delta_z = gamma(3) * max_zt;
     let max_xt = p0t.x.abs().max(p1t.x.abs()).max(p2t.x.abs());
     let max_yt = p0t.y.abs().max(p1t.y.abs()).max(p2t.y.abs());
-    // DEVIATION(pbrt): pbrt bounds the x and y errors with the z already scaled by
+    // DEVIATION(pbrt): robustness. pbrt bounds the x and y errors with the z already scaled by
     // 1/d.z, which is off by the direction's length: with a direction of length 1e-5 a
     // triangle of size 1e-6 could never be hit, and with a long one the bound shrinks.
     let delta_x = gamma(5) * (max_xt + max_z);
@@ -275,7 +275,7 @@ pub fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
     let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
     // t is the barycentric mix of the corners' distances along the ray, so when every
     // corner is conservatively ahead, so is the hit, whatever the bound on t says.
-    // DEVIATION(pbrt): pbrt rejects on the bound alone, which grows as 1/det: a
+    // DEVIATION(pbrt): robustness. pbrt rejects on the bound alone, which grows as 1/det: a
     // triangle nearly edge-on to the ray (the rim of a flattened closed mesh) was
     // rejected even at t ≈ 1, and a ray through the edge it shares escaped the mesh.
     let min_zt = p0t.z.min(p1t.z).min(p2t.z);
