@@ -7,6 +7,7 @@ pub mod metrics;
 
 use exr::prelude::*;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// exr's prelude has its own `Result`; ours carry a message.
 type Res<T> = std::result::Result<T, String>;
@@ -252,4 +253,15 @@ fn decode_png(bytes: &[u8]) -> Res<RgbImage> {
     let (w, h) = (img.width() as usize, img.height() as usize);
     let pixels = img.pixels().map(|p| p.0.map(from_srgb)).collect();
     Ok(RgbImage { width: w, height: h, pixels, origin: (0, 0), full: (w, h), meta: ImageMeta::default() })
+}
+
+/// `image` with the values its file stores: PNGs are read sRGB-decoded, so they are
+/// encoded back (for linear image textures and normal maps).
+pub fn stored_values(name: &str, image: Arc<RgbImage>) -> Arc<RgbImage> {
+    if !name.to_ascii_lowercase().ends_with(".png") {
+        return image;
+    }
+    let mut raw = (*image).clone();
+    raw.pixels.iter_mut().for_each(|px| *px = px.map(to_srgb));
+    Arc::new(raw)
 }

@@ -6,26 +6,9 @@
 
 use super::layered::Layered;
 use super::lobes::{Kind, Lobe, MAX_LOBES};
+use super::transport::TransportMode;
 use crate::spectrum::Rgb;
 use glam::Vec3;
-
-/// Which quantity a path carries: radiance (camera paths) or importance (photons).
-/// Refraction differs: radiance is scaled by (η_i/η_t)².
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TransportMode {
-    Radiance,
-    Importance,
-}
-
-impl TransportMode {
-    /// The other quantity: paths traced backwards (pbrt-v4's `!mode`).
-    pub fn adjoint(self) -> TransportMode {
-        match self {
-            TransportMode::Radiance => TransportMode::Importance,
-            TransportMode::Importance => TransportMode::Radiance,
-        }
-    }
-}
 
 /// A sampled direction.
 #[derive(Clone, Copy, Debug, PartialEq)]

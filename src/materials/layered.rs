@@ -15,9 +15,9 @@
 //! always gets the same estimate, as in pbrt-v4). The interfaces are pbrt-v4's
 //! `DielectricBxDF`, `DiffuseBxDF` and `ConductorBxDF`, in the local shading frame.
 
-use super::bsdf::TransportMode;
 use super::lobes::{self, reflect, same_hemisphere};
 use super::microfacet::{TrowbridgeReitz, fr_conductor, fr_dielectric};
+use super::transport::TransportMode;
 use crate::sampling::{Rng, cosine_hemisphere, hash, power_heuristic};
 use crate::spectrum::Rgb;
 use glam::Vec3;

@@ -2,8 +2,8 @@
 //! density and sampling. A [`super::Bsdf`] combines up to [`MAX_LOBES`] of them as pbrt's
 //! `BSDF` does.
 
-use super::TransportMode;
 use super::microfacet::{Fresnel, TrowbridgeReitz, fr_dielectric};
+use super::transport::TransportMode;
 use crate::sampling::cosine_hemisphere;
 use crate::spectrum::Rgb;
 use glam::Vec3;

@@ -16,11 +16,13 @@ pub mod lobes;
 pub mod microfacet;
 pub mod noise;
 mod textures;
+mod transport;
 
-pub use bsdf::{Bsdf, BsdfSample, Convention, TransportMode};
+pub use bsdf::{Bsdf, BsdfSample, Convention};
 use lobes::{Lobe, MAX_LOBES, oren_nayar_ab};
 use microfacet::{Fresnel, TrowbridgeReitz};
 pub use textures::{TexCtx, Textures, lookup};
+pub use transport::TransportMode;
 
 use crate::fixes::{Fix, Fixes};
 use crate::scene::{CoatBase, Coated, MaterialDesc, MaterialKind, Metal, RoughnessRemap, TexValue};

@@ -359,18 +359,7 @@ fn image_texture(p: &ParamList, at: Span, site: &TextureSite, r: &mut dyn Resolv
     };
     let linear = gamma == Some(false) || encoding.as_deref() == Some("linear");
     if linear {
-        image = stored_values(&name, image);
+        image = crate::imageio::stored_values(&name, image);
     }
     Ok(TextureKind::Image { image, map, wrap, scale, invert })
-}
-
-/// `image` with the values its file stores: PNGs are read sRGB-decoded, so they are
-/// encoded back (for linear image textures and normal maps).
-pub(super) fn stored_values(name: &str, image: Arc<RgbImage>) -> Arc<RgbImage> {
-    if !name.to_ascii_lowercase().ends_with(".png") {
-        return image;
-    }
-    let mut raw = (*image).clone();
-    raw.pixels.iter_mut().for_each(|px| *px = px.map(crate::imageio::to_srgb));
-    Arc::new(raw)
 }

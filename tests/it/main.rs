@@ -13,6 +13,7 @@ mod hostile;
 mod imgtool;
 mod instancing;
 mod intersect;
+mod layout;
 mod mitsuba;
 mod pbrt_refs;
 mod real_scenes;

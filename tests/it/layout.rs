@@ -1,0 +1,96 @@
+//! The source's layout: no two modules of `src/` import each other, directly or through
+//! others (a module and its own submodules aside), so each concept has one direction
+//! of dependence. Paths are read from `use` lines and inline `crate::`/`super::` paths
+//! outside comments and test modules.
+
+use crate::common::root;
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+/// Module path (`materials::bsdf`) → source text, for every file under `src/`.
+fn modules(dir: &Path, prefix: &[String], out: &mut BTreeMap<String, String>) {
+    for entry in std::fs::read_dir(dir).unwrap().flatten() {
+        let path = entry.path();
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if path.is_dir() {
+            modules(&path, &[prefix, &[name]].concat(), out);
+        } else if let Some(stem) = name.strip_suffix(".rs") {
+            let m = if ["mod", "lib", "main"].contains(&stem) {
+                prefix.to_vec()
+            } else {
+                [prefix, &[stem.into()]].concat()
+            };
+            out.insert(m.join("::"), std::fs::read_to_string(&path).unwrap());
+        }
+    }
+}
+
+/// The longest module that `path`, written in module `from`, names.
+fn target(from: &str, path: &str, known: &BTreeMap<String, String>) -> Option<String> {
+    let mut parts: Vec<&str> = path.split("::").collect();
+    let mut base: Vec<&str> = if from.is_empty() { vec![] } else { from.split("::").collect() };
+    match parts.first() {
+        Some(&"crate") => base.clear(),
+        Some(&"super") => {
+            while parts.first() == Some(&"super") {
+                base.pop();
+                parts.remove(0);
+            }
+            parts.insert(0, "");
+        }
+        _ => return None,
+    }
+    let rest = &parts[1..];
+    (0..=rest.len()).rev().map(|k| [&base[..], &rest[..k]].concat().join("::")).find(|m| known.contains_key(m))
+}
+
+/// Module → the modules it uses, each neither its ancestor nor its descendant.
+fn dependencies(known: &BTreeMap<String, String>) -> BTreeMap<String, BTreeSet<String>> {
+    let path = |s: &str| {
+        s.split(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':')).map(str::to_owned).collect::<Vec<_>>()
+    };
+    known
+        .iter()
+        .map(|(m, text)| {
+            let code = text.split("#[cfg(test)]\nmod tests").next().unwrap_or("");
+            let uses = code
+                .lines()
+                .filter(|l| !l.trim_start().starts_with("//"))
+                .flat_map(path)
+                .filter(|w| w.starts_with("crate::") || w.starts_with("super::"))
+                .filter_map(|w| target(m, &w, known))
+                .filter(|t| t != m && !m.starts_with(&format!("{t}::")) && !t.starts_with(&format!("{m}::")))
+                .collect();
+            (m.clone(), uses)
+        })
+        .collect()
+}
+
+/// Whether `to` can be reached from `from`.
+fn reaches(g: &BTreeMap<String, BTreeSet<String>>, from: &str, to: &str) -> bool {
+    let (mut seen, mut stack) = (BTreeSet::new(), vec![from.to_string()]);
+    while let Some(m) = stack.pop() {
+        for n in g.get(&m).into_iter().flatten() {
+            if n == to {
+                return true;
+            }
+            if seen.insert(n.clone()) {
+                stack.push(n.clone());
+            }
+        }
+    }
+    false
+}
+
+#[test]
+fn no_module_of_src_depends_on_itself_through_others() {
+    let mut known = BTreeMap::new();
+    modules(&root().join("src"), &[], &mut known);
+    let g = dependencies(&known);
+    assert!(g["materials::bsdf"].contains("materials::lobes"), "the reader sees `use super::lobes`");
+    let cycles: Vec<String> = g
+        .iter()
+        .flat_map(|(m, uses)| uses.iter().filter(|u| reaches(&g, u, m)).map(move |u| format!("{m} ↔ {u}")))
+        .collect();
+    assert!(cycles.is_empty(), "import cycles: {cycles:?}");
+}
