@@ -146,37 +146,12 @@ impl Material {
                     out.push(Lobe::MicrofacetReflection { r: Vec3::ONE, dist: TrowbridgeReitz::new(alpha), fresnel });
                 }
             }
-            MaterialKind::Plastic { kd, ks, roughness, remap } => {
-                out.push_nonzero(i.refl(*kd), Lobe::Lambert);
-                let a = remap.alpha(i.float(*roughness));
-                let fresnel = match i.fixes.has(Fix::PlasticFresnel) {
-                    true => Fresnel::Coat { eta: 1.5 },
-                    false => Fresnel::SwappedCoat { eta: 1.5 },
-                };
-                let dist = TrowbridgeReitz::new([a, a]);
-                out.push_nonzero(i.refl(*ks), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
-            }
+            MaterialKind::Plastic { kd, ks, roughness, remap } => plastic(i, [*kd, *ks], *roughness, *remap, out),
             MaterialKind::Uber { kd, ks, kr, kt, roughness, eta, opacity, remap } => {
-                // pbrt-v3: a pass-through of 1 − opacity, then each layer scaled by it.
-                let op = i.refl(*opacity);
-                out.push_nonzero((Vec3::ONE - op).max(Vec3::ZERO), |t| Lobe::SpecularTransmission { t, eta: 1.0 });
-                let eta = i.float(*eta);
-                out.push_nonzero(op * i.refl(*kd), Lobe::Lambert);
-                let (dist, fresnel) = (TrowbridgeReitz::new(i.alpha(roughness, *remap)), Fresnel::Dielectric { eta });
-                out.push_nonzero(op * i.refl(*ks), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
-                out.push_nonzero(op * i.refl(*kr), |r| Lobe::SpecularReflection { r, fresnel });
-                out.push_nonzero(op * i.refl(*kt), |t| Lobe::SpecularTransmission { t, eta });
+                uber(i, [*kd, *ks, *kr, *kt, *eta, *opacity], roughness, *remap, out)
             }
             MaterialKind::Translucent { kd, ks, reflect, transmit, roughness, remap } => {
-                let (r, t) = (i.refl(*reflect), i.refl(*transmit));
-                let (kd, ks) = (i.refl(*kd), i.refl(*ks));
-                out.push_nonzero(r * kd, Lobe::Lambert);
-                out.push_nonzero(t * kd, Lobe::LambertTransmission);
-                let a = remap.alpha(i.float(*roughness));
-                let (dist, eta) = (TrowbridgeReitz::new([a, a]), 1.5);
-                let fresnel = Fresnel::Dielectric { eta };
-                out.push_nonzero(r * ks, |r| Lobe::MicrofacetReflection { r, dist, fresnel });
-                out.push_nonzero(t * ks, |t| Lobe::MicrofacetTransmission { t, dist, eta });
+                translucent(i, [*kd, *ks, *reflect, *transmit], *roughness, *remap, out)
             }
             MaterialKind::Substrate { kd, ks, roughness, remap } => {
                 let (rd, rs) = (i.refl(*kd), i.refl(*ks));
@@ -190,6 +165,61 @@ impl Material {
         }
         Some(())
     }
+}
+
+/// pbrt-v3's plastic: Lambertian `kd` and a microfacet coat `ks` of index 1.5.
+fn plastic<const N: usize>(
+    i: &Inputs<impl Fn() -> TexCtx>,
+    [kd, ks]: [TexValue; 2],
+    roughness: TexValue,
+    remap: RoughnessRemap,
+    out: &mut Lobes<N>,
+) {
+    out.push_nonzero(i.refl(kd), Lobe::Lambert);
+    let a = remap.alpha(i.float(roughness));
+    let fresnel = match i.fixes.has(Fix::PlasticFresnel) {
+        true => Fresnel::Coat { eta: 1.5 },
+        false => Fresnel::SwappedCoat { eta: 1.5 },
+    };
+    let dist = TrowbridgeReitz::new([a, a]);
+    out.push_nonzero(i.refl(ks), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
+}
+
+/// pbrt-v3's uber: a pass-through of 1 − opacity, then each layer scaled by the opacity.
+fn uber<const N: usize>(
+    i: &Inputs<impl Fn() -> TexCtx>,
+    [kd, ks, kr, kt, eta, opacity]: [TexValue; 6],
+    roughness: &[TexValue; 2],
+    remap: RoughnessRemap,
+    out: &mut Lobes<N>,
+) {
+    let op = i.refl(opacity);
+    out.push_nonzero((Vec3::ONE - op).max(Vec3::ZERO), |t| Lobe::SpecularTransmission { t, eta: 1.0 });
+    let eta = i.float(eta);
+    out.push_nonzero(op * i.refl(kd), Lobe::Lambert);
+    let (dist, fresnel) = (TrowbridgeReitz::new(i.alpha(roughness, remap)), Fresnel::Dielectric { eta });
+    out.push_nonzero(op * i.refl(ks), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
+    out.push_nonzero(op * i.refl(kr), |r| Lobe::SpecularReflection { r, fresnel });
+    out.push_nonzero(op * i.refl(kt), |t| Lobe::SpecularTransmission { t, eta });
+}
+
+/// pbrt-v3's translucent: diffuse and glossy (index 1.5) reflection and transmission.
+fn translucent<const N: usize>(
+    i: &Inputs<impl Fn() -> TexCtx>,
+    [kd, ks, reflect, transmit]: [TexValue; 4],
+    roughness: TexValue,
+    remap: RoughnessRemap,
+    out: &mut Lobes<N>,
+) {
+    let (r, t) = (i.refl(reflect), i.refl(transmit));
+    let (kd, ks) = (i.refl(kd), i.refl(ks));
+    out.push_nonzero(r * kd, Lobe::Lambert);
+    out.push_nonzero(t * kd, Lobe::LambertTransmission);
+    let a = remap.alpha(i.float(roughness));
+    let (dist, eta) = (TrowbridgeReitz::new([a, a]), 1.5);
+    let fresnel = Fresnel::Dielectric { eta };
+    out.push_nonzero(r * ks, |r| Lobe::MicrofacetReflection { r, dist, fresnel });
+    out.push_nonzero(t * ks, |t| Lobe::MicrofacetTransmission { t, dist, eta });
 }
 
 /// A coated material's layers at a hit (pbrt-v4's `CoatedDiffuseMaterial::GetBxDF`

@@ -170,6 +170,10 @@ pub fn read_scene_bytes(path: &Path, limits: &Limits) -> Result<Vec<u8>, String>
     Ok(bytes)
 }
 
+/// Directives that only pbrt-v3 has, and only pbrt-v4: reading one decides the syntax.
+const V3_ONLY: [&str; 3] = ["WorldEnd", "TransformBegin", "TransformEnd"];
+const V4_ONLY: [&str; 4] = ["Option", "ColorSpace", "Attribute", "Import"];
+
 impl StatementReader {
     /// Starts reading `text` as the top-level file `path` (the base for relative paths).
     pub fn new(path: &Path, text: Vec<u8>, limits: Limits) -> Result<StatementReader, String> {
@@ -342,8 +346,11 @@ impl StatementReader {
         use StmtKind as K;
         let kw = t.span;
         let word = self.word(t);
-        let v3 = |r: &mut Self| r.note_evidence(Syntax::V3, kw, format!("{word} (v3 only)"));
-        let v4 = |r: &mut Self| r.note_evidence(Syntax::V4, kw, format!("{word} (v4 only)"));
+        if V3_ONLY.contains(&word.as_str()) {
+            self.note_evidence(Syntax::V3, kw, format!("{word} (v3 only)"));
+        } else if V4_ONLY.contains(&word.as_str()) {
+            self.note_evidence(Syntax::V4, kw, format!("{word} (v4 only)"));
+        }
         Ok(Some(match word.as_str() {
             "Identity" => K::Identity,
             "Translate" => K::Translate(self.numbers(kw, "Translate")?),
@@ -357,14 +364,8 @@ impl StatementReader {
             "TransformTimes" => K::TransformTimes(self.numbers(kw, "TransformTimes")?),
             "ActiveTransform" => K::ActiveTransform(self.active_transform(kw)?),
             "ReverseOrientation" => K::ReverseOrientation,
-            "Option" => {
-                v4(self);
-                self.option(kw)?
-            }
-            "ColorSpace" => {
-                v4(self);
-                K::ColorSpace(self.string(kw, "ColorSpace")?.0)
-            }
+            "Option" => self.option(kw)?,
+            "ColorSpace" => K::ColorSpace(self.string(kw, "ColorSpace")?.0),
             "Camera" => K::Camera(self.entity(kw, "Camera")?),
             "Sampler" => K::Sampler(self.entity(kw, "Sampler")?),
             "Film" => K::Film(self.entity(kw, "Film")?),
@@ -374,24 +375,12 @@ impl StatementReader {
             "MakeNamedMedium" => K::MakeNamedMedium(self.entity(kw, "MakeNamedMedium")?),
             "MediumInterface" => self.medium_interface(kw)?,
             "WorldBegin" => K::WorldBegin,
-            "WorldEnd" => {
-                v3(self);
-                K::WorldEnd
-            }
+            "WorldEnd" => K::WorldEnd,
             "AttributeBegin" => K::AttributeBegin,
             "AttributeEnd" => K::AttributeEnd,
-            "TransformBegin" => {
-                v3(self);
-                K::TransformBegin
-            }
-            "TransformEnd" => {
-                v3(self);
-                K::TransformEnd
-            }
-            "Attribute" => {
-                v4(self);
-                K::Attribute(self.entity(kw, "Attribute")?)
-            }
+            "TransformBegin" => K::TransformBegin,
+            "TransformEnd" => K::TransformEnd,
+            "Attribute" => K::Attribute(self.entity(kw, "Attribute")?),
             "Shape" => K::Shape(self.entity(kw, "Shape")?),
             "ObjectBegin" => K::ObjectBegin(self.string(kw, "ObjectBegin")?.0),
             "ObjectEnd" => K::ObjectEnd,
@@ -401,25 +390,27 @@ impl StatementReader {
             "Material" => K::Material(self.entity(kw, "Material")?),
             "MakeNamedMaterial" => K::MakeNamedMaterial(self.entity(kw, "MakeNamedMaterial")?),
             "NamedMaterial" => K::NamedMaterial(self.string(kw, "NamedMaterial")?.0),
-            "Texture" => {
-                let (name, _) = self.string(kw, "Texture")?;
-                let (ty, ty_span) = self.string(kw, "Texture")?;
-                let class = self.entity(ty_span, "Texture")?;
-                K::Texture { name, ty, class }
-            }
-            "Include" => {
-                let (name, span) = self.string(kw, "Include")?;
-                self.push_file(&name, span, FrameKind::Include)?;
-                return Ok(None);
-            }
-            "Import" => {
-                v4(self);
-                let (name, span) = self.string(kw, "Import")?;
-                self.push_file(&name, span, FrameKind::Import)?;
-                K::ImportBegin(name)
-            }
+            "Texture" => self.texture(kw)?,
+            "Include" => return self.include(kw, FrameKind::Include).map(|_| None),
+            "Import" => K::ImportBegin(self.include(kw, FrameKind::Import)?),
             _ => return Err(Diagnostic::error(kw, format!("unknown directive '{word}'"))),
         }))
+    }
+
+    /// `Texture "name" "type" "class" params...`
+    fn texture(&mut self, kw: Span) -> Result<StmtKind, Diagnostic> {
+        let (name, _) = self.string(kw, "Texture")?;
+        let (ty, ty_span) = self.string(kw, "Texture")?;
+        let class = self.entity(ty_span, "Texture")?;
+        Ok(StmtKind::Texture { name, ty, class })
+    }
+
+    /// `Include "file"` or `Import "file"`: reading goes on in that file; its name.
+    fn include(&mut self, kw: Span, kind: FrameKind) -> Result<String, Diagnostic> {
+        let what = if kind == FrameKind::Include { "Include" } else { "Import" };
+        let (name, span) = self.string(kw, what)?;
+        self.push_file(&name, span, kind)?;
+        Ok(name)
     }
 
     fn active_transform(&mut self, kw: Span) -> Result<ActiveTransform, Diagnostic> {

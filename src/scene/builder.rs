@@ -352,117 +352,26 @@ impl Builder {
             K::Identity => self.transform(span, |_| DMat4::IDENTITY),
             K::Translate(d) => self.concat(span, DMat4::from_translation(DVec3::from(d))),
             K::Scale(s) => self.concat(span, DMat4::from_scale(DVec3::from(s))),
-            K::Rotate([angle, x, y, z]) => {
-                let axis = DVec3::new(x, y, z);
-                if axis.length_squared() == 0.0 {
-                    return Err(Diagnostic::error(span, "Rotate: the axis is the zero vector"));
-                }
-                self.concat(span, DMat4::from_axis_angle(axis.normalize(), angle.to_radians()))
-            }
-            K::LookAt(v) => {
-                let m = look_at(&v).ok_or_else(|| {
-                    Diagnostic::error(
-                        span,
-                        "LookAt: the up vector and the viewing direction are parallel (or eye = look)",
-                    )
-                })?;
-                self.concat(span, m)
-            }
+            K::Rotate(r) => self.rotate(r, span),
+            K::LookAt(v) => self.look_at(&v, span),
             K::Transform(m) => self.transform(span, |_| DMat4::from_cols_array(&m)),
             K::ConcatTransform(m) => self.concat(span, DMat4::from_cols_array(&m)),
-            K::CoordinateSystem(name) => {
-                self.named_coords.insert(name, self.gs.ctm);
-                Ok(())
-            }
-            K::CoordSysTransform(name) => match self.named_coords.get(&name) {
-                Some(&m) => self.transform(span, |i| m[i]),
-                None => {
-                    self.warnings.push(Diagnostic::warning(
-                        span,
-                        format!("coordinate system \"{name}\" is not defined; CTM unchanged"),
-                    ));
-                    Ok(())
-                }
-            },
+            K::CoordinateSystem(name) => self.coordinate_system(name),
+            K::CoordSysTransform(name) => self.coord_sys_transform(&name, span),
             K::TransformTimes(_) => Ok(()),
-            K::ActiveTransform(a) => {
-                self.gs.active = match a {
-                    ActiveTransform::StartTime => [true, false],
-                    ActiveTransform::EndTime => [false, true],
-                    ActiveTransform::All => [true, true],
-                };
-                Ok(())
-            }
-            K::ReverseOrientation => {
-                self.gs.reverse_orientation = !self.gs.reverse_orientation;
-                Ok(())
-            }
-            K::Option { name, value } => {
-                let key = name.to_ascii_lowercase().replace(['-', '_'], "");
-                if key == "seed" {
-                    let seed = value.parse().map_err(|_| {
-                        Diagnostic::error(span, format!("Option \"seed\": \"{value}\" is not a whole number"))
-                    })?;
-                    self.render.seed_option = Some(seed);
-                }
-                self.options.push((key, value));
-                Ok(())
-            }
-            K::ColorSpace(name) => {
-                if name != "srgb" {
-                    self.note(span, format!("ColorSpace \"{name}\""), Approx::ColorSpace);
-                }
-                Ok(())
-            }
+            K::ActiveTransform(a) => self.active_transform(a),
+            K::ReverseOrientation => self.reverse_orientation(),
+            K::Option { name, value } => self.option(name, value, span),
+            K::ColorSpace(name) => self.color_space(&name, span),
             K::Camera(e) => self.camera(e, span),
-            K::Film(e) => {
-                self.evidence("Film", &e.name.clone(), e.name_span);
-                self.render.film = Some(e);
-                Ok(())
-            }
-            K::Sampler(e) => {
-                self.evidence("Sampler", &e.name.clone(), e.name_span);
-                self.render.sampler = Some(e);
-                Ok(())
-            }
-            K::Integrator(e) => {
-                self.evidence("Integrator", &e.name.clone(), e.name_span);
-                if let Some(p) = e.params.named("numiterations") {
-                    self.reader.note_evidence(Syntax::V3, p.span, "\"numiterations\"");
-                }
-                self.render.integrator = Some(e);
-                Ok(())
-            }
-            K::PixelFilter(e) => {
-                self.render.filter = Some(e);
-                Ok(())
-            }
-            K::Accelerator(e) => {
-                self.render.accelerator = Some(e);
-                Ok(())
-            }
-            K::MakeNamedMedium(e) => {
-                self.skip(
-                    e.name_span,
-                    format!("MakeNamedMedium \"{}\"", e.name),
-                    "participating media are not supported".into(),
-                );
-                Ok(())
-            }
-            K::MediumInterface { inside, outside } => {
-                if !(inside.is_empty() && outside.is_empty()) {
-                    self.skip(span, "MediumInterface".into(), "participating media are not supported; ignored".into());
-                }
-                Ok(())
-            }
-            K::WorldBegin => {
-                self.in_world = true;
-                self.world_begin = Some(span);
-                self.gs.ctm = [DMat4::IDENTITY; 2];
-                self.gs.active = [true; 2];
-                self.named_coords.insert("world".into(), self.gs.ctm);
-                Ok(())
-            }
+            K::Film(e) => self.film(e),
+            K::Sampler(e) => self.sampler(e),
+            K::Integrator(e) => self.integrator(e),
+            K::PixelFilter(e) => self.set(|b| b.render.filter = Some(e)),
+            K::Accelerator(e) => self.set(|b| b.render.accelerator = Some(e)),
+            K::MakeNamedMedium(e) => self.named_medium(e),
+            K::MediumInterface { inside, outside } => self.medium_interface(&inside, &outside, span),
+            K::WorldBegin => self.world_begin(span),
             K::WorldEnd => Ok(()),
             K::AttributeBegin => self.push(PushKind::Attribute, span),
             K::TransformBegin => self.push(PushKind::Transform, span),
@@ -474,32 +383,153 @@ impl Builder {
             K::Shape(e) => self.shape(e, span),
             K::ObjectBegin(name) => self.object_begin(name, span),
             K::ObjectEnd => self.object_end(span),
-            K::ObjectInstance(name) => {
-                if self.current_object.is_some() {
-                    return Err(Diagnostic::error(span, "ObjectInstance is not allowed inside an object definition"));
-                }
-                self.instance_uses.push((name, self.gs.ctm[0], span));
-                self.warn_motion(span);
-                Ok(())
-            }
+            K::ObjectInstance(name) => self.object_instance(name, span),
             K::LightSource(e) => self.light(e),
             K::AreaLightSource(e) => self.area_light(e),
-            K::Material(e) => {
-                self.evidence("Material", &e.name.clone(), e.name_span);
-                let idx = self.add_material(e.name, None, e.params, e.name_span);
-                self.gs.material = MaterialRef::Pending(idx);
-                Ok(())
-            }
+            K::Material(e) => self.material(e),
             K::MakeNamedMaterial(e) => self.make_named_material(e),
-            K::NamedMaterial(name) => {
-                self.gs.material = match self.gs.scope.materials.get(&name) {
-                    Some(&i) => MaterialRef::Pending(i),
-                    None => MaterialRef::Named(name, span),
-                };
-                Ok(())
-            }
+            K::NamedMaterial(name) => self.named_material(name, span),
             K::Texture { name, ty, class } => self.texture(name, ty, class),
         }
+    }
+
+    // ---- statements -------------------------------------------------------------
+
+    /// A statement that only records something.
+    fn set(&mut self, f: impl FnOnce(&mut Self)) -> Res<()> {
+        f(self);
+        Ok(())
+    }
+
+    fn coordinate_system(&mut self, name: String) -> Res<()> {
+        self.named_coords.insert(name, self.gs.ctm);
+        Ok(())
+    }
+
+    fn reverse_orientation(&mut self) -> Res<()> {
+        self.gs.reverse_orientation = !self.gs.reverse_orientation;
+        Ok(())
+    }
+
+    fn rotate(&mut self, [angle, x, y, z]: [f64; 4], span: Span) -> Res<()> {
+        let axis = DVec3::new(x, y, z);
+        if axis.length_squared() == 0.0 {
+            return Err(Diagnostic::error(span, "Rotate: the axis is the zero vector"));
+        }
+        self.concat(span, DMat4::from_axis_angle(axis.normalize(), angle.to_radians()))
+    }
+
+    fn look_at(&mut self, v: &[f64; 9], span: Span) -> Res<()> {
+        let m = look_at(v).ok_or_else(|| {
+            Diagnostic::error(span, "LookAt: the up vector and the viewing direction are parallel (or eye = look)")
+        })?;
+        self.concat(span, m)
+    }
+
+    fn coord_sys_transform(&mut self, name: &str, span: Span) -> Res<()> {
+        match self.named_coords.get(name) {
+            Some(&m) => self.transform(span, |i| m[i]),
+            None => {
+                let why = format!("coordinate system \"{name}\" is not defined; CTM unchanged");
+                self.warnings.push(Diagnostic::warning(span, why));
+                Ok(())
+            }
+        }
+    }
+
+    fn active_transform(&mut self, a: ActiveTransform) -> Res<()> {
+        self.gs.active = match a {
+            ActiveTransform::StartTime => [true, false],
+            ActiveTransform::EndTime => [false, true],
+            ActiveTransform::All => [true, true],
+        };
+        Ok(())
+    }
+
+    fn option(&mut self, name: String, value: String, span: Span) -> Res<()> {
+        let key = name.to_ascii_lowercase().replace(['-', '_'], "");
+        if key == "seed" {
+            let seed = value
+                .parse()
+                .map_err(|_| Diagnostic::error(span, format!("Option \"seed\": \"{value}\" is not a whole number")))?;
+            self.render.seed_option = Some(seed);
+        }
+        self.options.push((key, value));
+        Ok(())
+    }
+
+    fn color_space(&mut self, name: &str, span: Span) -> Res<()> {
+        if name != "srgb" {
+            self.note(span, format!("ColorSpace \"{name}\""), Approx::ColorSpace);
+        }
+        Ok(())
+    }
+
+    fn film(&mut self, e: Entity) -> Res<()> {
+        self.evidence("Film", &e.name.clone(), e.name_span);
+        self.render.film = Some(e);
+        Ok(())
+    }
+
+    fn sampler(&mut self, e: Entity) -> Res<()> {
+        self.evidence("Sampler", &e.name.clone(), e.name_span);
+        self.render.sampler = Some(e);
+        Ok(())
+    }
+
+    fn integrator(&mut self, e: Entity) -> Res<()> {
+        self.evidence("Integrator", &e.name.clone(), e.name_span);
+        if let Some(p) = e.params.named("numiterations") {
+            self.reader.note_evidence(Syntax::V3, p.span, "\"numiterations\"");
+        }
+        self.render.integrator = Some(e);
+        Ok(())
+    }
+
+    fn named_medium(&mut self, e: Entity) -> Res<()> {
+        let what = format!("MakeNamedMedium \"{}\"", e.name);
+        self.skip(e.name_span, what, "participating media are not supported".into());
+        Ok(())
+    }
+
+    fn medium_interface(&mut self, inside: &str, outside: &str, span: Span) -> Res<()> {
+        if !(inside.is_empty() && outside.is_empty()) {
+            self.skip(span, "MediumInterface".into(), "participating media are not supported; ignored".into());
+        }
+        Ok(())
+    }
+
+    fn world_begin(&mut self, span: Span) -> Res<()> {
+        self.in_world = true;
+        self.world_begin = Some(span);
+        self.gs.ctm = [DMat4::IDENTITY; 2];
+        self.gs.active = [true; 2];
+        self.named_coords.insert("world".into(), self.gs.ctm);
+        Ok(())
+    }
+
+    fn object_instance(&mut self, name: String, span: Span) -> Res<()> {
+        if self.current_object.is_some() {
+            return Err(Diagnostic::error(span, "ObjectInstance is not allowed inside an object definition"));
+        }
+        self.instance_uses.push((name, self.gs.ctm[0], span));
+        self.warn_motion(span);
+        Ok(())
+    }
+
+    fn material(&mut self, e: Entity) -> Res<()> {
+        self.evidence("Material", &e.name.clone(), e.name_span);
+        let idx = self.add_material(e.name, None, e.params, e.name_span);
+        self.gs.material = MaterialRef::Pending(idx);
+        Ok(())
+    }
+
+    fn named_material(&mut self, name: String, span: Span) -> Res<()> {
+        self.gs.material = match self.gs.scope.materials.get(&name) {
+            Some(&i) => MaterialRef::Pending(i),
+            None => MaterialRef::Named(name, span),
+        };
+        Ok(())
     }
 
     // ---- transforms -------------------------------------------------------------
@@ -925,31 +955,12 @@ impl Builder {
             .into_iter()
             .map(|(obj, m)| InstanceDesc { object: remap[obj as usize], world_from_instance: m })
             .collect();
-        let world_materials = std::mem::take(&mut self.shape_materials);
-        let resolved: Vec<u32> = world_materials.iter().map(|r| self.resolve_material(r)).collect::<Res<_>>()?;
-        for (shape, m) in self.shapes.iter_mut().zip(resolved) {
-            shape.material = m;
-        }
-        for (i, a) in std::mem::take(&mut self.shape_alphas).into_iter().enumerate() {
-            if let Some((a, scope)) = a {
-                self.shapes[i].alpha = self.resolve_alpha(&a, scope)?;
-            }
-        }
+        self.resolve_world_shapes()?;
         self.drop_interface_emitters();
         let bugs = self.pbrt_bugs(syntax, &objects);
         let lights = self.build_lights()?;
         let area_lights = self.build_area_lights()?;
-        let mut approx = Vec::new();
-        let r = self.render.resolve(syntax, &self.opts.limits, &mut self.warnings, &mut approx)?;
-        for (at, what, how) in approx {
-            self.note(at, what, how);
-        }
-        if let Some((c, _)) = &self.render.camera {
-            typed::finish_params(&c.params, &mut self.warnings)?;
-        }
-        for e in [&self.render.film, &self.render.integrator].into_iter().flatten() {
-            typed::finish_params(&e.params, &mut self.warnings)?;
-        }
+        let r = self.resolve_options(syntax)?;
         self.report_left_out();
         // In file order, whatever the order they were found in.
         self.skipped.sort_by_key(|(span, _, _)| span.map(|s| (s.file.0, s.start)));
@@ -985,27 +996,69 @@ impl Builder {
             options: std::mem::take(&mut self.options),
             base_dir: self.reader.base_dir().to_path_buf(),
             warnings: warnings.iter().map(|d| Located::resolve(sources, d.span, &d.message)).collect(),
-            skipped: self
-                .skipped
-                .iter()
-                .map(|(span, what, why)| {
-                    let l = Located::resolve(sources, *span, "");
-                    Skipped { file: l.file, line: l.line, column: l.column, what: what.clone(), why: why.clone() }
-                })
-                .collect(),
-            approximated: self
-                .approximated
-                .iter()
-                .map(|(span, what, how)| {
-                    let l = Located::resolve(sources, Some(*span), "");
-                    let (what, how) = (what.clone(), how.how().to_string());
-                    Approximated { file: l.file, line: l.line, column: l.column, what, how }
-                })
-                .collect(),
+            skipped: self.located_skipped(),
+            approximated: self.located_approximated(),
             pbrt_bugs: bugs::located(&bugs, self.opts.fixes, sources),
             fixes: self.opts.fixes,
             limits: self.opts.limits,
         })
+    }
+
+    /// The world shapes' materials and alpha masks, resolved now that every name is
+    /// known.
+    fn resolve_world_shapes(&mut self) -> Res<()> {
+        let world_materials = std::mem::take(&mut self.shape_materials);
+        let resolved: Vec<u32> = world_materials.iter().map(|r| self.resolve_material(r)).collect::<Res<_>>()?;
+        for (shape, m) in self.shapes.iter_mut().zip(resolved) {
+            shape.material = m;
+        }
+        for (i, a) in std::mem::take(&mut self.shape_alphas).into_iter().enumerate() {
+            if let Some((a, scope)) = a {
+                self.shapes[i].alpha = self.resolve_alpha(&a, scope)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Camera, film and integrator, with their approximations noted and their unused
+    /// parameters warned.
+    fn resolve_options(&mut self, syntax: Syntax) -> Res<super::options::Resolved> {
+        let mut approx = Vec::new();
+        let r = self.render.resolve(syntax, &self.opts.limits, &mut self.warnings, &mut approx)?;
+        for (at, what, how) in approx {
+            self.note(at, what, how);
+        }
+        if let Some((c, _)) = &self.render.camera {
+            typed::finish_params(&c.params, &mut self.warnings)?;
+        }
+        for e in [&self.render.film, &self.render.integrator].into_iter().flatten() {
+            typed::finish_params(&e.params, &mut self.warnings)?;
+        }
+        Ok(r)
+    }
+
+    fn located_skipped(&self) -> Vec<Skipped> {
+        let sources = &self.reader.sources;
+        let locate = |(span, what, why): &(Option<Span>, String, String)| {
+            let l = Located::resolve(sources, *span, "");
+            Skipped { file: l.file, line: l.line, column: l.column, what: what.clone(), why: why.clone() }
+        };
+        self.skipped.iter().map(locate).collect()
+    }
+
+    fn located_approximated(&self) -> Vec<Approximated> {
+        let sources = &self.reader.sources;
+        let locate = |(span, what, how): &(Span, String, Approx)| {
+            let l = Located::resolve(sources, Some(*span), "");
+            Approximated {
+                file: l.file,
+                line: l.line,
+                column: l.column,
+                what: what.clone(),
+                how: how.how().to_string(),
+            }
+        };
+        self.approximated.iter().map(locate).collect()
     }
 
     /// Instances name objects that may be defined later (v4); unknown names are errors.
