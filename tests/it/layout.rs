@@ -94,3 +94,47 @@ fn no_module_of_src_depends_on_itself_through_others() {
         .collect();
     assert!(cycles.is_empty(), "import cycles: {cycles:?}");
 }
+
+/// (lines, file, name) of each function in `text` longer than `limit` lines, counted
+/// from its `fn` line to its closing brace.
+fn long_functions(file: &str, text: &str, limit: usize) -> Vec<(usize, String, String)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let t = line.trim_start();
+        let t = t.strip_prefix("pub(crate) ").or_else(|| t.strip_prefix("pub(super) ")).unwrap_or(t);
+        let t = t.strip_prefix("pub ").unwrap_or(t);
+        let Some(rest) = t.strip_prefix("fn ") else { continue };
+        if line.trim_end().ends_with(';') {
+            continue;
+        }
+        let (mut depth, mut opened) = (0i32, false);
+        let end = lines[i..].iter().position(|l| {
+            for c in l.chars() {
+                match c {
+                    '{' => (depth, opened) = (depth + 1, true),
+                    '}' => depth -= 1,
+                    _ => {}
+                }
+            }
+            opened && depth == 0
+        });
+        let n = end.map_or(0, |e| e + 1);
+        if n > limit {
+            let name = rest.split(|c: char| !(c.is_alphanumeric() || c == '_')).next().unwrap_or("").to_string();
+            out.push((n, file.to_string(), name));
+        }
+    }
+    out
+}
+
+#[test]
+fn no_function_in_src_is_longer_than_80_lines() {
+    let mut known = BTreeMap::new();
+    modules(&root().join("src"), &[], &mut known);
+    let long: Vec<_> = known.iter().flat_map(|(m, text)| long_functions(m, text, 80)).collect();
+    assert!(long.is_empty(), "functions over 80 lines (lines, module, name): {long:?}");
+    // The counter sees a long function when there is one.
+    let body = "fn f() {\n".to_string() + &"    let x = 1;\n".repeat(85) + "}\n";
+    assert_eq!(long_functions("probe", &body, 80).len(), 1);
+}
