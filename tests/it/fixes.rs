@@ -273,3 +273,16 @@ fn a_sky_over_matte_alone_triggers_nothing_in_v3() {
     let names: Vec<String> = bugs(&metal).into_iter().map(|b| b.0).collect();
     assert_eq!(names, ["photons-behind", "sky-after-glossy"]);
 }
+
+#[test]
+fn pbrt_v4s_double_alpha_mask_is_reported_only_for_fractional_alpha() {
+    let text = |alpha: &str| {
+        format!(
+            "WorldBegin\nAreaLightSource \"diffuse\"\n\
+             Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 1 1 0] \"integer indices\" [0 1 2] \"float alpha\" {alpha}\n"
+        )
+    };
+    let names = |a: &str| bugs(&text(a)).into_iter().map(|b| b.0).collect::<Vec<_>>();
+    assert_eq!(names("0.5"), ["photons-behind", "area-alpha"]);
+    assert_eq!(names("0"), ["photons-behind"], "0 or 1 masks the same once or twice");
+}

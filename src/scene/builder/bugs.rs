@@ -75,7 +75,9 @@ impl Builder {
         if syntax == Syntax::V4 && pieces > 1 && e.params.named("power").is_some() {
             found.push((e.name_span, Fix::MeshPower));
         }
-        if s.alpha.is_some() {
+        // pbrt-v4's second mask changes nothing where alpha is only 0 or 1.
+        let fractional = |a: &TexValue| !matches!(a, TexValue::Const(c) if c.x <= 0.0 || c.x >= 1.0);
+        if s.alpha.as_ref().is_some_and(|a| syntax == Syntax::V3 || fractional(&a.alpha)) {
             found.push((e.name_span, Fix::AreaAlpha));
         }
         let two_sided = e.params.bool("twosided").ok().flatten().unwrap_or(false);
