@@ -19,15 +19,13 @@ use crate::shapes::ShapeSample;
 use crate::spectrum::Rgb;
 use glam::Vec3;
 
-/// An emitting world shape: its radiance and where its lights start.
+/// An emitting world shape: which side emits and where its lights start (each
+/// primitive's light holds its radiance).
 #[derive(Clone, Copy, Debug)]
 pub struct EmitterInfo {
-    pub l: Rgb,
     pub two_sided: bool,
     /// Index of its (first) light; meshes have one light per stored triangle after it.
     pub first_light: u32,
-    /// Each primitive's light has its own radiance (pbrt-v4's `power` on a mesh).
-    pub per_piece: bool,
 }
 
 /// Where alpha masks an area light's emission.
@@ -312,9 +310,9 @@ impl RenderScene {
         if self.has_alpha && self.alpha_rules.hits && self.emission_masked_at(hit.shape_index, si.p.0, si.n.0, si.uv) {
             return Vec3::ZERO;
         }
-        match (e.per_piece, &self.lights[light as usize]) {
-            (true, Light::Area { l, .. }) => *l,
-            _ => e.l,
+        match &self.lights[light as usize] {
+            Light::Area { l, .. } => *l,
+            _ => Vec3::ZERO,
         }
     }
 }
@@ -428,7 +426,7 @@ fn area_lights(
             let l = if area > 0.0 { l } else { Vec3::ZERO };
             lights.push(Light::Area { emitter, shape: i as u32, l, two_sided: desc.two_sided, area });
         }
-        emitters[i] = Some(EmitterInfo { l, two_sided: desc.two_sided, first_light, per_piece });
+        emitters[i] = Some(EmitterInfo { two_sided: desc.two_sided, first_light });
     }
     emitters
 }

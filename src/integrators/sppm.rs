@@ -472,7 +472,7 @@ fn camera_path(
         let visible_point = bsdf.is_diffuse() || (bsdf.is_glossy() && depth + 1 == max_depth);
         // pbrt-v4 follows the path one bounce past its visible point, so a light seen
         // in a specular lobe there (a smooth coat) is reflected; pbrt-v3 stops.
-        let specular_too = visible_point && scene.syntax == Syntax::V4;
+        let specular_too = visible_point && scene.syntax == Syntax::V4 && bsdf.is_specular();
         ld += beta * direct_light(scene, &si, &bsdf, wo, sampler, specular_too);
         if visible_point {
             return (ld, Some(VisiblePoint { p: si.p.0, wo, ng: si.n.0, bsdf, beta }));

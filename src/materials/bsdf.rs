@@ -112,6 +112,14 @@ impl Bsdf {
         }
     }
 
+    /// Whether a sample can be specular (a specular lobe, or a layered smooth coat).
+    pub fn is_specular(&self) -> bool {
+        match &self.lobes {
+            Lobes::Layered(l) => l.is_specular(),
+            _ => self.has(Kind::Specular),
+        }
+    }
+
     /// Whether it has a glossy lobe (SPPM stores a visible point there at the last depth).
     pub fn is_glossy(&self) -> bool {
         match &self.lobes {

@@ -363,6 +363,12 @@ impl Layered {
         matches!(self.bottom, Base::Diffuse(r) if r != Vec3::ZERO) || self.albedo != Vec3::ZERO
     }
 
+    /// Whether a sample can be specular: only the coat's mirror reflection leaves the
+    /// surface specularly without passing the base (pbrt-v4's `Specular` flag).
+    pub fn is_specular(&self) -> bool {
+        self.top.specular()
+    }
+
     /// Glossy when not diffuse and either interface is rough.
     pub fn is_glossy(&self) -> bool {
         !self.is_diffuse() && (!self.top.specular() || !self.bottom.specular())

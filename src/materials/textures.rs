@@ -31,17 +31,14 @@ pub struct Textures(pub Vec<TextureKind>);
 impl Textures {
     /// The scene's textures, with the pbrt bugs in `fixes` fixed.
     pub fn new(descs: &[TextureDesc], fixes: Fixes) -> Textures {
-        let fix = |k: &TextureKind| match k {
-            TextureKind::Marble { .. } if fixes.has(Fix::MarblePalette) => {
-                let mut k = k.clone();
-                if let TextureKind::Marble { v3_segments, .. } = &mut k {
-                    *v3_segments = false;
-                }
-                k
+        let fixed = |t: &TextureDesc| {
+            let mut k = t.kind.clone();
+            if let TextureKind::Marble { v3_segments, .. } = &mut k {
+                *v3_segments &= !fixes.has(Fix::MarblePalette);
             }
-            _ => k.clone(),
+            k
         };
-        Textures(descs.iter().map(|t| fix(&t.kind)).collect())
+        Textures(descs.iter().map(fixed).collect())
     }
 
     /// Whether some texture reads the footprint (`dpdx`, `dpdy`): the noise textures.

@@ -27,7 +27,7 @@ use super::Quadric;
 use super::quadric::QuadricShape;
 use super::sampling::{ShapeSample, area_to_solid_angle};
 use crate::math::{Normal3, Point3, Ray, Vector3};
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use std::f64::consts::{FRAC_PI_4, PI, TAU};
 
 /// Whether pbrt can sample this quadric (it aborts for the others).
@@ -49,8 +49,7 @@ impl QuadricShape {
     /// The world normal of object normal `n` (as pbrt transforms normals), flipped by
     /// `ReverseOrientation` alone.
     fn pbrt_normal(&self, n: DVec3) -> DVec3 {
-        let inv_t = DMat3::from_mat4(self.object_from_render).transpose();
-        let n = (inv_t * n).normalize_or_zero();
+        let n = (self.normal_matrix() * n).normalize_or_zero();
         if self.reverse_orientation { -n } else { n }
     }
 

@@ -138,6 +138,12 @@ impl QuadricShape {
         Local { uv: l.uv, ..moved }
     }
 
+    /// What maps object-space normals to render space: the inverse transpose of the
+    /// linear part of render-from-object.
+    pub(super) fn normal_matrix(&self) -> DMat3 {
+        DMat3::from_mat4(self.object_from_render).transpose()
+    }
+
     /// The geometric normal at an object-space hit: `n`, the normal of the (u, v)
     /// parametrisation, unless the surface intersected is another one (pbrt-v3's
     /// implicit hyperboloid), whose own normal, on `n`'s side, rays are spawned from.
@@ -150,7 +156,7 @@ impl QuadricShape {
             return n;
         }
         let (_, g) = h.implicit(p_obj);
-        let g = (DMat3::from_mat4(self.object_from_render).transpose() * g).normalize_or_zero();
+        let g = (self.normal_matrix() * g).normalize_or_zero();
         match g.dot(n) {
             d if g == DVec3::ZERO || !d.is_finite() => n,
             d if d < 0.0 => -g,
@@ -174,20 +180,19 @@ impl QuadricShape {
             d2_vv: m3 * l.d2_vv,
         };
         let (dpdu, dpdv) = (world.dpdu, world.dpdv);
-        let mut n = dpdu.cross(dpdv).normalize_or_zero();
-        let (mut dndu, mut dndv) = weingarten(&world);
-        if self.reverse_orientation {
-            (n, dndu, dndv) = (-n, -dndu, -dndv);
-        }
+        let n = dpdu.cross(dpdv).normalize_or_zero();
+        let n = if self.reverse_orientation { -n } else { n };
         // DEVIATION(pbrt): appearance, `--fix normal-derivatives`. pbrt transforms the
         // object-space ∂n/∂u and ∂n/∂v as normals (off by the scale under scaling) and
         // does not flip them with ReverseOrientation, which bump maps then use; the fix
         // uses the derivatives of the normal reported.
-        if self.pbrt_normal_derivatives {
-            let (du, dv) = weingarten(&l);
-            let normal_map = DMat3::from_mat4(self.object_from_render).transpose();
-            (dndu, dndv) = (normal_map * du, normal_map * dv);
-        }
+        let (dndu, dndv) = if self.pbrt_normal_derivatives {
+            let ((du, dv), normals) = (weingarten(&l), self.normal_matrix());
+            (normals * du, normals * dv)
+        } else {
+            let (du, dv) = weingarten(&world);
+            if self.reverse_orientation { (-du, -dv) } else { (du, dv) }
+        };
         let p = m.transform_point3(hit.p_obj);
         let p32 = p.as_vec3();
         // The f32 rounding of p, the f64 work before it, and any distance left between

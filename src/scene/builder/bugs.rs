@@ -88,8 +88,8 @@ impl Builder {
         }
     }
 
-    /// Where SPPM is asked for: the `Integrator` statement, or the first shape's
-    /// `WorldBegin` when there is none (`None` for a scene with nothing to render).
+    /// Where SPPM is asked for: the `Integrator` statement, or `WorldBegin` when there
+    /// is none (`None` for a scene with nothing to render).
     fn photon_statement(&self) -> Option<Span> {
         if self.shapes.is_empty() && self.objects.is_empty() {
             return None;
@@ -150,13 +150,12 @@ pub(super) fn located(found: &[(Span, Fix)], fixes: Fixes, sources: &crate::pars
         .iter()
         .map(|(span, fix)| {
             let l = Located::resolve(sources, Some(*span), "");
-            let effect = fix.info().effect.split_whitespace().collect::<Vec<_>>().join(" ");
             PbrtBug {
                 file: l.file,
                 line: l.line,
                 column: l.column,
                 name: fix.name().into(),
-                effect,
+                effect: fix.info().effect.into(),
                 fixed: fixes.has(*fix),
             }
         })
