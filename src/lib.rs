@@ -6,14 +6,12 @@
 
 pub mod accel;
 pub mod camera;
-pub mod check;
-pub mod export;
-pub mod farm;
+pub mod cli;
 pub mod fixes;
-pub mod fuzzing;
 pub mod imageio;
 pub mod integrators;
 pub mod interaction;
+pub mod job;
 pub mod lights;
 pub mod limits;
 pub mod materials;
@@ -24,4 +22,3 @@ pub mod sampling;
 pub mod scene;
 pub mod shapes;
 pub mod spectrum;
-pub mod trace;

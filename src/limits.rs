@@ -8,32 +8,55 @@
 //! regular files (so `/dev/zero`, FIFOs and folders are refused) of at most
 //! `file-bytes`, and gzip streams are decompressed to at most `file-bytes` too.
 //!
-//! Every input file passes through [`read_file`], which also notes its name and a hash
-//! of its bytes ([`inputs_read`]): what a checkpoint's scene fingerprint is made of.
+//! A load reads every input file through [`Files`], which also notes its name and a
+//! hash of its bytes ([`Files::list`]): what a checkpoint's scene fingerprint is made of.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
-/// The files read so far in this process (see [`inputs_read`]).
-// A process-wide log rather than a parameter: every loader (Include, PLY, OBJ, images)
-// reaches the disk only through `read_file`, and only the command line reads the log.
-static INPUTS: Mutex<Vec<(PathBuf, u64)>> = Mutex::new(Vec::new());
-
-/// Every file read through [`read_file`] in this process, as (path made absolute,
-/// 64-bit XXH3 of its bytes as stored), sorted by path, each path once.
-pub fn inputs_read() -> Vec<(PathBuf, u64)> {
-    let mut v = INPUTS.lock().map(|l| l.clone()).unwrap_or_default();
-    v.sort();
-    v.dedup_by(|a, b| a.0 == b.0);
-    v
+/// A file a scene was made from: its path made absolute and a 64-bit XXH3 of its bytes
+/// as stored.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct InputFile {
+    pub path: PathBuf,
+    pub hash: u64,
 }
 
-/// Notes a file read other than through [`read_file`] (a scene on standard input).
-pub fn note_input(path: &Path, bytes: &[u8]) {
-    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
-    if let Ok(mut log) = INPUTS.lock() {
-        log.push((abs, xxhash_rust::xxh3::xxh3_64(bytes)));
+/// What one load may read (its [`Limits`]) and what it has read. Every loader (Include,
+/// PLY, OBJ, SPD, images) reaches the disk through [`Files::read`], so the list of files
+/// a scene came from is complete; clones share the list.
+#[derive(Clone, Debug, Default)]
+pub struct Files {
+    pub limits: Limits,
+    read: Arc<Mutex<Vec<InputFile>>>,
+}
+
+impl Files {
+    pub fn new(limits: Limits) -> Files {
+        Files { limits, read: Arc::default() }
+    }
+
+    /// Reads a whole input file within the limits (see [`read_file`]) and notes it.
+    pub fn read(&self, path: &Path) -> Result<Vec<u8>, String> {
+        read_file_noting(path, &self.limits, |raw| self.note(path, raw))
+    }
+
+    /// Notes a file read otherwise (a scene given as bytes, such as standard input).
+    pub fn note(&self, path: &Path, bytes: &[u8]) {
+        let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+        let hash = xxhash_rust::xxh3::xxh3_64(bytes);
+        if let Ok(mut log) = self.read.lock() {
+            log.push(InputFile { path, hash });
+        }
+    }
+
+    /// The files read so far, sorted by path, each path once.
+    pub fn list(&self) -> Vec<InputFile> {
+        let mut v = self.read.lock().map(|l| l.clone()).unwrap_or_default();
+        v.sort();
+        v.dedup_by(|a, b| a.path == b.path);
+        v
     }
 }
 
@@ -124,6 +147,11 @@ impl Limits {
 /// Reads a whole input file: a regular file of at most `limits.file_bytes`, gunzipped
 /// (to at most as many bytes) when it starts with the gzip magic.
 pub fn read_file(path: &Path, limits: &Limits) -> Result<Vec<u8>, String> {
+    read_file_noting(path, limits, |_| {})
+}
+
+/// [`read_file`], showing `note` the bytes as stored (before gunzip).
+fn read_file_noting(path: &Path, limits: &Limits, note: impl FnOnce(&[u8])) -> Result<Vec<u8>, String> {
     let shown = path.display();
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
     if !meta.is_file() {
@@ -141,7 +169,7 @@ pub fn read_file(path: &Path, limits: &Limits) -> Result<Vec<u8>, String> {
     if raw.len() as u64 > limits.file_bytes {
         return Err(Limits::over(format!("\"{shown}\" grew while being read and"), "file-bytes", limits.file_bytes));
     }
-    note_input(path, &raw);
+    note(&raw);
     if raw.starts_with(&[0x1f, 0x8b]) { gunzip(&raw, limits).map_err(|e| format!("\"{shown}\": {e}")) } else { Ok(raw) }
 }
 

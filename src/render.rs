@@ -85,7 +85,7 @@ pub struct RenderScene {
 }
 
 impl RenderScene {
-    pub fn new(mut scene: SceneDescription) -> RenderScene {
+    pub fn new(scene: &SceneDescription) -> RenderScene {
         let camera = Camera::new(&scene.camera, &scene.film);
         let textures = Textures::new(&scene.textures, scene.fixes);
         let needs_differentials = textures.use_footprint() || scene.materials.iter().any(|m| m.bump.is_some());
@@ -111,7 +111,7 @@ impl RenderScene {
         let film = scene.film.clone();
         let integrator = scene.integrator.clone();
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
-        let geometry = Geometry::new(&mut scene);
+        let geometry = Geometry::new(scene);
         let rules = EmitterRules {
             spread_power: scene.syntax == Syntax::V3 || scene.fixes.has(Fix::MeshPower),
             pbrt_sampling: !scene.fixes.has(Fix::ShapeSampling),

@@ -415,16 +415,15 @@ fn rays_bench(dir: &Path, runs: usize, dump: bool, sse: bool) -> ExitCode {
     let mesh_bytes = scene.meshes[0].heap_bytes();
     let build_times: Vec<f64> = (0..runs)
         .map(|_| {
-            let mut s = load_scene(&scene_path, &LoadOptions::default()).unwrap_or_else(|_| scene_clone_empty());
+            let s = load_scene(&scene_path, &LoadOptions::default()).unwrap_or_else(|_| scene_clone_empty());
             let t = Instant::now();
-            let g = Geometry::new(&mut s);
+            let g = Geometry::new(&s);
             let secs = t.elapsed().as_secs_f64();
             drop(g);
             secs
         })
         .collect();
-    let mut scene = scene;
-    let mut geometry = Geometry::new(&mut scene);
+    let mut geometry = Geometry::new(&scene);
     geometry.set_avx(!sse);
     println!("node test: {}", if geometry.uses_avx() { "AVX2" } else { "SSE" });
     println!(
@@ -530,7 +529,7 @@ fn sppm_bench(mut scenes: Vec<PathBuf>, runs: usize) -> ExitCode {
     );
     for path in scenes {
         let scene = match load_scene(&path, &LoadOptions::default()) {
-            Ok(s) => RenderScene::new(s),
+            Ok(s) => RenderScene::new(&s),
             Err(e) => {
                 eprintln!("{e}");
                 return ExitCode::FAILURE;
@@ -543,7 +542,8 @@ fn sppm_bench(mut scenes: Vec<PathBuf>, runs: usize) -> ExitCode {
             let mut times = Vec::new();
             let (mut iters, mut photons) = (0, 0);
             for _ in 0..runs {
-                let Ok(out) = pool.install(|| scene.render(&RenderSettings::default())) else {
+                let Ok(out) = pool.install(|| pbrt_sppm::integrators::render(&scene, &RenderSettings::default()))
+                else {
                     return ExitCode::FAILURE;
                 };
                 times.push(out.seconds);

@@ -157,7 +157,7 @@ fn say(text: &str) -> Result<ExitCode, String> {
 }
 
 fn read(path: &str) -> Result<RgbImage, String> {
-    read_image(Path::new(path))
+    read_image(Path::new(path)).map_err(|e| e.to_string())
 }
 
 fn tiles(x: &str, y: &str, grid: usize, floor: f64, tolerance: Option<f64>) -> Result<ExitCode, String> {
@@ -232,7 +232,7 @@ fn diff(
 fn check_image_name(path: &Path) -> Result<(), String> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("exr" | "png") => pbrt_sppm::imageio::check_writable(path),
+        Some("exr" | "png") => pbrt_sppm::imageio::check_writable(path).map_err(|e| e.to_string()),
         _ => Err(format!("\"{}\": an image name must end in .exr or .png", path.display())),
     }
 }
@@ -245,7 +245,7 @@ fn heatmap(a: &RgbImage, b: &RgbImage, max: f64, out: &Path) -> Result<(), Strin
         // The PNG writer applies sRGB; undo it so the palette lands as designed.
         *p = metrics::heat(if max > 0.0 { (d as f64 / max) as f32 } else { 0.0 }).map(pbrt_sppm::imageio::from_srgb);
     }
-    write_image(out, &img)
+    write_image(out, &img).map_err(|e| e.to_string())
 }
 
 fn info(path: &str) -> Result<ExitCode, String> {
@@ -293,9 +293,9 @@ fn convert(input: &str, output: &Path, exposure: f64, half: bool) -> Result<Exit
     let scale = 2f64.powf(exposure) as f32;
     img.pixels.iter_mut().for_each(|p| *p = p.map(|c| c * scale));
     if half {
-        pbrt_sppm::imageio::write_exr_half(output, &img)?
+        pbrt_sppm::imageio::write_exr_half(output, &img).map_err(|e| e.to_string())?
     } else {
-        write_image(output, &img)?
+        write_image(output, &img).map_err(|e| e.to_string())?
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -304,7 +304,7 @@ fn plot(csv: &[String], out: &Path, x: &str, metric: &str) -> Result<ExitCode, S
     if !out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
         return Err(format!("\"{}\": the plot is written as PNG; name it .png", out.display()));
     }
-    pbrt_sppm::imageio::check_writable(out)?;
+    pbrt_sppm::imageio::check_writable(out).map_err(|e| e.to_string())?;
     let x = if x == "iterations" { "iteration" } else { "seconds" };
     let series = csv.iter().map(|p| plot::read_series(Path::new(p), x, metric)).collect::<Result<Vec<_>, _>>()?;
     plot::draw(&series, x, metric, out)?;

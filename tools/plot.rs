@@ -8,6 +8,7 @@
 //! fit of log(error) against log(x); an unbiased Monte Carlo estimator converges with
 //! slope −1 in MSE (−½ in RMSE), SPPM a little slower because of its shrinking radius.
 
+use pbrt_sppm::imageio::ImageError;
 pub use pbrt_sppm::imageio::metrics::log_slope;
 use plotters::prelude::*;
 use std::path::Path;
@@ -66,7 +67,9 @@ pub fn draw(series: &[Series], x_label: &str, metric: &str, out: &Path) -> Resul
     let (x0, x1, y0, y1) = all.fold((f64::MAX, f64::MIN, f64::MAX, f64::MIN), |(a, b, c, d), &(x, y)| {
         (a.min(x), b.max(x), c.min(y), d.max(y))
     });
-    pbrt_sppm::imageio::atomically(out, |tmp| render(series, (x0, x1, y0, y1), x_label, metric, tmp))
+    let draw =
+        |tmp: &Path| render(series, (x0, x1, y0, y1), x_label, metric, tmp).map_err(|e| ImageError::write(out, e));
+    pbrt_sppm::imageio::atomically(out, draw).map_err(|e| e.to_string())
 }
 
 fn render(

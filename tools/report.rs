@@ -15,7 +15,7 @@
 
 use crate::plot::{Series, draw, log_slope};
 use pbrt_sppm::imageio::{read_image, write_image, write_text};
-use pbrt_sppm::integrators::{ErrorRow, RenderSettings, errors_csv};
+use pbrt_sppm::integrators::{ErrorRow, Monitor, Plan, RenderSettings, errors_csv};
 use pbrt_sppm::render::RenderScene;
 use pbrt_sppm::scene::{LoadOptions, load_scene};
 use std::fmt::Write;
@@ -87,11 +87,10 @@ pub fn report(a: &ReportArgs) -> Result<(), String> {
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("cannot make \"{}\": {e}", dir.display()))?;
     }
-    pbrt_sppm::imageio::check_writable(&a.out)?;
-    let reference = read_image(&a.reference)?;
+    pbrt_sppm::imageio::check_writable(&a.out).map_err(|e| e.to_string())?;
+    let reference = read_image(&a.reference).map_err(|e| e.to_string())?;
     let scene = load_scene(&a.scene, &LoadOptions::default()).map_err(|e| e.one_line())?;
-    let mut settings =
-        RenderSettings { reference: Some(reference), photons: a.photons, seed: a.seed, ..Default::default() };
+    let mut settings = RenderSettings { photons: a.photons, seed: a.seed, ..Default::default() };
     match &ladder {
         Ladder::Seconds(v) => {
             settings.time_limit = v.last().copied();
@@ -100,15 +99,18 @@ pub fn report(a: &ReportArgs) -> Result<(), String> {
         Ladder::Iterations(v) => settings.iterations = v.last().copied(),
     }
     let pool = rayon::ThreadPoolBuilder::new().num_threads(a.nthreads).build().map_err(|e| e.to_string())?;
-    let rs = RenderScene::new(scene);
-    let out = pool.install(|| rs.render(&settings))?;
+    let rs = RenderScene::new(&scene);
+    let plan = Plan::new(&rs.integrator, &settings).map_err(|e| e.to_string())?;
+    let monitor = Monitor { reference: Some(reference), ..Default::default() };
+    let out =
+        pool.install(|| pbrt_sppm::integrators::run::run(&rs, &plan, &monitor, None)).map_err(|e| e.to_string())?;
     let rows = rungs(&out.errors, &ladder);
     if rows.is_empty() {
         return Err("no iteration finished within the smallest budget; raise the budgets".into());
     }
     let side = |ext: &str| a.out.with_extension(ext);
-    write_text(&side("csv"), &errors_csv(&out.errors))?;
-    write_image(&side("exr"), &out.image)?;
+    write_text(&side("csv"), &errors_csv(&out.errors)).map_err(|e| e.to_string())?;
+    write_image(&side("exr"), &out.image).map_err(|e| e.to_string())?;
     let (x_label, x) = match ladder {
         Ladder::Seconds(_) => ("seconds", (|r: &ErrorRow| r.seconds) as fn(&ErrorRow) -> f64),
         Ladder::Iterations(_) => ("iterations", (|r: &ErrorRow| r.iteration as f64) as fn(&ErrorRow) -> f64),
@@ -120,7 +122,7 @@ pub fn report(a: &ReportArgs) -> Result<(), String> {
     let (rmse, relmse) = (series("rmse", |r| r.rmse), series("relmse", |r| r.relmse));
     draw(&[rmse, relmse], x_label, "error", &side("png"))?;
     let markdown = markdown(a, &rows, &out.errors, x, x_label);
-    write_text(&a.out, &markdown)
+    write_text(&a.out, &markdown).map_err(|e| e.to_string())
 }
 
 fn markdown(

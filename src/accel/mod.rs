@@ -20,6 +20,7 @@ use crate::shapes::{
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
+use std::sync::Arc;
 
 /// An instance's, for the top-level SAH: a ray transform and a whole traversal.
 const INSTANCE_COST: f32 = 16.0;
@@ -181,12 +182,12 @@ impl Blas {
     /// Reorders each mesh's triangles into this BVH's leaf order; records the file's
     /// numbers in `ids` and points the primitives at the new positions. A BVH over a
     /// single mesh then needs no primitive list: its leaves refer to leaf blocks.
-    fn localize(&mut self, meshes: &mut [TriangleMesh], ids: &mut [Vec<u32>]) {
+    fn localize(&mut self, meshes: &mut [Arc<TriangleMesh>], ids: &mut [Vec<u32>]) {
         for (shape, s) in self.shapes.iter().enumerate() {
             let ShapeRef::Mesh { mesh, .. } = s else { continue };
             let mesh = *mesh as usize;
             let order: Vec<u32> = self.prims.iter().filter(|p| p.shape == shape as u32).map(|p| p.tri).collect();
-            meshes[mesh].reorder(&order);
+            meshes[mesh] = Arc::new(meshes[mesh].reordered(&order));
             for (next, p) in self.prims.iter_mut().filter(|p| p.shape == shape as u32).enumerate() {
                 p.tri = next as u32;
             }
@@ -361,13 +362,10 @@ fn instance_bounds(m: &DMat4, b: Bounds3) -> Bounds3 {
 }
 
 impl Geometry {
-    /// Builds the acceleration structures, taking the scene's meshes.
-    pub fn new(scene: &mut SceneDescription) -> Geometry {
-        let mut set = ShapeSet {
-            meshes: std::mem::take(&mut scene.meshes),
-            patches: std::mem::take(&mut scene.patches),
-            quadrics: Vec::new(),
-        };
+    /// Builds the acceleration structures over the scene's shapes (sharing its meshes
+    /// until the BVHs reorder their triangles into copies of their own).
+    pub fn new(scene: &SceneDescription) -> Geometry {
+        let mut set = ShapeSet { meshes: scene.meshes.clone(), patches: scene.patches.clone(), quadrics: Vec::new() };
         let world_shapes: Vec<ShapeRef> = scene.shapes.iter().map(|s| shape_ref(s, &mut set.quadrics)).collect();
         let object_shapes: Vec<Vec<ShapeRef>> =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| shape_ref(s, &mut set.quadrics)).collect()).collect();

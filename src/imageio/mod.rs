@@ -9,8 +9,47 @@ use exr::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// exr's prelude has its own `Result`; ours carry a message.
-type Res<T> = std::result::Result<T, String>;
+/// exr's prelude has its own `Result`.
+type Res<T> = std::result::Result<T, ImageError>;
+
+/// Why an image (or another file written atomically) cannot be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    #[error("cannot read \"{}\": {why}", path.display())]
+    Read { path: PathBuf, why: String },
+    #[error("cannot write \"{}\": {why}", path.display())]
+    Write { path: PathBuf, why: String },
+    #[error("cannot rename to \"{}\": {why}", path.display())]
+    Rename { path: PathBuf, why: std::io::Error },
+    #[error("\"{}\" is a folder", path.display())]
+    Folder { path: PathBuf },
+    #[error("\"{}\": an image name must end in .exr or .png", path.display())]
+    Extension { path: PathBuf },
+    /// Bytes that are not an image of the format, or not one we read.
+    #[error("{why}")]
+    Decode { why: String },
+    /// Past a limit (`--limit file-bytes`, `texture-pixels`), or a scene's input file
+    /// that cannot be read; the message says which.
+    #[error("{0}")]
+    Input(String),
+    #[error("\"{}\": {source}", path.display())]
+    In { path: PathBuf, source: Box<ImageError> },
+}
+
+impl ImageError {
+    /// A failed write of `path` for the reason `why`.
+    pub fn write(path: &Path, why: impl std::fmt::Display) -> ImageError {
+        ImageError::Write { path: path.to_path_buf(), why: why.to_string() }
+    }
+
+    fn read(path: &Path, why: impl std::fmt::Display) -> ImageError {
+        ImageError::Read { path: path.to_path_buf(), why: why.to_string() }
+    }
+
+    fn decode(why: impl std::fmt::Display) -> ImageError {
+        ImageError::Decode { why: why.to_string() }
+    }
+}
 
 /// Metadata written into EXR headers.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -55,7 +94,7 @@ impl RgbImage {
 pub fn atomically(path: &Path, write: impl FnOnce(&Path) -> Res<()>) -> Res<()> {
     let tmp = temp_path(path);
     let result = write(&tmp)
-        .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| format!("cannot rename to \"{}\": {e}", path.display())));
+        .and_then(|_| std::fs::rename(&tmp, path).map_err(|why| ImageError::Rename { path: path.to_path_buf(), why }));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -72,7 +111,7 @@ fn temp_path(path: &Path) -> PathBuf {
 
 /// Writes text atomically (reports, CSV files).
 pub fn write_text(path: &Path, text: &str) -> Res<()> {
-    atomically(path, |tmp| std::fs::write(tmp, text).map_err(|e| format!("cannot write \"{}\": {e}", path.display())))
+    atomically(path, |tmp| std::fs::write(tmp, text).map_err(|e| ImageError::write(path, e)))
 }
 
 /// Writes by extension: `.exr`, or `.png` for an sRGB preview; any other name is an
@@ -81,7 +120,7 @@ pub fn write_image(path: &Path, img: &RgbImage) -> Res<()> {
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("png") => write_png(path, img),
         Some("exr") => write_exr(path, img),
-        _ => Err(format!("\"{}\": an image name must end in .exr or .png", path.display())),
+        _ => Err(ImageError::Extension { path: path.to_path_buf() }),
     }
 }
 
@@ -89,10 +128,10 @@ pub fn write_image(path: &Path, img: &RgbImage) -> Res<()> {
 /// takes a new file (made and removed again), and `path` is not a folder.
 pub fn check_writable(path: &Path) -> Res<()> {
     if path.is_dir() {
-        return Err(format!("\"{}\" is a folder", path.display()));
+        return Err(ImageError::Folder { path: path.to_path_buf() });
     }
     let tmp = temp_path(path);
-    std::fs::File::create(&tmp).map_err(|e| format!("cannot write \"{}\": {e}", path.display()))?;
+    std::fs::File::create(&tmp).map_err(|e| ImageError::write(path, e))?;
     let _ = std::fs::remove_file(&tmp);
     Ok(())
 }
@@ -124,7 +163,7 @@ fn write_exr_as(path: &Path, img: &RgbImage, half: bool) -> Res<()> {
         put("photonsPerIteration", AttributeValue::I32(n.min(i32::MAX as i64) as i32));
     }
     let (w, pixels, size, full) = (img.width, &img.pixels, (img.width, img.height), img.full);
-    let fail = |e: exr::error::Error| format!("cannot write \"{}\": {e}", path.display());
+    let fail = |e: exr::error::Error| ImageError::write(path, e);
     if half {
         let h = |v: f32| exr::prelude::f16::from_f32(v);
         let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| pixels[y * w + x].map(h).into());
@@ -151,18 +190,16 @@ pub fn from_srgb(v: f32) -> f32 {
 pub fn write_png(path: &Path, img: &RgbImage) -> Res<()> {
     let bytes: Vec<u8> = img.pixels.iter().flat_map(|p| p.map(|c| (to_srgb(c) * 255.0).round() as u8)).collect();
     let buf = image::RgbImage::from_raw(img.width as u32, img.height as u32, bytes)
-        .ok_or_else(|| "image size does not match its pixels".to_string())?;
-    atomically(path, |tmp| {
-        buf.save_with_format(tmp, image::ImageFormat::Png)
-            .map_err(|e| format!("cannot write \"{}\": {e}", path.display()))
-    })
+        .ok_or_else(|| ImageError::write(path, "the image size does not match its pixels"))?;
+    atomically(path, |tmp| buf.save_with_format(tmp, image::ImageFormat::Png).map_err(|e| ImageError::write(path, e)))
 }
 
 /// Reads an image for a scene: a regular file within `limits.file_bytes`, whose size
 /// (from its header, before decoding) is within `limits.texture_pixels`.
-pub fn read_image_within(path: &Path, limits: &crate::limits::Limits) -> Res<RgbImage> {
-    let bytes = crate::limits::read_file(path, limits)?;
-    decode_image(&bytes, is_png(path), limits.texture_pixels).map_err(|e| format!("\"{}\": {e}", path.display()))
+pub fn read_image_within(path: &Path, files: &crate::limits::Files) -> Res<RgbImage> {
+    let bytes = files.read(path).map_err(ImageError::Input)?;
+    decode_image(&bytes, is_png(path), files.limits.texture_pixels)
+        .map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
 }
 
 /// Decodes an EXR or PNG held in memory, refusing (from the header alone) images of
@@ -171,17 +208,18 @@ pub fn decode_image(bytes: &[u8], png: bool, max_pixels: u64) -> Res<RgbImage> {
     let (w, h) = if png {
         let (w, h) = image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Png)
             .into_dimensions()
-            .map_err(|e| format!("not a readable PNG: {e}"))?;
+            .map_err(|e| ImageError::decode(format!("not a readable PNG: {e}")))?;
         (w as u64, h as u64)
     } else {
         let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
-            .map_err(|e| format!("not a readable EXR: {e}"))?;
-        let header = meta.headers.first().ok_or("not a readable EXR: no image in the file")?;
+            .map_err(|e| ImageError::decode(format!("not a readable EXR: {e}")))?;
+        let header =
+            meta.headers.first().ok_or_else(|| ImageError::decode("not a readable EXR: no image in the file"))?;
         (header.layer_size.width() as u64, header.layer_size.height() as u64)
     };
     if w.saturating_mul(h) > max_pixels {
         let what = format!("the image's {w}x{h} pixels");
-        return Err(crate::limits::Limits::over(what, "texture-pixels", max_pixels));
+        return Err(ImageError::Input(crate::limits::Limits::over(what, "texture-pixels", max_pixels)));
     }
     if png { decode_png(bytes) } else { decode_exr(bytes) }
 }
@@ -199,8 +237,8 @@ pub fn read_image(path: &Path) -> Res<RgbImage> {
 }
 
 pub fn read_exr(path: &Path) -> Res<RgbImage> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
-    decode_exr(&bytes).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))
+    let bytes = std::fs::read(path).map_err(|e| ImageError::read(path, e))?;
+    decode_exr(&bytes).map_err(|e| ImageError::read(path, e))
 }
 
 fn decode_exr(bytes: &[u8]) -> Res<RgbImage> {
@@ -214,7 +252,7 @@ fn decode_exr(bytes: &[u8]) -> Res<RgbImage> {
         .first_valid_layer()
         .all_attributes()
         .from_buffered(std::io::Cursor::new(bytes))
-        .map_err(|e| e.to_string())?;
+        .map_err(ImageError::decode)?;
     let layer = &image.layer_data;
     let a = &layer.attributes;
     let get_f32 = |k: &str| match a.other.get(&Text::from(k)) {
@@ -243,13 +281,13 @@ fn decode_exr(bytes: &[u8]) -> Res<RgbImage> {
 }
 
 pub fn read_png(path: &Path) -> Res<RgbImage> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
-    decode_png(&bytes).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))
+    let bytes = std::fs::read(path).map_err(|e| ImageError::read(path, e))?;
+    decode_png(&bytes).map_err(|e| ImageError::read(path, e))
 }
 
 fn decode_png(bytes: &[u8]) -> Res<RgbImage> {
     let img =
-        image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(|e| e.to_string())?.to_rgb32f();
+        image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(ImageError::decode)?.to_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     let pixels = img.pixels().map(|p| p.0.map(from_srgb)).collect();
     Ok(RgbImage { width: w, height: h, pixels, origin: (0, 0), full: (w, h), meta: ImageMeta::default() })

@@ -22,6 +22,7 @@
 use super::adaptive::Chain;
 use super::report::ErrorRow;
 use super::sppm::{PixelState, Stats};
+use crate::imageio::ImageError;
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::Path;
@@ -29,6 +30,27 @@ use std::path::Path;
 const MAGIC: &[u8] = b"pbrt-sppm checkpoint 1\n";
 /// Bytes of one pixel's state.
 const PIXEL_BYTES: usize = 64;
+
+/// Why a checkpoint cannot be written, read or continued.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointError {
+    #[error("cannot encode the checkpoint: {0}")]
+    Encode(serde_json::Error),
+    #[error("not a pbrt-sppm checkpoint (or one of another version)")]
+    NotACheckpoint,
+    #[error("the checkpoint is damaged or incomplete (its checksum does not match)")]
+    Damaged,
+    #[error("the checkpoint's header is unreadable: {0}")]
+    Header(serde_json::Error),
+    #[error(transparent)]
+    File(#[from] ImageError),
+}
+
+/// How a render's fingerprint differs from the one it would continue: one sentence per
+/// difference.
+#[derive(Debug, PartialEq, thiserror::Error)]
+#[error("{}", .0.join("; "))]
+pub struct Mismatch(pub Vec<String>);
 
 /// What a render was made from: compared on `--resume`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -44,7 +66,7 @@ pub struct Fingerprint {
 impl Fingerprint {
     /// `Ok` when a render made from `self` may be continued as `now`; otherwise every
     /// difference found, one per line.
-    pub fn check(&self, now: &Fingerprint) -> Result<(), String> {
+    pub fn check(&self, now: &Fingerprint) -> Result<(), Mismatch> {
         let mut diffs = Vec::new();
         for (name, old) in &self.settings {
             match now.settings.iter().find(|(n, _)| n == name) {
@@ -56,7 +78,7 @@ impl Fingerprint {
             }
         }
         diffs.extend(self.input_differences(now));
-        if diffs.is_empty() { Ok(()) } else { Err(diffs.join("; ")) }
+        if diffs.is_empty() { Ok(()) } else { Err(Mismatch(diffs)) }
     }
 
     /// A moved scene folder is the same scene: files are compared by content first.
@@ -147,8 +169,8 @@ pub struct Checkpoint {
 }
 
 impl Checkpoint {
-    fn to_bytes(&self) -> Result<Vec<u8>, String> {
-        let json = serde_json::to_vec(self).map_err(|e| format!("cannot encode the checkpoint: {e}"))?;
+    fn to_bytes(&self) -> Result<Vec<u8>, CheckpointError> {
+        let json = serde_json::to_vec(self).map_err(CheckpointError::Encode)?;
         let mut out = Vec::with_capacity(MAGIC.len() + 16 + json.len() + self.pixels.len() * PIXEL_BYTES);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&(json.len() as u64).to_le_bytes());
@@ -163,21 +185,20 @@ impl Checkpoint {
         Ok(out)
     }
 
-    fn from_bytes(bytes: &[u8]) -> Result<Checkpoint, String> {
-        let body = bytes.strip_prefix(MAGIC).ok_or("not a pbrt-sppm checkpoint (or one of another version)")?;
-        let damaged = "the checkpoint is damaged or incomplete (its checksum does not match)";
-        let (body, sum) = body.split_at_checked(body.len().wrapping_sub(8)).ok_or(damaged)?;
+    fn from_bytes(bytes: &[u8]) -> Result<Checkpoint, CheckpointError> {
+        use CheckpointError::Damaged;
+        let body = bytes.strip_prefix(MAGIC).ok_or(CheckpointError::NotACheckpoint)?;
+        let (body, sum) = body.split_at_checked(body.len().wrapping_sub(8)).ok_or(Damaged)?;
         let whole = &bytes[..bytes.len() - 8];
         if xxhash_rust::xxh3::xxh3_64(whole).to_le_bytes() != sum {
-            return Err(damaged.into());
+            return Err(Damaged);
         }
-        let (len, rest) = body.split_at_checked(8).ok_or(damaged)?;
-        let len = usize::try_from(u64::from_le_bytes(len.try_into().map_err(|_| damaged)?)).map_err(|_| damaged)?;
-        let (json, pixels) = rest.split_at_checked(len).ok_or(damaged)?;
-        let mut c: Checkpoint =
-            serde_json::from_slice(json).map_err(|e| format!("the checkpoint's header is unreadable: {e}"))?;
+        let (len, rest) = body.split_at_checked(8).ok_or(Damaged)?;
+        let len = usize::try_from(u64::from_le_bytes(len.try_into().map_err(|_| Damaged)?)).map_err(|_| Damaged)?;
+        let (json, pixels) = rest.split_at_checked(len).ok_or(Damaged)?;
+        let mut c: Checkpoint = serde_json::from_slice(json).map_err(CheckpointError::Header)?;
         if !pixels.len().is_multiple_of(PIXEL_BYTES) {
-            return Err(damaged.into());
+            return Err(Damaged);
         }
         let f = |c: &[u8], k: usize| f64::from_le_bytes(c[8 * k..8 * k + 8].try_into().unwrap_or([0; 8]));
         c.pixels = pixels
@@ -193,20 +214,19 @@ impl Checkpoint {
     /// Writes the checkpoint beside `path`, flushes it to the disk and only then
     /// renames it over `path`: a crash at any moment leaves the previous checkpoint or
     /// this one, never a torn file.
-    pub fn write(&self, path: &Path) -> Result<(), String> {
+    pub fn write(&self, path: &Path) -> Result<(), CheckpointError> {
         let bytes = self.to_bytes()?;
-        crate::imageio::atomically(path, |tmp| {
-            let mut f = std::fs::File::create(tmp).map_err(|e| format!("cannot write \"{}\": {e}", path.display()))?;
-            f.write_all(&bytes)
-                .and_then(|()| f.sync_all())
-                .map_err(|e| format!("cannot write \"{}\": {e}", path.display()))
-        })
+        let written = crate::imageio::atomically(path, |tmp| {
+            let mut f = std::fs::File::create(tmp).map_err(|e| ImageError::write(path, e))?;
+            f.write_all(&bytes).and_then(|()| f.sync_all()).map_err(|e| ImageError::write(path, e))
+        });
+        Ok(written?)
     }
 
-    pub fn read(path: &Path) -> Result<Checkpoint, String> {
-        let cannot = |e: &dyn std::fmt::Display| format!("cannot read \"{}\": {e}", path.display());
+    pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
+        let cannot = |e: &dyn std::fmt::Display| ImageError::Read { path: path.to_path_buf(), why: e.to_string() };
         if !std::fs::metadata(path).map_err(|e| cannot(&e))?.is_file() {
-            return Err(cannot(&"not a regular file"));
+            return Err(cannot(&"not a regular file").into());
         }
         let bytes = std::fs::read(path).map_err(|e| cannot(&e))?;
         Checkpoint::from_bytes(&bytes)
@@ -267,7 +287,7 @@ mod tests {
         let mut flipped = bytes.clone();
         let at = bytes.len() - 20;
         flipped[at] ^= 1;
-        assert!(Checkpoint::from_bytes(&flipped).unwrap_err().contains("damaged"));
+        assert!(matches!(Checkpoint::from_bytes(&flipped), Err(CheckpointError::Damaged)));
     }
 
     #[test]
@@ -276,17 +296,17 @@ mod tests {
         assert!(a.check(&a).is_ok());
         let mut b = a.clone();
         b.settings[0].1 = "200".into();
-        assert_eq!(a.check(&b).unwrap_err(), "it was made with photons 100, this run has 200");
+        assert_eq!(a.check(&b).unwrap_err().to_string(), "it was made with photons 100, this run has 200");
         let mut c = a.clone();
         c.inputs[1].1 = 3;
-        assert_eq!(a.check(&c).unwrap_err(), "\"/s/m.ply\" has changed since");
+        assert_eq!(a.check(&c).unwrap_err().to_string(), "\"/s/m.ply\" has changed since");
         let mut moved = a.clone();
         moved.scene = "/t/a.pbrt".into();
         moved.inputs = vec![("/t/a.pbrt".into(), 1), ("/t/m.ply".into(), 2)];
         assert!(a.check(&moved).is_ok(), "a moved folder is the same scene");
         let mut other = c.clone();
         other.scene = "/t/b.pbrt".into();
-        assert!(a.check(&other).unwrap_err().contains("made from the scene \"/s/a.pbrt\""));
+        assert!(a.check(&other).unwrap_err().to_string().contains("made from the scene \"/s/a.pbrt\""));
     }
 
     #[test]

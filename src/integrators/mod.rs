@@ -1,11 +1,12 @@
 //! Integrators. pbrt-sppm renders with stochastic progressive photon mapping only:
 //! [`sppm`] holds its passes, [`grid`] the photon lookup grid, [`adaptive`] adaptive
-//! photon chains, [`run`] the render loop, [`checkpoint`] saved and resumed state,
+//! photon chains, [`run`] the render loop, [`error`] what stops it, [`checkpoint`] saved and resumed state,
 //! [`passes`] independent passes, [`part`] shard files and their merge, [`report`]
 //! `ERRORS.csv` and progress. Data flows one way: the render-ready scene (`render`) in, an image out.
 
 pub mod adaptive;
 pub mod checkpoint;
+pub mod error;
 pub mod grid;
 pub mod part;
 pub mod passes;
@@ -13,5 +14,6 @@ pub mod report;
 pub mod run;
 pub mod sppm;
 
+pub use error::RenderError;
 pub use report::{ERRORS_HEADER, ErrorRow, errors_csv};
-pub use run::{CheckpointTarget, Plan, RenderOutput, RenderSettings};
+pub use run::{CheckpointTarget, Monitor, Plan, RenderOutput, RenderSettings, render};

@@ -24,11 +24,35 @@
 
 use super::checkpoint::Fingerprint;
 use super::passes::PassSet;
-use crate::imageio::{ImageMeta, RgbImage, atomically};
+use crate::imageio::{ImageError, ImageMeta, RgbImage, atomically};
 use exr::prelude::*;
 use std::path::{Path, PathBuf};
 
-type Res<T> = std::result::Result<T, String>;
+type Res<T> = std::result::Result<T, PartError>;
+
+/// Why a part cannot be written or read, or parts cannot be merged.
+#[derive(Debug, thiserror::Error)]
+pub enum PartError {
+    #[error("the sum of the passes at pixel ({}, {}) is beyond the range of 32-bit floats", pixel.0, pixel.1)]
+    NotFinite { pixel: (i32, i32) },
+    #[error("only independent passes make parts")]
+    NotIndependent,
+    #[error(transparent)]
+    File(#[from] ImageError),
+    /// A file that is not a part this version reads; `why` says what is wrong with it.
+    #[error("\"{}\": {why}", path.display())]
+    Unreadable { path: PathBuf, why: String },
+    #[error("the part does not say how many passes the render has")]
+    NoPassCount,
+    #[error("\"{}\" is not a part of the same render as \"{}\": {why}", path.display(), first.display())]
+    OtherRender { path: PathBuf, first: PathBuf, why: String },
+    #[error("\"{}\" and \"{}\" both hold passes {passes}; a pass must be merged once (remove one of them)", a.display(), b.display())]
+    Overlap { a: PathBuf, b: PathBuf, passes: PassSet },
+    #[error("passes {missing} of 0..{planned} are in no part (re-run those shards, or merge with --allow-gaps)")]
+    Missing { missing: PassSet, planned: u32 },
+    #[error("no parts to merge")]
+    NoParts,
+}
 
 const VERSION: &str = "1";
 /// Channel names, in the order EXR stores them (sorted).
@@ -58,7 +82,7 @@ impl Part {
     /// The passes the whole render plans (the fingerprint's `iterations`).
     pub fn planned(&self) -> Res<u32> {
         let s = self.fingerprint.settings.iter().find(|(k, _)| k == "iterations");
-        s.and_then(|(_, v)| v.parse().ok()).ok_or_else(|| "the part does not say how many passes the render has".into())
+        s.and_then(|(_, v)| v.parse().ok()).ok_or(PartError::NoPassCount)
     }
 
     /// The average of the passes: the image the part stands for.
@@ -93,10 +117,10 @@ impl Part {
         if let Some(i) = self.sums.iter().position(|s| !s.iter().all(|c| (*c as f32).is_finite())) {
             let (x, y) =
                 (self.origin.0 + (i % self.width.max(1)) as i32, self.origin.1 + (i / self.width.max(1)) as i32);
-            return Err(format!("the sum of the passes at pixel ({x}, {y}) is beyond the range of 32-bit floats"));
+            return Err(PartError::NotFinite { pixel: (x, y) });
         }
-        let fail = |e: exr::error::Error| format!("cannot write \"{}\": {e}", path.display());
-        let json = serde_json::to_string(&self.fingerprint).map_err(|e| e.to_string())?;
+        let fail = |e: exr::error::Error| ImageError::write(path, e);
+        let json = serde_json::to_string(&self.fingerprint).map_err(|e| ImageError::write(path, e))?;
         let mut attrs = LayerAttributes::named("");
         attrs.layer_position = Vec2(self.origin.0, self.origin.1);
         attrs.software_name = Some(Text::from(format!("pbrt-sppm {}", env!("CARGO_PKG_VERSION")).as_str()));
@@ -122,7 +146,7 @@ impl Part {
         let layer = Layer::new((self.width, self.height), attrs, Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels));
         let mut image = Image::from_layer(layer);
         image.attributes.display_window = IntegerBounds::new((0, 0), self.full);
-        atomically(path, |tmp| image.write().to_file(tmp).map_err(fail))
+        Ok(atomically(path, |tmp| image.write().to_file(tmp).map_err(fail))?)
     }
 
     /// One channel's samples: the f32 nearest each sum (`R`) or what it leaves (`lo.R`).
@@ -137,12 +161,14 @@ impl Part {
     }
 
     pub fn read(path: &Path) -> Res<Part> {
-        let bytes = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
-        decode(&bytes).map_err(|e| format!("\"{}\": {e}", path.display()))
+        let bytes =
+            std::fs::read(path).map_err(|e| ImageError::Read { path: path.to_path_buf(), why: e.to_string() })?;
+        decode(&bytes).map_err(|why| PartError::Unreadable { path: path.to_path_buf(), why })
     }
 }
 
-fn decode(bytes: &[u8]) -> Res<Part> {
+/// A part from its file's bytes, or what is wrong with them.
+fn decode(bytes: &[u8]) -> std::result::Result<Part, String> {
     // From the header alone: a part is never larger than a render may be.
     let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
         .map_err(|e| format!("not a readable EXR ({e})"))?;
@@ -201,8 +227,8 @@ fn decode(bytes: &[u8]) -> Res<Part> {
 }
 
 /// The f64 sums from the six channels.
-fn sums(list: &[AnyChannel<FlatSamples>], n: usize) -> Res<Vec<[f64; 3]>> {
-    let get = |name: &str| -> Res<&Vec<f32>> {
+fn sums(list: &[AnyChannel<FlatSamples>], n: usize) -> std::result::Result<Vec<[f64; 3]>, String> {
+    let get = |name: &str| -> std::result::Result<&Vec<f32>, String> {
         match list.iter().find(|c| c.name == *name).map(|c| &c.sample_data) {
             Some(FlatSamples::F32(v)) if v.len() == n => Ok(v),
             Some(_) => Err(format!("channel \"{name}\" is not 32-bit float")),
@@ -243,7 +269,7 @@ pub fn merge(paths: &[PathBuf], allow_gaps: bool) -> Res<Merged> {
             Some(m) => m.add(path.clone(), part)?,
         }
     }
-    merger.ok_or_else(|| "no parts to merge".to_string())?.finish(allow_gaps)
+    merger.ok_or(PartError::NoParts)?.finish(allow_gaps)
 }
 
 /// The running sum of a merge.
@@ -269,19 +295,13 @@ impl Merger {
 
     fn add(&mut self, path: PathBuf, part: Part) -> Res<()> {
         let (p0, base) = &self.base;
-        belongs(base, &part).map_err(|e| {
-            format!("\"{}\" is not a part of the same render as \"{}\": {e}", path.display(), p0.display())
-        })?;
+        belongs(base, &part).map_err(|why| PartError::OtherRender { path: path.clone(), first: p0.clone(), why })?;
         let hash = sums_hash(&part);
         match self.kept.iter().find(|k| k.1.intersection(&part.passes).count() > 0) {
             Some(k) if k.1 == part.passes && k.2 == hash => self.duplicates.push(path),
             Some((other, passes, _)) => {
-                return Err(format!(
-                    "\"{}\" and \"{}\" both hold passes {}; a pass must be merged once (remove one of them)",
-                    other.display(),
-                    path.display(),
-                    passes.intersection(&part.passes)
-                ));
+                let passes = passes.intersection(&part.passes);
+                return Err(PartError::Overlap { a: other.clone(), b: path, passes });
             }
             None => {
                 let total = &mut self.base.1;
@@ -300,9 +320,7 @@ impl Merger {
         let planned = part.planned()?;
         let missing = part.passes.missing_from(planned);
         if !missing.ranges().is_empty() && !allow_gaps {
-            return Err(format!(
-                "passes {missing} of 0..{planned} are in no part (re-run those shards, or merge with --allow-gaps)"
-            ));
+            return Err(PartError::Missing { missing, planned });
         }
         Ok(Merged { part, missing, duplicates: self.duplicates })
     }
@@ -310,9 +328,9 @@ impl Merger {
 
 /// Why `b` cannot be merged with `a`, if it cannot. The fingerprints hold every
 /// setting (seed and photons among them); the windows are checked beside them.
-fn belongs(a: &Part, b: &Part) -> Res<()> {
-    a.fingerprint.check(&b.fingerprint)?;
-    b.fingerprint.check(&a.fingerprint)?;
+fn belongs(a: &Part, b: &Part) -> std::result::Result<(), String> {
+    a.fingerprint.check(&b.fingerprint).map_err(|e| e.to_string())?;
+    b.fingerprint.check(&a.fingerprint).map_err(|e| e.to_string())?;
     if (a.width, a.height, a.origin, a.full) != (b.width, b.height, b.origin, b.full) {
         return Err(format!(
             "its image is {}x{} at {:?}, not {}x{} at {:?}",

@@ -4,12 +4,14 @@
 
 use super::adaptive::PhotonSampling;
 use super::checkpoint::{Checkpoint, Every, Fingerprint};
+use super::error::RenderError;
 use super::passes::{PassMode, PassSet};
 use super::report::{ErrorRow, progress_bar};
 use super::sppm::Sppm;
-use crate::imageio::{ImageMeta, RgbImage, metrics};
+use crate::imageio::{ImageMeta, RgbImage, metrics, write_image};
 use crate::render::RenderScene;
 use crate::sampling::SamplerKind;
+use crate::scene::Integrator;
 use std::ops::Range;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -19,7 +21,8 @@ use std::time::Instant;
 /// The smallest initial radius: its square is a normal f32.
 pub const MIN_RADIUS: f32 = 1e-18;
 
-/// Command-line overrides and reporting for a render.
+/// How to render: overrides of the scene's SPPM parameters and the pass plan. Nothing
+/// here is about reporting or output (see [`Monitor`]).
 #[derive(Clone, Debug, Default)]
 pub struct RenderSettings {
     /// SPPM iterations (`--spp`/`--iterations`).
@@ -34,6 +37,16 @@ pub struct RenderSettings {
     pub quick: bool,
     /// Stop once this many seconds have passed (the iteration under way is finished).
     pub time_limit: Option<f64>,
+    /// Classic SPPM or independent passes (`--passes`, `--alpha`).
+    pub passes: PassMode,
+    /// Render only these passes of the planned ones (`--pass-range A..B`; independent
+    /// passes only).
+    pub pass_range: Option<Range<u32>>,
+}
+
+/// What a render reports and saves while it runs, and what stops it early.
+#[derive(Clone, Debug, Default)]
+pub struct Monitor {
     /// Compare against this image after every iteration (`--mse-reference-image`).
     pub reference: Option<RgbImage>,
     /// Print a progress bar with ETA on stderr.
@@ -46,11 +59,6 @@ pub struct RenderSettings {
     pub partial_images: Option<PathBuf>,
     /// Raised (by a signal handler) to stop after the iteration under way.
     pub interrupt: Option<Arc<AtomicBool>>,
-    /// Classic SPPM or independent passes (`--passes`, `--alpha`).
-    pub passes: PassMode,
-    /// Render only these passes of the planned ones (`--pass-range A..B`; independent
-    /// passes only).
-    pub pass_range: Option<Range<u32>>,
 }
 
 /// Where and how often a render saves its state, and what it was made from.
@@ -73,6 +81,8 @@ pub struct Plan {
     pub passes: PassMode,
     /// The passes this run renders, within `0..iterations`.
     pub range: Range<u32>,
+    /// Stop after the iteration that passes this many seconds.
+    pub time_limit: Option<f64>,
 }
 
 impl Plan {
@@ -100,7 +110,7 @@ pub struct RenderOutput {
     pub stats: super::sppm::Stats,
     pub errors: Vec<ErrorRow>,
     pub seconds: f64,
-    /// Stopped early by [`RenderSettings::interrupt`].
+    /// Stopped early by [`Monitor::interrupt`].
     pub interrupted: bool,
     /// The passes rendered (fewer than planned after a time limit or an interrupt).
     pub passes: PassSet,
@@ -126,166 +136,168 @@ impl Progress {
     }
 }
 
-impl RenderScene {
-    /// The settings the render will run with.
-    pub fn plan(&self, settings: &RenderSettings) -> Result<Plan, String> {
-        let i = &self.integrator;
-        let mut iterations = settings.iterations.unwrap_or(i.iterations);
+impl Plan {
+    /// The settings a render of a scene with these SPPM parameters runs with.
+    pub fn new(integrator: &Integrator, settings: &RenderSettings) -> Result<Plan, RenderError> {
+        let mut iterations = settings.iterations.unwrap_or(integrator.iterations);
         if settings.quick {
             iterations = (iterations / 16).max(1);
         }
-        let radius = settings.radius.unwrap_or(i.radius);
+        let radius = settings.radius.unwrap_or(integrator.radius);
         // The gather compares squared distances in f32: below 1e-18 the square leaves
         // f32's normal range and no photon is ever found.
         if !(radius >= MIN_RADIUS && radius.is_finite()) {
-            return Err(format!("the radius must be at least {MIN_RADIUS:e} and finite, not {radius}"));
+            return Err(RenderError::Radius { radius, min: MIN_RADIUS });
         }
         let range = settings.pass_range.clone().unwrap_or(0..iterations);
         if range.end > iterations || range.start >= range.end {
-            return Err(format!(
-                "the pass range {}..{} does not fit in the render's {iterations} passes (0..{iterations}; set the total with --spp)",
-                range.start, range.end
-            ));
+            return Err(RenderError::PassRange { range, iterations });
         }
         if range != (0..iterations) && !settings.passes.is_independent() {
-            return Err("a pass range needs independent passes (--passes independent)".into());
+            return Err(RenderError::RangeNeedsIndependentPasses);
         }
         Ok(Plan {
             passes: settings.passes,
             range,
             iterations,
-            photons: settings.photons.unwrap_or(i.photons_per_iteration).max(1),
+            photons: settings.photons.unwrap_or(integrator.photons_per_iteration).max(1),
             radius,
-            seed: settings.seed.unwrap_or(i.seed),
+            seed: settings.seed.unwrap_or(integrator.seed),
             sampler: settings.sampler,
             photon_sampling: settings.photon_sampling,
+            time_limit: settings.time_limit,
         })
     }
+}
 
-    /// Renders with SPPM (scene loading excluded from the timings).
-    pub fn render(&self, settings: &RenderSettings) -> Result<RenderOutput, String> {
-        self.render_from(settings, None)
-    }
+/// Plans and renders with no monitor and no checkpoint (tests and tools; the command
+/// line goes through [`crate::job::Job`]).
+pub fn render(scene: &RenderScene, settings: &RenderSettings) -> Result<RenderOutput, RenderError> {
+    run(scene, &Plan::new(&scene.integrator, settings)?, &Monitor::default(), None)
+}
 
-    /// Renders, continuing a checkpoint's state when given one (whose fingerprint the
-    /// caller has checked).
-    pub fn render_from(&self, settings: &RenderSettings, resume: Option<Checkpoint>) -> Result<RenderOutput, String> {
-        let plan = self.plan(settings)?;
-        self.check_reference(settings)?;
-        let p = &plan;
-        let mut sppm = Sppm::new(self, p.iterations, p.photons, p.radius, p.seed, (p.sampler, p.photon_sampling))?
-            .with_passes(p.passes, p.range.start)?;
-        let now = Instant::now();
-        let mut progress = Progress { start: now, prior: 0.0, errors: Vec::new(), saved: (0, now), save_failed: false };
-        if let Some(c) = resume {
-            if !(plan.range.start..=plan.range.end).contains(&c.iteration) {
-                let r = &plan.range;
-                return Err(format!(
-                    "the checkpoint is at pass {}, outside this run's passes {}..{}",
-                    c.iteration, r.start, r.end
-                ));
-            }
-            sppm.restore(c.iteration, &c.pixels, c.chains, c.stats)?;
-            (progress.prior, progress.errors, progress.saved.0) = (c.seconds, c.errors, c.iteration);
+/// Renders a plan with SPPM (scene loading excluded from the timings), continuing a
+/// checkpoint's state when given one (whose fingerprint the caller has checked).
+pub fn run(
+    scene: &RenderScene,
+    plan: &Plan,
+    monitor: &Monitor,
+    resume: Option<Checkpoint>,
+) -> Result<RenderOutput, RenderError> {
+    check_reference(scene, monitor)?;
+    let p = plan;
+    let mut sppm = Sppm::new(scene, p.iterations, p.photons, p.radius, p.seed, (p.sampler, p.photon_sampling))?
+        .with_passes(p.passes, p.range.start)?;
+    let now = Instant::now();
+    let mut progress = Progress { start: now, prior: 0.0, errors: Vec::new(), saved: (0, now), save_failed: false };
+    if let Some(c) = resume {
+        if !(plan.range.start..=plan.range.end).contains(&c.iteration) {
+            return Err(RenderError::CheckpointOutside { at: c.iteration, range: plan.range.clone() });
         }
-        let interrupted = loop {
-            if settings.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
-                break true;
-            }
-            let over_time = settings.time_limit.is_some_and(|t| progress.seconds() >= t);
-            if sppm.iteration >= plan.range.end || (sppm.passes_done() > 0 && over_time) {
-                break false;
-            }
-            sppm.iterate();
-            self.after_iteration(&sppm, settings, &plan, &mut progress);
+        sppm.restore(c.iteration, &c.pixels, c.chains, c.stats)?;
+        (progress.prior, progress.errors, progress.saved.0) = (c.seconds, c.errors, c.iteration);
+    }
+    let interrupted = loop {
+        if monitor.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
+            break true;
+        }
+        let over_time = plan.time_limit.is_some_and(|t| progress.seconds() >= t);
+        if sppm.iteration >= plan.range.end || (sppm.passes_done() > 0 && over_time) {
+            break false;
+        }
+        sppm.iterate();
+        after_iteration(&sppm, monitor, plan, &mut progress);
+    };
+    if monitor.progress {
+        eprintln!();
+    }
+    if let Some(t) = &monitor.checkpoint
+        && progress.saved.0 != sppm.iteration
+    {
+        save(&sppm, t, &mut progress, monitor.quiet);
+    }
+    let seconds = progress.seconds();
+    let image = image(&sppm, plan.photons, seconds);
+    check_finite(&image)?;
+    let passes = PassSet::from_range(sppm.first_pass()..sppm.iteration);
+    let pass_sums = plan.passes.is_independent().then(|| sppm.pass_sums().iter().map(|s| s.to_array()).collect());
+    let stats = sppm.stats.clone();
+    Ok(RenderOutput { image, stats, errors: progress.errors, seconds, interrupted, passes, pass_sums })
+}
+
+/// The error row, progress bar, partial image and checkpoint due after an iteration.
+fn after_iteration(sppm: &Sppm, monitor: &Monitor, plan: &Plan, progress: &mut Progress) {
+    let seconds = progress.seconds();
+    if let Some(r) = &monitor.reference {
+        let img = sppm.image();
+        let refpx = crop_reference(r, sppm.scene.film.pixel_bounds);
+        let mse = metrics::mse(&img, &refpx);
+        progress.errors.push(ErrorRow {
+            iteration: sppm.iteration,
+            seconds,
+            photons: sppm.stats.photons.traced,
+            mse,
+            rmse: mse.sqrt(),
+            relmse: metrics::relmse(&img, &refpx),
+        });
+    }
+    if monitor.progress {
+        progress_bar(sppm.passes_done(), plan.range.len() as u32, seconds);
+    }
+    if let Some(path) = &monitor.partial_images
+        && sppm.passes_done().is_power_of_two()
+        && let image = image(sppm, plan.photons, seconds)
+        && let Err(e) = check_finite(&image)
+            .map_err(|e| e.to_string())
+            .and_then(|()| write_image(path, &image).map_err(|e| e.to_string()))
+        && !monitor.quiet
+    {
+        eprintln!("\n{}: warning: cannot write the partial image ({e}); rendering goes on", path.display());
+    }
+    if let Some(t) = &monitor.checkpoint {
+        let due = match t.every {
+            Every::Iterations(n) => sppm.iteration.is_multiple_of(n),
+            Every::Seconds(s) => progress.saved.1.elapsed().as_secs_f64() >= s,
         };
-        if settings.progress {
-            eprintln!();
+        if due {
+            save(sppm, t, progress, monitor.quiet);
         }
-        if let Some(t) = &settings.checkpoint
-            && progress.saved.0 != sppm.iteration
+    }
+}
+
+/// Fails when a reference image's size fits neither the film nor its crop.
+fn check_reference(scene: &RenderScene, monitor: &Monitor) -> Result<(), RenderError> {
+    let film = &scene.film;
+    let [x0, x1, y0, y1] = film.pixel_bounds;
+    let render = ((x1 - x0) as usize, (y1 - y0) as usize);
+    match &monitor.reference {
+        Some(r)
+            if (r.width, r.height) != render
+                && (r.width, r.height) != (film.x_resolution as usize, film.y_resolution as usize) =>
         {
-            save(&sppm, t, &mut progress, settings.quiet);
+            Err(RenderError::ReferenceSize { reference: (r.width, r.height), render })
         }
-        let seconds = progress.seconds();
-        let image = self.image(&sppm, plan.photons, seconds);
-        check_finite(&image)?;
-        let passes = PassSet::from_range(sppm.first_pass()..sppm.iteration);
-        let pass_sums = plan.passes.is_independent().then(|| sppm.pass_sums().iter().map(|s| s.to_array()).collect());
-        let stats = sppm.stats.clone();
-        Ok(RenderOutput { image, stats, errors: progress.errors, seconds, interrupted, passes, pass_sums })
+        _ => Ok(()),
     }
+}
 
-    /// The error row, progress bar, partial image and checkpoint due after an iteration.
-    fn after_iteration(&self, sppm: &Sppm, settings: &RenderSettings, plan: &Plan, progress: &mut Progress) {
-        let seconds = progress.seconds();
-        if let Some(r) = &settings.reference {
-            let img = sppm.image();
-            let refpx = crop_reference(r, self.film.pixel_bounds);
-            let mse = metrics::mse(&img, &refpx);
-            progress.errors.push(ErrorRow {
-                iteration: sppm.iteration,
-                seconds,
-                photons: sppm.stats.photons.traced,
-                mse,
-                rmse: mse.sqrt(),
-                relmse: metrics::relmse(&img, &refpx),
-            });
-        }
-        if settings.progress {
-            progress_bar(sppm.passes_done(), plan.range.len() as u32, seconds);
-        }
-        if let Some(path) = &settings.partial_images
-            && sppm.passes_done().is_power_of_two()
-            && let image = self.image(sppm, plan.photons, seconds)
-            && let Err(e) = check_finite(&image).and_then(|()| crate::imageio::write_image(path, &image))
-            && !settings.quiet
-        {
-            eprintln!("\n{}: warning: cannot write the partial image ({e}); rendering goes on", path.display());
-        }
-        if let Some(t) = &settings.checkpoint {
-            let due = match t.every {
-                Every::Iterations(n) => sppm.iteration.is_multiple_of(n),
-                Every::Seconds(s) => progress.saved.1.elapsed().as_secs_f64() >= s,
-            };
-            if due {
-                save(sppm, t, progress, settings.quiet);
-            }
-        }
-    }
-
-    /// Fails when a reference image's size fits neither the film nor its crop.
-    fn check_reference(&self, settings: &RenderSettings) -> Result<(), String> {
-        let [x0, x1, y0, y1] = self.film.pixel_bounds;
-        let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
-        match &settings.reference {
-            Some(r)
-                if (r.width, r.height) != (w, h)
-                    && (r.width, r.height) != (self.film.x_resolution as usize, self.film.y_resolution as usize) =>
-            {
-                Err(format!("the reference image is {}x{}, the render {w}x{h}", r.width, r.height))
-            }
-            _ => Ok(()),
-        }
-    }
-
-    /// The current estimate as an image with the render's metadata.
-    fn image(&self, sppm: &Sppm, photons: u64, seconds: f64) -> RgbImage {
-        let [x0, x1, y0, y1] = self.film.pixel_bounds;
-        RgbImage {
-            width: (x1 - x0) as usize,
-            height: (y1 - y0) as usize,
-            pixels: sppm.image(),
-            origin: (x0 as i32, y0 as i32),
-            full: (self.film.x_resolution as usize, self.film.y_resolution as usize),
-            meta: ImageMeta {
-                render_time_seconds: Some(seconds as f32),
-                samples_per_pixel: Some(sppm.passes_done() as i32),
-                photons_per_iteration: Some(photons as i64),
-                world_to_camera: Some(self.world_to_camera),
-                software: Some(format!("pbrt-sppm {}", env!("CARGO_PKG_VERSION"))),
-            },
-        }
+/// The current estimate as an image with the render's metadata.
+fn image(sppm: &Sppm, photons: u64, seconds: f64) -> RgbImage {
+    let scene = sppm.scene;
+    let [x0, x1, y0, y1] = scene.film.pixel_bounds;
+    RgbImage {
+        width: (x1 - x0) as usize,
+        height: (y1 - y0) as usize,
+        pixels: sppm.image(),
+        origin: (x0 as i32, y0 as i32),
+        full: (scene.film.x_resolution as usize, scene.film.y_resolution as usize),
+        meta: ImageMeta {
+            render_time_seconds: Some(seconds as f32),
+            samples_per_pixel: Some(sppm.passes_done() as i32),
+            photons_per_iteration: Some(photons as i64),
+            world_to_camera: Some(scene.world_to_camera),
+            software: Some(format!("pbrt-sppm {}", env!("CARGO_PKG_VERSION"))),
+        },
     }
 }
 
@@ -316,15 +328,12 @@ fn save(sppm: &Sppm, target: &CheckpointTarget, progress: &mut Progress, quiet: 
 
 /// Refuses to write an image with a value f32 cannot hold (no Inf or NaN is ever
 /// written): the scene's radiance times the Film's `scale` passed 3.4e38.
-// DEVIATION(pbrt): robustness. pbrt writes such pixels as Inf.
-fn check_finite(image: &RgbImage) -> Result<(), String> {
+fn check_finite(image: &RgbImage) -> Result<(), RenderError> {
     match image.pixels.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-        Some(i) => Err(format!(
-            "pixel ({}, {}) is {:?}, beyond the range of 32-bit floats: lower the lights or the Film's \"scale\"",
-            image.origin.0 + (i % image.width) as i32,
-            image.origin.1 + (i / image.width) as i32,
-            image.pixels[i]
-        )),
+        Some(i) => Err(RenderError::NotFinite {
+            pixel: (image.origin.0 + (i % image.width) as i32, image.origin.1 + (i / image.width) as i32),
+            value: image.pixels[i],
+        }),
         None => Ok(()),
     }
 }

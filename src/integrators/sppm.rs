@@ -15,6 +15,7 @@
 //! image.
 
 use super::adaptive::{self, Chain, Deposit, PhotonCounts, PhotonSampling};
+use super::error::RenderError;
 use super::grid::{Grid, Grouped, Site};
 use super::passes::{self, PassMode};
 use crate::fixes::Fix;
@@ -85,7 +86,7 @@ pub struct Stats {
 
 /// The progressive state of a render.
 pub struct Sppm<'a> {
-    scene: &'a RenderScene,
+    pub(super) scene: &'a RenderScene,
     pub pixels: Vec<Pixel>,
     width: usize,
     origin: (u32, u32),
@@ -124,14 +125,15 @@ impl<'a> Sppm<'a> {
         radius: f32,
         seed: u64,
         (sampler, photon_sampling): (SamplerKind, PhotonSampling),
-    ) -> Result<Sppm<'a>, String> {
+    ) -> Result<Sppm<'a>, RenderError> {
         let [x0, x1, y0, y1] = scene.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
         let pixel = Pixel { radius: radius as f64, ld: DVec3::ZERO, tau: DVec3::ZERO, n: 0.0, vp: None };
         let mut pixels = Vec::new();
-        pixels.try_reserve_exact(w * h).map_err(|_| {
-            let bytes = (w * h).saturating_mul(std::mem::size_of::<Pixel>());
-            format!("not enough memory for the state of {w}x{h} pixels ({bytes} bytes)")
+        pixels.try_reserve_exact(w * h).map_err(|_| RenderError::OutOfMemory {
+            width: w,
+            height: h,
+            bytes: (w * h).saturating_mul(std::mem::size_of::<Pixel>()),
         })?;
         pixels.resize(w * h, pixel);
         Ok(Sppm {
@@ -155,11 +157,9 @@ impl<'a> Sppm<'a> {
 
     /// Renders independent passes from `first` on, or classic SPPM (`first` 0; the
     /// run's plan refuses a pass range for it).
-    pub fn with_passes(mut self, mode: PassMode, first: u32) -> Result<Sppm<'a>, String> {
+    pub fn with_passes(mut self, mode: PassMode, first: u32) -> Result<Sppm<'a>, RenderError> {
         if mode.is_independent() && self.chains.is_some() {
-            return Err("adaptive photon sampling carries its Markov chains from pass to pass, so it cannot \
-                        render independent passes; use --photon-sampling uniform"
-                .into());
+            return Err(RenderError::AdaptiveIndependent);
         }
         (self.passes, self.first, self.iteration) = (mode, first, first);
         Ok(self)
@@ -188,12 +188,12 @@ impl<'a> Sppm<'a> {
         pixels: &[PixelState],
         chains: Option<Vec<Chain>>,
         stats: Stats,
-    ) -> Result<(), String> {
+    ) -> Result<(), RenderError> {
         if pixels.len() != self.pixels.len() {
-            return Err(format!("the checkpoint holds {} pixels, the film {}", pixels.len(), self.pixels.len()));
+            return Err(RenderError::CheckpointPixels { saved: pixels.len(), film: self.pixels.len() });
         }
         if chains.is_some() != self.chains.is_some() {
-            return Err("the checkpoint's photon sampling differs from this run's".into());
+            return Err(RenderError::CheckpointSampling);
         }
         for (p, s) in self.pixels.iter_mut().zip(pixels) {
             (p.radius, p.n, p.ld, p.tau) = (s.radius, s.n, DVec3::from(s.ld), DVec3::from(s.tau));

@@ -20,7 +20,7 @@ use super::error::Diagnostic;
 use super::lexer::{Lexer, TokenKind, decode_string, is_space};
 use super::params::{Param, ParamList, ParamType, Values};
 use super::source::{FileId, SourceMap, Span};
-use crate::limits::Limits;
+use crate::limits::{Files, Limits};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -153,14 +153,15 @@ pub struct StatementReader {
     pub warnings: Vec<Diagnostic>,
     /// The first version-specific construct seen, if any.
     pub evidence: Option<(Syntax, Span, String)>,
-    pub limits: Limits,
+    /// What the load may read, and the list of what it has read.
+    pub files: Files,
     /// Included files served from memory by name (see `LoadOptions::in_memory`).
     pub in_memory: std::collections::HashMap<String, Arc<[u8]>>,
 }
 
 /// Reads a scene file's bytes within the limits, decompressing gzip and rejecting UTF-16.
-pub fn read_scene_bytes(path: &Path, limits: &Limits) -> Result<Vec<u8>, String> {
-    let mut bytes = crate::limits::read_file(path, limits)?;
+pub fn read_scene_bytes(path: &Path, files: &Files) -> Result<Vec<u8>, String> {
+    let mut bytes = files.read(path)?;
     if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
         return Err(format!("\"{}\" is UTF-16; pbrt scene files must be ASCII or UTF-8", path.display()));
     }
@@ -176,7 +177,7 @@ const V4_ONLY: [&str; 4] = ["Option", "ColorSpace", "Attribute", "Import"];
 
 impl StatementReader {
     /// Starts reading `text` as the top-level file `path` (the base for relative paths).
-    pub fn new(path: &Path, text: Vec<u8>, limits: Limits) -> Result<StatementReader, String> {
+    pub fn new(path: &Path, text: Vec<u8>, files: Files) -> Result<StatementReader, String> {
         let mut sources = SourceMap::default();
         let file = sources.add(path, path.display().to_string(), text)?;
         let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -188,7 +189,7 @@ impl StatementReader {
             peeked: None,
             warnings: Vec::new(),
             evidence: None,
-            limits,
+            files,
             in_memory: Default::default(),
         })
     }
@@ -452,7 +453,7 @@ impl StatementReader {
     }
 
     fn push_file(&mut self, name: &str, span: Span, kind: FrameKind) -> Result<(), Diagnostic> {
-        let depth = self.limits.include_depth;
+        let depth = self.files.limits.include_depth;
         if self.stack.len() as u64 > depth {
             let what = format!("Include/Import nesting ({} files deep; an Include cycle?)", self.stack.len());
             return Err(Diagnostic::error(span, Limits::over(what, "include-depth", depth)));
@@ -460,7 +461,7 @@ impl StatementReader {
         let path = self.resolve_path(name);
         let bytes = match self.in_memory.get(name) {
             Some(b) => b.to_vec(),
-            None => read_scene_bytes(&path, &self.limits).map_err(|e| Diagnostic::error(span, e))?,
+            None => read_scene_bytes(&path, &self.files).map_err(|e| Diagnostic::error(span, e))?,
         };
         let file =
             self.sources.add(&path, path.display().to_string(), bytes).map_err(|e| Diagnostic::error(span, e))?;

@@ -28,7 +28,7 @@ use super::shapes::{self as shape_build, AlphaParams, Built};
 use super::textures::TextureDesc;
 use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped, mesh, ply};
 use crate::imageio::RgbImage;
-use crate::limits::Limits;
+use crate::limits::{Files, Limits};
 use crate::parser::Syntax;
 use crate::parser::error::{Diagnostic, LoadError, Located};
 use crate::parser::params::ParamList;
@@ -55,7 +55,8 @@ pub struct LoadOptions {
 
 /// Reads, parses and builds a scene file.
 pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
-    let bytes = read_scene_bytes(path, &opts.limits).map_err(|e| {
+    let files = Files::new(opts.limits);
+    let bytes = read_scene_bytes(path, &files).map_err(|e| {
         // A file that exists but cannot be used (UTF-16, corrupt gzip, too large) is
         // blamed at its start; a missing one has no line to point at.
         let name = path.display().to_string();
@@ -64,14 +65,20 @@ pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<SceneDescription, L
             false => LoadError::in_file(name, e),
         }
     })?;
-    load_scene_from_bytes(path, bytes, opts)
+    load(path, bytes, opts, files)
 }
 
 /// As [`load_scene`], with the top-level file's bytes given (its path still anchors
-/// relative file names).
+/// relative file names, and names it in the list of files read).
 pub fn load_scene_from_bytes(path: &Path, bytes: Vec<u8>, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
-    let mut reader = StatementReader::new(path, bytes, opts.limits)
-        .map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
+    let files = Files::new(opts.limits);
+    files.note(path, &bytes);
+    load(path, bytes, opts, files)
+}
+
+fn load(path: &Path, bytes: Vec<u8>, opts: &LoadOptions, files: Files) -> Result<SceneDescription, LoadError> {
+    let mut reader =
+        StatementReader::new(path, bytes, files).map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
     reader.in_memory = opts.in_memory.clone();
     let mut b = Builder::new(reader, opts.clone());
     match b.run() {
@@ -737,7 +744,7 @@ impl Builder {
             _ => ply::Quads::Patches,
         };
         let mut warn = Vec::new();
-        let built = shape_build::build(&s.entity.name, p, at, &resolve, quads, &self.reader.limits, &mut warn);
+        let built = shape_build::build(&s.entity.name, p, at, &resolve, quads, &self.reader.files, &mut warn);
         self.warnings.append(&mut warn);
         let Some(built) = built? else {
             let what = format!("Shape \"{}\"", s.entity.name);
@@ -987,8 +994,8 @@ impl Builder {
             shapes: std::mem::take(&mut self.shapes),
             objects,
             instances,
-            meshes: std::mem::take(&mut self.meshes),
-            patches: std::mem::take(&mut self.patches),
+            meshes: std::mem::take(&mut self.meshes).into_iter().map(Arc::new).collect(),
+            patches: std::mem::take(&mut self.patches).into_iter().map(Arc::new).collect(),
             lights,
             area_lights,
             materials: std::mem::take(&mut self.built_materials),
@@ -1001,6 +1008,7 @@ impl Builder {
             pbrt_bugs: bugs::located(&bugs, self.opts.fixes, sources),
             fixes: self.opts.fixes,
             limits: self.opts.limits,
+            inputs: self.reader.files.list(),
         })
     }
 

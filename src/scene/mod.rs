@@ -150,8 +150,10 @@ pub struct SceneDescription {
     pub shapes: Vec<ShapeDesc>,
     pub objects: Vec<ObjectDesc>,
     pub instances: Vec<InstanceDesc>,
-    pub meshes: Vec<TriangleMesh>,
-    pub patches: Vec<PatchMesh>,
+    /// Shared with the render scene, which reads them and keeps its own reordered
+    /// copies of the triangle meshes.
+    pub meshes: Vec<std::sync::Arc<TriangleMesh>>,
+    pub patches: Vec<std::sync::Arc<PatchMesh>>,
     pub lights: Vec<LightDesc>,
     pub area_lights: Vec<AreaLightDesc>,
     pub materials: Vec<MaterialDesc>,
@@ -169,6 +171,9 @@ pub struct SceneDescription {
     pub fixes: crate::fixes::Fixes,
     /// The limits the scene was loaded under (the renderer checks its overrides too).
     pub limits: crate::limits::Limits,
+    /// Every file the scene was made from (the top-level file, Includes, meshes,
+    /// images, SPD files), sorted by path: what a checkpoint's fingerprint hashes.
+    pub inputs: Vec<crate::limits::InputFile>,
 }
 
 /// A shape placed in the world: instances expanded, with world-from-object.

@@ -4,9 +4,9 @@
 
 use crate::shapes::TriangleMesh;
 
-pub fn load(path: &std::path::Path, limits: &crate::limits::Limits) -> Result<TriangleMesh, String> {
+pub fn load(path: &std::path::Path, files: &crate::limits::Files) -> Result<TriangleMesh, String> {
     let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
-    let bytes = crate::limits::read_file(path, limits)?;
+    let bytes = files.read(path)?;
     // Materials (.mtl) are not used: the scene gives the material.
     let (models, _materials) = tobj::load_obj_buf(&mut &bytes[..], &opts, |_| Ok(Default::default()))
         .map_err(|e| format!("cannot read OBJ \"{}\": {e}", path.display()))?;

@@ -13,7 +13,6 @@
 //!
 //! Errors name the element: `face 12 has 5 vertices (pbrt reads triangles and quads)`.
 
-use crate::limits::Limits;
 use crate::shapes::{PatchMesh, TriangleMesh};
 use ply_rs::parser::Parser;
 use ply_rs::ply::{
@@ -64,8 +63,8 @@ pub enum Quads {
 }
 
 /// Loads a PLY file. Errors are plain messages; the caller adds the location.
-pub fn load(path: &std::path::Path, quads: Quads, limits: &Limits) -> Result<PlyMesh, String> {
-    parse(&crate::limits::read_file(path, limits)?, quads)
+pub fn load(path: &std::path::Path, quads: Quads, files: &crate::limits::Files) -> Result<PlyMesh, String> {
+    parse(&files.read(path)?, quads)
 }
 
 /// Parses a PLY file's bytes (already decompressed).

@@ -9,7 +9,7 @@
 //! ```
 
 use super::{mesh, obj, ply};
-use crate::limits::Limits;
+use crate::limits::{Files, Limits};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList, ParamType};
 use crate::parser::source::Span;
@@ -46,7 +46,7 @@ pub fn build(
     span: Span,
     resolve: &dyn Fn(&str) -> PathBuf,
     quads: ply::Quads,
-    limits: &Limits,
+    files: &Files,
     warn: &mut Vec<Diagnostic>,
 ) -> Res<Option<Built>> {
     let q = |q| Ok(Some(Built::Quadric(q)));
@@ -100,8 +100,8 @@ pub fn build(
             let m = mesh::patches_from_params(p, span, warn)?;
             Ok(Some(Built::Patches { mesh: m, kind: "bilinearmesh", filename: None }))
         }
-        "loopsubdiv" => loop_subdiv(p, span, limits, warn).map(Some),
-        "plymesh" | "objmesh" => file_mesh(ty, p, span, resolve, quads, limits, warn).map(Some),
+        "loopsubdiv" => loop_subdiv(p, span, &files.limits, warn).map(Some),
+        "plymesh" | "objmesh" => file_mesh(ty, p, span, resolve, quads, files, warn).map(Some),
         _ => Ok(None),
     }
 }
@@ -137,7 +137,7 @@ fn file_mesh(
     span: Span,
     resolve: &dyn Fn(&str) -> PathBuf,
     quads: ply::Quads,
-    limits: &Limits,
+    files: &Files,
     warn: &mut Vec<Diagnostic>,
 ) -> Res<Built> {
     let name =
@@ -150,10 +150,10 @@ fn file_mesh(
     }
     p.mark_known(&["edgelength"]);
     if ty == "objmesh" {
-        let mesh = obj::load(&path, limits).map_err(|e| Diagnostic::error(at, e))?;
+        let mesh = obj::load(&path, files).map_err(|e| Diagnostic::error(at, e))?;
         return Ok(Built::Mesh { mesh, kind: "objmesh", filename: Some(name) });
     }
-    let m = ply::load(&path, quads, limits).map_err(|e| {
+    let m = ply::load(&path, quads, files).map_err(|e| {
         // Read errors name the file already; format errors get its name first.
         Diagnostic::error(at, if e.starts_with("cannot read") { e } else { format!("{name}: {e}") })
     })?;

@@ -83,7 +83,7 @@ pub struct SpectrumContext<'a> {
     pub base_dir: &'a Path,
     /// v4 blackbody spectra are normalised to luminance 1 where lights use them.
     pub normalize_blackbody: bool,
-    pub limits: &'a crate::limits::Limits,
+    pub files: &'a crate::limits::Files,
 }
 
 /// A spectrum (`rgb`, `xyz`, `blackbody`, `spectrum`) or texture; every component must
@@ -167,7 +167,9 @@ fn named_or_file(p: &Param, name: &str, ctx: &SpectrumContext) -> Res<Rgb> {
     }
     let path = crate::parser::stmt::resolve_relative(ctx.base_dir, name);
     let at = |m: String| Diagnostic::error(p.value_span, m);
-    let bytes = crate::limits::read_file(&path, ctx.limits)
+    let bytes = ctx
+        .files
+        .read(&path)
         .map_err(|e| at(format!("\"{name}\" is neither a named spectrum nor a readable SPD file: {e}")))?;
     let text = String::from_utf8_lossy(&bytes);
     let mut values = Vec::new();

@@ -15,6 +15,7 @@ use super::sampling::{QuadricSampler, ShapeSample, area_to_solid_angle};
 use super::triangle::{MeshFlags, TriangleHit, TriangleMesh, WatertightRay, watertight};
 use crate::interaction::SurfaceInteraction;
 use crate::math::{Bounds3, Point3, Ray, Vector3};
+use std::sync::Arc;
 
 /// A quadric's intersection cost in triangle tests, for SAH: its root solve with
 /// error bounds and its partial-shape checks take several times a triangle's.
@@ -26,8 +27,8 @@ pub const PATCH_COST: f32 = 4.0;
 #[derive(Default)]
 pub struct ShapeSet {
     pub quadrics: Vec<QuadricShape>,
-    pub meshes: Vec<TriangleMesh>,
-    pub patches: Vec<PatchMesh>,
+    pub meshes: Vec<Arc<TriangleMesh>>,
+    pub patches: Vec<Arc<PatchMesh>>,
 }
 
 /// One shape of a BVH: an index into its family's list, and the orientation flags of

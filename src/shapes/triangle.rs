@@ -76,7 +76,7 @@ impl TriangleMesh {
     /// Puts triangle `order[k]` at position k and renumbers vertices by first use, so
     /// triangles that are near in a BVH are near in memory (their vertices too).
     /// Per-vertex arrays follow; vertices no triangle uses are dropped.
-    pub fn reorder(&mut self, order: &[u32]) {
+    pub fn reordered(&self, order: &[u32]) -> TriangleMesh {
         let mut remap = vec![u32::MAX; self.p.len()];
         let mut old_of_new: Vec<u32> = Vec::with_capacity(self.p.len());
         let mut indices = Vec::with_capacity(3 * order.len());
@@ -92,12 +92,14 @@ impl TriangleMesh {
         fn gather<T: Copy>(v: &[T], at: &[u32]) -> Vec<T> {
             at.iter().map(|&i| v[i as usize]).collect()
         }
-        self.indices = indices;
-        self.p = gather(&self.p, &old_of_new);
-        self.n = self.n.as_ref().map(|n| gather(n, &old_of_new));
-        self.s = self.s.as_ref().map(|s| gather(s, &old_of_new));
-        self.uv = self.uv.as_ref().map(|uv| gather(uv, &old_of_new));
-        self.face_indices = self.face_indices.as_ref().map(|f| gather(f, order));
+        TriangleMesh {
+            indices,
+            p: gather(&self.p, &old_of_new),
+            n: self.n.as_ref().map(|n| gather(n, &old_of_new)),
+            s: self.s.as_ref().map(|s| gather(s, &old_of_new)),
+            uv: self.uv.as_ref().map(|uv| gather(uv, &old_of_new)),
+            face_indices: self.face_indices.as_ref().map(|f| gather(f, order)),
+        }
     }
 
     /// Heap bytes held by this mesh.

@@ -3,14 +3,14 @@
 
 use crate::common::scene;
 use pbrt_sppm::camera::Camera;
+use pbrt_sppm::cli::trace::Tracer;
 use pbrt_sppm::imageio::{ImageMeta, RgbImage, read_image, write_image};
-use pbrt_sppm::trace::Tracer;
 
 /// Raster pixels (x, y) whose centre ray hits something, for a scene text.
 fn hit_pixels(text: &str, res: usize) -> Vec<(usize, usize)> {
     let s = scene(text);
     let camera = Camera::new(&s.camera, &s.film);
-    let tracer = Tracer::new(s);
+    let tracer = Tracer::new(&s);
     let mut hits = Vec::new();
     for y in 0..res {
         for x in 0..res {
@@ -60,7 +60,7 @@ fn fov_spans_the_shorter_axis_and_orthographic_uses_the_screen_window() {
     assert!(hits.is_empty());
     let s = scene(text);
     let camera = Camera::new(&s.camera, &s.film);
-    let g = Tracer::new(s);
+    let g = Tracer::new(&s);
     let through = |x: f32, y: f32| g.geometry.intersect(&camera.generate_ray([x, y], [0.5, 0.5])).is_some();
     assert!(through(64.0, 1.0) && through(64.0, 63.0), "top and bottom rows see the sphere");
     assert!(!through(64.0, -0.5) || !through(0.5, 32.0), "beyond the window it does not");

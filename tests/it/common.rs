@@ -23,7 +23,7 @@ pub fn scene(text: &str) -> SceneDescription {
 
 /// The `check --json --shapes` report of scene text.
 pub fn report(text: &str) -> Value {
-    pbrt_sppm::check::report(&scene(text), true)
+    pbrt_sppm::cli::check::report(&scene(text), true)
 }
 
 /// The `shapes` array of the report of a world block.

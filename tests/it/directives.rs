@@ -237,7 +237,7 @@ fn objects_share_geometry_and_compose_transforms() {
     );
     assert_eq!(s.meshes.len(), 1, "geometry is never copied");
     assert_eq!(s.instances.len(), 2);
-    let r = pbrt_sppm::check::report(&s, true);
+    let r = pbrt_sppm::cli::check::report(&s, true);
     let w = matrix(&r["shapes"][1]["object_to_world"]);
     assert_eq!((w[3], w[7]), (5.0, 1.0), "instance · definition");
     assert_eq!(r["shapes"][1]["bounds"], serde_json::json!([[5.0, 1.0, 0.0], [6.0, 2.0, 0.0]]));
@@ -264,7 +264,7 @@ fn lights_and_area_lights() {
     );
     let unused = s.warnings.iter().find(|w| w.message.contains("bogus")).expect("unused-parameter warning");
     assert_eq!((unused.line, unused.column), (2, 45));
-    assert_eq!(pbrt_sppm::check::report(&s, false)["counts"]["lights"], 3);
+    assert_eq!(pbrt_sppm::cli::check::report(&s, false)["counts"]["lights"], 3);
 }
 
 #[test]
@@ -321,7 +321,7 @@ fn textures_are_built_only_when_a_used_material_needs_them() {
 #[test]
 fn include_continues_a_parameter_list_across_the_file_end() {
     let s = load_file(&root().join("tests/data/good/continue-main.pbrt")).expect("loads");
-    let r = pbrt_sppm::check::report(&s, true);
+    let r = pbrt_sppm::cli::check::report(&s, true);
     let p = &r["shapes"][0]["params"];
     assert_eq!((num(&p["radius"]), num(&p["zmax"])), (3.0, 1.0));
     assert_eq!(matrix(&r["shapes"][0]["object_to_world"])[11], 1.0);
@@ -331,7 +331,7 @@ fn include_continues_a_parameter_list_across_the_file_end() {
 #[test]
 fn include_paths_are_relative_to_the_top_level_file() {
     let s = load_file(&root().join("tests/data/good/nested-main.pbrt")).expect("loads");
-    let r = pbrt_sppm::check::report(&s, true);
+    let r = pbrt_sppm::cli::check::report(&s, true);
     assert_eq!(num(&r["shapes"][0]["params"]["radius"]), 2.0);
 }
 
@@ -403,7 +403,7 @@ fn v3_and_v4_spellings_of_one_scene_give_the_same_description() {
     let load = |v: &str| {
         let s = load_file(&root().join(format!("pbrt-scenes/{v}/cornell-glass.pbrt"))).expect("loads");
         assert!(s.warnings.is_empty(), "{v}: {:?}", s.warnings);
-        pbrt_sppm::check::report(&s, true)
+        pbrt_sppm::cli::check::report(&s, true)
     };
     let (v3, v4) = (load("v3"), load("v4"));
     assert_eq!((v3["syntax"].as_str(), v4["syntax"].as_str()), (Some("v3"), Some("v4")));

@@ -22,7 +22,8 @@ fn mean(px: &[[f32; 3]]) -> f64 {
 }
 
 fn rendered_mean(text: &str, fixes: Fixes) -> f64 {
-    let out = RenderScene::new(scene_with(text, fixes)).render(&RenderSettings::default()).unwrap();
+    let out = pbrt_sppm::integrators::render(&RenderScene::new(&scene_with(text, fixes)), &RenderSettings::default())
+        .unwrap();
     mean(&out.image.pixels)
 }
 
@@ -72,7 +73,7 @@ fn check_names_each_bug_at_the_statement_that_triggers_it() {
 fn check_says_which_bugs_the_run_fixes() {
     let text = "WorldBegin\nMaterial \"plastic\"\nShape \"sphere\"\nWorldEnd\n";
     let s = scene_with(text, Fixes::NONE.with(Fix::PlasticFresnel));
-    let r = pbrt_sppm::check::report(&s, false);
+    let r = pbrt_sppm::cli::check::report(&s, false);
     let b = r["pbrt_bugs"].as_array().unwrap();
     let fixed: Vec<(&str, bool)> =
         b.iter().map(|b| (b["name"].as_str().unwrap(), b["fixed"].as_bool().unwrap())).collect();
@@ -146,7 +147,7 @@ fn power_on_a_mesh_is_per_triangle_in_pbrt_v4_and_whole_when_fixed() {
     let text = "WorldBegin AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"float power\" 20 \
                 Shape \"trianglemesh\" \"point3 P\" [0 0 0 3 0 0 3 1 0 0 2 0] \"integer indices\" [0 1 2 0 2 3]";
     let emitted = |fixes: Fixes| {
-        let rs = RenderScene::new(scene_with(text, fixes));
+        let rs = RenderScene::new(&scene_with(text, fixes));
         let l: Vec<f32> = rs.lights.iter().map(|l| if let Light::Area { l, .. } = l { l.x } else { 0.0 }).collect();
         (rs.lights.iter().map(|l| l.power(rs.world)).sum::<f64>(), l)
     };
@@ -189,7 +190,7 @@ fn photons_from_behind_shrink_the_radius_unless_fixed() {
                 Material \"diffuse\" Shape \"bilinearmesh\" \"point3 P\" [-2 -2 0 2 -2 0 -2 2 0 2 2 0] \
                 Shape \"bilinearmesh\" \"point3 P\" [-9 -9 2 9 -9 2 -9 9 2 9 9 2]";
     let radii = |fixes: Fixes| {
-        let rs = RenderScene::new(scene_with(text, fixes));
+        let rs = RenderScene::new(&scene_with(text, fixes));
         let mut sppm = Sppm::new(&rs, 4, 20_000, 0.5, 0, Default::default()).unwrap();
         (0..4).for_each(|_| sppm.iterate());
         assert_eq!(mean(&sppm.image()), 0.0);

@@ -1,6 +1,6 @@
 //! Replays every input that ever crashed a fuzz target (`tools/fuzz/regressions/<target>`)
 //! and the committed seeds through the same entry points the fuzz targets call
-//! (`pbrt_sppm::fuzzing`): each must return without panicking.
+//! (`pbrt_sppm::cli::fuzzing`): each must return without panicking.
 
 use crate::common::root;
 
@@ -22,7 +22,7 @@ fn replay(target: &str, dirs: &[&str], run: fn(&[u8])) -> usize {
 
 #[test]
 fn every_input_that_crashed_a_fuzz_target_is_answered() {
-    use pbrt_sppm::fuzzing;
+    use pbrt_sppm::cli::fuzzing;
     let scenes = ["pbrt-scenes/v3", "pbrt-scenes/v4", "tests/data/good", "tests/data/bad"];
     let with = |t: &str, extra: &[&'static str]| -> Vec<String> {
         let mut v: Vec<String> = extra.iter().map(|s| s.to_string()).collect();

@@ -404,7 +404,7 @@ fn approximations_are_listed_and_the_readme_names_every_kind() {
     let how: Vec<&str> = s.approximated.iter().map(|a| a.how.as_str()).collect();
     use pbrt_sppm::scene::Approx;
     assert_eq!(how, [Approx::CoatInBlend.how(), Approx::UnsupportedTexture.how(), Approx::UnsupportedMaterial.how()]);
-    let json = pbrt_sppm::check::report(&s, false);
+    let json = pbrt_sppm::cli::check::report(&s, false);
     assert_eq!(json["approximated"].as_array().map(Vec::len), Some(3));
     assert_eq!(json["approximated"][0]["line"], 1);
     let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
@@ -425,13 +425,13 @@ fn zero_area_triangles_are_dropped_and_the_rest_keep_their_file_numbers() {
         "{:?}",
         s.warnings
     );
-    let tracer = pbrt_sppm::trace::Tracer::new(s);
+    let tracer = pbrt_sppm::cli::trace::Tracer::new(&s);
     let hit = |o: &str| -> serde_json::Value {
         let line = tracer.line(&format!("{o} 0 0 1")).unwrap().unwrap();
         serde_json::from_str(&line.to_string()).unwrap()
     };
     assert_eq!(hit("5.2 0.2 -1")["triangle"], 2, "file numbers survive the drop");
     assert_eq!(hit("0.2 0.2 -1")["triangle"], 0);
-    let rs = pbrt_sppm::render::RenderScene::new(crate::common::scene(text));
+    let rs = pbrt_sppm::render::RenderScene::new(&crate::common::scene(text));
     assert_eq!(rs.lights.len(), 2, "one light per kept triangle");
 }

@@ -98,6 +98,6 @@ fn many_instances_cost_about_one_copy() {
     // over (reading buffers), the 1.5 MB scene text and 25,000 transforms.
     let budget = 4 * one_copy + 3 * scene.len() as isize + 25_000 * 512;
     assert!(peak < budget, "peak {peak} bytes while loading; budget {budget}");
-    let counts = &pbrt_sppm::check::report(&s, false)["counts"];
+    let counts = &pbrt_sppm::cli::check::report(&s, false)["counts"];
     assert_eq!(counts["triangles"], 30_258u64 * 25_000);
 }

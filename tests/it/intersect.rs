@@ -5,12 +5,12 @@
 
 use crate::common::{root, scene};
 use glam::{DMat3, DMat4, DVec3, Vec3};
+use pbrt_sppm::cli::trace::Tracer;
 use pbrt_sppm::math::{Normal3, Point3, Ray, Vector3};
 use pbrt_sppm::shapes::{
     Cone, Cylinder, Disk, Hyperboloid, MeshFlags, Paraboloid, Quadric, QuadricShape, Sphere, TriangleMesh,
     WatertightRay, edge_candidates,
 };
-use pbrt_sppm::trace::Tracer;
 #[cfg(target_arch = "x86_64")]
 use pbrt_sppm::{accel::Avx, shapes::edge_candidates8};
 use rayon::prelude::*;
@@ -340,11 +340,11 @@ fn sphere_mesh(nt: usize, np: usize, mut r: impl FnMut() -> f64) -> String {
 #[test]
 fn a_large_mesh_fits_the_storage_budgets() {
     let mut rng = Rng::new(404);
-    let mut s = scene(&sphere_mesh(160, 160, || 1.0 + 0.01 * rng.uniform()));
+    let s = scene(&sphere_mesh(160, 160, || 1.0 + 0.01 * rng.uniform()));
     let triangles = s.meshes[0].triangle_count() as f64;
     assert!(triangles > 50_000.0);
     let mesh = s.meshes[0].heap_bytes() as f64 / triangles;
-    let g = pbrt_sppm::accel::Geometry::new(&mut s);
+    let g = pbrt_sppm::accel::Geometry::new(&s);
     let accel = g.accel_bytes() as f64 / triangles;
     // A closed genus-0 mesh has T/2 + 2 vertices of 12 bytes, and 12 bytes of
     // indices per triangle.
@@ -357,10 +357,10 @@ fn a_large_mesh_fits_the_storage_budgets() {
 #[test]
 fn closed_mesh_is_watertight() {
     let mut rng = Rng::new(12111);
-    let mut s = scene(&perturbed_sphere(&mut rng));
+    let s = scene(&perturbed_sphere(&mut rng));
     let verts: Vec<Vec3> = s.meshes[0].p.iter().map(|v| Vec3::from(*v)).collect();
     let tris: Vec<[u32; 3]> = s.meshes[0].indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-    let g = pbrt_sppm::accel::Geometry::new(&mut s);
+    let g = pbrt_sppm::accel::Geometry::new(&s);
     let mut escapes = 0;
     for i in 0..100_000u64 {
         let mut r = Rng::new(i);
@@ -466,11 +466,11 @@ fn mesh_traversal_finds_the_closest_hit_of_all_triangles() {
         if with_sphere {
             text += " AttributeBegin Translate 0.2 0 0 Shape \"sphere\" \"float radius\" 0.3 AttributeEnd";
         }
-        let mut s = scene(&text);
+        let s = scene(&text);
         let mesh = s.meshes[0].clone();
         let verts: Vec<Vec3> = mesh.p.iter().map(|v| Vec3::from(*v)).collect();
         let tris: Vec<[u32; 3]> = mesh.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-        let mut g = pbrt_sppm::accel::Geometry::new(&mut s);
+        let mut g = pbrt_sppm::accel::Geometry::new(&s);
         assert_eq!(g.shapes.quadrics.len(), with_sphere as usize);
         for ray in sphere_probe_rays(&verts, &tris, &mut rng) {
             let brute = (0..mesh.triangle_count())
@@ -594,17 +594,17 @@ fn mirrored_mesh_and_reverse_orientation_follow_pbrt() {
     let tri = "\"point3 P\" [0 0 0 1 0 0 0 1 0]";
     for (pre, want) in [("", 1.0), ("Scale -1 1 1", 1.0), ("ReverseOrientation", -1.0), ("Scale 1 1 -1", -1.0)] {
         let mut s = scene(&format!("WorldBegin {pre} Shape \"trianglemesh\" {tri}"));
-        let t = Tracer::new(std::mem::replace(&mut s, scene("WorldBegin")));
+        let t = Tracer::new(&std::mem::replace(&mut s, scene("WorldBegin")));
         let sign = if pre == "Scale -1 1 1" { -1.0 } else { 1.0 };
         let out = t.trace(&Ray::new(Point3::new(0.2 * sign, 0.2, 5.0), Vector3::new(0.0, 0.0, -1.0)));
         assert_eq!(out["n"][2].as_f64(), Some(want), "{pre}: {out}");
     }
     // With per-vertex N the normals decide the front; ReverseOrientation flips shading.
     let n = "\"normal N\" [0 0 -1 0 0 -1 0 0 -1]";
-    let t = Tracer::new(scene(&format!("WorldBegin Shape \"trianglemesh\" {tri} {n}")));
+    let t = Tracer::new(&scene(&format!("WorldBegin Shape \"trianglemesh\" {tri} {n}")));
     let out = t.trace(&Ray::new(Point3::new(0.2, 0.2, 5.0), Vector3::new(0.0, 0.0, -1.0)));
     assert_eq!((out["n"][2].as_f64(), out["ns"][2].as_f64()), (Some(-1.0), Some(-1.0)));
-    let t = Tracer::new(scene(&format!("WorldBegin ReverseOrientation Shape \"trianglemesh\" {tri} {n}")));
+    let t = Tracer::new(&scene(&format!("WorldBegin ReverseOrientation Shape \"trianglemesh\" {tri} {n}")));
     let out = t.trace(&Ray::new(Point3::new(0.2, 0.2, 5.0), Vector3::new(0.0, 0.0, -1.0)));
     assert_eq!((out["n"][2].as_f64(), out["ns"][2].as_f64()), (Some(1.0), Some(1.0)));
     let _ = Normal3::default();
@@ -613,7 +613,7 @@ fn mirrored_mesh_and_reverse_orientation_follow_pbrt() {
 #[test]
 fn trace_answers_match_hand_computed_hits() {
     let scene_path = root().join("tests/data/good/trace-scene.pbrt");
-    let t = Tracer::new(crate::common::load_file(&scene_path).expect("loads"));
+    let t = Tracer::new(&crate::common::load_file(&scene_path).expect("loads"));
     let lines = [
         // Unit sphere at (0,0,5): hit at z = 4 from the origin along +z, t in units of d = (0,0,2).
         "0 0 0 0 0 2",
@@ -695,7 +695,7 @@ fn reintersect_through_instances() {
         ));
         centers.push((m, [DVec3::ZERO, DVec3::new(2.5, 0.5, 0.5)]));
     }
-    let tracer = Tracer::new(scene(&text));
+    let tracer = Tracer::new(&scene(&text));
     let g = &tracer.geometry;
     let (mut hits, mut failures) = (0, 0);
     for (m, local_centers) in &centers {
@@ -759,7 +759,7 @@ fn trace_reports_file_triangle_numbers_after_reordering() {
         p.join(" "),
         idx.join(" ")
     );
-    let t = Tracer::new(scene(&text));
+    let t = Tracer::new(&scene(&text));
     for _ in 0..200 {
         let (x, y) = (rng.uniform() * n as f64, rng.uniform() * n as f64);
         // Which file triangle covers (x, y): its quad, and the half it lies in.
@@ -784,7 +784,7 @@ fn trace_meets_bilinear_patches_exactly() {
     );
     let mut rng = Rng::new(11);
     for text in [world, instanced] {
-        let t = Tracer::new(scene(&text));
+        let t = Tracer::new(&scene(&text));
         for _ in 0..200 {
             let (x, y) = (2.0 * rng.uniform(), rng.uniform());
             let out = t.trace(&Ray::new(Point3::new(x as f32, y as f32, 10.0), Vector3::new(0.0, 0.0, -1.0)));

@@ -4,9 +4,9 @@
 
 use crate::common::{root, scene};
 use glam::{DMat4, DVec3, Vec3};
-use pbrt_sppm::export::{Export, GeometryOut, LightOut, MaterialOut, mitsuba};
+use pbrt_sppm::cli::export::{Export, GeometryOut, LightOut, MaterialOut, mitsuba};
+use pbrt_sppm::cli::trace::Tracer;
 use pbrt_sppm::math::{Point3, Ray, Vector3};
-use pbrt_sppm::trace::Tracer;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -20,7 +20,7 @@ fn export_of(text: &str) -> (Export, Tracer) {
         s.fixes = pbrt_sppm::fixes::Fixes::all();
         s
     };
-    (mitsuba(&fixed(), "inline"), Tracer::new(fixed()))
+    (mitsuba(&fixed(), "inline"), Tracer::new(&fixed()))
 }
 
 fn matrix(row_major: &[f64; 16]) -> DMat4 {
@@ -101,7 +101,7 @@ fn front_faces(e: &Export) -> Vec<(u32, Vec3, Vec3, f32)> {
     out
 }
 
-fn local_faces(shapes: &[pbrt_sppm::export::ShapeOut]) -> Vec<(u32, Vec3, Vec3, f32)> {
+fn local_faces(shapes: &[pbrt_sppm::cli::export::ShapeOut]) -> Vec<(u32, Vec3, Vec3, f32)> {
     let mut out = Vec::new();
     for s in shapes {
         let i = s.shape_index;

@@ -21,7 +21,8 @@ pub fn assert_matches_pbrt(name: &str, bound: f64) {
 pub fn assert_matches_reference(name: &str, fixes: Fixes, reference: &str, bound: f64) {
     let mut scene = load_file(&root().join(format!("pbrt-scenes/verify/{name}.pbrt"))).expect("the scene loads");
     scene.fixes = fixes;
-    let ours = RenderScene::new(scene).render(&RenderSettings::default()).expect("renders").image;
+    let ours =
+        pbrt_sppm::integrators::render(&RenderScene::new(&scene), &RenderSettings::default()).expect("renders").image;
     let name = format!("{name} ({})", fixes.names());
     let reference = read_image(&root().join(format!("tests/data/pbrt-ref/{reference}.exr"))).expect("the reference");
     assert_eq!((ours.width, ours.height), (reference.width, reference.height));

@@ -15,7 +15,7 @@ fn mean(px: &[[f32; 3]]) -> f64 {
 }
 
 fn render(text: &str, settings: &RenderSettings) -> pbrt_sppm::integrators::RenderOutput {
-    RenderScene::new(scene(text)).render(settings).expect("renders")
+    pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), settings).expect("renders")
 }
 
 /// The camera sits at the centre of a unit sphere whose normals face inward.
@@ -79,7 +79,7 @@ fn floor_under_disk(setup: &str, fixes: pbrt_sppm::fixes::Fixes) -> f64 {
     );
     let mut s = scene(&text);
     s.fixes = fixes;
-    mean(&RenderScene::new(s).render(&RenderSettings::default()).unwrap().image.pixels)
+    mean(&pbrt_sppm::integrators::render(&RenderScene::new(&s), &RenderSettings::default()).unwrap().image.pixels)
 }
 
 #[test]
@@ -115,14 +115,14 @@ fn the_same_seed_gives_identical_pixels_for_any_thread_count() {
             RenderSettings { iterations: Some(2), photons: Some(5000), sampler, photon_sampling, ..Default::default() };
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let sc = RenderScene::new(
-            pbrt_sppm::scene::load_scene_from_bytes(
+            &pbrt_sppm::scene::load_scene_from_bytes(
                 &root().join("pbrt-scenes/v3/cornell-glass.pbrt"),
                 text.clone().into_bytes(),
                 &Default::default(),
             )
             .unwrap(),
         );
-        pool.install(|| sc.render(&s).unwrap().image.pixels)
+        pool.install(|| pbrt_sppm::integrators::render(&sc, &s).unwrap().image.pixels)
     };
     for sampler in [SamplerKind::Sobol, SamplerKind::Random] {
         let (one, two) = (run(1, sampler, PhotonSampling::Uniform), run(2, sampler, PhotonSampling::Uniform));
@@ -137,9 +137,8 @@ fn the_same_seed_gives_identical_pixels_for_any_thread_count() {
     assert_ne!(uniform, run(2, SamplerKind::Random, PhotonSampling::Uniform), "the samplers draw different numbers");
     assert_ne!(uniform, two, "adaptive photons are other photons");
     let s = RenderSettings { iterations: Some(2), photons: Some(5000), ..Default::default() };
-    let other_seed = RenderScene::new(scene(&text.replace("WorldBegin", "Option \"seed\" 5 WorldBegin")))
-        .render(&RenderSettings { seed: Some(5), ..s.clone() })
-        .unwrap();
+    let other = RenderScene::new(&scene(&text.replace("WorldBegin", "Option \"seed\" 5 WorldBegin")));
+    let other_seed = pbrt_sppm::integrators::render(&other, &RenderSettings { seed: Some(5), ..s.clone() }).unwrap();
     assert_ne!(uniform, other_seed.image.pixels, "another seed gives other samples");
 }
 
@@ -155,10 +154,10 @@ fn sobol_camera_paths_have_less_error_than_random_ones_at_equal_iterations() {
           Shape \"disk\" \"float radius\" 0.7 AttributeEnd \
         Material \"diffuse\" Shape \"sphere\" \"float radius\" 0.5 \
         Shape \"trianglemesh\" \"point3 P\" [-4 -0.5 -4  4 -0.5 -4  4 -0.5 4  -4 -0.5 4] \"integer indices\" [0 1 2 0 2 3]";
-    let sc = RenderScene::new(scene(text));
+    let sc = RenderScene::new(&scene(text));
     let render = |iterations, sampler, seed| {
         let s = RenderSettings { iterations: Some(iterations), seed: Some(seed), sampler, ..Default::default() };
-        sc.render(&s).expect("renders").image.pixels
+        pbrt_sppm::integrators::render(&sc, &s).expect("renders").image.pixels
     };
     let reference = render(1024, SamplerKind::Random, 99);
     let error = |sampler| (1..=3).map(|seed| relmse(&render(16, sampler, seed), &reference)).sum::<f64>();
@@ -173,7 +172,7 @@ fn sobol_camera_paths_have_less_error_than_random_ones_at_equal_iterations() {
 #[test]
 fn adaptive_photons_match_uniform_ones_with_less_error_where_few_photons_are_seen() {
     let text = std::fs::read_to_string(root().join("pbrt-scenes/v3/keyhole.pbrt")).expect("keyhole scene");
-    let sc = RenderScene::new(scene(&text.replace("[ 128 ]", "[ 24 ]")));
+    let sc = RenderScene::new(&scene(&text.replace("[ 128 ]", "[ 24 ]")));
     let render = |photon_sampling, iterations, photons, seed| {
         let s = RenderSettings {
             iterations: Some(iterations),
@@ -182,7 +181,7 @@ fn adaptive_photons_match_uniform_ones_with_less_error_where_few_photons_are_see
             photon_sampling,
             ..Default::default()
         };
-        sc.render(&s).expect("renders")
+        pbrt_sppm::integrators::render(&sc, &s).expect("renders")
     };
     let reference = render(PhotonSampling::Uniform, 32, 400_000, 99).image.pixels;
     let (mut uniform, mut adaptive, mut means) = (0.0, 0.0, 0.0);
@@ -306,7 +305,7 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
          Material \"diffuse\" \"texture reflectance\" \"t\" Shape \"sphere\"",
     )
     .unwrap();
-    let rs = RenderScene::new(crate::common::load_file(&path).unwrap());
+    let rs = RenderScene::new(&crate::common::load_file(&path).unwrap());
     let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
     assert_eq!(rs.textures.eval(*kd, &at_uv([0.25, 0.25])).to_array(), [0.0, 0.0, 1.0], "bottom-left is blue");
     assert_eq!(rs.textures.eval(*kd, &at_uv([0.75, 0.75])).to_array(), [0.0, 1.0, 0.0], "top-right is green");
@@ -323,7 +322,7 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
     assert_eq!(s.approximated.len(), 1, "{:?}", s.approximated);
     let a = &s.approximated[0];
     assert!(a.what.contains("missing.png") && (a.line, a.column) == (1, 67), "{a:?}");
-    let rs = RenderScene::new(s);
+    let rs = RenderScene::new(&s);
     let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
     let grey = pbrt_sppm::imageio::from_srgb(0.5);
     assert!((grey - 0.214).abs() < 1e-3);
@@ -334,7 +333,7 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
          Material \"diffuse\" \"texture reflectance\" \"gone\" Shape \"disk\"",
     )
     .unwrap();
-    let rs = RenderScene::new(crate::common::load_file(&path).unwrap());
+    let rs = RenderScene::new(&crate::common::load_file(&path).unwrap());
     let pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: kd } = rs.materials[0].kind() else { panic!("diffuse") };
     // An EXR is read linear: 0.5 · scale.
     assert_eq!(rs.textures.eval(*kd, &at_uv([0.3, 0.3])).to_array(), [0.3 * 0.5; 3]);
@@ -356,8 +355,11 @@ fn a_constant_environment_map_lights_like_a_constant_infinite_light() {
     let render_at = |text: String| {
         let path = dir.join("env.pbrt");
         std::fs::write(&path, text).unwrap();
-        let out =
-            RenderScene::new(crate::common::load_file(&path).unwrap()).render(&RenderSettings::default()).unwrap();
+        let out = pbrt_sppm::integrators::render(
+            &RenderScene::new(&crate::common::load_file(&path).unwrap()),
+            &RenderSettings::default(),
+        )
+        .unwrap();
         mean(&out.image.pixels)
     };
     let constant = render_at(scene_for("LightSource \"infinite\" \"rgb L\" [.5 .5 .5]"));
@@ -368,7 +370,7 @@ fn a_constant_environment_map_lights_like_a_constant_infinite_light() {
 
 #[test]
 fn metal_roughness_follows_each_versions_remapping() {
-    let rs = RenderScene::new(scene(
+    let rs = RenderScene::new(&scene(
         "WorldBegin Material \"metal\" Shape \"sphere\" \
          Material \"conductor\" Shape \"sphere\" \
          Material \"conductor\" \"float roughness\" 0.04 Shape \"sphere\" \
@@ -431,7 +433,7 @@ fn an_empty_view_warns_and_renders_black() {
 fn glass_is_smooth_at_roughness_zero_in_both_versions() {
     use pbrt_sppm::materials::lobes::Lobe;
     // v3's remapping takes roughness 0 to α ≈ 0.047; pbrt-v3 still treats it as smooth.
-    let rs = RenderScene::new(scene(
+    let rs = RenderScene::new(&scene(
         "WorldBegin Material \"glass\" Shape \"sphere\" Material \"dielectric\" Shape \"sphere\" \
          Material \"glass\" \"float uroughness\" 0.01 \"float vroughness\" 0.01 Shape \"sphere\"",
     ));

@@ -196,7 +196,7 @@ fn v4_ply_of_triangles_and_quads_is_two_shapes_in_file_order() {
         let path = dir.join("scene.pbrt");
         std::fs::write(&path, text).unwrap();
         let s = crate::common::load_file(&path).unwrap_or_else(|e| panic!("{e}"));
-        pbrt_sppm::check::report(&s, true)
+        pbrt_sppm::cli::check::report(&s, true)
     };
     // No version evidence before the shape: read at the end, as pbrt-v4 (the default).
     let r = report_of(world);
@@ -249,7 +249,7 @@ fn ply_roundtrip(format: &str, uv: (&str, &str)) -> pbrt_sppm::shapes::TriangleM
     let path = dir.join("scene.pbrt");
     std::fs::write(&path, "WorldBegin\nShape \"plymesh\" \"string filename\" \"t.ply\"\n").unwrap();
     let s = crate::common::load_file(&path).unwrap_or_else(|e| panic!("{format}: {e}"));
-    s.meshes[0].clone()
+    (*s.meshes[0]).clone()
 }
 
 #[test]

@@ -164,7 +164,7 @@ fn bad_pass_options_are_clear_errors() {
 
 #[test]
 fn each_independent_pass_gathers_with_the_radius_of_its_index() {
-    let rs = RenderScene::new(crate::common::scene(SCENE));
+    let rs = RenderScene::new(&crate::common::scene(SCENE));
     let alpha = 0.5;
     let mut sppm = Sppm::new(&rs, 6, 500, 0.15, 0, Default::default())
         .and_then(|s| s.with_passes(PassMode::Independent { alpha }, 2))
@@ -218,7 +218,7 @@ fn the_batch_scripts_split_passes_as_the_plan_does() {
         .collect();
     let (n, k) = (10u32, 4u32);
     for i in 0..k {
-        let want = pbrt_sppm::farm::shard_range(i, n, k);
+        let want = pbrt_sppm::cli::farm::shard_range(i, n, k);
         let want =
             format!("--pass-range {}..{} --partial parts/part-{}-{}.exr", want.start, want.end, want.start, want.end);
         let slurm = Command::new("sh")
@@ -254,7 +254,7 @@ fn plan_prints_a_job_array_and_a_merge_that_waits_for_it() {
     assert!(s.contains("sbatch --parsable --array=0-3 --cpus-per-task=1"), "{s}");
     assert!(s.contains("\"$parts\" --photons 5000)"), "{s}");
     assert!(s.contains("--dependency=afterok:\"$array\""), "{s}");
-    assert!(s.contains(pbrt_sppm::farm::SHARD_SBATCH) && s.contains(pbrt_sppm::farm::MERGE_SBATCH));
+    assert!(s.contains(pbrt_sppm::cli::farm::SHARD_SBATCH) && s.contains(pbrt_sppm::cli::farm::MERGE_SBATCH));
     let check = Command::new("sh").args(["-n", "-c", &s]).status().unwrap();
     assert!(check.success(), "the script is not valid sh");
     ok(&d, &["plan", "--slurm", "--passes", "4", "--shards", "2", "scene.pbrt", "--write", "submit.sh"]);

@@ -30,7 +30,8 @@ fn every_stress_scene_renders_finite_and_lit() {
     assert!(names.len() >= 6, "stress scenes: {names:?}");
     for path in names {
         let s = load_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let out = RenderScene::new(s).render(&quick()).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let out = pbrt_sppm::integrators::render(&RenderScene::new(&s), &quick())
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
         assert_finite(&name, &out.image.pixels);
         assert!(mean(&out.image.pixels) > 0.0, "{name}: black");
@@ -45,7 +46,7 @@ fn emitters_and_film_scales_far_from_one_cancel_exactly_enough() {
     let text = std::fs::read_to_string(root().join("pbrt-scenes/stress/extreme-values.pbrt")).unwrap();
     let render = |i: &str, scale: &str| {
         let t = text.replace("1e30 1e30 1e30", &format!("{i} {i} {i}")).replace("[ 1e-30 ]", &format!("[ {scale} ]"));
-        RenderScene::new(scene(&t)).render(&quick()).unwrap().image.pixels
+        pbrt_sppm::integrators::render(&RenderScene::new(&scene(&t)), &quick()).unwrap().image.pixels
     };
     for (i, scale, same_as) in [("1e30", "1e-30", "1"), ("3e38", "1e-38", "3"), ("1e-30", "1e30", "1")] {
         let unit = render(same_as, "1");
@@ -57,8 +58,9 @@ fn emitters_and_film_scales_far_from_one_cancel_exactly_enough() {
     }
     // Past f32 on the way out: an error naming the cause, never an Inf pixel.
     let t = text.replace("1e30 1e30 1e30", "3e38 3e38 3e38").replace("[ 1e-30 ]", "[ 1e10 ]");
-    let Err(err) = RenderScene::new(scene(&t)).render(&quick()) else { panic!("rendered") };
-    assert!(err.contains("beyond the range of 32-bit floats"), "{err}");
+    let Err(err) = pbrt_sppm::integrators::render(&RenderScene::new(&scene(&t)), &quick()) else { panic!("rendered") };
+    assert!(matches!(err, pbrt_sppm::integrators::RenderError::NotFinite { .. }), "{err}");
+    assert!(err.to_string().contains("beyond the range of 32-bit floats"), "{err}");
 }
 
 /// The camera at the centre of an emitting diffuse sphere (ρ = 0.5, Le = 0.5, maxdepth
@@ -71,7 +73,7 @@ fn ten_thousand_iterations_keep_the_state_finite_and_the_energy() {
          Integrator \"sppm\" \"integer maxdepth\" 5 WorldBegin \
          AttributeBegin ReverseOrientation Material \"diffuse\" \"rgb reflectance\" [.5 .5 .5] \
          AreaLightSource \"diffuse\" \"rgb L\" [.5 .5 .5] Shape \"sphere\" AttributeEnd";
-    let rs = RenderScene::new(scene(text));
+    let rs = RenderScene::new(&scene(text));
     let expected = 1.0 - 0.5f64.powi(6);
     let (radius, photons) = (0.2, 200);
     let mut sppm = Sppm::new(&rs, 10_000, photons, radius, 7, Default::default()).unwrap();

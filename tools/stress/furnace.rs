@@ -26,7 +26,7 @@ pub fn run(iterations: u32) {
         Ok(s) => s,
         Err(e) => panic!("the furnace scene did not load: {e}"),
     };
-    let rs = RenderScene::new(scene);
+    let rs = RenderScene::new(&scene);
     let expected = 1.0 - 0.5f64.powi(6);
     let radius = 0.2;
     let mut sppm = match Sppm::new(&rs, iterations, 200, radius, 7, Default::default()) {

@@ -81,17 +81,16 @@ fn one_mesh(kind: usize, scale: f64, distance: f64, instanced: bool, rays: usize
     }
     let (p, tris) = sphere(&mut rng);
     let text = scene_text(&p, &tris, m, instanced);
-    let mut scene =
-        match load_scene_from_bytes(Path::new("stress-mesh.pbrt"), text.into_bytes(), &LoadOptions::default()) {
-            Ok(s) => s,
-            Err(e) => panic!("the generated mesh scene did not load: {e}"),
-        };
+    let scene = match load_scene_from_bytes(Path::new("stress-mesh.pbrt"), text.into_bytes(), &LoadOptions::default()) {
+        Ok(s) => s,
+        Err(e) => panic!("the generated mesh scene did not load: {e}"),
+    };
     // The loader's own world-space vertices, so that "at a vertex" is exact.
     let world: Vec<Vec3> = match scene.meshes.first() {
         Some(mesh) if !instanced => mesh.p.iter().map(|v| Vec3::from(*v)).collect(),
         _ => p.iter().map(|v| m.transform_point3(*v).as_vec3()).collect(),
     };
-    let g = Geometry::new(&mut scene);
+    let g = Geometry::new(&scene);
     let mut escapes = 0;
     for i in 0..rays {
         let o = m.transform_point3(dir(&mut rng) * 0.3 * rng.uniform() as f64).as_vec3();

@@ -43,7 +43,7 @@ impl Builder {
         SpectrumContext {
             base_dir: self.reader.base_dir(),
             normalize_blackbody: lights && self.syntax() == Syntax::V4,
-            limits: &self.reader.limits,
+            files: &self.reader.files,
         }
     }
 
@@ -53,7 +53,7 @@ impl Builder {
         if let Some(img) = self.images.get(&path) {
             return Ok(img.clone());
         }
-        let img = Arc::new(crate::imageio::read_image_within(&path, &self.reader.limits)?);
+        let img = Arc::new(crate::imageio::read_image_within(&path, &self.reader.files).map_err(|e| e.to_string())?);
         self.images.insert(path, img.clone());
         Ok(img)
     }
@@ -67,7 +67,7 @@ impl Builder {
                 let at = e.params.named("filename").map_or(e.name_span, |p| p.span);
                 self.note(at, "environment map".into(), Approx::EqualAreaMap);
             }
-            let (limits, base) = (self.reader.limits, self.reader.base_dir().to_path_buf());
+            let (files, base) = (self.reader.files.clone(), self.reader.base_dir().to_path_buf());
             let mut warnings = Vec::new();
             let mut missing = Vec::new();
             let kind = {
@@ -79,7 +79,7 @@ impl Builder {
                     spectra: SpectrumContext {
                         base_dir: &base,
                         normalize_blackbody: syntax == Syntax::V4,
-                        limits: &limits,
+                        files: &files,
                     },
                     image: &mut images,
                     warnings: &mut warnings,

@@ -1,2 +1,2 @@
 #![no_main]
-libfuzzer_sys::fuzz_target!(|data: &[u8]| pbrt_sppm::fuzzing::statements(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| pbrt_sppm::cli::fuzzing::statements(data));

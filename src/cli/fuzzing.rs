@@ -26,7 +26,11 @@ pub fn limits() -> Limits {
 
 /// Tokenizer and statement reader: reads statements until the end or an error.
 pub fn statements(data: &[u8]) {
-    let Ok(mut reader) = StatementReader::new(Path::new("fuzz.pbrt"), data.to_vec(), limits()) else { return };
+    let Ok(mut reader) =
+        StatementReader::new(Path::new("fuzz.pbrt"), data.to_vec(), crate::limits::Files::new(limits()))
+    else {
+        return;
+    };
     while let Ok(Some(_)) = reader.next_stmt() {}
 }
 
@@ -40,7 +44,7 @@ pub fn builder(data: &[u8]) {
     let mut opts = LoadOptions { limits: limits(), ..Default::default() };
     opts.in_memory.insert("inc.pbrt".into(), inc.into());
     if let Ok(scene) = load_scene_from_bytes(Path::new("/nonexistent/fuzz.pbrt"), main.to_vec(), &opts) {
-        let _ = crate::check::report(&scene, true);
+        let _ = crate::cli::check::report(&scene, true);
     }
 }
 

@@ -13,9 +13,9 @@
 use std::ops::Range;
 
 /// The array task's batch script.
-pub const SHARD_SBATCH: &str = include_str!("../tools/slurm/shard.sbatch");
+pub const SHARD_SBATCH: &str = include_str!("../../tools/slurm/shard.sbatch");
 /// The merge job's batch script.
-pub const MERGE_SBATCH: &str = include_str!("../tools/slurm/merge.sbatch");
+pub const MERGE_SBATCH: &str = include_str!("../../tools/slurm/merge.sbatch");
 
 /// A render split into shards.
 #[derive(Clone, Debug)]

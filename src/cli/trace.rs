@@ -8,10 +8,21 @@
 //! for meshes.
 
 use crate::accel::{Geometry, LocalHit};
-use crate::check::f32_json;
+use crate::cli::check::f32_json;
 use crate::math::{Point3, Ray, Vector3};
 use crate::scene::SceneDescription;
 use serde_json::{Value, json};
+use std::io::{BufRead, Write};
+
+/// Why the answers stopped: a line that is not a ray, or an output that cannot be
+/// written.
+#[derive(Debug, thiserror::Error)]
+pub enum TraceError {
+    #[error("line {line}: {message}")]
+    Line { line: usize, message: String },
+    #[error("cannot write: {0}")]
+    Write(std::io::Error),
+}
 
 /// The geometry plus the shape names, in `check --shapes` order.
 pub struct Tracer {
@@ -20,9 +31,21 @@ pub struct Tracer {
 }
 
 impl Tracer {
-    pub fn new(mut scene: SceneDescription) -> Tracer {
+    pub fn new(scene: &SceneDescription) -> Tracer {
         let kinds = scene.placed_shapes().map(|p| p.shape.kind()).collect();
-        Tracer { geometry: Geometry::new(&mut scene), kinds }
+        Tracer { geometry: Geometry::new(scene), kinds }
+    }
+
+    /// Answers every line of `input` on `out`, stopping at the first malformed line.
+    pub fn answer(&self, input: impl BufRead, out: &mut impl Write) -> Result<(), TraceError> {
+        for (i, line) in input.lines().enumerate() {
+            let located = |message: String| TraceError::Line { line: i + 1, message };
+            let text = line.map_err(|e| located(e.to_string()))?;
+            if let Some(v) = self.line(&text).map_err(located)? {
+                writeln!(out, "{v}").map_err(TraceError::Write)?;
+            }
+        }
+        out.flush().map_err(TraceError::Write)
     }
 
     /// One input line: `Ok(None)` for blank lines and comments.

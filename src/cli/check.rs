@@ -204,3 +204,41 @@ fn quadric_params(q: &Quadric) -> Value {
         }),
     }
 }
+
+/// The text `check` prints: the scene in a few lines, then every skipped, approximated
+/// and pbrt-bug statement at its location.
+pub fn summary(s: &SceneDescription) -> String {
+    use std::fmt::Write as _;
+    let r = report(s, false);
+    let mut out = String::new();
+    let _ = writeln!(out, "syntax      {}", s.syntax.name());
+    let _ = writeln!(out, "film        {}x{} -> {}", s.film.x_resolution, s.film.y_resolution, s.film.filename);
+    let i = &s.integrator;
+    let _ = writeln!(
+        out,
+        "sppm        {} iterations, maxdepth {}, {} photons/iteration, radius {}",
+        i.iterations, i.max_depth, i.photons_per_iteration, i.radius
+    );
+    if let Some(c) = r["counts"].as_object() {
+        let parts: Vec<String> =
+            c.iter().filter(|(_, v)| v.as_u64() != Some(0)).map(|(k, v)| format!("{k} {v}")).collect();
+        let _ = writeln!(out, "counts      {}", parts.join(", "));
+    }
+    for k in &s.skipped {
+        let _ = writeln!(out, "skipped     {}:{}:{}: {} ({})", k.file, k.line, k.column, k.what, k.why);
+    }
+    for a in &s.approximated {
+        let _ = writeln!(out, "approximated {}:{}:{}: {} ({})", a.file, a.line, a.column, a.what, a.how);
+    }
+    for b in &s.pbrt_bugs {
+        let how = if b.fixed { "fixed (--fix)" } else { "rendered as pbrt does" };
+        let _ = writeln!(out, "pbrt bug    {}:{}:{}: {} ({how})", b.file, b.line, b.column, b.name);
+    }
+    if s.pbrt_bugs.iter().any(|b| !b.fixed) {
+        let _ = writeln!(
+            out,
+            "            (`--fix NAME` renders the physically right image; `--fix help` says what each changes)"
+        );
+    }
+    out
+}

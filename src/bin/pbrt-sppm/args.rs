@@ -1,0 +1,393 @@
+//! The command line: every subcommand and flag, their values checked as they are
+//! parsed, and the render flags turned into a [`Request`].
+
+use clap::{Parser, Subcommand};
+use pbrt_sppm::fixes::Fixes;
+use pbrt_sppm::integrators::RenderSettings;
+use pbrt_sppm::integrators::adaptive::PhotonSampling;
+use pbrt_sppm::integrators::checkpoint::Every;
+use pbrt_sppm::integrators::passes::{DEFAULT_ALPHA, PassMode};
+use pbrt_sppm::job::Request;
+use pbrt_sppm::parser::Syntax;
+use pbrt_sppm::sampling::SamplerKind;
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(name = "pbrt-sppm", version, about = "Renders pbrt-v3/v4 scenes with stochastic progressive photon mapping")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Render a scene (the default when the first argument is a file).
+    Render(RenderArgs),
+    /// Parse and build a scene without rendering; report what it contains.
+    Check {
+        /// The scene file (`-` reads standard input).
+        scene: PathBuf,
+        /// Print one JSON object (design.md §3) instead of a summary.
+        #[arg(long)]
+        json: bool,
+        /// Add one entry per created shape to the JSON.
+        #[arg(long)]
+        shapes: bool,
+        #[command(flatten)]
+        common: Common,
+    },
+    /// Write the loaded scene for another renderer (README: "Cross-checking with Mitsuba 3").
+    Export {
+        /// The scene file (`-` reads standard input).
+        scene: PathBuf,
+        /// The JSON form `tools/mitsuba_reference.py` reads (the only format so far).
+        #[arg(long, required = true)]
+        mitsuba: bool,
+        /// Write here instead of standard output.
+        #[arg(long, short)]
+        output: Option<PathBuf>,
+        #[command(flatten)]
+        common: Common,
+    },
+    /// Add up the parts of a render (`render --partial`) into its image.
+    Merge {
+        /// The parts: files written by `render --partial` or `merge --partial`.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// The image to write (`.exr`, or `.png` for an 8-bit sRGB preview).
+        #[arg(long, required_unless_present = "partial")]
+        outfile: Option<PathBuf>,
+        /// Also write the merged part (all the passes summed), to merge with others later.
+        #[arg(long, value_name = "FILE.exr")]
+        partial: Option<PathBuf>,
+        /// Merge even when some passes of the render are in no part (a warning then).
+        #[arg(long)]
+        allow_gaps: bool,
+        /// Print no warnings and no summary.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Print the commands that render a scene in shards on a cluster and merge them.
+    Plan(PlanArgs),
+    /// Intersect rays (`ox oy oz dx dy dz [tmax]` per line) with the scene; JSON lines out.
+    Trace {
+        /// The scene file (`-` reads standard input; then give the rays with --rays).
+        scene: PathBuf,
+        /// Read rays from this file instead of standard input.
+        #[arg(long)]
+        rays: Option<PathBuf>,
+        #[command(flatten)]
+        common: Common,
+    },
+}
+
+#[derive(clap::Args)]
+pub struct Common {
+    /// Read the file as pbrt-v3 or pbrt-v4 syntax instead of detecting it.
+    #[arg(long, value_parser = parse_syntax)]
+    pub syntax: Option<Syntax>,
+    /// Raise or lower a limit, NAME=N (pixels, photons, iterations, maxdepth, file-bytes,
+    /// texture-pixels, include-depth, triangles); may be repeated.
+    #[arg(long = "limit", value_name = "NAME=N")]
+    pub limits: Vec<String>,
+    /// Print no warnings and no summary (errors still go to standard error).
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Fix these pbrt bugs instead of rendering them as the file's pbrt does:
+    /// NAME,... or `all` (`--fix help` lists them; `check` says which a scene shows).
+    #[arg(long = "fix", value_name = "NAME,...|all|help", value_parser = parse_fixes)]
+    pub fixes: Option<Fixes>,
+}
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// The scene file (`-` reads standard input).
+    pub scene: PathBuf,
+    /// The image to write (`.exr`, or `.png` for an 8-bit sRGB preview); default: the
+    /// Film's `filename`.
+    #[arg(long)]
+    pub outfile: Option<PathBuf>,
+    /// Worker threads (0, the default, uses every core).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<usize, 0>)]
+    pub nthreads: Option<usize>,
+    /// The seed every random number derives from (default: the Integrator's `seed`).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u64, 0>)]
+    pub seed: Option<u64>,
+    /// What drives camera and photon paths: `sobol` (scrambled low-discrepancy points,
+    /// the default) or `random` (independent random numbers).
+    #[arg(long, value_parser = parse_sampler)]
+    pub sampler: Option<SamplerKind>,
+    /// How photon paths are drawn: `uniform` (independent photons, as pbrt; the
+    /// default) or `adaptive` (Markov chains over paths that reach what the camera
+    /// sees, for scenes where most photons land out of view).
+    #[arg(long, value_parser = parse_photon_sampling)]
+    pub photon_sampling: Option<PhotonSampling>,
+    /// SPPM iterations (at least 1), overriding the scene's.
+    #[arg(long, visible_alias = "iterations", allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
+    pub spp: Option<u32>,
+    /// Divide the iteration count by 16 (at least 1 remains), as pbrt-v3 does.
+    #[arg(long)]
+    pub quick: bool,
+    /// Print the time per phase, the paths traced and the peak memory.
+    #[arg(long)]
+    pub stats: bool,
+    /// Photons per iteration (at least 1), overriding `photonsperiteration`.
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u64, 1>)]
+    pub photons: Option<u64>,
+    /// The initial photon radius (positive), overriding `radius`.
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_positive)]
+    pub radius: Option<f32>,
+    /// Stop after the iteration that passes this many seconds (positive).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_positive)]
+    pub time_limit: Option<f32>,
+    /// Compare every iteration with this image (needs --mse-reference-out).
+    #[arg(long, requires = "mse_reference_out")]
+    pub mse_reference_image: Option<PathBuf>,
+    /// Write the per-iteration errors (ERRORS.csv) here (needs --mse-reference-image).
+    #[arg(long, requires = "mse_reference_image")]
+    pub mse_reference_out: Option<PathBuf>,
+    /// Save the render's state to this file as it goes, at the end, and when
+    /// interrupted (Ctrl-C, SIGTERM), so that `--resume` can continue it.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// How often to save: a number of iterations (`10`) or a time (`90s`, `5m`, `2h`);
+    /// default 5m.
+    #[arg(long, value_name = "N|TIME", value_parser = parse_every)]
+    pub checkpoint_every: Option<Every>,
+    /// Continue the render saved in this checkpoint (made from the same scene files and
+    /// settings); it goes on saving there unless --checkpoint names another file.
+    #[arg(long, value_name = "FILE")]
+    pub resume: Option<PathBuf>,
+    /// Write the image after iterations 1, 2, 4, 8, … as well as at the end.
+    #[arg(long)]
+    pub write_partial_images: bool,
+    /// `classic` (pbrt's SPPM, the default) or `independent` (Knaus–Zwicker: each
+    /// pass's radius depends only on its index, so passes can be rendered apart and
+    /// merged).
+    #[arg(long, value_parser = parse_passes)]
+    pub passes: Option<bool>,
+    /// How fast independent passes' radius shrinks: r²_{i+1} = r²_i (i+α)/(i+1), 0 < α < 1
+    /// (default 2/3).
+    #[arg(long, value_parser = parse_alpha)]
+    pub alpha: Option<f64>,
+    /// Render only passes A to B−1 of the --spp planned (independent passes).
+    #[arg(long, value_name = "A..B", value_parser = parse_pass_range)]
+    pub pass_range: Option<std::ops::Range<u32>>,
+    /// Write the sum of the passes rendered to this EXR, for `pbrt-sppm merge`
+    /// (independent passes; the image itself is written only when --outfile is given).
+    #[arg(long, value_name = "FILE.exr")]
+    pub partial: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+#[derive(clap::Args)]
+pub struct PlanArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Plan for Slurm: an array job of shards, then a merge job once all succeed.
+    #[arg(long, required = true)]
+    pub slurm: bool,
+    /// The passes of the whole render (its --spp).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
+    pub passes: u32,
+    /// How many shards (array tasks) share them (at most --passes).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
+    pub shards: u32,
+    /// The folder the parts are written to, which every node must reach (default:
+    /// SCENE's name with `.parts`, beside it).
+    #[arg(long)]
+    pub parts: Option<PathBuf>,
+    /// The merged image (default: SCENE's name with `.exr`, beside it).
+    #[arg(long)]
+    pub outfile: Option<PathBuf>,
+    /// Cores per shard (sbatch --cpus-per-task; the shard renders with as many threads).
+    #[arg(long, default_value_t = 1, value_parser = parse_count::<u32, 1>)]
+    pub cpus_per_task: u32,
+    /// The pbrt-sppm the nodes run (default: this one).
+    #[arg(long)]
+    pub binary: Option<PathBuf>,
+    /// Write the script to this file instead of standard output.
+    #[arg(long)]
+    pub write: Option<PathBuf>,
+    /// Render options every shard gets, after `--` (such as `-- --photons 200000`).
+    #[arg(last = true)]
+    pub render_args: Vec<String>,
+}
+
+fn parse_fixes(s: &str) -> Result<Fixes, String> {
+    Fixes::parse(s)
+}
+
+fn parse_syntax(s: &str) -> Result<Syntax, String> {
+    match s {
+        "v3" => Ok(Syntax::V3),
+        "v4" => Ok(Syntax::V4),
+        _ => Err(format!("expected v3 or v4, not \"{s}\"")),
+    }
+}
+
+fn parse_photon_sampling(s: &str) -> Result<PhotonSampling, String> {
+    match s {
+        "uniform" => Ok(PhotonSampling::Uniform),
+        "adaptive" => Ok(PhotonSampling::Adaptive),
+        _ => Err(format!("expected uniform or adaptive, not \"{s}\"")),
+    }
+}
+
+/// `independent` → true.
+fn parse_passes(s: &str) -> Result<bool, String> {
+    match s {
+        "classic" => Ok(false),
+        "independent" => Ok(true),
+        _ => Err(format!("expected classic or independent, not \"{s}\"")),
+    }
+}
+
+fn parse_alpha(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(a) if a > 0.0 && a < 1.0 => Ok(a),
+        _ => Err(format!("must be a number between 0 and 1 (exclusive), not {s}")),
+    }
+}
+
+fn parse_pass_range(s: &str) -> Result<std::ops::Range<u32>, String> {
+    pbrt_sppm::integrators::passes::parse_range(s)
+}
+
+fn parse_every(s: &str) -> Result<Every, String> {
+    s.parse()
+}
+
+fn parse_sampler(s: &str) -> Result<SamplerKind, String> {
+    match s {
+        "sobol" => Ok(SamplerKind::Sobol),
+        "random" => Ok(SamplerKind::Random),
+        _ => Err(format!("expected sobol or random, not \"{s}\"")),
+    }
+}
+
+/// A whole number of at least `MIN`.
+fn parse_count<T: TryFrom<u64>, const MIN: u64>(s: &str) -> Result<T, String> {
+    let n: i128 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a whole number"))?;
+    if n < MIN as i128 {
+        return Err(format!("must be at least {MIN}, not {n}"));
+    }
+    u64::try_from(n).ok().and_then(|n| T::try_from(n).ok()).ok_or_else(|| format!("{n} is too large"))
+}
+
+fn parse_positive(s: &str) -> Result<f32, String> {
+    let v: f32 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a number"))?;
+    if v > 0.0 && v.is_finite() { Ok(v) } else { Err(format!("must be a positive number, not {s}")) }
+}
+
+/// `pbrt-sppm scene.pbrt ...` means `pbrt-sppm render scene.pbrt ...`.
+pub fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    const KNOWN: [&str; 11] =
+        ["render", "check", "trace", "export", "merge", "plan", "help", "--help", "-h", "--version", "-V"];
+    if args.len() > 1 && !KNOWN.iter().any(|k| args[1] == *k) {
+        args.insert(1, "render".into());
+    }
+    args
+}
+
+/// Whether the arguments hold `--fix help` (or `--fix=help`), which lists the fixes
+/// whatever else is given.
+pub fn asks_fix_help(args: impl Iterator<Item = std::ffi::OsString>) -> bool {
+    let mut prev_fix = false;
+    for a in args {
+        if (prev_fix && a == "help") || a == "--fix=help" {
+            return true;
+        }
+        prev_fix = a == "--fix";
+    }
+    false
+}
+
+impl RenderArgs {
+    /// The job these flags ask for; `interrupt` is raised by a signal handler.
+    pub fn request(&self, interrupt: std::sync::Arc<std::sync::atomic::AtomicBool>) -> Result<Request, String> {
+        let quiet = self.common.quiet;
+        let settings = RenderSettings {
+            iterations: self.spp,
+            photons: self.photons,
+            radius: self.radius,
+            seed: self.seed,
+            sampler: self.sampler.unwrap_or_default(),
+            photon_sampling: self.photon_sampling.unwrap_or_default(),
+            quick: self.quick,
+            time_limit: self.time_limit.map(f64::from),
+            passes: self.pass_mode()?,
+            pass_range: self.pass_range.clone(),
+        };
+        Ok(Request {
+            scene: self.scene.clone(),
+            settings,
+            outfile: self.outfile.clone(),
+            part: self.partial.clone(),
+            reference: self.mse_reference_image.clone(),
+            errors_csv: self.mse_reference_out.clone(),
+            checkpoint: self.checkpoint.clone(),
+            checkpoint_every: self.checkpoint_every,
+            resume: self.resume.clone(),
+            partial_images: self.write_partial_images,
+            progress: std::io::IsTerminal::is_terminal(&std::io::stderr()) && !quiet,
+            quiet,
+            interrupt: Some(interrupt),
+        })
+    }
+
+    /// Classic SPPM unless asked for independent passes, which a pass range or a part
+    /// implies.
+    fn pass_mode(&self) -> Result<PassMode, String> {
+        let sharded = self.pass_range.is_some() || self.partial.is_some();
+        let independent = match self.passes {
+            Some(false) if sharded => {
+                return Err("classic SPPM cannot be split: --pass-range and --partial need independent passes".into());
+            }
+            Some(i) => i,
+            None => sharded,
+        };
+        match (independent, self.alpha) {
+            (false, Some(_)) => Err("--alpha sets the radius of independent passes: add --passes independent".into()),
+            (false, None) => Ok(PassMode::Classic),
+            (true, alpha) => Ok(PassMode::Independent { alpha: alpha.unwrap_or(DEFAULT_ALPHA) }),
+        }
+    }
+}
+
+impl PlanArgs {
+    /// The options after `--` must be render options that leave the split to the plan.
+    pub fn check_shard_options(&self) -> Result<(), String> {
+        let mut argv = vec!["pbrt-sppm".to_string(), "render".into(), self.scene.display().to_string()];
+        argv.extend(self.render_args.iter().cloned());
+        let parsed =
+            Cli::try_parse_from(argv).map_err(|e| e.to_string().lines().next().unwrap_or_default().to_string())?;
+        let Command::Render(r) = parsed.command else {
+            return Err("the options after -- must be render options".into());
+        };
+        let taken = [
+            ("--spp", r.spp.is_some()),
+            ("--pass-range", r.pass_range.is_some()),
+            ("--partial", r.partial.is_some()),
+            ("--outfile", r.outfile.is_some()),
+            ("--nthreads", r.nthreads.is_some()),
+            ("--passes", r.passes.is_some()),
+            ("--checkpoint", r.checkpoint.is_some()),
+            ("--resume", r.resume.is_some()),
+            ("--time-limit", r.time_limit.is_some()),
+            ("--write-partial-images", r.write_partial_images),
+            ("--mse-reference-image", r.mse_reference_image.is_some()),
+            ("--quick", r.quick),
+            ("--photon-sampling", r.photon_sampling == Some(PhotonSampling::Adaptive)),
+        ];
+        match taken.iter().find(|t| t.1) {
+            Some((flag, _)) => Err(format!(
+                "{flag} cannot be given to the shards: the plan sets the passes, the parts and the threads \
+                 (--passes, --shards, --parts, --outfile, --cpus-per-task), and a shard must render all its \
+                 passes with uniform photons"
+            )),
+            None => Ok(()),
+        }
+    }
+}

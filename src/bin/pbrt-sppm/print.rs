@@ -1,0 +1,121 @@
+//! What the command line prints: errors, standard output that reports a failed write,
+//! and the summaries after a render and a merge.
+
+use crate::args::RenderArgs;
+use pbrt_sppm::integrators::RenderOutput;
+use pbrt_sppm::integrators::part::Merged;
+use pbrt_sppm::job::Job;
+use std::io::Write;
+use std::path::Path;
+use std::process::ExitCode;
+
+/// Writes a line to standard error; a closed stderr is not worth a panic.
+macro_rules! say {
+    ($($t:tt)*) => {{
+        let _ = std::io::Write::write_fmt(&mut std::io::stderr(), format_args!("{}\n", format_args!($($t)*)));
+    }};
+}
+pub(crate) use say;
+
+/// `FILE: error: MESSAGE` on standard error; exit code 1.
+pub fn fail(file: &Path, message: impl std::fmt::Display) -> ExitCode {
+    say!("{}: error: {message}", file.display());
+    ExitCode::FAILURE
+}
+
+/// Standard output that reports a failed write (a full disk, a closed pipe) as an error.
+pub fn print(text: &str) -> ExitCode {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => fail(Path::new("<stdout>"), format!("cannot write: {e}")),
+    }
+}
+
+/// The summary after a render; exit code 130 when it was interrupted.
+pub fn rendered(job: &Job, out: &RenderOutput, args: &RenderArgs) -> ExitCode {
+    let code = if out.interrupted { ExitCode::from(130) } else { ExitCode::SUCCESS };
+    if args.common.quiet {
+        return code;
+    }
+    if out.stats.visible_points == 0 {
+        say!(
+            "{}: warning: no camera path reached a diffuse surface; the image holds only direct emission",
+            args.scene.display()
+        );
+    }
+    if args.stats {
+        stats(out);
+    }
+    let what = if out.interrupted { "interrupted after" } else { "rendered" };
+    let done = match &out.pass_sums {
+        Some(_) => format!("independent passes {}", out.passes),
+        None => format!("{} iterations", out.stats.iterations),
+    };
+    let image = job.image.as_ref().map(|i| i.0.as_path());
+    let to: Vec<String> = image.into_iter().chain(args.partial.as_deref()).map(|p| p.display().to_string()).collect();
+    say!(
+        "{what} {done} ({} photons each) in {:.2} s -> {}",
+        out.image.meta.photons_per_iteration.unwrap_or(0),
+        out.seconds,
+        to.join(", ")
+    );
+    if out.interrupted
+        && let Some(c) = job.checkpoint_path()
+    {
+        say!("continue with --resume {}", c.display());
+    }
+    code
+}
+
+/// `--stats`: the time per phase, the paths traced and the peak memory.
+fn stats(out: &RenderOutput) {
+    let s = &out.stats;
+    let peak = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|t| t.lines().find_map(|l| l.strip_prefix("VmHWM:").map(|v| v.trim().to_string())))
+        .unwrap_or_else(|| "unknown".into());
+    say!(
+        "stats: camera pass {:.3} s, grid {:.3} s, photons {:.3} s, update {:.3} s",
+        s.camera_seconds,
+        s.grid_seconds,
+        s.photon_seconds,
+        s.update_seconds
+    );
+    say!(
+        "stats: {} camera paths, {} photon paths, {} photon hits, peak memory {peak}",
+        s.camera_rays,
+        s.photons.traced,
+        s.photons.hits
+    );
+    let p = &s.photons;
+    if p.uniform > 0 {
+        let wasted = 1.0 - p.uniform_deposited as f64 / p.uniform as f64;
+        say!("stats: {:.3}% of uniform photon paths reached no visible point", 100.0 * wasted);
+    }
+    if p.mutations > 0 {
+        let rate = p.accepted as f64 / p.mutations as f64;
+        say!("stats: adaptive photons: {} mutations, {:.3} accepted", p.mutations, rate);
+    }
+}
+
+/// The summary after a merge.
+pub fn merged(m: &Merged, files: usize, to: &Path) {
+    for d in &m.duplicates {
+        say!("{}: warning: the same passes as another part, and identical: counted once", d.display());
+    }
+    if !m.missing.ranges().is_empty() {
+        say!(
+            "merge: warning: passes {} are in no part; the image averages the {} passes there are",
+            m.missing,
+            m.part.passes.count()
+        );
+    }
+    say!(
+        "merged {files} parts: passes {} ({} photons traced, {:.2} s of rendering) -> {}",
+        m.part.passes,
+        m.part.photons,
+        m.part.seconds,
+        to.display()
+    );
+}
