@@ -9,17 +9,25 @@
 //! screen window spans [−1, 1] on the image's shorter axis, so `fov` is the full angle
 //! of the shorter axis. Raster (0, 0) is the top-left pixel corner and y grows
 //! downward. With `LookAt`, world +x appears on the image's left (pbrt's orientation).
+//!
+//! For light paths that reach the lens (bidirectional methods), a perspective camera
+//! also gives its importance `we` for a ray leaving the lens, the densities `pdf_we`
+//! with which `generate_ray` makes it, and `sample_wi`, a lens point seen from a scene
+//! point, as pbrt-v3's `PerspectiveCamera` does. An orthographic camera cannot be
+//! reached by chance (its rays are parallel), so it has none, as in pbrt.
 
 use crate::math::ray::RayDifferential;
 use crate::math::{Point3, Ray, Vector3};
 use crate::scene::{Camera as CameraDesc, CameraKind, Film};
-use glam::{DMat4, DVec3, Vec2};
+use glam::Vec3;
+use glam::{DMat4, DVec3};
 
 /// A camera ready to generate rays.
 #[derive(Clone, Debug)]
 pub struct Camera {
     kind: CameraKind,
     world_from_camera: DMat4,
+    camera_from_world: DMat4,
     /// Screen window [x0, x1, y0, y1] and the full film resolution.
     window: [f32; 4],
     resolution: [f32; 2],
@@ -28,25 +36,12 @@ pub struct Camera {
     focal_distance: f32,
 }
 
-/// Concentric mapping of the unit square to the unit disk (Shirley–Chiu).
-pub fn concentric_disk(u: [f32; 2]) -> Vec2 {
-    let o = Vec2::new(2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
-    if o == Vec2::ZERO {
-        return o;
-    }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, std::f32::consts::FRAC_PI_4 * (o.y / o.x))
-    } else {
-        (o.y, std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y))
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
-}
-
 impl Camera {
     pub fn new(desc: &CameraDesc, film: &Film) -> Camera {
         Camera {
             kind: desc.kind,
             world_from_camera: desc.camera_from_world.inverse(),
+            camera_from_world: desc.camera_from_world,
             window: desc.screen_window,
             resolution: [film.x_resolution as f32, film.y_resolution as f32],
             tan_half_fov: (desc.fov.to_radians() / 2.0).tan(),
@@ -87,7 +82,7 @@ impl Camera {
             CameraKind::Orthographic => (DVec3::new(sx as f64, sy as f64, 0.0), DVec3::Z),
         };
         if self.lens_radius > 0.0 {
-            let lens = (self.lens_radius * concentric_disk(u_lens)).as_dvec2();
+            let lens = (self.lens_radius * crate::sampling::concentric_disk(u_lens)).as_dvec2();
             let ft = self.focal_distance as f64 / d.z;
             let focus = o + d * ft;
             o = DVec3::new(o.x + lens.x, o.y + lens.y, 0.0);
@@ -97,4 +92,90 @@ impl Camera {
         let dw = self.world_from_camera.transform_vector3(d).normalize();
         Ray::new(Point3(ow.as_vec3()), Vector3(dw.as_vec3()))
     }
+
+    /// The film's area at distance 1 in camera space (pbrt's `A`).
+    fn film_area(&self) -> f32 {
+        let [x0, x1, y0, y1] = self.window;
+        (x1 - x0) * (y1 - y0) * self.tan_half_fov * self.tan_half_fov
+    }
+
+    /// The lens area (1 for a pinhole, whose position is a delta).
+    fn lens_area(&self) -> f32 {
+        if self.lens_radius > 0.0 { std::f32::consts::PI * self.lens_radius * self.lens_radius } else { 1.0 }
+    }
+
+    /// The camera-space direction of a world ray, and its cosine with the view axis.
+    fn local(&self, ray: &Ray) -> (DVec3, f64) {
+        let d = self.camera_from_world.transform_vector3(ray.d.0.as_dvec3()).normalize();
+        (d, d.z)
+    }
+
+    /// The importance of a ray leaving the lens at `ray.o` along `ray.d` (unit length),
+    /// and the raster point it reaches: pbrt-v3's `We`. `None` off the film, behind the
+    /// camera, or for an orthographic camera.
+    pub fn we(&self, ray: &Ray) -> Option<(f32, [f32; 2])> {
+        if self.kind != CameraKind::Perspective {
+            return None;
+        }
+        let (d, cos) = self.local(ray);
+        if cos <= 0.0 {
+            return None;
+        }
+        let o = self.camera_from_world.transform_point3(ray.o.0.as_dvec3());
+        let focus = if self.lens_radius > 0.0 { self.focal_distance as f64 } else { 1.0 };
+        let p = o + d * (focus / cos);
+        let raster = self.raster(p)?;
+        let cos2 = (cos * cos) as f32;
+        Some((1.0 / (self.film_area() * self.lens_area() * cos2 * cos2), raster))
+    }
+
+    /// The (lens position, direction) densities of a ray as `generate_ray` makes it
+    /// from a uniform raster point and lens point (pbrt-v3's `Pdf_We`); 0 off the film.
+    pub fn pdf_we(&self, ray: &Ray) -> (f32, f32) {
+        let Some(_) = self.we(ray) else { return (0.0, 0.0) };
+        let cos = self.local(ray).1 as f32;
+        (1.0 / self.lens_area(), 1.0 / (self.film_area() * cos * cos * cos))
+    }
+
+    /// A point on the lens seen from the scene point `p`: the unit direction from `p`
+    /// to it, the importance arriving there, the solid-angle density at `p`, the lens
+    /// point and the raster point (pbrt-v3's `Sample_Wi`).
+    pub fn sample_wi(&self, p: Vec3, u: [f32; 2]) -> Option<CameraSample> {
+        let lens = self.lens_radius * crate::sampling::concentric_disk(u);
+        let on_lens = DVec3::new(lens.x as f64, lens.y as f64, 0.0);
+        let p_lens = self.world_from_camera.transform_point3(on_lens).as_vec3();
+        let to_lens = p_lens - p;
+        let dist2 = to_lens.length_squared();
+        if dist2 == 0.0 {
+            return None;
+        }
+        let wi = to_lens / dist2.sqrt();
+        let (we, raster) = self.we(&Ray::new(Point3(p_lens), Vector3(-wi)))?;
+        let axis = self.world_from_camera.transform_vector3(DVec3::Z).normalize().as_vec3();
+        let pdf = dist2 / (axis.dot(wi).abs() * self.lens_area());
+        Some(CameraSample { wi, we, pdf, p_lens, raster })
+    }
+
+    /// The raster position of a camera-space point in front of the lens, if on the film.
+    fn raster(&self, p: DVec3) -> Option<[f32; 2]> {
+        let [x0, x1, y0, y1] = self.window.map(f64::from);
+        let t = self.tan_half_fov as f64;
+        let (sx, sy) = (p.x / p.z / t, p.y / p.z / t);
+        let r = [(sx - x0) / (x1 - x0) * self.resolution[0] as f64, (y1 - sy) / (y1 - y0) * self.resolution[1] as f64];
+        let inside =
+            (0.0..=self.resolution[0] as f64).contains(&r[0]) && (0.0..=self.resolution[1] as f64).contains(&r[1]);
+        inside.then(|| r.map(|x| x as f32))
+    }
+}
+
+/// Importance arriving at a scene point from a lens point (see [`Camera::sample_wi`]).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraSample {
+    /// Unit direction from the scene point to the lens point.
+    pub wi: Vec3,
+    pub we: f32,
+    /// Solid-angle density at the scene point.
+    pub pdf: f32,
+    pub p_lens: Vec3,
+    pub raster: [f32; 2],
 }

@@ -6,7 +6,7 @@ use crate::accel::{Geometry, Hit};
 use crate::camera::Camera;
 use crate::fixes::{Fix, Fixes};
 use crate::interaction::{Footprint, SurfaceInteraction};
-use crate::lights::{Light, WorldSphere};
+use crate::lights::{AreaLight, Light, WorldSphere};
 use crate::materials::{Bsdf, LobeList, Material, TexCtx, Textures};
 use crate::math::Ray;
 use crate::math::frame::coordinate_system;
@@ -205,8 +205,8 @@ impl RenderScene {
     // photons (but not where rays hit them); the fix masks them as pbrt-v4 does.
     #[inline]
     pub fn emission_masked(&self, light: &Light, surface: Option<&ShapeSample>) -> bool {
-        let (Light::Area { shape, .. }, Some(s)) = (light, surface) else { return false };
-        self.has_alpha && self.alpha_rules.samples && self.emission_masked_at(*shape, s.p.0, s.n.0, s.uv)
+        let (Light::Area(a), Some(s)) = (light, surface) else { return false };
+        self.has_alpha && self.alpha_rules.samples && self.emission_masked_at(a.shape, s.p.0, s.n.0, s.uv)
     }
 
     /// Whether shape `shape`'s alpha cuts its emission away at a point (by a hash of
@@ -311,7 +311,7 @@ impl RenderScene {
             return Vec3::ZERO;
         }
         match &self.lights[light as usize] {
-            Light::Area { l, .. } => *l,
+            Light::Area(a) => a.l,
             _ => Vec3::ZERO,
         }
     }
@@ -352,7 +352,7 @@ fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction, fp: &Footprin
 /// and normal. The normal stays on the side of the geometric one.
 fn normal_map(img: &crate::imageio::RgbImage, si: &SurfaceInteraction) -> (Vec3, Vec3) {
     let sh = &si.shading;
-    let rgb = crate::materials::lookup(img, si.uv[0], 1.0 - si.uv[1], crate::scene::Wrap::Repeat, true);
+    let rgb = crate::imageio::lookup(img, si.uv[0], 1.0 - si.uv[1], crate::imageio::Wrap::Repeat, true);
     let local = (2.0 * rgb - Vec3::ONE).normalize_or_zero();
     let (n, dpdu) = (sh.n.0, sh.dpdu.0);
     let s = (dpdu - n * n.dot(dpdu)).normalize_or_zero();
@@ -417,32 +417,18 @@ fn area_lights(
         let first_light = lights.len() as u32;
         let pieces = g.shapes.pieces(g.world_shape(i), rules.pbrt_sampling);
         let per_piece = !rules.spread_power && desc.power.is_some() && pieces.len() > 1;
-        let l = area_emission(desc, pieces.iter().map(|(_, a)| *a).sum());
+        let l = desc.emission(pieces.iter().map(|(_, a)| *a).sum());
         for (emitter, area) in pieces {
-            let l = if per_piece { area_emission(desc, area) } else { l };
+            let l = if per_piece { desc.emission(area) } else { l };
             // The BVH dropped zero-area primitives; one whose area underflows in f32
             // still keeps its slot (lights are found by primitive) but emits nothing.
             let area = area as f32;
             let l = if area > 0.0 { l } else { Vec3::ZERO };
-            lights.push(Light::Area { emitter, shape: i as u32, l, two_sided: desc.two_sided, area });
+            lights.push(Light::Area(AreaLight { emitter, shape: i as u32, l, two_sided: desc.two_sided, area }));
         }
         emitters[i] = Some(EmitterInfo { two_sided: desc.two_sided, first_light });
     }
     emitters
-}
-
-/// An area light's radiance on a shape of total area `area`, after v4's `power`.
-/// As in pbrt-v4, `power` scales the emission as read (the RGB's own brightness and
-/// `scale` stay; spectra were already normalised to luminance 1), so an `rgb L` of
-/// luminance y emits y·power watts (photometric).
-pub fn area_emission(a: &AreaLightDesc, area: f64) -> Rgb {
-    match a.power {
-        Some(w) if area > 0.0 => {
-            let sides = if a.two_sided { 2.0 } else { 1.0 };
-            a.l * (w as f64 / (std::f64::consts::PI * sides * area)) as f32
-        }
-        _ => a.l,
-    }
 }
 
 /// The power of two nearest `total` (1 for no light).

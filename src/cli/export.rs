@@ -32,12 +32,10 @@
 //! so the reader can verify its camera reproduces ours.
 
 use crate::camera::Camera;
-use crate::lights::Light;
 use crate::materials::{TexCtx, Textures};
 use crate::math::transform::row_major;
 use crate::scene::{
-    CameraKind, Geometry, LightDesc, LightKind, MaterialDesc, MaterialKind, Metal, PlacedShape, SceneDescription,
-    ShapeDesc, TexValue,
+    CameraKind, Geometry, MaterialDesc, MaterialKind, Metal, PlacedShape, SceneDescription, ShapeDesc, TexValue,
 };
 use crate::shapes::{Quadric, TriangleMesh};
 use crate::spectrum::Rgb;
@@ -178,45 +176,7 @@ pub enum GeometryOut {
     },
 }
 
-#[derive(Serialize)]
-#[serde(tag = "type", rename_all = "snake_case")]
-pub enum LightOut {
-    Point {
-        position: [f32; 3],
-        intensity: [f32; 3],
-    },
-    Spot {
-        position: [f32; 3],
-        direction: [f32; 3],
-        up: [f32; 3],
-        intensity: [f32; 3],
-        cutoff_angle: f32,
-        beam_width: f32,
-    },
-    /// `direction` is the way the light travels.
-    Distant {
-        direction: [f32; 3],
-        irradiance: [f32; 3],
-    },
-    Constant {
-        radiance: [f32; 3],
-    },
-    /// An equirectangular map (absolute path); `to_world` maps Mitsuba's map axes to
-    /// the world.
-    EnvMap {
-        filename: String,
-        to_world: [f64; 16],
-        scale: f32,
-    },
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Unsupported {
-    #[serde(rename = "where")]
-    pub location: String,
-    pub what: String,
-    pub why: String,
-}
+pub use crate::mitsuba::{LightOut, Unsupported};
 
 /// Quadric tessellation: cells around the full φ range and along v.
 const PHI_CELLS: u32 = 96;
@@ -259,7 +219,7 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
             out
         })
         .collect();
-    let lights = scene.lights.iter().filter_map(|d| light(d, &Light::from_desc(d), &mut notes)).collect();
+    let lights = scene.lights.iter().map(|d| d.mitsuba(&mut notes)).collect();
     Export {
         format: "pbrt-sppm-export",
         version: 1,
@@ -282,7 +242,7 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
 }
 
 fn note(location: &str, what: &str, why: impl Into<String>) -> Unsupported {
-    Unsupported { location: location.to_string(), what: what.to_string(), why: why.into() }
+    Unsupported::new(location, what, why)
 }
 
 fn camera(scene: &SceneDescription, notes: &mut Vec<Unsupported>) -> CameraOut {
@@ -391,49 +351,6 @@ fn material(m: &MaterialDesc, textures: &Textures, index: usize, notes: &mut Vec
     }
 }
 
-fn light(d: &LightDesc, l: &Light, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
-    Some(match l {
-        Light::Point { p, i } => LightOut::Point { position: p.to_array(), intensity: i.to_array() },
-        Light::Spot { p, frame, i, cos_total, cos_start, smooth } => {
-            if cos_start > cos_total {
-                let ours = if *smooth { "smoothstep in cos θ (v4)" } else { "quartic in cos θ (v3)" };
-                notes.push(note("", "spot light falloff", format!("Mitsuba's is linear in θ, pbrt's {ours}")));
-            }
-            LightOut::Spot {
-                position: p.to_array(),
-                direction: frame[2].to_array(),
-                up: frame[1].to_array(),
-                intensity: i.to_array(),
-                cutoff_angle: cos_total.clamp(-1.0, 1.0).acos().to_degrees(),
-                beam_width: cos_start.clamp(-1.0, 1.0).acos().to_degrees(),
-            }
-        }
-        Light::Distant { w, l } => LightOut::Distant { direction: (-*w).to_array(), irradiance: l.to_array() },
-        Light::Infinite { l, map: None } => LightOut::Constant { radiance: l.to_array() },
-        Light::Infinite { l, map: Some(_) } => env_map(d, *l, notes)?,
-        Light::Area { .. } => return None,
-    })
-}
-
-/// An environment map for Mitsuba's `envmap`, which reads directions as
-/// (atan2(x, −z)/2π, acos(y)/π) where pbrt reads (atan2(y, x)/2π, acos(z)/π): its
-/// axes are ours through a reflection, (x, y, z)_mitsuba = (y, z, −x)_pbrt.
-fn env_map(d: &LightDesc, l: Rgb, notes: &mut Vec<Unsupported>) -> Option<LightOut> {
-    let LightKind::Infinite { map: Some(map), .. } = &d.kind else { return None };
-    let path = std::path::absolute(&map.path).unwrap_or_else(|_| map.path.clone());
-    if l.max_element() - l.min_element() > 1e-6 * l.max_element() {
-        notes.push(note("", "environment map scale", "a coloured scale has no Mitsuba equivalent; its mean is used"));
-    }
-    let rotation = DMat3::from_mat4(d.world_from_light);
-    let pbrt_from_mitsuba = DMat3::from_cols(DVec3::Y, DVec3::Z, -DVec3::X);
-    let to_world = DMat4::from_mat3(rotation * pbrt_from_mitsuba);
-    Some(LightOut::EnvMap {
-        filename: path.display().to_string(),
-        to_world: row_major(&to_world),
-        scale: (l.x + l.y + l.z) / 3.0,
-    })
-}
-
 /// One shape in its own space: the world for world shapes, its object's for object
 /// shapes (which cannot emit, in pbrt-sppm as in Mitsuba).
 fn shape(scene: &SceneDescription, s: &ShapeDesc, world: bool, index: u32, notes: &mut Vec<Unsupported>) -> ShapeOut {
@@ -443,7 +360,7 @@ fn shape(scene: &SceneDescription, s: &ShapeDesc, world: bool, index: u32, notes
             notes.push(note("", &format!("shape {index}"), "two-sided area light: Mitsuba's emit on one side"));
         }
         let area = scene.placed_area(&PlacedShape { shape: s, object_to_world: s.object_to_world, instance: None });
-        Emission { radiance: crate::render::area_emission(a, area).to_array(), two_sided: a.two_sided }
+        Emission { radiance: a.emission(area).to_array(), two_sided: a.two_sided }
     });
     let geometry = match &s.geometry {
         Geometry::Quadric(q) => quadric(q, &s.object_to_world, s.reverse_orientation),

@@ -3,7 +3,10 @@
 //! the same folder and are renamed into place, so a crash never leaves half an image.
 //! Reading accepts half and float EXRs (pbrt-v3 writes half, pbrt-v4 float) and PNGs.
 
+pub mod lookup;
 pub mod metrics;
+
+pub use lookup::{Wrap, lookup};
 
 use exr::prelude::*;
 use std::path::{Path, PathBuf};

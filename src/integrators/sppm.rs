@@ -519,7 +519,7 @@ fn direct_light(
     let (u_light, u_bsdf, u_lobe) = (sampler.get2d(), sampler.get2d(), sampler.get1d());
     let ns = bsdf.shading_normal();
     let mut ld = Vec3::ZERO;
-    if let Some(ls) = light.sample_li(&scene.geometry, si.p.0, u_light)
+    if let Some(ls) = light.sample_li(&scene.geometry.shapes, si.p.0, u_light)
         && !scene.emission_masked(light, ls.surface.as_ref())
     {
         let f = bsdf.f(wo, ls.wi) * ls.wi.dot(ns).abs();
@@ -569,7 +569,7 @@ fn bsdf_strategy(
     if li == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let light_pdf = light.pdf_li(&scene.geometry, ray.o.0, s.wi);
+    let light_pdf = light.pdf_li(&scene.geometry.shapes, ray.o.0, s.wi);
     if light_pdf <= 0.0 {
         return Vec3::ZERO;
     }
@@ -616,7 +616,7 @@ fn trace_photon(
     let Some((li, light_pdf)) = scene.light_power.sample(sampler.get1d()) else { return PhotonPath::default() };
     let light: &Light = &scene.lights[li];
     let (u1, u2) = (sampler.get2d(), sampler.get2d());
-    let Some(e) = light.sample_le(&scene.geometry, scene.world, u1, u2) else { return PhotonPath::default() };
+    let Some(e) = light.sample_le(&scene.geometry.shapes, scene.world, u1, u2) else { return PhotonPath::default() };
     if scene.emission_masked(light, e.surface.as_ref()) {
         return PhotonPath::default();
     }

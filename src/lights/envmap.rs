@@ -9,9 +9,7 @@
 //! image's top row (θ = 0 is light-space +z). Directions are importance sampled from a
 //! 2D piecewise-constant distribution of luminance × sin θ, with the matching pdf.
 
-use crate::imageio::RgbImage;
-use crate::materials::lookup;
-use crate::scene::Wrap;
+use crate::imageio::{RgbImage, Wrap, lookup};
 use crate::spectrum::{Rgb, luminance};
 use glam::{DMat3, DVec3, Vec3};
 use std::f32::consts::PI;

@@ -22,6 +22,19 @@ pub struct BsdfSample {
     pub proportional: bool,
 }
 
+/// A BSDF evaluated for a pair of directions, both ways: what bidirectional methods
+/// need at a vertex (see [`Bsdf::eval`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfEval {
+    /// f(ωo, ωi) for the quantity carried (`mode`).
+    pub f: Rgb,
+    /// The density of sampling ωi from ωo, as this path's walk does.
+    pub pdf: f32,
+    /// The density of sampling ωo from ωi, as a walk of the adjoint quantity coming the
+    /// other way does.
+    pub pdf_rev: f32,
+}
+
 /// How lobes combine where the shading normal differs from the geometric one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Convention {
@@ -163,12 +176,29 @@ impl Bsdf {
     }
 
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.pdf_mode(wo, wi, TransportMode::Radiance)
+    }
+
+    /// The density `sample_f` gives ωi from ωo when carrying `mode` (a layered
+    /// material's walk depends on it; lobes' densities do not).
+    pub fn pdf_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> f32 {
         let (o, i) = (self.local(wo), self.local(wi));
         if let Lobes::Layered(l) = &self.lobes {
-            return if o.z == 0.0 { 0.0 } else { l.pdf(o, i, TransportMode::Radiance) };
+            return if o.z == 0.0 { 0.0 } else { l.pdf(o, i, mode) };
         }
         let n = self.lobes().len().max(1) as f32;
         self.lobes().iter().map(|l| l.pdf(o, i)).sum::<f32>() / n
+    }
+
+    /// f and the densities both ways for the pair (ωo, ωi), carrying `mode` from ωo's
+    /// side: the forward density is this walk's, the reverse one the adjoint walk's
+    /// (from ωi back to ωo). Specular lobes give 0 for any given pair, as in pbrt.
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> BsdfEval {
+        BsdfEval {
+            f: self.f_mode(wo, wi, mode),
+            pdf: self.pdf_mode(wo, wi, mode),
+            pdf_rev: self.pdf_mode(wi, wo, mode.adjoint()),
+        }
     }
 
     /// Samples ωi for ωo; `u_lobe` chooses the lobe and then, rescaled, between a

@@ -18,10 +18,10 @@ pub mod noise;
 mod textures;
 mod transport;
 
-pub use bsdf::{Bsdf, BsdfSample, Convention};
+pub use bsdf::{Bsdf, BsdfEval, BsdfSample, Convention};
 use lobes::{Lobe, MAX_LOBES, oren_nayar_ab};
 use microfacet::{Fresnel, TrowbridgeReitz};
-pub use textures::{TexCtx, Textures, lookup};
+pub use textures::{TexCtx, Textures};
 pub use transport::TransportMode;
 
 use crate::fixes::{Fix, Fixes};

@@ -7,8 +7,9 @@
 
 use super::noise::{fbm, noise2, turbulence};
 use crate::fixes::{Fix, Fixes};
-use crate::imageio::RgbImage;
-use crate::scene::{Mapping2D, TexValue, TextureDesc, TextureKind, Wrap};
+
+use crate::imageio::lookup;
+use crate::scene::{Mapping2D, TexValue, TextureDesc, TextureKind};
 use crate::spectrum::Rgb;
 use glam::{Mat4, Vec3};
 use std::f32::consts::PI;
@@ -184,32 +185,6 @@ fn marble(t: f32, v3_segments: bool) -> Rgb {
     let (s0, s1, s2) = (l(c[0], c[1]), l(c[1], c[2]), l(c[2], c[3]));
     let (s0, s1) = (l(s0, s1), l(s1, s2));
     1.5 * l(s0, s1)
-}
-
-/// Bilinear lookup at (s, t) with t = 0 at the bottom row unless `top_down`.
-pub fn lookup(img: &RgbImage, s: f32, t: f32, wrap: Wrap, top_down: bool) -> Rgb {
-    let (w, h) = (img.width as i64, img.height as i64);
-    if w == 0 || h == 0 {
-        return Vec3::ZERO;
-    }
-    let y = if top_down { t } else { 1.0 - t };
-    let (x, y) = (s * w as f32 - 0.5, y * h as f32 - 0.5);
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let texel = |xi: i64, yi: i64| -> Rgb {
-        let (xi, yi) = match wrap {
-            Wrap::Repeat => (xi.rem_euclid(w), yi.rem_euclid(h)),
-            Wrap::Clamp => (xi.clamp(0, w - 1), yi.clamp(0, h - 1)),
-            Wrap::Black if xi < 0 || yi < 0 || xi >= w || yi >= h => return Vec3::ZERO,
-            Wrap::Black => (xi, yi),
-        };
-        Vec3::from(img.pixels[(yi * w + xi) as usize])
-    };
-    let (x0, y0) = (x0 as i64, y0 as i64);
-    (1.0 - fx) * (1.0 - fy) * texel(x0, y0)
-        + fx * (1.0 - fy) * texel(x0 + 1, y0)
-        + (1.0 - fx) * fy * texel(x0, y0 + 1)
-        + fx * fy * texel(x0 + 1, y0 + 1)
 }
 
 #[cfg(test)]

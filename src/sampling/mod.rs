@@ -4,7 +4,7 @@
 //! (pixel and iteration, or iteration and photon index, plus the scene seed), so the
 //! thread count never changes which samples are drawn.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 mod sobol;
 pub use sobol::SobolSample;
@@ -95,7 +95,7 @@ pub fn power_heuristic(f: f32, g: f32) -> f32 {
 
 /// Cosine-weighted direction about +z.
 pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
-    let d = crate::camera::concentric_disk(u);
+    let d = concentric_disk(u);
     Vec3::new(d.x, d.y, (1.0 - d.length_squared()).max(0.0).sqrt())
 }
 
@@ -150,4 +150,18 @@ impl Distribution1D {
         let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
         ((self.cdf[i] - lo) / self.total) as f32
     }
+}
+
+/// Concentric mapping of the unit square to the unit disk (Shirley–Chiu).
+pub fn concentric_disk(u: [f32; 2]) -> Vec2 {
+    let o = Vec2::new(2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
+    if o == Vec2::ZERO {
+        return o;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, std::f32::consts::FRAC_PI_4 * (o.y / o.x))
+    } else {
+        (o.y, std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y))
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
 }

@@ -848,7 +848,7 @@ impl Builder {
 
     fn area_light(&mut self, e: Entity) -> Res<()> {
         self.evidence("AreaLightSource", &e.name.clone(), e.name_span);
-        if !matches!(e.name.as_str(), "diffuse" | "area") {
+        if !crate::lights::diffuse::NAMES.contains(&e.name.as_str()) {
             let what = format!("AreaLightSource \"{}\"", e.name);
             self.skip(e.name_span, what, "this area light type is not supported".into());
             self.gs.area_light = None;

@@ -30,7 +30,7 @@ pub fn evidence(directive: &str, ty: &str) -> Option<Syntax> {
         },
         ("Shape", "cone" | "paraboloid" | "hyperboloid" | "heightfield" | "nurbs") => Some(V3),
         ("Shape", "bilinearmesh") => Some(V4),
-        ("AreaLightSource", "area") => Some(V3),
+        ("AreaLightSource", t) => crate::lights::diffuse::evidence(t),
         ("Sampler", "lowdiscrepancy" | "02sequence" | "maxmindist" | "random") => Some(V3),
         ("Sampler", "zsobol" | "pmj02bn" | "paddedsobol" | "independent") => Some(V4),
         ("Integrator", "directlighting" | "whitted") => Some(V3),

@@ -38,13 +38,7 @@ use crate::spectrum::Rgb;
 use glam::{DMat4, DVec3, Mat4, Vec3};
 use std::sync::Arc;
 
-/// How image lookups treat coordinates outside [0, 1].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Wrap {
-    Repeat,
-    Clamp,
-    Black,
-}
+pub use crate::imageio::Wrap;
 
 /// (s, t) = (su·u + du, sv·v + dv).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -338,6 +338,20 @@ impl PatchMesh {
         Some(ShapeSample { p: Point3(p), n: Normal3(n), uv: st, pdf: Self::uv_pdf(c, uv) / jacobian })
     }
 
+    /// The area density `sample` gives the point `p` of the patch (whose normal is
+    /// `n`), found again by a short ray through `p` along the normal.
+    pub fn pdf_area(&self, patch: usize, p: Point3, n: Vec3) -> f32 {
+        let c = self.corners(patch);
+        let size = c.iter().map(|q| (*q - c[0]).abs().max_element()).fold(0.0f32, f32::max).max(1e-30);
+        let eps = 1e-3 * size + 1e-4 * p.0.abs().max_element();
+        let Some(hit) = self.intersect(patch, &Ray::new(Point3(p.0 + n * eps), Vector3(-n)), 2.0 * eps) else {
+            return 0.0;
+        };
+        let (dpdu, dpdv) = Self::derivatives(c, hit.uv[0], hit.uv[1]);
+        let jacobian = dpdu.cross(dpdv).length();
+        if jacobian == 0.0 { 0.0 } else { Self::uv_pdf(c, hit.uv) / jacobian }
+    }
+
     /// Solid-angle density of `sample` (converted at `reference`) along `wi`.
     pub fn pdf_solid_angle(&self, patch: usize, reference: Point3, wi: Vector3) -> f32 {
         let Some(hit) = self.intersect(patch, &Ray::new(reference, wi), f32::INFINITY) else { return 0.0 };

@@ -212,6 +212,15 @@ impl QuadricShape {
         Some(ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), uv, pdf: pdf as f32 })
     }
 
+    /// The area density [`QuadricShape::sample_area`] gives the surface point `p`.
+    pub fn pdf_area(&self, s: &QuadricSampler, p: Point3) -> f32 {
+        if let QuadricSampler::Pbrt { object_area } = s {
+            return (1.0 / object_area) as f32;
+        }
+        let uv = self.uv_of_object_point(self.render_from_object.inverse().transform_point3(p.0.as_dvec3()));
+        self.pdf_area_uv(s, uv) as f32
+    }
+
     /// The solid-angle density of [`QuadricShape::sample_solid_angle`] for direction `wi`
     /// (0 when the ray misses).
     pub fn pdf_solid_angle(&self, s: &QuadricSampler, reference: Point3, wi: Vector3) -> f32 {
@@ -279,6 +288,12 @@ impl TriangleMesh {
         let [t0, t1, t2] = self.uvs(tri);
         let uv = (b0 as f32 * t0 + b1 as f32 * t1 + b2 as f32 * t2).to_array();
         ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), uv, pdf: (1.0 / area) as f32 }
+    }
+
+    /// The area density of `sample_triangle`: one over the triangle's area.
+    pub fn pdf_triangle_area(&self, tri: usize) -> f32 {
+        let [p0, p1, p2] = self.vertices(tri);
+        (2.0 / (p1 - p0).cross(p2 - p0).length()) as f32
     }
 
     /// Solid-angle density of area-sampling triangle `tri` from `reference` along `wi`.

@@ -15,6 +15,7 @@ use super::sampling::{QuadricSampler, ShapeSample, area_to_solid_angle};
 use super::triangle::{MeshFlags, TriangleHit, TriangleMesh, WatertightRay, watertight};
 use crate::interaction::SurfaceInteraction;
 use crate::math::{Bounds3, Point3, Ray, Vector3};
+use glam::Vec3;
 use std::sync::Arc;
 
 /// A quadric's intersection cost in triangle tests, for SAH: its root solve with
@@ -193,6 +194,16 @@ impl ShapeSet {
         match reference {
             Some(r) => area_to_solid_angle(by_area, r),
             None => Some(by_area),
+        }
+    }
+
+    /// The area density `sample_piece` (by area) gives the point `p` of a piece, whose
+    /// normal there is `n`.
+    pub fn pdf_piece_area(&self, piece: &Piece, p: Point3, n: Vec3) -> f32 {
+        match piece {
+            Piece::Quadric { index, sampler } => self.quadrics[*index as usize].pdf_area(sampler, p),
+            Piece::Triangle { mesh, tri, .. } => self.meshes[*mesh as usize].pdf_triangle_area(*tri as usize),
+            Piece::Patch { mesh, patch, .. } => self.patches[*mesh as usize].pdf_area(*patch as usize, p, n),
         }
     }
 

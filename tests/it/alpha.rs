@@ -114,7 +114,7 @@ fn masked_fraction(s: &RenderScene) -> f64 {
     let masked = (0..n)
         .filter(|k| {
             let light = &s.lights[k % 2];
-            let ls = light.sample_li(&s.geometry, glam::Vec3::ZERO, rng.uniform2()).expect("a sample");
+            let ls = light.sample_li(&s.geometry.shapes, glam::Vec3::ZERO, rng.uniform2()).expect("a sample");
             s.emission_masked(light, ls.surface.as_ref())
         })
         .count();

@@ -148,7 +148,7 @@ fn power_on_a_mesh_is_per_triangle_in_pbrt_v4_and_whole_when_fixed() {
                 Shape \"trianglemesh\" \"point3 P\" [0 0 0 3 0 0 3 1 0 0 2 0] \"integer indices\" [0 1 2 0 2 3]";
     let emitted = |fixes: Fixes| {
         let rs = RenderScene::new(&scene_with(text, fixes));
-        let l: Vec<f32> = rs.lights.iter().map(|l| if let Light::Area { l, .. } = l { l.x } else { 0.0 }).collect();
+        let l: Vec<f32> = rs.lights.iter().map(|l| if let Light::Area(a) = l { a.l.x } else { 0.0 }).collect();
         (rs.lights.iter().map(|l| l.power(rs.world)).sum::<f64>(), l)
     };
     let (pbrt, l) = emitted(Fixes::NONE);

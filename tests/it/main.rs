@@ -12,6 +12,7 @@ mod fuzz_regressions;
 mod hostile;
 mod imgtool;
 mod instancing;
+mod interfaces;
 mod intersect;
 mod layout;
 mod mitsuba;

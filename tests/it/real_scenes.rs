@@ -73,16 +73,7 @@ fn caustic_glass_is_read_as_pbrt_reads_it() {
     assert_eq!(s.camera.fov, 30.0);
     let tys: Vec<&str> = s.materials.iter().map(|m| m.ty.as_str()).collect();
     assert_eq!(tys, ["glass", "uber"]);
-    use pbrt_sppm::scene::LightKind;
-    let kinds: Vec<&str> = s
-        .lights
-        .iter()
-        .map(|l| match l.kind {
-            LightKind::Spot { .. } => "spot",
-            LightKind::Infinite { .. } => "infinite",
-            _ => "other",
-        })
-        .collect();
+    let kinds: Vec<&str> = s.lights.iter().map(|l| l.name()).collect();
     assert_eq!(kinds, ["spot", "infinite"]);
     let crop = load_file(&dir.join("pbrt-v3-scenes/caustic-glass/f16-11a.pbrt")).expect("loads");
     // pbrt computes ceil(1400 · 0.3f) in f32: 420.00003 → 421.

@@ -35,7 +35,7 @@ impl Builder {
             }
         }
         if syntax == Syntax::V3 && self.built_materials.iter().any(|m| glossy(&m.kind)) {
-            let skies = self.pending_lights.iter().filter(|(e, _)| e.name == "infinite");
+            let skies = self.pending_lights.iter().filter(|(e, _)| e.name == crate::lights::infinite::NAME);
             found.extend(skies.map(|(e, _)| (e.name_span, Fix::SkyAfterGlossy)));
         }
         for s in self.shapes.iter().filter(|s| s.area_light.is_some()) {

@@ -5,13 +5,13 @@
 
 use super::{Builder, Res, Scope};
 use crate::imageio::RgbImage;
+use crate::lights::{self, LightContext, LightDesc};
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList};
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::scene::approx::Approx;
-use crate::scene::lights::{self, LightContext, LightDesc};
 use crate::scene::materials::{self, MaterialDesc, MaterialKind, Resolver, TexValue};
 use crate::scene::shapes::AlphaParams;
 use crate::scene::textures::{self, TextureDesc, TextureKind, TextureSite};
@@ -63,7 +63,7 @@ impl Builder {
         let pending = std::mem::take(&mut self.pending_lights);
         let mut out = Vec::new();
         for (e, ctm) in pending {
-            if self.syntax() == Syntax::V4 && e.name == "infinite" && e.params.named("filename").is_some() {
+            if self.syntax() == Syntax::V4 && e.name == lights::infinite::NAME && e.params.named("filename").is_some() {
                 let at = e.params.named("filename").map_or(e.name_span, |p| p.span);
                 self.note(at, "environment map".into(), Approx::EqualAreaMap);
             }
@@ -85,7 +85,7 @@ impl Builder {
                     warnings: &mut warnings,
                     missing: &mut note_missing,
                 };
-                lights::light(&e.name, &e.params, &ctm, e.name_span, &mut ctx)
+                lights::read(&e.name, &e.params, &ctm, e.name_span, &mut ctx)
             };
             self.warnings.append(&mut warnings);
             for (at, what) in missing {
@@ -131,7 +131,7 @@ impl Builder {
         for i in used {
             let e = std::mem::replace(&mut self.area_light_entities[i as usize].0, Entity::default_named(""));
             let mut warnings = Vec::new();
-            let desc = lights::area_light(&e.name, &e.params, &self.spectrum_context(true), &mut warnings);
+            let desc = lights::diffuse::read(&e.name, &e.params, &self.spectrum_context(true), &mut warnings);
             self.warnings.append(&mut warnings);
             let desc = desc?.ok_or_else(|| Diagnostic::error(e.name_span, "unsupported area light"))?;
             finish_params(&e.params, &mut self.warnings)?;

@@ -1,0 +1,195 @@
+//! `LightSource "infinite"`: light from every direction, constant or from an
+//! equirectangular environment map ([`super::envmap`]).
+//!
+//! ```text
+//! LightSource "infinite" "rgb L" [.1 .1 .1]
+//! LightSource "infinite" "string mapname" "sky.exr"            # v3 (v4: "filename")
+//! LightSource "infinite" "string filename" "sky.exr" "float illuminance" 1000   # v4
+//! ```
+//! v4's `illuminance` scales the light so that an upward-facing surface (light-space
+//! +z) receives that many lux. A map that cannot be read leaves the constant `L`, with a
+//! located warning. Photons start on a disk of the scene's bounding sphere.
+
+use super::envmap::EnvMap;
+use super::params::{LightContext, emission, illuminance};
+use super::{Emission, LightKind, LightSample, WorldSphere};
+use crate::imageio::RgbImage;
+use crate::math::frame::coordinate_system;
+use crate::math::transform::row_major;
+use crate::math::{Point3, Ray, Vector3};
+use crate::mitsuba::{LightOut, Unsupported};
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::sampling::{concentric_disk, uniform_sphere};
+use crate::scene::values::{self, Res};
+use crate::spectrum::{Rgb, luminance};
+use glam::{DMat3, DMat4, DVec3, Vec3};
+use std::f32::consts::PI;
+use std::sync::Arc;
+
+pub const NAME: &str = "infinite";
+
+/// An equirectangular environment map and its orientation.
+#[derive(Clone, Debug)]
+pub struct EnvMapDesc {
+    /// The file name as the scene wrote it, and where it was read from.
+    pub filename: String,
+    pub path: std::path::PathBuf,
+    pub image: Arc<RgbImage>,
+    pub world_from_light: DMat3,
+}
+
+/// An infinite light as read; `l` scales the map when there is one.
+#[derive(Clone, Debug)]
+pub struct Infinite {
+    pub l: Rgb,
+    pub map: Option<EnvMapDesc>,
+}
+
+pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Res<LightKind> {
+    values::ignored(p, &["portal"], "portals are not supported; the whole map is sampled", ctx.warnings);
+    let mut l = emission(p, "L", &ctx.spectra)?;
+    let map = map(p, m, ctx)?;
+    if let Some(e) = illuminance(p)? {
+        let up = match &map {
+            None => PI * luminance(l),
+            Some(env) => upper_hemisphere_illuminance(&env.image) * luminance(l),
+        };
+        l *= e / up.max(1e-9);
+    }
+    Ok(LightKind::Infinite(Infinite { l, map }))
+}
+
+/// The map `mapname` (v3) or `filename` (v4) names, if it can be read.
+fn map(p: &ParamList, m: &DMat4, ctx: &mut LightContext) -> Res<Option<EnvMapDesc>> {
+    let name = match p.string("mapname")? {
+        Some(n) => Some((n, "mapname")),
+        None => p.string("filename")?.map(|n| (n, "filename")),
+    };
+    let Some((filename, param)) = name.filter(|(n, _)| !n.is_empty()) else { return Ok(None) };
+    let at = p.named(param).map_or(Span::default(), |q| q.value_span);
+    match (ctx.image)(&filename) {
+        Ok(image) => {
+            let path = crate::parser::stmt::resolve_relative(ctx.spectra.base_dir, &filename);
+            Ok(Some(EnvMapDesc { filename, path, image, world_from_light: DMat3::from_mat4(*m) }))
+        }
+        Err(e) => {
+            (ctx.missing)(at, format!("environment map ({e})"));
+            Ok(None)
+        }
+    }
+}
+
+/// ∫ over the map's upper hemisphere (θ < π/2) of luminance · cos θ dω, for the
+/// equirectangular mapping (row = θ).
+fn upper_hemisphere_illuminance(img: &RgbImage) -> f32 {
+    use std::f64::consts::PI;
+    let (w, h) = (img.width, img.height);
+    let cell = (PI / h as f64) * (2.0 * PI / w as f64);
+    let mut sum = 0.0;
+    for y in 0..h {
+        let theta = (y as f64 + 0.5) / h as f64 * PI;
+        if theta >= PI / 2.0 {
+            break;
+        }
+        let row: f64 = img.pixels[y * w..(y + 1) * w].iter().map(|px| luminance(Vec3::from(*px)) as f64).sum();
+        sum += row * theta.cos() * theta.sin() * cell;
+    }
+    sum as f32
+}
+
+impl Infinite {
+    /// Mitsuba's `constant`, or its `envmap`, which reads directions as
+    /// (atan2(x, −z)/2π, acos(y)/π) where pbrt reads (atan2(y, x)/2π, acos(z)/π): its
+    /// axes are ours through a reflection, (x, y, z)_mitsuba = (y, z, −x)_pbrt.
+    pub fn mitsuba(&self, world_from_light: &DMat4, notes: &mut Vec<Unsupported>) -> LightOut {
+        let (l, Some(map)) = (self.l, &self.map) else { return LightOut::Constant { radiance: self.l.to_array() } };
+        let path = std::path::absolute(&map.path).unwrap_or_else(|_| map.path.clone());
+        if l.max_element() - l.min_element() > 1e-6 * l.max_element() {
+            let why = "a coloured scale has no Mitsuba equivalent; its mean is used";
+            notes.push(Unsupported::new("", "environment map scale", why));
+        }
+        let rotation = DMat3::from_mat4(*world_from_light);
+        let pbrt_from_mitsuba = DMat3::from_cols(DVec3::Y, DVec3::Z, -DVec3::X);
+        let to_world = DMat4::from_mat3(rotation * pbrt_from_mitsuba);
+        LightOut::EnvMap {
+            filename: path.display().to_string(),
+            to_world: row_major(&to_world),
+            scale: (l.x + l.y + l.z) / 3.0,
+        }
+    }
+}
+
+/// An infinite light ready to sample.
+#[derive(Clone, Debug)]
+pub struct InfiniteLight {
+    pub l: Rgb,
+    pub map: Option<Arc<EnvMap>>,
+}
+
+impl InfiniteLight {
+    pub fn new(d: &Infinite) -> InfiniteLight {
+        let map = d.map.as_ref().map(|m| Arc::new(EnvMap::new(m.image.clone(), d.l, m.world_from_light)));
+        InfiniteLight { l: d.l, map }
+    }
+
+    pub fn power(&self, world: WorldSphere) -> f64 {
+        let r2 = (world.radius as f64).powi(2);
+        let lum = match &self.map {
+            None => luminance(self.l),
+            Some(env) => env.average_luminance,
+        };
+        lum as f64 * std::f64::consts::PI * r2
+    }
+
+    pub fn sample_li(&self, u: [f32; 2]) -> Option<LightSample> {
+        let (wi, li, pdf) = match &self.map {
+            None => (uniform_sphere(u), self.l, 1.0 / (4.0 * PI)),
+            Some(env) => {
+                let (wi, pdf) = env.sample(u)?;
+                (wi, env.le(wi), pdf)
+            }
+        };
+        (pdf > 0.0).then_some(LightSample { wi, li, pdf, p_light: None, delta: false, surface: None })
+    }
+
+    /// The solid-angle density `sample_li` gives direction `wi`.
+    pub fn pdf_li(&self, wi: Vec3) -> f32 {
+        match &self.map {
+            None => 1.0 / (4.0 * PI),
+            Some(env) => env.pdf(wi),
+        }
+    }
+
+    /// A photon: a direction toward the environment, then a start on the disk of the
+    /// world's radius facing it.
+    pub fn sample_le(&self, world: WorldSphere, u1: [f32; 2], u2: [f32; 2]) -> Option<Emission> {
+        // w points toward the environment; photons travel along d = −w.
+        let (w, pdf_dir, le) = match &self.map {
+            None => (uniform_sphere(u1), 1.0 / (4.0 * PI), self.l),
+            Some(env) => {
+                let (w, pdf) = env.sample(u1)?;
+                (w, pdf, env.le(w))
+            }
+        };
+        let (d, r) = (-w, world.radius);
+        let (a, b) = coordinate_system(w);
+        let cd = concentric_disk(u2);
+        let o = world.center + r * (cd.x * a + cd.y * b) + r * w;
+        let ray = Ray::new(Point3(o), Vector3(d));
+        Some(Emission { ray, n: d, pdf_pos: 1.0 / (PI * r * r), pdf_dir, le, surface: None })
+    }
+
+    /// (position, direction) densities of an emission travelling along `d`.
+    pub fn pdf_le(&self, world: WorldSphere, d: Vec3) -> (f32, f32) {
+        (1.0 / (PI * world.radius * world.radius), self.pdf_li(-d))
+    }
+
+    /// Radiance along a ray that escapes in direction `d`.
+    pub fn le(&self, d: Vec3) -> Rgb {
+        match &self.map {
+            None => self.l,
+            Some(env) => env.le(d.normalize()),
+        }
+    }
+}

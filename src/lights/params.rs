@@ -1,0 +1,63 @@
+//! Parameters several light types read alike: emission with `scale`, v4's `power`,
+//! finite points and the `from`/`to` direction.
+
+use crate::imageio::RgbImage;
+use crate::parser::Syntax;
+use crate::parser::error::Diagnostic;
+use crate::parser::params::{ParamList, ParamType};
+use crate::parser::source::Span;
+use crate::scene::values::{self, Range, Res, SpectrumContext};
+use crate::spectrum::Rgb;
+use glam::{DMat4, DVec3, Vec3};
+use std::sync::Arc;
+
+/// What reading a light needs besides its parameters.
+pub struct LightContext<'a> {
+    pub syntax: Syntax,
+    pub spectra: SpectrumContext<'a>,
+    /// Reads an image (cached) for environment maps; errors are plain messages.
+    pub image: &'a mut dyn FnMut(&str) -> Result<Arc<RgbImage>, String>,
+    pub warnings: &'a mut Vec<Diagnostic>,
+    /// Notes an image that cannot be read (the light then uses its constant `L`).
+    pub missing: &'a mut dyn FnMut(Span, String),
+}
+
+/// Light emission: the spectrum `name` (default 1) times `scale` (a float, or in v3 a
+/// spectrum).
+pub fn emission(p: &ParamList, name: &str, spectra: &SpectrumContext) -> Res<Rgb> {
+    let l = values::rgb(p, name, spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE);
+    let scale = if values::given(p, "scale", &[ParamType::Float]) {
+        Vec3::splat(values::float(p, "scale", 1.0, Range::NonNegative)?)
+    } else {
+        values::rgb(p, "scale", spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE)
+    };
+    Ok(l * scale)
+}
+
+pub fn point3(p: &ParamList, name: &str, default: [f32; 3]) -> Res<DVec3> {
+    let v = p.point3(name)?.unwrap_or(default);
+    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+        let param = p.named(name).map_or(Span::default(), |q| q.value_span);
+        return Err(Diagnostic::error(param, format!("\"{name}\" must be finite, not {x}")));
+    }
+    Ok(DVec3::from(v.map(f64::from)))
+}
+
+/// v4's `power` in watts, when given and positive (≤ 0 means "not given", as in pbrt).
+pub fn power(p: &ParamList) -> Res<Option<f32>> {
+    Ok(Some(values::float(p, "power", -1.0, Range::Any)?).filter(|&w| w > 0.0))
+}
+
+/// v4's `illuminance` (distant and infinite lights), when given and positive.
+pub fn illuminance(p: &ParamList) -> Res<Option<f32>> {
+    Ok(Some(values::float(p, "illuminance", -1.0, Range::Any)?).filter(|&e| e > 0.0))
+}
+
+/// `from` and the unit direction from `from` to `to` in world space.
+pub fn direction(p: &ParamList, m: &DMat4, span: Span) -> Res<(DVec3, DVec3)> {
+    let (from, to) = (point3(p, "from", [0.0; 3])?, point3(p, "to", [0.0, 0.0, 1.0])?);
+    let d = m.transform_vector3(to - from).try_normalize().ok_or_else(|| {
+        Diagnostic::error(span, "\"from\" and \"to\" must be different points (they give the light's direction)")
+    })?;
+    Ok((from, d))
+}

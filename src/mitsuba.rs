@@ -1,0 +1,53 @@
+//! The scene as `pbrt-sppm export --mitsuba` writes it for Mitsuba 3: plain data that
+//! `tools/mitsuba_reference.py` reads. Each light type writes its own entry (its module's
+//! `mitsuba`); `cli::export` assembles the whole.
+
+use serde::Serialize;
+
+/// A light, in world space (area lights go with their shapes).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum LightOut {
+    Point {
+        position: [f32; 3],
+        intensity: [f32; 3],
+    },
+    Spot {
+        position: [f32; 3],
+        direction: [f32; 3],
+        up: [f32; 3],
+        intensity: [f32; 3],
+        cutoff_angle: f32,
+        beam_width: f32,
+    },
+    /// `direction` is the way the light travels.
+    Distant {
+        direction: [f32; 3],
+        irradiance: [f32; 3],
+    },
+    Constant {
+        radiance: [f32; 3],
+    },
+    /// An equirectangular map (absolute path); `to_world` maps Mitsuba's map axes to
+    /// the world.
+    EnvMap {
+        filename: String,
+        to_world: [f64; 16],
+        scale: f32,
+    },
+}
+
+/// What an export could not carry over alike, where in the scene, and why.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Unsupported {
+    #[serde(rename = "where")]
+    pub location: String,
+    pub what: String,
+    pub why: String,
+}
+
+impl Unsupported {
+    pub fn new(location: &str, what: &str, why: impl Into<String>) -> Unsupported {
+        Unsupported { location: location.to_string(), what: what.to_string(), why: why.into() }
+    }
+}
