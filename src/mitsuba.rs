@@ -2,6 +2,7 @@
 //! `tools/mitsuba_reference.py` reads. Each light type writes its own entry (its module's
 //! `mitsuba`); `cli::export` assembles the whole.
 
+use crate::materials::params::TexValue;
 use serde::Serialize;
 
 /// A light, in world space (area lights go with their shapes).
@@ -49,5 +50,48 @@ pub struct Unsupported {
 impl Unsupported {
     pub fn new(location: &str, what: &str, why: impl Into<String>) -> Unsupported {
         Unsupported { location: location.to_string(), what: what.to_string(), why: why.into() }
+    }
+}
+
+/// A material (pbrt's types map to the nearest Mitsuba BSDF; what does not is noted).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum MaterialOut {
+    Diffuse {
+        reflectance: [f32; 3],
+    },
+    /// A perfect mirror scaled by `reflectance`.
+    Mirror {
+        reflectance: [f32; 3],
+    },
+    Dielectric {
+        eta: f32,
+        reflectance: [f32; 3],
+        transmittance: [f32; 3],
+    },
+    Conductor {
+        eta: [f32; 3],
+        k: [f32; 3],
+    },
+    /// GGX, α along the shading tangents.
+    RoughConductor {
+        eta: [f32; 3],
+        k: [f32; 3],
+        alpha: [f32; 2],
+    },
+    /// No surface: rays pass straight through.
+    None,
+}
+
+/// What a material's export needs from the exporter: its inputs as constants (a
+/// texture's mean, noted), and a place to note what does not go over alike.
+pub trait MaterialExport {
+    fn rgb(&mut self, t: TexValue) -> [f32; 3];
+    fn note(&mut self, why: &str);
+
+    /// A material exported as its diffuse part (noted).
+    fn diffuse_part(&mut self, reflectance: TexValue) -> MaterialOut {
+        self.note("no Mitsuba equivalent is exported yet; exported as its diffuse part");
+        MaterialOut::Diffuse { reflectance: self.rgb(reflectance) }
     }
 }

@@ -34,9 +34,7 @@
 use crate::camera::Camera;
 use crate::materials::{TexCtx, Textures};
 use crate::math::transform::row_major;
-use crate::scene::{
-    CameraKind, Geometry, MaterialDesc, MaterialKind, Metal, PlacedShape, SceneDescription, ShapeDesc, TexValue,
-};
+use crate::scene::{CameraKind, Geometry, MaterialDesc, PlacedShape, SceneDescription, ShapeDesc, TexValue};
 use crate::shapes::{Quadric, TriangleMesh};
 use crate::spectrum::Rgb;
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -89,35 +87,6 @@ pub struct FilmOut {
     /// Pixel bounds [x0, x1, y0, y1], half open.
     pub crop: [u32; 4],
     pub scale: f32,
-}
-
-#[derive(Serialize)]
-#[serde(tag = "type", rename_all = "snake_case")]
-pub enum MaterialOut {
-    Diffuse {
-        reflectance: [f32; 3],
-    },
-    /// A perfect mirror scaled by `reflectance`.
-    Mirror {
-        reflectance: [f32; 3],
-    },
-    Dielectric {
-        eta: f32,
-        reflectance: [f32; 3],
-        transmittance: [f32; 3],
-    },
-    Conductor {
-        eta: [f32; 3],
-        k: [f32; 3],
-    },
-    /// GGX, α along the shading tangents.
-    RoughConductor {
-        eta: [f32; 3],
-        k: [f32; 3],
-        alpha: [f32; 2],
-    },
-    /// No surface: rays pass straight through.
-    None,
 }
 
 #[derive(Serialize)]
@@ -176,7 +145,8 @@ pub enum GeometryOut {
     },
 }
 
-pub use crate::mitsuba::{LightOut, Unsupported};
+use crate::mitsuba::MaterialExport;
+pub use crate::mitsuba::{LightOut, MaterialOut, Unsupported};
 
 /// Quadric tessellation: cells around the full φ range and along v.
 const PHI_CELLS: u32 = 96;
@@ -292,63 +262,26 @@ fn flat(t: TexValue, textures: &Textures, what: &str, notes: &mut Vec<Unsupporte
     (sum / (N * N) as f32).to_array()
 }
 
+/// What a material's export reads and notes: its inputs flattened to constants.
+struct Flatten<'a> {
+    textures: &'a Textures,
+    what: String,
+    notes: &'a mut Vec<Unsupported>,
+}
+
+impl MaterialExport for Flatten<'_> {
+    fn rgb(&mut self, t: TexValue) -> [f32; 3] {
+        flat(t, self.textures, &self.what, self.notes)
+    }
+
+    fn note(&mut self, why: &str) {
+        self.notes.push(note("", &self.what, why));
+    }
+}
+
 fn material(m: &MaterialDesc, textures: &Textures, index: usize, notes: &mut Vec<Unsupported>) -> MaterialOut {
     let what = format!("material {index} (\"{}\")", m.ty);
-    let one = |t: TexValue, notes: &mut Vec<Unsupported>| flat(t, textures, &what, notes);
-    match &m.kind {
-        MaterialKind::Diffuse { reflectance } => MaterialOut::Diffuse { reflectance: one(*reflectance, notes) },
-        MaterialKind::Mirror { reflectance } => MaterialOut::Mirror { reflectance: one(*reflectance, notes) },
-        MaterialKind::Dielectric { eta, kr, kt, roughness, .. } => {
-            if roughness.iter().any(|r| *r != TexValue::Const(Vec3::ZERO)) {
-                notes.push(note("", &what, "rough dielectric: exported smooth"));
-            }
-            MaterialOut::Dielectric {
-                eta: one(*eta, notes)[0],
-                reflectance: one(*kr, notes),
-                transmittance: one(*kt, notes),
-            }
-        }
-        MaterialKind::Conductor { metal, roughness, remap } => {
-            let (eta, k) = match metal {
-                Metal::EtaK { eta, k } => (*eta, *k),
-                Metal::Reflectance(r) => Metal::eta_k_of_reflectance(Vec3::from(one(*r, notes))),
-            };
-            let alpha = roughness.map(|r| remap.alpha(one(r, notes)[0]));
-            if alpha[0] < 1e-3 && alpha[1] < 1e-3 {
-                return MaterialOut::Conductor { eta: eta.to_array(), k: k.to_array() };
-            }
-            if alpha[0] != alpha[1] {
-                notes.push(note("", &what, "anisotropic roughness: Mitsuba's tangent frame differs from pbrt's"));
-            }
-            MaterialOut::RoughConductor { eta: eta.to_array(), k: k.to_array(), alpha: alpha.map(|a| a.max(1e-3)) }
-        }
-        MaterialKind::OrenNayar { reflectance, .. }
-        | MaterialKind::Plastic { kd: reflectance, .. }
-        | MaterialKind::Uber { kd: reflectance, .. }
-        | MaterialKind::Translucent { kd: reflectance, .. }
-        | MaterialKind::Substrate { kd: reflectance, .. }
-        | MaterialKind::DiffuseTransmission { reflectance, .. } => {
-            notes.push(note("", &what, "no Mitsuba equivalent is exported yet; exported as its diffuse part"));
-            MaterialOut::Diffuse { reflectance: one(*reflectance, notes) }
-        }
-        MaterialKind::Coated(c) => {
-            notes.push(note(
-                "",
-                &what,
-                "coated: no Mitsuba equivalent is exported yet; exported as its diffuse base (grey over a conductor)",
-            ));
-            let reflectance = match c.base {
-                crate::scene::CoatBase::Diffuse { reflectance } => one(reflectance, notes),
-                _ => [0.5; 3],
-            };
-            MaterialOut::Diffuse { reflectance }
-        }
-        MaterialKind::Interface => MaterialOut::None,
-        MaterialKind::Mix { .. } => {
-            notes.push(note("", &what, "mix: no Mitsuba equivalent is exported yet; exported as grey diffuse"));
-            MaterialOut::Diffuse { reflectance: [0.5; 3] }
-        }
-    }
+    m.mitsuba(&mut Flatten { textures, what, notes })
 }
 
 /// One shape in its own space: the world for world shapes, its object's for object

@@ -1,34 +1,256 @@
-//! Materials and textures (RGB) and the BSDFs they produce at a hit.
+//! Materials, one module per type, each owning its parameters (names, defaults per
+//! version, located errors), the lobes it makes at a hit, and its Mitsuba export;
+//! [`REGISTRY`] is the one list of `Material` types. Textures ([`Textures`]) are
+//! evaluated at each hit; [`bsdf`] combines the lobes as pbrt's `BSDF` does.
 //!
 //! ```text
 //! Material "matte" "rgb Kd" [.5 .5 .5]        Material "diffuse" "texture reflectance" "checks"
-//! Material "glass" "float index" 1.5          Material "metal" "spectrum eta" "metal-Au-eta"
-//! Texture "checks" "spectrum" "checkerboard" "float uscale" 8 "rgb tex1" [1 0 0]
+//! Material "glass" "float index" 1.5          Material "dielectric" "float eta" 1.5
+//! Material "metal" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k" "float roughness" .1
+//! Material "plastic" "rgb Kd" [.4 .1 .1]      Material "coateddiffuse" "float roughness" .05
+//! Material "mix" "string materials" ["a" "b"] "float amount" .3
 //! ```
-//! Every parameter is settled by the scene description (`scene::materials`); this module
-//! turns typed materials into BSDFs, their inputs evaluated at each hit. Textures live
-//! in one array and refer to each other by index, so shared definitions are stored once
-//! (`textures`).
+//! pbrt-v3's material types build their BSDFs by pbrt-v3's rules (reflectances clamped
+//! only below 0, the geometric normal deciding reflection or transmission), pbrt-v4's
+//! by pbrt-v4's. A type we do not render is drawn as grey diffuse, noted as an
+//! approximation at its statement.
+//!
+//! Adding a material type: a module here with its name(s), `read`, `lobes` and
+//! `mitsuba`; a variant in [`MaterialKind`]; a line in [`REGISTRY`]; then the compiler
+//! lists the `match`es to extend ([`Material`]'s lobes, [`MaterialDesc::mitsuba`]).
 
 mod bsdf;
+pub mod coated;
+pub mod conductor;
+pub mod dielectric;
+pub mod diffuse;
+pub mod diffusetransmission;
+pub mod inputs;
+pub mod interface;
 pub mod layered;
 pub mod lobes;
+pub mod matte;
 pub mod microfacet;
+pub mod mirror;
+pub mod mix;
 pub mod noise;
+pub mod params;
+pub mod plastic;
+pub mod substrate;
 mod textures;
+pub mod translucent;
 mod transport;
+pub mod uber;
 
 pub use bsdf::{Bsdf, BsdfEval, BsdfSample, Convention};
-use lobes::{Lobe, MAX_LOBES, oren_nayar_ab};
-use microfacet::{Fresnel, TrowbridgeReitz};
+pub use coated::{CoatBase, Coated};
+pub use inputs::LobeList;
+pub use mix::MixRule;
+pub use params::{Metal, Resolver, RoughnessRemap, TexValue};
 pub use textures::{TexCtx, Textures};
 pub use transport::TransportMode;
 
-use crate::fixes::{Fix, Fixes};
-use crate::scene::{CoatBase, Coated, MaterialDesc, MaterialKind, Metal, RoughnessRemap, TexValue};
+use crate::fixes::Fixes;
+use crate::imageio::RgbImage;
+use crate::mitsuba::{MaterialExport, MaterialOut};
+use crate::parser::Syntax;
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::approx::Approx;
+use crate::scene::values::Res;
 use crate::spectrum::Rgb;
 use glam::Vec3;
-use layered::{Base, Coat, Layered};
+use inputs::{Inputs, Lobes, MATERIAL_LOBES, lambert};
+use std::sync::Arc;
+
+/// A `Material` type: the name scenes use, the pbrt version it belongs to (`None`:
+/// both), and its reader.
+pub struct MaterialType {
+    pub name: &'static str,
+    pub syntax: Option<Syntax>,
+    pub read: fn(&str, &ParamList, Span, &mut dyn Resolver) -> Res<MaterialKind>,
+}
+
+const fn ty(
+    name: &'static str,
+    syntax: Option<Syntax>,
+    read: fn(&str, &ParamList, Span, &mut dyn Resolver) -> Res<MaterialKind>,
+) -> MaterialType {
+    MaterialType { name, syntax, read }
+}
+
+const V3: Option<Syntax> = Some(Syntax::V3);
+const V4: Option<Syntax> = Some(Syntax::V4);
+
+/// Every `Material` type we render.
+pub const REGISTRY: [MaterialType; 18] = [
+    ty(matte::NAME, V3, matte::read),
+    ty(diffuse::NAME, V4, diffuse::read),
+    ty(mirror::NAME, V3, mirror::read),
+    ty(dielectric::NAMES[0], V3, dielectric::read),
+    ty(dielectric::NAMES[1], V4, dielectric::read),
+    ty(conductor::NAMES[0], V3, conductor::read),
+    ty(conductor::NAMES[1], V4, conductor::read),
+    ty(plastic::NAME, V3, plastic::read),
+    ty(uber::NAME, V3, uber::read),
+    ty(translucent::NAME, V3, translucent::read),
+    ty(substrate::NAME, V3, substrate::read),
+    ty(coated::NAMES[0], V4, coated::read),
+    ty(coated::NAMES[1], V4, coated::read),
+    ty(diffusetransmission::NAME, V4, diffusetransmission::read),
+    ty(interface::NAMES[0], V4, interface::read),
+    ty(interface::NAMES[1], V3, interface::read),
+    ty(interface::NAMES[2], V3, interface::read),
+    ty(mix::NAME, None, mix::read),
+];
+
+/// Types we do not render that still say which pbrt a file is for.
+const UNRENDERED: [(&str, Syntax); 5] = [
+    ("kdsubsurface", Syntax::V3),
+    ("fourier", Syntax::V3),
+    ("disney", Syntax::V3),
+    ("thindielectric", Syntax::V4),
+    ("measured", Syntax::V4),
+];
+
+/// The pbrt version a material type name proves, for syntax detection.
+pub fn evidence(ty: &str) -> Option<Syntax> {
+    match REGISTRY.iter().find(|t| t.name == ty) {
+        Some(t) => t.syntax,
+        None => UNRENDERED.iter().find(|u| u.0 == ty).map(|u| u.1),
+    }
+}
+
+/// The material of type `ty`; unsupported types become grey diffuse (noted).
+pub fn read(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
+    if let Some(t) = REGISTRY.iter().find(|t| t.name == ty) {
+        return (t.read)(ty, p, at, r);
+    }
+    p.mark_all_used();
+    r.approximate(at, format!("material \"{ty}\""), Approx::UnsupportedMaterial);
+    Ok(MaterialKind::Diffuse { reflectance: TexValue::Const(Vec3::splat(0.5)) })
+}
+
+/// A material some shape uses. Inputs are taken at each hit's (u, v); roughnesses are
+/// as written, turned into α by `remap` when shading.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialKind {
+    Diffuse {
+        reflectance: TexValue,
+    },
+    /// v3 `matte` with `sigma` (degrees) not zero.
+    OrenNayar {
+        reflectance: TexValue,
+        sigma: TexValue,
+    },
+    /// v3 `plastic`: Lambertian plus a microfacet coat of index 1.5.
+    Plastic {
+        kd: TexValue,
+        ks: TexValue,
+        roughness: TexValue,
+        remap: RoughnessRemap,
+    },
+    /// v3 `uber`: plastic-like layers plus specular reflection, transmission and opacity.
+    Uber {
+        kd: TexValue,
+        ks: TexValue,
+        kr: TexValue,
+        kt: TexValue,
+        roughness: [TexValue; 2],
+        eta: TexValue,
+        opacity: TexValue,
+        remap: RoughnessRemap,
+    },
+    /// v3 `translucent`: diffuse and glossy reflection and transmission.
+    Translucent {
+        kd: TexValue,
+        ks: TexValue,
+        reflect: TexValue,
+        transmit: TexValue,
+        roughness: TexValue,
+        remap: RoughnessRemap,
+    },
+    /// v3 `substrate` (Ashikhmin–Shirley).
+    Substrate {
+        kd: TexValue,
+        ks: TexValue,
+        roughness: [TexValue; 2],
+        remap: RoughnessRemap,
+    },
+    /// pbrt-v4 `diffusetransmission`: Lambertian reflection and transmission, both
+    /// multiplied by `scale` and clamped to [0, 1].
+    DiffuseTransmission {
+        reflectance: TexValue,
+        transmittance: TexValue,
+        scale: TexValue,
+    },
+    /// A perfect mirror tinted by `reflectance` (`mirror`).
+    Mirror {
+        reflectance: TexValue,
+    },
+    /// A dielectric; smooth when both roughnesses are 0.
+    Dielectric {
+        eta: TexValue,
+        kr: TexValue,
+        kt: TexValue,
+        roughness: [TexValue; 2],
+        remap: RoughnessRemap,
+    },
+    /// A conductor; smooth when both roughnesses give α below 10⁻³.
+    Conductor {
+        metal: Metal,
+        roughness: [TexValue; 2],
+        remap: RoughnessRemap,
+    },
+    /// pbrt-v4 `coateddiffuse` / `coatedconductor`: a dielectric coat over a base.
+    Coated(Box<Coated>),
+    /// No surface: rays continue straight through.
+    Interface,
+    /// Two materials (built indices) mixed by `amount`.
+    Mix {
+        materials: [u32; 2],
+        amount: TexValue,
+        rule: MixRule,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialDesc {
+    /// The type as written (`matte`, `diffuse`, `interface`, ...).
+    pub ty: String,
+    /// The `MakeNamedMaterial` name, if any.
+    pub name: Option<String>,
+    pub kind: MaterialKind,
+    /// A float texture displacing the surface along its shading normal (v3 `bumpmap`,
+    /// v4 `displacement`): it tilts the shading normal, as pbrt's bump mapping does.
+    pub bump: Option<TexValue>,
+    /// A v4 `normalmap` image, which replaces the bump map when both are given (as in
+    /// pbrt-v4).
+    pub normal_map: Option<Arc<RgbImage>>,
+}
+
+impl MaterialDesc {
+    /// The material for Mitsuba 3 (the nearest BSDF; what differs is noted).
+    pub fn mitsuba(&self, e: &mut dyn MaterialExport) -> MaterialOut {
+        match &self.kind {
+            MaterialKind::Diffuse { reflectance } => diffuse::mitsuba(*reflectance, e),
+            MaterialKind::OrenNayar { reflectance, .. } => matte::mitsuba(*reflectance, e),
+            MaterialKind::Mirror { reflectance } => mirror::mitsuba(*reflectance, e),
+            MaterialKind::Dielectric { eta, kr, kt, roughness, .. } => {
+                dielectric::mitsuba([*eta, *kr, *kt], roughness, e)
+            }
+            MaterialKind::Conductor { metal, roughness, remap } => conductor::mitsuba(metal, roughness, *remap, e),
+            MaterialKind::Plastic { kd, .. } => plastic::mitsuba(*kd, e),
+            MaterialKind::Uber { kd, .. } => uber::mitsuba(*kd, e),
+            MaterialKind::Translucent { kd, .. } => translucent::mitsuba(*kd, e),
+            MaterialKind::Substrate { kd, .. } => substrate::mitsuba(*kd, e),
+            MaterialKind::DiffuseTransmission { reflectance, .. } => diffusetransmission::mitsuba(*reflectance, e),
+            MaterialKind::Coated(c) => coated::mitsuba(c, e),
+            MaterialKind::Interface => interface::mitsuba(),
+            MaterialKind::Mix { .. } => mix::mitsuba(e),
+        }
+    }
+}
 
 /// A material ready to shade: the scene's description, its inputs evaluated at each hit.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,17 +265,14 @@ pub struct Material {
     /// The bump map (a float texture), if any.
     pub bump: Option<TexValue>,
     /// The normal map (tangent-space normals as stored), if any; it wins over `bump`.
-    pub normal_map: Option<std::sync::Arc<crate::imageio::RgbImage>>,
+    pub normal_map: Option<Arc<RgbImage>>,
     /// The pbrt bugs fixed (`--fix`).
     fixes: Fixes,
 }
 
-/// pbrt-v3's material types (the rest are pbrt-v4's): their BSDFs follow pbrt-v3.
-const V3_TYPES: [&str; 8] = ["matte", "plastic", "uber", "translucent", "substrate", "glass", "metal", "mirror"];
-
 impl Material {
     pub fn from_desc(m: &MaterialDesc, fixes: Fixes) -> Material {
-        let v3 = V3_TYPES.contains(&m.ty.as_str());
+        let v3 = REGISTRY.iter().any(|t| t.name == m.ty && t.syntax == V3);
         let (max_reflectance, convention) =
             if v3 { (f32::INFINITY, Convention::PbrtV3) } else { (1.0, Convention::PbrtV4) };
         let normal_map = m.normal_map.clone();
@@ -80,7 +299,7 @@ impl Material {
     #[inline(never)]
     fn layered_bsdf(&self, inputs: &Inputs<impl Fn() -> TexCtx>, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
         if let MaterialKind::Coated(c) = &self.kind {
-            return Some(Bsdf::layered(frame, coated(c, inputs)));
+            return Some(Bsdf::layered(frame, coated::layers(c, inputs)));
         }
         let mut lobes = Lobes::<MATERIAL_LOBES>::default();
         self.lobes(inputs, &mut lobes)?;
@@ -97,285 +316,35 @@ impl Material {
         }
     }
 
+    /// The lobes of this material at a hit, by its type's module.
     fn lobes<const N: usize>(&self, i: &Inputs<impl Fn() -> TexCtx>, out: &mut Lobes<N>) -> Option<()> {
         match &self.kind {
-            MaterialKind::Diffuse { reflectance } => {
-                lambert(i.refl(*reflectance)).into_iter().for_each(|l| out.push(l))
-            }
-            MaterialKind::OrenNayar { reflectance, sigma } => {
-                let r = i.refl(*reflectance);
-                match oren_nayar_ab(i.float(*sigma)) {
-                    (_, 0.0) => out.push_nonzero(r, Lobe::Lambert),
-                    (a, b) => out.push_nonzero(r, |r| Lobe::OrenNayar { r, a, b }),
-                }
-            }
+            MaterialKind::Diffuse { reflectance } => diffuse::lobes(*reflectance, i, out),
+            MaterialKind::OrenNayar { reflectance, sigma } => matte::lobes(*reflectance, *sigma, i, out),
             MaterialKind::DiffuseTransmission { reflectance, transmittance, scale } => {
-                let s = i.float(*scale);
-                out.push_nonzero(i.refl_scaled(*reflectance, s), Lobe::Lambert);
-                out.push_nonzero(i.refl_scaled(*transmittance, s), Lobe::LambertTransmission);
+                diffusetransmission::lobes([*reflectance, *transmittance, *scale], i, out)
             }
-            // Only inside a pbrt-v3 mix, which holds lobes: the base alone (noted).
-            MaterialKind::Coated(c) => match coated(c, i).bottom {
-                Base::Diffuse(r) => out.push_nonzero(r, Lobe::Lambert),
-                Base::Conductor { eta, k, dist, smooth } => {
-                    let fresnel = Fresnel::Conductor { eta, k };
-                    out.push(match smooth {
-                        true => Lobe::SpecularReflection { r: Vec3::ONE, fresnel },
-                        false => Lobe::MicrofacetReflection { r: Vec3::ONE, dist, fresnel },
-                    })
-                }
-            },
-            MaterialKind::Mirror { reflectance } => {
-                out.push(Lobe::SpecularReflection { r: i.rgb(*reflectance), fresnel: Fresnel::One })
-            }
+            MaterialKind::Coated(c) => coated::base_lobes(c, i, out),
+            MaterialKind::Mirror { reflectance } => mirror::lobes(*reflectance, i, out),
             MaterialKind::Dielectric { eta, kr, kt, roughness, remap } => {
-                // Smooth when the roughness as written is 0 (pbrt-v3: v3's remapping
-                // takes 0 to α ≈ 0.047) or α is below 10⁻³ (pbrt-v4's test).
-                let raw = roughness.map(|r| i.float(r));
-                let alpha = if raw == [0.0; 2] { raw } else { raw.map(|r| remap.alpha(r)) };
-                let alpha = if alpha.iter().all(|a| *a < 1e-3) { [0.0; 2] } else { alpha };
-                dielectric(i.float(*eta), i.refl(*kr), i.refl(*kt), alpha, self.convention, out)
+                dielectric::lobes([*eta, *kr, *kt], roughness, *remap, self.convention, i, out)
             }
-            MaterialKind::Conductor { metal, roughness, remap } => {
-                let (eta, k) = i.eta_k(metal);
-                let fresnel = Fresnel::Conductor { eta, k };
-                let alpha = i.alpha(roughness, *remap);
-                if alpha[0] < 1e-3 && alpha[1] < 1e-3 {
-                    out.push(Lobe::SpecularReflection { r: Vec3::ONE, fresnel });
-                } else {
-                    out.push(Lobe::MicrofacetReflection { r: Vec3::ONE, dist: TrowbridgeReitz::new(alpha), fresnel });
-                }
+            MaterialKind::Conductor { metal, roughness, remap } => conductor::lobes(metal, roughness, *remap, i, out),
+            MaterialKind::Plastic { kd, ks, roughness, remap } => {
+                plastic::lobes([*kd, *ks], *roughness, *remap, i, out)
             }
-            MaterialKind::Plastic { kd, ks, roughness, remap } => plastic(i, [*kd, *ks], *roughness, *remap, out),
             MaterialKind::Uber { kd, ks, kr, kt, roughness, eta, opacity, remap } => {
-                uber(i, [*kd, *ks, *kr, *kt, *eta, *opacity], roughness, *remap, out)
+                uber::lobes([*kd, *ks, *kr, *kt, *eta, *opacity], roughness, *remap, i, out)
             }
             MaterialKind::Translucent { kd, ks, reflect, transmit, roughness, remap } => {
-                translucent(i, [*kd, *ks, *reflect, *transmit], *roughness, *remap, out)
+                translucent::lobes([*kd, *ks, *reflect, *transmit], *roughness, *remap, i, out)
             }
             MaterialKind::Substrate { kd, ks, roughness, remap } => {
-                let (rd, rs) = (i.refl(*kd), i.refl(*ks));
-                if rd != Vec3::ZERO || rs != Vec3::ZERO {
-                    let dist = TrowbridgeReitz::new(i.alpha(roughness, *remap));
-                    out.push(Lobe::FresnelBlend { rd, rs, dist, scale: Vec3::ONE });
-                }
+                substrate::lobes([*kd, *ks], roughness, *remap, i, out)
             }
             // Mixes are resolved by the scene, which holds their materials.
             MaterialKind::Interface | MaterialKind::Mix { .. } => return None,
         }
         Some(())
-    }
-}
-
-/// pbrt-v3's plastic: Lambertian `kd` and a microfacet coat `ks` of index 1.5.
-fn plastic<const N: usize>(
-    i: &Inputs<impl Fn() -> TexCtx>,
-    [kd, ks]: [TexValue; 2],
-    roughness: TexValue,
-    remap: RoughnessRemap,
-    out: &mut Lobes<N>,
-) {
-    out.push_nonzero(i.refl(kd), Lobe::Lambert);
-    let a = remap.alpha(i.float(roughness));
-    let fresnel = match i.fixes.has(Fix::PlasticFresnel) {
-        true => Fresnel::Coat { eta: 1.5 },
-        false => Fresnel::SwappedCoat { eta: 1.5 },
-    };
-    let dist = TrowbridgeReitz::new([a, a]);
-    out.push_nonzero(i.refl(ks), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
-}
-
-/// pbrt-v3's uber: a pass-through of 1 − opacity, then each layer scaled by the opacity.
-fn uber<const N: usize>(
-    i: &Inputs<impl Fn() -> TexCtx>,
-    [kd, ks, kr, kt, eta, opacity]: [TexValue; 6],
-    roughness: &[TexValue; 2],
-    remap: RoughnessRemap,
-    out: &mut Lobes<N>,
-) {
-    let op = i.refl(opacity);
-    out.push_nonzero((Vec3::ONE - op).max(Vec3::ZERO), |t| Lobe::SpecularTransmission { t, eta: 1.0 });
-    let eta = i.float(eta);
-    out.push_nonzero(op * i.refl(kd), Lobe::Lambert);
-    let (dist, fresnel) = (TrowbridgeReitz::new(i.alpha(roughness, remap)), Fresnel::Dielectric { eta });
-    out.push_nonzero(op * i.refl(ks), |r| Lobe::MicrofacetReflection { r, dist, fresnel });
-    out.push_nonzero(op * i.refl(kr), |r| Lobe::SpecularReflection { r, fresnel });
-    out.push_nonzero(op * i.refl(kt), |t| Lobe::SpecularTransmission { t, eta });
-}
-
-/// pbrt-v3's translucent: diffuse and glossy (index 1.5) reflection and transmission.
-fn translucent<const N: usize>(
-    i: &Inputs<impl Fn() -> TexCtx>,
-    [kd, ks, reflect, transmit]: [TexValue; 4],
-    roughness: TexValue,
-    remap: RoughnessRemap,
-    out: &mut Lobes<N>,
-) {
-    let (r, t) = (i.refl(reflect), i.refl(transmit));
-    let (kd, ks) = (i.refl(kd), i.refl(ks));
-    out.push_nonzero(r * kd, Lobe::Lambert);
-    out.push_nonzero(t * kd, Lobe::LambertTransmission);
-    let a = remap.alpha(i.float(roughness));
-    let (dist, eta) = (TrowbridgeReitz::new([a, a]), 1.5);
-    let fresnel = Fresnel::Dielectric { eta };
-    out.push_nonzero(r * ks, |r| Lobe::MicrofacetReflection { r, dist, fresnel });
-    out.push_nonzero(t * ks, |t| Lobe::MicrofacetTransmission { t, dist, eta });
-}
-
-/// A coated material's layers at a hit (pbrt-v4's `CoatedDiffuseMaterial::GetBxDF`
-/// and `CoatedConductorMaterial::GetBxDF`).
-fn coated(c: &Coated, i: &Inputs<impl Fn() -> TexCtx>) -> Layered {
-    let alpha = |r: &[TexValue; 2]| i.alpha(r, c.remap);
-    let smooth = |a: [f32; 2]| a[0].max(a[1]) < 1e-3;
-    let a = alpha(&c.coat_roughness);
-    let top = Coat { eta: c.coat_eta, dist: TrowbridgeReitz::new(a), smooth: smooth(a) };
-    let conductor = |eta: Rgb, k: Rgb, r: &[TexValue; 2]| {
-        let a = alpha(r);
-        Base::Conductor { eta: eta / c.coat_eta, k: k / c.coat_eta, dist: TrowbridgeReitz::new(a), smooth: smooth(a) }
-    };
-    let bottom = match &c.base {
-        CoatBase::Diffuse { reflectance } => Base::Diffuse(i.refl(*reflectance)),
-        CoatBase::Conductor { metal, roughness } => {
-            let (eta, k) = i.eta_k(metal);
-            conductor(eta, k, roughness)
-        }
-    };
-    Layered {
-        top,
-        bottom,
-        thickness: i.float(c.thickness).max(f32::MIN_POSITIVE),
-        albedo: i.rgb(c.albedo).clamp(Vec3::ZERO, Vec3::ONE),
-        g: i.float(c.g).clamp(-1.0, 1.0),
-        max_depth: c.max_depth,
-        n_samples: c.n_samples,
-        fixed_weights: i.fixes.has(Fix::LayeredWeights),
-    }
-}
-
-/// A Lambertian lobe, or none for a black reflectance (pbrt adds no lobe then).
-fn lambert(r: Rgb) -> Option<Lobe> {
-    (r != Vec3::ZERO).then_some(Lobe::Lambert(r))
-}
-
-/// Smooth glass is one Fresnel-weighted lobe; rough glass is pbrt-v3's pair of
-/// microfacet reflection and transmission lobes, or pbrt-v4's single lobe.
-fn dielectric<const N: usize>(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], c: Convention, out: &mut Lobes<N>) {
-    if r == Vec3::ZERO && t == Vec3::ZERO {
-        return;
-    }
-    if alpha == [0.0, 0.0] {
-        out.push(Lobe::FresnelSpecular { r, t, eta });
-        return;
-    }
-    let dist = TrowbridgeReitz::new(alpha);
-    if c == Convention::PbrtV4 {
-        out.push(Lobe::RoughDielectric { r, t, dist, eta });
-        return;
-    }
-    out.push_nonzero(r, |r| Lobe::MicrofacetReflection { r, dist, fresnel: Fresnel::Dielectric { eta } });
-    out.push_nonzero(t, |t| Lobe::MicrofacetTransmission { t, dist, eta });
-}
-
-/// Texture inputs at one hit.
-struct Inputs<'a, C: Fn() -> TexCtx> {
-    textures: &'a Textures,
-    ctx: C,
-    max_reflectance: f32,
-    fixes: Fixes,
-}
-
-impl<C: Fn() -> TexCtx> Inputs<'_, C> {
-    /// A reflectance (or transmittance), clamped as the material's version does.
-    fn refl(&self, v: TexValue) -> Rgb {
-        self.rgb(v).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance))
-    }
-
-    /// `v` times `s`, clamped as a reflectance.
-    fn refl_scaled(&self, v: TexValue, s: f32) -> Rgb {
-        (s * self.rgb(v)).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance))
-    }
-
-    fn rgb(&self, v: TexValue) -> Rgb {
-        match v {
-            TexValue::Const(c) => c,
-            TexValue::Texture(_) => self.textures.eval(v, &(self.ctx)()),
-        }
-    }
-
-    fn float(&self, v: TexValue) -> f32 {
-        self.rgb(v).x
-    }
-
-    fn alpha(&self, roughness: &[TexValue; 2], remap: RoughnessRemap) -> [f32; 2] {
-        roughness.map(|r| remap.alpha(self.float(r)))
-    }
-
-    /// A conductor's η and k here.
-    fn eta_k(&self, metal: &Metal) -> (Rgb, Rgb) {
-        match metal {
-            Metal::EtaK { eta, k } => (*eta, *k),
-            Metal::Reflectance(r) => Metal::eta_k_of_reflectance(self.rgb(*r)),
-        }
-    }
-}
-
-impl RoughnessRemap {
-    /// The microfacet α of a roughness as written.
-    pub fn alpha(self, r: f32) -> f32 {
-        match self {
-            RoughnessRemap::None => r.max(0.0),
-            RoughnessRemap::V3 => microfacet::roughness_to_alpha_v3(r),
-            RoughnessRemap::V4 => r.max(0.0).sqrt(),
-        }
-    }
-}
-
-/// Lobes gathered from the parts of a pbrt-v3 `mix` (at most [`MAX_LOBES`], as
-/// pbrt-v3's BSDF holds at most 8).
-#[derive(Default)]
-pub struct LobeList(Lobes<MAX_LOBES>);
-
-impl LobeList {
-    /// Their BSDF, combined as pbrt-v3 combines them.
-    pub fn bsdf(&self, frame: [Vec3; 3], ng: Vec3) -> Bsdf {
-        Bsdf::new(frame, ng, &self.0.list[..self.0.n], Convention::PbrtV3)
-    }
-}
-
-/// The most lobes one material makes (uber's five); a list this long is set up for
-/// every hit, so it is no longer than that.
-const MATERIAL_LOBES: usize = 5;
-
-/// Lobes made at one hit, at most `N`.
-struct Lobes<const N: usize> {
-    list: [Lobe; N],
-    n: usize,
-}
-
-impl<const N: usize> Default for Lobes<N> {
-    fn default() -> Self {
-        Lobes { list: [Lobe::default(); N], n: 0 }
-    }
-}
-
-impl Default for Lobe {
-    fn default() -> Lobe {
-        Lobe::Lambert(Vec3::ZERO)
-    }
-}
-
-impl<const N: usize> Lobes<N> {
-    fn push(&mut self, l: Lobe) {
-        if self.n < N {
-            self.list[self.n] = l;
-            self.n += 1;
-        }
-    }
-
-    /// Adds `make(c)` unless `c` is black (pbrt adds no lobe for a black input).
-    fn push_nonzero(&mut self, c: Rgb, make: impl FnOnce(Rgb) -> Lobe) {
-        if c != Vec3::ZERO {
-            self.push(make(c));
-        }
     }
 }

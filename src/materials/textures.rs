@@ -8,8 +8,9 @@
 use super::noise::{fbm, noise2, turbulence};
 use crate::fixes::{Fix, Fixes};
 
+use super::params::TexValue;
 use crate::imageio::lookup;
-use crate::scene::{Mapping2D, TexValue, TextureDesc, TextureKind};
+use crate::scene::textures::{Mapping2D, TextureDesc, TextureKind};
 use crate::spectrum::Rgb;
 use glam::{Mat4, Vec3};
 use std::f32::consts::PI;
@@ -190,7 +191,7 @@ fn marble(t: f32, v3_segments: bool) -> Rgb {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Octaves, UvMapping};
+    use crate::scene::textures::{Octaves, UvMapping};
 
     fn at(p: Vec3, uv: [f32; 2]) -> TexCtx {
         TexCtx { p, n: Vec3::Z, uv, ..TexCtx::default() }

@@ -22,13 +22,13 @@ mod typed;
 
 use super::approx::Approx;
 use super::entities;
-use super::materials::MaterialDesc;
 use super::options::RenderOptions;
 use super::shapes::{self as shape_build, AlphaParams, Built};
 use super::textures::TextureDesc;
 use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped, mesh, ply};
 use crate::imageio::RgbImage;
 use crate::limits::{Files, Limits};
+use crate::materials::MaterialDesc;
 use crate::parser::Syntax;
 use crate::parser::error::{Diagnostic, LoadError, Located};
 use crate::parser::params::ParamList;

@@ -14,20 +14,7 @@ pub fn evidence(directive: &str, ty: &str) -> Option<Syntax> {
     match (directive, ty) {
         ("Film", "image") => Some(V3),
         ("Film", "rgb" | "gbuffer" | "spectral") => Some(V4),
-        ("Material" | "MakeNamedMaterial", t) => match t {
-            "matte" | "plastic" | "glass" | "metal" | "mirror" | "uber" | "substrate" | "translucent"
-            | "kdsubsurface" | "fourier" | "disney" | "none" | "" => Some(V3),
-            "diffuse"
-            | "dielectric"
-            | "conductor"
-            | "coateddiffuse"
-            | "coatedconductor"
-            | "thindielectric"
-            | "diffusetransmission"
-            | "measured"
-            | "interface" => Some(V4),
-            _ => None,
-        },
+        ("Material" | "MakeNamedMaterial", t) => crate::materials::evidence(t),
         ("Shape", "cone" | "paraboloid" | "hyperboloid" | "heightfield" | "nurbs") => Some(V3),
         ("Shape", "bilinearmesh") => Some(V4),
         ("AreaLightSource", t) => crate::lights::diffuse::evidence(t),

@@ -9,7 +9,6 @@
 pub mod approx;
 pub mod builder;
 pub mod entities;
-pub mod materials;
 pub mod mesh;
 pub mod obj;
 pub mod options;
@@ -25,9 +24,9 @@ use crate::shapes::{PatchMesh, Quadric, TriangleMesh};
 use glam::{DMat4, DVec3};
 
 pub use crate::lights::{AreaLightDesc, EnvMapDesc, LightDesc, LightKind};
+pub use crate::materials::{CoatBase, Coated, MaterialDesc, MaterialKind, Metal, MixRule, RoughnessRemap, TexValue};
 pub use approx::Approx;
 pub use builder::{LoadOptions, load_scene, load_scene_from_bytes};
-pub use materials::{CoatBase, Coated, MaterialDesc, MaterialKind, Metal, MixRule, RoughnessRemap, TexValue};
 pub use options::{Camera, CameraKind, Film, Integrator};
 pub use textures::{Mapping2D, Octaves, TextureDesc, TextureKind, TextureSite, UvMapping, Wrap};
 

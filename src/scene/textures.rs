@@ -27,9 +27,9 @@
 //! `ptex` is left out (noted; a constant 0.5 stands in).
 
 use super::approx::Approx;
-use super::materials::{Resolver, TexValue, float, spectrum};
 use super::values::{self, Range, Res};
 use crate::imageio::RgbImage;
+use crate::materials::params::{Resolver, TexValue, float, spectrum};
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};

@@ -4,10 +4,10 @@
 
 use super::Builder;
 use crate::fixes::{Fix, Fixes, PbrtBug};
+use crate::materials::{CoatBase, MaterialDesc, MaterialKind, TexValue};
 use crate::parser::Syntax;
 use crate::parser::error::Located;
 use crate::parser::source::Span;
-use crate::scene::materials::{CoatBase, MaterialDesc, MaterialKind, TexValue};
 use crate::scene::textures::TextureKind;
 use crate::scene::{Geometry, ObjectDesc, ShapeDesc};
 use crate::shapes::Quadric;

@@ -6,13 +6,14 @@
 use super::{Builder, Res, Scope};
 use crate::imageio::RgbImage;
 use crate::lights::{self, LightContext, LightDesc};
+use crate::materials::params::{bump_map, normal_map};
+use crate::materials::{self, MaterialDesc, MaterialKind, Resolver, TexValue};
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList};
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::scene::approx::Approx;
-use crate::scene::materials::{self, MaterialDesc, MaterialKind, Resolver, TexValue};
 use crate::scene::shapes::AlphaParams;
 use crate::scene::textures::{self, TextureDesc, TextureKind, TextureSite};
 use crate::scene::values::SpectrumContext;
@@ -158,8 +159,8 @@ impl Builder {
         let at = span.unwrap_or_default();
         let kind = {
             let mut r = Scoped { b: self, scope, depth: 0 };
-            let kind = materials::material(&ty, &params, at, &mut r)?;
-            (kind, materials::bump_map(&params, &mut r)?, materials::normal_map(&ty, &params, &mut r)?)
+            let kind = materials::read(&ty, &params, at, &mut r)?;
+            (kind, bump_map(&params, &mut r)?, normal_map(&ty, &params, &mut r)?)
         };
         let (kind, bump, normal_map) = kind;
         finish_params(&params, &mut self.warnings)?;

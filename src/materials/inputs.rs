@@ -1,0 +1,109 @@
+//! What a material's lobes are made from at one hit: its inputs evaluated there
+//! ([`Inputs`]) and the short list the lobes go into ([`Lobes`]).
+
+use super::Textures;
+use super::bsdf::{Bsdf, Convention};
+use super::lobes::{Lobe, MAX_LOBES};
+use super::params::{Metal, RoughnessRemap, TexValue};
+use super::textures::TexCtx;
+use crate::fixes::Fixes;
+use crate::spectrum::Rgb;
+use glam::Vec3;
+
+/// Texture inputs at one hit.
+pub struct Inputs<'a, C: Fn() -> TexCtx> {
+    pub textures: &'a Textures,
+    pub ctx: C,
+    pub max_reflectance: f32,
+    pub fixes: Fixes,
+}
+
+impl<C: Fn() -> TexCtx> Inputs<'_, C> {
+    /// A reflectance (or transmittance), clamped as the material's version does.
+    pub fn refl(&self, v: TexValue) -> Rgb {
+        self.rgb(v).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance))
+    }
+
+    /// `v` times `s`, clamped as a reflectance.
+    pub fn refl_scaled(&self, v: TexValue, s: f32) -> Rgb {
+        (s * self.rgb(v)).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance))
+    }
+
+    pub fn rgb(&self, v: TexValue) -> Rgb {
+        match v {
+            TexValue::Const(c) => c,
+            TexValue::Texture(_) => self.textures.eval(v, &(self.ctx)()),
+        }
+    }
+
+    pub fn float(&self, v: TexValue) -> f32 {
+        self.rgb(v).x
+    }
+
+    pub fn alpha(&self, roughness: &[TexValue; 2], remap: RoughnessRemap) -> [f32; 2] {
+        roughness.map(|r| remap.alpha(self.float(r)))
+    }
+
+    /// A conductor's η and k here.
+    pub fn eta_k(&self, metal: &Metal) -> (Rgb, Rgb) {
+        match metal {
+            Metal::EtaK { eta, k } => (*eta, *k),
+            Metal::Reflectance(r) => Metal::eta_k_of_reflectance(self.rgb(*r)),
+        }
+    }
+}
+
+/// Lobes gathered from the parts of a pbrt-v3 `mix` (at most [`MAX_LOBES`], as
+/// pbrt-v3's BSDF holds at most 8).
+#[derive(Default)]
+pub struct LobeList(pub(super) Lobes<MAX_LOBES>);
+
+impl LobeList {
+    /// Their BSDF, combined as pbrt-v3 combines them.
+    pub fn bsdf(&self, frame: [Vec3; 3], ng: Vec3) -> Bsdf {
+        Bsdf::new(frame, ng, &self.0.list[..self.0.n], Convention::PbrtV3)
+    }
+}
+
+/// The most lobes one material makes (uber's five); a list this long is set up for
+/// every hit, so it is no longer than that.
+pub const MATERIAL_LOBES: usize = 5;
+
+/// Lobes made at one hit, at most `N`.
+pub struct Lobes<const N: usize> {
+    pub list: [Lobe; N],
+    pub n: usize,
+}
+
+impl<const N: usize> Default for Lobes<N> {
+    fn default() -> Self {
+        Lobes { list: [Lobe::default(); N], n: 0 }
+    }
+}
+
+impl Default for Lobe {
+    fn default() -> Lobe {
+        Lobe::Lambert(Vec3::ZERO)
+    }
+}
+
+impl<const N: usize> Lobes<N> {
+    pub fn push(&mut self, l: Lobe) {
+        if self.n < N {
+            self.list[self.n] = l;
+            self.n += 1;
+        }
+    }
+
+    /// Adds `make(c)` unless `c` is black (pbrt adds no lobe for a black input).
+    pub fn push_nonzero(&mut self, c: Rgb, make: impl FnOnce(Rgb) -> Lobe) {
+        if c != Vec3::ZERO {
+            self.push(make(c));
+        }
+    }
+}
+
+/// A Lambertian lobe, or none for a black reflectance (pbrt adds no lobe then).
+pub fn lambert(r: Rgb) -> Option<Lobe> {
+    (r != Vec3::ZERO).then_some(Lobe::Lambert(r))
+}
