@@ -23,3 +23,4 @@ pub mod sampling;
 pub mod scene;
 pub mod shapes;
 pub mod spectrum;
+pub mod textures;

@@ -18,7 +18,6 @@ use super::layered::{Base, Coat, Layered};
 use super::lobes::Lobe;
 use super::microfacet::{Fresnel, TrowbridgeReitz};
 use super::params::{Metal, Resolver, RoughnessRemap, TexValue, float, metal, prefixed_roughness, remap_v4, spectrum};
-use super::textures::TexCtx;
 use crate::fixes::Fix;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::error::Diagnostic;
@@ -26,6 +25,7 @@ use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::scene::values::{self, Range, Res};
 use crate::spectrum::Rgb;
+use crate::textures::TexCtx;
 use glam::Vec3;
 
 pub const NAMES: [&str; 2] = ["coateddiffuse", "coatedconductor"];

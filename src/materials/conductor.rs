@@ -13,11 +13,11 @@ use super::inputs::{Inputs, Lobes};
 use super::lobes::Lobe;
 use super::microfacet::{Fresnel, TrowbridgeReitz};
 use super::params::{Metal, Resolver, RoughnessRemap, TexValue, metal, remap_v3, remap_v4, roughness};
-use super::textures::TexCtx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::Res;
+use crate::textures::TexCtx;
 use glam::Vec3;
 
 pub const NAMES: [&str; 2] = ["metal", "conductor"];

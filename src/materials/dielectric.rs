@@ -15,12 +15,12 @@ use super::inputs::{Inputs, Lobes};
 use super::lobes::Lobe;
 use super::microfacet::{Fresnel, TrowbridgeReitz};
 use super::params::{Resolver, RoughnessRemap, TexValue, float, remap_v3, remap_v4, roughness, spectrum, uv_roughness};
-use super::textures::TexCtx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::scene::values::{self, Range, Res};
 use crate::spectrum::Rgb;
+use crate::textures::TexCtx;
 use glam::Vec3;
 
 pub const NAMES: [&str; 2] = ["glass", "dielectric"];

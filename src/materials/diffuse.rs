@@ -8,11 +8,11 @@
 use super::MaterialKind;
 use super::inputs::{Inputs, Lobes, lambert};
 use super::params::{Resolver, TexValue, spectrum};
-use super::textures::TexCtx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::Res;
+use crate::textures::TexCtx;
 
 pub const NAME: &str = "diffuse";
 

@@ -9,11 +9,11 @@ use super::MaterialKind;
 use super::inputs::{Inputs, Lobes};
 use super::lobes::Lobe;
 use super::params::{Resolver, TexValue, float, spectrum};
-use super::textures::TexCtx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::{Range, Res};
+use crate::textures::TexCtx;
 
 pub const NAME: &str = "diffusetransmission";
 

@@ -1,13 +1,13 @@
 //! What a material's lobes are made from at one hit: its inputs evaluated there
 //! ([`Inputs`]) and the short list the lobes go into ([`Lobes`]).
 
-use super::Textures;
 use super::bsdf::{Bsdf, Convention};
 use super::lobes::{Lobe, MAX_LOBES};
 use super::params::{Metal, RoughnessRemap, TexValue};
-use super::textures::TexCtx;
 use crate::fixes::Fixes;
 use crate::spectrum::Rgb;
+use crate::textures::TexCtx;
+use crate::textures::Textures;
 use glam::Vec3;
 
 /// Texture inputs at one hit.

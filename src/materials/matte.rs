@@ -9,11 +9,11 @@ use super::MaterialKind;
 use super::inputs::{Inputs, Lobes};
 use super::lobes::{Lobe, oren_nayar_ab};
 use super::params::{Resolver, TexValue, float, spectrum};
-use super::textures::TexCtx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::{Range, Res};
+use crate::textures::TexCtx;
 use glam::Vec3;
 
 pub const NAME: &str = "matte";

@@ -9,11 +9,11 @@ use super::inputs::{Inputs, Lobes};
 use super::lobes::Lobe;
 use super::microfacet::Fresnel;
 use super::params::{Resolver, TexValue, spectrum};
-use super::textures::TexCtx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::Res;
+use crate::textures::TexCtx;
 
 pub const NAME: &str = "mirror";
 

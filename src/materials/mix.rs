@@ -50,7 +50,7 @@ pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mat
     };
     let materials = [named("namedmaterial1", r)?, named("namedmaterial2", r)?];
     let amount: TexValue = spectrum(p, "amount", 0.5, r)?;
-    if materials.iter().any(|&m| matches!(r.material_kind(m), Some(MaterialKind::Coated(_)))) {
+    if materials.iter().any(|&m| r.material_type(m).is_some_and(|t| super::coated::NAMES.contains(&t))) {
         r.approximate(at, "pbrt-v4 coated material in a pbrt-v3 mix".into(), Approx::CoatInBlend);
     }
     Ok(MaterialKind::Mix { materials, amount, rule: MixRule::Blend })

@@ -33,21 +33,19 @@ pub mod matte;
 pub mod microfacet;
 pub mod mirror;
 pub mod mix;
-pub mod noise;
 pub mod params;
 pub mod plastic;
 pub mod substrate;
-mod textures;
 pub mod translucent;
 mod transport;
 pub mod uber;
 
+pub use crate::textures::{TexCtx, Textures};
 pub use bsdf::{Bsdf, BsdfEval, BsdfSample, Convention};
 pub use coated::{CoatBase, Coated};
 pub use inputs::LobeList;
 pub use mix::MixRule;
 pub use params::{Metal, Resolver, RoughnessRemap, TexValue};
-pub use textures::{TexCtx, Textures};
 pub use transport::TransportMode;
 
 use crate::fixes::Fixes;

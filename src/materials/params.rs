@@ -14,18 +14,11 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList};
 use crate::parser::source::Span;
 use crate::scene::approx::Approx;
-use crate::scene::values::{self, Range, Res, SpectrumContext, SpectrumOrTexture};
+use crate::scene::values::{self, Range, Res};
+pub use crate::scene::values::{Resolver, TexValue, float_input as float, spectrum_input as spectrum};
 use crate::spectrum::Rgb;
 use glam::Vec3;
 use std::sync::Arc;
-
-/// A spectrum- or float-valued input: a constant (floats as grey) or a texture, by its
-/// index in the scene description's `textures`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum TexValue {
-    Const(Rgb),
-    Texture(u32),
-}
 
 /// How a roughness becomes a microfacet α.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -66,40 +59,6 @@ impl Metal {
         let r = r.clamp(Vec3::ZERO, Vec3::splat(0.9999));
         (Vec3::ONE, 2.0 * r.powf(0.5) / (Vec3::ONE - r).powf(0.5))
     }
-}
-
-/// What reading materials and textures needs from the scene builder.
-pub trait Resolver {
-    /// The float or spectrum texture `name`, built on first use; `at` is the span of
-    /// the parameter naming it.
-    fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<u32>;
-    fn approximate(&mut self, at: Span, what: String, how: Approx);
-    /// The named material `name`, built on first use (for `mix`); its built index.
-    fn named_material(&mut self, name: &str, at: Span) -> Res<u32>;
-    /// What a built material (a [`Resolver::named_material`] index) is.
-    fn material_kind(&self, built: u32) -> Option<&super::MaterialKind>;
-    fn spectra(&self) -> SpectrumContext<'_>;
-    /// An image for `imagemap` (cached); errors are plain messages.
-    fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String>;
-}
-
-/// A spectrum input: constant (non-negative) or a spectrum texture.
-pub fn spectrum(p: &ParamList, name: &str, default: f32, r: &mut dyn Resolver) -> Res<TexValue> {
-    let found = values::spectrum(p, name, &r.spectra(), Range::NonNegative)?;
-    Ok(match found {
-        None => TexValue::Const(Vec3::splat(default)),
-        Some((SpectrumOrTexture::Rgb(c), _)) => TexValue::Const(c),
-        Some((SpectrumOrTexture::Texture(t), at)) => TexValue::Texture(r.texture(&t, false, at)?),
-    })
-}
-
-/// A float input: constant (in `range`) or a float texture.
-pub fn float(p: &ParamList, name: &str, default: f32, range: Range, r: &mut dyn Resolver) -> Res<TexValue> {
-    Ok(match values::float_or_texture(p, name, range)? {
-        None => TexValue::Const(Vec3::splat(default)),
-        Some((FloatValue::Const(v), _)) => TexValue::Const(Vec3::splat(v)),
-        Some((FloatValue::Texture(t), at)) => TexValue::Texture(r.texture(&t, true, at)?),
-    })
 }
 
 /// v3 `remaproughness` (default true): pbrt-v3's polynomial.

@@ -9,11 +9,11 @@ use super::inputs::{Inputs, Lobes};
 use super::lobes::Lobe;
 use super::microfacet::TrowbridgeReitz;
 use super::params::{Resolver, RoughnessRemap, TexValue, float, remap_v3, spectrum};
-use super::textures::TexCtx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::{Range, Res};
+use crate::textures::TexCtx;
 use glam::Vec3;
 
 pub const NAME: &str = "substrate";

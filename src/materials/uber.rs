@@ -12,11 +12,11 @@ use super::inputs::{Inputs, Lobes};
 use super::lobes::Lobe;
 use super::microfacet::{Fresnel, TrowbridgeReitz};
 use super::params::{Resolver, RoughnessRemap, TexValue, float, remap_v3, roughness, spectrum};
-use super::textures::TexCtx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::{Range, Res};
+use crate::textures::TexCtx;
 use glam::Vec3;
 
 pub const NAME: &str = "uber";

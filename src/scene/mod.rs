@@ -14,7 +14,6 @@ pub mod obj;
 pub mod options;
 pub mod ply;
 pub mod shapes;
-pub mod textures;
 pub mod values;
 
 use crate::math::bounds::transform_bounds;
@@ -25,10 +24,10 @@ use glam::{DMat4, DVec3};
 
 pub use crate::lights::{AreaLightDesc, EnvMapDesc, LightDesc, LightKind};
 pub use crate::materials::{CoatBase, Coated, MaterialDesc, MaterialKind, Metal, MixRule, RoughnessRemap, TexValue};
+pub use crate::textures::{Mapping2D, Octaves, TextureDesc, TextureKind, TextureSite, UvMapping, Wrap};
 pub use approx::Approx;
 pub use builder::{LoadOptions, load_scene, load_scene_from_bytes};
 pub use options::{Camera, CameraKind, Film, Integrator};
-pub use textures::{Mapping2D, Octaves, TextureDesc, TextureKind, TextureSite, UvMapping, Wrap};
 
 /// A shape's geometry: a quadric, a triangle mesh stored in [`SceneDescription::meshes`]
 /// or a bilinear patch mesh stored in [`SceneDescription::patches`].

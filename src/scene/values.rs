@@ -11,12 +11,14 @@
 //! Each lookup marks the parameter used, so what no lookup asked for is reported as
 //! unused at its own span; a wrong type, arity or value is a located error.
 
+use crate::imageio::RgbImage;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, Param, ParamList, ParamType, SpectrumValue};
 use crate::parser::source::Span;
 use crate::spectrum::{Rgb, blackbody, named_spectrum, sampled_to_rgb, xyz_to_rgb};
 use glam::Vec3;
 use std::path::Path;
+use std::sync::Arc;
 
 pub type Res<T> = Result<T, Diagnostic>;
 
@@ -216,4 +218,46 @@ pub fn span_of(p: &ParamList, name: &str) -> Option<Span> {
 /// Is `name` given with any of `types`? (Does not mark it used.)
 pub fn given(p: &ParamList, name: &str, types: &[ParamType]) -> bool {
     p.named(name).is_some_and(|x| types.contains(&x.ty))
+}
+
+/// A spectrum- or float-valued input: a constant (floats as grey) or a texture, by its
+/// index in the scene description's `textures`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TexValue {
+    Const(Rgb),
+    Texture(u32),
+}
+
+/// What reading materials and textures needs from the scene builder.
+pub trait Resolver {
+    /// The float or spectrum texture `name`, built on first use; `at` is the span of
+    /// the parameter naming it.
+    fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<u32>;
+    fn approximate(&mut self, at: Span, what: String, how: super::approx::Approx);
+    /// The named material `name`, built on first use (for `mix`); its built index.
+    fn named_material(&mut self, name: &str, at: Span) -> Res<u32>;
+    /// The type (as written) of a built material (a [`Resolver::named_material`] index).
+    fn material_type(&self, built: u32) -> Option<&str>;
+    fn spectra(&self) -> SpectrumContext<'_>;
+    /// An image for `imagemap` (cached); errors are plain messages.
+    fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String>;
+}
+
+/// A spectrum input: constant (non-negative) or a spectrum texture.
+pub fn spectrum_input(p: &ParamList, name: &str, default: f32, r: &mut dyn Resolver) -> Res<TexValue> {
+    let found = spectrum(p, name, &r.spectra(), Range::NonNegative)?;
+    Ok(match found {
+        None => TexValue::Const(Vec3::splat(default)),
+        Some((SpectrumOrTexture::Rgb(c), _)) => TexValue::Const(c),
+        Some((SpectrumOrTexture::Texture(t), at)) => TexValue::Texture(r.texture(&t, false, at)?),
+    })
+}
+
+/// A float input: constant (in `range`) or a float texture.
+pub fn float_input(p: &ParamList, name: &str, default: f32, range: Range, r: &mut dyn Resolver) -> Res<TexValue> {
+    Ok(match float_or_texture(p, name, range)? {
+        None => TexValue::Const(Vec3::splat(default)),
+        Some((FloatValue::Const(v), _)) => TexValue::Const(Vec3::splat(v)),
+        Some((FloatValue::Texture(t), at)) => TexValue::Texture(r.texture(&t, true, at)?),
+    })
 }

@@ -8,9 +8,9 @@ use crate::materials::{CoatBase, MaterialDesc, MaterialKind, TexValue};
 use crate::parser::Syntax;
 use crate::parser::error::Located;
 use crate::parser::source::Span;
-use crate::scene::textures::TextureKind;
 use crate::scene::{Geometry, ObjectDesc, ShapeDesc};
 use crate::shapes::Quadric;
+use crate::textures::TextureKind;
 use glam::DMat3;
 
 impl Builder {

@@ -15,9 +15,9 @@ use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::scene::approx::Approx;
 use crate::scene::shapes::AlphaParams;
-use crate::scene::textures::{self, TextureDesc, TextureKind, TextureSite};
 use crate::scene::values::SpectrumContext;
 use crate::scene::{AlphaRule, ShapeAlpha};
+use crate::textures::{self, TextureDesc, TextureKind, TextureSite};
 use glam::Vec3;
 use std::rc::Rc;
 use std::sync::Arc;
@@ -190,7 +190,7 @@ impl Builder {
         let site = TextureSite { world_from_texture: t.ctm, syntax: self.syntax() };
         let kind = {
             let mut r = Scoped { b: self, scope, depth: depth + 1 };
-            textures::texture(&class, is_float, &params, span, &site, &mut r)?
+            textures::read(&class, is_float, &params, span, &site, &mut r)?
         };
         let kind = kind.unwrap_or_else(|| {
             params.mark_all_used();
@@ -284,8 +284,8 @@ impl Resolver for Scoped<'_> {
         self.b.build_material(i)
     }
 
-    fn material_kind(&self, built: u32) -> Option<&MaterialKind> {
-        self.b.built_materials.get(built as usize).map(|m| &m.kind)
+    fn material_type(&self, built: u32) -> Option<&str> {
+        self.b.built_materials.get(built as usize).map(|m| m.ty.as_str())
     }
 
     fn spectra(&self) -> SpectrumContext<'_> {

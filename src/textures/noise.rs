@@ -6,7 +6,30 @@
 //! space, `dpdx`, `dpdy`) are left out, the last one faded in; without differentials
 //! every octave is summed.
 
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::scene::values::{self, Range, Res};
 use glam::Vec3;
+
+/// The noise textures' parameters: `octaves` and `roughness` (ω, each octave's weight
+/// relative to the one before).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Octaves {
+    pub octaves: u32,
+    pub omega: f32,
+}
+
+impl Octaves {
+    /// `octaves` (default 8, at most 32) and `roughness` (default .5).
+    pub fn read(p: &ParamList) -> Res<Octaves> {
+        let n = p.int("octaves")?.unwrap_or(8);
+        if !(0..=32).contains(&n) {
+            let at = values::span_of(p, "octaves").unwrap_or_default();
+            return Err(Diagnostic::error(at, format!("\"octaves\" must be between 0 and 32, not {n}")));
+        }
+        Ok(Octaves { octaves: n as u32, omega: values::float(p, "roughness", 0.5, Range::Any)? })
+    }
+}
 
 /// Ken Perlin's permutation of 0..=255 (the table pbrt uses).
 const PERM: [u8; 256] = [

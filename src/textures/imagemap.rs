@@ -1,0 +1,65 @@
+//! `Texture "name" "float|spectrum" "imagemap"`: an EXR or PNG image, looked up
+//! bilinearly with t = 0 at the bottom row (as pbrt).
+//!
+//! ```text
+//! Texture "img" "spectrum" "imagemap" "string filename" "wood.png" "string wrap" "clamp"
+//! Texture "raw" "spectrum" "imagemap" "string filename" "n.png" "bool gamma" false   # v3
+//! Texture "raw" "spectrum" "imagemap" "string filename" "n.png" "string encoding" "linear"   # v4
+//! ```
+//! Images are sRGB-decoded unless `gamma false` or `encoding "linear"`; `wrap` is
+//! repeat, clamp or black; `scale` and `invert` apply after the lookup. An image that
+//! cannot be read is, as in pbrt-v3, one grey texel of 0.5 times `scale` (noted);
+//! pbrt-v4 aborts. Filtering hints have no effect: SPPM's many samples per pixel filter.
+
+use super::mapping::{self, Mapping2D, map_2d};
+use super::{Input, TexCtx, TextureKind, TextureSite};
+use crate::imageio::{RgbImage, Wrap, lookup};
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::approx::Approx;
+use crate::scene::values::{self, Range, Res, TexValue};
+use crate::spectrum::Rgb;
+use glam::Vec3;
+use std::sync::Arc;
+
+pub const NAME: &str = "imagemap";
+
+pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<Option<TextureKind>> {
+    let name = p
+        .string("filename")?
+        .ok_or_else(|| p.wrong_type().unwrap_or_else(|| Diagnostic::error(at, "imagemap needs \"string filename\"")))?;
+    let name_at = p.named("filename").map_or(at, |f| f.value_span);
+    let map = mapping::read(p, site)?;
+    let wrap = match values::choice(p, "wrap", "repeat", &["repeat", "clamp", "black", "octahedralsphere"])? {
+        "clamp" => Wrap::Clamp,
+        "black" => Wrap::Black,
+        _ => Wrap::Repeat,
+    };
+    let scale = values::float(p, "scale", 1.0, Range::Any)?;
+    let invert = p.bool("invert")?.unwrap_or(false);
+    let gamma = p.bool("gamma")?;
+    let encoding = p.string("encoding")?;
+    values::no_effect(p, &["maxanisotropy", "trilinear", "filter"]);
+    let mut image = match i.r.image(&name) {
+        Ok(img) => img,
+        Err(e) => {
+            i.r.approximate(name_at, format!("imagemap ({e})"), Approx::MissingImage);
+            let lower = name.to_ascii_lowercase();
+            let gamma = gamma.unwrap_or(lower.ends_with(".png") || lower.ends_with(".tga"));
+            let grey = if gamma { crate::imageio::from_srgb(0.5) } else { 0.5 };
+            return Ok(Some(TextureKind::Constant(TexValue::Const(Vec3::splat(scale * grey)))));
+        }
+    };
+    let linear = gamma == Some(false) || encoding.as_deref() == Some("linear");
+    if linear {
+        image = crate::imageio::stored_values(&name, image);
+    }
+    Ok(Some(TextureKind::Image { image, map, wrap, scale, invert }))
+}
+
+pub fn eval(image: &Arc<RgbImage>, map: &Mapping2D, (wrap, scale, invert): (Wrap, f32, bool), ctx: &TexCtx) -> Rgb {
+    let [s, t] = map_2d(map, ctx);
+    let v = lookup(image, s, t, wrap, false) * scale;
+    if invert { (Vec3::ONE - v).max(Vec3::ZERO) } else { v }
+}
