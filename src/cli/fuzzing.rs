@@ -50,8 +50,8 @@ pub fn builder(data: &[u8]) {
 
 /// The PLY reader.
 pub fn ply(data: &[u8]) {
-    for quads in [crate::scene::ply::Quads::Split, crate::scene::ply::Quads::Patches] {
-        let _ = crate::scene::ply::parse(data, quads);
+    for quads in [crate::shapes::plymesh::Quads::Split, crate::shapes::plymesh::Quads::Patches] {
+        let _ = crate::shapes::plymesh::parse(data, quads);
     }
 }
 

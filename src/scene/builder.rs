@@ -23,8 +23,8 @@ mod typed;
 use super::approx::Approx;
 use super::entities;
 use super::options::RenderOptions;
-use super::shapes::{self as shape_build, AlphaParams, Built};
-use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped, mesh, ply};
+use super::shapes::{AlphaParams, alpha_params};
+use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped};
 use crate::imageio::RgbImage;
 use crate::limits::{Files, Limits};
 use crate::materials::MaterialDesc;
@@ -33,6 +33,7 @@ use crate::parser::error::{Diagnostic, LoadError, Located};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::parser::stmt::{ActiveTransform, Entity, StatementReader, Stmt, StmtKind, read_scene_bytes};
+use crate::shapes::{self, Built, ShapeContext, mesh_params as mesh, plymesh};
 use crate::textures::TextureDesc;
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
@@ -740,18 +741,19 @@ impl Builder {
         let (p, at) = (&s.entity.params, s.entity.name_span);
         let resolve = |n: &str| self.reader.resolve_path(n);
         let quads = match self.known_syntax() {
-            Some(Syntax::V3) => ply::Quads::Split,
-            _ => ply::Quads::Patches,
+            Some(Syntax::V3) => plymesh::Quads::Split,
+            _ => plymesh::Quads::Patches,
         };
         let mut warn = Vec::new();
-        let built = shape_build::build(&s.entity.name, p, at, &resolve, quads, &self.reader.files, &mut warn);
+        let mut ctx = ShapeContext { resolve: &resolve, quads, files: &self.reader.files, warn: &mut warn };
+        let built = shapes::read(&s.entity.name, p, at, &mut ctx);
         self.warnings.append(&mut warn);
         let Some(built) = built? else {
             let what = format!("Shape \"{}\"", s.entity.name);
             self.skip(at, what, "this shape type is not supported".into());
             return Ok(Vec::new());
         };
-        let alpha = shape_build::alpha_params(p)?;
+        let alpha = alpha_params(p)?;
         typed::finish_params(p, &mut self.warnings)?;
         let mut geometries = Vec::new();
         self.add_geometry(built, s, &mut geometries)?;

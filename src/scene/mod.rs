@@ -9,10 +9,7 @@
 pub mod approx;
 pub mod builder;
 pub mod entities;
-pub mod mesh;
-pub mod obj;
 pub mod options;
-pub mod ply;
 pub mod shapes;
 pub mod values;
 

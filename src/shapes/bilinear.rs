@@ -410,6 +410,18 @@ fn bilinear_pdf([x, y]: [f32; 2], w: [f32; 4]) -> f32 {
     4.0 * ((1.0 - x) * (1.0 - y) * w[0] + x * (1.0 - y) * w[1] + (1.0 - x) * y * w[2] + x * y * w[3]) / sum
 }
 
+/// `Shape "bilinearmesh"` (v4; see [`super::mesh_params`] for its parameters).
+pub const NAME: &str = "bilinearmesh";
+
+pub fn read(
+    ctx: &mut super::ShapeContext,
+    p: &crate::parser::params::ParamList,
+    span: crate::parser::source::Span,
+) -> crate::scene::values::Res<super::Built> {
+    let mesh = super::mesh_params::patches_from_params(p, span, ctx.warn)?;
+    Ok(super::Built::Patches { mesh, kind: NAME, filename: None })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,8 +2,14 @@
 //!
 //! p(u, v) = (r(1 − v) cosφ, r(1 − v) sinφ, v·h): base circle at z = 0, apex at z = h.
 
+use super::Quadric;
+use super::params::{f, positive};
 use super::phi_max_radians;
 use super::quadric::{E, Local, QuadricSurface, newton};
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -87,4 +93,16 @@ impl QuadricSurface for Cone {
             d2_vv: DVec3::ZERO,
         }
     }
+}
+
+pub const NAME: &str = "cone";
+
+/// `Shape "cone"` (v3): `height` 1 (not 0), `radius` 1, `phimax` 360.
+pub fn read(p: &ParamList, span: Span) -> Res<Quadric> {
+    let r = positive(p, "radius", 1.0, span)?;
+    let h = f(p, "height", 1.0)?;
+    if h == 0.0 {
+        return Err(Diagnostic::error(span, "cone: height must be nonzero"));
+    }
+    Ok(Quadric::Cone(Cone::new(h, r, f(p, "phimax", 360.0)?)))
 }

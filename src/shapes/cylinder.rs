@@ -2,8 +2,13 @@
 //!
 //! p(u, v) = (r cosφ, r sinφ, zmin + v·(zmax − zmin)).
 
+use super::Quadric;
+use super::params::{f, positive};
 use super::phi_max_radians;
 use super::quadric::{E, Local, QuadricSurface};
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -77,4 +82,12 @@ impl QuadricSurface for Cylinder {
             d2_vv: DVec3::ZERO,
         }
     }
+}
+
+pub const NAME: &str = "cylinder";
+
+/// `Shape "cylinder"`: `radius` 1, `zmin` −1, `zmax` 1, `phimax` 360.
+pub fn read(p: &ParamList, span: Span) -> Res<Quadric> {
+    let r = positive(p, "radius", 1.0, span)?;
+    Ok(Quadric::Cylinder(Cylinder::new(r, f(p, "zmin", -1.0)?, f(p, "zmax", 1.0)?, f(p, "phimax", 360.0)?)))
 }

@@ -2,8 +2,14 @@
 //!
 //! p(u, v) = (ρ cosφ, ρ sinφ, h) with ρ = r − v·(r − ri): v = 0 on the outer rim.
 
+use super::Quadric;
+use super::params::{f, positive};
 use super::phi_max_radians;
 use super::quadric::{E, Local, QuadricSurface, at};
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -94,4 +100,16 @@ impl QuadricSurface for Disk {
             d2_vv: DVec3::ZERO,
         }
     }
+}
+
+pub const NAME: &str = "disk";
+
+/// `Shape "disk"`: `height` 0, `radius` 1, `innerradius` 0 (within [0, radius]), `phimax` 360.
+pub fn read(p: &ParamList, span: Span) -> Res<Quadric> {
+    let r = positive(p, "radius", 1.0, span)?;
+    let ri = f(p, "innerradius", 0.0)?;
+    if !(0.0..=r).contains(&ri) {
+        return Err(Diagnostic::error(span, format!("disk: innerradius {ri} must lie in [0, radius {r}]")));
+    }
+    Ok(Quadric::Disk(Disk::new(f(p, "height", 0.0)?, r, ri, f(p, "phimax", 360.0)?)))
 }

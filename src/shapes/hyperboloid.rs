@@ -9,8 +9,14 @@
 //! including for the default parameters, so such input is rejected here. Sampling (an
 //! emitting hyperboloid, which pbrt cannot sample) always uses the swept surface.
 
+use super::Quadric;
+use super::params::f;
 use super::quadric::{E, Local, QuadricSurface, phi_of};
 use super::{integrate_unit_interval, phi_max_radians};
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use glam::{DVec3, Vec3};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -205,6 +211,20 @@ impl QuadricSurface for Hyperboloid {
             d2_vv: DVec3::ZERO,
         }
     }
+}
+
+pub const NAME: &str = "hyperboloid";
+
+/// `Shape "hyperboloid"` (v3): `p1` (0,0,0), `p2` (1,1,1), `phimax` 360; a line that
+/// meets the z axis is an error (pbrt-v3 never returns from it).
+pub fn read(p: &ParamList, span: Span) -> Res<Quadric> {
+    let p1 = Vec3::from(p.point3("p1")?.unwrap_or([0.0; 3]));
+    let p2 = Vec3::from(p.point3("p2")?.unwrap_or([1.0; 3]));
+    if !(p1.is_finite() && p2.is_finite()) {
+        return Err(Diagnostic::error(span, "hyperboloid: p1 and p2 must be finite"));
+    }
+    let h = Hyperboloid::new(p1, p2, f(p, "phimax", 360.0)?).map_err(|e| Diagnostic::error(span, e))?;
+    Ok(Quadric::Hyperboloid(h))
 }
 
 #[cfg(test)]

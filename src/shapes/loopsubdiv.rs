@@ -15,6 +15,11 @@
 //! pbrt assumes a consistently oriented 2-manifold and crashes or loops otherwise; here
 //! such a mesh is an error naming the vertex where the walk around it fails.
 
+use crate::limits::Limits;
+use crate::parser::error::Diagnostic;
+use crate::parser::params::{ParamList, ParamType};
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use glam::Vec3;
 
 const NONE: u32 = u32::MAX;
@@ -415,6 +420,38 @@ fn compact(p: &[[f32; 3]], indices: &[u32]) -> (Vec<Vec3>, Vec<u32>) {
 /// Triangles after `levels` levels, or `None` past `u64`.
 pub fn triangle_count(base: usize, levels: u32) -> Option<u64> {
     4u64.checked_pow(levels)?.checked_mul(base as u64)
+}
+
+/// `Shape "loopsubdiv"`: the control mesh refined to its limit surface at load, so the
+/// renderer sees an ordinary triangle mesh with normals.
+///
+/// ```text
+/// Shape "loopsubdiv" "integer levels" 3 "point3 P" [...] "integer indices" [...]   # v3 also "nlevels"
+/// ```
+pub const NAME: &str = "loopsubdiv";
+
+pub fn read(ctx: &mut super::ShapeContext, p: &ParamList, span: Span) -> Res<super::Built> {
+    let need = |what: &str| Diagnostic::error(span, format!("loopsubdiv needs {what}"));
+    let positions = p.array("P", ParamType::Point3)?.ok_or_else(|| need("\"point3 P\""))?;
+    let indices = p.array("indices", ParamType::Integer)?.ok_or_else(|| need("\"integer indices\""))?;
+    let n_p = positions.values.len() / 3;
+    let indices = super::mesh_params::check_indices(indices.ints().to_vec(), n_p, indices.value_span, ctx.warn)?;
+    // v3 also reads "nlevels"; both default to 3.
+    let levels_at = p.find("levels", &[ParamType::Integer]).or(p.find("nlevels", &[ParamType::Integer]));
+    let levels = p.int("levels")?.or(p.int("nlevels")?).unwrap_or(3).max(0) as u32;
+    let at = levels_at.map_or(span, |l| l.value_span);
+    let tris = triangle_count(indices.len() / 3, levels).unwrap_or(u64::MAX);
+    let limits = &ctx.files.limits;
+    if tris > limits.triangles {
+        let what = format!("loopsubdiv: {levels} levels make {tris} triangles, which");
+        return Err(Diagnostic::error(at, Limits::over(what, "triangles", limits.triangles)));
+    }
+    let points: Vec<[f32; 3]> = positions.floats().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let s = subdivide(&points, &indices, levels)
+        .map_err(|e| Diagnostic::error(p.named("indices").map_or(span, |i| i.value_span), e))?;
+    p.mark_known(&["scheme"]);
+    let mesh = super::TriangleMesh { p: s.p, indices: s.indices, n: Some(s.n), ..Default::default() };
+    Ok(super::Built::Mesh { mesh, kind: NAME, filename: None })
 }
 
 #[cfg(test)]

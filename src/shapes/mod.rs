@@ -36,8 +36,12 @@ pub mod cylinder;
 pub mod disk;
 pub mod hyperboloid;
 pub mod loopsubdiv;
+pub mod mesh_params;
+pub mod objmesh;
 pub mod paraboloid;
+pub mod params;
 mod pbrt_sampling;
+pub mod plymesh;
 pub mod quadric;
 pub mod sampling;
 pub mod set;
@@ -58,6 +62,10 @@ pub use sphere::Sphere;
 pub use triangle::edge_candidates8;
 pub use triangle::{MeshFlags, TriangleHit, TriangleMesh, WatertightRay, corner_lanes_of, edge_candidates, watertight};
 
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use glam::{DMat3, DVec3};
 
 /// `phimax` in degrees, clamped to [0, 360], as radians (pbrt: `Radians(Clamp(phiMax, 0, 360))`).
@@ -175,6 +183,83 @@ pub fn integrate_unit_square(f: impl Fn(f64, f64) -> f64) -> f64 {
 /// ∫ f over [0,1] by the same rule (for areas of surfaces of revolution).
 pub fn integrate_unit_interval(f: impl Fn(f64) -> f64) -> f64 {
     integrate_unit_square(|_, v| f(v))
+}
+
+/// What a `Shape` statement produced.
+pub enum Built {
+    Quadric(Quadric),
+    Mesh {
+        mesh: TriangleMesh,
+        kind: &'static str,
+        filename: Option<String>,
+    },
+    Patches {
+        mesh: PatchMesh,
+        kind: &'static str,
+        filename: Option<String>,
+    },
+    /// A pbrt-v4 PLY file of triangles and quads: two shapes, as in pbrt-v4.
+    Several(Vec<Built>),
+}
+
+/// What reading a shape needs besides its parameters.
+pub struct ShapeContext<'a> {
+    /// Maps scene-relative file names to paths.
+    pub resolve: &'a dyn Fn(&str) -> std::path::PathBuf,
+    /// How a PLY file's quads are read (the file's pbrt version decides).
+    pub quads: plymesh::Quads,
+    pub files: &'a crate::limits::Files,
+    pub warn: &'a mut Vec<Diagnostic>,
+}
+
+/// A `Shape` type: the name scenes use and its reader.
+pub struct ShapeType {
+    pub name: &'static str,
+    pub read: fn(&mut ShapeContext, &ParamList, Span) -> Res<Built>,
+}
+
+/// A quadric's reader as a shape reader.
+macro_rules! quadric_type {
+    ($m:ident) => {
+        ShapeType { name: $m::NAME, read: |_, p, span| $m::read(p, span).map(Built::Quadric) }
+    };
+}
+
+/// Every `Shape` type we render.
+pub const REGISTRY: [ShapeType; 11] = [
+    quadric_type!(sphere),
+    quadric_type!(cylinder),
+    quadric_type!(disk),
+    quadric_type!(cone),
+    quadric_type!(paraboloid),
+    quadric_type!(hyperboloid),
+    ShapeType { name: triangle::NAME, read: triangle::read },
+    ShapeType { name: bilinear::NAME, read: bilinear::read },
+    ShapeType { name: loopsubdiv::NAME, read: loopsubdiv::read },
+    ShapeType { name: plymesh::NAME, read: plymesh::read },
+    ShapeType { name: objmesh::NAME, read: objmesh::read },
+];
+
+/// Builds a shape's geometry in object space, or `None` for a type we do not render
+/// (the caller skips it with a warning).
+pub fn read(ty: &str, p: &ParamList, span: Span, ctx: &mut ShapeContext) -> Res<Option<Built>> {
+    let Some(t) = REGISTRY.iter().find(|t| t.name == ty) else { return Ok(None) };
+    (t.read)(ctx, p, span).map(Some)
+}
+
+/// A mesh file's `filename` (required), where it was written, and its path; warns that
+/// `displacement` is not supported.
+fn mesh_file(ctx: &mut ShapeContext, ty: &str, p: &ParamList, span: Span) -> Res<(String, Span, std::path::PathBuf)> {
+    let name =
+        p.string("filename")?.ok_or_else(|| Diagnostic::error(span, format!("{ty} needs \"string filename\"")))?;
+    let at = p.named("filename").map_or(span, |f| f.value_span);
+    if let Some(d) = p.named("displacement") {
+        d.mark_used();
+        ctx.warn.push(Diagnostic::warning(d.span, "displacement is not supported; the mesh is used undisplaced"));
+    }
+    p.mark_known(&["edgelength"]);
+    let path = (ctx.resolve)(&name);
+    Ok((name, at, path))
 }
 
 #[cfg(test)]

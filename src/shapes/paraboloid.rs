@@ -3,8 +3,14 @@
 //!
 //! z = zmin + v·(zmax − zmin), ρ = r·sqrt(z / zmax): the radius is r at z = zmax.
 
+use super::Quadric;
+use super::params::{f, positive};
 use super::phi_max_radians;
 use super::quadric::{E, Local, QuadricSurface};
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -78,4 +84,16 @@ impl QuadricSurface for Paraboloid {
             d2_vv: -dz * dz * DVec3::new(p.x / (4.0 * p.z * p.z), p.y / (4.0 * p.z * p.z), 0.0),
         }
     }
+}
+
+pub const NAME: &str = "paraboloid";
+
+/// `Shape "paraboloid"` (v3): `radius` 1, `zmin` 0, `zmax` 1 (not both 0), `phimax` 360.
+pub fn read(p: &ParamList, span: Span) -> Res<Quadric> {
+    let r = positive(p, "radius", 1.0, span)?;
+    let (z0, z1) = (f(p, "zmin", 0.0)?, f(p, "zmax", 1.0)?);
+    if z0.max(z1) == 0.0 {
+        return Err(Diagnostic::error(span, "paraboloid: zmax must be nonzero"));
+    }
+    Ok(Quadric::Paraboloid(Paraboloid::new(r, z0, z1, f(p, "phimax", 360.0)?)))
 }

@@ -3,8 +3,13 @@
 //! p(u, v) = r(sinθ cosφ, sinθ sinφ, cosθ), φ = u·φmax, θ = θ(zmin) + v·(θ(zmax) − θ(zmin)),
 //! so v = 0 at zmin and v = 1 at zmax.
 
+use super::Quadric;
+use super::params::{f, positive};
 use super::phi_max_radians;
 use super::quadric::{E, Local, QuadricSurface};
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -112,4 +117,12 @@ impl QuadricSurface for Sphere {
             d2_vv: -dt * dt * p,
         }
     }
+}
+
+pub const NAME: &str = "sphere";
+
+/// `Shape "sphere"`: `radius` 1, `zmin` −radius, `zmax` radius, `phimax` 360.
+pub fn read(p: &ParamList, span: Span) -> Res<Quadric> {
+    let r = positive(p, "radius", 1.0, span)?;
+    Ok(Quadric::Sphere(Sphere::new(r, f(p, "zmin", -r)?, f(p, "zmax", r)?, f(p, "phimax", 360.0)?)))
 }

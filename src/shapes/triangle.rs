@@ -485,3 +485,15 @@ impl TriangleMesh {
         ((duv12.y * dn1 - duv02.y * dn2) * inv, (-duv12.x * dn1 + duv02.x * dn2) * inv)
     }
 }
+
+/// `Shape "trianglemesh"` (see [`super::mesh_params`] for its parameters).
+pub const NAME: &str = "trianglemesh";
+
+pub fn read(
+    ctx: &mut super::ShapeContext,
+    p: &crate::parser::params::ParamList,
+    span: crate::parser::source::Span,
+) -> crate::scene::values::Res<super::Built> {
+    let mesh = super::mesh_params::from_params(p, span, ctx.warn)?;
+    Ok(super::Built::Mesh { mesh, kind: NAME, filename: None })
+}

@@ -32,3 +32,15 @@ pub fn load(path: &std::path::Path, files: &crate::limits::Files) -> Result<Tria
     mesh.uv = (all_uvs && uv.len() == mesh.p.len()).then_some(uv);
     Ok(mesh)
 }
+
+pub const NAME: &str = "objmesh";
+
+pub fn read(
+    ctx: &mut super::ShapeContext,
+    p: &crate::parser::params::ParamList,
+    span: crate::parser::source::Span,
+) -> crate::scene::values::Res<super::Built> {
+    let (name, at, path) = super::mesh_file(ctx, NAME, p, span)?;
+    let mesh = load(&path, ctx.files).map_err(|e| crate::parser::error::Diagnostic::error(at, e))?;
+    Ok(super::Built::Mesh { mesh, kind: NAME, filename: Some(name) })
+}
