@@ -8,6 +8,7 @@
 //! world-space area and bounds.
 
 use crate::scene::{CameraKind, Geometry, PlacedShape, SceneDescription};
+use crate::shapes::QUADRIC_NAMES;
 use crate::shapes::Quadric;
 use glam::{DMat3, DMat4, DVec3};
 use serde_json::{Value, json};
@@ -112,27 +113,20 @@ fn counts(scene: &SceneDescription) -> Value {
             emitters += scene.prim_count(p.shape) as u64;
         }
     }
-    json!({
-        "sphere": n[0], "cylinder": n[1], "disk": n[2], "cone": n[3], "paraboloid": n[4], "hyperboloid": n[5],
-        "trianglemesh": meshes,
-        "triangles": triangles,
-        "bilinearmesh": patch_meshes,
-        "patches": patches,
-        "instances": scene.instances.len(),
-        "lights": scene.lights.len() as u64 + emitters,
-        "materials": scene.materials.len(),
-    })
+    let mut counts: serde_json::Map<String, Value> =
+        QUADRIC_NAMES.iter().zip(n).map(|(name, k)| (name.to_string(), k.into())).collect();
+    counts.insert(crate::shapes::triangle::NAME.into(), meshes.into());
+    counts.insert("triangles".into(), triangles.into());
+    counts.insert(crate::shapes::bilinear::NAME.into(), patch_meshes.into());
+    counts.insert("patches".into(), patches.into());
+    counts.insert("instances".into(), scene.instances.len().into());
+    counts.insert("lights".into(), (scene.lights.len() as u64 + emitters).into());
+    counts.insert("materials".into(), scene.materials.len().into());
+    Value::Object(counts)
 }
 
 fn quadric_slot(q: &Quadric) -> usize {
-    match q {
-        Quadric::Sphere(_) => 0,
-        Quadric::Cylinder(_) => 1,
-        Quadric::Disk(_) => 2,
-        Quadric::Cone(_) => 3,
-        Quadric::Paraboloid(_) => 4,
-        Quadric::Hyperboloid(_) => 5,
-    }
+    QUADRIC_NAMES.iter().position(|n| *n == q.name()).unwrap_or(0)
 }
 
 fn shape(scene: &SceneDescription, index: usize, p: &PlacedShape) -> Value {

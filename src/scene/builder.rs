@@ -697,7 +697,7 @@ impl Builder {
             }
             None => {
                 let area_light = self.gs.area_light;
-                if pending.entity.name == "plymesh" && self.known_syntax().is_none() {
+                if pending.entity.name == crate::shapes::plymesh::NAME && self.known_syntax().is_none() {
                     // How its quads are read depends on the file's version, not known yet.
                     self.deferred_shapes.push((self.shapes.len(), pending, area_light));
                     return Ok(());
@@ -957,7 +957,8 @@ impl Builder {
         let syntax = self.opts.syntax.or(self.reader.evidence.as_ref().map(|e| e.0)).unwrap_or(Syntax::V4);
         self.syntax = Some(syntax);
         self.build_deferred_shapes()?;
-        self.materials[0].ty = if syntax == Syntax::V3 { "matte" } else { "diffuse" }.into();
+        self.materials[0].ty =
+            if syntax == Syntax::V3 { crate::materials::matte::NAME } else { crate::materials::diffuse::NAME }.into();
         let uses = self.resolve_instances()?;
         let (objects, remap) = self.build_objects()?;
         let instances = uses

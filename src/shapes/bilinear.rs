@@ -418,7 +418,7 @@ pub fn read(
     p: &crate::parser::params::ParamList,
     span: crate::parser::source::Span,
 ) -> crate::scene::values::Res<super::Built> {
-    let mesh = super::mesh_params::patches_from_params(p, span, ctx.warn)?;
+    let mesh = super::mesh_params::patches_from_params(p, NAME, span, ctx.warn)?;
     Ok(super::Built::Patches { mesh, kind: NAME, filename: None })
 }
 

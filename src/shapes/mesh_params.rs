@@ -24,8 +24,14 @@ fn triples(v: &[f32]) -> Vec<[f32; 3]> {
 }
 
 /// Reads the mesh arrays of a `trianglemesh` statement.
-pub fn from_params(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Result<TriangleMesh, Diagnostic> {
-    let (positions, indices) = points_and_indices(p, "trianglemesh", 3, span, warn)?;
+/// `ty` names the shape in messages.
+pub fn from_params(
+    p: &ParamList,
+    ty: &str,
+    span: Span,
+    warn: &mut Vec<Diagnostic>,
+) -> Result<TriangleMesh, Diagnostic> {
+    let (positions, indices) = points_and_indices(p, ty, 3, span, warn)?;
     let n_p = positions.len();
     let mut mesh = TriangleMesh { p: positions, indices, ..Default::default() };
     mesh.n = per_vertex(p, "N", ParamType::Normal3, n_p, warn)?;
@@ -37,8 +43,14 @@ pub fn from_params(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Res
 }
 
 /// Reads the arrays of a v4 `bilinearmesh` statement.
-pub fn patches_from_params(p: &ParamList, span: Span, warn: &mut Vec<Diagnostic>) -> Result<PatchMesh, Diagnostic> {
-    let (positions, indices) = points_and_indices(p, "bilinearmesh", 4, span, warn)?;
+/// `ty` names the shape in messages.
+pub fn patches_from_params(
+    p: &ParamList,
+    ty: &str,
+    span: Span,
+    warn: &mut Vec<Diagnostic>,
+) -> Result<PatchMesh, Diagnostic> {
+    let (positions, indices) = points_and_indices(p, ty, 4, span, warn)?;
     let n_p = positions.len();
     let mut mesh = PatchMesh { p: positions, indices, ..Default::default() };
     mesh.n = per_vertex(p, "N", ParamType::Normal3, n_p, warn)?;

@@ -88,12 +88,12 @@ impl Quadric {
     /// The shape's name in scene files.
     pub fn name(&self) -> &'static str {
         match self {
-            Quadric::Sphere(_) => "sphere",
-            Quadric::Cylinder(_) => "cylinder",
-            Quadric::Disk(_) => "disk",
-            Quadric::Cone(_) => "cone",
-            Quadric::Paraboloid(_) => "paraboloid",
-            Quadric::Hyperboloid(_) => "hyperboloid",
+            Quadric::Sphere(_) => sphere::NAME,
+            Quadric::Cylinder(_) => cylinder::NAME,
+            Quadric::Disk(_) => disk::NAME,
+            Quadric::Cone(_) => cone::NAME,
+            Quadric::Paraboloid(_) => paraboloid::NAME,
+            Quadric::Hyperboloid(_) => hyperboloid::NAME,
         }
     }
 
@@ -223,6 +223,22 @@ macro_rules! quadric_type {
     ($m:ident) => {
         ShapeType { name: $m::NAME, read: |_, p, span| $m::read(p, span).map(Built::Quadric) }
     };
+}
+
+/// The quadrics' names, in the order `check` counts them.
+pub const QUADRIC_NAMES: [&str; 6] =
+    [sphere::NAME, cylinder::NAME, disk::NAME, cone::NAME, paraboloid::NAME, hyperboloid::NAME];
+
+/// The pbrt version a shape type name proves, for syntax detection: pbrt-v4 dropped
+/// the cone, paraboloid and hyperboloid (and heightfield and nurbs, which we do not
+/// render) and added the bilinear mesh.
+pub fn evidence(ty: &str) -> Option<crate::parser::Syntax> {
+    use crate::parser::Syntax::{V3, V4};
+    match ty {
+        cone::NAME | paraboloid::NAME | hyperboloid::NAME | "heightfield" | "nurbs" => Some(V3),
+        bilinear::NAME => Some(V4),
+        _ => None,
+    }
 }
 
 /// Every `Shape` type we render.

@@ -494,6 +494,6 @@ pub fn read(
     p: &crate::parser::params::ParamList,
     span: crate::parser::source::Span,
 ) -> crate::scene::values::Res<super::Built> {
-    let mesh = super::mesh_params::from_params(p, span, ctx.warn)?;
+    let mesh = super::mesh_params::from_params(p, NAME, span, ctx.warn)?;
     Ok(super::Built::Mesh { mesh, kind: NAME, filename: None })
 }
