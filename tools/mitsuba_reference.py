@@ -5,7 +5,7 @@
     python3 tools/mitsuba_reference.py scene.json reference.exr --spp 1024
 
 Needs the PyPI package `mitsuba` (its `scalar_rgb` variant needs no system libraries).
-The JSON form is documented in src/export.rs. Everything the export could not carry
+The JSON form is documented in src/cli/export.rs. Everything the export could not carry
 over is printed as a warning first. Before rendering, the script checks that
 Mitsuba's camera reproduces pbrt-sppm's rays (`check_rays`), so a mirrored or shifted
 image is an error rather than a silent mismatch. Errors print

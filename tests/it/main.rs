@@ -18,6 +18,7 @@ mod layout;
 mod mitsuba;
 mod pbrt_refs;
 mod real_scenes;
+mod registries;
 mod render;
 mod sampling;
 mod shapes;
