@@ -48,14 +48,23 @@ pub fn quote(s: &str) -> String {
     format!("'{}'", s.replace('\'', r"'\''"))
 }
 
+/// Why a plan cannot be made.
+#[derive(Debug, PartialEq, thiserror::Error)]
+pub enum PlanError {
+    #[error("--passes and --shards must be at least 1")]
+    Empty,
+    #[error("{shards} shards of {passes} passes would leave shards empty")]
+    EmptyShards { shards: u32, passes: u32 },
+}
+
 impl ShardPlan {
     /// Checks the counts: at least one pass per shard.
-    pub fn new(base: ShardPlan) -> Result<ShardPlan, String> {
+    pub fn new(base: ShardPlan) -> Result<ShardPlan, PlanError> {
         if base.passes == 0 || base.shards == 0 {
-            return Err("--passes and --shards must be at least 1".into());
+            return Err(PlanError::Empty);
         }
         if base.shards > base.passes {
-            return Err(format!("{} shards of {} passes would leave shards empty", base.shards, base.passes));
+            return Err(PlanError::EmptyShards { shards: base.shards, passes: base.passes });
         }
         Ok(base)
     }
