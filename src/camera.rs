@@ -27,7 +27,6 @@ use glam::{DMat4, DVec3};
 pub struct Camera {
     kind: CameraKind,
     world_from_camera: DMat4,
-    camera_from_world: DMat4,
     /// Screen window [x0, x1, y0, y1] and the full film resolution.
     window: [f32; 4],
     resolution: [f32; 2],
@@ -41,7 +40,6 @@ impl Camera {
         Camera {
             kind: desc.kind,
             world_from_camera: desc.camera_from_world.inverse(),
-            camera_from_world: desc.camera_from_world,
             window: desc.screen_window,
             resolution: [film.x_resolution as f32, film.y_resolution as f32],
             tan_half_fov: (desc.fov.to_radians() / 2.0).tan(),
@@ -106,7 +104,7 @@ impl Camera {
 
     /// The camera-space direction of a world ray, and its cosine with the view axis.
     fn local(&self, ray: &Ray) -> (DVec3, f64) {
-        let d = self.camera_from_world.transform_vector3(ray.d.0.as_dvec3()).normalize();
+        let d = self.world_from_camera.inverse().transform_vector3(ray.d.0.as_dvec3()).normalize();
         (d, d.z)
     }
 
@@ -121,7 +119,7 @@ impl Camera {
         if cos <= 0.0 {
             return None;
         }
-        let o = self.camera_from_world.transform_point3(ray.o.0.as_dvec3());
+        let o = self.world_from_camera.inverse().transform_point3(ray.o.0.as_dvec3());
         let focus = if self.lens_radius > 0.0 { self.focal_distance as f64 } else { 1.0 };
         let p = o + d * (focus / cos);
         let raster = self.raster(p)?;

@@ -88,11 +88,13 @@ pub struct AreaLight {
 }
 
 impl AreaLight {
+    #[inline]
     pub fn power(&self) -> f64 {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         luminance(self.l) as f64 * self.area as f64 * std::f64::consts::PI * sides
     }
 
+    #[inline]
     pub fn sample_li(&self, shapes: &ShapeSet, p: Vec3, u: [f32; 2]) -> Option<LightSample> {
         let s = shapes.sample_piece(&self.emitter, Some(Point3(p)), u)?;
         let d = s.p.0 - p;
@@ -109,12 +111,14 @@ impl AreaLight {
     }
 
     /// The solid-angle density `sample_li` gives direction `wi` from `p`.
+    #[inline]
     pub fn pdf_li(&self, shapes: &ShapeSet, p: Vec3, wi: Vec3) -> f32 {
         shapes.pdf_piece(&self.emitter, Point3(p), Vector3(wi))
     }
 
     /// A photon: a point by area, then a cosine-weighted direction about its normal
     /// (two-sided lights pick a side with probability ½).
+    #[inline]
     pub fn sample_le(&self, shapes: &ShapeSet, u1: [f32; 2], u2: [f32; 2]) -> Option<Emission> {
         let s = shapes.sample_piece(&self.emitter, None, u1)?;
         let n = s.n.0;
@@ -141,6 +145,7 @@ impl AreaLight {
 
     /// (position, direction) densities of an emission from the point `p` of this
     /// primitive, whose oriented normal there is `n`, along the unit direction `d`.
+    #[inline]
     pub fn pdf_le(&self, shapes: &ShapeSet, p: Vec3, n: Vec3, d: Vec3) -> (f32, f32) {
         let cos = n.dot(d);
         let pdf_dir = match self.two_sided {
@@ -151,6 +156,7 @@ impl AreaLight {
     }
 
     /// Radiance leaving the point with normal `n` along `w`.
+    #[inline]
     pub fn l(&self, n: Vec3, w: Vec3) -> Rgb {
         if self.two_sided || n.dot(w) > 0.0 { self.l } else { Vec3::ZERO }
     }

@@ -56,14 +56,17 @@ impl DistantLight {
         DistantLight { w: d.toward_light.as_vec3(), l: d.l }
     }
 
+    #[inline]
     pub fn power(&self, world: WorldSphere) -> f64 {
         luminance(self.l) as f64 * std::f64::consts::PI * (world.radius as f64).powi(2)
     }
 
+    #[inline]
     pub fn sample_li(&self) -> LightSample {
         LightSample::delta(self.w, self.l, None)
     }
 
+    #[inline]
     pub fn sample_le(&self, world: WorldSphere, u: [f32; 2]) -> Emission {
         let (w, r) = (self.w, world.radius);
         let (a, b) = coordinate_system(w);
@@ -75,6 +78,7 @@ impl DistantLight {
 
     /// (position, direction) densities of an emission: uniform over the disk of the
     /// world's radius, the direction a delta (0, as pbrt's `Pdf_Le` reports it).
+    #[inline]
     pub fn pdf_le(&self, world: WorldSphere) -> (f32, f32) {
         (1.0 / (PI * world.radius * world.radius), 0.0)
     }

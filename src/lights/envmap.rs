@@ -127,6 +127,7 @@ impl EnvMap {
     }
 
     /// Radiance arriving from world direction `w`.
+    #[inline]
     pub fn le(&self, w: Vec3) -> Rgb {
         let (st, _) = self.st_of(w);
         lookup(&self.img, st[0], st[1], Wrap::Repeat, true) * self.scale

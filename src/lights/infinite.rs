@@ -133,6 +133,7 @@ impl InfiniteLight {
         InfiniteLight { l: d.l, map }
     }
 
+    #[inline]
     pub fn power(&self, world: WorldSphere) -> f64 {
         let r2 = (world.radius as f64).powi(2);
         let lum = match &self.map {
@@ -142,6 +143,7 @@ impl InfiniteLight {
         lum as f64 * std::f64::consts::PI * r2
     }
 
+    #[inline]
     pub fn sample_li(&self, u: [f32; 2]) -> Option<LightSample> {
         let (wi, li, pdf) = match &self.map {
             None => (uniform_sphere(u), self.l, 1.0 / (4.0 * PI)),
@@ -154,6 +156,7 @@ impl InfiniteLight {
     }
 
     /// The solid-angle density `sample_li` gives direction `wi`.
+    #[inline]
     pub fn pdf_li(&self, wi: Vec3) -> f32 {
         match &self.map {
             None => 1.0 / (4.0 * PI),
@@ -163,6 +166,7 @@ impl InfiniteLight {
 
     /// A photon: a direction toward the environment, then a start on the disk of the
     /// world's radius facing it.
+    #[inline]
     pub fn sample_le(&self, world: WorldSphere, u1: [f32; 2], u2: [f32; 2]) -> Option<Emission> {
         // w points toward the environment; photons travel along d = −w.
         let (w, pdf_dir, le) = match &self.map {
@@ -181,11 +185,13 @@ impl InfiniteLight {
     }
 
     /// (position, direction) densities of an emission travelling along `d`.
+    #[inline]
     pub fn pdf_le(&self, world: WorldSphere, d: Vec3) -> (f32, f32) {
         (1.0 / (PI * world.radius * world.radius), self.pdf_li(-d))
     }
 
     /// Radiance along a ray that escapes in direction `d`.
+    #[inline]
     pub fn le(&self, d: Vec3) -> Rgb {
         match &self.map {
             None => self.l,

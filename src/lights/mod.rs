@@ -168,6 +168,7 @@ impl Light {
 
     /// Total emitted power, for choosing photon sources (luminance; in f64, so that a
     /// light bright enough for 4π·I to pass f32's range still has a power).
+    #[inline]
     pub fn power(&self, world: WorldSphere) -> f64 {
         match self {
             Light::Point(l) => l.power(),
@@ -179,6 +180,7 @@ impl Light {
     }
 
     /// Incident light at `p` from this light.
+    #[inline]
     pub fn sample_li(&self, shapes: &ShapeSet, p: Vec3, u: [f32; 2]) -> Option<LightSample> {
         match self {
             Light::Point(l) => l.sample_li(p),
@@ -191,6 +193,7 @@ impl Light {
 
     /// The solid-angle density `sample_li` gives direction `wi` from `p` (0 for delta
     /// lights, which no direction finds by chance).
+    #[inline]
     pub fn pdf_li(&self, shapes: &ShapeSet, p: Vec3, wi: Vec3) -> f32 {
         match self {
             Light::Infinite(l) => l.pdf_li(wi),
@@ -201,6 +204,7 @@ impl Light {
 
     /// A photon: ray, light normal, position and direction densities and emitted
     /// radiance (pbrt's `Sample_Le`).
+    #[inline]
     pub fn sample_le(&self, shapes: &ShapeSet, world: WorldSphere, u1: [f32; 2], u2: [f32; 2]) -> Option<Emission> {
         match self {
             Light::Point(l) => Some(l.sample_le(u1)),
@@ -215,6 +219,7 @@ impl Light {
     /// necessarily draw: a ray leaving `ray.o` (on an area light, where its oriented
     /// normal is `n`) along the unit direction `ray.d` (pbrt's `PDF_Le`). Delta
     /// positions and directions have density 0 here, as in pbrt.
+    #[inline]
     pub fn pdf_le(&self, shapes: &ShapeSet, world: WorldSphere, ray: &Ray, n: Vec3) -> (f32, f32) {
         match self {
             Light::Point(l) => l.pdf_le(),

@@ -44,6 +44,7 @@ pub fn point3(p: &ParamList, name: &str, default: [f32; 3]) -> Res<DVec3> {
 }
 
 /// v4's `power` in watts, when given and positive (≤ 0 means "not given", as in pbrt).
+#[inline]
 pub fn power(p: &ParamList) -> Res<Option<f32>> {
     Ok(Some(values::float(p, "power", -1.0, Range::Any)?).filter(|&w| w > 0.0))
 }

@@ -60,16 +60,19 @@ impl PointLight {
         PointLight { p: d.position.as_vec3(), i: d.i }
     }
 
+    #[inline]
     pub fn power(&self) -> f64 {
         4.0 * std::f64::consts::PI * luminance(self.i) as f64
     }
 
+    #[inline]
     pub fn sample_li(&self, p: Vec3) -> Option<LightSample> {
         let d = self.p - p;
         let d2 = d.length_squared();
         (d2 > 0.0).then(|| LightSample::delta(d / d2.sqrt(), self.i / d2, Some(self.p)))
     }
 
+    #[inline]
     pub fn sample_le(&self, u: [f32; 2]) -> Emission {
         let d = uniform_sphere(u);
         let ray = Ray::new(Point3(self.p), Vector3(d));
@@ -78,6 +81,7 @@ impl PointLight {
 
     /// (position, direction) densities of an emission along `d`: the position is a
     /// delta (0, as pbrt's `Pdf_Le` reports it), the direction uniform.
+    #[inline]
     pub fn pdf_le(&self) -> (f32, f32) {
         (0.0, 1.0 / (4.0 * PI))
     }

@@ -100,6 +100,7 @@ impl SpotLight {
     }
 
     /// The share of I emitted along the unit direction `w` (away from the light).
+    #[inline]
     fn falloff(&self, w: Vec3) -> f32 {
         let c = w.dot(self.frame[2]);
         if c < self.cos_total {
@@ -112,10 +113,12 @@ impl SpotLight {
         if self.smooth { d * d * (3.0 - 2.0 * d) } else { d * d * d * d }
     }
 
+    #[inline]
     pub fn power(&self) -> f64 {
         luminance(self.i) as f64 * 2.0 * std::f64::consts::PI * (1.0 - 0.5 * (self.cos_start + self.cos_total)) as f64
     }
 
+    #[inline]
     pub fn sample_li(&self, p: Vec3) -> Option<LightSample> {
         let d = self.p - p;
         let d2 = d.length_squared();
@@ -124,6 +127,7 @@ impl SpotLight {
         (d2 > 0.0 && f > 0.0).then(|| LightSample::delta(wi, self.i * f / d2, Some(self.p)))
     }
 
+    #[inline]
     pub fn sample_le(&self, u: [f32; 2]) -> Emission {
         let l = uniform_cone(u, self.cos_total);
         let [a, b, c] = self.frame;
@@ -140,6 +144,7 @@ impl SpotLight {
 
     /// (position, direction) densities of an emission along the unit direction `d`:
     /// the position is a delta (0), the direction uniform within the cone.
+    #[inline]
     pub fn pdf_le(&self, d: Vec3) -> (f32, f32) {
         (0.0, if d.dot(self.frame[2]) >= self.cos_total { self.pdf_dir() } else { 0.0 })
     }

@@ -175,6 +175,7 @@ impl Bsdf {
         self.f_mode(wo, wi, TransportMode::Radiance)
     }
 
+    #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         self.pdf_mode(wo, wi, TransportMode::Radiance)
     }

@@ -111,6 +111,7 @@ fn coat_eta(p: &ParamList, name: &str, r: &mut dyn Resolver) -> Res<f32> {
 
 /// The layers at a hit (pbrt-v4's `CoatedDiffuseMaterial::GetBxDF` and
 /// `CoatedConductorMaterial::GetBxDF`).
+#[inline]
 pub fn layers(c: &Coated, i: &Inputs<impl Fn() -> TexCtx>) -> Layered {
     let alpha = |r: &[TexValue; 2]| i.alpha(r, c.remap);
     let smooth = |a: [f32; 2]| a[0].max(a[1]) < 1e-3;
@@ -140,6 +141,7 @@ pub fn layers(c: &Coated, i: &Inputs<impl Fn() -> TexCtx>) -> Layered {
 }
 
 /// Only inside a pbrt-v3 mix, which holds lobes: the base alone (noted when read).
+#[inline]
 pub fn base_lobes<const N: usize>(c: &Coated, i: &Inputs<impl Fn() -> TexCtx>, out: &mut Lobes<N>) {
     match layers(c, i).bottom {
         Base::Diffuse(r) => out.push_nonzero(r, Lobe::Lambert),

@@ -31,6 +31,7 @@ pub fn read(ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Mat
 }
 
 /// A conductor is smooth when both roughnesses give α below 10⁻³.
+#[inline]
 pub fn lobes<const N: usize>(
     metal: &Metal,
     roughness: &[TexValue; 2],

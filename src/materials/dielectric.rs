@@ -48,6 +48,7 @@ pub fn read(ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Mat
 }
 
 /// The glass's lobes at a hit.
+#[inline]
 pub fn lobes<const N: usize>(
     [eta, kr, kt]: [TexValue; 3],
     roughness: &[TexValue; 2],

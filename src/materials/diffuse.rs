@@ -21,6 +21,7 @@ pub fn read(_ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Ma
 }
 
 /// A Lambertian lobe (also pbrt-v3's `matte` without `sigma`).
+#[inline]
 pub fn lobes<const N: usize>(reflectance: TexValue, i: &Inputs<impl Fn() -> TexCtx>, out: &mut Lobes<N>) {
     lambert(i.refl(reflectance)).into_iter().for_each(|l| out.push(l))
 }

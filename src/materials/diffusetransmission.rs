@@ -26,6 +26,7 @@ pub fn read(_ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Ma
     })
 }
 
+#[inline]
 pub fn lobes<const N: usize>(
     [reflectance, transmittance, scale]: [TexValue; 3],
     i: &Inputs<impl Fn() -> TexCtx>,

@@ -29,6 +29,7 @@ pub fn read(_ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Ma
 }
 
 /// Oren–Nayar with pbrt's A and B (Lambertian where σ is 0 at this hit).
+#[inline]
 pub fn lobes<const N: usize>(
     reflectance: TexValue,
     sigma: TexValue,

@@ -21,6 +21,7 @@ pub fn read(_ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Ma
     Ok(MaterialKind::Mirror { reflectance: spectrum(p, "Kr", 0.9, r)? })
 }
 
+#[inline]
 pub fn lobes<const N: usize>(reflectance: TexValue, i: &Inputs<impl Fn() -> TexCtx>, out: &mut Lobes<N>) {
     out.push(Lobe::SpecularReflection { r: i.rgb(reflectance), fresnel: Fresnel::One })
 }

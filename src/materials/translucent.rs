@@ -29,6 +29,7 @@ pub fn read(_ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Ma
     })
 }
 
+#[inline]
 pub fn lobes<const N: usize>(
     [kd, ks, reflect, transmit]: [TexValue; 4],
     roughness: TexValue,

@@ -36,6 +36,7 @@ pub fn read(_ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Ma
 }
 
 /// pbrt-v3's uber: a pass-through of 1 − opacity, then each layer scaled by the opacity.
+#[inline]
 pub fn lobes<const N: usize>(
     [kd, ks, kr, kt, eta, opacity]: [TexValue; 6],
     roughness: &[TexValue; 2],

@@ -20,6 +20,7 @@ pub fn read(i: &mut Input, p: &ParamList, _at: Span, site: &TextureSite) -> Res<
     Ok(Some(TextureKind::Bilerp { v, map: mapping::read(p, site)? }))
 }
 
+#[inline]
 pub fn eval(v: &[Rgb; 4], map: &Mapping2D, ctx: &TexCtx) -> Rgb {
     let [s, t] = map_2d(map, ctx);
     (1.0 - s) * (1.0 - t) * v[0] + s * (1.0 - t) * v[1] + (1.0 - s) * t * v[2] + s * t * v[3]

@@ -33,11 +33,13 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
     }
 }
 
+#[inline]
 pub fn eval_2d([tex1, tex2]: [TexValue; 2], map: &Mapping2D, ctx: &TexCtx, get: impl Fn(TexValue) -> Rgb) -> Rgb {
     let [s, t] = map_2d(map, ctx);
     get(if (s.floor() as i64 + t.floor() as i64) % 2 == 0 { tex1 } else { tex2 })
 }
 
+#[inline]
 pub fn eval_3d([tex1, tex2]: [TexValue; 2], map: &Mat4, ctx: &TexCtx, get: impl Fn(TexValue) -> Rgb) -> Rgb {
     let p = map.transform_point3(ctx.p).floor();
     get(if (p.x as i64 + p.y as i64 + p.z as i64) % 2 == 0 { tex1 } else { tex2 })

@@ -16,6 +16,7 @@ pub fn read(i: &mut Input, p: &ParamList, _at: Span, _site: &TextureSite) -> Res
     Ok(Some(TextureKind::Constant(i.input(p, "value", 1.0)?)))
 }
 
+#[inline]
 pub fn eval(v: TexValue, get: impl Fn(TexValue) -> Rgb) -> Rgb {
     get(v)
 }

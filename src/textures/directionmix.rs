@@ -22,6 +22,7 @@ pub fn read(i: &mut Input, p: &ParamList, _at: Span, site: &TextureSite) -> Res<
     Ok(Some(TextureKind::DirectionMix { tex1, tex2, dir }))
 }
 
+#[inline]
 pub fn eval([tex1, tex2]: [TexValue; 2], dir: Vec3, ctx: &TexCtx, get: impl Fn(TexValue) -> Rgb) -> Rgb {
     let a = ctx.n.dot(dir).abs();
     a * get(tex1) + (1.0 - a) * get(tex2)

@@ -26,11 +26,13 @@ pub fn read(i: &mut Input, p: &ParamList, _at: Span, site: &TextureSite) -> Res<
     }))
 }
 
+#[inline]
 pub fn eval([dot, background]: [TexValue; 2], map: &Mapping2D, ctx: &TexCtx, get: impl Fn(TexValue) -> Rgb) -> Rgb {
     get(if inside_dot(map_2d(map, ctx)) { dot } else { background })
 }
 
 /// Whether (s, t) is inside a dot.
+#[inline]
 pub fn inside_dot([s, t]: [f32; 2]) -> bool {
     let (sc, tc) = ((s + 0.5).floor(), (t + 0.5).floor());
     if noise2(sc + 0.5, tc + 0.5) <= 0.0 {

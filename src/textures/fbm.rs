@@ -20,6 +20,7 @@ pub fn read(_i: &mut Input, p: &ParamList, _at: Span, site: &TextureSite) -> Res
     Ok(Some(TextureKind::Fbm { map: site.map3d(), octaves: Octaves::read(p)? }))
 }
 
+#[inline]
 pub fn eval(map: &Mat4, o: &Octaves, ctx: &TexCtx) -> Rgb {
     let (p, dx, dy) = map_3d(map, ctx);
     Vec3::splat(fbm(p, dx, dy, o.omega, o.octaves))

@@ -58,6 +58,7 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
     Ok(Some(TextureKind::Image { image, map, wrap, scale, invert }))
 }
 
+#[inline]
 pub fn eval(image: &Arc<RgbImage>, map: &Mapping2D, (wrap, scale, invert): (Wrap, f32, bool), ctx: &TexCtx) -> Rgb {
     let [s, t] = map_2d(map, ctx);
     let v = lookup(image, s, t, wrap, false) * scale;

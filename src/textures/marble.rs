@@ -33,6 +33,7 @@ pub fn read(i: &mut Input, p: &ParamList, _at: Span, site: &TextureSite) -> Res<
     }))
 }
 
+#[inline]
 pub fn eval(map: &Mat4, o: &Octaves, [scale, variation]: [f32; 2], v3_segments: bool, ctx: &TexCtx) -> Rgb {
     let (p, dx, dy) = map_3d(map, ctx);
     let m = p.y * scale + variation * fbm(p * scale, dx * scale, dy * scale, o.omega, o.octaves);
@@ -44,6 +45,7 @@ pub fn eval(map: &Mat4, o: &Octaves, [scale, variation]: [f32; 2], v3_segments: 
 // DEVIATION(pbrt): appearance, `--fix marble-palette`. pbrt-v3 picks the segment with
 // `min(1, ⌊6t⌋)` (`v3_segments`), which evaluates the Bézier far outside [0, 1]
 // (colours beyond 10, or negative); the fix, and pbrt-v4, use `min(⌊6t⌋, 5)`.
+#[inline]
 pub fn colour(t: f32, v3_segments: bool) -> Rgb {
     const C: [[f32; 3]; 9] = [
         [0.58, 0.58, 0.6],

@@ -22,6 +22,7 @@ pub fn read(i: &mut Input, p: &ParamList, _at: Span, _site: &TextureSite) -> Res
     }))
 }
 
+#[inline]
 pub fn eval([tex1, tex2, amount]: [TexValue; 3], get: impl Fn(TexValue) -> Rgb) -> Rgb {
     let t = get(amount);
     get(tex1) * (Vec3::ONE - t) + get(tex2) * t

@@ -252,6 +252,7 @@ impl Textures {
         self.0.iter().any(|t| matches!(t, K::Fbm { .. } | K::Wrinkled { .. } | K::Windy { .. } | K::Marble { .. }))
     }
 
+    #[inline]
     pub fn eval(&self, v: TexValue, ctx: &TexCtx) -> Rgb {
         match v {
             TexValue::Const(c) => c,

@@ -23,6 +23,7 @@ pub fn read(i: &mut Input, p: &ParamList, _at: Span, _site: &TextureSite) -> Res
     Ok(Some(TextureKind::Scale { tex, scale: i.float(p, "scale", 1.0, Range::Any)? }))
 }
 
+#[inline]
 pub fn eval(tex: TexValue, scale: TexValue, get: impl Fn(TexValue) -> Rgb) -> Rgb {
     get(tex) * get(scale)
 }

@@ -22,6 +22,7 @@ pub fn read(i: &mut Input, p: &ParamList, _at: Span, site: &TextureSite) -> Res<
     Ok(Some(TextureKind::Uv { map: mapping::read(p, site)? }))
 }
 
+#[inline]
 pub fn eval(map: &Mapping2D, ctx: &TexCtx) -> Rgb {
     let [s, t] = map_2d(map, ctx);
     Vec3::new(s - s.floor(), t - t.floor(), 0.0)

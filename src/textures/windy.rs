@@ -20,6 +20,7 @@ pub fn read(_i: &mut Input, _p: &ParamList, _at: Span, site: &TextureSite) -> Re
     Ok(Some(TextureKind::Windy { map: site.map3d() }))
 }
 
+#[inline]
 pub fn eval(map: &Mat4, ctx: &TexCtx) -> Rgb {
     let (p, dx, dy) = map_3d(map, ctx);
     Vec3::splat(fbm(0.1 * p, 0.1 * dx, 0.1 * dy, 0.5, 3).abs() * fbm(p, dx, dy, 0.5, 6))
