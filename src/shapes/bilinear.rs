@@ -11,10 +11,14 @@
 //! and normals are stored already transformed.
 
 use super::sampling::ShapeSample;
+use super::{Built, ShapeContext};
 use super::{MeshFlags, integrate_unit_square};
 use crate::interaction::{Shading, SurfaceInteraction};
 use crate::math::float::gamma;
 use crate::math::{Bounds3, Normal3, Point3, Ray, Vector3};
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use glam::{DVec3, Quat, Vec2, Vec3};
 
 /// One bilinear patch mesh's vertex data (already in the space of its transform).
@@ -413,13 +417,9 @@ fn bilinear_pdf([x, y]: [f32; 2], w: [f32; 4]) -> f32 {
 /// `Shape "bilinearmesh"` (v4; see [`super::mesh_params`] for its parameters).
 pub const NAME: &str = "bilinearmesh";
 
-pub fn read(
-    ctx: &mut super::ShapeContext,
-    p: &crate::parser::params::ParamList,
-    span: crate::parser::source::Span,
-) -> crate::scene::values::Res<super::Built> {
+pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     let mesh = super::mesh_params::patches_from_params(p, NAME, span, ctx.warn)?;
-    Ok(super::Built::Patches { mesh, kind: NAME, filename: None })
+    Ok(Built::Patches { mesh, kind: NAME, filename: None })
 }
 
 #[cfg(test)]

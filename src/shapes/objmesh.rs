@@ -2,6 +2,11 @@
 //! OBJ support): every object and group of the file becomes one triangle mesh, with
 //! normals and texture coordinates when every part has them. Read through tobj.
 
+use super::{Built, ShapeContext};
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use crate::shapes::TriangleMesh;
 
 pub fn load(path: &std::path::Path, files: &crate::limits::Files) -> Result<TriangleMesh, String> {
@@ -35,12 +40,8 @@ pub fn load(path: &std::path::Path, files: &crate::limits::Files) -> Result<Tria
 
 pub const NAME: &str = "objmesh";
 
-pub fn read(
-    ctx: &mut super::ShapeContext,
-    p: &crate::parser::params::ParamList,
-    span: crate::parser::source::Span,
-) -> crate::scene::values::Res<super::Built> {
+pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     let (name, at, path) = super::mesh_file(ctx, NAME, p, span)?;
-    let mesh = load(&path, ctx.files).map_err(|e| crate::parser::error::Diagnostic::error(at, e))?;
-    Ok(super::Built::Mesh { mesh, kind: NAME, filename: Some(name) })
+    let mesh = load(&path, ctx.files).map_err(|e| Diagnostic::error(at, e))?;
+    Ok(Built::Mesh { mesh, kind: NAME, filename: Some(name) })
 }

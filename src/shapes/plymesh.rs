@@ -13,6 +13,11 @@
 //!
 //! Errors name the element: `face 12 has 5 vertices (pbrt reads triangles and quads)`.
 
+use super::{Built, ShapeContext};
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use crate::shapes::{PatchMesh, TriangleMesh};
 use ply_rs::parser::Parser;
 use ply_rs::ply::{
@@ -473,26 +478,19 @@ pub const NAME: &str = "plymesh";
 
 /// `Shape "plymesh" "string filename" "mesh.ply"`: the file's triangles, and its quads
 /// as the file's version reads them (a file of both is two shapes, as in pbrt-v4).
-pub fn read(
-    ctx: &mut super::ShapeContext,
-    p: &crate::parser::params::ParamList,
-    span: crate::parser::source::Span,
-) -> crate::scene::values::Res<super::Built> {
+pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     let (name, at, path) = super::mesh_file(ctx, NAME, p, span)?;
     let m = load(&path, ctx.quads, ctx.files).map_err(|e| {
         // Read errors name the file already; format errors get its name first.
-        crate::parser::error::Diagnostic::error(
-            at,
-            if e.starts_with("cannot read") { e } else { format!("{name}: {e}") },
-        )
+        Diagnostic::error(at, if e.starts_with("cannot read") { e } else { format!("{name}: {e}") })
     })?;
     let has_triangles = !m.triangles.indices.is_empty();
-    let tris = super::Built::Mesh { mesh: m.triangles, kind: NAME, filename: Some(name.clone()) };
+    let tris = Built::Mesh { mesh: m.triangles, kind: NAME, filename: Some(name.clone()) };
     Ok(match m.patches {
         None => tris,
         Some(mesh) => {
-            let patches = super::Built::Patches { mesh, kind: NAME, filename: Some(name) };
-            if has_triangles { super::Built::Several(vec![tris, patches]) } else { patches }
+            let patches = Built::Patches { mesh, kind: NAME, filename: Some(name) };
+            if has_triangles { Built::Several(vec![tris, patches]) } else { patches }
         }
     })
 }

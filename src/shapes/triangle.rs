@@ -113,10 +113,14 @@ impl TriangleMesh {
     }
 }
 
+use super::{Built, ShapeContext};
 use crate::interaction::{Shading, SurfaceInteraction};
 use crate::math::float::gamma;
 use crate::math::frame::coordinate_system;
 use crate::math::{Bounds3, Normal3, Point3, Ray, Vector3};
+use crate::parser::params::ParamList;
+use crate::parser::source::Span;
+use crate::scene::values::Res;
 use glam::{Mat4, Vec3, Vec4};
 
 /// Orientation flags of the shape a mesh came from.
@@ -489,11 +493,7 @@ impl TriangleMesh {
 /// `Shape "trianglemesh"` (see [`super::mesh_params`] for its parameters).
 pub const NAME: &str = "trianglemesh";
 
-pub fn read(
-    ctx: &mut super::ShapeContext,
-    p: &crate::parser::params::ParamList,
-    span: crate::parser::source::Span,
-) -> crate::scene::values::Res<super::Built> {
+pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     let mesh = super::mesh_params::from_params(p, NAME, span, ctx.warn)?;
-    Ok(super::Built::Mesh { mesh, kind: NAME, filename: None })
+    Ok(Built::Mesh { mesh, kind: NAME, filename: None })
 }
