@@ -82,4 +82,7 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import docsection
+
+    sys.exit(docsection.run(main, "passes-converge"))

@@ -12,6 +12,7 @@ render without Slurm, and the cost model's terms: scene loading per shard, secon
 pass on one thread, merge time and part size.
 """
 import argparse
+import sys
 import os
 import shutil
 import statistics
@@ -114,4 +115,7 @@ def model(o, plain, walls, last):
 
 
 if __name__ == "__main__":
-    main()
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import docsection
+
+    sys.exit(docsection.run(main, "slurm-throughput"))
