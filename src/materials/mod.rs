@@ -1,7 +1,7 @@
 //! Materials, one module per type, each owning its parameters (names, defaults per
 //! version, located errors), the lobes it makes at a hit, and its Mitsuba export;
 //! [`REGISTRY`] is the one list of `Material` types. Textures ([`Textures`]) are
-//! evaluated at each hit; [`bsdf`] combines the lobes as pbrt's `BSDF` does.
+//! evaluated at each hit; [`Bsdf`] combines the lobes as pbrt's `BSDF` does.
 //!
 //! ```text
 //! Material "matte" "rgb Kd" [.5 .5 .5]        Material "diffuse" "texture reflectance" "checks"

@@ -1,5 +1,6 @@
-//! Typed parameter values: the checks every value of a light, material or texture gets
-//! before it leaves `scene/` (the last place a parameter list is seen).
+//! Typed parameter values: the checks every value of a light, material, texture or
+//! shape gets as its type's module reads it. Inputs that may be textures
+//! ([`TexValue`]) are resolved through the builder ([`Resolver`]).
 //!
 //! ```text
 //! "float eta" 1.5              # exactly one finite number; eta must be positive
