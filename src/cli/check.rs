@@ -8,8 +8,8 @@
 //! world-space area and bounds.
 
 use crate::scene::{CameraKind, Geometry, PlacedShape, SceneDescription};
-use crate::shapes::QUADRIC_NAMES;
 use crate::shapes::Quadric;
+use crate::shapes::{QUADRIC_NAMES, ShapeParam};
 use glam::{DMat3, DMat4, DVec3};
 use serde_json::{Value, json};
 
@@ -174,29 +174,12 @@ fn shape(scene: &SceneDescription, index: usize, p: &PlacedShape) -> Value {
 }
 
 fn quadric_params(q: &Quadric) -> Value {
-    let deg = |r: f32| f32_json((r as f64).to_degrees() as f32);
-    match q {
-        Quadric::Sphere(s) => json!({
-            "radius": f32_json(s.radius), "zmin": f32_json(s.z_min), "zmax": f32_json(s.z_max), "phimax": deg(s.phi_max),
-        }),
-        Quadric::Cylinder(s) => json!({
-            "radius": f32_json(s.radius), "zmin": f32_json(s.z_min), "zmax": f32_json(s.z_max), "phimax": deg(s.phi_max),
-        }),
-        Quadric::Disk(s) => json!({
-            "height": f32_json(s.height), "radius": f32_json(s.radius), "innerradius": f32_json(s.inner_radius),
-            "phimax": deg(s.phi_max),
-        }),
-        Quadric::Cone(s) => {
-            json!({ "height": f32_json(s.height), "radius": f32_json(s.radius), "phimax": deg(s.phi_max) })
-        }
-        Quadric::Paraboloid(s) => json!({
-            "radius": f32_json(s.radius), "zmin": f32_json(s.z_min), "zmax": f32_json(s.z_max), "phimax": deg(s.phi_max),
-        }),
-        Quadric::Hyperboloid(s) => json!({
-            "p1": s.p1.to_array().map(f32_json), "p2": s.p2.to_array().map(f32_json), "phimax": deg(s.phi_max),
-            "zmin": f32_json(s.z_min), "zmax": f32_json(s.z_max), "rmax": f32_json(s.r_max),
-        }),
-    }
+    let value = |v: ShapeParam| match v {
+        ShapeParam::Float(x) => f32_json(x),
+        ShapeParam::Angle(r) => f32_json((r as f64).to_degrees() as f32),
+        ShapeParam::Point(p) => json!(p.map(f32_json)),
+    };
+    Value::Object(q.params().into_iter().map(|(name, v)| (name.to_string(), value(v))).collect())
 }
 
 /// The text `check` prints: the scene in a few lines, then every skipped, approximated

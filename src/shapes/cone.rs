@@ -95,6 +95,14 @@ impl QuadricSurface for Cone {
     }
 }
 
+impl Cone {
+    /// Its parameters after defaults and clamps, for `check --shapes`.
+    pub fn params(&self) -> Vec<(&'static str, super::ShapeParam)> {
+        use super::ShapeParam::*;
+        vec![("height", Float(self.height)), ("radius", Float(self.radius)), ("phimax", Angle(self.phi_max))]
+    }
+}
+
 pub const NAME: &str = "cone";
 
 /// `Shape "cone"` (v3): `height` 1 (not 0), `radius` 1, `phimax` 360.

@@ -84,6 +84,19 @@ impl QuadricSurface for Cylinder {
     }
 }
 
+impl Cylinder {
+    /// Its parameters after defaults and clamps, for `check --shapes`.
+    pub fn params(&self) -> Vec<(&'static str, super::ShapeParam)> {
+        use super::ShapeParam::*;
+        vec![
+            ("radius", Float(self.radius)),
+            ("zmin", Float(self.z_min)),
+            ("zmax", Float(self.z_max)),
+            ("phimax", Angle(self.phi_max)),
+        ]
+    }
+}
+
 pub const NAME: &str = "cylinder";
 
 /// `Shape "cylinder"`: `radius` 1, `zmin` −1, `zmax` 1, `phimax` 360.

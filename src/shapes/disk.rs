@@ -102,6 +102,19 @@ impl QuadricSurface for Disk {
     }
 }
 
+impl Disk {
+    /// Its parameters after defaults and clamps, for `check --shapes`.
+    pub fn params(&self) -> Vec<(&'static str, super::ShapeParam)> {
+        use super::ShapeParam::*;
+        vec![
+            ("height", Float(self.height)),
+            ("radius", Float(self.radius)),
+            ("innerradius", Float(self.inner_radius)),
+            ("phimax", Angle(self.phi_max)),
+        ]
+    }
+}
+
 pub const NAME: &str = "disk";
 
 /// `Shape "disk"`: `height` 0, `radius` 1, `innerradius` 0 (within [0, radius]), `phimax` 360.

@@ -213,6 +213,21 @@ impl QuadricSurface for Hyperboloid {
     }
 }
 
+impl Hyperboloid {
+    /// Its parameters after defaults and clamps, for `check --shapes`.
+    pub fn params(&self) -> Vec<(&'static str, super::ShapeParam)> {
+        use super::ShapeParam::*;
+        vec![
+            ("p1", Point(self.p1.to_array())),
+            ("p2", Point(self.p2.to_array())),
+            ("phimax", Angle(self.phi_max)),
+            ("zmin", Float(self.z_min)),
+            ("zmax", Float(self.z_max)),
+            ("rmax", Float(self.r_max)),
+        ]
+    }
+}
+
 pub const NAME: &str = "hyperboloid";
 
 /// `Shape "hyperboloid"` (v3): `p1` (0,0,0), `p2` (1,1,1), `phimax` 360; a line that

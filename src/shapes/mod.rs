@@ -97,6 +97,11 @@ impl Quadric {
         }
     }
 
+    /// Its parameters after defaults and clamps, for `check --shapes`.
+    pub fn params(&self) -> Vec<(&'static str, ShapeParam)> {
+        dispatch_quadric!(self, s => s.params())
+    }
+
     pub fn phi_max(&self) -> f64 {
         dispatch_quadric!(self, s => s.phi_max as f64)
     }
@@ -223,6 +228,15 @@ macro_rules! quadric_type {
     ($m:ident) => {
         ShapeType { name: $m::NAME, read: |_, p, span| $m::read(p, span).map(Built::Quadric) }
     };
+}
+
+/// One parameter of a shape as it is after defaults and clamps (for reports).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ShapeParam {
+    Float(f32),
+    /// An angle, stored in radians and reported in degrees as scenes write it.
+    Angle(f32),
+    Point([f32; 3]),
 }
 
 /// The quadrics' names, in the order `check` counts them.

@@ -86,6 +86,19 @@ impl QuadricSurface for Paraboloid {
     }
 }
 
+impl Paraboloid {
+    /// Its parameters after defaults and clamps, for `check --shapes`.
+    pub fn params(&self) -> Vec<(&'static str, super::ShapeParam)> {
+        use super::ShapeParam::*;
+        vec![
+            ("radius", Float(self.radius)),
+            ("zmin", Float(self.z_min)),
+            ("zmax", Float(self.z_max)),
+            ("phimax", Angle(self.phi_max)),
+        ]
+    }
+}
+
 pub const NAME: &str = "paraboloid";
 
 /// `Shape "paraboloid"` (v3): `radius` 1, `zmin` 0, `zmax` 1 (not both 0), `phimax` 360.

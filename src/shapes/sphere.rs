@@ -119,6 +119,19 @@ impl QuadricSurface for Sphere {
     }
 }
 
+impl Sphere {
+    /// Its parameters after defaults and clamps, for `check --shapes`.
+    pub fn params(&self) -> Vec<(&'static str, super::ShapeParam)> {
+        use super::ShapeParam::*;
+        vec![
+            ("radius", Float(self.radius)),
+            ("zmin", Float(self.z_min)),
+            ("zmax", Float(self.z_max)),
+            ("phimax", Angle(self.phi_max)),
+        ]
+    }
+}
+
 pub const NAME: &str = "sphere";
 
 /// `Shape "sphere"`: `radius` 1, `zmin` −radius, `zmax` radius, `phimax` 360.
