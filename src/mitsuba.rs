@@ -95,3 +95,30 @@ pub trait MaterialExport {
         MaterialOut::Diffuse { reflectance: self.rgb(reflectance) }
     }
 }
+
+/// A shape's geometry.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum GeometryOut {
+    Sphere {
+        center: [f64; 3],
+        radius: f64,
+        flip_normals: bool,
+    },
+    Cylinder {
+        to_world: [f64; 16],
+        flip_normals: bool,
+    },
+    Disk {
+        to_world: [f64; 16],
+        flip_normals: bool,
+    },
+    /// `face_normals`: shade with the flat triangle normal (pbrt meshes without `N`);
+    /// false for tessellated quadrics, whose smooth normals the reader interpolates.
+    Mesh {
+        positions: Vec<f32>,
+        normals: Option<Vec<f32>>,
+        indices: Vec<u32>,
+        face_normals: bool,
+    },
+}

@@ -37,7 +37,7 @@ use crate::math::transform::row_major;
 use crate::scene::{CameraKind, Geometry, MaterialDesc, PlacedShape, SceneDescription, ShapeDesc, TexValue};
 use crate::shapes::{Quadric, TriangleMesh};
 use crate::spectrum::Rgb;
-use glam::{DMat3, DMat4, DVec3, Vec3};
+use glam::{DMat4, DVec3, Vec3};
 use serde::Serialize;
 
 #[derive(Serialize)]
@@ -119,34 +119,8 @@ pub struct InstanceOut {
     pub first_shape_index: u32,
 }
 
-#[derive(Serialize)]
-#[serde(tag = "type", rename_all = "snake_case")]
-pub enum GeometryOut {
-    Sphere {
-        center: [f64; 3],
-        radius: f64,
-        flip_normals: bool,
-    },
-    Cylinder {
-        to_world: [f64; 16],
-        flip_normals: bool,
-    },
-    Disk {
-        to_world: [f64; 16],
-        flip_normals: bool,
-    },
-    /// `face_normals`: shade with the flat triangle normal (pbrt meshes without `N`);
-    /// false for tessellated quadrics, whose smooth normals the reader interpolates.
-    Mesh {
-        positions: Vec<f32>,
-        normals: Option<Vec<f32>>,
-        indices: Vec<u32>,
-        face_normals: bool,
-    },
-}
-
 use crate::mitsuba::MaterialExport;
-pub use crate::mitsuba::{LightOut, MaterialOut, Unsupported};
+pub use crate::mitsuba::{GeometryOut, LightOut, MaterialOut, Unsupported};
 
 /// Quadric tessellation: cells around the full φ range and along v.
 const PHI_CELLS: u32 = 96;
@@ -313,32 +287,10 @@ const PATCH_CELLS: usize = 8;
 
 /// Mitsuba's sphere, cylinder and disk for full shapes under a rotation, uniform scale
 /// and translation; a mesh otherwise.
+/// A quadric as Mitsuba's own shape where it has one (each quadric's `mitsuba`), else
+/// tessellated.
 fn quadric(q: &Quadric, m: &DMat4, reverse: bool) -> GeometryOut {
-    let m3 = DMat3::from_mat4(*m);
-    let native = crate::shapes::similarity_scale(m3).is_some() && m3.determinant() > 0.0;
-    let full = q.phi_max() >= std::f64::consts::TAU - 1e-6;
-    match q {
-        Quadric::Sphere(s) if native && full && s.z_min <= -s.radius && s.z_max >= s.radius => GeometryOut::Sphere {
-            center: m.transform_point3(DVec3::ZERO).to_array(),
-            radius: m3.x_axis.length() * s.radius as f64,
-            flip_normals: reverse,
-        },
-        Quadric::Cylinder(c) if native && full => {
-            let (r, z0, z1) = (c.radius as f64, c.z_min as f64, c.z_max as f64);
-            let local = DMat4::from_translation(DVec3::new(0.0, 0.0, z0)) * scale(r, r, z1 - z0);
-            GeometryOut::Cylinder { to_world: row_major(&(*m * local)), flip_normals: reverse }
-        }
-        Quadric::Disk(d) if native && full && d.inner_radius == 0.0 => {
-            let r = d.radius as f64;
-            let local = DMat4::from_translation(DVec3::new(0.0, 0.0, d.height as f64)) * scale(r, r, 1.0);
-            GeometryOut::Disk { to_world: row_major(&(*m * local)), flip_normals: reverse }
-        }
-        _ => tessellate(q, m, reverse),
-    }
-}
-
-fn scale(x: f64, y: f64, z: f64) -> DMat4 {
-    DMat4::from_scale(DVec3::new(x, y, z))
+    q.mitsuba(m, reverse).unwrap_or_else(|| tessellate(q, m, reverse))
 }
 
 /// A (u, v) grid over the quadric. Our normal is m·∂p/∂u × m·∂p/∂v (negated by

@@ -6,10 +6,12 @@ use super::Quadric;
 use super::params::{f, positive};
 use super::phi_max_radians;
 use super::quadric::{E, Local, QuadricSurface};
+use crate::math::transform::row_major;
+use crate::mitsuba::GeometryOut;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::Res;
-use glam::DVec3;
+use glam::{DMat3, DMat4, DVec3};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Cylinder {
@@ -94,6 +96,21 @@ impl Cylinder {
             ("zmax", Float(self.z_max)),
             ("phimax", Angle(self.phi_max)),
         ]
+    }
+}
+
+impl Cylinder {
+    /// Mitsuba's `cylinder` (unit radius and height, placed by `to_world`), for a full
+    /// cylinder under a similarity transform that keeps handedness.
+    pub fn mitsuba(&self, m: &DMat4, reverse: bool) -> Option<GeometryOut> {
+        let full = self.phi_max as f64 >= std::f64::consts::TAU - 1e-6;
+        if !(super::native_in_mitsuba(DMat3::from_mat4(*m)) && full) {
+            return None;
+        }
+        let (r, z0, z1) = (self.radius as f64, self.z_min as f64, self.z_max as f64);
+        let local = DMat4::from_translation(DVec3::new(0.0, 0.0, z0)) * DMat4::from_scale(DVec3::new(r, r, z1 - z0));
+        let to_world = row_major(&(*m * local));
+        Some(GeometryOut::Cylinder { to_world, flip_normals: reverse })
     }
 }
 

@@ -6,11 +6,13 @@ use super::Quadric;
 use super::params::{f, positive};
 use super::phi_max_radians;
 use super::quadric::{E, Local, QuadricSurface, at};
+use crate::math::transform::row_major;
+use crate::mitsuba::GeometryOut;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::Res;
-use glam::DVec3;
+use glam::{DMat3, DMat4, DVec3};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Disk {
@@ -112,6 +114,22 @@ impl Disk {
             ("innerradius", Float(self.inner_radius)),
             ("phimax", Angle(self.phi_max)),
         ]
+    }
+}
+
+impl Disk {
+    /// Mitsuba's `disk` (unit radius, placed by `to_world`), for a full disk without a
+    /// hole under a similarity transform that keeps handedness.
+    pub fn mitsuba(&self, m: &DMat4, reverse: bool) -> Option<GeometryOut> {
+        let full = self.phi_max as f64 >= std::f64::consts::TAU - 1e-6 && self.inner_radius == 0.0;
+        if !(super::native_in_mitsuba(DMat3::from_mat4(*m)) && full) {
+            return None;
+        }
+        let r = self.radius as f64;
+        let local = DMat4::from_translation(DVec3::new(0.0, 0.0, self.height as f64))
+            * DMat4::from_scale(DVec3::new(r, r, 1.0));
+        let to_world = row_major(&(*m * local));
+        Some(GeometryOut::Disk { to_world, flip_normals: reverse })
     }
 }
 

@@ -66,7 +66,7 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::Res;
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DMat4, DVec3};
 
 /// `phimax` in degrees, clamped to [0, 360], as radians (pbrt: `Radians(Clamp(phiMax, 0, 360))`).
 pub fn phi_max_radians(degrees: f32) -> f32 {
@@ -94,6 +94,17 @@ impl Quadric {
             Quadric::Cone(_) => cone::NAME,
             Quadric::Paraboloid(_) => paraboloid::NAME,
             Quadric::Hyperboloid(_) => hyperboloid::NAME,
+        }
+    }
+
+    /// The quadric as Mitsuba's own shape under `m`, where it has one (full spheres,
+    /// cylinders and disks under similarity transforms); `None`: tessellate it.
+    pub fn mitsuba(&self, m: &DMat4, reverse: bool) -> Option<crate::mitsuba::GeometryOut> {
+        match self {
+            Quadric::Sphere(s) => s.mitsuba(m, reverse),
+            Quadric::Cylinder(s) => s.mitsuba(m, reverse),
+            Quadric::Disk(s) => s.mitsuba(m, reverse),
+            Quadric::Cone(_) | Quadric::Paraboloid(_) | Quadric::Hyperboloid(_) => None,
         }
     }
 
@@ -228,6 +239,12 @@ macro_rules! quadric_type {
     ($m:ident) => {
         ShapeType { name: $m::NAME, read: |_, p, span| $m::read(p, span).map(Built::Quadric) }
     };
+}
+
+/// Whether Mitsuba's own shapes can stand for a quadric under this linear part: a
+/// similarity that keeps handedness.
+fn native_in_mitsuba(m3: DMat3) -> bool {
+    similarity_scale(m3).is_some() && m3.determinant() > 0.0
 }
 
 /// One parameter of a shape as it is after defaults and clamps (for reports).

@@ -7,10 +7,11 @@ use super::Quadric;
 use super::params::{f, positive};
 use super::phi_max_radians;
 use super::quadric::{E, Local, QuadricSurface};
+use crate::mitsuba::GeometryOut;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::Res;
-use glam::DVec3;
+use glam::{DMat3, DMat4, DVec3};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sphere {
@@ -129,6 +130,22 @@ impl Sphere {
             ("zmax", Float(self.z_max)),
             ("phimax", Angle(self.phi_max)),
         ]
+    }
+}
+
+impl Sphere {
+    /// Mitsuba's `sphere`, for a full sphere under a similarity transform that keeps
+    /// handedness; `None` otherwise (the exporter tessellates).
+    pub fn mitsuba(&self, m: &DMat4, reverse: bool) -> Option<GeometryOut> {
+        let m3 = DMat3::from_mat4(*m);
+        let full = self.phi_max as f64 >= std::f64::consts::TAU - 1e-6
+            && self.z_min <= -self.radius
+            && self.z_max >= self.radius;
+        (super::native_in_mitsuba(m3) && full).then(|| GeometryOut::Sphere {
+            center: m.transform_point3(DVec3::ZERO).to_array(),
+            radius: m3.x_axis.length() * self.radius as f64,
+            flip_normals: reverse,
+        })
     }
 }
 
