@@ -3,7 +3,7 @@
 //! ```text
 //! pbrt-bench converge [SCENE.pbrt[@half] ...] [--runs 3] [--iterations 4,16,64]
 //!                     [--reference-iterations N] [--peers DIR] [--out DIR] [--nthreads 2]
-//!                     [--ours-args "--photon-sampling adaptive"]
+//!                     [--ours-args "--photon-sampling adaptive"] [--doc README.md]
 //! ```
 //! For each scene, every round runs each peer found in `--peers` (`pbrt-v3`, `pbrt-v4`)
 //! once per iteration count of the ladder (default: the scene's count over 4, over 2 and
@@ -29,6 +29,8 @@
 //!
 //! `--ours-args` passes options to our timed runs only (not to the reference), so one
 //! of our settings can be set beside the peers; give each setting its own `--out`.
+//! `--doc FILE` writes the suite table (one row per scene) between `<!-- BEGIN converge -->`
+//! and `<!-- END converge -->` in FILE (with `--ours-args A`: the section `converge A`).
 //!
 //! Per scene this writes `converge.md` (the table), one `ERRORS.csv`-shaped file per
 //! renderer and `converge.png` (all curves, log-log).
@@ -60,6 +62,8 @@ struct Options {
     nthreads: usize,
     /// Extra options for our timed runs.
     ours_args: Vec<String>,
+    /// `--doc FILE`: write the suite table into FILE's `converge` section.
+    doc: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -98,6 +102,9 @@ struct Prepared {
     reference_file: PathBuf,
     reference_iterations: u32,
     reference_v4: Option<RgbImage>,
+    /// The scene's own iteration count and photons per iteration, for the suite table.
+    iterations: u32,
+    photons: u64,
 }
 
 /// A point on a curve: median seconds over the rounds, their range, and relMSE.
@@ -116,12 +123,18 @@ pub fn main(args: &[String]) -> ExitCode {
     let result = options(args).and_then(|o| {
         let ours = our_binary()?;
         let peers = find_peers(&o.peers);
-        let mut summary = String::new();
+        let (mut summary, mut suite) = (String::new(), String::from(SUITE_HEADER));
         for spec in &o.scenes {
-            summary.push_str(&bench_scene(&o, spec, &ours, &peers)?);
+            let (line, row) = bench_scene(&o, spec, &ours, &peers)?;
+            summary.push_str(&line);
+            suite.push_str(&row);
         }
         println!("\n## Summary (ours/peer relMSE at the peer's wall time)\n\n{summary}");
-        Ok(())
+        println!("\n## Suite table\n\n{suite}");
+        match &o.doc {
+            Some(doc) => write_doc_section(doc, &doc_section(&o), &suite),
+            None => Ok(()),
+        }
     });
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -142,6 +155,7 @@ fn options(args: &[String]) -> Res<Options> {
         out: PathBuf::from("target/converge"),
         nthreads: 2,
         ours_args: Vec::new(),
+        doc: None,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -157,6 +171,7 @@ fn options(args: &[String]) -> Res<Options> {
             "--peers" => o.peers = PathBuf::from(value()?),
             "--out" => o.out = PathBuf::from(value()?),
             "--ours-args" => o.ours_args = value()?.split_whitespace().map(String::from).collect(),
+            "--doc" => o.doc = Some(PathBuf::from(value()?)),
             s if s.starts_with("--") => return Err(format!("unknown option {s}")),
             s => {
                 let (path, half) = s.strip_suffix("@half").map_or((s, false), |p| (p, true));
@@ -187,6 +202,7 @@ fn default_suite() -> Vec<SceneSpec> {
         v.push(SceneSpec { path: f16.clone(), half: true });
         v.push(SceneSpec { path: f16, half: false });
     }
+    v.push(SceneSpec { path: PathBuf::from("pbrt-scenes/v3/keyhole.pbrt"), half: false });
     v
 }
 
@@ -214,7 +230,7 @@ fn find_peers(dir: &Path) -> Vec<Peer> {
 }
 
 /// Rewrites, renders references, runs the rounds and reports one scene.
-fn bench_scene(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<String> {
+fn bench_scene(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<(String, String)> {
     let p = prepare(o, spec, ours, peers)?;
     println!("\n## {}\n", p.label);
     let rounds = run_rounds(o, &p, ours, peers)?;
@@ -262,8 +278,9 @@ fn run_rounds(o: &Options, p: &Prepared, ours: &Path, peers: &[Peer]) -> Res<Rou
     Ok(r)
 }
 
-/// The table (printed and written), the CSVs and the plot; returns the summary line.
-fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<String> {
+/// The table (printed and written), the CSVs and the plot; returns the summary line
+/// and the scene's row of the suite table.
+fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<(String, String)> {
     let our_curve = our_curve(&rounds.our_runs);
     let mut table = format!(
         "{}: {} rounds, {} threads, reference ours at {} iterations, another seed{}\n\n\
@@ -277,6 +294,9 @@ fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<Str
     );
     let mut series = vec![curve_series("ours", &our_curve)];
     let mut ratios = Vec::new();
+    let top = p.ladder.iter().max().copied().unwrap_or(p.iterations);
+    let mut row = format!("| `{}` | {} × {} |", p.label, top, thousands(p.photons));
+    let mut cells = [" — | — | — |".to_string(), " — | — | — |".to_string()];
     for (k, peer) in peers.iter().enumerate().filter(|(k, _)| rounds.working[*k]) {
         let runs = &rounds.peer_runs[k];
         let points: Vec<Point> = p.ladder.iter().zip(runs).map(|(&n, r)| median_point(n, r)).collect();
@@ -298,6 +318,7 @@ fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<Str
                 ratio.map_or("—".into(), |r| format!("{r:.2}"))
             );
         }
+        cells[(peer.kind == PeerKind::V4) as usize] = suite_cells(&points, &our_curve);
         write_csv(&p.dir.join(format!("{}.csv", peer.name())), &points)?;
         series.push(curve_series(peer.name(), &points));
     }
@@ -312,7 +333,53 @@ fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<Str
     draw(&series, "seconds (whole process)", "relmse", &p.dir.join("converge.png"))?;
     write_text(&p.dir.join("converge.md"), &table).map_err(|e| e.to_string())?;
     println!("{table}");
-    Ok(summary_line(&p.label, &ratios))
+    row.push_str(&cells.concat());
+    row.push('\n');
+    Ok((summary_line(&p.label, &ratios), row))
+}
+
+/// The suite table's columns: the scene, then per peer its time and relMSE at the
+/// scene's own iteration count, ours at that time, and ours over its error per rung.
+const SUITE_HEADER: &str = "| scene | iterations × photons | pbrt-v3: s, relMSE | ours at that time | ours / pbrt-v3 | \
+                            pbrt-v4: s, relMSE | ours at that time | ours / pbrt-v4 |\n|---|---|---|---|---|---|---|---|\n";
+
+/// One peer's three cells of the suite table.
+fn suite_cells(points: &[Point], our_curve: &[Point]) -> String {
+    let Some(last) = points.last() else { return " — | — | — |".into() };
+    let ratio = |pt: &Point| our_error_at(our_curve, pt.seconds).map(|e| e / pt.relmse);
+    let ratios: Vec<String> = points.iter().map(|pt| ratio(pt).map_or("—".into(), |r| format!("{r:.2}"))).collect();
+    let ours = our_error_at(our_curve, last.seconds).map_or("—".into(), |e| format!("{e:.2e}"));
+    format!(" {:.2} s, {:.2e} | {ours} | {} |", last.seconds, last.relmse, ratios.join(", "))
+}
+
+/// 65536 as 65,536.
+fn thousands(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// The section `--doc` writes: `converge`, or with `--ours-args` `converge <args>`.
+fn doc_section(o: &Options) -> String {
+    if o.ours_args.is_empty() { "converge".into() } else { format!("converge {}", o.ours_args.join(" ")) }
+}
+
+/// Puts `text` between `<!-- BEGIN name -->` and `<!-- END name -->` in `path`,
+/// through a temporary file (see `tools/docsection.py`, its Python twin).
+fn write_doc_section(path: &Path, name: &str, text: &str) -> Res<()> {
+    let doc = std::fs::read_to_string(path).map_err(|e| format!("--doc {}: {e}", path.display()))?;
+    let (begin, end) = (format!("<!-- BEGIN {name} -->"), format!("<!-- END {name} -->"));
+    let (Some((head, rest)), true) = (doc.split_once(&begin), doc.contains(&end)) else {
+        return Err(format!("--doc {}: no section {begin} ... {end}", path.display()));
+    };
+    let tail = rest.split_once(&end).map_or("", |(_, t)| t);
+    write_text(path, &format!("{head}{begin}\n{}\n{end}{tail}", text.trim_end())).map_err(|e| e.to_string())
 }
 
 fn summary_line(label: &str, ratios: &[f64]) -> String {
@@ -385,7 +452,7 @@ fn prepare(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<Pr
     let at_res = rewrite(&src, None, spec.half).map_err(|e| format!("{}: {e}", spec.path.display()))?;
     let ours_file = dir.join(format!("{stem}.converge.pbrt"));
     write_text(&ours_file, &at_res).map_err(|e| e.to_string())?;
-    let (written, syntax) = scene_facts(&ours_file)?;
+    let (written, photons, syntax) = scene_facts(&ours_file)?;
     let ladder = o.ladder.clone().unwrap_or_else(|| default_ladder(written));
     let mut v3 = Vec::new();
     for &n in &ladder {
@@ -420,6 +487,8 @@ fn prepare(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<Pr
         reference_file,
         reference_iterations,
         reference_v4,
+        iterations: written,
+        photons,
     })
 }
 
@@ -430,11 +499,11 @@ fn default_ladder(n: u32) -> Vec<u32> {
     v
 }
 
-/// The scene's iteration count and syntax (one load serves both).
-fn scene_facts(file: &Path) -> Res<(u32, pbrt_sppm::parser::Syntax)> {
+/// The scene's iteration count, photons per iteration and syntax (one load serves all).
+fn scene_facts(file: &Path) -> Res<(u32, u64, pbrt_sppm::parser::Syntax)> {
     let opts = pbrt_sppm::scene::LoadOptions::default();
     let scene = pbrt_sppm::scene::load_scene(file, &opts).map_err(|e| e.one_line())?;
-    Ok((scene.integrator.iterations, scene.syntax))
+    Ok((scene.integrator.iterations, scene.integrator.photons_per_iteration, scene.syntax))
 }
 
 /// `dir` gets a link to every entry of the scene's folder (so `Include`, meshes and
