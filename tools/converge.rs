@@ -122,6 +122,10 @@ struct Point {
 pub fn main(args: &[String]) -> ExitCode {
     let result = options(args).and_then(|o| {
         let ours = our_binary()?;
+        if let Some(doc) = &o.doc {
+            // A missing section fails now, not after the measuring.
+            read_doc_section(doc, &doc_section(&o))?;
+        }
         let peers = find_peers(&o.peers);
         let (mut summary, mut suite) = (String::new(), String::from(SUITE_HEADER));
         for spec in &o.scenes {
@@ -373,13 +377,22 @@ fn doc_section(o: &Options) -> String {
 /// Puts `text` between `<!-- BEGIN name -->` and `<!-- END name -->` in `path`,
 /// through a temporary file (see `tools/docsection.py`, its Python twin).
 fn write_doc_section(path: &Path, name: &str, text: &str) -> Res<()> {
+    let (head, tail) = read_doc_section(path, name)?;
+    let (begin, end) = (format!("<!-- BEGIN {name} -->"), format!("<!-- END {name} -->"));
+    write_text(path, &format!("{head}{begin}\n{}\n{end}{tail}", text.trim_end())).map_err(|e| e.to_string())
+}
+
+/// What `path` holds before and after section `name` (an error when it has none).
+fn read_doc_section(path: &Path, name: &str) -> Res<(String, String)> {
     let doc = std::fs::read_to_string(path).map_err(|e| format!("--doc {}: {e}", path.display()))?;
     let (begin, end) = (format!("<!-- BEGIN {name} -->"), format!("<!-- END {name} -->"));
-    let (Some((head, rest)), true) = (doc.split_once(&begin), doc.contains(&end)) else {
+    let Some((head, rest)) = doc.split_once(&begin) else {
         return Err(format!("--doc {}: no section {begin} ... {end}", path.display()));
     };
-    let tail = rest.split_once(&end).map_or("", |(_, t)| t);
-    write_text(path, &format!("{head}{begin}\n{}\n{end}{tail}", text.trim_end())).map_err(|e| e.to_string())
+    let Some((_, tail)) = rest.split_once(&end) else {
+        return Err(format!("--doc {}: no {end} after {begin}", path.display()));
+    };
+    Ok((head.to_string(), tail.to_string()))
 }
 
 fn summary_line(label: &str, ratios: &[f64]) -> String {
