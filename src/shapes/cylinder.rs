@@ -97,9 +97,7 @@ impl Cylinder {
             ("phimax", Angle(self.phi_max)),
         ]
     }
-}
 
-impl Cylinder {
     /// Mitsuba's `cylinder` (unit radius and height, placed by `to_world`), for a full
     /// cylinder under a similarity transform that keeps handedness.
     pub fn mitsuba(&self, m: &DMat4, reverse: bool) -> Option<GeometryOut> {

@@ -115,9 +115,7 @@ impl Disk {
             ("phimax", Angle(self.phi_max)),
         ]
     }
-}
 
-impl Disk {
     /// Mitsuba's `disk` (unit radius, placed by `to_world`), for a full disk without a
     /// hole under a similarity transform that keeps handedness.
     pub fn mitsuba(&self, m: &DMat4, reverse: bool) -> Option<GeometryOut> {

@@ -131,9 +131,7 @@ impl Sphere {
             ("phimax", Angle(self.phi_max)),
         ]
     }
-}
 
-impl Sphere {
     /// Mitsuba's `sphere`, for a full sphere under a similarity transform that keeps
     /// handedness; `None` otherwise (the exporter tessellates).
     pub fn mitsuba(&self, m: &DMat4, reverse: bool) -> Option<GeometryOut> {
