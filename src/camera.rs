@@ -102,27 +102,28 @@ impl Camera {
         if self.lens_radius > 0.0 { std::f32::consts::PI * self.lens_radius * self.lens_radius } else { 1.0 }
     }
 
-    /// The camera-space direction of a world ray, and its cosine with the view axis.
-    fn local(&self, ray: &Ray) -> (DVec3, f64) {
-        let d = self.world_from_camera.inverse().transform_vector3(ray.d.0.as_dvec3()).normalize();
-        (d, d.z)
+    /// Where a ray leaving the lens meets the film (raster position) and the cosine of
+    /// its direction with the view axis; `None` off the film, behind the camera, or for
+    /// an orthographic camera (its rays are parallel: no ray reaches it by chance).
+    fn on_film(&self, ray: &Ray) -> Option<([f32; 2], f64)> {
+        if self.kind != CameraKind::Perspective {
+            return None;
+        }
+        let camera_from_world = self.world_from_camera.inverse();
+        let d = camera_from_world.transform_vector3(ray.d.0.as_dvec3()).normalize();
+        if d.z <= 0.0 {
+            return None;
+        }
+        let o = camera_from_world.transform_point3(ray.o.0.as_dvec3());
+        let focus = if self.lens_radius > 0.0 { self.focal_distance as f64 } else { 1.0 };
+        Some((self.raster(o + d * (focus / d.z))?, d.z))
     }
 
     /// The importance of a ray leaving the lens at `ray.o` along `ray.d` (unit length),
     /// and the raster point it reaches: pbrt-v3's `We`. `None` off the film, behind the
     /// camera, or for an orthographic camera.
     pub fn we(&self, ray: &Ray) -> Option<(f32, [f32; 2])> {
-        if self.kind != CameraKind::Perspective {
-            return None;
-        }
-        let (d, cos) = self.local(ray);
-        if cos <= 0.0 {
-            return None;
-        }
-        let o = self.world_from_camera.inverse().transform_point3(ray.o.0.as_dvec3());
-        let focus = if self.lens_radius > 0.0 { self.focal_distance as f64 } else { 1.0 };
-        let p = o + d * (focus / cos);
-        let raster = self.raster(p)?;
+        let (raster, cos) = self.on_film(ray)?;
         let cos2 = (cos * cos) as f32;
         Some((1.0 / (self.film_area() * self.lens_area() * cos2 * cos2), raster))
     }
@@ -130,8 +131,8 @@ impl Camera {
     /// The (lens position, direction) densities of a ray as `generate_ray` makes it
     /// from a uniform raster point and lens point (pbrt-v3's `Pdf_We`); 0 off the film.
     pub fn pdf_we(&self, ray: &Ray) -> (f32, f32) {
-        let Some(_) = self.we(ray) else { return (0.0, 0.0) };
-        let cos = self.local(ray).1 as f32;
+        let Some((_, cos)) = self.on_film(ray) else { return (0.0, 0.0) };
+        let cos = cos as f32;
         (1.0 / self.lens_area(), 1.0 / (self.film_area() * cos * cos * cos))
     }
 

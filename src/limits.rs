@@ -37,9 +37,10 @@ impl Files {
         Files { limits, read: Arc::default() }
     }
 
-    /// Reads a whole input file within the limits (see [`read_file`]) and notes it.
+    /// Reads a whole input file within the limits (a regular file of at most
+    /// `file-bytes`, gunzipped to at most as many) and notes it.
     pub fn read(&self, path: &Path) -> Result<Vec<u8>, String> {
-        read_file_noting(path, &self.limits, |raw| self.note(path, raw))
+        read_file(path, &self.limits, |raw| self.note(path, raw))
     }
 
     /// Notes a file read otherwise (a scene given as bytes, such as standard input).
@@ -145,13 +146,9 @@ impl Limits {
 }
 
 /// Reads a whole input file: a regular file of at most `limits.file_bytes`, gunzipped
-/// (to at most as many bytes) when it starts with the gzip magic.
-pub fn read_file(path: &Path, limits: &Limits) -> Result<Vec<u8>, String> {
-    read_file_noting(path, limits, |_| {})
-}
-
-/// [`read_file`], showing `note` the bytes as stored (before gunzip).
-fn read_file_noting(path: &Path, limits: &Limits, note: impl FnOnce(&[u8])) -> Result<Vec<u8>, String> {
+/// (to at most as many bytes) when it starts with the gzip magic; `note` sees the bytes
+/// as stored (before gunzip).
+fn read_file(path: &Path, limits: &Limits, note: impl FnOnce(&[u8])) -> Result<Vec<u8>, String> {
     let shown = path.display();
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
     if !meta.is_file() {

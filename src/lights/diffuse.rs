@@ -154,10 +154,4 @@ impl AreaLight {
         };
         (shapes.pdf_piece_area(&self.emitter, Point3(p), n), pdf_dir)
     }
-
-    /// Radiance leaving the point with normal `n` along `w`.
-    #[inline]
-    pub fn l(&self, n: Vec3, w: Vec3) -> Rgb {
-        if self.two_sided || n.dot(w) > 0.0 { self.l } else { Vec3::ZERO }
-    }
 }
