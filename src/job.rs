@@ -112,7 +112,8 @@ impl Job {
             None => None,
         };
         let render_error = |source| JobError::Render { scene: request.scene.clone(), source };
-        let plan = Plan::new(&scene.integrator, &request.settings).map_err(render_error)?;
+        let plan = Plan::new(&scene.integrator, crate::render::world_sphere(scene).radius, &request.settings)
+            .map_err(render_error)?;
         let fingerprint = fingerprint(scene, &request.scene, &plan);
         let monitor = Monitor {
             reference,

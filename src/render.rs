@@ -28,6 +28,17 @@ pub struct EmitterInfo {
     pub first_light: u32,
 }
 
+/// The sphere around the scene's shapes (distant and infinite lights emit across it).
+pub fn world_sphere(scene: &SceneDescription) -> WorldSphere {
+    match scene.world_bounds() {
+        Some([lo, hi]) => {
+            let c = (lo + hi) * 0.5;
+            WorldSphere { center: c.as_vec3(), radius: ((hi - c).length() as f32).max(1e-6) }
+        }
+        None => WorldSphere { center: Vec3::ZERO, radius: 1.0 },
+    }
+}
+
 /// Where alpha masks an area light's emission.
 #[derive(Clone, Copy, Debug)]
 struct AlphaEmission {
@@ -97,14 +108,7 @@ impl RenderScene {
         let object_shape_alpha: Vec<Vec<_>> =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.alpha).collect()).collect();
         let has_alpha = world_shape_alpha.iter().chain(object_shape_alpha.iter().flatten()).any(|a| a.is_some());
-        let bounds = scene.world_bounds();
-        let world = match bounds {
-            Some([lo, hi]) => {
-                let c = (lo + hi) * 0.5;
-                WorldSphere { center: c.as_vec3(), radius: ((hi - c).length() as f32).max(1e-6) }
-            }
-            None => WorldSphere { center: Vec3::ZERO, radius: 1.0 },
-        };
+        let world = world_sphere(scene);
         let mut lights: Vec<Light> = scene.lights.iter().map(Light::from_desc).collect();
         let shape_area_lights: Vec<Option<u32>> = scene.shapes.iter().map(|s| s.area_light).collect();
         let area_params = scene.area_lights.clone();

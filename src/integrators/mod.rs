@@ -1,11 +1,14 @@
-//! Integrators. pbrt-sppm renders with stochastic progressive photon mapping only:
-//! [`sppm`] holds its passes, [`grid`] the photon lookup grid, [`adaptive`] adaptive
-//! photon chains, [`run`] the render loop, [`error`] what stops it, [`checkpoint`] saved and resumed state,
-//! [`passes`] independent passes, [`part`] shard files and their merge, [`report`]
-//! `ERRORS.csv` and progress. Data flows one way: the render-ready scene (`render`) in, an image out.
+//! Integrators: stochastic progressive photon mapping ([`sppm`] holds its passes) and
+//! vertex connection and merging ([`vcm`]; bdpt is vcm without merging), both driven
+//! through [`engine`]. [`grid`] is the photon (and light vertex) lookup grid,
+//! [`adaptive`] adaptive photon chains, [`run`] the render loop, [`error`] what stops
+//! it, [`checkpoint`] saved and resumed state, [`passes`] independent passes, [`part`]
+//! shard files and their merge, [`report`] `ERRORS.csv` and progress. Data flows one
+//! way: the render-ready scene (`render`) in, an image out.
 
 pub mod adaptive;
 pub mod checkpoint;
+pub mod engine;
 pub mod error;
 pub mod grid;
 pub mod part;
@@ -13,7 +16,9 @@ pub mod passes;
 pub mod report;
 pub mod run;
 pub mod sppm;
+pub mod vcm;
 
+pub use engine::Algorithm;
 pub use error::RenderError;
 pub use report::{ERRORS_HEADER, ErrorRow, errors_csv};
 pub use run::{CheckpointTarget, Monitor, Plan, RenderOutput, RenderSettings, render};

@@ -1,13 +1,14 @@
-//! The render loop: iterations of SPPM until the count or the time limit, with the
+//! The render loop: iterations of SPPM or VCM ([`super::engine`]) until the count or the time limit, with the
 //! error against a reference after each (`ERRORS.csv`), a progress bar, partial images,
 //! checkpoints, and a clean stop when interrupted.
 
 use super::adaptive::PhotonSampling;
 use super::checkpoint::{Checkpoint, Every, Fingerprint};
+use super::engine::{Algorithm, Engine};
 use super::error::RenderError;
+use super::passes::DEFAULT_ALPHA;
 use super::passes::{PassMode, PassSet};
 use super::report::{ErrorRow, progress_bar};
-use super::sppm::Sppm;
 use crate::imageio::{ImageMeta, RgbImage, metrics, write_image};
 use crate::render::RenderScene;
 use crate::sampling::SamplerKind;
@@ -25,6 +26,8 @@ pub const MIN_RADIUS: f32 = 1e-18;
 /// here is about reporting or output (see [`Monitor`]).
 #[derive(Clone, Debug, Default)]
 pub struct RenderSettings {
+    /// `--integrator` (default: what the file asks for, [`Algorithm::for_file`]).
+    pub algorithm: Option<Algorithm>,
     /// SPPM iterations (`--spp`/`--iterations`).
     pub iterations: Option<u32>,
     pub photons: Option<u64>,
@@ -72,6 +75,7 @@ pub struct CheckpointTarget {
 /// The settings a render runs with, the scene's defaults and the overrides combined.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
+    pub algorithm: Algorithm,
     pub iterations: u32,
     pub photons: u64,
     pub radius: f32,
@@ -100,8 +104,18 @@ impl Plan {
             ("passes", self.passes.to_string()),
         ]
         .into_iter()
+        // SPPM's fingerprint stays as it was before other integrators existed.
+        .chain((self.algorithm != Algorithm::Sppm).then(|| ("integrator", self.algorithm.name())))
         .map(|(k, v)| (k.to_string(), v))
         .collect()
+    }
+
+    /// How fast a VCM render's merging radius shrinks: the independent passes' α.
+    pub fn alpha(&self) -> f64 {
+        match self.passes {
+            PassMode::Independent { alpha } => alpha,
+            PassMode::Classic => DEFAULT_ALPHA,
+        }
     }
 }
 
@@ -137,13 +151,15 @@ impl Progress {
 }
 
 impl Plan {
-    /// The settings a render of a scene with these SPPM parameters runs with.
-    pub fn new(integrator: &Integrator, settings: &RenderSettings) -> Result<Plan, RenderError> {
+    /// The settings a render of a scene with these integrator parameters, and a
+    /// bounding sphere of this radius, runs with.
+    pub fn new(integrator: &Integrator, world_radius: f32, settings: &RenderSettings) -> Result<Plan, RenderError> {
+        let algorithm = settings.algorithm.unwrap_or_else(|| Algorithm::for_file(&integrator.requested));
         let mut iterations = settings.iterations.unwrap_or(integrator.iterations);
         if settings.quick {
             iterations = (iterations / 16).max(1);
         }
-        let radius = settings.radius.unwrap_or(integrator.radius);
+        let radius = settings.radius.unwrap_or_else(|| default_radius(integrator, world_radius, algorithm));
         // The gather compares squared distances in f32: below 1e-18 the square leaves
         // f32's normal range and no photon is ever found.
         if !(radius >= MIN_RADIUS && radius.is_finite()) {
@@ -153,10 +169,15 @@ impl Plan {
         if range.end > iterations || range.start >= range.end {
             return Err(RenderError::PassRange { range, iterations });
         }
-        if range != (0..iterations) && !settings.passes.is_independent() {
+        let sppm = algorithm == Algorithm::Sppm;
+        if range != (0..iterations) && !settings.passes.is_independent() && sppm {
             return Err(RenderError::RangeNeedsIndependentPasses);
         }
+        if !sppm && settings.photon_sampling == PhotonSampling::Adaptive {
+            return Err(RenderError::AdaptiveVcm);
+        }
         Ok(Plan {
+            algorithm,
             passes: settings.passes,
             range,
             iterations,
@@ -170,13 +191,23 @@ impl Plan {
     }
 }
 
+/// The first radius when none is given: SPPM's is the Integrator's `radius`; VCM takes
+/// it when the file gives one, else 0.003 of the scene's bounding radius (SmallVCM's
+/// default), since a merge radius must suit the scene's scale.
+fn default_radius(i: &Integrator, world_radius: f32, algorithm: Algorithm) -> f32 {
+    match algorithm {
+        Algorithm::Vcm(_) if !i.radius_given => (0.003 * world_radius).max(MIN_RADIUS),
+        _ => i.radius,
+    }
+}
+
 /// Plans and renders with no monitor and no checkpoint (tests and tools; the command
 /// line goes through [`crate::job::Job`]).
 pub fn render(scene: &RenderScene, settings: &RenderSettings) -> Result<RenderOutput, RenderError> {
-    run(scene, &Plan::new(&scene.integrator, settings)?, &Monitor::default(), None)
+    run(scene, &Plan::new(&scene.integrator, scene.world.radius, settings)?, &Monitor::default(), None)
 }
 
-/// Renders a plan with SPPM (scene loading excluded from the timings), continuing a
+/// Renders a plan (scene loading excluded from the timings), continuing a
 /// checkpoint's state when given one (whose fingerprint the caller has checked).
 pub fn run(
     scene: &RenderScene,
@@ -185,16 +216,14 @@ pub fn run(
     resume: Option<Checkpoint>,
 ) -> Result<RenderOutput, RenderError> {
     check_reference(scene, monitor)?;
-    let p = plan;
-    let mut sppm = Sppm::new(scene, p.iterations, p.photons, p.radius, p.seed, (p.sampler, p.photon_sampling))?
-        .with_passes(p.passes, p.range.start)?;
+    let mut engine = Engine::new(scene, plan)?;
     let now = Instant::now();
     let mut progress = Progress { start: now, prior: 0.0, errors: Vec::new(), saved: (0, now), save_failed: false };
     if let Some(c) = resume {
         if !(plan.range.start..=plan.range.end).contains(&c.iteration) {
             return Err(RenderError::CheckpointOutside { at: c.iteration, range: plan.range.clone() });
         }
-        sppm.restore(c.iteration, &c.pixels, c.chains, c.stats)?;
+        engine.restore(c.iteration, &c.pixels, c.chains, c.stats)?;
         (progress.prior, progress.errors, progress.saved.0) = (c.seconds, c.errors, c.iteration);
     }
     let interrupted = loop {
@@ -202,51 +231,52 @@ pub fn run(
             break true;
         }
         let over_time = plan.time_limit.is_some_and(|t| progress.seconds() >= t);
-        if sppm.iteration >= plan.range.end || (sppm.passes_done() > 0 && over_time) {
+        if engine.iteration() >= plan.range.end || (engine.passes_done() > 0 && over_time) {
             break false;
         }
-        sppm.iterate();
-        after_iteration(&sppm, monitor, plan, &mut progress);
+        engine.iterate();
+        after_iteration(&engine, monitor, plan, &mut progress);
     };
     if monitor.progress {
         eprintln!();
     }
     if let Some(t) = &monitor.checkpoint
-        && progress.saved.0 != sppm.iteration
+        && progress.saved.0 != engine.iteration()
     {
-        save(&sppm, t, &mut progress, monitor.quiet);
+        save(&engine, t, &mut progress, monitor.quiet);
     }
     let seconds = progress.seconds();
-    let image = image(&sppm, plan.photons, seconds);
+    let image = image(&engine, plan.photons, seconds);
     check_finite(&image)?;
-    let passes = PassSet::from_range(sppm.first_pass()..sppm.iteration);
-    let pass_sums = plan.passes.is_independent().then(|| sppm.pass_sums().iter().map(|s| s.to_array()).collect());
-    let stats = sppm.stats.clone();
+    let passes = PassSet::from_range(engine.first_pass()..engine.iteration());
+    let independent = plan.passes.is_independent() || plan.algorithm != Algorithm::Sppm;
+    let pass_sums = independent.then(|| engine.pass_sums().iter().map(|s| s.to_array()).collect());
+    let stats = engine.stats().clone();
     Ok(RenderOutput { image, stats, errors: progress.errors, seconds, interrupted, passes, pass_sums })
 }
 
 /// The error row, progress bar, partial image and checkpoint due after an iteration.
-fn after_iteration(sppm: &Sppm, monitor: &Monitor, plan: &Plan, progress: &mut Progress) {
+fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &mut Progress) {
     let seconds = progress.seconds();
     if let Some(r) = &monitor.reference {
-        let img = sppm.image();
-        let refpx = crop_reference(r, sppm.scene.film.pixel_bounds);
+        let img = engine.image();
+        let refpx = crop_reference(r, engine.scene().film.pixel_bounds);
         let mse = metrics::mse(&img, &refpx);
         progress.errors.push(ErrorRow {
-            iteration: sppm.iteration,
+            iteration: engine.iteration(),
             seconds,
-            photons: sppm.stats.photons.traced,
+            photons: engine.stats().photons.traced,
             mse,
             rmse: mse.sqrt(),
             relmse: metrics::relmse(&img, &refpx),
         });
     }
     if monitor.progress {
-        progress_bar(sppm.passes_done(), plan.range.len() as u32, seconds);
+        progress_bar(engine.passes_done(), plan.range.len() as u32, seconds);
     }
     if let Some(path) = &monitor.partial_images
-        && sppm.passes_done().is_power_of_two()
-        && let image = image(sppm, plan.photons, seconds)
+        && engine.passes_done().is_power_of_two()
+        && let image = image(engine, plan.photons, seconds)
         && let Err(e) = check_finite(&image)
             .map_err(|e| e.to_string())
             .and_then(|()| write_image(path, &image).map_err(|e| e.to_string()))
@@ -256,11 +286,11 @@ fn after_iteration(sppm: &Sppm, monitor: &Monitor, plan: &Plan, progress: &mut P
     }
     if let Some(t) = &monitor.checkpoint {
         let due = match t.every {
-            Every::Iterations(n) => sppm.iteration.is_multiple_of(n),
+            Every::Iterations(n) => engine.iteration().is_multiple_of(n),
             Every::Seconds(s) => progress.saved.1.elapsed().as_secs_f64() >= s,
         };
         if due {
-            save(sppm, t, progress, monitor.quiet);
+            save(engine, t, progress, monitor.quiet);
         }
     }
 }
@@ -282,18 +312,18 @@ fn check_reference(scene: &RenderScene, monitor: &Monitor) -> Result<(), RenderE
 }
 
 /// The current estimate as an image with the render's metadata.
-fn image(sppm: &Sppm, photons: u64, seconds: f64) -> RgbImage {
-    let scene = sppm.scene;
+fn image(engine: &Engine, photons: u64, seconds: f64) -> RgbImage {
+    let scene = engine.scene();
     let [x0, x1, y0, y1] = scene.film.pixel_bounds;
     RgbImage {
         width: (x1 - x0) as usize,
         height: (y1 - y0) as usize,
-        pixels: sppm.image(),
+        pixels: engine.image(),
         origin: (x0 as i32, y0 as i32),
         full: (scene.film.x_resolution as usize, scene.film.y_resolution as usize),
         meta: ImageMeta {
             render_time_seconds: Some(seconds as f32),
-            samples_per_pixel: Some(sppm.passes_done() as i32),
+            samples_per_pixel: Some(engine.passes_done() as i32),
             photons_per_iteration: Some(photons as i64),
             world_to_camera: Some(scene.world_to_camera),
             software: Some(format!("pbrt-sppm {}", env!("CARGO_PKG_VERSION"))),
@@ -303,19 +333,19 @@ fn image(sppm: &Sppm, photons: u64, seconds: f64) -> RgbImage {
 
 /// Saves a checkpoint; a failure is a warning (the render goes on, and the previous
 /// checkpoint stays as it was).
-fn save(sppm: &Sppm, target: &CheckpointTarget, progress: &mut Progress, quiet: bool) {
-    let (pixels, chains) = sppm.save();
+fn save(engine: &Engine, target: &CheckpointTarget, progress: &mut Progress, quiet: bool) {
+    let (pixels, chains) = engine.save();
     let c = Checkpoint {
         fingerprint: target.fingerprint.clone(),
-        iteration: sppm.iteration,
+        iteration: engine.iteration(),
         seconds: progress.seconds(),
-        stats: sppm.stats.clone(),
+        stats: engine.stats().clone(),
         errors: progress.errors.clone(),
         pixels,
         chains,
     };
     match c.write(&target.path) {
-        Ok(()) => (progress.saved, progress.save_failed) = ((sppm.iteration, Instant::now()), false),
+        Ok(()) => (progress.saved, progress.save_failed) = ((engine.iteration(), Instant::now()), false),
         Err(e) => {
             if !quiet && !progress.save_failed {
                 let at = target.path.display();

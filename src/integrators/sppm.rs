@@ -396,7 +396,7 @@ fn sum_deposits(lists: Vec<Vec<Deposit>>, w: f64, mut phi: Vec<DVec3>, mut m: Ve
 /// What a path finds at a hit.
 // A stack temporary per hit: boxing the BSDF would allocate on every bounce.
 #[allow(clippy::large_enum_variant)]
-enum Surface {
+pub(super) enum Surface {
     Bsdf(Bsdf),
     /// An interface (no surface): the ray now continues past it, depth unchanged.
     PassedThrough,
@@ -404,7 +404,9 @@ enum Surface {
     Abandon,
 }
 
-fn surface(
+/// The BSDF at a hit, or for an interface the ray moved past it (at most
+/// [`MAX_PASSES`] in a row).
+pub(super) fn surface(
     scene: &RenderScene,
     hit: &crate::accel::Hit,
     si: &crate::interaction::SurfaceInteraction,

@@ -71,12 +71,14 @@ impl Film {
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Integrator {
-    /// The integrator the file asked for (we always render with SPPM).
+    /// The integrator the file asked for (see `integrators::Algorithm::for_file`).
     pub requested: String,
     pub iterations: u32,
     pub max_depth: u32,
     pub photons_per_iteration: u64,
     pub radius: f32,
+    /// Whether the file gave `radius` (VCM otherwise picks one by the scene's size).
+    pub radius_given: bool,
     pub seed: u64,
     /// Camera rays' differentials are scaled by max(this, 1/√iterations): pbrt-v3
     /// scales them by 1/√iterations, pbrt-v4 by at least 1/8.
@@ -261,9 +263,13 @@ impl RenderOptions {
         let e = self.integrator.as_ref().unwrap_or(&default);
         let p = &e.params;
         if e.name != "sppm" {
+            let (with, why) = match e.name.as_str() {
+                "bdpt" => ("bdpt", "its bidirectional path tracing"),
+                _ => ("vcm", "vertex connection and merging, which converges to the same image"),
+            };
             warn.push(Diagnostic::warning(
                 e.name_span,
-                format!("integrator \"{}\" is not supported; rendering with SPPM", e.name),
+                format!("integrator \"{}\" is rendered with {with} ({why}); --integrator picks another", e.name),
             ));
         }
         let positive = |name: &str, v: Option<i32>| -> Res<Option<u32>> {
@@ -282,6 +288,8 @@ impl RenderOptions {
         };
         let iterations = match (explicit, syntax) {
             (Some(n), _) => n,
+            // Other integrators take one path per pixel sample, in either version.
+            (None, _) if e.name != "sppm" => self.pixel_samples()?,
             (None, Syntax::V3) => 64,
             (None, Syntax::V4) => self.pixel_samples()?,
         };
@@ -329,6 +337,7 @@ impl RenderOptions {
             max_depth,
             photons_per_iteration: photons,
             radius,
+            radius_given: p.named("radius").is_some(),
             seed,
             differential_floor: if syntax == Syntax::V4 { 0.125 } else { 0.0 },
         })

@@ -3,10 +3,11 @@
 
 use clap::{Parser, Subcommand};
 use pbrt_sppm::fixes::Fixes;
-use pbrt_sppm::integrators::RenderSettings;
 use pbrt_sppm::integrators::adaptive::PhotonSampling;
 use pbrt_sppm::integrators::checkpoint::Every;
 use pbrt_sppm::integrators::passes::{DEFAULT_ALPHA, PassMode};
+use pbrt_sppm::integrators::vcm::Techniques;
+use pbrt_sppm::integrators::{Algorithm, RenderSettings};
 use pbrt_sppm::job::Request;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::sampling::SamplerKind;
@@ -122,6 +123,11 @@ pub struct RenderArgs {
     /// sees, for scenes where most photons land out of view).
     #[arg(long, value_parser = parse_photon_sampling)]
     pub photon_sampling: Option<PhotonSampling>,
+    /// `sppm`, `vcm` (vertex connection and merging) or `bdpt` (vcm without merging);
+    /// default: what the file asks for (`sppm` → sppm, `bdpt` → bdpt, other
+    /// integrators → vcm).
+    #[arg(long, value_parser = parse_integrator)]
+    pub integrator: Option<Algorithm>,
     /// SPPM iterations (at least 1), overriding the scene's.
     #[arg(long, visible_alias = "iterations", allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
     pub spp: Option<u32>,
@@ -236,6 +242,15 @@ fn parse_photon_sampling(s: &str) -> Result<PhotonSampling, String> {
 }
 
 /// `independent` → true.
+fn parse_integrator(s: &str) -> Result<Algorithm, String> {
+    match s {
+        "sppm" => Ok(Algorithm::Sppm),
+        "vcm" => Ok(Algorithm::Vcm(Techniques::All)),
+        "bdpt" => Ok(Algorithm::Vcm(Techniques::Bdpt)),
+        _ => Err(format!("\"{s}\" is not an integrator: sppm, vcm or bdpt")),
+    }
+}
+
 fn parse_passes(s: &str) -> Result<bool, String> {
     match s {
         "classic" => Ok(false),
@@ -309,6 +324,7 @@ impl RenderArgs {
     pub fn request(&self, interrupt: std::sync::Arc<std::sync::atomic::AtomicBool>) -> Result<Request, String> {
         let quiet = self.common.quiet;
         let settings = RenderSettings {
+            algorithm: self.integrator,
             iterations: self.spp,
             photons: self.photons,
             radius: self.radius,
@@ -349,6 +365,10 @@ impl RenderArgs {
             None => sharded,
         };
         match (independent, self.alpha) {
+            // VCM's passes are independent already: α is its radius schedule.
+            (false, Some(alpha)) if self.integrator.is_some_and(|a| a != Algorithm::Sppm) => {
+                Ok(PassMode::Independent { alpha })
+            }
             (false, Some(_)) => Err("--alpha sets the radius of independent passes: add --passes independent".into()),
             (false, None) => Ok(PassMode::Classic),
             (true, alpha) => Ok(PassMode::Independent { alpha: alpha.unwrap_or(DEFAULT_ALPHA) }),

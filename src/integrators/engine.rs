@@ -1,0 +1,150 @@
+//! The progressive renderers the render loop drives, behind one interface: SPPM, or
+//! vertex connection and merging (and bidirectional path tracing, its part without
+//! merging). Both add one pass per iteration and save the same checkpoint state.
+
+use super::adaptive::Chain;
+use super::error::RenderError;
+use super::run::Plan;
+use super::sppm::{PixelState, Sppm, Stats};
+use super::vcm::{Techniques, Vcm, VcmSettings};
+use crate::render::RenderScene;
+use glam::DVec3;
+
+/// Which renderer a run uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Algorithm {
+    #[default]
+    Sppm,
+    /// Vertex connection and merging with these techniques ([`Techniques::Bdpt`]: bdpt).
+    Vcm(Techniques),
+}
+
+impl Algorithm {
+    /// What renders a file that asks for integrator `requested`: SPPM for `sppm`,
+    /// bdpt for `bdpt` (the same techniques), vcm for the rest (`path`, `volpath`, …:
+    /// the same converged image, and the caustics they leave noisy converge).
+    pub fn for_file(requested: &str) -> Algorithm {
+        match requested {
+            "sppm" => Algorithm::Sppm,
+            "bdpt" => Algorithm::Vcm(Techniques::Bdpt),
+            _ => Algorithm::Vcm(Techniques::All),
+        }
+    }
+
+    /// The name `--integrator` takes.
+    pub fn name(self) -> String {
+        match self {
+            Algorithm::Sppm => "sppm".into(),
+            Algorithm::Vcm(Techniques::All) => "vcm".into(),
+            Algorithm::Vcm(Techniques::Bdpt) => "bdpt".into(),
+            Algorithm::Vcm(Techniques::Only(t)) => format!("vcm-only-{t:?}").to_lowercase(),
+        }
+    }
+}
+
+/// A render's progressive state.
+pub enum Engine<'a> {
+    Sppm(Box<Sppm<'a>>),
+    Vcm(Box<Vcm<'a>>),
+}
+
+impl<'a> Engine<'a> {
+    pub fn new(scene: &'a RenderScene, p: &Plan) -> Result<Engine<'a>, RenderError> {
+        Ok(match p.algorithm {
+            Algorithm::Sppm => Engine::Sppm(Box::new(
+                Sppm::new(scene, p.iterations, p.photons, p.radius, p.seed, (p.sampler, p.photon_sampling))?
+                    .with_passes(p.passes, p.range.start)?,
+            )),
+            Algorithm::Vcm(techniques) => {
+                let settings = VcmSettings {
+                    light_paths: p.photons,
+                    radius: p.radius as f64,
+                    alpha: p.alpha(),
+                    seed: p.seed,
+                    sampler: p.sampler,
+                    techniques,
+                };
+                Engine::Vcm(Box::new(Vcm::new(scene, p.iterations, p.range.start, settings)?))
+            }
+        })
+    }
+
+    pub fn iterate(&mut self) {
+        match self {
+            Engine::Sppm(s) => s.iterate(),
+            Engine::Vcm(v) => v.iterate(),
+        }
+    }
+
+    /// Passes done, counting those before the first of this run.
+    pub fn iteration(&self) -> u32 {
+        match self {
+            Engine::Sppm(s) => s.iteration,
+            Engine::Vcm(v) => v.iteration,
+        }
+    }
+
+    pub fn passes_done(&self) -> u32 {
+        match self {
+            Engine::Sppm(s) => s.passes_done(),
+            Engine::Vcm(v) => v.passes_done(),
+        }
+    }
+
+    pub fn first_pass(&self) -> u32 {
+        match self {
+            Engine::Sppm(s) => s.first_pass(),
+            Engine::Vcm(v) => v.first_pass(),
+        }
+    }
+
+    pub fn scene(&self) -> &'a RenderScene {
+        match self {
+            Engine::Sppm(s) => s.scene,
+            Engine::Vcm(v) => v.scene,
+        }
+    }
+
+    pub fn stats(&self) -> &Stats {
+        match self {
+            Engine::Sppm(s) => &s.stats,
+            Engine::Vcm(v) => &v.stats,
+        }
+    }
+
+    pub fn image(&self) -> Vec<[f32; 3]> {
+        match self {
+            Engine::Sppm(s) => s.image(),
+            Engine::Vcm(v) => v.image(),
+        }
+    }
+
+    /// The sum of the passes' estimates (independent passes and every VCM render).
+    pub fn pass_sums(&self) -> Vec<DVec3> {
+        match self {
+            Engine::Sppm(s) => s.pass_sums(),
+            Engine::Vcm(v) => v.pass_sums(),
+        }
+    }
+
+    pub fn save(&self) -> (Vec<PixelState>, Option<Vec<Chain>>) {
+        match self {
+            Engine::Sppm(s) => s.save(),
+            Engine::Vcm(v) => (v.save(), None),
+        }
+    }
+
+    pub fn restore(
+        &mut self,
+        iteration: u32,
+        pixels: &[PixelState],
+        chains: Option<Vec<Chain>>,
+        stats: Stats,
+    ) -> Result<(), RenderError> {
+        match self {
+            Engine::Sppm(s) => s.restore(iteration, pixels, chains, stats),
+            Engine::Vcm(_) if chains.is_some() => Err(RenderError::CheckpointSampling),
+            Engine::Vcm(v) => v.restore(iteration, pixels, stats),
+        }
+    }
+}

@@ -1,0 +1,270 @@
+//! Light subpaths: emitted from a light chosen by power, scattered by the BSDFs'
+//! adjoints, each non-specular vertex kept (for connections and merging) and seen
+//! through the lens (light tracing).
+
+use super::mis::{self, Partial};
+use super::{Pass, Technique};
+use crate::integrators::sppm::{Surface, surface};
+use crate::interaction::{Footprint, SHADOW_EPSILON, offset_ray_origin};
+use crate::lights::Light;
+use crate::materials::{Bsdf, TransportMode};
+use crate::math::{Normal3, Point3, Ray, Vector3};
+use crate::render::RenderScene;
+use crate::sampling::{Rng, Sampler, hash};
+use crate::spectrum::{Rgb, luminance};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Light subpaths per parallel work item.
+const CHUNK: u64 = 1024;
+
+/// A light subpath's vertex on a surface that is not purely specular.
+#[derive(Clone, Debug)]
+pub struct LightVertex {
+    pub p: Vec3,
+    pub p_error: Vec3,
+    /// The geometric normal.
+    pub ng: Vec3,
+    /// Unit direction toward the vertex before (where the light came from).
+    pub wo: Vec3,
+    /// Throughput up to here, divided by the scene's photon scale.
+    pub beta: Rgb,
+    pub bsdf: Bsdf,
+    pub partial: Partial,
+    /// Edges from the light.
+    pub len: u32,
+}
+
+impl LightVertex {
+    /// The cosine factor of leaving along `wi` for the adjoint BSDF: |ωi·ns| with
+    /// pbrt's correction for shading normals, |ωo·ns| |ωi·ng| / |ωo·ng| (Veach §5.3),
+    /// so light subpaths carry what camera subpaths would.
+    pub fn adjoint_cos(&self, wi: Vec3) -> f32 {
+        self.wo.dot(self.bsdf.shading_normal()).abs() * wi.dot(self.ng).abs() / self.wo.dot(self.ng).abs()
+    }
+}
+
+/// Paths traced and surfaces hit.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Counts {
+    pub paths: u64,
+    pub hits: u64,
+}
+
+/// A pass's light subpaths: their vertices in subpath order, where each begins, and
+/// the lists of light-tracing splats (pixel, radiance), one per work item.
+pub struct LightPass {
+    pub vertices: Vec<LightVertex>,
+    /// Subpath k holds `vertices[starts[k]..starts[k + 1]]`.
+    pub starts: Vec<u32>,
+    pub splats: Vec<Vec<(u32, Rgb)>>,
+    pub counts: Counts,
+}
+
+impl LightPass {
+    /// The vertices of light subpath `k`, shortest first.
+    pub fn path(&self, k: usize) -> &[LightVertex] {
+        match (self.starts.get(k), self.starts.get(k + 1)) {
+            (Some(&a), Some(&b)) => &self.vertices[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+}
+
+#[derive(Default)]
+struct Chunk {
+    vertices: Vec<LightVertex>,
+    lens: Vec<u32>,
+    splats: Vec<(u32, Rgb)>,
+    counts: Counts,
+}
+
+/// Traces the pass's light subpaths in parallel; subpath k draws from a generator
+/// seeded by (seed, pass, k).
+pub fn trace_all(pass: &Pass, seed: u64, iteration: u32) -> LightPass {
+    let n = pass.light_paths;
+    let mut chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = Chunk::default();
+            for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                let mut rng = Rng::new(hash(&[seed, iteration as u64, k, 3]));
+                let before = out.vertices.len();
+                out.counts.hits += trace(pass, &mut rng, &mut out.vertices, &mut out.splats);
+                out.lens.push((out.vertices.len() - before) as u32);
+                out.counts.paths += 1;
+            }
+            out
+        })
+        .collect();
+    let mut starts = Vec::with_capacity(n as usize + 1);
+    starts.push(0u32);
+    let mut at = 0u32;
+    for len in chunks.iter().flat_map(|c| &c.lens) {
+        at += len;
+        starts.push(at);
+    }
+    let counts = chunks
+        .iter()
+        .fold(Counts::default(), |a, c| Counts { paths: a.paths + c.counts.paths, hits: a.hits + c.counts.hits });
+    let splats = chunks.iter_mut().map(|c| std::mem::take(&mut c.splats)).collect();
+    let vertices = chunks.into_par_iter().flat_map_iter(|c| c.vertices).collect();
+    LightPass { vertices, starts, splats, counts }
+}
+
+/// A light subpath as it leaves the light.
+struct Start<'a> {
+    ray: Ray,
+    beta: Rgb,
+    partial: Partial,
+    light: &'a Light,
+    /// The light's choice probability and the cosine at its surface.
+    pick: f64,
+    cos: f64,
+}
+
+/// Emits from a light chosen by power (`None`: nothing emitted).
+fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
+    let scene = pass.scene;
+    let (li, pick) = scene.light_power.sample(s.get1d())?;
+    let light = &scene.lights[li];
+    let (u1, u2) = (s.get2d(), s.get2d());
+    let e = light.sample_le(&scene.geometry.shapes, scene.world, u1, u2)?;
+    if scene.emission_masked(light, e.surface.as_ref()) || e.pdf_pos <= 0.0 || e.pdf_dir <= 0.0 || e.le == Vec3::ZERO {
+        return None;
+    }
+    let d = e.ray.d.0.normalize();
+    let (pick, cos) = (pick as f64, e.n.dot(d).abs() as f64);
+    let emission = pick * e.pdf_pos as f64 * e.pdf_dir as f64;
+    // Next-event estimation's density of the same emission point: an area light's is
+    // found at the first hit (it may depend on the point lit).
+    let direct = match light {
+        Light::Infinite(_) => pick * e.pdf_dir as f64,
+        Light::Area(_) => 1.0,
+        _ => pick,
+    };
+    let cos_used = if is_finite(light) { cos } else { 1.0 };
+    let partial = Partial::light(emission, direct, cos_used, light.is_delta(), pass.factors);
+    // DEVIATION(pbrt): robustness. Formed in f64 and carried divided by the scene's
+    // photon scale, as SPPM's photons, so emitters past f32's range keep their paths.
+    let beta = (e.le.as_dvec3() * (cos / emission / scene.photon_scale)).as_vec3();
+    Some(Start { ray: Ray::new(e.ray.o, Vector3(d)), beta, partial, light, pick, cos })
+}
+
+/// Whether a light has a position (distances to it count).
+pub fn is_finite(light: &Light) -> bool {
+    !matches!(light, Light::Distant(_) | Light::Infinite(_))
+}
+
+/// Whether a BSDF only scatters specularly (no connection or merge can use it).
+pub fn is_delta(bsdf: &Bsdf) -> bool {
+    !bsdf.is_diffuse() && !bsdf.is_glossy()
+}
+
+/// One light subpath: appends its usable vertices and its splats; returns the surfaces
+/// hit.
+fn trace(pass: &Pass, s: &mut impl Sampler, out: &mut Vec<LightVertex>, splats: &mut Vec<(u32, Rgb)>) -> u64 {
+    let scene = pass.scene;
+    let Some(Start { mut ray, mut beta, mut partial, light, pick, cos }) = emit(pass, s) else { return 0 };
+    let (mut prev, mut len, mut passes, mut hits) = (ray.o.0, 0u32, 0u32, 0u64);
+    let keep = pass.techniques.uses(Technique::Connect) || pass.techniques.uses(Technique::Merge);
+    while let Some(hit) = scene.intersect(&ray) {
+        hits += 1;
+        let si = scene.geometry.interaction(&hit);
+        let bsdf = match surface(scene, &hit, &si, &Footprint::default(), &mut ray, &mut passes) {
+            Surface::Bsdf(b) => b,
+            Surface::PassedThrough => continue,
+            Surface::Abandon => break,
+        };
+        len += 1;
+        let (wo, ng) = (-ray.d.0.normalize(), si.n.0);
+        let dist2 = (si.p.0 - prev).length_squared() as f64;
+        if len == 1 && matches!(light, Light::Area(_)) {
+            let pdf = light.pdf_li(&scene.geometry.shapes, si.p.0, wo) as f64;
+            partial.vcm *= mis::mis(pick * pdf * cos / dist2);
+        }
+        partial.arrive((len > 1 || is_finite(light)).then_some(dist2), wo.dot(ng) as f64);
+        if wo.dot(ng) == 0.0 {
+            break;
+        }
+        let v = LightVertex { p: si.p.0, p_error: si.p_error, ng, wo, beta, bsdf, partial, len };
+        if !is_delta(&v.bsdf) {
+            if pass.techniques.uses(Technique::LightTrace) && len < pass.max_len {
+                to_camera(pass, &v, s, splats);
+            }
+            if keep && len < pass.max_len {
+                out.push(v.clone());
+            }
+        }
+        if len + 2 > pass.max_len {
+            break;
+        }
+        let Some((next, b, p)) = scatter(pass, &v, s) else { break };
+        (ray, beta, partial, prev) = (next, b, p, si.p.0);
+    }
+    hits
+}
+
+/// Samples the adjoint BSDF at a light vertex: the ray on, the throughput and the
+/// partial sums after it (`None`: absorbed or ended by Russian roulette).
+fn scatter(pass: &Pass, v: &LightVertex, s: &mut impl Sampler) -> Option<(Ray, Rgb, Partial)> {
+    let b = &v.bsdf;
+    let smp = b.sample_f(v.wo, s.get2d(), s.get1d(), TransportMode::Importance)?;
+    let pdf = if smp.proportional { b.pdf_mode(v.wo, smp.wi, TransportMode::Importance) } else { smp.pdf };
+    let pdf_rev = if smp.specular { pdf } else { b.pdf_mode(smp.wi, v.wo, TransportMode::Radiance) };
+    if !(pdf > 0.0 && smp.pdf > 0.0) {
+        return None;
+    }
+    let bnew = v.beta * smp.f * (v.adjoint_cos(smp.wi) / smp.pdf);
+    // As SPPM's photons: continue with the probability the throughput kept.
+    let q = (1.0 - luminance(bnew) / luminance(v.beta).max(1e-30)).max(0.0);
+    if s.get1d() < q {
+        return None;
+    }
+    let beta = bnew / (1.0 - q);
+    if !beta.is_finite() || beta == Vec3::ZERO {
+        return None;
+    }
+    let mut partial = v.partial;
+    partial.scatter(smp.wi.dot(v.ng).abs() as f64, pdf as f64, pdf_rev as f64, smp.specular, pass.factors);
+    let ray = Ray::new(offset_ray_origin(Point3(v.p), v.p_error, Normal3(v.ng), Vector3(smp.wi)), Vector3(smp.wi));
+    Some((ray, beta, partial))
+}
+
+/// Light tracing: connects a light vertex to a point on the lens and splats what it
+/// sends there onto the pixel it reaches.
+fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Vec<(u32, Rgb)>) {
+    let scene = pass.scene;
+    let Some(cs) = scene.camera.sample_wi(v.p, s.get2d()) else { return };
+    let Some(pixel) = pass.pixel_index(cs.raster) else { return };
+    let e = v.bsdf.eval(v.wo, cs.wi, TransportMode::Importance);
+    if e.f == Vec3::ZERO || cs.pdf <= 0.0 {
+        return;
+    }
+    let dist2 = (cs.p_lens - v.p).length_squared() as f64;
+    let (_, pdf_dir) = scene.camera.pdf_we(&Ray::new(Point3(cs.p_lens), Vector3(-cs.wi)));
+    let camera_a = pdf_dir as f64 * pass.film_pixels * cs.wi.dot(v.ng).abs() as f64 / dist2;
+    let light_paths = pass.light_paths as f64;
+    let w = mis::to_camera(v.partial, camera_a, e.pdf_rev as f64, light_paths, pass.factors);
+    let c = v.beta * e.f * v.adjoint_cos(cs.wi) * (cs.we / cs.pdf) * (pass.film_pixels / light_paths) as f32;
+    let c = c * pass.techniques.weight(w);
+    if c == Vec3::ZERO || !c.is_finite() || occluded(scene, (v.p, v.p_error, v.ng), cs.p_lens) {
+        return;
+    }
+    splats.push((pixel, c));
+}
+
+/// A surface point: position, error bounds, geometric normal.
+pub type SurfacePoint = (Vec3, Vec3, Vec3);
+
+/// Whether anything lies between a surface point and a point `to`.
+pub fn occluded(scene: &RenderScene, (p, err, n): SurfacePoint, to: Vec3) -> bool {
+    let o = offset_ray_origin(Point3(p), err, Normal3(n), Vector3(to - p));
+    scene.intersect_p(&Ray { o, d: Vector3(to - o.0), t_max: 1.0 - SHADOW_EPSILON })
+}
+
+/// Whether anything lies between two surface points (each end offset off its surface).
+pub fn occluded_between(scene: &RenderScene, a: SurfacePoint, b: SurfacePoint) -> bool {
+    let to = offset_ray_origin(Point3(b.0), b.1, Normal3(b.2), Vector3(a.0 - b.0));
+    occluded(scene, a, to.0)
+}

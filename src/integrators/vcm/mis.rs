@@ -1,0 +1,170 @@
+//! The multiple-importance weights of vertex connection and merging, computed as the
+//! subpaths grow (Georgiev, Křivánek, Davidovič and Slusallek 2012, and the technical
+//! report's §§4–5 recurrences).
+//!
+//! Every subpath carries three partial sums, [`Partial`]: `vcm`, `vc` and `vm` (the
+//! report's dVCM, dVC, dVM). They are updated in constant time at each vertex, so a
+//! technique's weight costs the same at any path length: no loop over the path.
+//! Densities here follow the report's conventions:
+//! - solid-angle densities at a vertex ("W"), area densities at the next one ("A");
+//! - cosines are geometric (they convert densities between measures);
+//! - a delta distribution's density is dropped (it cancels in every ratio), and a
+//!   specular bounce keeps `vc` and `vm` but clears `vcm`;
+//! - light choice probabilities are folded into the light's densities.
+//!
+//! The heuristic is the power heuristic with β = 2 ([`mis`]); sums are `f64` (a squared
+//! area density over a squared distance leaves `f32`'s range in large scenes).
+
+use std::f64::consts::PI;
+
+/// The heuristic's power: x ↦ x².
+#[inline]
+pub fn mis(x: f64) -> f64 {
+    x * x
+}
+
+/// The partial sums a subpath carries (the report's dVCM, dVC, dVM).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Partial {
+    pub vcm: f64,
+    pub vc: f64,
+    pub vm: f64,
+}
+
+/// An iteration's constants: the heuristic applied to η = π r² · N_light (vertex
+/// merging against one connection) and to 1/η; zero for a technique left out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Factors {
+    /// The report's "MisVmWeightFactor", mis(η): 0 without merging.
+    pub vm: f64,
+    /// The report's "MisVcWeightFactor", mis(1/η): 0 without connections.
+    pub vc: f64,
+}
+
+impl Factors {
+    /// For merging radius `radius` and `light_paths` light subpaths per iteration.
+    pub fn new(radius: f64, light_paths: f64, connect: bool, merge: bool) -> Factors {
+        let eta = PI * radius * radius * light_paths;
+        Factors { vm: if merge { mis(eta) } else { 0.0 }, vc: if connect { mis(1.0 / eta) } else { 0.0 } }
+    }
+}
+
+impl Partial {
+    /// A light subpath as it leaves its light. `emission`: the density of the emitted
+    /// ray (position × direction × the light's choice); `direct`: the density next-event
+    /// estimation gives the same emission point (area measure; solid angle for lights
+    /// at infinity); `cos`: the cosine at the light (1 for lights at infinity);
+    /// `delta`: no connection can reach the light's position or direction.
+    pub fn light(emission: f64, direct: f64, cos: f64, delta: bool, f: Factors) -> Partial {
+        let vc = if delta { 0.0 } else { mis(cos / emission) };
+        Partial { vcm: mis(direct / emission), vc, vm: vc * f.vc }
+    }
+
+    /// A camera subpath as it leaves the lens: `camera_pdf` is the solid-angle density
+    /// of its direction per unit of raster area (one pixel), 0 where no light path can
+    /// reach the camera (an orthographic one).
+    pub fn camera(camera_pdf: f64, light_paths: f64) -> Partial {
+        let vcm = if camera_pdf > 0.0 { mis(light_paths / camera_pdf) } else { 0.0 };
+        Partial { vcm, vc: 0.0, vm: 0.0 }
+    }
+
+    /// Arriving at a vertex over a segment of squared length `dist2` (`None`: the first
+    /// segment from a light at infinity, whose densities are in solid angle), at
+    /// geometric cosine `cos` with the surface.
+    pub fn arrive(&mut self, dist2: Option<f64>, cos: f64) {
+        if let Some(d2) = dist2 {
+            self.vcm *= mis(d2);
+        }
+        let c = mis(cos.abs());
+        self.vcm /= c;
+        self.vc /= c;
+        self.vm /= c;
+    }
+
+    /// Leaving a vertex along a sampled direction: `cos_out` the geometric cosine there,
+    /// `pdf` the solid-angle density of the sample, `pdf_rev` the density of the
+    /// reverse walk choosing the direction the path came from.
+    pub fn scatter(&mut self, cos_out: f64, pdf: f64, pdf_rev: f64, specular: bool, f: Factors) {
+        if specular {
+            self.vcm = 0.0;
+            self.vc *= mis(cos_out);
+            self.vm *= mis(cos_out);
+            return;
+        }
+        let g = mis(cos_out / pdf);
+        let vc = g * (self.vc * mis(pdf_rev) + self.vcm + f.vm);
+        let vm = g * (self.vm * mis(pdf_rev) + self.vcm * f.vc + 1.0);
+        *self = Partial { vcm: mis(1.0 / pdf), vc, vm };
+    }
+}
+
+/// The weight of a camera subpath that finds an emitter by itself (after at least one
+/// bounce): `direct` is the area density next-event estimation gives the point found
+/// (solid angle for a light at infinity), `emission` the density of the light emitting
+/// back along the path.
+pub fn emitter_hit(camera: Partial, direct: f64, emission: f64) -> f64 {
+    1.0 / (1.0 + mis(direct) * camera.vcm + mis(emission) * camera.vc)
+}
+
+/// The densities of one next-event estimate.
+#[derive(Clone, Copy, Debug)]
+pub struct DirectPdfs {
+    /// The BSDF's density of sampling the light direction (0 for a delta light).
+    pub bsdf: f64,
+    /// The BSDF's density of the reverse direction.
+    pub bsdf_rev: f64,
+    /// The light sample's solid-angle density, times the light's choice (a point
+    /// light's: the squared distance).
+    pub direct: f64,
+    /// The density of the light emitting toward the vertex (position × direction ×
+    /// choice).
+    pub emission: f64,
+    /// Geometric cosines at the vertex and at the light (1 for delta and infinite lights).
+    pub cos_here: f64,
+    pub cos_light: f64,
+}
+
+/// The weight of next-event estimation (a camera vertex connected to a point drawn on
+/// a light).
+pub fn direct(camera: Partial, p: DirectPdfs, f: Factors) -> f64 {
+    let w_light = mis(p.bsdf / p.direct);
+    let w_camera =
+        mis(p.emission * p.cos_here / (p.direct * p.cos_light)) * (f.vm + camera.vcm + camera.vc * mis(p.bsdf_rev));
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// The densities of a connection between a light vertex and a camera vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct ConnectPdfs {
+    /// The camera vertex's BSDF choosing the light vertex, in area measure there.
+    pub camera_a: f64,
+    /// The light vertex's BSDF choosing the camera vertex, in area measure there.
+    pub light_a: f64,
+    /// Each BSDF's density of the direction its own subpath arrived from.
+    pub camera_rev: f64,
+    pub light_rev: f64,
+}
+
+/// The weight of connecting a light vertex to a camera vertex.
+pub fn connect(light: Partial, camera: Partial, p: ConnectPdfs, f: Factors) -> f64 {
+    let w_light = mis(p.camera_a) * (f.vm + light.vcm + light.vc * mis(p.light_rev));
+    let w_camera = mis(p.light_a) * (f.vm + camera.vcm + camera.vc * mis(p.camera_rev));
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// The weight of light tracing: a light vertex connected to the lens. `camera_a`: the
+/// camera's density of the vertex (per raster area, in area measure there);
+/// `bsdf_rev`: the vertex BSDF's density of the direction its subpath arrived from.
+pub fn to_camera(light: Partial, camera_a: f64, bsdf_rev: f64, light_paths: f64, f: Factors) -> f64 {
+    let w_light = mis(camera_a / light_paths) * (f.vm + light.vcm + light.vc * mis(bsdf_rev));
+    1.0 / (w_light + 1.0)
+}
+
+/// The weight of merging a light vertex at a camera vertex: `pdf` and `pdf_rev` are the
+/// camera vertex BSDF's densities of the light vertex's arrival direction and of the
+/// camera subpath's own.
+pub fn merge(light: Partial, camera: Partial, pdf: f64, pdf_rev: f64, f: Factors) -> f64 {
+    let w_light = light.vcm * f.vc + light.vm * mis(pdf);
+    let w_camera = camera.vcm * f.vc + camera.vm * mis(pdf_rev);
+    1.0 / (w_light + 1.0 + w_camera)
+}

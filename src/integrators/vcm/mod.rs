@@ -1,0 +1,303 @@
+//! Vertex connection and merging (Georgiev et al. 2012; Hachisuka et al. 2012), and
+//! bidirectional path tracing as the same code with merging left out.
+//!
+//! ```text
+//! pbrt-sppm render scene.pbrt --integrator vcm [--alpha 0.6667] [--radius R]
+//! pbrt-sppm render scene.pbrt --integrator bdpt
+//! Integrator "bdpt" "integer maxdepth" 5      # rendered with bdpt
+//! Integrator "path"                           # rendered with vcm
+//! ```
+//! Each iteration (one pass) traces `photons` light subpaths ([`light`]), keeps their
+//! non-specular vertices in the photon grid, then one camera subpath per pixel
+//! ([`camera`]). Every technique counts, weighted by the power heuristic over all of
+//! them ([`mis`]): camera paths finding emitters, next-event estimation, connections
+//! of a camera vertex with the vertices of one light subpath, light vertices seen
+//! through the lens (light tracing) and merging light vertices within the pass's
+//! radius. The radius of pass i is that of independent SPPM passes
+//! ([`super::passes::radius`]), so passes stand alone: any range of them can be
+//! rendered apart and merged, and the image is their mean.
+//!
+//! Determinism: seeds derive from (seed, pixel, pass) and (seed, pass, light path);
+//! light vertices keep their subpaths' order; splats are summed per pixel in light-path
+//! order; so the thread count never changes the image.
+
+pub mod camera;
+pub mod light;
+pub mod mis;
+
+use super::error::RenderError;
+use super::grid::{Grid, Grouped, Site};
+use super::passes;
+use super::sppm::{PixelState, Stats};
+use crate::render::RenderScene;
+use crate::sampling::SamplerKind;
+use crate::spectrum::Rgb;
+use glam::{DVec3, Vec3};
+use mis::Factors;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Pixel ranges splats are grouped into for the parallel reduction.
+const SPLAT_RANGES: usize = 64;
+
+/// One of the ways a path is sampled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Technique {
+    /// A camera subpath finds an emitter (or escapes to a light at infinity).
+    EmitterHit,
+    /// Next-event estimation: a camera vertex connected to a point drawn on a light.
+    Direct,
+    /// A camera vertex connected to a light subpath's vertex.
+    Connect,
+    /// A light vertex connected to the lens.
+    LightTrace,
+    /// A light vertex merged at a camera vertex within the radius.
+    Merge,
+}
+
+/// Which techniques a render uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Techniques {
+    /// Vertex connection and merging: all of them.
+    All,
+    /// Bidirectional path tracing: all but merging.
+    Bdpt,
+    /// One alone with weight 1 (to check each converges to the same image).
+    Only(Technique),
+}
+
+impl Techniques {
+    pub fn uses(self, t: Technique) -> bool {
+        match self {
+            Techniques::All => true,
+            Techniques::Bdpt => t != Technique::Merge,
+            Techniques::Only(o) => o == t,
+        }
+    }
+
+    /// The weight to apply: the MIS weight, or 1 for a technique alone.
+    #[inline]
+    pub fn weight(self, w: f64) -> f32 {
+        match self {
+            Techniques::Only(_) => 1.0,
+            _ => w as f32,
+        }
+    }
+
+    fn factors(self, radius: f64, light_paths: f64) -> Factors {
+        let merge = self.uses(Technique::Merge);
+        Factors::new(radius, light_paths, self.uses(Technique::Connect) || !merge, merge)
+    }
+}
+
+/// What one pass shares between its light and camera subpaths.
+pub struct Pass<'a> {
+    pub scene: &'a RenderScene,
+    pub factors: Factors,
+    pub techniques: Techniques,
+    /// The most edges a path may have (pbrt's `maxdepth` + 1).
+    pub max_len: u32,
+    /// Light subpaths in the pass.
+    pub light_paths: u64,
+    /// The full film's pixel count: a camera density per unit raster area is pbrt's
+    /// per film area times this.
+    pub film_pixels: f64,
+    pub radius: f32,
+    /// The rendered window: its first pixel and its width and height.
+    pub origin: (u32, u32),
+    pub size: (usize, usize),
+}
+
+impl Pass<'_> {
+    /// The index in the rendered window of the pixel holding a raster point, if any.
+    pub fn pixel_index(&self, raster: [f32; 2]) -> Option<u32> {
+        let (x, y) = (raster[0].floor(), raster[1].floor());
+        let (x, y) = (x as i64 - self.origin.0 as i64, y as i64 - self.origin.1 as i64);
+        let inside = (0..self.size.0 as i64).contains(&x) && (0..self.size.1 as i64).contains(&y);
+        inside.then(|| (y as usize * self.size.0 + x as usize) as u32)
+    }
+}
+
+/// The settings of a render with [`Vcm`].
+#[derive(Clone, Copy, Debug)]
+pub struct VcmSettings {
+    pub light_paths: u64,
+    /// The first pass's merging radius.
+    pub radius: f64,
+    /// How fast the radius shrinks (as independent SPPM passes').
+    pub alpha: f64,
+    pub seed: u64,
+    pub sampler: SamplerKind,
+    pub techniques: Techniques,
+}
+
+/// The progressive state of a render: each pixel's sum over the passes so far.
+pub struct Vcm<'a> {
+    pub(super) scene: &'a RenderScene,
+    sums: Vec<DVec3>,
+    origin: (u32, u32),
+    size: (usize, usize),
+    pub iteration: u32,
+    first: u32,
+    settings: VcmSettings,
+    /// Camera rays' differential scale (as SPPM's).
+    differential_scale: f32,
+    pub stats: Stats,
+}
+
+impl<'a> Vcm<'a> {
+    /// Fails (rather than aborting) when the pixels do not fit in memory. `iterations`
+    /// sets the camera rays' differential scale; `first` is the first pass rendered.
+    pub fn new(
+        scene: &'a RenderScene,
+        iterations: u32,
+        first: u32,
+        settings: VcmSettings,
+    ) -> Result<Vcm<'a>, RenderError> {
+        let [x0, x1, y0, y1] = scene.film.pixel_bounds;
+        let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
+        let mut sums = Vec::new();
+        sums.try_reserve_exact(w * h).map_err(|_| RenderError::OutOfMemory {
+            width: w,
+            height: h,
+            bytes: (w * h).saturating_mul(std::mem::size_of::<DVec3>()),
+        })?;
+        sums.resize(w * h, DVec3::ZERO);
+        let floor = scene.integrator.differential_floor;
+        Ok(Vcm {
+            scene,
+            sums,
+            origin: (x0, y0),
+            size: (w, h),
+            iteration: first,
+            first,
+            settings,
+            differential_scale: (1.0 / (iterations.max(1) as f32).sqrt()).max(floor),
+            stats: Stats::default(),
+        })
+    }
+
+    pub fn passes_done(&self) -> u32 {
+        self.iteration.saturating_sub(self.first)
+    }
+
+    pub fn first_pass(&self) -> u32 {
+        self.first
+    }
+
+    /// The merging radius of the pass under way.
+    pub fn radius(&self) -> f64 {
+        passes::radius(self.settings.radius, self.settings.alpha, self.iteration)
+    }
+
+    /// The state a checkpoint saves: each pixel's sum (as `ld`) and the radius.
+    pub fn save(&self) -> Vec<PixelState> {
+        let radius = self.radius();
+        self.sums.iter().map(|s| PixelState { radius, n: 0.0, ld: s.to_array(), tau: [0.0; 3] }).collect()
+    }
+
+    /// Continues from a checkpoint's state after `iteration` passes.
+    pub fn restore(&mut self, iteration: u32, pixels: &[PixelState], stats: Stats) -> Result<(), RenderError> {
+        if pixels.len() != self.sums.len() {
+            return Err(RenderError::CheckpointPixels { saved: pixels.len(), film: self.sums.len() });
+        }
+        for (s, p) in self.sums.iter_mut().zip(pixels) {
+            *s = DVec3::from(p.ld);
+        }
+        (self.iteration, self.stats) = (iteration, stats);
+        Ok(())
+    }
+
+    /// One pass: light subpaths, the grid of their vertices, camera subpaths, splats.
+    pub fn iterate(&mut self) {
+        let t0 = Instant::now();
+        let pass = self.pass();
+        let lights = light::trace_all(&pass, self.settings.seed, self.iteration);
+        let t1 = Instant::now();
+        let grid = match self.settings.techniques.uses(Technique::Merge) {
+            true => Grid::build(
+                &lights.vertices.par_iter().map(|v| Some(Site { p: v.p, radius: pass.radius })).collect::<Vec<_>>(),
+            ),
+            false => None,
+        };
+        let t2 = Instant::now();
+        let cams = camera::Cameras {
+            pass: &pass,
+            lights: &lights,
+            grid: grid.as_ref(),
+            seed: self.settings.seed,
+            iteration: self.iteration,
+            sampler: self.settings.sampler,
+            differential_scale: self.differential_scale,
+        };
+        let width = self.size.0;
+        self.sums.par_iter_mut().enumerate().for_each(|(i, s)| {
+            *s += cams.pixel(i, width).as_dvec3();
+        });
+        let t3 = Instant::now();
+        let scale = self.scene.photon_scale;
+        add_splats(&mut self.sums, lights.splats, scale);
+        let t4 = Instant::now();
+        self.iteration += 1;
+        self.note(&lights.counts, lights.vertices.len(), [t0, t1, t2, t3, t4]);
+    }
+
+    fn pass(&self) -> Pass<'a> {
+        let scene = self.scene;
+        let radius = self.radius();
+        let n = self.settings.light_paths.max(1);
+        Pass {
+            scene,
+            factors: self.settings.techniques.factors(radius, n as f64),
+            techniques: self.settings.techniques,
+            max_len: scene.integrator.max_depth + 1,
+            light_paths: n,
+            film_pixels: scene.film.x_resolution as f64 * scene.film.y_resolution as f64,
+            radius: radius as f32,
+            origin: self.origin,
+            size: self.size,
+        }
+    }
+
+    fn note(&mut self, counts: &light::Counts, vertices: usize, t: [Instant; 5]) {
+        let s = &mut self.stats;
+        s.photon_seconds += (t[1] - t[0]).as_secs_f64();
+        s.grid_seconds += (t[2] - t[1]).as_secs_f64();
+        s.camera_seconds += (t[3] - t[2]).as_secs_f64();
+        s.update_seconds += (t[4] - t[3]).as_secs_f64();
+        s.camera_rays += self.sums.len() as u64;
+        s.photons.traced += counts.paths;
+        s.photons.uniform += counts.paths;
+        s.photons.hits += counts.hits;
+        s.visible_points += vertices as u64;
+        s.iterations = self.iteration;
+    }
+
+    /// The current estimate: the mean of the passes, times the film's scale.
+    pub fn image(&self) -> Vec<[f32; 3]> {
+        let k = self.passes_done().max(1) as f64;
+        let scale = self.scene.film.scale as f64;
+        self.sums.iter().map(|s| (*s * scale / k).as_vec3().to_array()).collect()
+    }
+
+    /// The sum of the passes' estimates per pixel, times the film's scale (what a shard
+    /// writes and a merge adds up).
+    pub fn pass_sums(&self) -> Vec<DVec3> {
+        let scale = self.scene.film.scale as f64;
+        self.sums.iter().map(|s| *s * scale).collect()
+    }
+}
+
+/// Adds light tracing's splats to the pixels' sums, each pixel in a fixed order (list by
+/// list, splat by splat) whatever the thread count; pixel ranges in parallel.
+fn add_splats(sums: &mut [DVec3], lists: Vec<Vec<(u32, Rgb)>>, scale: f64) {
+    let span = sums.len().div_ceil(SPLAT_RANGES).max(1);
+    let grouped: Vec<Grouped<(u32, Vec3)>> =
+        lists.into_par_iter().map(|l| Grouped::new(l, SPLAT_RANGES, |s| s.0 as usize / span)).collect();
+    sums.par_chunks_mut(span).enumerate().for_each(|(r, sums)| {
+        let lo = r * span;
+        for &(pixel, c) in grouped.iter().flat_map(|g| g.group(r)) {
+            sums[pixel as usize - lo] += c.as_dvec3() * scale;
+        }
+    });
+}
