@@ -364,7 +364,7 @@ impl PatchMesh {
         let cross = dpdu.cross(dpdv);
         let jacobian = cross.length();
         let d = wi.0 * hit.t;
-        let cos = (cross / jacobian).dot(d.normalize()).abs();
+        let cos = (cross / jacobian).dot(wi.0.normalize()).abs();
         if jacobian == 0.0 || cos == 0.0 {
             return 0.0;
         }

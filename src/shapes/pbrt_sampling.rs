@@ -121,8 +121,10 @@ impl QuadricShape {
             return (1.0 / (TAU * (1.0 - cos_max))) as f32;
         }
         let si = self.interaction(&hit);
-        let d = si.p.0.as_dvec3() - reference.0.as_dvec3();
-        let cos = si.n.0.as_dvec3().dot(-d.normalize()).abs();
-        if cos == 0.0 || object_area <= 0.0 { 0.0 } else { (d.length_squared() / (cos * object_area)) as f32 }
+        let d2 = (si.p.0.as_dvec3() - reference.0.as_dvec3()).length_squared();
+        // The cosine with the direction asked about, as pbrt: a hit at the reference
+        // point itself (d = 0) has density 0, not NaN.
+        let cos = si.n.0.as_dvec3().dot(-wi.0.as_dvec3().normalize()).abs();
+        if cos == 0.0 || object_area <= 0.0 { 0.0 } else { (d2 / (cos * object_area)) as f32 }
     }
 }

@@ -238,9 +238,9 @@ impl QuadricShape {
         }
         let si = self.interaction(&hit);
         let pdf_a = self.pdf_area_uv(s, self.uv_of(&hit));
-        let d = si.p.0.as_dvec3() - reference.0.as_dvec3();
-        let cos = si.n.0.as_dvec3().dot(-d.normalize()).abs();
-        if cos == 0.0 { 0.0 } else { (pdf_a * d.length_squared() / cos) as f32 }
+        let d2 = (si.p.0.as_dvec3() - reference.0.as_dvec3()).length_squared();
+        let cos = si.n.0.as_dvec3().dot(-wi.0.as_dvec3().normalize()).abs();
+        if cos == 0.0 { 0.0 } else { (pdf_a * d2 / cos) as f32 }
     }
 }
 
@@ -303,7 +303,7 @@ impl TriangleMesh {
         let area = 0.5 * (p1 - p0).cross(p2 - p0).length();
         let d = wi.0.as_dvec3() * hit.t as f64;
         let n = (p1 - p0).cross(p2 - p0).normalize();
-        let cos = n.dot(d.normalize()).abs();
+        let cos = n.dot(wi.0.as_dvec3().normalize()).abs();
         if cos == 0.0 { 0.0 } else { (d.length_squared() / (cos * area)) as f32 }
     }
 }

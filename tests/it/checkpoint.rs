@@ -99,7 +99,12 @@ fn kill_and_resume(d: &Path, extra: &[&str], seed: u64, t: Duration) -> usize {
 
 #[test]
 fn a_render_killed_at_random_moments_and_resumed_matches_an_uninterrupted_one() {
-    for (name, extra, seed) in [("uniform", &[][..], 1), ("adaptive", &["--photon-sampling", "adaptive"][..], 2)] {
+    let cases = [
+        ("uniform", &[][..], 1),
+        ("adaptive", &["--photon-sampling", "adaptive"][..], 2),
+        ("vcm", &["--integrator", "vcm"][..], 3),
+    ];
+    for (name, extra, seed) in cases {
         let d = dir(name);
         let start = Instant::now();
         let out = run(&d, &[&["--outfile", "full.exr", "-q"], extra].concat());

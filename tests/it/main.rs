@@ -27,3 +27,4 @@ mod slurm;
 mod stability;
 mod tokenizer;
 mod truncation;
+mod vcm;

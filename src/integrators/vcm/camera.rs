@@ -4,7 +4,7 @@
 
 use super::light::{LightPass, LightVertex, is_delta, occluded, occluded_between};
 use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
-use super::{Pass, Technique};
+use super::{Pass, Technique, Techniques};
 use crate::accel::Hit;
 use crate::integrators::grid::Grid;
 use crate::integrators::sppm::{Surface, surface};
@@ -82,7 +82,7 @@ impl Cameras<'_> {
         loop {
             let Some(hit) = scene.intersect(&ray) else {
                 if pass.techniques.uses(Technique::EmitterHit) && len < pass.max_len {
-                    color += beta * self.escaped(ray.d.0.normalize(), prev, len, partial);
+                    color += beta * self.escaped(ray.d.0.normalize(), ray.o.0, len, partial);
                 }
                 break;
             };
@@ -99,7 +99,7 @@ impl Cameras<'_> {
             partial.arrive(Some(dist2), wo.dot(si.n.0) as f64);
             let v = Vertex { si: &si, bsdf: &bsdf, wo, partial, len };
             if pass.techniques.uses(Technique::EmitterHit) {
-                color += beta * self.emitted(&hit, &v, prev, dist2);
+                color += beta * self.emitted(&hit, &v, ray.o.0, dist2);
             }
             if len >= pass.max_len || wo.dot(si.n.0) == 0.0 {
                 break;
@@ -121,12 +121,19 @@ impl Cameras<'_> {
         if t.uses(Technique::Direct) {
             c += self.direct(v, s);
         }
+        // Alone, each counts one strategy, so that every path is counted once: the
+        // light subpath's first vertex for connections, the camera subpath's first for
+        // merging (as photon mapping does).
         if t.uses(Technique::Connect) {
+            let first_only = t == Techniques::Only(Technique::Connect);
             for lv in light_path.iter().take_while(|lv| lv.len + v.len < self.pass.max_len) {
-                c += self.connect(v, lv);
+                if !first_only || lv.len == 1 {
+                    c += self.connect(v, lv);
+                }
             }
         }
         if t.uses(Technique::Merge)
+            && (t != Techniques::Only(Technique::Merge) || v.len == 1)
             && let Some(grid) = self.grid
         {
             c += self.merge(v, grid);
@@ -135,7 +142,8 @@ impl Cameras<'_> {
     }
 
     /// Light from an area light the path has found, weighted against the techniques
-    /// that could have found the same point on it.
+    /// that could have found the same point on it. `prev`: where the ray left the
+    /// vertex before (offset off its surface, as light samples are taken from there).
     fn emitted(&self, hit: &Hit, v: &Vertex, prev: Vec3, dist2: f64) -> Rgb {
         let scene = self.pass.scene;
         let le = scene.emitted(hit, v.si, v.wo);

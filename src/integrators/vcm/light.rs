@@ -180,7 +180,9 @@ fn trace(pass: &Pass, s: &mut impl Sampler, out: &mut Vec<LightVertex>, splats: 
         let (wo, ng) = (-ray.d.0.normalize(), si.n.0);
         let dist2 = (si.p.0 - prev).length_squared() as f64;
         if len == 1 && matches!(light, Light::Area(_)) {
-            let pdf = light.pdf_li(&scene.geometry.shapes, si.p.0, wo) as f64;
+            // Measured from the point offset off the surface, as light samples are.
+            let from = offset_ray_origin(si.p, si.p_error, si.n, Vector3(wo));
+            let pdf = light.pdf_li(&scene.geometry.shapes, from.0, wo) as f64;
             partial.vcm *= mis::mis(pick * pdf * cos / dist2);
         }
         partial.arrive((len > 1 || is_finite(light)).then_some(dist2), wo.dot(ng) as f64);

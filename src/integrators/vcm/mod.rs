@@ -62,7 +62,8 @@ pub enum Techniques {
     All,
     /// Bidirectional path tracing: all but merging.
     Bdpt,
-    /// One alone with weight 1 (to check each converges to the same image).
+    /// One alone with weight 1, to check each converges to the same image. Connections
+    /// and merging then keep one strategy each (see [`camera`]), so each path counts once.
     Only(Technique),
 }
 

@@ -1,0 +1,327 @@
+//! Vertex connection and merging: its MIS weights against the full-path formula, each
+//! technique alone against all of them, energy in a furnace, determinism, and the
+//! run's contracts (checkpoints, pass ranges).
+
+use crate::common::scene;
+use pbrt_sppm::integrators::vcm::mis::{self, ConnectPdfs, DirectPdfs, Factors, Partial};
+use pbrt_sppm::integrators::vcm::{Technique, Techniques};
+use pbrt_sppm::integrators::{Algorithm, RenderSettings};
+use pbrt_sppm::render::RenderScene;
+use pbrt_sppm::sampling::Rng;
+
+/// A path x0 (on a light) … x_{k−1} (surfaces), then the camera, with every density
+/// and cosine the techniques need, drawn at random.
+struct AbstractPath {
+    k: usize,
+    /// d2[i]: squared length of the edge from x_i to x_{i+1} (x_k: the camera).
+    d2: Vec<f64>,
+    /// At x_i: cosine toward x_{i−1} (a) and toward x_{i+1} (b); at x0, b is the
+    /// light's cosine.
+    a: Vec<f64>,
+    b: Vec<f64>,
+    /// At x_i (0 < i < k): the light walk's density toward x_{i+1} (coming from
+    /// x_{i−1}) and the camera walk's toward x_{i−1}; 1 at specular vertices.
+    fwd_l: Vec<f64>,
+    fwd_c: Vec<f64>,
+    specular: Vec<bool>,
+    /// The light: emission position and direction densities, next-event estimation's
+    /// area density; a point light (delta) or an area light.
+    p0: f64,
+    e_dir: f64,
+    direct_a: f64,
+    delta_light: bool,
+    /// The camera's solid-angle density per pixel toward x_{k−1}.
+    cam: f64,
+    n_light: f64,
+    f: Factors,
+}
+
+impl AbstractPath {
+    fn random(rng: &mut Rng, k: usize) -> AbstractPath {
+        let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.uniform() as f64;
+        let d2 = (0..k).map(|_| u(0.05, 4.0)).collect();
+        let a = (0..k).map(|_| u(0.05, 1.0)).collect();
+        let b = (0..k).map(|_| u(0.05, 1.0)).collect();
+        let mut specular: Vec<bool> = (0..k).map(|_| u(0.0, 1.0) < 0.3).collect();
+        specular[0] = false;
+        let fwd_l = (0..k).map(|i| if specular[i] { 1.0 } else { u(0.05, 3.0) }).collect();
+        let fwd_c = (0..k).map(|i| if specular[i] { 1.0 } else { u(0.05, 3.0) }).collect();
+        let delta_light = u(0.0, 1.0) < 0.3;
+        let (p0, direct_a) = if delta_light { (1.0, 1.0) } else { (u(0.1, 2.0), u(0.1, 2.0)) };
+        let (e_dir, cam, n_light, r) = (u(0.05, 1.0), u(0.5, 5.0), u(10.0, 1000.0), u(0.001, 0.1));
+        AbstractPath {
+            k,
+            d2,
+            a,
+            b,
+            fwd_l,
+            fwd_c,
+            specular,
+            p0,
+            e_dir,
+            direct_a,
+            delta_light,
+            cam,
+            n_light,
+            f: Factors::new(r, n_light, true, true),
+        }
+    }
+
+    /// Area density of x_i from the light walk (x0: emission's position density).
+    fn p_light(&self, i: usize) -> f64 {
+        match i {
+            0 => self.p0,
+            1 => self.e_dir * self.a[1] / self.d2[0],
+            _ => self.fwd_l[i - 1] * self.a[i] / self.d2[i - 1],
+        }
+    }
+
+    /// Area density of x_i from the camera walk.
+    fn p_camera(&self, i: usize) -> f64 {
+        let k = self.k;
+        if i == k - 1 { self.cam * self.b[k - 1] / self.d2[k - 1] } else { self.fwd_c[i + 1] * self.b[i] / self.d2[i] }
+    }
+
+    /// Every technique's density, for the full-path power heuristic (0 where it cannot
+    /// sample the path). Connections take s light vertices (x0…x_{s−1}).
+    fn brute_force(&self) -> Vec<f64> {
+        let k = self.k;
+        let pl = |s: usize| (0..s).map(|i| self.p_light(i)).product::<f64>();
+        let pc = |s: usize| (s..k).map(|i| self.p_camera(i)).product::<f64>();
+        let spec = |i: usize| i > 0 && self.specular[i];
+        let mut p = Vec::new();
+        // s = 0: the camera walk finds the light.
+        p.push(if self.delta_light { 0.0 } else { pc(0) });
+        // s = 1: next-event estimation.
+        p.push(if spec(1) { 0.0 } else { self.direct_a * pc(1) });
+        for s in 2..k {
+            p.push(if spec(s - 1) || spec(s) { 0.0 } else { pl(s) * pc(s) });
+        }
+        // Light tracing (n_light of them per camera path's one).
+        p.push(if spec(k - 1) { 0.0 } else { self.n_light * pl(k) });
+        let eta = self.f.vm.sqrt();
+        for i in 1..k {
+            p.push(if spec(i) { 0.0 } else { eta * pl(i + 1) * pc(i) });
+        }
+        p
+    }
+
+    /// The light subpath's partial sums on arriving at x_i.
+    fn light_state(&self, i: usize) -> Partial {
+        let cos = if self.delta_light { 1.0 } else { self.b[0] };
+        let mut s = Partial::light(self.p0 * self.e_dir, self.direct_a, cos, self.delta_light, self.f);
+        s.arrive(Some(self.d2[0]), self.a[1]);
+        for j in 1..i {
+            s.scatter(self.b[j], self.fwd_l[j], self.fwd_c[j], self.specular[j], self.f);
+            s.arrive(Some(self.d2[j]), self.a[j + 1]);
+        }
+        s
+    }
+
+    /// The camera subpath's partial sums on arriving at x_i.
+    fn camera_state(&self, i: usize) -> Partial {
+        let k = self.k;
+        let mut s = Partial::camera(self.cam, self.n_light);
+        s.arrive(Some(self.d2[k - 1]), self.b[k - 1]);
+        for j in (i + 1..k).rev() {
+            s.scatter(self.a[j], self.fwd_c[j], self.fwd_l[j], self.specular[j], self.f);
+            s.arrive(Some(self.d2[j - 1]), self.b[j - 1]);
+        }
+        s
+    }
+
+    /// Every technique's weight as the integrator computes it (0 where it cannot run).
+    fn recurrences(&self) -> Vec<f64> {
+        let (k, f) = (self.k, self.f);
+        let spec = |i: usize| i > 0 && self.specular[i];
+        let mut w = Vec::new();
+        let emission = self.p0 * self.e_dir;
+        w.push(if self.delta_light { 0.0 } else { mis::emitter_hit(self.camera_state(0), self.direct_a, emission) });
+        let direct = self.direct_a * self.d2[0] / self.b[0];
+        let pdfs = DirectPdfs {
+            bsdf: if self.delta_light { 0.0 } else { self.fwd_c[1] },
+            bsdf_rev: self.fwd_l[1],
+            direct: if self.delta_light { self.d2[0] } else { direct },
+            emission,
+            cos_here: self.a[1],
+            cos_light: if self.delta_light { 1.0 } else { self.b[0] },
+        };
+        w.push(if spec(1) { 0.0 } else { mis::direct(self.camera_state(1), pdfs, f) });
+        for s in 2..k {
+            let pdfs = ConnectPdfs {
+                camera_a: self.fwd_c[s] * self.b[s - 1] / self.d2[s - 1],
+                light_a: self.fwd_l[s - 1] * self.a[s] / self.d2[s - 1],
+                camera_rev: self.fwd_l[s],
+                light_rev: self.fwd_c[s - 1],
+            };
+            let ok = !(spec(s - 1) || spec(s));
+            w.push(if ok { mis::connect(self.light_state(s - 1), self.camera_state(s), pdfs, f) } else { 0.0 });
+        }
+        let camera_a = self.cam * self.b[k - 1] / self.d2[k - 1];
+        let lt = mis::to_camera(self.light_state(k - 1), camera_a, self.fwd_c[k - 1], self.n_light, f);
+        w.push(if spec(k - 1) { 0.0 } else { lt });
+        for i in 1..k {
+            let m = mis::merge(self.light_state(i), self.camera_state(i), self.fwd_c[i], self.fwd_l[i], f);
+            w.push(if spec(i) { 0.0 } else { m });
+        }
+        w
+    }
+}
+
+#[test]
+fn mis_weights_of_all_techniques_sum_to_one_and_match_the_full_path_formula() {
+    let mut rng = Rng::new(7);
+    let mut checked = 0;
+    for k in 2..=7 {
+        for _ in 0..400 {
+            let path = AbstractPath::random(&mut rng, k);
+            let p = path.brute_force();
+            let total: f64 = p.iter().map(|p| p * p).sum();
+            if total == 0.0 {
+                continue;
+            }
+            let w = path.recurrences();
+            assert_eq!(w.len(), p.len());
+            let sum: f64 = w.iter().sum();
+            assert!((sum - 1.0).abs() < 1e-9, "path of {k} edges: weights sum to {sum}: {w:?}");
+            for (t, (w, p)) in w.iter().zip(&p).enumerate() {
+                let expected = p * p / total;
+                assert!(
+                    (w - expected).abs() < 1e-9 * (1.0 + expected),
+                    "technique {t} of {k} edges: {w} vs {expected}"
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 2000, "{checked} paths checked");
+}
+
+/// A closed box lit only through its ceiling: a light faces up from above the camera,
+/// which sees the floor and the lower walls, so every path has at least three edges
+/// and every technique alone can render the whole image.
+fn indirect_room(iterations: u32, photons: u32) -> String {
+    let quad = |p: &str| format!("Shape \"trianglemesh\" \"point3 P\" [{p}] \"integer indices\" [0 1 2 0 2 3]");
+    format!(
+        "LookAt 0 1 0.9  0 0 -0.5  0 1 0 Camera \"perspective\" \"float fov\" 40 \
+         Film \"rgb\" \"integer xresolution\" 12 \"integer yresolution\" 12 \
+         Integrator \"bdpt\" \"integer maxdepth\" 4 \"integer iterations\" {iterations} \
+         \"integer photonsperiteration\" {photons} \"float radius\" 0.03 \
+         WorldBegin Material \"diffuse\" \"rgb reflectance\" [.7 .7 .7] {} {} {} {} {} {} \
+         AttributeBegin Translate 0 1.2 0 AreaLightSource \"diffuse\" \"rgb L\" [8 8 8] \
+         Material \"diffuse\" \"rgb reflectance\" [0 0 0] {} AttributeEnd",
+        quad("-1 0 -1  1 0 -1  1 0 1  -1 0 1"),
+        quad("-1 2 -1  -1 2 1  1 2 1  1 2 -1"),
+        quad("-1 0 -1  -1 2 -1  1 2 -1  1 0 -1"),
+        quad("-1 0 1  1 0 1  1 2 1  -1 2 1"),
+        quad("-1 0 -1  -1 0 1  -1 2 1  -1 2 -1"),
+        quad("1 0 -1  1 2 -1  1 2 1  1 0 1"),
+        quad("-.3 0 -.3  -.3 0 .3  .3 0 .3  .3 0 -.3"),
+    )
+}
+
+fn render_with(text: &str, algorithm: Algorithm) -> Vec<[f32; 3]> {
+    let settings = RenderSettings { algorithm: Some(algorithm), ..Default::default() };
+    pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), &settings).expect("renders").image.pixels
+}
+
+/// Channel means over the whole image and over each quarter.
+fn means(px: &[[f32; 3]], w: usize) -> Vec<f64> {
+    let h = px.len() / w;
+    let mut out = vec![px.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / px.len() as f64];
+    for (qx, qy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        let q: Vec<f64> = (0..px.len())
+            .filter(|i| (i % w) * 2 / w == qx && (i / w) * 2 / h == qy)
+            .map(|i| (px[i][0] + px[i][1] + px[i][2]) as f64)
+            .collect();
+        out.push(q.iter().sum::<f64>() / q.len() as f64);
+    }
+    out
+}
+
+#[test]
+fn each_technique_alone_converges_to_the_image_of_all_combined() {
+    let all = means(&render_with(&indirect_room(256, 4000), Algorithm::Vcm(Techniques::All)), 12);
+    assert!(all[0] > 0.01, "the room is lit: {all:?}");
+    for (t, budget, tolerance) in [
+        // Budgets and tolerances: about three standard deviations of each estimate
+        // (measured over seeds), the camera-side techniques being the noisier.
+        (Technique::EmitterHit, 512, 0.05),
+        (Technique::Direct, 128, 0.04),
+        (Technique::Connect, 256, 0.05),
+        (Technique::LightTrace, 64, 0.04),
+        (Technique::Merge, 256, 0.05),
+    ] {
+        let alone = means(&render_with(&indirect_room(budget, 4000), Algorithm::Vcm(Techniques::Only(t))), 12);
+        for (k, (a, b)) in alone.iter().zip(&all).enumerate() {
+            assert!((a / b - 1.0).abs() < tolerance, "{t:?} alone: region {k} has {a}, all techniques {b}");
+        }
+        eprintln!("{t:?} alone: {alone:?} (all: {all:?})");
+    }
+}
+
+#[test]
+fn the_same_seed_gives_identical_pixels_for_any_thread_count() {
+    let text = std::fs::read_to_string(crate::common::root().join("pbrt-scenes/v3/cornell-glass.pbrt")).unwrap();
+    let sc = RenderScene::new(&scene(&text));
+    for algorithm in [Algorithm::Vcm(Techniques::All), Algorithm::Vcm(Techniques::Bdpt)] {
+        let s = RenderSettings {
+            algorithm: Some(algorithm),
+            iterations: Some(2),
+            photons: Some(3000),
+            ..Default::default()
+        };
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| pbrt_sppm::integrators::render(&sc, &s).unwrap().image.pixels)
+        };
+        let (one, two) = (run(1), run(2));
+        assert!(one.iter().any(|p| p[0] > 0.0), "{algorithm:?}: the image is black");
+        let same = one.iter().zip(&two).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits));
+        assert!(same, "{algorithm:?}: images differ between 1 and 2 threads");
+    }
+}
+
+#[test]
+fn any_split_of_a_vcm_render_merges_to_the_single_machine_render() {
+    let d = crate::shards::dir("vcm");
+    let run = |args: &[&str]| {
+        let o =
+            std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm")).current_dir(&d).args(args).output().unwrap();
+        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    };
+    let vcm = ["render", "scene.pbrt", "--integrator", "vcm", "-q"];
+    run(&[&vcm[..], &["--outfile", "single.exr"]].concat());
+    for (range, threads) in [("0..2", "1"), ("2..6", "2")] {
+        let part = format!("p{}.part.exr", &range[..1]);
+        run(&[&vcm[..], &["--pass-range", range, "--partial", &part, "--nthreads", threads]].concat());
+    }
+    run(&["merge", "--outfile", "merged.exr", "p0.part.exr", "p2.part.exr"]);
+    crate::shards::assert_same_image(&d.join("merged.exr"), &d.join("single.exr"), 1e-6);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A closed sphere (normals inward) around the camera with reflectance ρ = 0.5: light
+/// emitted inside reaches the eye after any number of bounces up to maxdepth.
+fn furnace(inside: &str) -> String {
+    format!(
+        "Film \"rgb\" \"integer xresolution\" 10 \"integer yresolution\" 10 Camera \"perspective\" \"float fov\" 45 \
+         Integrator \"bdpt\" \"integer iterations\" 16 \"integer maxdepth\" 5 \"integer photonsperiteration\" 2000 \
+         WorldBegin AttributeBegin ReverseOrientation Material \"diffuse\" \"rgb reflectance\" [.5 .5 .5] \
+         {inside} Shape \"sphere\" AttributeEnd"
+    )
+}
+
+#[test]
+fn a_white_furnace_gives_the_geometric_series_with_every_technique_combined() {
+    for algorithm in [Algorithm::Vcm(Techniques::All), Algorithm::Vcm(Techniques::Bdpt)] {
+        // An emitting sphere: Le (1 + ρ + … + ρ^maxdepth).
+        let px = render_with(&furnace("AreaLightSource \"diffuse\" \"rgb L\" [.5 .5 .5]"), algorithm);
+        let mean = means(&px, 10)[0] / 3.0;
+        let expected = 1.0 - 0.5f64.powi(6);
+        assert!(
+            (mean - expected).abs() < 0.01 * expected,
+            "{algorithm:?}: emitting sphere {mean}, expected {expected}"
+        );
+    }
+}
