@@ -123,7 +123,7 @@ impl Job {
             partial_images: request.partial_images.then(|| image.as_ref().map(|i| i.0.clone())).flatten(),
             interrupt: request.interrupt.clone(),
         };
-        let scene = RenderScene::new(scene);
+        let scene = RenderScene::for_integrator(scene, plan.algorithm != crate::integrators::Algorithm::Sppm);
         Ok(Job { request, scene, plan, fingerprint, image, monitor })
     }
 

@@ -99,9 +99,11 @@ impl AbstractPath {
         }
         // Light tracing (n_light of them per camera path's one).
         p.push(if spec(k - 1) { 0.0 } else { self.n_light * pl(k) });
+        // Merging at x_i takes a light subpath of i edges; direct light (i = 1) is
+        // never merged.
         let eta = self.f.vm.sqrt();
         for i in 1..k {
-            p.push(if spec(i) { 0.0 } else { eta * pl(i + 1) * pc(i) });
+            p.push(if spec(i) || i == 1 { 0.0 } else { eta * pl(i + 1) * pc(i) });
         }
         p
     }
@@ -112,7 +114,7 @@ impl AbstractPath {
         let mut s = Partial::light(self.p0 * self.e_dir, self.direct_a, cos, self.delta_light, self.f);
         s.arrive(Some(self.d2[0]), self.a[1]);
         for j in 1..i {
-            s.scatter(self.b[j], self.fwd_l[j], self.fwd_c[j], self.specular[j], self.f);
+            s.scatter(self.b[j], self.fwd_l[j], self.fwd_c[j], self.specular[j], j > 1, self.f);
             s.arrive(Some(self.d2[j]), self.a[j + 1]);
         }
         s
@@ -124,7 +126,7 @@ impl AbstractPath {
         let mut s = Partial::camera(self.cam, self.n_light);
         s.arrive(Some(self.d2[k - 1]), self.b[k - 1]);
         for j in (i + 1..k).rev() {
-            s.scatter(self.a[j], self.fwd_c[j], self.fwd_l[j], self.specular[j], self.f);
+            s.scatter(self.a[j], self.fwd_c[j], self.fwd_l[j], self.specular[j], true, self.f);
             s.arrive(Some(self.d2[j - 1]), self.b[j - 1]);
         }
         s
@@ -146,7 +148,7 @@ impl AbstractPath {
             cos_here: self.a[1],
             cos_light: if self.delta_light { 1.0 } else { self.b[0] },
         };
-        w.push(if spec(1) { 0.0 } else { mis::direct(self.camera_state(1), pdfs, f) });
+        w.push(if spec(1) { 0.0 } else { mis::direct(self.camera_state(1), pdfs) });
         for s in 2..k {
             let pdfs = ConnectPdfs {
                 camera_a: self.fwd_c[s] * self.b[s - 1] / self.d2[s - 1],
@@ -155,14 +157,15 @@ impl AbstractPath {
                 light_rev: self.fwd_c[s - 1],
             };
             let ok = !(spec(s - 1) || spec(s));
-            w.push(if ok { mis::connect(self.light_state(s - 1), self.camera_state(s), pdfs, f) } else { 0.0 });
+            let light = self.light_state(s - 1);
+            w.push(if ok { mis::connect(light, self.camera_state(s), pdfs, s as u32 - 1, f) } else { 0.0 });
         }
         let camera_a = self.cam * self.b[k - 1] / self.d2[k - 1];
-        let lt = mis::to_camera(self.light_state(k - 1), camera_a, self.fwd_c[k - 1], self.n_light, f);
+        let lt = mis::to_camera(self.light_state(k - 1), camera_a, self.fwd_c[k - 1], k as u32 - 1, self.n_light, f);
         w.push(if spec(k - 1) { 0.0 } else { lt });
         for i in 1..k {
             let m = mis::merge(self.light_state(i), self.camera_state(i), self.fwd_c[i], self.fwd_l[i], f);
-            w.push(if spec(i) { 0.0 } else { m });
+            w.push(if spec(i) || i == 1 { 0.0 } else { m });
         }
         w
     }

@@ -6,7 +6,7 @@ use pbrt_sppm::fixes::Fixes;
 use pbrt_sppm::integrators::adaptive::PhotonSampling;
 use pbrt_sppm::integrators::checkpoint::Every;
 use pbrt_sppm::integrators::passes::{DEFAULT_ALPHA, PassMode};
-use pbrt_sppm::integrators::vcm::Techniques;
+use pbrt_sppm::integrators::vcm::{Technique, Techniques};
 use pbrt_sppm::integrators::{Algorithm, RenderSettings};
 use pbrt_sppm::job::Request;
 use pbrt_sppm::parser::Syntax;
@@ -125,7 +125,8 @@ pub struct RenderArgs {
     pub photon_sampling: Option<PhotonSampling>,
     /// `sppm`, `vcm` (vertex connection and merging) or `bdpt` (vcm without merging);
     /// default: what the file asks for (`sppm` → sppm, `bdpt` → bdpt, other
-    /// integrators → vcm).
+    /// integrators → vcm). `vcm-only-T` renders technique T alone (emitterhit, direct,
+    /// connect, lighttrace, merge).
     #[arg(long, value_parser = parse_integrator)]
     pub integrator: Option<Algorithm>,
     /// SPPM iterations (at least 1), overriding the scene's.
@@ -247,7 +248,12 @@ fn parse_integrator(s: &str) -> Result<Algorithm, String> {
         "sppm" => Ok(Algorithm::Sppm),
         "vcm" => Ok(Algorithm::Vcm(Techniques::All)),
         "bdpt" => Ok(Algorithm::Vcm(Techniques::Bdpt)),
-        _ => Err(format!("\"{s}\" is not an integrator: sppm, vcm or bdpt")),
+        // One technique alone (weight 1), to see what each contributes.
+        _ => Technique::ALL
+            .into_iter()
+            .map(|t| Algorithm::Vcm(Techniques::Only(t)))
+            .find(|a| a.name() == s)
+            .ok_or_else(|| format!("\"{s}\" is not an integrator: sppm, vcm or bdpt")),
     }
 }
 

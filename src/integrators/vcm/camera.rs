@@ -75,7 +75,7 @@ impl Cameras<'_> {
             false => (scene.camera.generate_ray(p_raster, u_lens), None),
         };
         let camera_pdf = scene.camera.pdf_we(&ray).1 as f64 * pass.film_pixels;
-        let mut partial = Partial::camera(camera_pdf, pass.light_paths as f64);
+        let mut partial = Partial::camera(camera_pdf, pass.lt_count());
         let light_path = self.lights.path(i % pass.light_paths as usize);
         let (mut beta, mut color, mut prev) = (Vec3::ONE, Vec3::ZERO, ray.o.0);
         let (mut len, mut passes) = (0u32, 0u32);
@@ -207,7 +207,7 @@ impl Cameras<'_> {
             cos_here: ls.wi.dot(v.si.n.0).abs() as f64,
             cos_light,
         };
-        let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs, self.pass.factors));
+        let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs));
         let c = e.f * ls.wi.dot(v.bsdf.shading_normal()).abs() * ls.li * (w / (pick as f32 * ls.pdf));
         let blocked = match ls.p_light {
             Some(p) => occluded(scene, v.point(), p),
@@ -236,7 +236,7 @@ impl Cameras<'_> {
             camera_rev: ec.pdf_rev as f64,
             light_rev: el.pdf_rev as f64,
         };
-        let w = self.pass.techniques.weight(mis::connect(lv.partial, v.partial, pdfs, self.pass.factors));
+        let w = self.pass.techniques.weight(mis::connect(lv.partial, v.partial, pdfs, lv.len, self.pass.factors));
         let g = dir.dot(v.bsdf.shading_normal()).abs() * lv.adjoint_cos(-dir) / dist2;
         let c = (lv.beta * el.f * ec.f * (g * w)).as_dvec3() * self.pass.scene.photon_scale;
         let c = c.as_vec3();
@@ -255,7 +255,8 @@ impl Cameras<'_> {
         let mut sum = DVec3::ZERO;
         grid.gather(p, |k| {
             let lv = &self.lights.vertices[k as usize];
-            if lv.len + v.len > pass.max_len || (lv.p - p).length_squared() > r2 {
+            // Direct light (one edge from the light) is never merged (see `mis`).
+            if lv.len < 2 || lv.len + v.len > pass.max_len || (lv.p - p).length_squared() > r2 {
                 return;
             }
             let e = v.bsdf.eval(v.wo, lv.wo, TransportMode::Radiance);
@@ -312,6 +313,7 @@ fn scatter(pass: &Pass, v: &Vertex, beta: Rgb, s: &mut impl Sampler) -> Option<(
         return None;
     }
     let mut partial = v.partial;
-    partial.scatter(smp.wi.dot(v.si.n.0).abs() as f64, pdf as f64, pdf_rev as f64, smp.specular, pass.factors);
+    let cos = smp.wi.dot(v.si.n.0).abs() as f64;
+    partial.scatter(cos, pdf as f64, pdf_rev as f64, smp.specular, true, pass.factors);
     Some(((beta, smp.wi), partial))
 }

@@ -228,7 +228,8 @@ fn scatter(pass: &Pass, v: &LightVertex, s: &mut impl Sampler) -> Option<(Ray, R
         return None;
     }
     let mut partial = v.partial;
-    partial.scatter(smp.wi.dot(v.ng).abs() as f64, pdf as f64, pdf_rev as f64, smp.specular, pass.factors);
+    let cos = smp.wi.dot(v.ng).abs() as f64;
+    partial.scatter(cos, pdf as f64, pdf_rev as f64, smp.specular, v.len > 1, pass.factors);
     let ray = Ray::new(offset_ray_origin(Point3(v.p), v.p_error, Normal3(v.ng), Vector3(smp.wi)), Vector3(smp.wi));
     Some((ray, beta, partial))
 }
@@ -247,7 +248,7 @@ fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Ve
     let (_, pdf_dir) = scene.camera.pdf_we(&Ray::new(Point3(cs.p_lens), Vector3(-cs.wi)));
     let camera_a = pdf_dir as f64 * pass.film_pixels * cs.wi.dot(v.ng).abs() as f64 / dist2;
     let light_paths = pass.light_paths as f64;
-    let w = mis::to_camera(v.partial, camera_a, e.pdf_rev as f64, light_paths, pass.factors);
+    let w = mis::to_camera(v.partial, camera_a, e.pdf_rev as f64, v.len, pass.lt_count(), pass.factors);
     let c = v.beta * e.f * v.adjoint_cos(cs.wi) * (cs.we / cs.pdf) * (pass.film_pixels / light_paths) as f32;
     let c = c * pass.techniques.weight(w);
     if c == Vec3::ZERO || !c.is_finite() || occluded(scene, (v.p, v.p_error, v.ng), cs.p_lens) {

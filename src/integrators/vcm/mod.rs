@@ -55,6 +55,11 @@ pub enum Technique {
     Merge,
 }
 
+impl Technique {
+    pub const ALL: [Technique; 5] =
+        [Technique::EmitterHit, Technique::Direct, Technique::Connect, Technique::LightTrace, Technique::Merge];
+}
+
 /// Which techniques a render uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Techniques {
@@ -110,6 +115,13 @@ pub struct Pass<'a> {
 }
 
 impl Pass<'_> {
+    /// How many samples light tracing counts as in the weights: one per light subpath.
+    /// (Counting fewer, to favour the camera's low-discrepancy techniques, halved a
+    /// diffuse scene's error but raised the caustic scenes' by half: left at 1.)
+    pub fn lt_count(&self) -> f64 {
+        self.light_paths as f64
+    }
+
     /// The index in the rendered window of the pixel holding a raster point, if any.
     pub fn pixel_index(&self, raster: [f32; 2]) -> Option<u32> {
         let (x, y) = (raster[0].floor(), raster[1].floor());
