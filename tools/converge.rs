@@ -4,10 +4,13 @@
 //! pbrt-bench converge [SCENE.pbrt[@half] ...] [--runs 3] [--iterations 4,16,64]
 //!                     [--reference-iterations N] [--peers DIR] [--out DIR] [--nthreads 2]
 //!                     [--ours-args "--photon-sampling adaptive"] [--doc README.md]
+//!                     [--reference-args "--integrator vcm"]
 //! ```
 //! For each scene, every round runs each peer found in `--peers` (`pbrt-v3`, `pbrt-v4`)
 //! once per iteration count of the ladder (default: the scene's count over 4, over 2 and
-//! as written), then ours once with a time limit just past the slowest peer run of that
+//! as written), with the scene's SPPM and again with `bdpt` and with `path` in its place
+//! (same `maxdepth`) at the samples per pixel that take as long as each SPPM rung
+//! (measured in the first round from runs at 1 and 4 samples), then ours once with a time limit just past the slowest peer run of that
 //! round, writing `ERRORS.csv`. Times are whole processes (loading, rendering, writing);
 //! our per-iteration times get the same loading and writing time added. With `--runs R`
 //! rounds, each figure is the median over the rounds, with the range beside it.
@@ -29,6 +32,10 @@
 //!
 //! `--ours-args` passes options to our timed runs only (not to the reference), so one
 //! of our settings can be set beside the peers; give each setting its own `--out`.
+//! `--reference-args` passes options to the reference render: an SPPM reference keeps
+//! SPPM's bias, which counts against the methods that converge to the scene's image
+//! (bdpt, path, vcm); `--reference-args "--integrator vcm"` removes it (at a cost to
+//! SPPM's figures).
 //! `--doc FILE` writes the suite table (one row per scene) between `<!-- BEGIN converge -->`
 //! and `<!-- END converge -->` in FILE (with `--ours-args A`: the section `converge A`).
 //!
@@ -62,6 +69,8 @@ struct Options {
     nthreads: usize,
     /// Extra options for our timed runs.
     ours_args: Vec<String>,
+    /// Extra options for the reference render (`--reference-args "--integrator vcm"`).
+    reference_args: Vec<String>,
     /// `--doc FILE`: write the suite table into FILE's `converge` section.
     doc: Option<PathBuf>,
 }
@@ -72,16 +81,32 @@ enum PeerKind {
     V4,
 }
 
+/// Which of pbrt's integrators a peer runs.
+#[derive(Clone, Copy, PartialEq)]
+enum Method {
+    /// As the scene asks (SPPM), at the ladder's iteration counts.
+    Sppm,
+    /// `bdpt` or `path` in its place, at the sample counts that take the SPPM runs' time.
+    Bdpt,
+    Path,
+}
+
 struct Peer {
     kind: PeerKind,
     exe: PathBuf,
+    method: Method,
 }
 
 impl Peer {
-    fn name(&self) -> &'static str {
-        match self.kind {
+    fn name(&self) -> String {
+        let version = match self.kind {
             PeerKind::V3 => "pbrt-v3",
             PeerKind::V4 => "pbrt-v4",
+        };
+        match self.method {
+            Method::Sppm => version.into(),
+            Method::Bdpt => format!("{version} bdpt"),
+            Method::Path => format!("{version} path"),
         }
     }
 }
@@ -105,6 +130,8 @@ struct Prepared {
     /// The scene's own iteration count and photons per iteration, for the suite table.
     iterations: u32,
     photons: u64,
+    /// The Integrator's `maxdepth`, which bdpt and path runs keep.
+    max_depth: u32,
 }
 
 /// A point on a curve: median seconds over the rounds, their range, and relMSE.
@@ -159,6 +186,7 @@ fn options(args: &[String]) -> Res<Options> {
         out: PathBuf::from("target/converge"),
         nthreads: 2,
         ours_args: Vec::new(),
+        reference_args: Vec::new(),
         doc: None,
     };
     let mut it = args.iter();
@@ -175,6 +203,7 @@ fn options(args: &[String]) -> Res<Options> {
             "--peers" => o.peers = PathBuf::from(value()?),
             "--out" => o.out = PathBuf::from(value()?),
             "--ours-args" => o.ours_args = value()?.split_whitespace().map(String::from).collect(),
+            "--reference-args" => o.reference_args = value()?.split_whitespace().map(String::from).collect(),
             "--doc" => o.doc = Some(PathBuf::from(value()?)),
             s if s.starts_with("--") => return Err(format!("unknown option {s}")),
             s => {
@@ -206,7 +235,9 @@ fn default_suite() -> Vec<SceneSpec> {
         v.push(SceneSpec { path: f16.clone(), half: true });
         v.push(SceneSpec { path: f16, half: false });
     }
-    v.push(SceneSpec { path: PathBuf::from("pbrt-scenes/v3/keyhole.pbrt"), half: false });
+    for n in ["keyhole", "doorway", "pool"] {
+        v.push(SceneSpec { path: PathBuf::from(format!("pbrt-scenes/v3/{n}.pbrt")), half: false });
+    }
     v
 }
 
@@ -220,15 +251,21 @@ fn our_binary() -> Res<PathBuf> {
     }
 }
 
+/// pbrt-v3 and pbrt-v4 as found, each with SPPM first (its times set the other
+/// methods' budgets), then bdpt and path.
 fn find_peers(dir: &Path) -> Vec<Peer> {
-    let mut peers = Vec::new();
+    let mut found = Vec::new();
     for (kind, name) in [(PeerKind::V3, "pbrt-v3"), (PeerKind::V4, "pbrt-v4")] {
         // Absolute: peers run inside the scene's folder.
         if let Some(exe) = dir.join(name).canonicalize().ok().filter(|e| e.is_file()) {
-            peers.push(Peer { kind, exe });
+            found.push((kind, exe));
         } else {
             println!("{}: not found, left out", dir.join(name).display());
         }
+    }
+    let mut peers = Vec::new();
+    for method in [Method::Sppm, Method::Bdpt, Method::Path] {
+        peers.extend(found.iter().map(|(kind, exe)| Peer { kind: *kind, exe: exe.clone(), method }));
     }
     peers
 }
@@ -247,6 +284,9 @@ struct Rounds {
     peer_runs: Vec<Vec<Vec<(f64, f64, f64)>>>,
     working: Vec<bool>,
     our_runs: Vec<Vec<(u32, f64, f64)>>,
+    /// Per peer and rung, the count it runs: SPPM's iterations, or the samples per
+    /// pixel that took bdpt or path as long as SPPM's rung (set in the first round).
+    counts: Vec<Vec<u32>>,
 }
 
 /// Alternates peers and ours, round after round, so drift in the machine's speed
@@ -256,14 +296,25 @@ fn run_rounds(o: &Options, p: &Prepared, ours: &Path, peers: &[Peer]) -> Res<Rou
         peer_runs: vec![vec![Vec::new(); p.ladder.len()]; peers.len()],
         working: vec![true; peers.len()],
         our_runs: Vec::new(),
+        counts: peers.iter().map(|_| p.ladder.clone()).collect(),
     };
-    for _ in 0..o.runs {
+    for round in 0..o.runs {
         let mut slowest: f64 = 0.0;
         for (k, peer) in peers.iter().enumerate() {
-            for (rung, &n) in p.ladder.iter().enumerate() {
+            if round == 0 && peer.method != Method::Sppm && r.working[k] {
+                match calibrate(p, peer, sppm_times(peers, &r, peer.kind), o.nthreads) {
+                    Ok(counts) => r.counts[k] = counts,
+                    Err(e) => {
+                        println!("{}: {e}; left out of this scene", peer.name());
+                        r.working[k] = false;
+                    }
+                }
+            }
+            for rung in 0..p.ladder.len() {
                 if !r.working[k] {
                     break;
                 }
+                let n = r.counts[k][rung];
                 match run_peer(p, peer, rung, n, o.nthreads) {
                     Ok(m) => {
                         slowest = slowest.max(m.0);
@@ -282,18 +333,41 @@ fn run_rounds(o: &Options, p: &Prepared, ours: &Path, peers: &[Peer]) -> Res<Rou
     Ok(r)
 }
 
+/// The first round's wall times of the same pbrt's SPPM, per rung (empty if it failed).
+fn sppm_times(peers: &[Peer], r: &Rounds, kind: PeerKind) -> Vec<f64> {
+    let k = peers.iter().position(|q| q.kind == kind && q.method == Method::Sppm);
+    match k.filter(|&k| r.working[k]) {
+        Some(k) => r.peer_runs[k].iter().filter_map(|runs| runs.first().map(|m| m.0)).collect(),
+        None => Vec::new(),
+    }
+}
+
+/// The samples per pixel at which a bdpt or path peer takes each SPPM rung's time:
+/// from runs at 1 and 4 samples, a fixed cost plus a cost per sample.
+fn calibrate(p: &Prepared, peer: &Peer, times: Vec<f64>, nthreads: usize) -> Res<Vec<u32>> {
+    if times.len() != p.ladder.len() {
+        return Err("no SPPM times of the same pbrt to match".into());
+    }
+    let t1 = run_peer(p, peer, 0, 1, nthreads)?.0;
+    let t4 = run_peer(p, peer, 0, 4, nthreads)?.0;
+    let per_sample = ((t4 - t1) / 3.0).max(1e-4);
+    let fixed = (t1 - per_sample).max(0.0);
+    Ok(times.iter().map(|t| (((t - fixed) / per_sample).round() as u32).max(1)).collect())
+}
+
 /// The table (printed and written), the CSVs and the plot; returns the summary line
 /// and the scene's row of the suite table.
 fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<(String, String)> {
     let our_curve = our_curve(&rounds.our_runs);
     let mut table = format!(
-        "{}: {} rounds, {} threads, reference ours at {} iterations, another seed{}\n\n\
+        "{}: {} rounds, {} threads, reference ours at {} iterations{}, another seed{}\n\n\
          | renderer | iterations | seconds (range) | relMSE | mean / reference | ours at that time | ours / peer |\n\
          |---|---|---|---|---|---|---|\n",
         p.label,
         o.runs,
         o.nthreads,
         p.reference_iterations,
+        if o.reference_args.is_empty() { String::new() } else { format!(" with {}", o.reference_args.join(" ")) },
         if o.ours_args.is_empty() { String::new() } else { format!("; ours with {}", o.ours_args.join(" ")) }
     );
     let mut series = vec![curve_series("ours", &our_curve)];
@@ -301,9 +375,10 @@ fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<(St
     let top = p.ladder.iter().max().copied().unwrap_or(p.iterations);
     let mut row = format!("| `{}` | {} × {} |", p.label, top, thousands(p.photons));
     let mut cells = [" — | — | — |".to_string(), " — | — | — |".to_string()];
+    let mut others: Vec<(String, Option<Point>)> = Vec::new();
     for (k, peer) in peers.iter().enumerate().filter(|(k, _)| rounds.working[*k]) {
         let runs = &rounds.peer_runs[k];
-        let points: Vec<Point> = p.ladder.iter().zip(runs).map(|(&n, r)| median_point(n, r)).collect();
+        let points: Vec<Point> = rounds.counts[k].iter().zip(runs).map(|(&n, r)| median_point(n, r)).collect();
         for pt in &points {
             let at = our_error_at(&our_curve, pt.seconds);
             let ratio = at.map(|e| e / pt.relmse);
@@ -322,9 +397,12 @@ fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<(St
                 ratio.map_or("—".into(), |r| format!("{r:.2}"))
             );
         }
-        cells[(peer.kind == PeerKind::V4) as usize] = suite_cells(&points, &our_curve);
-        write_csv(&p.dir.join(format!("{}.csv", peer.name())), &points)?;
-        series.push(curve_series(peer.name(), &points));
+        match peer.method {
+            Method::Sppm => cells[(peer.kind == PeerKind::V4) as usize] = suite_cells(&points, &our_curve),
+            _ => others.push((peer.name(), points.last().copied())),
+        }
+        write_csv(&p.dir.join(format!("{}.csv", peer.name().replace(' ', "-"))), &points)?;
+        series.push(curve_series(&peer.name(), &points));
     }
     for pt in [our_curve.first(), our_curve.last()].into_iter().flatten() {
         let _ = writeln!(
@@ -338,6 +416,7 @@ fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<(St
     write_text(&p.dir.join("converge.md"), &table).map_err(|e| e.to_string())?;
     println!("{table}");
     row.push_str(&cells.concat());
+    row.push_str(&best_other_cell(&others, &our_curve));
     row.push('\n');
     Ok((summary_line(&p.label, &ratios), row))
 }
@@ -345,7 +424,25 @@ fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<(St
 /// The suite table's columns: the scene, then per peer its time and relMSE at the
 /// scene's own iteration count, ours at that time, and ours over its error per rung.
 const SUITE_HEADER: &str = "| scene | iterations × photons | pbrt-v3: s, relMSE | ours at that time | ours / pbrt-v3 | \
-                            pbrt-v4: s, relMSE | ours at that time | ours / pbrt-v4 |\n|---|---|---|---|---|---|---|---|\n";
+                            pbrt-v4: s, relMSE | ours at that time | ours / pbrt-v4 | \
+                            best pbrt bdpt/path at the top rung's time | ours / it |\n\
+                            |---|---|---|---|---|---|---|---|---|---|\n";
+
+/// The suite table's last two cells: the bdpt or path peer with the least error at
+/// the top rung (the time of its pbrt's SPPM run as written), and ours over it.
+fn best_other_cell(others: &[(String, Option<Point>)], our_curve: &[Point]) -> String {
+    let best =
+        others.iter().filter_map(|(name, pt)| pt.map(|pt| (name, pt))).min_by(|a, b| a.1.relmse.total_cmp(&b.1.relmse));
+    let Some((name, pt)) = best else { return " — | — |".into() };
+    let ours = our_error_at(our_curve, pt.seconds).map(|e| e / pt.relmse);
+    format!(
+        " {name}: {} spp, {:.2} s, {:.2e} | {} |",
+        pt.iterations,
+        pt.seconds,
+        pt.relmse,
+        ours.map_or("—".into(), |r| format!("{r:.2}"))
+    )
+}
 
 /// One peer's three cells of the suite table.
 fn suite_cells(points: &[Point], our_curve: &[Point]) -> String {
@@ -465,7 +562,7 @@ fn prepare(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<Pr
     let at_res = rewrite(&src, None, spec.half).map_err(|e| format!("{}: {e}", spec.path.display()))?;
     let ours_file = dir.join(format!("{stem}.converge.pbrt"));
     write_text(&ours_file, &at_res).map_err(|e| e.to_string())?;
-    let (written, photons, syntax) = scene_facts(&ours_file)?;
+    let (written, photons, syntax, max_depth) = scene_facts(&ours_file)?;
     let ladder = o.ladder.clone().unwrap_or_else(|| default_ladder(written));
     let mut v3 = Vec::new();
     for &n in &ladder {
@@ -502,6 +599,7 @@ fn prepare(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<Pr
         reference_v4,
         iterations: written,
         photons,
+        max_depth,
     })
 }
 
@@ -512,11 +610,13 @@ fn default_ladder(n: u32) -> Vec<u32> {
     v
 }
 
-/// The scene's iteration count, photons per iteration and syntax (one load serves all).
-fn scene_facts(file: &Path) -> Res<(u32, u64, pbrt_sppm::parser::Syntax)> {
+/// The scene's iteration count, photons per iteration, syntax and maxdepth (one load
+/// serves all).
+fn scene_facts(file: &Path) -> Res<(u32, u64, pbrt_sppm::parser::Syntax, u32)> {
     let opts = pbrt_sppm::scene::LoadOptions::default();
     let scene = pbrt_sppm::scene::load_scene(file, &opts).map_err(|e| e.one_line())?;
-    Ok((scene.integrator.iterations, scene.integrator.photons_per_iteration, scene.syntax))
+    let i = &scene.integrator;
+    Ok((i.iterations, i.photons_per_iteration, scene.syntax, i.max_depth))
 }
 
 /// `dir` gets a link to every entry of the scene's folder (so `Include`, meshes and
@@ -577,7 +677,7 @@ fn output(cmd: &mut Command) -> Res<std::process::Output> {
 
 /// Our image of `file` at `n` iterations with a seed of its own, cached by content.
 fn render_reference(o: &Options, ours: &Path, file: &Path, text: &str, n: u32) -> Res<(PathBuf, RgbImage)> {
-    let key = pbrt_sppm::sampling::hash(&[fnv(text.as_bytes()), n as u64]);
+    let key = pbrt_sppm::sampling::hash(&[fnv(text.as_bytes()), n as u64, fnv(o.reference_args.join(" ").as_bytes())]);
     let refs = o.out.join("refs");
     std::fs::create_dir_all(&refs).map_err(|e| format!("{}: {e}", refs.display()))?;
     let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -589,6 +689,7 @@ fn render_reference(o: &Options, ours: &Path, file: &Path, text: &str, n: u32) -
             .arg("render")
             .arg(file)
             .args(["--quiet", "--seed", "1000003", "--spp", &n.to_string(), "--nthreads", &o.nthreads.to_string()])
+            .args(&o.reference_args)
             .arg("--outfile")
             .arg(&path)
             .stdin(Stdio::null())
@@ -617,16 +718,24 @@ fn error_line(bytes: &[u8]) -> String {
 
 /// One peer run: (wall seconds, relMSE, mean / reference mean).
 fn run_peer(p: &Prepared, peer: &Peer, rung: usize, n: u32, nthreads: usize) -> Res<(f64, f64, f64)> {
-    let out = p.dir.join(format!("{}-{n}.exr", peer.name()));
+    let out = p.dir.join(format!("{}-{n}.exr", peer.name().replace(' ', "-")));
     let mut cmd = Command::new(&peer.exe);
     cmd.args(["--quiet", "--nthreads", &nthreads.to_string(), "--outfile"]).arg(&out);
-    let reference = match peer.kind {
-        PeerKind::V3 => {
+    let reference = match (peer.kind, peer.method) {
+        (PeerKind::V3, Method::Sppm) => {
             cmd.arg(&p.v3[rung]);
             &p.reference
         }
-        PeerKind::V4 => {
+        (PeerKind::V3, method) => {
+            cmd.arg(method_input(&p.ours, method, p.max_depth, Some(n))?);
+            &p.reference
+        }
+        (PeerKind::V4, method) => {
             let file = p.v4.as_ref().ok_or("no input pbrt-v4 reads")?;
+            let file = match method {
+                Method::Sppm => file.clone(),
+                _ => method_input(file, method, p.max_depth, None)?,
+            };
             cmd.args(["--spp", &n.to_string()]).arg(file);
             p.reference_v4.as_ref().ok_or("no pbrt-v4 reference")?
         }
@@ -740,6 +849,39 @@ fn rewrite(src: &str, iterations: Option<u32>, half: bool) -> Res<String> {
     }
     out.push_str(&src[at..]);
     Ok(out)
+}
+
+/// `file` with its Integrator replaced by `method` at `max_depth` and, given `spp`, its
+/// Sampler by a Halton sampler of that many samples (pbrt-v3 has no `--spp`); written
+/// beside it, named after the method and count.
+fn method_input(file: &Path, method: Method, max_depth: u32, spp: Option<u32>) -> Res<PathBuf> {
+    let src = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
+    let name = if method == Method::Bdpt { "bdpt" } else { "path" };
+    let mut text =
+        replace_directive(&src, "Integrator", &format!("Integrator \"{name}\" \"integer maxdepth\" [ {max_depth} ]"))?;
+    if let Some(n) = spp {
+        let sampler = format!("Sampler \"halton\" \"integer pixelsamples\" [ {n} ]");
+        text = match replace_directive(&text, "Sampler", &sampler) {
+            Ok(t) => t,
+            Err(_) => text.replacen("Integrator", &format!("{sampler}\nIntegrator"), 1),
+        };
+    }
+    let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let out = file.with_file_name(format!("{stem}.{name}{}.pbrt", spp.map_or(String::new(), |n| format!(".{n}"))));
+    write_text(&out, &text).map_err(|e| e.to_string())?;
+    Ok(out)
+}
+
+/// `src` with the first `directive` statement (name, type and parameters) replaced by
+/// `with`; an error when there is none.
+fn replace_directive(src: &str, directive: &str, with: &str) -> Res<String> {
+    let tokens = tokens(src)?;
+    let text = |t: &Token| &src[t.start as usize..t.end as usize];
+    let is_directive = |t: &Token| t.kind == TokenKind::Word && text(t).starts_with(|c: char| c.is_ascii_uppercase());
+    let i = tokens.iter().position(|t| is_directive(t) && text(t) == directive).ok_or(format!("no {directive}"))?;
+    let end = tokens[i + 1..].iter().position(is_directive).map_or(tokens.len(), |k| i + 1 + k);
+    let (a, b) = (tokens[i].start as usize, tokens[end - 1].end as usize);
+    Ok(format!("{}{with}{}", &src[..a], &src[b..]))
 }
 
 fn tokens(src: &str) -> Res<Vec<Token>> {

@@ -2,7 +2,8 @@
 """Writes the small mesh files used by pbrt-scenes/ (our own geometry, no third-party data).
 
 icosphere.ply (ASCII, normals, u v), slab_be.ply (binary big-endian, quads, s t),
-cube.obj, and pbrt-scenes/verify/geometry/swept-hyperboloid.ply (the surface a
+cube.obj, pbrt-scenes/v3/geometry/pool-water.pbrt (the pool scene's rippled water),
+and pbrt-scenes/verify/geometry/swept-hyperboloid.ply (the surface a
 hyperboloid's segment sweeps, finely tessellated with its normals: the reference for
 `--fix hyperboloid-surface`). Run from the repository root: python3 tools/make_meshes.py
 """
@@ -97,6 +98,36 @@ def write_swept_hyperboloid(path, p1=(0.9, 0.0, -0.2), p2=(-0.2, 0.7, 1.2), nu=9
         for f in faces:
             out.write(struct.pack("<B3i", 3, *f))
 
+def write_pool_water(path, n=40):
+    """The rippled water surface of pbrt-scenes/v3/pool.pbrt: an n x n grid over
+    [-2, 2]^2 at height h(x, z) (three crossing sine waves), with its exact normals,
+    as a pbrt trianglemesh to Include."""
+    waves = [(0.04, 3.1, 1.7, 0.0), (0.03, -2.3, 4.1, 1.0), (0.02, 5.3, -3.7, 2.0)]
+    def h(x, z):
+        return sum(a * math.sin(kx * x + kz * z + ph) for a, kx, kz, ph in waves)
+    def grad(x, z):
+        c = [(a * math.cos(kx * x + kz * z + ph), kx, kz) for a, kx, kz, ph in waves]
+        return sum(v * kx for v, kx, _ in c), sum(v * kz for v, _, kz in c)
+    pts, nrm, idx = [], [], []
+    for j in range(n + 1):
+        for i in range(n + 1):
+            x, z = -2 + 4 * i / n, -2 + 4 * j / n
+            pts.append((x, h(x, z), z))
+            dx, dz = grad(x, z)
+            l = math.sqrt(dx * dx + 1 + dz * dz)
+            nrm.append((-dx / l, 1 / l, -dz / l))
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            idx += [a, a + n + 2, a + 1, a, a + n + 1, a + n + 2]
+    fmt = lambda v: " ".join("%.5g" % c for c in v)
+    rows = lambda vs, k: "\n".join("    " + "  ".join(fmt(v) for v in vs[i:i + k]) for i in range(0, len(vs), k))
+    ind = "\n".join("    " + " ".join(map(str, idx[i:i + 24])) for i in range(0, len(idx), 24))
+    with open(path, "w") as out:
+        out.write(f"# Written by tools/make_meshes.py (write_pool_water): {n} x {n} grid.\n")
+        out.write(f'Shape "trianglemesh"\n  "point3 P" [\n{rows(pts, 6)} ]\n')
+        out.write(f'  "normal N" [\n{rows(nrm, 6)} ]\n  "integer indices" [\n{ind} ]\n')
+
 if __name__ == "__main__":
     for d in ("pbrt-scenes/v3/geometry", "pbrt-scenes/v4/geometry"):
         os.makedirs(d, exist_ok=True)
@@ -104,3 +135,4 @@ if __name__ == "__main__":
         write_binary_quads(f"{d}/slab_be.ply")
         write_obj(f"{d}/cube.obj")
     write_swept_hyperboloid("pbrt-scenes/verify/geometry/swept-hyperboloid.ply")
+    write_pool_water("pbrt-scenes/v3/geometry/pool-water.pbrt")

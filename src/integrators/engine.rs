@@ -4,43 +4,11 @@
 
 use super::adaptive::Chain;
 use super::error::RenderError;
-use super::run::Plan;
+use super::plan::{Algorithm, Plan};
 use super::sppm::{PixelState, Sppm, Stats};
-use super::vcm::{Techniques, Vcm, VcmSettings};
+use super::vcm::{Vcm, VcmSettings};
 use crate::render::RenderScene;
 use glam::DVec3;
-
-/// Which renderer a run uses.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Algorithm {
-    #[default]
-    Sppm,
-    /// Vertex connection and merging with these techniques ([`Techniques::Bdpt`]: bdpt).
-    Vcm(Techniques),
-}
-
-impl Algorithm {
-    /// What renders a file that asks for integrator `requested`: SPPM for `sppm`,
-    /// bdpt for `bdpt` (the same techniques), vcm for the rest (`path`, `volpath`, …:
-    /// the same converged image, and the caustics they leave noisy converge).
-    pub fn for_file(requested: &str) -> Algorithm {
-        match requested {
-            "sppm" => Algorithm::Sppm,
-            "bdpt" => Algorithm::Vcm(Techniques::Bdpt),
-            _ => Algorithm::Vcm(Techniques::All),
-        }
-    }
-
-    /// The name `--integrator` takes.
-    pub fn name(self) -> String {
-        match self {
-            Algorithm::Sppm => "sppm".into(),
-            Algorithm::Vcm(Techniques::All) => "vcm".into(),
-            Algorithm::Vcm(Techniques::Bdpt) => "bdpt".into(),
-            Algorithm::Vcm(Techniques::Only(t)) => format!("vcm-only-{t:?}").to_lowercase(),
-        }
-    }
-}
 
 /// A render's progressive state.
 pub enum Engine<'a> {

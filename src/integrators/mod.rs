@@ -1,7 +1,7 @@
 //! Integrators: stochastic progressive photon mapping ([`sppm`] holds its passes) and
 //! vertex connection and merging ([`vcm`]; bdpt is vcm without merging), both driven
 //! through [`engine`]. [`grid`] is the photon (and light vertex) lookup grid,
-//! [`adaptive`] adaptive photon chains, [`run`] the render loop, [`error`] what stops
+//! [`adaptive`] adaptive photon chains, [`plan`] what a run is asked and runs with, [`run`] the render loop, [`error`] what stops
 //! it, [`checkpoint`] saved and resumed state, [`passes`] independent passes, [`part`]
 //! shard files and their merge, [`report`] `ERRORS.csv` and progress. Data flows one
 //! way: the render-ready scene (`render`) in, an image out.
@@ -13,12 +13,13 @@ pub mod error;
 pub mod grid;
 pub mod part;
 pub mod passes;
+pub mod plan;
 pub mod report;
 pub mod run;
 pub mod sppm;
 pub mod vcm;
 
-pub use engine::Algorithm;
 pub use error::RenderError;
+pub use plan::Algorithm;
 pub use report::{ERRORS_HEADER, ErrorRow, errors_csv};
 pub use run::{CheckpointTarget, Monitor, Plan, RenderOutput, RenderSettings, render};

@@ -2,50 +2,18 @@
 //! error against a reference after each (`ERRORS.csv`), a progress bar, partial images,
 //! checkpoints, and a clean stop when interrupted.
 
-use super::adaptive::PhotonSampling;
 use super::checkpoint::{Checkpoint, Every, Fingerprint};
-use super::engine::{Algorithm, Engine};
+use super::engine::Engine;
 use super::error::RenderError;
-use super::passes::DEFAULT_ALPHA;
-use super::passes::{PassMode, PassSet};
+use super::passes::PassSet;
+pub use super::plan::{Algorithm, MIN_RADIUS, Plan, RenderSettings};
 use super::report::{ErrorRow, progress_bar};
 use crate::imageio::{ImageMeta, RgbImage, metrics, write_image};
 use crate::render::RenderScene;
-use crate::sampling::SamplerKind;
-use crate::scene::Integrator;
-use std::ops::Range;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
-
-/// The smallest initial radius: its square is a normal f32.
-pub const MIN_RADIUS: f32 = 1e-18;
-
-/// How to render: overrides of the scene's SPPM parameters and the pass plan. Nothing
-/// here is about reporting or output (see [`Monitor`]).
-#[derive(Clone, Debug, Default)]
-pub struct RenderSettings {
-    /// `--integrator` (default: what the file asks for, [`Algorithm::for_file`]).
-    pub algorithm: Option<Algorithm>,
-    /// SPPM iterations (`--spp`/`--iterations`).
-    pub iterations: Option<u32>,
-    pub photons: Option<u64>,
-    pub radius: Option<f32>,
-    pub seed: Option<u64>,
-    pub sampler: SamplerKind,
-    /// How photon paths are drawn (`--photon-sampling`).
-    pub photon_sampling: PhotonSampling,
-    /// Divide the iteration count by 16 (pbrt-v3's `--quick`).
-    pub quick: bool,
-    /// Stop once this many seconds have passed (the iteration under way is finished).
-    pub time_limit: Option<f64>,
-    /// Classic SPPM or independent passes (`--passes`, `--alpha`).
-    pub passes: PassMode,
-    /// Render only these passes of the planned ones (`--pass-range A..B`; independent
-    /// passes only).
-    pub pass_range: Option<Range<u32>>,
-}
 
 /// What a render reports and saves while it runs, and what stops it early.
 #[derive(Clone, Debug, Default)]
@@ -70,53 +38,6 @@ pub struct CheckpointTarget {
     pub path: PathBuf,
     pub every: Every,
     pub fingerprint: Fingerprint,
-}
-
-/// The settings a render runs with, the scene's defaults and the overrides combined.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Plan {
-    pub algorithm: Algorithm,
-    pub iterations: u32,
-    pub photons: u64,
-    pub radius: f32,
-    pub seed: u64,
-    pub sampler: SamplerKind,
-    pub photon_sampling: PhotonSampling,
-    pub passes: PassMode,
-    /// The passes this run renders, within `0..iterations`.
-    pub range: Range<u32>,
-    /// Stop after the iteration that passes this many seconds.
-    pub time_limit: Option<f64>,
-}
-
-impl Plan {
-    /// Every setting that changes the image, by name, for a checkpoint's fingerprint.
-    /// The iteration count is one: it sets the camera rays' differential scale.
-    pub fn fingerprint_settings(&self) -> Vec<(String, String)> {
-        [
-            ("pbrt-sppm", env!("CARGO_PKG_VERSION").to_string()),
-            ("iterations", self.iterations.to_string()),
-            ("photons", self.photons.to_string()),
-            ("radius", format!("{:?}", self.radius)),
-            ("seed", self.seed.to_string()),
-            ("sampler", format!("{:?}", self.sampler).to_lowercase()),
-            ("photon-sampling", format!("{:?}", self.photon_sampling).to_lowercase()),
-            ("passes", self.passes.to_string()),
-        ]
-        .into_iter()
-        // SPPM's fingerprint stays as it was before other integrators existed.
-        .chain((self.algorithm != Algorithm::Sppm).then(|| ("integrator", self.algorithm.name())))
-        .map(|(k, v)| (k.to_string(), v))
-        .collect()
-    }
-
-    /// How fast a VCM render's merging radius shrinks: the independent passes' α.
-    pub fn alpha(&self) -> f64 {
-        match self.passes {
-            PassMode::Independent { alpha } => alpha,
-            PassMode::Classic => DEFAULT_ALPHA,
-        }
-    }
 }
 
 pub struct RenderOutput {
@@ -147,57 +68,6 @@ struct Progress {
 impl Progress {
     fn seconds(&self) -> f64 {
         self.prior + self.start.elapsed().as_secs_f64()
-    }
-}
-
-impl Plan {
-    /// The settings a render of a scene with these integrator parameters, and a
-    /// bounding sphere of this radius, runs with.
-    pub fn new(integrator: &Integrator, world_radius: f32, settings: &RenderSettings) -> Result<Plan, RenderError> {
-        let algorithm = settings.algorithm.unwrap_or_else(|| Algorithm::for_file(&integrator.requested));
-        let mut iterations = settings.iterations.unwrap_or(integrator.iterations);
-        if settings.quick {
-            iterations = (iterations / 16).max(1);
-        }
-        let radius = settings.radius.unwrap_or_else(|| default_radius(integrator, world_radius, algorithm));
-        // The gather compares squared distances in f32: below 1e-18 the square leaves
-        // f32's normal range and no photon is ever found.
-        if !(radius >= MIN_RADIUS && radius.is_finite()) {
-            return Err(RenderError::Radius { radius, min: MIN_RADIUS });
-        }
-        let range = settings.pass_range.clone().unwrap_or(0..iterations);
-        if range.end > iterations || range.start >= range.end {
-            return Err(RenderError::PassRange { range, iterations });
-        }
-        let sppm = algorithm == Algorithm::Sppm;
-        if range != (0..iterations) && !settings.passes.is_independent() && sppm {
-            return Err(RenderError::RangeNeedsIndependentPasses);
-        }
-        if !sppm && settings.photon_sampling == PhotonSampling::Adaptive {
-            return Err(RenderError::AdaptiveVcm);
-        }
-        Ok(Plan {
-            algorithm,
-            passes: settings.passes,
-            range,
-            iterations,
-            photons: settings.photons.unwrap_or(integrator.photons_per_iteration).max(1),
-            radius,
-            seed: settings.seed.unwrap_or(integrator.seed),
-            sampler: settings.sampler,
-            photon_sampling: settings.photon_sampling,
-            time_limit: settings.time_limit,
-        })
-    }
-}
-
-/// The first radius when none is given: SPPM's is the Integrator's `radius`; VCM takes
-/// it when the file gives one, else 0.003 of the scene's bounding radius (SmallVCM's
-/// default), since a merge radius must suit the scene's scale.
-fn default_radius(i: &Integrator, world_radius: f32, algorithm: Algorithm) -> f32 {
-    match algorithm {
-        Algorithm::Vcm(_) if !i.radius_given => (0.003 * world_radius).max(MIN_RADIUS),
-        _ => i.radius,
     }
 }
 

@@ -79,6 +79,8 @@ pub struct Integrator {
     pub radius: f32,
     /// Whether the file gave `radius` (VCM otherwise picks one by the scene's size).
     pub radius_given: bool,
+    /// The cropped film's pixels: VCM's light subpaths per pass unless `--photons`.
+    pub pixel_count: u64,
     pub seed: u64,
     /// Camera rays' differentials are scaled by max(this, 1/√iterations): pbrt-v3
     /// scales them by 1/√iterations, pbrt-v4 by at least 1/8.
@@ -263,14 +265,7 @@ impl RenderOptions {
         let e = self.integrator.as_ref().unwrap_or(&default);
         let p = &e.params;
         if e.name != "sppm" {
-            let (with, why) = match e.name.as_str() {
-                "bdpt" => ("bdpt", "its bidirectional path tracing"),
-                _ => ("vcm", "vertex connection and merging, which converges to the same image"),
-            };
-            warn.push(Diagnostic::warning(
-                e.name_span,
-                format!("integrator \"{}\" is rendered with {with} ({why}); --integrator picks another", e.name),
-            ));
+            warn.push(rendered_with(e));
         }
         let positive = |name: &str, v: Option<i32>| -> Res<Option<u32>> {
             match v {
@@ -338,6 +333,7 @@ impl RenderOptions {
             photons_per_iteration: photons,
             radius,
             radius_given: p.named("radius").is_some(),
+            pixel_count: film.pixel_count(),
             seed,
             differential_floor: if syntax == Syntax::V4 { 0.125 } else { 0.0 },
         })
@@ -357,6 +353,16 @@ impl RenderOptions {
         }
         Ok(n as u32)
     }
+}
+
+/// The warning for a file asking for an integrator other than SPPM: what renders it.
+fn rendered_with(e: &Entity) -> Diagnostic {
+    let (with, why) = match e.name.as_str() {
+        "bdpt" => ("bdpt", "its bidirectional path tracing"),
+        _ => ("vcm", "vertex connection and merging, which converges to the same image"),
+    };
+    let message = format!("integrator \"{}\" is rendered with {with} ({why}); --integrator picks another", e.name);
+    Diagnostic::warning(e.name_span, message)
 }
 
 /// The `--limit` name for an Integrator parameter.

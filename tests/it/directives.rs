@@ -154,7 +154,10 @@ fn integrator_iterations_per_syntax_version() {
     assert_eq!(explicit.integrator.iterations, 3);
     assert!(explicit.warnings.is_empty(), "{:?}", explicit.warnings);
     let path = scene("Integrator \"path\" \"integer maxdepth\" 3\nWorldBegin\n");
-    assert!(warnings(&path)[0].contains("\"path\" is not supported; rendering with SPPM"));
+    assert!(warnings(&path)[0].contains("\"path\" is rendered with vcm"), "{:?}", warnings(&path));
+    let bdpt = scene("Integrator \"bdpt\"\nSampler \"halton\" \"integer pixelsamples\" 8\nWorldBegin\n");
+    assert!(warnings(&bdpt)[0].contains("\"bdpt\" is rendered with bdpt"), "{:?}", warnings(&bdpt));
+    assert_eq!(bdpt.integrator.iterations, 8, "a bdpt file's passes are its pixel samples");
 }
 
 #[test]

@@ -1,0 +1,176 @@
+//! A render's plan: the overrides a run was asked for ([`RenderSettings`]) and the
+//! settings it runs with once combined with the scene's ([`Plan`]).
+
+use super::adaptive::PhotonSampling;
+use super::error::RenderError;
+use super::passes::{DEFAULT_ALPHA, PassMode};
+use super::vcm::Techniques;
+use crate::sampling::SamplerKind;
+use crate::scene::Integrator;
+use std::ops::Range;
+
+/// Which renderer a run uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Algorithm {
+    #[default]
+    Sppm,
+    /// Vertex connection and merging with these techniques ([`Techniques::Bdpt`]: bdpt).
+    Vcm(Techniques),
+}
+
+impl Algorithm {
+    /// What renders a file that asks for integrator `requested`: SPPM for `sppm`,
+    /// bdpt for `bdpt` (the same techniques), vcm for the rest (`path`, `volpath`, …:
+    /// the same converged image, and the caustics they leave noisy converge).
+    pub fn for_file(requested: &str) -> Algorithm {
+        match requested {
+            "sppm" => Algorithm::Sppm,
+            "bdpt" => Algorithm::Vcm(Techniques::Bdpt),
+            _ => Algorithm::Vcm(Techniques::All),
+        }
+    }
+
+    /// The name `--integrator` takes.
+    pub fn name(self) -> String {
+        match self {
+            Algorithm::Sppm => "sppm".into(),
+            Algorithm::Vcm(Techniques::All) => "vcm".into(),
+            Algorithm::Vcm(Techniques::Bdpt) => "bdpt".into(),
+            Algorithm::Vcm(Techniques::Only(t)) => format!("vcm-only-{t:?}").to_lowercase(),
+        }
+    }
+}
+
+/// The smallest initial radius: its square is a normal f32.
+pub const MIN_RADIUS: f32 = 1e-18;
+
+/// How to render: overrides of the scene's SPPM parameters and the pass plan. Nothing
+/// here is about reporting or output (see [`super::Monitor`]).
+#[derive(Clone, Debug, Default)]
+pub struct RenderSettings {
+    /// `--integrator` (default: what the file asks for, [`Algorithm::for_file`]).
+    pub algorithm: Option<Algorithm>,
+    /// SPPM iterations (`--spp`/`--iterations`).
+    pub iterations: Option<u32>,
+    pub photons: Option<u64>,
+    pub radius: Option<f32>,
+    pub seed: Option<u64>,
+    pub sampler: SamplerKind,
+    /// How photon paths are drawn (`--photon-sampling`).
+    pub photon_sampling: PhotonSampling,
+    /// Divide the iteration count by 16 (pbrt-v3's `--quick`).
+    pub quick: bool,
+    /// Stop once this many seconds have passed (the iteration under way is finished).
+    pub time_limit: Option<f64>,
+    /// Classic SPPM or independent passes (`--passes`, `--alpha`).
+    pub passes: PassMode,
+    /// Render only these passes of the planned ones (`--pass-range A..B`; independent
+    /// passes only).
+    pub pass_range: Option<Range<u32>>,
+}
+
+/// The settings a render runs with, the scene's defaults and the overrides combined.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    pub algorithm: Algorithm,
+    pub iterations: u32,
+    pub photons: u64,
+    pub radius: f32,
+    pub seed: u64,
+    pub sampler: SamplerKind,
+    pub photon_sampling: PhotonSampling,
+    pub passes: PassMode,
+    /// The passes this run renders, within `0..iterations`.
+    pub range: Range<u32>,
+    /// Stop after the iteration that passes this many seconds.
+    pub time_limit: Option<f64>,
+}
+
+impl Plan {
+    /// Every setting that changes the image, by name, for a checkpoint's fingerprint.
+    /// The iteration count is one: it sets the camera rays' differential scale.
+    pub fn fingerprint_settings(&self) -> Vec<(String, String)> {
+        [
+            ("pbrt-sppm", env!("CARGO_PKG_VERSION").to_string()),
+            ("iterations", self.iterations.to_string()),
+            ("photons", self.photons.to_string()),
+            ("radius", format!("{:?}", self.radius)),
+            ("seed", self.seed.to_string()),
+            ("sampler", format!("{:?}", self.sampler).to_lowercase()),
+            ("photon-sampling", format!("{:?}", self.photon_sampling).to_lowercase()),
+            ("passes", self.passes.to_string()),
+        ]
+        .into_iter()
+        // SPPM's fingerprint stays as it was before other integrators existed.
+        .chain((self.algorithm != Algorithm::Sppm).then(|| ("integrator", self.algorithm.name())))
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+    }
+
+    /// How fast a VCM render's merging radius shrinks: the independent passes' α.
+    pub fn alpha(&self) -> f64 {
+        match self.passes {
+            PassMode::Independent { alpha } => alpha,
+            PassMode::Classic => DEFAULT_ALPHA,
+        }
+    }
+}
+
+impl Plan {
+    /// The settings a render of a scene with these integrator parameters, and a
+    /// bounding sphere of this radius, runs with.
+    pub fn new(integrator: &Integrator, world_radius: f32, settings: &RenderSettings) -> Result<Plan, RenderError> {
+        let algorithm = settings.algorithm.unwrap_or_else(|| Algorithm::for_file(&integrator.requested));
+        let mut iterations = settings.iterations.unwrap_or(integrator.iterations);
+        if settings.quick {
+            iterations = (iterations / 16).max(1);
+        }
+        let radius = settings.radius.unwrap_or_else(|| default_radius(integrator, world_radius, algorithm));
+        // The gather compares squared distances in f32: below 1e-18 the square leaves
+        // f32's normal range and no photon is ever found.
+        if !(radius >= MIN_RADIUS && radius.is_finite()) {
+            return Err(RenderError::Radius { radius, min: MIN_RADIUS });
+        }
+        let range = settings.pass_range.clone().unwrap_or(0..iterations);
+        if range.end > iterations || range.start >= range.end {
+            return Err(RenderError::PassRange { range, iterations });
+        }
+        let sppm = algorithm == Algorithm::Sppm;
+        if range != (0..iterations) && !settings.passes.is_independent() && sppm {
+            return Err(RenderError::RangeNeedsIndependentPasses);
+        }
+        if !sppm && settings.photon_sampling == PhotonSampling::Adaptive {
+            return Err(RenderError::AdaptiveVcm);
+        }
+        Ok(Plan {
+            algorithm,
+            passes: settings.passes,
+            range,
+            iterations,
+            photons: settings
+                .photons
+                .unwrap_or(if sppm { integrator.photons_per_iteration } else { integrator.pixel_count })
+                .max(1),
+            radius,
+            seed: settings.seed.unwrap_or(integrator.seed),
+            sampler: settings.sampler,
+            photon_sampling: settings.photon_sampling,
+            time_limit: settings.time_limit,
+        })
+    }
+}
+
+// VCM's light subpaths per pass default to one per pixel (one per camera subpath, as
+// SmallVCM), not the file's `photonsperiteration`: that is tuned for SPPM's density
+// estimates, and on `doorway` its 100,000 (5 per pixel) left 1.8 times the error of one
+// per pixel at equal time.
+
+/// The first radius when none is given: SPPM's is the Integrator's `radius`; VCM takes
+/// it when the file gives one, else 0.003 of the scene's bounding radius (SmallVCM's
+/// default), since a merge radius must suit the scene's scale.
+fn default_radius(i: &Integrator, world_radius: f32, algorithm: Algorithm) -> f32 {
+    match algorithm {
+        Algorithm::Vcm(_) if !i.radius_given => (0.003 * world_radius).max(MIN_RADIUS),
+        _ => i.radius,
+    }
+}
