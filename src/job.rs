@@ -112,7 +112,7 @@ impl Job {
             None => None,
         };
         let render_error = |source| JobError::Render { scene: request.scene.clone(), source };
-        let plan = Plan::new(&scene.integrator, crate::render::world_sphere(scene).radius, &request.settings)
+        let plan = Plan::new(&scene.integrator, || crate::render::world_sphere(scene).radius, &request.settings)
             .map_err(render_error)?;
         let fingerprint = fingerprint(scene, &request.scene, &plan);
         let monitor = Monitor {

@@ -100,7 +100,7 @@ pub fn report(a: &ReportArgs) -> Result<(), String> {
     }
     let pool = rayon::ThreadPoolBuilder::new().num_threads(a.nthreads).build().map_err(|e| e.to_string())?;
     let rs = RenderScene::new(&scene);
-    let plan = Plan::new(&rs.integrator, rs.world.radius, &settings).map_err(|e| e.to_string())?;
+    let plan = Plan::new(&rs.integrator, || rs.world.radius, &settings).map_err(|e| e.to_string())?;
     let monitor = Monitor { reference: Some(reference), ..Default::default() };
     let out =
         pool.install(|| pbrt_sppm::integrators::run::run(&rs, &plan, &monitor, None)).map_err(|e| e.to_string())?;

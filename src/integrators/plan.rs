@@ -119,7 +119,13 @@ impl Plan {
 impl Plan {
     /// The settings a render of a scene with these integrator parameters, and a
     /// bounding sphere of this radius, runs with.
-    pub fn new(integrator: &Integrator, world_radius: f32, settings: &RenderSettings) -> Result<Plan, RenderError> {
+    /// `world_radius` gives the scene's bounding radius, asked for only when a vcm
+    /// radius must be chosen.
+    pub fn new(
+        integrator: &Integrator,
+        world_radius: impl FnOnce() -> f32,
+        settings: &RenderSettings,
+    ) -> Result<Plan, RenderError> {
         let algorithm = settings.algorithm.unwrap_or_else(|| Algorithm::for_file(&integrator.requested));
         let mut iterations = settings.iterations.unwrap_or(integrator.iterations);
         if settings.quick {
@@ -147,10 +153,7 @@ impl Plan {
             passes: settings.passes,
             range,
             iterations,
-            photons: settings
-                .photons
-                .unwrap_or(if sppm { integrator.photons_per_iteration } else { integrator.pixel_count })
-                .max(1),
+            photons: settings.photons.unwrap_or(integrator.photons_per_iteration).max(1),
             radius,
             seed: settings.seed.unwrap_or(integrator.seed),
             sampler: settings.sampler,
@@ -160,17 +163,17 @@ impl Plan {
     }
 }
 
-// VCM's light subpaths per pass default to one per pixel (one per camera subpath, as
-// SmallVCM), not the file's `photonsperiteration`: that is tuned for SPPM's density
-// estimates, and on `doorway` its 100,000 (5 per pixel) left 1.8 times the error of one
-// per pixel at equal time.
+// VCM's light subpaths per pass are the photon count, as SPPM's photons: the file's
+// `photonsperiteration` (default one per pixel, as SmallVCM) unless `--photons`. One
+// per pixel suits connections (on `doorway`, 100,000 per pass left 1.8 times the error
+// of 19,200 at equal time), more suit merging (`pool`'s caustic).
 
 /// The first radius when none is given: SPPM's is the Integrator's `radius`; VCM takes
 /// it when the file gives one, else 0.003 of the scene's bounding radius (SmallVCM's
 /// default), since a merge radius must suit the scene's scale.
-fn default_radius(i: &Integrator, world_radius: f32, algorithm: Algorithm) -> f32 {
+fn default_radius(i: &Integrator, world_radius: impl FnOnce() -> f32, algorithm: Algorithm) -> f32 {
     match algorithm {
-        Algorithm::Vcm(_) if !i.radius_given => (0.003 * world_radius).max(MIN_RADIUS),
+        Algorithm::Vcm(_) if !i.radius_given => (0.003 * world_radius()).max(MIN_RADIUS),
         _ => i.radius,
     }
 }

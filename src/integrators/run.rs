@@ -74,7 +74,7 @@ impl Progress {
 /// Plans and renders with no monitor and no checkpoint (tests and tools; the command
 /// line goes through [`crate::job::Job`]).
 pub fn render(scene: &RenderScene, settings: &RenderSettings) -> Result<RenderOutput, RenderError> {
-    run(scene, &Plan::new(&scene.integrator, scene.world.radius, settings)?, &Monitor::default(), None)
+    run(scene, &Plan::new(&scene.integrator, || scene.world.radius, settings)?, &Monitor::default(), None)
 }
 
 /// Renders a plan (scene loading excluded from the timings), continuing a

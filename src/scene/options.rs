@@ -79,8 +79,6 @@ pub struct Integrator {
     pub radius: f32,
     /// Whether the file gave `radius` (VCM otherwise picks one by the scene's size).
     pub radius_given: bool,
-    /// The cropped film's pixels: VCM's light subpaths per pass unless `--photons`.
-    pub pixel_count: u64,
     pub seed: u64,
     /// Camera rays' differentials are scaled by max(this, 1/√iterations): pbrt-v3
     /// scales them by 1/√iterations, pbrt-v4 by at least 1/8.
@@ -333,7 +331,6 @@ impl RenderOptions {
             photons_per_iteration: photons,
             radius,
             radius_given: p.named("radius").is_some(),
-            pixel_count: film.pixel_count(),
             seed,
             differential_floor: if syntax == Syntax::V4 { 0.125 } else { 0.0 },
         })

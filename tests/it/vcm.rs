@@ -223,11 +223,8 @@ fn indirect_room(iterations: u32, photons: u32) -> String {
     )
 }
 
-/// Renders with `algorithm`, taking the file's `photonsperiteration` as the light
-/// subpaths per pass (vcm's own default is one per pixel).
 fn render_with(text: &str, algorithm: Algorithm) -> Vec<[f32; 3]> {
-    let photons = scene(text).integrator.photons_per_iteration;
-    let settings = RenderSettings { algorithm: Some(algorithm), photons: Some(photons), ..Default::default() };
+    let settings = RenderSettings { algorithm: Some(algorithm), ..Default::default() };
     pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), &settings).expect("renders").image.pixels
 }
 
