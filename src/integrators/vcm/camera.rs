@@ -77,12 +77,14 @@ impl Cameras<'_> {
         let camera_pdf = scene.camera.pdf_we(&ray).1 as f64 * pass.film_pixels;
         let mut partial = Partial::camera(camera_pdf, pass.lt_count());
         let light_path = self.lights.path(i % pass.light_paths as usize);
-        let (mut beta, mut color, mut prev) = (Vec3::ONE, Vec3::ZERO, ray.o.0);
+        // The last vertex, and where rays left it (past any interfaces since, light
+        // densities are measured from there).
+        let (mut beta, mut color, mut prev, mut origin) = (Vec3::ONE, Vec3::ZERO, ray.o.0, ray.o.0);
         let (mut len, mut passes) = (0u32, 0u32);
         loop {
             let Some(hit) = scene.intersect(&ray) else {
                 if pass.techniques.uses(Technique::EmitterHit) && len < pass.max_len {
-                    color += beta * self.escaped(ray.d.0.normalize(), ray.o.0, len, partial);
+                    color += beta * self.escaped(ray.d.0.normalize(), origin, len, partial);
                 }
                 break;
             };
@@ -99,7 +101,7 @@ impl Cameras<'_> {
             partial.arrive(Some(dist2), wo.dot(si.n.0) as f64);
             let v = Vertex { si: &si, bsdf: &bsdf, wo, partial, len };
             if pass.techniques.uses(Technique::EmitterHit) {
-                color += beta * self.emitted(&hit, &v, ray.o.0, dist2);
+                color += beta * self.emitted(&hit, &v, origin, dist2);
             }
             if len >= pass.max_len || wo.dot(si.n.0) == 0.0 {
                 break;
@@ -110,6 +112,7 @@ impl Cameras<'_> {
             let Some((b, p)) = scatter(pass, &v, beta, s) else { break };
             (beta, partial, prev) = (b.0, p, si.p.0);
             ray = si.spawn_ray(Vector3(b.1));
+            origin = ray.o.0;
         }
         color
     }
