@@ -90,9 +90,10 @@ impl Techniques {
         }
     }
 
+    /// The pass's constants: merging counts only where it is used (a technique alone
+    /// takes weight 1 and reads none).
     fn factors(self, radius: f64, light_paths: f64) -> Factors {
-        let merge = self.uses(Technique::Merge);
-        Factors::new(radius, light_paths, self.uses(Technique::Connect) || !merge, merge)
+        Factors::new(radius, light_paths, true, self.uses(Technique::Merge))
     }
 }
 
