@@ -54,6 +54,17 @@ impl<T: Copy + Default> Grouped<T> {
     }
 }
 
+impl Grouped<(u32, Vec3)> {
+    /// Lists of (pixel, value) (photon deposits, light-tracing splats) each grouped, in
+    /// parallel, by ranges of `span` pixels; returns them and the span. Range r then
+    /// reads, list by list and in each list's order, the items of pixels r·span up to
+    /// (r+1)·span: a reduction in a fixed order whatever the thread count.
+    pub fn by_pixel_range(lists: Vec<Vec<(u32, Vec3)>>, pixels: usize, ranges: usize) -> (Vec<Self>, usize) {
+        let span = pixels.div_ceil(ranges).max(1);
+        (lists.into_par_iter().map(|l| Grouped::new(l, ranges, |d| d.0 as usize / span)).collect(), span)
+    }
+}
+
 /// Visible points binned into a uniform grid: (cell, pixel) pairs grouped by a hash
 /// of the cell (pixel order within a bucket, so deterministic).
 pub struct Grid {

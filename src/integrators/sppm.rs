@@ -380,9 +380,7 @@ impl<'a> Sppm<'a> {
 /// whatever the thread count; the lists are grouped by pixel range first, so that
 /// pixel ranges are summed in parallel and each deposit is read once.
 fn sum_deposits(lists: Vec<Vec<Deposit>>, w: f64, mut phi: Vec<DVec3>, mut m: Vec<u64>) -> (Vec<DVec3>, Vec<u64>) {
-    let span = phi.len().div_ceil(DEPOSIT_RANGES).max(1);
-    let grouped: Vec<Grouped<Deposit>> =
-        lists.into_par_iter().map(|l| Grouped::new(l, DEPOSIT_RANGES, |d| d.0 as usize / span)).collect();
+    let (grouped, span) = Grouped::by_pixel_range(lists, phi.len(), DEPOSIT_RANGES);
     phi.par_chunks_mut(span).zip(m.par_chunks_mut(span)).enumerate().for_each(|(r, (phi, m))| {
         let lo = r * span;
         for &(pixel, f) in grouped.iter().flat_map(|g| g.group(r)) {
@@ -425,6 +423,26 @@ pub(super) fn surface(
     Surface::PassedThrough
 }
 
+/// The camera ray through a point drawn in `pixel` (two 2D samples: film, lens), with
+/// its differentials scaled by `diff_scale` when the scene's shading reads them.
+pub(super) fn camera_ray(
+    scene: &RenderScene,
+    pixel: [f32; 2],
+    sampler: &mut impl Sampler,
+    diff_scale: f32,
+) -> (crate::math::Ray, Option<crate::math::ray::RayDifferential>) {
+    let u = sampler.get2d();
+    let (p_raster, u_lens) = ([pixel[0] + u[0], pixel[1] + u[1]], sampler.get2d());
+    // As in pbrt, only the camera ray has differentials: rays spawned later have none.
+    // Scenes whose shading never reads a footprint skip them.
+    if scene.needs_differentials {
+        let (ray, diff) = scene.camera.generate_ray_differential(p_raster, u_lens, diff_scale);
+        (ray, Some(diff))
+    } else {
+        (scene.camera.generate_ray(p_raster, u_lens), None)
+    }
+}
+
 /// A camera path: (direct and emitted light gathered, the visible point).
 fn camera_path(
     scene: &RenderScene,
@@ -433,16 +451,7 @@ fn camera_path(
     max_depth: u32,
     diff_scale: f32,
 ) -> (Rgb, Option<VisiblePoint>) {
-    let u = sampler.get2d();
-    let (p_raster, u_lens) = ([pixel[0] + u[0], pixel[1] + u[1]], sampler.get2d());
-    // As in pbrt, only the camera ray has differentials: rays spawned later have none.
-    // Scenes whose shading never reads a footprint skip them.
-    let (mut ray, mut diff) = if scene.needs_differentials {
-        let (ray, diff) = scene.camera.generate_ray_differential(p_raster, u_lens, diff_scale);
-        (ray, Some(diff))
-    } else {
-        (scene.camera.generate_ray(p_raster, u_lens), None)
-    };
+    let (mut ray, mut diff) = camera_ray(scene, pixel, sampler, diff_scale);
     let (mut beta, mut ld) = (Vec3::ONE, Vec3::ZERO);
     let (mut specular_bounce, mut depth, mut passes) = (false, 0, 0);
     // DEVIATION(pbrt): appearance, `--fix sky-after-glossy`. pbrt-v3 adds infinite

@@ -7,7 +7,7 @@ use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
 use super::{Pass, Technique, Techniques};
 use crate::accel::Hit;
 use crate::integrators::grid::Grid;
-use crate::integrators::sppm::{Surface, surface};
+use crate::integrators::sppm::{Surface, camera_ray, surface};
 use crate::interaction::{Footprint, SurfaceInteraction};
 use crate::lights::Light;
 use crate::materials::{Bsdf, TransportMode};
@@ -65,15 +65,7 @@ impl Cameras<'_> {
 
     fn path(&self, i: usize, pixel: [f32; 2], s: &mut impl Sampler) -> Rgb {
         let (pass, scene) = (self.pass, self.pass.scene);
-        let u = s.get2d();
-        let (p_raster, u_lens) = ([pixel[0] + u[0], pixel[1] + u[1]], s.get2d());
-        let (mut ray, mut diff) = match scene.needs_differentials {
-            true => {
-                let (ray, diff) = scene.camera.generate_ray_differential(p_raster, u_lens, self.differential_scale);
-                (ray, Some(diff))
-            }
-            false => (scene.camera.generate_ray(p_raster, u_lens), None),
-        };
+        let (mut ray, mut diff) = camera_ray(scene, pixel, s, self.differential_scale);
         let camera_pdf = scene.camera.pdf_we(&ray).1 as f64 * pass.film_pixels;
         let mut partial = Partial::camera(camera_pdf, pass.lt_count());
         let light_path = self.lights.path(i % pass.light_paths as usize);

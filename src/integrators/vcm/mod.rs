@@ -32,7 +32,7 @@ use super::sppm::{PixelState, Stats};
 use crate::render::RenderScene;
 use crate::sampling::SamplerKind;
 use crate::spectrum::Rgb;
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use mis::Factors;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -305,9 +305,7 @@ impl<'a> Vcm<'a> {
 /// Adds light tracing's splats to the pixels' sums, each pixel in a fixed order (list by
 /// list, splat by splat) whatever the thread count; pixel ranges in parallel.
 fn add_splats(sums: &mut [DVec3], lists: Vec<Vec<(u32, Rgb)>>, scale: f64) {
-    let span = sums.len().div_ceil(SPLAT_RANGES).max(1);
-    let grouped: Vec<Grouped<(u32, Vec3)>> =
-        lists.into_par_iter().map(|l| Grouped::new(l, SPLAT_RANGES, |s| s.0 as usize / span)).collect();
+    let (grouped, span) = Grouped::by_pixel_range(lists, sums.len(), SPLAT_RANGES);
     sums.par_chunks_mut(span).enumerate().for_each(|(r, sums)| {
         let lo = r * span;
         for &(pixel, c) in grouped.iter().flat_map(|g| g.group(r)) {
