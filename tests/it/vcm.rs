@@ -304,6 +304,24 @@ fn any_split_of_a_vcm_render_merges_to_the_single_machine_render() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+#[test]
+fn vcm_stats_name_its_own_phases_and_counts() {
+    let d = crate::shards::dir("vcm-stats");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
+        .current_dir(&d)
+        .args(["render", "scene.pbrt", "--integrator", "vcm", "--spp", "2", "--photons", "500", "--stats"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("stats: light subpaths"), "{err}");
+    assert!(err.contains("1000 light subpaths, "), "{err}");
+    assert!(err.contains("(500 light subpaths each)"), "{err}");
+    // SPPM's photon figures mean nothing here: no uniform-photon waste line.
+    assert!(!err.contains("uniform photon paths"), "{err}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// A closed sphere (normals inward) around the camera with reflectance ρ = 0.5: light
 /// emitted inside reaches the eye after any number of bounces up to maxdepth.
 fn furnace(inside: &str) -> String {

@@ -54,8 +54,9 @@ pub fn rendered(job: &Job, out: &RenderOutput, args: &RenderArgs) -> ExitCode {
     };
     let image = job.image.as_ref().map(|i| i.0.as_path());
     let to: Vec<String> = image.into_iter().chain(args.partial.as_deref()).map(|p| p.display().to_string()).collect();
+    let each = if out.stats.bidirectional { "light subpaths" } else { "photons" };
     say!(
-        "{what} {done} ({} photons each) in {:.2} s -> {}",
+        "{what} {done} ({} {each} each) in {:.2} s -> {}",
         out.image.meta.photons_per_iteration.unwrap_or(0),
         out.seconds,
         to.join(", ")
@@ -75,6 +76,22 @@ fn stats(out: &RenderOutput) {
         .ok()
         .and_then(|t| t.lines().find_map(|l| l.strip_prefix("VmHWM:").map(|v| v.trim().to_string())))
         .unwrap_or_else(|| "unknown".into());
+    if s.bidirectional {
+        say!(
+            "stats: light subpaths {:.3} s, grid {:.3} s, camera subpaths {:.3} s, light tracing splats {:.3} s",
+            s.photon_seconds,
+            s.grid_seconds,
+            s.camera_seconds,
+            s.update_seconds
+        );
+        say!(
+            "stats: {} camera subpaths, {} light subpaths, {} light vertices stored, peak memory {peak}",
+            s.camera_rays,
+            s.photons.traced,
+            s.visible_points
+        );
+        return;
+    }
     say!(
         "stats: camera pass {:.3} s, grid {:.3} s, photons {:.3} s, update {:.3} s",
         s.camera_seconds,

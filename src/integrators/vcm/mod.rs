@@ -245,7 +245,7 @@ impl<'a> Vcm<'a> {
             differential_scale: self.differential_scale,
         };
         let width = self.size.0;
-        self.sums.par_iter_mut().enumerate().for_each(|(i, s)| {
+        self.sums.par_iter_mut().enumerate().with_max_len(crate::integrators::PIXELS_PER_TASK).for_each(|(i, s)| {
             *s += cams.pixel(i, width).as_dvec3();
         });
         let t3 = Instant::now();
@@ -281,10 +281,10 @@ impl<'a> Vcm<'a> {
         s.update_seconds += (t[4] - t[3]).as_secs_f64();
         s.camera_rays += self.sums.len() as u64;
         s.photons.traced += counts.paths;
-        s.photons.uniform += counts.paths;
         s.photons.hits += counts.hits;
         s.visible_points += vertices as u64;
         s.iterations = self.iteration;
+        s.bidirectional = true;
     }
 
     /// The current estimate: the mean of the passes, times the film's scale.
