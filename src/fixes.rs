@@ -26,6 +26,7 @@ pub enum Fix {
     ShapeSampling,
     NormalDerivatives,
     HyperboloidSurface,
+    CameraMedium,
 }
 
 /// Name, the pbrt versions that have the bug, and what fixing it changes.
@@ -37,7 +38,7 @@ pub struct FixInfo {
 }
 
 /// Every fix, in the order `--fix help` lists them.
-pub const FIXES: [FixInfo; 10] = [
+pub const FIXES: [FixInfo; 11] = [
     FixInfo {
         fix: Fix::PlasticFresnel,
         name: "plastic-fresnel",
@@ -111,6 +112,14 @@ pub const FIXES: [FixInfo; 10] = [
         effect: "a hyperboloid is the surface its segment p1→p2 sweeps, which its (u,v), normals and \
                  area describe; pbrt-v3 intersects an implicit fit that is that surface only when the \
                  segment's closest approach to the axis is at z = 0 (pbrt-v3 #168)",
+    },
+    FixInfo {
+        fix: Fix::CameraMedium,
+        name: "camera-medium",
+        versions: "v3",
+        effect: "the camera sits in the outside medium current at its Camera statement, as in pbrt-v4; \
+                 pbrt-v3 makes the camera at WorldEnd and gives it the medium current there, so a \
+                 MediumInterface at the world's top level moves the camera into (or out of) that medium",
     },
 ];
 

@@ -16,6 +16,7 @@ pub mod lights;
 pub mod limits;
 pub mod materials;
 pub mod math;
+pub mod media;
 pub mod mitsuba;
 pub mod parser;
 pub mod render;

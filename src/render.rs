@@ -10,6 +10,7 @@ use crate::lights::{AreaLight, Light, WorldSphere};
 use crate::materials::{Bsdf, LobeList, Material, TexCtx, Textures};
 use crate::math::Ray;
 use crate::math::frame::coordinate_system;
+use crate::media::MediumInterface;
 use crate::parser::Syntax;
 use crate::sampling::Distribution1D;
 use crate::scene::{
@@ -93,6 +94,14 @@ pub struct RenderScene {
     pub world: WorldSphere,
     /// Row-major world-to-camera, for image metadata.
     pub world_to_camera: [f32; 16],
+    /// The rendered media (`SceneDescription::media`); empty for a scene in vacuum,
+    /// whose rays then never ask which medium they are in.
+    pub media: Vec<crate::media::Medium>,
+    pub camera_medium: Option<u32>,
+    world_shape_media: Vec<MediumInterface>,
+    object_shape_media: Vec<Vec<MediumInterface>>,
+    /// Per light of the scene's `LightSource`s (the first of `lights`): its medium.
+    light_media: Vec<Option<u32>>,
 }
 
 impl RenderScene {
@@ -131,6 +140,10 @@ impl RenderScene {
             pbrt_sampling: !scene.fixes.has(Fix::ShapeSampling) && !bidirectional,
         };
         let emitters = area_lights(&geometry, &shape_area_lights, &area_params, rules, &mut lights);
+        let media = scene.media.iter().map(|m| m.kind).collect();
+        let world_shape_media = scene.shapes.iter().map(|s| s.media).collect();
+        let object_shape_media = scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.media).collect()).collect();
+        let light_media = scene.lights.iter().map(|l| l.medium).collect();
         let powers: Vec<f64> = lights.iter().map(|l| l.power(world)).collect();
         let photon_scale = photon_scale(powers.iter().sum());
         let light_power = Distribution1D::new(&powers);
@@ -156,6 +169,40 @@ impl RenderScene {
             photon_scale,
             world,
             world_to_camera: m,
+            media,
+            camera_medium: scene.camera_medium,
+            world_shape_media,
+            object_shape_media,
+            light_media,
+        }
+    }
+
+    /// The media on either side of a hit shape.
+    pub fn media_of(&self, hit: &Hit) -> MediumInterface {
+        match self.geometry.shape_of(hit) {
+            (None, s) => self.world_shape_media[s as usize],
+            (Some(o), s) => self.object_shape_media[o as usize][s as usize],
+        }
+    }
+
+    /// The medium a ray in `current` is in after crossing the hit surface in
+    /// direction `d` (geometric normal `n`): a transition's side, else unchanged.
+    #[inline]
+    pub fn medium_after(&self, hit: &Hit, n: Vec3, d: Vec3, current: Option<u32>) -> Option<u32> {
+        if self.media.is_empty() {
+            return None;
+        }
+        let mi = self.media_of(hit);
+        if mi.is_transition() { mi.toward(d, n) } else { current }
+    }
+
+    /// The medium light `idx` emits into along `d` from a point with normal `n`: an
+    /// area light's shape's side, another light's own medium.
+    pub fn light_medium(&self, idx: usize, d: Vec3, n: Vec3) -> Option<u32> {
+        match &self.lights[idx] {
+            _ if self.media.is_empty() => None,
+            Light::Area(a) => self.world_shape_media[a.shape as usize].toward(d, n),
+            _ => self.light_media.get(idx).copied().flatten(),
         }
     }
 

@@ -142,6 +142,11 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         what: a.what.clone(),
         why: format!("approximated by pbrt-sppm too: {}", a.how),
     }));
+    notes.extend(scene.media.iter().map(|m| Unsupported {
+        location: source.to_string(),
+        what: format!("MakeNamedMedium \"{}\"", m.name),
+        why: "media are not exported: Mitsuba renders the scene in vacuum".into(),
+    }));
     let textures = Textures::new(&scene.textures, scene.fixes);
     let materials = scene.materials.iter().enumerate().map(|(i, m)| material(m, &textures, i, &mut notes)).collect();
     let shapes = scene.shapes.iter().enumerate().map(|(i, s)| shape(scene, s, true, i as u32, &mut notes)).collect();

@@ -18,6 +18,7 @@ pub mod report;
 pub mod run;
 pub mod sppm;
 pub mod vcm;
+pub mod volume;
 
 pub use error::RenderError;
 

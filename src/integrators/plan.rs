@@ -22,9 +22,11 @@ impl Algorithm {
     /// What renders a file that asks for integrator `requested`: SPPM for `sppm`,
     /// bdpt for `bdpt` (the same techniques), vcm for the rest (`path`, `volpath`, …:
     /// the same converged image, and the caustics they leave noisy converge).
-    pub fn for_file(requested: &str) -> Algorithm {
+    /// A scene with media gets SPPM whatever it asks for: vcm does not render media yet.
+    pub fn for_file(requested: &str, media: bool) -> Algorithm {
         match requested {
             "sppm" => Algorithm::Sppm,
+            _ if media => Algorithm::Sppm,
             "bdpt" => Algorithm::Vcm(Techniques::Bdpt),
             _ => Algorithm::Vcm(Techniques::All),
         }
@@ -126,7 +128,11 @@ impl Plan {
         world_radius: impl FnOnce() -> f32,
         settings: &RenderSettings,
     ) -> Result<Plan, RenderError> {
-        let algorithm = settings.algorithm.unwrap_or_else(|| Algorithm::for_file(&integrator.requested));
+        let algorithm =
+            settings.algorithm.unwrap_or_else(|| Algorithm::for_file(&integrator.requested, integrator.media));
+        if integrator.media && algorithm != Algorithm::Sppm {
+            return Err(RenderError::MediaNeedSppm { integrator: algorithm.name() });
+        }
         let mut iterations = settings.iterations.unwrap_or(integrator.iterations);
         if settings.quick {
             iterations = (iterations / 16).max(1);
@@ -174,6 +180,9 @@ impl Plan {
 fn default_radius(i: &Integrator, world_radius: impl FnOnce() -> f32, algorithm: Algorithm) -> f32 {
     match algorithm {
         Algorithm::Vcm(_) if !i.radius_given => (0.003 * world_radius()).max(MIN_RADIUS),
+        // A file that asked for another integrator (one with media, rendered by SPPM)
+        // has no radius meant for photons: pbrt's default of 1 may span the scene.
+        Algorithm::Sppm if !i.radius_given && i.requested != "sppm" => (0.01 * world_radius()).max(MIN_RADIUS),
         _ => i.radius,
     }
 }

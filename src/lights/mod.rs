@@ -78,6 +78,8 @@ pub struct LightDesc {
     pub kind: LightKind,
     /// The CTM at the statement.
     pub world_from_light: DMat4,
+    /// The medium it sits in (the outside one current at the statement).
+    pub medium: Option<u32>,
 }
 
 impl LightDesc {

@@ -18,10 +18,11 @@ pub enum Approx {
     FilmType,
     ColorSpace,
     EqualAreaMap,
+    MediumEmission,
 }
 
 impl Approx {
-    pub const ALL: [Approx; 9] = [
+    pub const ALL: [Approx; 10] = [
         Approx::CoatInBlend,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
@@ -31,6 +32,7 @@ impl Approx {
         Approx::FilmType,
         Approx::ColorSpace,
         Approx::EqualAreaMap,
+        Approx::MediumEmission,
     ];
 
     /// How it is rendered instead (the README lists these texts).
@@ -47,6 +49,7 @@ impl Approx {
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",
             Approx::ColorSpace => "only sRGB is supported; RGB values are taken as sRGB",
             Approx::EqualAreaMap => "pbrt-v4's equal-area environment maps are read as equirectangular ones",
+            Approx::MediumEmission => "emission from media is not rendered yet; the medium absorbs and scatters only",
         }
     }
 }

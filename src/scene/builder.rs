@@ -18,6 +18,7 @@
 //! only when something uses them.
 
 mod bugs;
+mod media;
 mod typed;
 
 use super::approx::Approx;
@@ -114,6 +115,8 @@ struct GraphicsState {
     scope: Rc<Scope>,
     /// v4 `Attribute` statements in effect: (target, index into `Builder::attributes`).
     attributes: Rc<Vec<(String, u32)>>,
+    /// `MediumInterface`: the media inside and outside what comes next.
+    media: media::MediaPair,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -155,6 +158,7 @@ struct PendingShape {
     material: MaterialRef,
     /// The names in scope at the statement (for an alpha texture).
     scope: Rc<Scope>,
+    media: media::MediaPair,
 }
 
 struct PendingObject {
@@ -211,6 +215,12 @@ struct Builder {
     warnings: Vec<Diagnostic>,
     skipped: Vec<(Option<Span>, String, String)>,
     motion_warned: bool,
+    medium_slots: Vec<media::MediumSlot>,
+    medium_names: HashMap<String, u32>,
+    /// The media current at `Camera` (pbrt puts the camera in the outside one).
+    camera_media: media::MediaPair,
+    /// Per pending light: the outside medium current at its statement.
+    pending_light_media: Vec<Option<u32>>,
 }
 
 impl Builder {
@@ -235,6 +245,7 @@ impl Builder {
                 area_light: None,
                 scope: Rc::default(),
                 attributes: Rc::default(),
+                media: (None, None),
             },
             stack: Vec::new(),
             named_coords: HashMap::new(),
@@ -270,6 +281,10 @@ impl Builder {
             warnings: Vec::new(),
             skipped: Vec::new(),
             motion_warned: false,
+            medium_slots: Vec::new(),
+            medium_names: HashMap::new(),
+            camera_media: (None, None),
+            pending_light_media: Vec::new(),
         }
     }
 
@@ -494,19 +509,6 @@ impl Builder {
         Ok(())
     }
 
-    fn named_medium(&mut self, e: Entity) -> Res<()> {
-        let what = format!("MakeNamedMedium \"{}\"", e.name);
-        self.skip(e.name_span, what, "participating media are not supported".into());
-        Ok(())
-    }
-
-    fn medium_interface(&mut self, inside: &str, outside: &str, span: Span) -> Res<()> {
-        if !(inside.is_empty() && outside.is_empty()) {
-            self.skip(span, "MediumInterface".into(), "participating media are not supported; ignored".into());
-        }
-        Ok(())
-    }
-
     fn world_begin(&mut self, span: Span) -> Res<()> {
         self.in_world = true;
         self.world_begin = Some(span);
@@ -577,6 +579,7 @@ impl Builder {
         }
         self.named_coords.insert("camera".into(), inv);
         self.render.camera = Some((e, ctm[0]));
+        self.camera_media = self.gs.media;
         Ok(())
     }
 
@@ -684,6 +687,7 @@ impl Builder {
             reverse_orientation: self.gs.reverse_orientation,
             material: self.gs.material.clone(),
             scope: self.gs.scope.clone(),
+            media: self.gs.media,
         };
         match self.current_object {
             Some(obj) => {
@@ -765,6 +769,7 @@ impl Builder {
             material: 0,
             area_light,
             alpha: None,
+            media: crate::media::MediumInterface { inside: s.media.0, outside: s.media.1 },
         };
         Ok(geometries.into_iter().map(|g| (shape(g), alpha.clone())).collect())
     }
@@ -845,6 +850,7 @@ impl Builder {
         }
         let params = self.with_attributes("light", e.params);
         self.pending_lights.push((Entity { params, ..e }, self.gs.ctm[0]));
+        self.pending_light_media.push(self.gs.media.1);
         Ok(())
     }
 
@@ -960,7 +966,7 @@ impl Builder {
         self.materials[0].ty =
             if syntax == Syntax::V3 { crate::materials::matte::NAME } else { crate::materials::diffuse::NAME }.into();
         let uses = self.resolve_instances()?;
-        let (objects, remap) = self.build_objects()?;
+        let (mut objects, remap) = self.build_objects()?;
         let instances = uses
             .into_iter()
             .map(|(obj, m)| InstanceDesc { object: remap[obj as usize], world_from_instance: m })
@@ -968,8 +974,10 @@ impl Builder {
         self.resolve_world_shapes()?;
         self.drop_interface_emitters();
         let bugs = self.pbrt_bugs(syntax, &objects);
-        let lights = self.build_lights()?;
+        let mut lights = self.build_lights()?;
         let area_lights = self.build_area_lights()?;
+        let (media, camera_medium) = self.resolve_media(&mut objects, &mut lights)?;
+        self.render.has_media = !media.is_empty();
         let r = self.resolve_options(syntax)?;
         self.report_left_out();
         // In file order, whatever the order they were found in.
@@ -1001,6 +1009,8 @@ impl Builder {
             patches: std::mem::take(&mut self.patches).into_iter().map(Arc::new).collect(),
             lights,
             area_lights,
+            media,
+            camera_medium,
             materials: std::mem::take(&mut self.built_materials),
             textures: std::mem::take(&mut self.built_textures),
             options: std::mem::take(&mut self.options),

@@ -61,6 +61,10 @@ pub struct ShapeDesc {
     pub area_light: Option<u32>,
     /// Where the shape is cut away, if anywhere.
     pub alpha: Option<ShapeAlpha>,
+    /// The media on its two sides (`MediumInterface`), indices into
+    /// [`SceneDescription::media`]. Only a transition changes a ray's medium; an area
+    /// light emits into these either way.
+    pub media: crate::media::MediumInterface,
 }
 
 /// A shape's alpha mask: rays pass through where it cuts the surface away.
@@ -150,6 +154,10 @@ pub struct SceneDescription {
     pub patches: Vec<std::sync::Arc<PatchMesh>>,
     pub lights: Vec<LightDesc>,
     pub area_lights: Vec<AreaLightDesc>,
+    /// The named media that are rendered (`MakeNamedMedium`), in order of first mention.
+    pub media: Vec<crate::media::MediumDesc>,
+    /// The medium the camera sits in.
+    pub camera_medium: Option<u32>,
     pub materials: Vec<MaterialDesc>,
     pub textures: Vec<TextureDesc>,
     /// `Option` statements (v4), name → raw value.

@@ -15,6 +15,7 @@ mod instancing;
 mod interfaces;
 mod intersect;
 mod layout;
+mod media;
 mod mitsuba;
 mod pbrt_refs;
 mod real_scenes;

@@ -62,8 +62,9 @@ impl Builder {
     /// Every `LightSource` of a supported type, typed.
     pub(super) fn build_lights(&mut self) -> Res<Vec<LightDesc>> {
         let pending = std::mem::take(&mut self.pending_lights);
+        let media = std::mem::take(&mut self.pending_light_media);
         let mut out = Vec::new();
-        for (e, ctm) in pending {
+        for ((e, ctm), medium) in pending.into_iter().zip(media) {
             if self.syntax() == Syntax::V4 && e.name == lights::infinite::NAME && e.params.named("filename").is_some() {
                 let at = e.params.named("filename").map_or(e.name_span, |p| p.span);
                 self.note(at, "environment map".into(), Approx::EqualAreaMap);
@@ -96,7 +97,7 @@ impl Builder {
             match kind {
                 Some(kind) => {
                     finish_params(&e.params, &mut self.warnings)?;
-                    out.push(LightDesc { kind, world_from_light: ctm });
+                    out.push(LightDesc { kind, world_from_light: ctm, medium });
                 }
                 None => {
                     let what = format!("LightSource \"{}\"", e.name);

@@ -1,0 +1,172 @@
+//! A medium of the same density everywhere.
+//!
+//! ```text
+//! MakeNamedMedium "fog" "string type" "homogeneous"
+//!     "rgb sigma_a" [0.05 0.05 0.05] "rgb sigma_s" [0.5 0.5 0.5] "float scale" 2 "float g" 0.3
+//! MakeNamedMedium "milk" "string type" "homogeneous" "string preset" "Wholemilk"
+//! ```
+//!
+//! | parameter | pbrt-v3 | pbrt-v4 |
+//! |---|---|---|
+//! | `sigma_a`, `sigma_s` (per unit length) | default whole milk's (0.0011, 0.0024, 0.014), (2.55, 3.21, 3.77); given values replace a preset's | default 1; a found preset wins over them |
+//! | `preset` | [`super::presets`]; unknown: a warning, the defaults | the same |
+//! | `scale` | multiplies σa and σs | the same |
+//! | `g` | Henyey–Greenstein asymmetry | the same (clamped to ±0.99) |
+//! | `Le`, `Lescale` | — | emission (not rendered yet: listed as approximated) |
+
+use super::phase::HenyeyGreenstein;
+use super::{MediumContext, presets};
+use crate::parser::Syntax;
+use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamList;
+use crate::scene::approx::Approx;
+use crate::scene::values::{self, Range, Res};
+use glam::Vec3;
+
+pub const NAME: &str = "homogeneous";
+
+/// σa and σs (per unit of world length) and the phase function.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Homogeneous {
+    pub sigma_a: Vec3,
+    pub sigma_s: Vec3,
+    pub phase: HenyeyGreenstein,
+}
+
+/// What free-flight sampling along a segment found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Flight {
+    /// A scattering point at ray parameter `t`; `weight` is Tr/pdf (times σs for a path
+    /// that scatters there; photons deposit with it as it is).
+    Scatter { t: f32, weight: Vec3 },
+    /// No interaction before the segment's end: Tr/pdf of reaching it.
+    Through { weight: Vec3 },
+}
+
+impl Homogeneous {
+    /// Reads the parameters by the rules of the file's version.
+    pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Homogeneous> {
+        let (mut sigma_a, mut sigma_s) = match ctx.syntax {
+            Syntax::V3 => (Vec3::new(0.0011, 0.0024, 0.014), Vec3::new(2.55, 3.21, 3.77)),
+            Syntax::V4 => (Vec3::ONE, Vec3::ONE),
+        };
+        let preset = preset(p, ctx)?;
+        if let Some((a, s)) = preset {
+            (sigma_a, sigma_s) = (a, s);
+        }
+        // pbrt-v3 lets given coefficients replace a preset's; pbrt-v4 keeps the preset.
+        if preset.is_none() || ctx.syntax == Syntax::V3 {
+            sigma_a = values::rgb(p, "sigma_a", &ctx.spectra, Range::NonNegative)?.unwrap_or(sigma_a);
+            sigma_s = values::rgb(p, "sigma_s", &ctx.spectra, Range::NonNegative)?.unwrap_or(sigma_s);
+        }
+        let scale = values::float(p, "scale", 1.0, Range::NonNegative)?;
+        let g = values::float(p, "g", 0.0, Range::Any)?;
+        if !(-1.0..=1.0).contains(&g) {
+            let at = values::span_of(p, "g").unwrap_or_default();
+            return Err(Diagnostic::error(at, format!("\"float g\" must lie in [-1, 1], not {g}")));
+        }
+        if ctx.syntax == Syntax::V4 {
+            emission(p, ctx)?;
+        }
+        Ok(Homogeneous { sigma_a: sigma_a * scale, sigma_s: sigma_s * scale, phase: HenyeyGreenstein::new(g) })
+    }
+
+    pub fn sigma_t(&self) -> Vec3 {
+        self.sigma_a + self.sigma_s
+    }
+
+    /// Transmittance across `dist` units of world length.
+    pub fn transmittance(&self, dist: f32) -> Vec3 {
+        exp_neg(self.sigma_t() * dist)
+    }
+
+    /// Free-flight sampling over a segment of `len` world units (ray parameter `t_max`,
+    /// direction length `dlen`): a channel chosen by `u_channel`, a distance by `u`,
+    /// weighted by the density averaged over channels (pbrt's single-channel scheme,
+    /// unbiased for colored media).
+    pub fn sample(&self, t_max: f32, dlen: f32, u_channel: f32, u: f32) -> Flight {
+        let st = self.sigma_t();
+        let c = ((u_channel * 3.0) as usize).min(2);
+        let dist = -(1.0 - u).max(f32::MIN_POSITIVE).ln() / st[c];
+        let t = dist / dlen;
+        if t < t_max {
+            let tr = self.transmittance(dist);
+            let pdf = (st * tr).element_sum() / 3.0;
+            // A zero density can only come from a point the other channels cannot reach.
+            let weight = if pdf > 0.0 { tr / pdf } else { Vec3::ZERO };
+            return Flight::Scatter { t, weight };
+        }
+        let tr = if t_max.is_finite() { self.transmittance(t_max * dlen) } else { Vec3::ZERO };
+        let pdf = tr.element_sum() / 3.0;
+        Flight::Through { weight: if pdf > 0.0 { tr / pdf } else { Vec3::ZERO } }
+    }
+}
+
+fn exp_neg(v: Vec3) -> Vec3 {
+    Vec3::new((-v.x).exp(), (-v.y).exp(), (-v.z).exp())
+}
+
+/// The preset's (σa, σs), `None` when none is given or it is unknown (a warning, as in
+/// pbrt).
+fn preset(p: &ParamList, ctx: &mut MediumContext) -> Res<Option<(Vec3, Vec3)>> {
+    let Some(name) = p.string("preset")? else { return Ok(None) };
+    let found = presets::lookup(&name);
+    if found.is_none() {
+        let at = values::span_of(p, "preset").unwrap_or_default();
+        let known: Vec<&str> = presets::names().collect();
+        let msg = format!("unknown medium preset \"{name}\"; the defaults are used (presets: {})", known.join(", "));
+        ctx.warnings.push(Diagnostic::warning(at, msg));
+    }
+    Ok(found)
+}
+
+/// pbrt-v4's `Le` and `Lescale`: read and checked; emission is not rendered yet.
+fn emission(p: &ParamList, ctx: &mut MediumContext) -> Res<()> {
+    let le = values::rgb(p, "Le", &ctx.spectra, Range::NonNegative)?;
+    let scale = values::float(p, "Lescale", 1.0, Range::NonNegative)?;
+    if le.is_some_and(|c| c.max_element() > 0.0) && scale > 0.0 {
+        let at = values::span_of(p, "Le").unwrap_or_default();
+        (ctx.approximate)(at, "medium emission \"Le\"".into(), Approx::MediumEmission);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fog() -> Homogeneous {
+        Homogeneous {
+            sigma_a: Vec3::new(0.1, 0.2, 0.3),
+            sigma_s: Vec3::new(0.5, 0.4, 0.9),
+            phase: HenyeyGreenstein::new(0.0),
+        }
+    }
+
+    /// E[weight · σs] over scatter events plus E[weight] over passes reproduce the two
+    /// terms of the segment's transport: ∫ Tr σs dt and Tr(L), per channel.
+    #[test]
+    fn free_flight_weights_are_unbiased_per_channel() {
+        let (m, len) = (fog(), 3.0);
+        let n = 200_000;
+        let (mut scattered, mut through) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
+        for k in 0..n {
+            let u = (k as f32 + 0.5) / n as f32;
+            let uc = ((k * 7) % 3) as f32 / 3.0 + 0.1;
+            match m.sample(len / 2.0, 2.0, uc, u) {
+                Flight::Scatter { t, weight } => {
+                    assert!(t < len / 2.0);
+                    scattered += (weight * m.sigma_s).as_dvec3();
+                }
+                Flight::Through { weight } => through += weight.as_dvec3(),
+            }
+        }
+        let st = m.sigma_t();
+        for c in 0..3 {
+            let want_s = m.sigma_s[c] / st[c] * (1.0 - (-st[c] * len).exp());
+            let want_t = (-st[c] * len).exp();
+            assert!((scattered[c] / n as f64 - want_s as f64).abs() < 2e-3, "channel {c} scatter");
+            assert!((through[c] / n as f64 - want_t as f64).abs() < 2e-3, "channel {c} through");
+        }
+    }
+}

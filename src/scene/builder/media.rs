@@ -1,0 +1,153 @@
+//! The builder's media: `MakeNamedMedium` definitions, the `MediumInterface` in the
+//! graphics state, and the names shapes, lights and the camera refer to, resolved to
+//! built media once the file's version is known.
+//!
+//! ```text
+//! MakeNamedMedium "fog" "string type" "homogeneous" "rgb sigma_s" [0.2 0.2 0.2]
+//! MediumInterface "fog" ""            # inside, outside; one name means both
+//! ```
+//!
+//! A name may be used before its definition (pbrt-v4 resolves names at the end too);
+//! one never defined is an error at its first use. Types that are not rendered are
+//! skipped with a warning, and what refers to them is in vacuum.
+
+use super::{Builder, Res};
+use crate::media::{self, MediumContext, MediumDesc, MediumInterface};
+use crate::parser::error::Diagnostic;
+use crate::parser::source::Span;
+use crate::parser::stmt::Entity;
+use crate::scene::values::SpectrumContext;
+use glam::DMat4;
+
+/// A medium name as the file uses it: its definition, if read, and its first use.
+pub(super) struct MediumSlot {
+    name: String,
+    definition: Option<(Entity, DMat4)>,
+    first_use: Option<Span>,
+}
+
+/// Slots of the media on either side of what comes next (`None`: vacuum).
+pub(super) type MediaPair = (Option<u32>, Option<u32>);
+
+impl Builder {
+    fn medium_slot(&mut self, name: &str) -> u32 {
+        if let Some(&i) = self.medium_names.get(name) {
+            return i;
+        }
+        self.medium_slots.push(MediumSlot { name: name.to_string(), definition: None, first_use: None });
+        let i = self.medium_slots.len() as u32 - 1;
+        self.medium_names.insert(name.to_string(), i);
+        i
+    }
+
+    pub(super) fn named_medium(&mut self, e: Entity) -> Res<()> {
+        let i = self.medium_slot(&e.name) as usize;
+        if self.medium_slots[i].definition.is_some() {
+            // DEVIATION(pbrt): robustness. pbrt-v4 refuses a file that redefines a
+            // medium; pbrt-v3 takes the last definition, as we do for both, with a warning.
+            let msg = format!("medium \"{}\" is defined again; this definition replaces the earlier one", e.name);
+            self.warnings.push(Diagnostic::warning(e.name_span, msg));
+        }
+        self.medium_slots[i].definition = Some((e, self.gs.ctm[0]));
+        Ok(())
+    }
+
+    pub(super) fn medium_interface(&mut self, inside: &str, outside: &str, span: Span) -> Res<()> {
+        let mut slot = |name: &str| -> Option<u32> {
+            if name.is_empty() {
+                return None;
+            }
+            let i = self.medium_slot(name);
+            self.medium_slots[i as usize].first_use.get_or_insert(span);
+            Some(i)
+        };
+        self.gs.media = (slot(inside), slot(outside));
+        Ok(())
+    }
+
+    /// Builds the defined media in slot order; returns each slot's index among them
+    /// (`None` for a type that is not rendered).
+    pub(super) fn build_media(&mut self) -> Res<(Vec<MediumDesc>, Vec<Option<u32>>)> {
+        let mut built = Vec::new();
+        let mut remap = Vec::new();
+        for i in 0..self.medium_slots.len() {
+            let slot = &mut self.medium_slots[i];
+            // The medium's own transform (the CTM at its statement) matters to grids only.
+            let Some((e, _ctm)) = slot.definition.take() else {
+                let at = slot.first_use.unwrap_or_default();
+                return Err(Diagnostic::error(
+                    at,
+                    format!("medium \"{}\" is not defined (MakeNamedMedium)", slot.name),
+                ));
+            };
+            remap.push(self.build_medium(&e)?.map(|kind| {
+                built.push(MediumDesc { name: e.name.clone(), kind });
+                built.len() as u32 - 1
+            }));
+        }
+        Ok((built, remap))
+    }
+
+    fn build_medium(&mut self, e: &Entity) -> Res<Option<media::Medium>> {
+        let ty = e.params.string("type")?.unwrap_or_default();
+        let at = crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span);
+        if ty.is_empty() {
+            return Err(Diagnostic::error(e.name_span, "MakeNamedMedium needs a \"string type\""));
+        }
+        if !media::known(&ty) {
+            return Err(Diagnostic::error(at, format!("unknown medium type \"{ty}\"")));
+        }
+        let (syntax, files, base) = (self.syntax(), self.reader.files.clone(), self.reader.base_dir().to_path_buf());
+        let mut warnings = Vec::new();
+        let mut notes = Vec::new();
+        let built = {
+            let mut approximate = |s, what, how| notes.push((s, what, how));
+            let spectra = SpectrumContext { base_dir: &base, normalize_blackbody: false, files: &files };
+            let mut ctx = MediumContext { syntax, spectra, warnings: &mut warnings, approximate: &mut approximate };
+            media::read(&ty, &e.params, &mut ctx)
+        };
+        self.warnings.append(&mut warnings);
+        for (s, what, how) in notes {
+            self.note(s, what, how);
+        }
+        let Some(m) = built? else {
+            let what = format!("MakeNamedMedium \"{}\" (\"{ty}\")", e.name);
+            self.skip(at, what, "this medium type is not rendered yet; what it fills is vacuum".into());
+            return Ok(None);
+        };
+        super::typed::finish_params(&e.params, &mut self.warnings)?;
+        Ok(Some(m))
+    }
+}
+
+impl Builder {
+    /// Builds the media and turns every slot index (shapes, lights, the camera) into
+    /// an index among them; returns the media and the camera's.
+    pub(super) fn resolve_media(
+        &mut self,
+        objects: &mut [crate::scene::ObjectDesc],
+        lights: &mut [crate::lights::LightDesc],
+    ) -> Res<(Vec<MediumDesc>, Option<u32>)> {
+        let (built, remap) = self.build_media()?;
+        let pair = |m: &MediumInterface| (m.inside, m.outside);
+        let shapes = self.shapes.iter_mut().chain(objects.iter_mut().flat_map(|o| o.shapes.iter_mut()));
+        for s in shapes {
+            s.media = resolve(pair(&s.media), &remap);
+        }
+        for l in lights {
+            l.medium = resolve((None, l.medium), &remap).outside;
+        }
+        // DEVIATION(pbrt): appearance, `--fix camera-medium` (pbrt-v3 only; see Fix).
+        let camera = match self.syntax() {
+            crate::parser::Syntax::V3 if !self.opts.fixes.has(crate::fixes::Fix::CameraMedium) => self.gs.media.1,
+            _ => self.camera_media.1,
+        };
+        Ok((built, resolve((None, camera), &remap).outside))
+    }
+}
+
+/// A pair of slots as built media.
+pub(super) fn resolve(pair: MediaPair, remap: &[Option<u32>]) -> MediumInterface {
+    let get = |s: Option<u32>| s.and_then(|s| remap[s as usize]);
+    MediumInterface { inside: get(pair.0), outside: get(pair.1) }
+}

@@ -1,0 +1,167 @@
+//! Participating media: what the files say (both versions' parameters, defaults and
+//! errors) and what SPPM renders with them (analytic cases; pbrt's image of the fog
+//! box is in `pbrt_refs`).
+
+use crate::common::{load, scene, warnings};
+use pbrt_sppm::integrators::RenderSettings;
+use pbrt_sppm::media::Medium;
+use pbrt_sppm::render::RenderScene;
+
+fn medium(text: &str) -> pbrt_sppm::media::Homogeneous {
+    let s = scene(text);
+    match s.media.first().map(|m| m.kind) {
+        Some(Medium::Homogeneous(h)) => h,
+        None => panic!("no medium built"),
+    }
+}
+
+fn fog(version_marker: &str, params: &str) -> String {
+    format!(
+        "{version_marker} MakeNamedMedium \"m\" \"string type\" \"homogeneous\" {params} \
+         WorldBegin MediumInterface \"m\" \"\" Shape \"sphere\""
+    )
+}
+
+const V3: &str = "Film \"image\"";
+const V4: &str = "Film \"rgb\"";
+
+#[test]
+fn homogeneous_defaults_presets_and_scale_follow_each_version() {
+    let m = medium(&fog(V3, ""));
+    assert_eq!((m.sigma_a.x, m.sigma_s.z), (0.0011, 3.77), "pbrt-v3's defaults are whole milk's");
+    let m = medium(&fog(V4, ""));
+    assert_eq!((m.sigma_a, m.sigma_s), (glam::Vec3::ONE, glam::Vec3::ONE), "pbrt-v4's default to 1");
+    // v3: given coefficients replace the preset's; v4: the preset wins.
+    let p = "\"string preset\" \"Ketchup\" \"rgb sigma_a\" [1 2 3] \"float scale\" 2";
+    let m = medium(&fog(V3, p));
+    assert_eq!((m.sigma_a.y, m.sigma_s.x), (4.0, 0.36));
+    let m = medium(&fog(V4, p));
+    assert_eq!((m.sigma_a.y, m.sigma_s.x), (1.94, 0.36));
+    assert_eq!(medium(&fog(V4, "\"float g\" 0.5")).phase.g, 0.5);
+}
+
+#[test]
+fn bad_media_are_located_errors() {
+    for (text, want) in [
+        (fog(V4, "\"rgb sigma_s\" [1 -1 1]"), "must be at least 0"),
+        (fog(V4, "\"float scale\" -2"), "must be at least 0"),
+        (fog(V4, "\"float g\" 1.5"), "must lie in [-1, 1]"),
+        (
+            "Film \"rgb\" WorldBegin MediumInterface \"nowhere\" \"\" Shape \"sphere\"".into(),
+            "\"nowhere\" is not defined",
+        ),
+        ("MakeNamedMedium \"m\" \"string type\" \"plasma\" WorldBegin".into(), "unknown medium type \"plasma\""),
+        ("MakeNamedMedium \"m\" \"rgb sigma_a\" [1 1 1] WorldBegin".into(), "needs a \"string type\""),
+    ] {
+        let e = load(&text).expect_err(&text).to_string();
+        assert!(e.contains(want), "{text}: {e}");
+        assert!(e.contains(":1:"), "located: {e}");
+    }
+}
+
+#[test]
+fn what_is_not_rendered_says_so_where_it_is_written() {
+    let s = scene(&fog(V3, "\"string preset\" \"Jelly\""));
+    assert!(warnings(&s).iter().any(|w| w.contains("unknown medium preset \"Jelly\"")), "{:?}", warnings(&s));
+    let grid = "MakeNamedMedium \"g\" \"string type\" \"heterogeneous\" \"float density\" [1] \
+                WorldBegin MediumInterface \"g\" \"\" Shape \"sphere\"";
+    let s = scene(grid);
+    assert!(s.media.is_empty());
+    assert!(s.skipped.iter().any(|k| k.what.contains("heterogeneous")), "{:?}", s.skipped);
+    let s = scene(&fog(V4, "\"rgb Le\" [1 1 1]"));
+    assert!(s.approximated.iter().any(|a| a.what.contains("Le")), "{:?}", s.approximated);
+}
+
+#[test]
+fn shapes_lights_and_the_camera_get_the_media_current_at_their_statements() {
+    let s = scene(
+        "MakeNamedMedium \"a\" \"string type\" \"homogeneous\" \
+         MediumInterface \"\" \"a\" Camera \"perspective\" \
+         WorldBegin LightSource \"point\" \
+         AttributeBegin MediumInterface \"b\" \"a\" Shape \"sphere\" AttributeEnd Shape \"disk\" \
+         MakeNamedMedium \"b\" \"string type\" \"homogeneous\" \"float g\" 0.2",
+    );
+    let (a, b) = (Some(0), Some(1));
+    assert_eq!(s.camera_medium, a);
+    assert_eq!(s.lights[0].medium, a);
+    assert_eq!((s.shapes[0].media.inside, s.shapes[0].media.outside), (b, a), "a forward reference resolves");
+    assert_eq!((s.shapes[1].media.inside, s.shapes[1].media.outside), (None, a));
+    assert_eq!(s.media[1].name, "b");
+}
+
+fn render(text: &str) -> Vec<[f32; 3]> {
+    let settings = RenderSettings::default();
+    pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), &settings).expect("renders").image.pixels
+}
+
+fn mean(px: &[[f32; 3]]) -> [f64; 3] {
+    let n = px.len() as f64;
+    [0, 1, 2].map(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / n)
+}
+
+/// An emitter seen through a slab of absorbing medium: exp(−σa·d) of its radiance, per
+/// channel (free-flight sampling with colored σt must stay unbiased).
+#[test]
+fn an_absorbing_slab_dims_what_is_behind_it_by_beers_law() {
+    let text = "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 \
+        LookAt 0 0 5  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 10 \
+        Integrator \"sppm\" \"integer numiterations\" 64 \"integer photonsperiteration\" 1000 \
+        MakeNamedMedium \"ink\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.25 0.5 1] \"rgb sigma_s\" [0 0 0] \
+        WorldBegin \
+        AttributeBegin MediumInterface \"ink\" \"\" Material \"\" \
+          Shape \"trianglemesh\" \"point P\" [-2 -2 -1  2 -2 -1  2 2 -1  -2 2 -1  -2 -2 1  2 -2 1  2 2 1  -2 2 1] \
+          \"integer indices\" [0 2 1 0 3 2  4 5 6 4 6 7  0 4 7 0 7 3  1 2 6 1 6 5  0 1 5 0 5 4  3 7 6 3 6 2] \
+        AttributeEnd \
+        AttributeBegin Translate 0 0 -3 AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \
+          Material \"matte\" \"rgb Kd\" [0 0 0] \
+          Shape \"trianglemesh\" \"point P\" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] \"integer indices\" [0 1 2 0 2 3] \
+        AttributeEnd WorldEnd";
+    let m = mean(&render(text));
+    for (c, sigma) in [0.25f64, 0.5, 1.0].into_iter().enumerate() {
+        let want = (-sigma * 2.0).exp();
+        assert!((m[c] - want).abs() < 0.01 * want + 1e-3, "channel {c}: {} against e^-{} = {want}", m[c], 2.0 * sigma);
+    }
+}
+
+/// Inside a closed sphere that emits L = 1 (two-sided) and reflects nothing, filled with a
+/// medium that scatters without absorbing, radiance is 1 everywhere and in every
+/// direction: direct light from the walls and the photons' multiple scattering must
+/// add up to exactly that (the volume estimate's normalization included).
+#[test]
+fn a_scattering_furnace_holds_radiance_one_everywhere() {
+    let text = "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8 \
+        LookAt 0 0 0  0 0 -1  0 1 0 \
+        MakeNamedMedium \"cloud\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [1 1 1] \
+          \"float g\" 0.4 \
+        MediumInterface \"\" \"cloud\" Camera \"perspective\" \"float fov\" 60 \
+        Integrator \"sppm\" \"integer numiterations\" 96 \"integer photonsperiteration\" 20000 \
+          \"integer maxdepth\" 200 \"float radius\" 0.15 \
+        WorldBegin AttributeBegin MediumInterface \"cloud\" \"\" \
+        AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" \"true\" Material \"matte\" \"rgb Kd\" [0 0 0] \
+        Shape \"sphere\" \"float radius\" 2 AttributeEnd WorldEnd";
+    let m = mean(&render(text));
+    for (c, v) in m.iter().enumerate() {
+        assert!((v - 1.0).abs() < 0.03, "channel {c}: {v}");
+    }
+}
+
+/// pbrt-v3 makes its camera at WorldEnd, with the medium current there: a
+/// `MediumInterface` at the world's top level moves the camera. `--fix camera-medium`
+/// keeps the one at `Camera`, as pbrt-v4 does; `check` names the Camera statement.
+#[test]
+fn pbrt_v3_gives_the_camera_the_medium_current_at_world_end() {
+    let text = "MakeNamedMedium \"a\" \"string type\" \"homogeneous\" \
+        MediumInterface \"\" \"a\" Camera \"perspective\" \
+        WorldBegin MediumInterface \"a\" \"\" Shape \"sphere\" WorldEnd";
+    let s = scene(text);
+    assert_eq!(s.camera_medium, None, "pbrt-v3: the outside medium at WorldEnd");
+    assert!(s.pbrt_bugs.iter().any(|b| b.name == "camera-medium" && b.line == 1), "{:?}", s.pbrt_bugs);
+    let opts = pbrt_sppm::scene::LoadOptions { fixes: pbrt_sppm::fixes::Fixes::all(), ..Default::default() };
+    let fixed = pbrt_sppm::scene::load_scene_from_bytes(std::path::Path::new("t.pbrt"), text.into(), &opts).unwrap();
+    assert_eq!(fixed.camera_medium, Some(0));
+    // pbrt-v4 takes the medium at Camera, and nothing is reported.
+    let v4 =
+        scene(&text.replace("WorldEnd", "").replace("Camera \"perspective\"", "Camera \"perspective\" Film \"rgb\""));
+    assert_eq!(v4.camera_medium, Some(0));
+    assert!(!v4.pbrt_bugs.iter().any(|b| b.name == "camera-medium"), "{:?}", v4.pbrt_bugs);
+}
