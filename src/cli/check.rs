@@ -122,6 +122,7 @@ fn counts(scene: &SceneDescription) -> Value {
     counts.insert("instances".into(), scene.instances.len().into());
     counts.insert("lights".into(), (scene.lights.len() as u64 + emitters).into());
     counts.insert("materials".into(), scene.materials.len().into());
+    counts.insert("media".into(), scene.media.len().into());
     Value::Object(counts)
 }
 

@@ -88,7 +88,7 @@ pub fn transmittance(scene: &RenderScene, ray: &Ray, medium: Option<u32>) -> Rgb
 }
 
 fn segment_transmittance(scene: &RenderScene, m: u32, t: f32, dlen: f32) -> Rgb {
-    if t.is_finite() { scene.media[m as usize].transmittance(t * dlen) } else { Vec3::ZERO }
+    scene.media[m as usize].transmittance(t * dlen)
 }
 
 /// Direct light at a medium point from one uniformly chosen light: light sampling and

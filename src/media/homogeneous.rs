@@ -75,9 +75,12 @@ impl Homogeneous {
         self.sigma_a + self.sigma_s
     }
 
-    /// Transmittance across `dist` units of world length.
+    /// Transmittance across `dist` units of world length (an infinite one too: 0
+    /// where the channel attenuates at all, 1 where it does not).
     pub fn transmittance(&self, dist: f32) -> Vec3 {
-        exp_neg(self.sigma_t() * dist)
+        let st = self.sigma_t();
+        let tr = |s: f32| if s == 0.0 { 1.0 } else { (-s * dist).exp() };
+        Vec3::new(tr(st.x), tr(st.y), tr(st.z))
     }
 
     /// Free-flight sampling over a segment of `len` world units (ray parameter `t_max`,
@@ -96,14 +99,10 @@ impl Homogeneous {
             let weight = if pdf > 0.0 { tr / pdf } else { Vec3::ZERO };
             return Flight::Scatter { t, weight };
         }
-        let tr = if t_max.is_finite() { self.transmittance(t_max * dlen) } else { Vec3::ZERO };
+        let tr = self.transmittance(t_max * dlen);
         let pdf = tr.element_sum() / 3.0;
         Flight::Through { weight: if pdf > 0.0 { tr / pdf } else { Vec3::ZERO } }
     }
-}
-
-fn exp_neg(v: Vec3) -> Vec3 {
-    Vec3::new((-v.x).exp(), (-v.y).exp(), (-v.z).exp())
 }
 
 /// The preset's (σa, σs), `None` when none is given or it is unknown (a warning, as in
@@ -141,6 +140,14 @@ mod tests {
             sigma_s: Vec3::new(0.5, 0.4, 0.9),
             phase: HenyeyGreenstein::new(0.0),
         }
+    }
+
+    #[test]
+    fn transmittance_to_infinity_is_one_where_a_channel_does_not_attenuate() {
+        let m =
+            Homogeneous { sigma_a: Vec3::new(0.0, 1.0, 0.0), sigma_s: Vec3::ZERO, phase: HenyeyGreenstein::new(0.0) };
+        assert_eq!(m.transmittance(f32::INFINITY), Vec3::new(1.0, 0.0, 1.0));
+        assert_eq!(m.sample(f32::INFINITY, 1.0, 0.1, 0.5), Flight::Through { weight: Vec3::new(1.5, 0.0, 1.5) });
     }
 
     /// E[weight · σs] over scatter events plus E[weight] over passes reproduce the two
