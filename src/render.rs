@@ -140,7 +140,7 @@ impl RenderScene {
             pbrt_sampling: !scene.fixes.has(Fix::ShapeSampling) && !bidirectional,
         };
         let emitters = area_lights(&geometry, &shape_area_lights, &area_params, rules, &mut lights);
-        let media = scene.media.iter().map(|m| m.kind).collect();
+        let media = scene.media.iter().map(|m| m.kind.clone()).collect();
         let world_shape_media = scene.shapes.iter().map(|s| s.media).collect();
         let object_shape_media = scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.media).collect()).collect();
         let light_media = scene.lights.iter().map(|l| l.medium).collect();

@@ -557,7 +557,7 @@ fn scatter_on_camera_path(
             None
         }
         Err((mp, weight)) => {
-            *beta *= weight * scene.media[m as usize].sigma_s();
+            *beta *= weight * mp.sigma_s;
             let direct = *beta * volume::direct_light(scene, &mp, sampler);
             let vp = VisiblePoint { p: mp.p, wo: mp.wo, ng: Vec3::ZERO, at: Scatterer::Medium(mp.phase), beta: *beta };
             Some((direct, vp))
@@ -604,7 +604,8 @@ fn direct_light(
         && !scene.emission_masked(light, ls.surface.as_ref())
     {
         let f = bsdf.f(wo, ls.wi) * ls.wi.dot(ns).abs();
-        let tr = if f != Vec3::ZERO && ls.li != Vec3::ZERO { shadow(scene, si, &ls, here) } else { Vec3::ZERO };
+        let tr =
+            if f != Vec3::ZERO && ls.li != Vec3::ZERO { shadow(scene, si, &ls, here, sampler) } else { Vec3::ZERO };
         if tr != Vec3::ZERO {
             let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi)) };
             ld += tr * f * ls.li * w / ls.pdf;
@@ -615,11 +616,11 @@ fn direct_light(
         && let Some(s) = bsdf.sample_f(wo, u_bsdf, u_lobe, TransportMode::Radiance)
     {
         if !s.specular && !light.is_delta() {
-            ld += bsdf_strategy(scene, si, bsdf, wo, &s, (light, idx), here);
+            ld += bsdf_strategy(scene, si, (bsdf, wo, &s), (light, idx), here, sampler);
         } else if s.specular && specular_too {
             // Light sampling cannot find this direction: whatever emits along it counts
             // in full, once (not through the light chosen above).
-            specular = s.f * s.wi.dot(ns).abs() * emitted_along(scene, si, s.wi, here) / s.pdf;
+            specular = s.f * s.wi.dot(ns).abs() * emitted_along(scene, si, s.wi, here, sampler) / s.pdf;
         }
     }
     ld * n as f32 + specular
@@ -629,17 +630,16 @@ fn direct_light(
 fn bsdf_strategy(
     scene: &RenderScene,
     si: &crate::interaction::SurfaceInteraction,
-    bsdf: &Bsdf,
-    wo: Vec3,
-    s: &crate::materials::BsdfSample,
+    (bsdf, wo, s): (&Bsdf, Vec3, &crate::materials::BsdfSample),
     (light, idx): (&Light, usize),
     here: Here,
+    sampler: &mut impl Sampler,
 ) -> Rgb {
     // Trace first: the sample only counts where it reaches this light, and only then
     // is the light's density needed (measured from the offset origin, so the surface
     // just left is never taken for the light).
     let ray = si.spawn_ray(Vector3(s.wi));
-    let (hit, tr) = trace_lit(scene, &ray, || here.medium_toward(scene, si, s.wi));
+    let (hit, tr) = trace_lit(scene, &ray, || here.medium_toward(scene, si, s.wi), sampler);
     let li = tr
         * match hit {
             Some(hit) => match scene.emitter(&hit) {
@@ -664,8 +664,14 @@ fn bsdf_strategy(
 
 /// What every light sends back along the ray from `si` in direction `wi`: the area
 /// light it hits, or the infinite lights where it escapes.
-fn emitted_along(scene: &RenderScene, si: &crate::interaction::SurfaceInteraction, wi: Vec3, here: Here) -> Rgb {
-    let (hit, tr) = trace_lit(scene, &si.spawn_ray(Vector3(wi)), || here.medium_toward(scene, si, wi));
+fn emitted_along(
+    scene: &RenderScene,
+    si: &crate::interaction::SurfaceInteraction,
+    wi: Vec3,
+    here: Here,
+    sampler: &mut impl Sampler,
+) -> Rgb {
+    let (hit, tr) = trace_lit(scene, &si.spawn_ray(Vector3(wi)), || here.medium_toward(scene, si, wi), sampler);
     tr * match hit {
         Some(hit) => scene.emitted(&hit, &scene.geometry.interaction(&hit), -wi),
         None => scene.lights.iter().map(|l| l.le_escaped(wi)).sum(),
@@ -679,8 +685,13 @@ fn trace_lit(
     scene: &RenderScene,
     ray: &crate::math::Ray,
     medium: impl FnOnce() -> Option<u32>,
+    sampler: &mut impl Sampler,
 ) -> (Option<crate::accel::Hit>, Rgb) {
-    if scene.media.is_empty() { (scene.intersect(ray), Vec3::ONE) } else { volume::trace(scene, ray, medium()) }
+    if scene.media.is_empty() {
+        (scene.intersect(ray), Vec3::ONE)
+    } else {
+        volume::trace(scene, ray, medium(), sampler)
+    }
 }
 
 /// How much of a light sample arrives: 0 or 1 in vacuum (an interface blocks it, as
@@ -690,6 +701,7 @@ fn shadow(
     si: &crate::interaction::SurfaceInteraction,
     ls: &crate::lights::LightSample,
     here: Here,
+    sampler: &mut impl Sampler,
 ) -> Rgb {
     let ray = match ls.p_light {
         Some(p) => si.spawn_ray_to(Point3(p)),
@@ -698,7 +710,7 @@ fn shadow(
     if scene.media.is_empty() {
         return if scene.intersect_p(&ray) { Vec3::ZERO } else { Vec3::ONE };
     }
-    volume::transmittance(scene, &ray, here.medium_toward(scene, si, ls.wi))
+    volume::transmittance(scene, &ray, here.medium_toward(scene, si, ls.wi), sampler)
 }
 
 /// What tracing a photon path found.
@@ -733,7 +745,7 @@ fn trace_photon(
                     if depth > 0 {
                         near |= deposit_in_medium(grid, pixels, &mp, beta * weight, out);
                     }
-                    let Some(next) = scatter_in_medium(scene, &mp, beta * weight, beta, sampler) else { break };
+                    let Some(next) = scatter_in_medium(&mp, beta * weight, beta, sampler) else { break };
                     (beta, ray) = next;
                     depth += 1;
                     continue;
@@ -744,11 +756,17 @@ fn trace_photon(
         hits += 1;
         let si = scene.geometry.interaction(&hit);
         let wi = -ray.d.0;
-        if depth > 0 {
+        let d = ray.d.0;
+        let at = surface(scene, &hit, &si, &Footprint::default(), &mut ray, &mut passes);
+        // DEVIATION(pbrt): appearance, in scenes with media only (which pbrt's SPPM does
+        // not render). pbrt gathers photons where they cross an interface as well as
+        // where they land, counting them twice near a medium's boundary (13% too bright
+        // on a floor just under a fog box, against pbrt's volpath); with media we gather
+        // at scattering surfaces only. Scenes without media keep pbrt's rule.
+        if depth > 0 && (scene.media.is_empty() || matches!(at, Surface::Bsdf(_))) {
             near |= deposit_on_surface(grid, pixels, si.p.0, (wi, beta), skip_behind, out);
         }
-        let d = ray.d.0;
-        let bsdf = match surface(scene, &hit, &si, &Footprint::default(), &mut ray, &mut passes) {
+        let bsdf = match at {
             Surface::Bsdf(b) => b,
             Surface::PassedThrough => {
                 medium = scene.medium_after(&hit, si.n.0, d, medium);
@@ -838,13 +856,12 @@ fn deposit_in_medium(grid: &Grid, pixels: &[Pixel], mp: &MediumPoint, beta: Rgb,
 /// The photon's next ray after scattering at `mp` (phase sampling, whose weight is 1),
 /// its weight σs·`weight`, with Russian roulette against the weight it had (`before`).
 fn scatter_in_medium(
-    scene: &RenderScene,
     mp: &MediumPoint,
     weight: Rgb,
     before: Rgb,
     sampler: &mut impl Sampler,
 ) -> Option<(Rgb, crate::math::Ray)> {
-    let bnew = weight * scene.media[mp.medium as usize].sigma_s();
+    let bnew = weight * mp.sigma_s;
     let s = mp.phase.sample(mp.wo, sampler.get2d());
     let q = (1.0 - luminance(bnew) / luminance(before).max(1e-30)).max(0.0);
     if sampler.get1d() < q {

@@ -31,6 +31,8 @@ pub struct MediumPoint {
     /// Back along the arriving ray, unit length.
     pub wo: Vec3,
     pub phase: HenyeyGreenstein,
+    /// The scattering coefficient here.
+    pub sigma_s: Rgb,
     pub medium: u32,
 }
 
@@ -45,10 +47,10 @@ pub fn fly(
 ) -> Result<Rgb, (MediumPoint, Rgb)> {
     let m = &scene.media[medium as usize];
     let t_max = hit.map_or(f32::INFINITY, |h| h.t);
-    match m.sample(t_max, ray.d.0.length(), sampler.get2d()) {
+    match m.sample(ray.o.0, ray.d.0, t_max, sampler) {
         Flight::Through { weight } => Ok(weight),
-        Flight::Scatter { t, weight } => {
-            let p = MediumPoint { p: ray.at(t).0, wo: -ray.d.0.normalize(), phase: m.phase(), medium };
+        Flight::Scatter { t, weight, sigma_s } => {
+            let p = MediumPoint { p: ray.at(t).0, wo: -ray.d.0.normalize(), phase: m.phase(), sigma_s, medium };
             Err((p, weight))
         }
     }
@@ -57,14 +59,19 @@ pub fn fly(
 /// The first surface along `ray` that is not an interface, and the transmittance up
 /// to it (or to `ray.t_max`, or to infinity where nothing is hit), starting in
 /// `medium`; `hit` is in the ray's own parameter. The transmittance is 0 where the ray
-/// crosses too many interfaces.
-pub fn trace(scene: &RenderScene, ray: &Ray, mut medium: Option<u32>) -> (Option<Hit>, Rgb) {
+/// crosses too many interfaces. Grids estimate it with numbers from `sampler`.
+pub fn trace(
+    scene: &RenderScene,
+    ray: &Ray,
+    mut medium: Option<u32>,
+    sampler: &mut impl Sampler,
+) -> (Option<Hit>, Rgb) {
     let (mut r, mut t0, mut tr) = (*ray, 0.0, Vec3::ONE);
     for _ in 0..MAX_CROSSINGS {
         let hit = scene.intersect(&r);
         if let Some(m) = medium {
             let t = hit.map_or(r.t_max, |h| h.t);
-            tr *= segment_transmittance(scene, m, t, r.d.0.length());
+            tr *= scene.media[m as usize].transmittance(r.o.0, r.d.0, t, sampler);
         }
         let Some(hit) = hit else { return (None, tr) };
         let si = scene.geometry.interaction(&hit);
@@ -80,15 +87,11 @@ pub fn trace(scene: &RenderScene, ray: &Ray, mut medium: Option<u32>) -> (Option
 
 /// Transmittance of a shadow ray to its `t_max`: 0 when a surface that is not an
 /// interface blocks it.
-pub fn transmittance(scene: &RenderScene, ray: &Ray, medium: Option<u32>) -> Rgb {
-    match trace(scene, ray, medium) {
+pub fn transmittance(scene: &RenderScene, ray: &Ray, medium: Option<u32>, sampler: &mut impl Sampler) -> Rgb {
+    match trace(scene, ray, medium, sampler) {
         (None, tr) => tr,
         (Some(_), _) => Vec3::ZERO,
     }
-}
-
-fn segment_transmittance(scene: &RenderScene, m: u32, t: f32, dlen: f32) -> Rgb {
-    scene.media[m as usize].transmittance(t * dlen)
 }
 
 /// Direct light at a medium point from one uniformly chosen light: light sampling and
@@ -116,14 +119,14 @@ pub fn direct_light(scene: &RenderScene, mp: &MediumPoint, sampler: &mut impl Sa
             },
             None => Ray::new(Point3(mp.p), crate::math::Vector3(ls.wi)),
         };
-        let tr = transmittance(scene, &ray, Some(mp.medium));
+        let tr = transmittance(scene, &ray, Some(mp.medium), sampler);
         let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, f) };
         ld += f * tr * ls.li * w / ls.pdf;
     }
     if !light.is_delta() {
         let s = mp.phase.sample(mp.wo, u_phase);
         let ray = Ray::new(Point3(mp.p), crate::math::Vector3(s.wi));
-        let (hit, tr) = trace(scene, &ray, Some(mp.medium));
+        let (hit, tr) = trace(scene, &ray, Some(mp.medium), sampler);
         let li = match hit {
             Some(hit) => match scene.emitter(&hit) {
                 Some((_, l)) if l as usize == idx => {

@@ -36,9 +36,10 @@ pub struct Homogeneous {
 /// What free-flight sampling along a segment found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Flight {
-    /// A scattering point at ray parameter `t`; `weight` is Tr/pdf (times σs for a path
-    /// that scatters there; photons deposit with it as it is).
-    Scatter { t: f32, weight: Vec3 },
+    /// A scattering point at ray parameter `t`; `weight` is Tr/pdf (times `sigma_s`,
+    /// the scattering coefficient there, for a path that scatters; photons deposit
+    /// with it as it is).
+    Scatter { t: f32, weight: Vec3, sigma_s: Vec3 },
     /// No interaction before the segment's end: Tr/pdf of reaching it.
     Through { weight: Vec3 },
 }
@@ -46,11 +47,21 @@ pub enum Flight {
 impl Homogeneous {
     /// Reads the parameters by the rules of the file's version.
     pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Homogeneous> {
+        let m = Homogeneous::coefficients(p, ctx, true)?;
+        if ctx.syntax == Syntax::V4 {
+            emission(p, ctx)?;
+        }
+        Ok(m)
+    }
+
+    /// σa, σs (scaled) and g as every medium type reads them; `presets`: whether
+    /// `preset` is read (pbrt-v4's grids ignore it).
+    pub fn coefficients(p: &ParamList, ctx: &mut MediumContext, presets: bool) -> Res<Homogeneous> {
         let (mut sigma_a, mut sigma_s) = match ctx.syntax {
             Syntax::V3 => (Vec3::new(0.0011, 0.0024, 0.014), Vec3::new(2.55, 3.21, 3.77)),
             Syntax::V4 => (Vec3::ONE, Vec3::ONE),
         };
-        let preset = preset(p, ctx)?;
+        let preset = if presets { preset(p, ctx)? } else { None };
         if let Some((a, s)) = preset {
             (sigma_a, sigma_s) = (a, s);
         }
@@ -64,9 +75,6 @@ impl Homogeneous {
         if !(-1.0..=1.0).contains(&g) {
             let at = values::span_of(p, "g").unwrap_or_default();
             return Err(Diagnostic::error(at, format!("\"float g\" must lie in [-1, 1], not {g}")));
-        }
-        if ctx.syntax == Syntax::V4 {
-            emission(p, ctx)?;
         }
         Ok(Homogeneous { sigma_a: sigma_a * scale, sigma_s: sigma_s * scale, phase: HenyeyGreenstein::new(g) })
     }
@@ -97,7 +105,7 @@ impl Homogeneous {
             let pdf = (st * tr).element_sum() / 3.0;
             // A zero density can only come from a point the other channels cannot reach.
             let weight = if pdf > 0.0 { tr / pdf } else { Vec3::ZERO };
-            return Flight::Scatter { t, weight };
+            return Flight::Scatter { t, weight, sigma_s: self.sigma_s };
         }
         let tr = self.transmittance(t_max * dlen);
         let pdf = tr.element_sum() / 3.0;
@@ -161,7 +169,7 @@ mod tests {
             let u = (k as f32 + 0.5) / n as f32;
             let uc = ((k * 7) % 3) as f32 / 3.0 + 0.1;
             match m.sample(len / 2.0, 2.0, uc, u) {
-                Flight::Scatter { t, weight } => {
+                Flight::Scatter { t, weight, .. } => {
                     assert!(t < len / 2.0);
                     scattered += (weight * m.sigma_s).as_dvec3();
                 }

@@ -12,10 +12,11 @@
 //! AttributeEnd
 //! ```
 //!
-//! One module per medium type ([`homogeneous`]), the phase function in [`phase`], the
-//! measured presets in [`presets`]. The types registered are [`TYPES`]; the others pbrt
-//! knows are skipped with a located warning and rendered as vacuum.
+//! One module per medium type ([`homogeneous`], [`grid`]), the phase function in
+//! [`phase`], the measured presets in [`presets`]. The types registered are [`TYPES`];
+//! the others pbrt knows are skipped with a located warning and rendered as vacuum.
 
+pub mod grid;
 pub mod homogeneous;
 pub mod phase;
 pub mod presets;
@@ -24,13 +25,17 @@ use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
+use crate::sampling::Sampler;
 use crate::scene::approx::Approx;
 use crate::scene::values::{Res, SpectrumContext};
+use glam::{DMat4, Vec3};
+pub use grid::GridMedium;
 pub use homogeneous::{Flight, Homogeneous};
 pub use phase::HenyeyGreenstein;
+use std::sync::Arc;
 
 /// The medium types rendered.
-pub const TYPES: &[&str] = &[homogeneous::NAME];
+pub const TYPES: &[&str] = &[homogeneous::NAME, grid::NAMES[0], grid::NAMES[1]];
 
 /// A named medium as the scene built it.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,43 +45,38 @@ pub struct MediumDesc {
 }
 
 /// A medium, ready to render.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Medium {
     Homogeneous(Homogeneous),
+    Grid(Arc<GridMedium>),
 }
 
 impl Medium {
-    pub fn type_name(&self) -> &'static str {
-        match self {
-            Medium::Homogeneous(_) => homogeneous::NAME,
-        }
-    }
-
     pub fn phase(&self) -> HenyeyGreenstein {
         match self {
             Medium::Homogeneous(h) => h.phase,
+            Medium::Grid(g) => g.phase,
         }
     }
 
-    /// The scattering coefficient at a point the sampler chose.
-    pub fn sigma_s(&self) -> glam::Vec3 {
+    /// Free-flight sampling along the segment `o + t·d`, t in [0, `t_max`).
+    pub fn sample(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler) -> Flight {
         match self {
-            Medium::Homogeneous(h) => h.sigma_s,
+            Medium::Homogeneous(h) => {
+                let u = sampler.get2d();
+                h.sample(t_max, d.length(), u[0], u[1])
+            }
+            Medium::Grid(g) => g.sample_flight(o, d, t_max, sampler),
         }
     }
 
-    /// Free-flight sampling along a segment of parameter length `t_max` of a ray
-    /// whose direction has length `dlen`.
-    pub fn sample(&self, t_max: f32, dlen: f32, u: [f32; 2]) -> Flight {
+    /// Transmittance along the segment `o + t·d`, t in [0, `t_max`] (an unbiased
+    /// estimate for grids, exact for homogeneous media).
+    pub fn transmittance(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler) -> Vec3 {
+        let dlen = d.length();
         match self {
-            Medium::Homogeneous(h) => h.sample(t_max, dlen, u[0], u[1]),
-        }
-    }
-
-    /// Transmittance across `dist` world units of the segment.
-    pub fn transmittance(&self, dist: f32) -> glam::Vec3 {
-        match self {
-            Medium::Homogeneous(h) => h.transmittance(dist),
+            Medium::Homogeneous(h) => h.transmittance(t_max * dlen),
+            Medium::Grid(g) => g.transmittance(o, d / dlen, t_max * dlen, sampler),
         }
     }
 }
@@ -109,12 +109,17 @@ pub struct MediumContext<'a> {
     pub warnings: &'a mut Vec<Diagnostic>,
     /// Notes something rendered other than as written.
     pub approximate: &'a mut dyn FnMut(Span, String, Approx),
+    /// The CTM at the statement: the medium's own space (grids are placed in it).
+    pub medium_to_world: DMat4,
+    /// The statement's name, for errors about the whole statement.
+    pub at: Span,
 }
 
 /// Builds a medium of type `ty`; `Ok(None)` for a type that is not rendered.
 pub fn read(ty: &str, p: &ParamList, ctx: &mut MediumContext) -> Res<Option<Medium>> {
     Ok(match ty {
         homogeneous::NAME => Some(Medium::Homogeneous(Homogeneous::read(p, ctx)?)),
+        "heterogeneous" | "uniformgrid" => Some(Medium::Grid(Arc::new(GridMedium::read(p, ctx)?))),
         _ => None,
     })
 }

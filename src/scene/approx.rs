@@ -19,10 +19,11 @@ pub enum Approx {
     ColorSpace,
     EqualAreaMap,
     MediumEmission,
+    ColoredGridMedium,
 }
 
 impl Approx {
-    pub const ALL: [Approx; 10] = [
+    pub const ALL: [Approx; 11] = [
         Approx::CoatInBlend,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
@@ -33,6 +34,7 @@ impl Approx {
         Approx::ColorSpace,
         Approx::EqualAreaMap,
         Approx::MediumEmission,
+        Approx::ColoredGridMedium,
     ];
 
     /// How it is rendered instead (the README lists these texts).
@@ -50,6 +52,9 @@ impl Approx {
             Approx::ColorSpace => "only sRGB is supported; RGB values are taken as sRGB",
             Approx::EqualAreaMap => "pbrt-v4's equal-area environment maps are read as equirectangular ones",
             Approx::MediumEmission => "emission from media is not rendered yet; the medium absorbs and scatters only",
+            Approx::ColoredGridMedium => {
+                "a grid medium is tracked with one attenuation (as pbrt-v3 requires): the mean of the channels' σa + σs"
+            }
         }
     }
 }

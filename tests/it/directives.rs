@@ -171,7 +171,7 @@ fn sampler_filter_and_accelerator_are_accepted_quietly() {
 #[test]
 fn media_not_rendered_yet_are_skipped_with_one_warning_each() {
     let s = scene(
-        "MakeNamedMedium \"grid\" \"string type\" \"uniformgrid\"\nWorldBegin\nMediumInterface \"grid\" \"\"\nMediumInterface \"\"\nShape \"sphere\"\n",
+        "MakeNamedMedium \"grid\" \"string type\" \"rgbgrid\"\nWorldBegin\nMediumInterface \"grid\" \"\"\nMediumInterface \"\"\nShape \"sphere\"\n",
     );
     assert_eq!(s.skipped.len(), 1);
     assert_eq!(s.skipped[0].line, 1);

@@ -9,9 +9,9 @@ use pbrt_sppm::render::RenderScene;
 
 fn medium(text: &str) -> pbrt_sppm::media::Homogeneous {
     let s = scene(text);
-    match s.media.first().map(|m| m.kind) {
+    match s.media.first().map(|m| m.kind.clone()) {
         Some(Medium::Homogeneous(h)) => h,
-        None => panic!("no medium built"),
+        other => panic!("not a homogeneous medium: {other:?}"),
     }
 }
 
@@ -23,6 +23,13 @@ fn fog(version_marker: &str, params: &str) -> String {
 }
 
 const V3: &str = "Film \"image\"";
+
+fn grid(params: &str) -> String {
+    format!(
+        "Film \"image\" MakeNamedMedium \"m\" \"string type\" \"heterogeneous\" {params} \
+         WorldBegin MediumInterface \"m\" \"\" Shape \"sphere\""
+    )
+}
 const V4: &str = "Film \"rgb\"";
 
 #[test]
@@ -52,6 +59,11 @@ fn bad_media_are_located_errors() {
         ),
         ("MakeNamedMedium \"m\" \"string type\" \"plasma\" WorldBegin".into(), "unknown medium type \"plasma\""),
         ("MakeNamedMedium \"m\" \"rgb sigma_a\" [1 1 1] WorldBegin".into(), "needs a \"string type\""),
+        (grid("\"integer nx\" 2 \"float density\" [1 2 3]"), "3 density values; nx·ny·nz = 2·1·1 = 2"),
+        (grid("\"integer nx\" 0 \"float density\" []"), "nx·ny·nz = 0·1·1"),
+        (grid(""), "needs \"float density\" values"),
+        (grid("\"float density\" [-1]"), "at least 0, not -1"),
+        (grid("\"float density\" [1] \"point p0\" [0 0 0] \"point p1\" [1 0 1]"), "must exceed \"p0\""),
     ] {
         let e = load(&text).expect_err(&text).to_string();
         assert!(e.contains(want), "{text}: {e}");
@@ -63,11 +75,15 @@ fn bad_media_are_located_errors() {
 fn what_is_not_rendered_says_so_where_it_is_written() {
     let s = scene(&fog(V3, "\"string preset\" \"Jelly\""));
     assert!(warnings(&s).iter().any(|w| w.contains("unknown medium preset \"Jelly\"")), "{:?}", warnings(&s));
-    let grid = "MakeNamedMedium \"g\" \"string type\" \"heterogeneous\" \"float density\" [1] \
-                WorldBegin MediumInterface \"g\" \"\" Shape \"sphere\"";
-    let s = scene(grid);
+    let cloud =
+        "MakeNamedMedium \"g\" \"string type\" \"cloud\" WorldBegin MediumInterface \"g\" \"\" Shape \"sphere\"";
+    let s = scene(cloud);
     assert!(s.media.is_empty());
-    assert!(s.skipped.iter().any(|k| k.what.contains("heterogeneous")), "{:?}", s.skipped);
+    assert!(s.skipped.iter().any(|k| k.what.contains("cloud")), "{:?}", s.skipped);
+    let colored = "MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"float density\" [1] \
+                   \"rgb sigma_a\" [1 2 3] WorldBegin MediumInterface \"g\" \"\" Shape \"sphere\"";
+    let s = scene(colored);
+    assert!(s.approximated.iter().any(|a| a.what.contains("σa + σs")), "{:?}", s.approximated);
     let s = scene(&fog(V4, "\"rgb Le\" [1 1 1]"));
     assert!(s.approximated.iter().any(|a| a.what.contains("Le")), "{:?}", s.approximated);
 }
@@ -164,4 +180,37 @@ fn pbrt_v3_gives_the_camera_the_medium_current_at_world_end() {
         scene(&text.replace("WorldEnd", "").replace("Camera \"perspective\"", "Camera \"perspective\" Film \"rgb\""));
     assert_eq!(v4.camera_medium, Some(0));
     assert!(!v4.pbrt_bugs.iter().any(|b| b.name == "camera-medium"), "{:?}", v4.pbrt_bugs);
+}
+
+/// An emitter seen through a grid medium of constant samples: where the samples are
+/// flat the density is 1, and it falls linearly to ½ over the outer half-voxel (pbrt's
+/// samples sit at voxel centres, zero beyond). A ray along z through the middle meets
+/// optical depth σa · 2 · (1 − 1/16) for a box of depth 2 and 4 voxels an axis. (The
+/// medium is defined after WorldBegin: before it, the CTM is the camera's and pbrt
+/// places the grid in that space.)
+#[test]
+fn a_grid_slab_dims_what_is_behind_it_by_its_integrated_density() {
+    let densities = vec!["1"; 64].join(" ");
+    let text = format!(
+        "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8 \
+        LookAt 0 0 6  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 4 \
+        Integrator \"sppm\" \"integer numiterations\" 64 \"integer photonsperiteration\" 1000 \
+        WorldBegin \
+        MakeNamedMedium \"ink\" \"string type\" \"heterogeneous\" \"color sigma_a\" [0.5 0.5 0.5] \
+          \"color sigma_s\" [0 0 0] \"integer nx\" 4 \"integer ny\" 4 \"integer nz\" 4 \"float density\" [{densities}] \
+          \"point p0\" [-1 -1 -1] \"point p1\" [1 1 1] \
+        AttributeBegin MediumInterface \"ink\" \"\" Material \"\" \
+          Shape \"trianglemesh\" \"point P\" [-1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1  -1 -1 1  1 -1 1  1 1 1  -1 1 1] \
+          \"integer indices\" [0 2 1 0 3 2  4 5 6 4 6 7  0 4 7 0 7 3  1 2 6 1 6 5  0 1 5 0 5 4  3 7 6 3 6 2] \
+        AttributeEnd \
+        AttributeBegin Translate 0 0 -3 AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \
+          Material \"matte\" \"rgb Kd\" [0 0 0] \
+          Shape \"trianglemesh\" \"point P\" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] \"integer indices\" [0 1 2 0 2 3] \
+        AttributeEnd WorldEnd"
+    );
+    let m = mean(&render(&text));
+    let want = (-0.5f64 * 2.0 * (1.0 - 1.0 / 16.0)).exp();
+    for (c, v) in m.iter().enumerate() {
+        assert!((v - want).abs() < 0.02 * want, "channel {c}: {v}, want {want}");
+    }
 }

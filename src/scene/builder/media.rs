@@ -73,14 +73,14 @@ impl Builder {
         for i in 0..self.medium_slots.len() {
             let slot = &mut self.medium_slots[i];
             // The medium's own transform (the CTM at its statement) matters to grids only.
-            let Some((e, _ctm)) = slot.definition.take() else {
+            let Some((e, ctm)) = slot.definition.take() else {
                 let at = slot.first_use.unwrap_or_default();
                 return Err(Diagnostic::error(
                     at,
                     format!("medium \"{}\" is not defined (MakeNamedMedium)", slot.name),
                 ));
             };
-            remap.push(self.build_medium(&e)?.map(|kind| {
+            remap.push(self.build_medium(&e, ctm)?.map(|kind| {
                 built.push(MediumDesc { name: e.name.clone(), kind });
                 built.len() as u32 - 1
             }));
@@ -88,7 +88,7 @@ impl Builder {
         Ok((built, remap))
     }
 
-    fn build_medium(&mut self, e: &Entity) -> Res<Option<media::Medium>> {
+    fn build_medium(&mut self, e: &Entity, medium_to_world: DMat4) -> Res<Option<media::Medium>> {
         let ty = e.params.string("type")?.unwrap_or_default();
         let at = crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span);
         if ty.is_empty() {
@@ -103,7 +103,14 @@ impl Builder {
         let built = {
             let mut approximate = |s, what, how| notes.push((s, what, how));
             let spectra = SpectrumContext { base_dir: &base, normalize_blackbody: false, files: &files };
-            let mut ctx = MediumContext { syntax, spectra, warnings: &mut warnings, approximate: &mut approximate };
+            let mut ctx = MediumContext {
+                syntax,
+                spectra,
+                warnings: &mut warnings,
+                approximate: &mut approximate,
+                medium_to_world,
+                at: e.name_span,
+            };
             media::read(&ty, &e.params, &mut ctx)
         };
         self.warnings.append(&mut warnings);
