@@ -300,3 +300,13 @@ fn smoke_in_a_density_grid_matches_pbrt_v3_volpath() {
     // 5.7–6.2% over three seeds; 3.1% at 256 × 200,000.
     assert_matches_reference("v3-smoke-grid", Fixes::NONE, "v3-smoke-grid-volpath", 0.10);
 }
+
+#[test]
+fn a_glass_sphere_focuses_a_spot_light_into_haze_as_pbrt_v4_bdpt() {
+    // A volumetric caustic: pbrt-v4's SPPM ignores media and its volpath cannot follow
+    // the specular chain from the spot light, so the reference is its bdpt (4096
+    // samples). Ours at 48 × 100,000 photons: worst tile 14.6–21.6% over three seeds,
+    // in the focused cone (a volume density estimate of few photons); 5.7% at 256 ×
+    // 400,000. The bound is for a missing or misplaced cone, not for a few percent.
+    assert_matches_reference("v4-volume-caustic", Fixes::NONE, "v4-volume-caustic-bdpt", 0.30);
+}
