@@ -82,6 +82,12 @@ impl GridMedium {
             emission(p, ctx)?;
         }
         let max_density = density.1.iter().fold(0f32, |m, &d| m.max(d));
+        if !(sigma_t * max_density).is_finite() {
+            return Err(Diagnostic::error(
+                density.0,
+                "σt times the largest density is beyond the range of 32-bit floats",
+            ));
+        }
         Ok(GridMedium {
             sigma_a: homogeneous.sigma_a,
             sigma_s: homogeneous.sigma_s,

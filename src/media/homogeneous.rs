@@ -76,7 +76,14 @@ impl Homogeneous {
             let at = values::span_of(p, "g").unwrap_or_default();
             return Err(Diagnostic::error(at, format!("\"float g\" must lie in [-1, 1], not {g}")));
         }
-        Ok(Homogeneous { sigma_a: sigma_a * scale, sigma_s: sigma_s * scale, phase: HenyeyGreenstein::new(g) })
+        let (sigma_a, sigma_s) = (sigma_a * scale, sigma_s * scale);
+        // DEVIATION(pbrt): robustness. pbrt lets σ·scale overflow to Inf, and then
+        // distances of 0 times Inf make NaN pixels.
+        if !(sigma_a + sigma_s).is_finite() {
+            let at = values::span_of(p, "scale").or(values::span_of(p, "sigma_s")).unwrap_or_default();
+            return Err(Diagnostic::error(at, "σa + σs times \"scale\" is beyond the range of 32-bit floats"));
+        }
+        Ok(Homogeneous { sigma_a, sigma_s, phase: HenyeyGreenstein::new(g) })
     }
 
     pub fn sigma_t(&self) -> Vec3 {

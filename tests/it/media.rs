@@ -53,6 +53,8 @@ fn bad_media_are_located_errors() {
         (fog(V4, "\"rgb sigma_s\" [1 -1 1]"), "must be at least 0"),
         (fog(V4, "\"float scale\" -2"), "must be at least 0"),
         (fog(V4, "\"float g\" 1.5"), "must lie in [-1, 1]"),
+        (fog(V4, "\"rgb sigma_s\" [1e30 1 1] \"float scale\" 1e30"), "beyond the range of 32-bit floats"),
+        (grid("\"float density\" [3e38] \"color sigma_s\" [10 10 10]"), "beyond the range of 32-bit floats"),
         (
             "Film \"rgb\" WorldBegin MediumInterface \"nowhere\" \"\" Shape \"sphere\"".into(),
             "\"nowhere\" is not defined",
