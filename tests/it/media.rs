@@ -59,8 +59,11 @@ fn bad_media_are_located_errors() {
             "Film \"rgb\" WorldBegin MediumInterface \"nowhere\" \"\" Shape \"sphere\"".into(),
             "\"nowhere\" is not defined",
         ),
-        ("MakeNamedMedium \"m\" \"string type\" \"plasma\" WorldBegin".into(), "unknown medium type \"plasma\""),
-        ("MakeNamedMedium \"m\" \"rgb sigma_a\" [1 1 1] WorldBegin".into(), "needs a \"string type\""),
+        (
+            "MakeNamedMedium \"m\" \"string type\" \"plasma\" MediumInterface \"m\" \"\"".into(),
+            "unknown medium type \"plasma\"",
+        ),
+        ("MakeNamedMedium \"m\" \"rgb sigma_a\" [1 1 1] MediumInterface \"m\" \"\"".into(), "needs a \"string type\""),
         (grid("\"integer nx\" 2 \"float density\" [1 2 3]"), "3 density values; nx·ny·nz = 2·1·1 = 2"),
         (grid("\"integer nx\" 0 \"float density\" []"), "nx·ny·nz = 0·1·1"),
         (grid(""), "needs \"float density\" values"),
@@ -215,4 +218,20 @@ fn a_grid_slab_dims_what_is_behind_it_by_its_integrated_density() {
     for (c, v) in m.iter().enumerate() {
         assert!((v - want).abs() < 0.02 * want, "channel {c}: {v}, want {want}");
     }
+}
+
+/// A medium no `MediumInterface` names is listed as never used and not built: the
+/// scene renders as one without media (SPPM's pbrt rules, vcm for a `path` file).
+#[test]
+fn a_medium_nothing_names_is_left_out() {
+    let s = scene(
+        "MakeNamedMedium \"unused\" \"string type\" \"homogeneous\" Integrator \"path\" WorldBegin Shape \"sphere\"",
+    );
+    assert!(s.media.is_empty());
+    assert!(
+        s.skipped.iter().any(|k| k.what == "MakeNamedMedium \"unused\"" && k.why == "never used"),
+        "{:?}",
+        s.skipped
+    );
+    assert!(!s.integrator.media);
 }

@@ -66,7 +66,7 @@ impl Builder {
     }
 
     /// Builds the defined media in slot order; returns each slot's index among them
-    /// (`None` for a type that is not rendered).
+    /// (`None` for a type that is not rendered, or a medium nothing names).
     pub(super) fn build_media(&mut self) -> Res<(Vec<MediumDesc>, Vec<Option<u32>>)> {
         let mut built = Vec::new();
         let mut remap = Vec::new();
@@ -80,6 +80,13 @@ impl Builder {
                     format!("medium \"{}\" is not defined (MakeNamedMedium)", slot.name),
                 ));
             };
+            // Never named by a MediumInterface: nothing is in it (listed, not built).
+            if slot.first_use.is_none() {
+                let what = format!("MakeNamedMedium \"{}\"", e.name);
+                self.skipped.push((Some(e.name_span), what, "never used".into()));
+                remap.push(None);
+                continue;
+            }
             remap.push(self.build_medium(&e, ctm)?.map(|kind| {
                 built.push(MediumDesc { name: e.name.clone(), kind });
                 built.len() as u32 - 1
