@@ -49,12 +49,11 @@ pub struct GridMedium {
 }
 
 impl GridMedium {
-    /// Reads a grid medium; `medium_to_world` is the CTM at its statement.
+    /// Reads a grid medium, placed by the CTM at its statement (`ctx.medium_to_world`).
     pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<GridMedium> {
         let homogeneous = super::Homogeneous::coefficients(p, ctx, ctx.syntax == Syntax::V3)?;
         let density = densities(p, ctx.at)?;
-        let n = ["nx", "ny", "nz"].map(|k| p.int(k).map(|v| v.unwrap_or(1)));
-        let n = [n[0].clone()?, n[1].clone()?, n[2].clone()?];
+        let n = [p.int("nx")?.unwrap_or(1), p.int("ny")?.unwrap_or(1), p.int("nz")?.unwrap_or(1)];
         let count = n.iter().map(|&k| k.max(0) as i64).product::<i64>();
         if n.iter().any(|&k| k < 1) || count != density.1.len() as i64 {
             let msg = format!(
