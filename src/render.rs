@@ -362,6 +362,19 @@ impl RenderScene {
         Some((info, info.first_light + hit.local.prim()))
     }
 
+    /// What light `idx` sends back along a ray in direction `wi` that found `hit` (or
+    /// escaped): its emission where the ray hit that very light, the sky's where it
+    /// escaped; 0 where it found anything else. For MIS with the light's density.
+    pub fn chosen_light_along(&self, hit: Option<&Hit>, idx: usize, wi: Vec3) -> Rgb {
+        match hit {
+            Some(hit) => match self.emitter(hit) {
+                Some((_, l)) if l as usize == idx => self.emitted(hit, &self.geometry.interaction(hit), -wi),
+                _ => Vec3::ZERO,
+            },
+            None => self.lights[idx].le_escaped(wi),
+        }
+    }
+
     /// Radiance leaving a hit surface toward `w` (area lights).
     pub fn emitted(&self, hit: &Hit, si: &SurfaceInteraction, w: Vec3) -> Rgb {
         let Some((e, light)) = self.emitter(hit) else { return Vec3::ZERO };

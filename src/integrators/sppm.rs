@@ -640,17 +640,7 @@ fn bsdf_strategy(
     // just left is never taken for the light).
     let ray = si.spawn_ray(Vector3(s.wi));
     let (hit, tr) = trace_lit(scene, &ray, || here.medium_toward(scene, si, s.wi), sampler);
-    let li = tr
-        * match hit {
-            Some(hit) => match scene.emitter(&hit) {
-                Some((_, l)) if l as usize == idx => {
-                    let lsi = scene.geometry.interaction(&hit);
-                    scene.emitted(&hit, &lsi, -s.wi)
-                }
-                _ => Vec3::ZERO,
-            },
-            None => light.le_escaped(s.wi),
-        };
+    let li = tr * scene.chosen_light_along(hit.as_ref(), idx, s.wi);
     if li == Vec3::ZERO {
         return Vec3::ZERO;
     }

@@ -127,16 +127,7 @@ pub fn direct_light(scene: &RenderScene, mp: &MediumPoint, sampler: &mut impl Sa
         let s = mp.phase.sample(mp.wo, u_phase);
         let ray = Ray::new(Point3(mp.p), crate::math::Vector3(s.wi));
         let (hit, tr) = trace(scene, &ray, Some(mp.medium), sampler);
-        let li = match hit {
-            Some(hit) => match scene.emitter(&hit) {
-                Some((_, l)) if l as usize == idx => {
-                    let lsi = scene.geometry.interaction(&hit);
-                    scene.emitted(&hit, &lsi, -s.wi)
-                }
-                _ => Vec3::ZERO,
-            },
-            None => light.le_escaped(s.wi),
-        };
+        let li = scene.chosen_light_along(hit.as_ref(), idx, s.wi);
         if li != Vec3::ZERO {
             let light_pdf = light.pdf_li(&scene.geometry.shapes, mp.p, s.wi);
             if light_pdf > 0.0 {

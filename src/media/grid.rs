@@ -24,7 +24,7 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::sampling::Sampler;
 use crate::scene::approx::Approx;
-use crate::scene::values::{self, Range, Res};
+use crate::scene::values::{self, Res};
 use glam::{DMat4, DVec3, Vec3};
 use std::sync::Arc;
 
@@ -245,15 +245,10 @@ fn densities(p: &ParamList, at: crate::parser::source::Span) -> Res<(crate::pars
 
 /// v4's emission parameters: read, and listed as approximated where they would emit.
 fn emission(p: &ParamList, ctx: &mut MediumContext) -> Res<()> {
-    let le = values::rgb(p, "Le", &ctx.spectra, Range::NonNegative)?;
     let temperature = p.array("temperature", ParamType::Float)?.map(|t| t.mark_used()).is_some();
     let _ = p.array("Lescale", ParamType::Float)?.map(|t| t.mark_used());
     values::no_effect(p, &["temperaturecutoff", "temperatureoffset", "temperaturescale"]);
-    if le.is_some_and(|c| c.max_element() > 0.0) || temperature {
-        let at = values::span_of(p, "Le").or(values::span_of(p, "temperature")).unwrap_or_default();
-        (ctx.approximate)(at, "medium emission".into(), Approx::MediumEmission);
-    }
-    Ok(())
+    super::note_emission(p, ctx, "medium emission", true, temperature)
 }
 
 #[cfg(test)]

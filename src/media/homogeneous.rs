@@ -19,7 +19,6 @@ use super::{MediumContext, presets};
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
-use crate::scene::approx::Approx;
 use crate::scene::values::{self, Range, Res};
 use glam::Vec3;
 
@@ -136,13 +135,8 @@ fn preset(p: &ParamList, ctx: &mut MediumContext) -> Res<Option<(Vec3, Vec3)>> {
 
 /// pbrt-v4's `Le` and `Lescale`: read and checked; emission is not rendered yet.
 fn emission(p: &ParamList, ctx: &mut MediumContext) -> Res<()> {
-    let le = values::rgb(p, "Le", &ctx.spectra, Range::NonNegative)?;
     let scale = values::float(p, "Lescale", 1.0, Range::NonNegative)?;
-    if le.is_some_and(|c| c.max_element() > 0.0) && scale > 0.0 {
-        let at = values::span_of(p, "Le").unwrap_or_default();
-        (ctx.approximate)(at, "medium emission \"Le\"".into(), Approx::MediumEmission);
-    }
-    Ok(())
+    super::note_emission(p, ctx, "medium emission \"Le\"", scale > 0.0, false)
 }
 
 #[cfg(test)]

@@ -27,7 +27,7 @@ use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::sampling::Sampler;
 use crate::scene::approx::Approx;
-use crate::scene::values::{Res, SpectrumContext};
+use crate::scene::values::{self, Range, Res, SpectrumContext};
 use glam::{DMat4, Vec3};
 pub use grid::GridMedium;
 pub use homogeneous::{Flight, Homogeneous};
@@ -113,6 +113,18 @@ pub struct MediumContext<'a> {
     pub medium_to_world: DMat4,
     /// The statement's name, for errors about the whole statement.
     pub at: Span,
+}
+
+/// pbrt-v4's medium emission, noted as approximated (it is not rendered yet) where it
+/// would emit: a nonzero `Le` (checked) under a positive scale, or what else the type
+/// found (`other`: a grid's `temperature`). `what` names it in the note.
+pub fn note_emission(p: &ParamList, ctx: &mut MediumContext, what: &str, scale_positive: bool, other: bool) -> Res<()> {
+    let le = values::rgb(p, "Le", &ctx.spectra, Range::NonNegative)?;
+    if (le.is_some_and(|c| c.max_element() > 0.0) && scale_positive) || other {
+        let at = values::span_of(p, "Le").or(values::span_of(p, "temperature")).unwrap_or_default();
+        (ctx.approximate)(at, what.into(), Approx::MediumEmission);
+    }
+    Ok(())
 }
 
 /// Builds a medium of type `ty`; `Ok(None)` for a type that is not rendered.

@@ -115,6 +115,22 @@ fn render(text: &str) -> Vec<[f32; 3]> {
     pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), &settings).expect("renders").image.pixels
 }
 
+/// The world block of a slab test, after WorldBegin: a box of half-size `h` across and
+/// 1 in depth about the origin, an interface to medium "ink" (defined by the caller),
+/// between the camera on +z and a large emitter of radiance 1 at z = -3.
+fn slab_before_an_emitter(h: f32) -> String {
+    format!(
+        "AttributeBegin MediumInterface \"ink\" \"\" Material \"\" \
+          Shape \"trianglemesh\" \"point P\" [-{h} -{h} -1  {h} -{h} -1  {h} {h} -1  -{h} {h} -1  -{h} -{h} 1  {h} -{h} 1  {h} {h} 1  -{h} {h} 1] \
+          \"integer indices\" [0 2 1 0 3 2  4 5 6 4 6 7  0 4 7 0 7 3  1 2 6 1 6 5  0 1 5 0 5 4  3 7 6 3 6 2] \
+        AttributeEnd \
+        AttributeBegin Translate 0 0 -3 AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \
+          Material \"matte\" \"rgb Kd\" [0 0 0] \
+          Shape \"trianglemesh\" \"point P\" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] \"integer indices\" [0 1 2 0 2 3] \
+        AttributeEnd WorldEnd"
+    )
+}
+
 fn mean(px: &[[f32; 3]]) -> [f64; 3] {
     let n = px.len() as f64;
     [0, 1, 2].map(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / n)
@@ -124,20 +140,16 @@ fn mean(px: &[[f32; 3]]) -> [f64; 3] {
 /// channel (free-flight sampling with colored σt must stay unbiased).
 #[test]
 fn an_absorbing_slab_dims_what_is_behind_it_by_beers_law() {
-    let text = "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 \
+    let ink =
+        "MakeNamedMedium \"ink\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.25 0.5 1] \"rgb sigma_s\" [0 0 0]";
+    let text = format!(
+        "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 \
         LookAt 0 0 5  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 10 \
         Integrator \"sppm\" \"integer numiterations\" 64 \"integer photonsperiteration\" 1000 \
-        MakeNamedMedium \"ink\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.25 0.5 1] \"rgb sigma_s\" [0 0 0] \
-        WorldBegin \
-        AttributeBegin MediumInterface \"ink\" \"\" Material \"\" \
-          Shape \"trianglemesh\" \"point P\" [-2 -2 -1  2 -2 -1  2 2 -1  -2 2 -1  -2 -2 1  2 -2 1  2 2 1  -2 2 1] \
-          \"integer indices\" [0 2 1 0 3 2  4 5 6 4 6 7  0 4 7 0 7 3  1 2 6 1 6 5  0 1 5 0 5 4  3 7 6 3 6 2] \
-        AttributeEnd \
-        AttributeBegin Translate 0 0 -3 AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \
-          Material \"matte\" \"rgb Kd\" [0 0 0] \
-          Shape \"trianglemesh\" \"point P\" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] \"integer indices\" [0 1 2 0 2 3] \
-        AttributeEnd WorldEnd";
-    let m = mean(&render(text));
+        {ink} WorldBegin {}",
+        slab_before_an_emitter(2.0)
+    );
+    let m = mean(&render(&text));
     for (c, sigma) in [0.25f64, 0.5, 1.0].into_iter().enumerate() {
         let want = (-sigma * 2.0).exp();
         assert!((m[c] - want).abs() < 0.01 * want + 1e-3, "channel {c}: {} against e^-{} = {want}", m[c], 2.0 * sigma);
@@ -203,15 +215,8 @@ fn a_grid_slab_dims_what_is_behind_it_by_its_integrated_density() {
         WorldBegin \
         MakeNamedMedium \"ink\" \"string type\" \"heterogeneous\" \"color sigma_a\" [0.5 0.5 0.5] \
           \"color sigma_s\" [0 0 0] \"integer nx\" 4 \"integer ny\" 4 \"integer nz\" 4 \"float density\" [{densities}] \
-          \"point p0\" [-1 -1 -1] \"point p1\" [1 1 1] \
-        AttributeBegin MediumInterface \"ink\" \"\" Material \"\" \
-          Shape \"trianglemesh\" \"point P\" [-1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1  -1 -1 1  1 -1 1  1 1 1  -1 1 1] \
-          \"integer indices\" [0 2 1 0 3 2  4 5 6 4 6 7  0 4 7 0 7 3  1 2 6 1 6 5  0 1 5 0 5 4  3 7 6 3 6 2] \
-        AttributeEnd \
-        AttributeBegin Translate 0 0 -3 AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \
-          Material \"matte\" \"rgb Kd\" [0 0 0] \
-          Shape \"trianglemesh\" \"point P\" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] \"integer indices\" [0 1 2 0 2 3] \
-        AttributeEnd WorldEnd"
+          \"point p0\" [-1 -1 -1] \"point p1\" [1 1 1] {}",
+        slab_before_an_emitter(1.0)
     );
     let m = mean(&render(&text));
     let want = (-0.5f64 * 2.0 * (1.0 - 1.0 / 16.0)).exp();
