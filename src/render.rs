@@ -86,6 +86,11 @@ pub struct RenderScene {
     pub emitters: Vec<Option<EmitterInfo>>,
     pub lights: Vec<Light>,
     pub light_power: Distribution1D,
+    /// Where SPPM's photons start: the lights (by `light_power`'s weights), then the
+    /// emitting media of `medium_emitters`.
+    pub photon_sources: Distribution1D,
+    /// The emitting media (index into `media`) and how their photons start.
+    pub medium_emitters: Vec<(u32, crate::media::emitters::EmissionPoints)>,
     /// Photons carry their power divided by this (a power of two near the lights'
     /// total power), so that lights far outside f32's range near 1 (an emitter of
     /// 1e38) neither overflow nor lose precision; the deposits are multiplied back in
@@ -140,12 +145,14 @@ impl RenderScene {
             pbrt_sampling: !scene.fixes.has(Fix::ShapeSampling) && !bidirectional,
         };
         let emitters = area_lights(&geometry, &shape_area_lights, &area_params, rules, &mut lights);
-        let media = scene.media.iter().map(|m| m.kind.clone()).collect();
+        let media: Vec<crate::media::Medium> = scene.media.iter().map(|m| m.kind.clone()).collect();
         let world_shape_media = scene.shapes.iter().map(|s| s.media).collect();
         let object_shape_media = scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.media).collect()).collect();
         let light_media = scene.lights.iter().map(|l| l.medium).collect();
         let powers: Vec<f64> = lights.iter().map(|l| l.power(world)).collect();
-        let photon_scale = photon_scale(powers.iter().sum());
+        let medium_emitters = medium_emitters(&media, scene);
+        let sources: Vec<f64> = powers.iter().copied().chain(medium_emitters.iter().map(|e| e.1.power)).collect();
+        let photon_scale = photon_scale(sources.iter().sum());
         let light_power = Distribution1D::new(&powers);
         RenderScene {
             geometry,
@@ -166,6 +173,8 @@ impl RenderScene {
             emitters,
             lights,
             light_power,
+            photon_sources: Distribution1D::new(&sources),
+            medium_emitters,
             photon_scale,
             world,
             world_to_camera: m,
@@ -183,6 +192,23 @@ impl RenderScene {
             (None, s) => self.world_shape_media[s as usize],
             (Some(o), s) => self.object_shape_media[o as usize][s as usize],
         }
+    }
+
+    /// The medium at point `p`, as a ray from it finds: the side of the first medium
+    /// transition it crosses, or the camera's medium where it crosses none.
+    pub fn medium_at(&self, p: Vec3) -> Option<u32> {
+        let d = Vec3::new(0.267_261, 0.801_784, 0.534_522);
+        let mut ray = crate::math::Ray::new(crate::math::Point3(p), crate::math::Vector3(d));
+        for _ in 0..1024 {
+            let Some(hit) = self.intersect(&ray) else { return self.camera_medium };
+            let si = self.geometry.interaction(&hit);
+            let mi = self.media_of(&hit);
+            if mi.is_transition() {
+                return mi.toward(-d, si.n.0);
+            }
+            ray = si.spawn_ray(crate::math::Vector3(d));
+        }
+        self.camera_medium
     }
 
     /// The medium a ray in `current` is in after crossing the hit surface in
@@ -506,6 +532,37 @@ fn area_lights(
 }
 
 /// The power of two nearest `total` (1 for no light).
+/// The emitting media and where their photons start.
+fn medium_emitters(
+    media: &[crate::media::Medium],
+    scene: &SceneDescription,
+) -> Vec<(u32, crate::media::emitters::EmissionPoints)> {
+    let points = |(i, m)| {
+        let region = medium_region(scene, i as u32)?;
+        crate::media::emitters::EmissionPoints::new(m, region).map(|e| (i as u32, e))
+    };
+    media.iter().enumerate().filter_map(points).collect()
+}
+
+/// A box holding every point of medium `m`: the bounds of the world shapes it is the
+/// inside of, where it is nowhere else (not outside a shape, not the camera's or a
+/// light's, not in an object); the scene's bounds otherwise.
+fn medium_region(scene: &SceneDescription, m: u32) -> Option<[glam::DVec3; 2]> {
+    let open = scene.camera_medium == Some(m)
+        || scene.lights.iter().any(|l| l.medium == Some(m))
+        || scene
+            .objects
+            .iter()
+            .flat_map(|o| &o.shapes)
+            .any(|s| s.media.inside == Some(m) || s.media.outside == Some(m))
+        || scene.shapes.iter().any(|s| s.media.outside == Some(m) && s.media.is_transition());
+    let inside = scene.shapes.iter().filter(|s| s.media.inside == Some(m) && s.media.is_transition());
+    match inside.filter_map(|s| scene.local_bounds(s)).reduce(crate::scene::union) {
+        Some(b) if !open => Some(b),
+        _ => scene.world_bounds(),
+    }
+}
+
 fn photon_scale(total: f64) -> f64 {
     if total > 0.0 && total.is_finite() { total.log2().round().clamp(-1000.0, 1000.0).exp2() } else { 1.0 }
 }

@@ -62,6 +62,10 @@ fn planck(lambda_nm: f64, t: f64) -> f64 {
     2.0 * h * c * c / (l.powi(5) * ((h * c / (l * kb * t)).exp() - 1.0))
 }
 
+/// ∫ȳ(λ) dλ over nanometres: what pbrt-v4's film records for a spectrum of 1 that no
+/// light normalised (the emission of its temperature grids and RGB grids).
+pub const CIE_Y_INTEGRAL: f32 = 106.856_895;
+
 /// A blackbody spectrum normalised so its peak is 1, as RGB.
 pub fn blackbody(kelvin: f32) -> Rgb {
     let t = kelvin.max(1.0) as f64;

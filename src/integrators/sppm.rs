@@ -278,7 +278,7 @@ impl<'a> Sppm<'a> {
         let n = self.pixels.len();
         let (phi, m) = (vec![DVec3::ZERO; n], vec![0u64; n]);
         let Some(grid) = grid else { return (phi, m) };
-        if self.scene.lights.is_empty() || self.scene.light_power.is_empty() {
+        if self.scene.photon_sources.is_empty() {
             return (phi, m);
         }
         let (scene, pixels, max_depth) = (self.scene, &self.pixels, self.max_depth);
@@ -479,10 +479,12 @@ fn camera_path(
     let sky_always = scene.syntax == Syntax::V3 && !scene.fixes.has(Fix::SkyAfterGlossy);
     while depth < max_depth {
         let hit = scene.intersect(&ray);
-        if let Some(m) = medium
-            && let Some((direct, vp)) = scatter_on_camera_path(scene, &ray, (hit.as_ref(), m), &mut beta, sampler)
-        {
-            return (ld + direct, Some(vp));
+        if let Some(m) = medium {
+            ld +=
+                beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, hit.map_or(f32::INFINITY, |h| h.t), sampler);
+            if let Some((direct, vp)) = scatter_on_camera_path(scene, &ray, (hit.as_ref(), m), &mut beta, sampler) {
+                return (ld + direct, Some(vp));
+            }
         }
         let Some(hit) = hit else {
             if depth == 0 || specular_bounce || sky_always {
@@ -722,8 +724,13 @@ fn trace_photon(
     max_depth: u32,
     out: &mut Vec<(u32, Vec3)>,
 ) -> PhotonPath {
-    let Some((mut beta, mut ray, mut medium)) = emit_photon(scene, sampler) else { return PhotonPath::default() };
+    let Some(Photon { mut beta, mut ray, mut medium, from_medium }) = emit_photon(scene, sampler) else {
+        return PhotonPath::default();
+    };
     let (mut depth, mut passes, mut hits, mut near) = (0, 0, 0, false);
+    // Light from lights is the camera side's where it arrives directly; light from
+    // media is not (nothing samples media toward a visible point), so it deposits at once.
+    let first_deposit = if from_medium { 0 } else { 1 };
     let skip_behind = scene.fixes.has(Fix::PhotonsBehind);
     while depth < max_depth {
         let hit = scene.intersect(&ray);
@@ -732,7 +739,7 @@ fn trace_photon(
                 Ok(weight) => beta *= weight,
                 Err((mp, weight)) => {
                     // Direct light in media is the camera side's, as on surfaces.
-                    if depth > 0 {
+                    if depth >= first_deposit {
                         near |= deposit_in_medium(grid, pixels, &mp, beta * weight, out);
                     }
                     let Some(next) = scatter_in_medium(&mp, beta * weight, beta, sampler) else { break };
@@ -753,7 +760,7 @@ fn trace_photon(
         // where they land, counting them twice near a medium's boundary (13% too bright
         // on a floor just under a fog box, against pbrt's volpath); with media we gather
         // at scattering surfaces only. Scenes without media keep pbrt's rule.
-        if depth > 0 && (scene.media.is_empty() || matches!(at, Surface::Bsdf(_))) {
+        if depth >= first_deposit && (scene.media.is_empty() || matches!(at, Surface::Bsdf(_))) {
             near |= deposit_on_surface(grid, pixels, si.p.0, (wi, beta), skip_behind, out);
         }
         let bsdf = match at {
@@ -781,9 +788,21 @@ fn trace_photon(
     PhotonPath { hits, near }
 }
 
-/// A photon leaving a light chosen by power: its weight, ray and medium.
-fn emit_photon(scene: &RenderScene, sampler: &mut impl Sampler) -> Option<(Rgb, crate::math::Ray, Option<u32>)> {
-    let (li, light_pdf) = scene.light_power.sample(sampler.get1d())?;
+/// A photon as it starts.
+struct Photon {
+    beta: Rgb,
+    ray: crate::math::Ray,
+    medium: Option<u32>,
+    /// Whether an emitting medium sent it.
+    from_medium: bool,
+}
+
+/// A photon leaving a light or an emitting medium chosen by power.
+fn emit_photon(scene: &RenderScene, sampler: &mut impl Sampler) -> Option<Photon> {
+    let (li, pick) = scene.photon_sources.sample(sampler.get1d())?;
+    if li >= scene.lights.len() {
+        return emit_from_medium(scene, li - scene.lights.len(), pick, sampler);
+    }
     let light: &Light = &scene.lights[li];
     let (u1, u2) = (sampler.get2d(), sampler.get2d());
     let e = light.sample_le(&scene.geometry.shapes, scene.world, u1, u2)?;
@@ -794,10 +813,28 @@ fn emit_photon(scene: &RenderScene, sampler: &mut impl Sampler) -> Option<(Rgb, 
     // DEVIATION(pbrt): robustness. The photon's power is formed in f64 and carried divided by a
     // power of two near the lights' total power. pbrt's f32 β overflows for emitters
     // past about 1e37 and silently drops those photons.
-    let pdf = light_pdf as f64 * e.pdf_pos as f64 * e.pdf_dir as f64;
+    let pdf = pick as f64 * e.pdf_pos as f64 * e.pdf_dir as f64;
     let beta = (e.le.as_dvec3() * (e.n.dot(d).abs() as f64 / pdf / scene.photon_scale)).as_vec3();
     let medium = if scene.media.is_empty() { None } else { scene.light_medium(li, d, e.n) };
-    Some((beta, crate::math::Ray::new(e.ray.o, Vector3(d)), medium))
+    Some(Photon { beta, ray: crate::math::Ray::new(e.ray.o, Vector3(d)), medium, from_medium: false })
+}
+
+/// A photon from emitting medium `k` of `scene.medium_emitters` (picked with
+/// probability `pick`): a point drawn in it, a uniform direction, σa·Le over the
+/// densities. A point where another medium is (outside the medium's region) sends none.
+// DEVIATION(pbrt): pbrt's SPPM ignores media; their emission here is a photon source.
+fn emit_from_medium(scene: &RenderScene, k: usize, pick: f32, sampler: &mut impl Sampler) -> Option<Photon> {
+    let (m, points) = &scene.medium_emitters[k];
+    let (u_voxel, u_pos, u_dir) = (sampler.get1d(), sampler.get2d(), sampler.get2d());
+    let at = points.sample(u_voxel, Vec3::new(u_pos[0], u_pos[1], sampler.get1d()))?;
+    let le = scene.media[*m as usize].emitted_at(at.p);
+    if le == Vec3::ZERO || scene.medium_at(at.p) != Some(*m) {
+        return None;
+    }
+    let pdf = pick as f64 * at.pdf / (4.0 * std::f64::consts::PI);
+    let beta = (le.as_dvec3() / pdf / scene.photon_scale).as_vec3();
+    let ray = crate::math::Ray::new(Point3(at.p), Vector3(crate::sampling::uniform_sphere(u_dir)));
+    Some(Photon { beta, ray, medium: Some(*m), from_medium: true })
 }
 
 /// Deposits a photon that arrived at surface point `p` from direction `wi` with weight

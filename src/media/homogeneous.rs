@@ -12,7 +12,7 @@
 //! | `preset` | [`super::presets`]; unknown: a warning, the defaults | the same |
 //! | `scale` | multiplies σa and σs | the same |
 //! | `g` | Henyey–Greenstein asymmetry | the same (clamped to ±0.99) |
-//! | `Le`, `Lescale` | — | emission (not rendered yet: listed as approximated) |
+//! | `Le`, `Lescale` | — | emission σa·`Le`·`Lescale` per unit length (`Le` an illuminant, as lights') |
 
 use super::phase::HenyeyGreenstein;
 use super::{MediumContext, presets};
@@ -24,12 +24,14 @@ use glam::Vec3;
 
 pub const NAME: &str = "homogeneous";
 
-/// σa and σs (per unit of world length) and the phase function.
+/// σa and σs (per unit of world length), the phase function and the emission.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Homogeneous {
     pub sigma_a: Vec3,
     pub sigma_s: Vec3,
     pub phase: HenyeyGreenstein,
+    /// Le times `Lescale` (pbrt-v4); the medium emits σa·Le per unit length.
+    pub le: Vec3,
 }
 
 /// What free-flight sampling along a segment found.
@@ -47,10 +49,8 @@ impl Homogeneous {
     /// Reads the parameters by the rules of the file's version.
     pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Homogeneous> {
         let m = Homogeneous::coefficients(p, ctx, true)?;
-        if ctx.syntax == Syntax::V4 {
-            emission(p, ctx)?;
-        }
-        Ok(m)
+        let le = if ctx.syntax == Syntax::V4 { emission(p, ctx)? } else { Vec3::ZERO };
+        Ok(Homogeneous { le, ..m })
     }
 
     /// σa, σs (scaled) and g as every medium type reads them; `presets`: whether
@@ -70,11 +70,7 @@ impl Homogeneous {
             sigma_s = values::rgb(p, "sigma_s", &ctx.spectra, Range::NonNegative)?.unwrap_or(sigma_s);
         }
         let scale = values::float(p, "scale", 1.0, Range::NonNegative)?;
-        let g = values::float(p, "g", 0.0, Range::Any)?;
-        if !(-1.0..=1.0).contains(&g) {
-            let at = values::span_of(p, "g").unwrap_or_default();
-            return Err(Diagnostic::error(at, format!("\"float g\" must lie in [-1, 1], not {g}")));
-        }
+        let g = super::asymmetry(p)?;
         let (sigma_a, sigma_s) = (sigma_a * scale, sigma_s * scale);
         // DEVIATION(pbrt): robustness. pbrt lets σ·scale overflow to Inf, and then
         // distances of 0 times Inf make NaN pixels.
@@ -82,7 +78,7 @@ impl Homogeneous {
             let at = values::span_of(p, "scale").or(values::span_of(p, "sigma_s")).unwrap_or_default();
             return Err(Diagnostic::error(at, "σa + σs times \"scale\" is beyond the range of 32-bit floats"));
         }
-        Ok(Homogeneous { sigma_a, sigma_s, phase: HenyeyGreenstein::new(g) })
+        Ok(Homogeneous { sigma_a, sigma_s, phase: HenyeyGreenstein::new(g), le: Vec3::ZERO })
     }
 
     pub fn sigma_t(&self) -> Vec3 {
@@ -95,6 +91,14 @@ impl Homogeneous {
         let st = self.sigma_t();
         let tr = |s: f32| if s == 0.0 { 1.0 } else { (-s * dist).exp() };
         Vec3::new(tr(st.x), tr(st.y), tr(st.z))
+    }
+
+    /// The emission reaching the start of a segment of `dist` world units (an infinite
+    /// one too): ∫₀^dist exp(−σt·t)·σa·Le dt per channel.
+    pub fn emission(&self, dist: f32) -> Vec3 {
+        let (st, e) = (self.sigma_t(), self.sigma_a * self.le);
+        let one = |s: f32, e: f32| if e == 0.0 { 0.0 } else { e * -(-s * dist).exp_m1() / s };
+        Vec3::new(one(st.x, e.x), one(st.y, e.y), one(st.z, e.z))
     }
 
     /// Free-flight sampling over a segment of `len` world units (ray parameter `t_max`,
@@ -133,10 +137,10 @@ fn preset(p: &ParamList, ctx: &mut MediumContext) -> Res<Option<(Vec3, Vec3)>> {
     Ok(found)
 }
 
-/// pbrt-v4's `Le` and `Lescale`: read and checked; emission is not rendered yet.
-fn emission(p: &ParamList, ctx: &mut MediumContext) -> Res<()> {
+/// pbrt-v4's `Le` times `Lescale`.
+fn emission(p: &ParamList, ctx: &mut MediumContext) -> Res<Vec3> {
     let scale = values::float(p, "Lescale", 1.0, Range::NonNegative)?;
-    super::note_emission(p, ctx, "medium emission \"Le\"", scale > 0.0, false)
+    Ok(super::read_le(p, ctx)?.unwrap_or(Vec3::ZERO) * scale)
 }
 
 #[cfg(test)]
@@ -148,13 +152,18 @@ mod tests {
             sigma_a: Vec3::new(0.1, 0.2, 0.3),
             sigma_s: Vec3::new(0.5, 0.4, 0.9),
             phase: HenyeyGreenstein::new(0.0),
+            le: Vec3::ZERO,
         }
     }
 
     #[test]
     fn transmittance_to_infinity_is_one_where_a_channel_does_not_attenuate() {
-        let m =
-            Homogeneous { sigma_a: Vec3::new(0.0, 1.0, 0.0), sigma_s: Vec3::ZERO, phase: HenyeyGreenstein::new(0.0) };
+        let m = Homogeneous {
+            sigma_a: Vec3::new(0.0, 1.0, 0.0),
+            sigma_s: Vec3::ZERO,
+            phase: HenyeyGreenstein::new(0.0),
+            le: Vec3::ZERO,
+        };
         assert_eq!(m.transmittance(f32::INFINITY), Vec3::new(1.0, 0.0, 1.0));
         assert_eq!(m.sample(f32::INFINITY, 1.0, 0.1, 0.5), Flight::Through { weight: Vec3::new(1.5, 0.0, 1.5) });
     }

@@ -12,30 +12,36 @@
 //! AttributeEnd
 //! ```
 //!
-//! One module per medium type ([`homogeneous`], [`grid`]), the phase function in
-//! [`phase`], the measured presets in [`presets`]. The types registered are [`TYPES`];
-//! the others pbrt knows are skipped with a located warning and rendered as vacuum.
+//! One module per medium type ([`homogeneous`], [`grid`], [`rgbgrid`], [`cloud`]);
+//! the ones that vary in space share [`tracking`] and [`sampled`]; the phase function
+//! is in [`phase`], the measured presets in [`presets`]. The types registered are
+//! [`TYPES`]; pbrt-v4's `nanovdb` (OpenVDB files, for which no maintained Rust reader
+//! exists) is skipped with a located warning, and what it fills is vacuum.
 
+pub mod cloud;
+pub mod emitters;
 pub mod grid;
 pub mod homogeneous;
 pub mod phase;
 pub mod presets;
+pub mod rgbgrid;
+pub mod sampled;
+pub mod tracking;
 
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::sampling::Sampler;
-use crate::scene::approx::Approx;
 use crate::scene::values::{self, Range, Res, SpectrumContext};
 use glam::{DMat4, Vec3};
-pub use grid::GridMedium;
 pub use homogeneous::{Flight, Homogeneous};
 pub use phase::HenyeyGreenstein;
 use std::sync::Arc;
+pub use tracking::Tracked;
 
 /// The medium types rendered.
-pub const TYPES: &[&str] = &[homogeneous::NAME, grid::NAMES[0], grid::NAMES[1]];
+pub const TYPES: &[&str] = &[homogeneous::NAME, grid::NAMES[0], grid::NAMES[1], rgbgrid::NAME, cloud::NAME];
 
 /// A named medium as the scene built it.
 #[derive(Clone, Debug, PartialEq)]
@@ -48,14 +54,42 @@ pub struct MediumDesc {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Medium {
     Homogeneous(Homogeneous),
-    Grid(Arc<GridMedium>),
+    /// Varying over a box: the grids and the cloud.
+    Tracked(Arc<Tracked>),
 }
 
 impl Medium {
     pub fn phase(&self) -> HenyeyGreenstein {
         match self {
             Medium::Homogeneous(h) => h.phase,
-            Medium::Grid(g) => g.phase,
+            Medium::Tracked(g) => g.phase,
+        }
+    }
+
+    /// Whether it emits light (pbrt-v4's `Le` and `temperature`).
+    pub fn emissive(&self) -> bool {
+        match self {
+            Medium::Homogeneous(h) => h.le != Vec3::ZERO,
+            Medium::Tracked(g) => g.emissive(),
+        }
+    }
+
+    /// σa·Le at a world point (where the medium is).
+    pub fn emitted_at(&self, p: Vec3) -> Vec3 {
+        match self {
+            Medium::Homogeneous(h) => h.sigma_a * h.le,
+            Medium::Tracked(g) => g.emitted_at(p),
+        }
+    }
+
+    /// The light the medium emits toward `o` along the segment `o + t·d`, t in [0,
+    /// `t_max`), attenuated on the way: ∫ Tr·σa·Le (exact for homogeneous media, an
+    /// unbiased estimate for the others).
+    pub fn emission(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler) -> Vec3 {
+        let dlen = d.length();
+        match self {
+            Medium::Homogeneous(h) => h.emission(t_max * dlen),
+            Medium::Tracked(g) => g.emission(o, d / dlen, t_max * dlen, sampler),
         }
     }
 
@@ -66,7 +100,7 @@ impl Medium {
                 let u = sampler.get2d();
                 h.sample(t_max, d.length(), u[0], u[1])
             }
-            Medium::Grid(g) => g.sample_flight(o, d, t_max, sampler),
+            Medium::Tracked(g) => g.sample_flight(o, d, t_max, sampler),
         }
     }
 
@@ -76,7 +110,7 @@ impl Medium {
         let dlen = d.length();
         match self {
             Medium::Homogeneous(h) => h.transmittance(t_max * dlen),
-            Medium::Grid(g) => g.transmittance(o, d / dlen, t_max * dlen, sampler),
+            Medium::Tracked(g) => g.transmittance(o, d / dlen, t_max * dlen, sampler),
         }
     }
 }
@@ -107,33 +141,49 @@ pub struct MediumContext<'a> {
     pub syntax: Syntax,
     pub spectra: SpectrumContext<'a>,
     pub warnings: &'a mut Vec<Diagnostic>,
-    /// Notes something rendered other than as written.
-    pub approximate: &'a mut dyn FnMut(Span, String, Approx),
     /// The CTM at the statement: the medium's own space (grids are placed in it).
     pub medium_to_world: DMat4,
     /// The statement's name, for errors about the whole statement.
     pub at: Span,
 }
 
-/// pbrt-v4's medium emission, noted as approximated (it is not rendered yet) where it
-/// would emit: a nonzero `Le` (checked) under a positive scale, or what else the type
-/// found (`other`: a grid's `temperature`). `what` names it in the note.
-pub fn note_emission(p: &ParamList, ctx: &mut MediumContext, what: &str, scale_positive: bool, other: bool) -> Res<()> {
-    let le = values::rgb(p, "Le", &ctx.spectra, Range::NonNegative)?;
-    if (le.is_some_and(|c| c.max_element() > 0.0) && scale_positive) || other {
-        let at = values::span_of(p, "Le").or(values::span_of(p, "temperature")).unwrap_or_default();
-        (ctx.approximate)(at, what.into(), Approx::MediumEmission);
+/// pbrt-v4's `Le` (an illuminant: a blackbody is normalised to luminance 1, as for
+/// lights), `None` where not given.
+pub fn read_le(p: &ParamList, ctx: &MediumContext) -> Res<Option<Vec3>> {
+    let spectra = SpectrumContext { normalize_blackbody: true, ..ctx.spectra };
+    values::rgb(p, "Le", &spectra, Range::NonNegative)
+}
+
+/// The Henyey–Greenstein asymmetry `g`, in [−1, 1].
+pub fn asymmetry(p: &ParamList) -> Res<f32> {
+    let g = values::float(p, "g", 0.0, Range::Any)?;
+    if !(-1.0..=1.0).contains(&g) {
+        let at = values::span_of(p, "g").unwrap_or_default();
+        return Err(Diagnostic::error(at, format!("\"float g\" must lie in [-1, 1], not {g}")));
     }
-    Ok(())
+    Ok(g)
+}
+
+/// A tracked medium whose bound of σt is finite: no overflow in `scale`, σa + σs or
+/// the densities (written at `at`).
+// DEVIATION(pbrt): robustness. pbrt lets the coefficients overflow to Inf, and then
+// distances of 0 times Inf make NaN pixels.
+fn finite(t: Tracked, at: Span) -> Res<Tracked> {
+    if t.max_majorant().is_finite() {
+        return Ok(t);
+    }
+    Err(Diagnostic::error(at, "σa + σs times the scale and the densities is beyond the range of 32-bit floats"))
 }
 
 /// Builds a medium of type `ty`; `Ok(None)` for a type that is not rendered.
 pub fn read(ty: &str, p: &ParamList, ctx: &mut MediumContext) -> Res<Option<Medium>> {
-    Ok(match ty {
-        homogeneous::NAME => Some(Medium::Homogeneous(Homogeneous::read(p, ctx)?)),
-        "heterogeneous" | "uniformgrid" => Some(Medium::Grid(Arc::new(GridMedium::read(p, ctx)?))),
-        _ => None,
-    })
+    Ok(Some(match ty {
+        homogeneous::NAME => Medium::Homogeneous(Homogeneous::read(p, ctx)?),
+        "heterogeneous" | "uniformgrid" => Medium::Tracked(Arc::new(grid::read(p, ctx)?)),
+        rgbgrid::NAME => Medium::Tracked(Arc::new(rgbgrid::read(p, ctx)?)),
+        cloud::NAME => Medium::Tracked(Arc::new(cloud::read(p, ctx)?)),
+        _ => return Ok(None),
+    }))
 }
 
 /// Whether pbrt knows the type (in some version): unknown names are errors.

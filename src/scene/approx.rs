@@ -18,12 +18,11 @@ pub enum Approx {
     FilmType,
     ColorSpace,
     EqualAreaMap,
-    MediumEmission,
-    ColoredGridMedium,
+    NanoVdb,
 }
 
 impl Approx {
-    pub const ALL: [Approx; 11] = [
+    pub const ALL: [Approx; 10] = [
         Approx::CoatInBlend,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
@@ -33,8 +32,7 @@ impl Approx {
         Approx::FilmType,
         Approx::ColorSpace,
         Approx::EqualAreaMap,
-        Approx::MediumEmission,
-        Approx::ColoredGridMedium,
+        Approx::NanoVdb,
     ];
 
     /// How it is rendered instead (the README lists these texts).
@@ -51,9 +49,8 @@ impl Approx {
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",
             Approx::ColorSpace => "only sRGB is supported; RGB values are taken as sRGB",
             Approx::EqualAreaMap => "pbrt-v4's equal-area environment maps are read as equirectangular ones",
-            Approx::MediumEmission => "emission from media is not rendered yet; the medium absorbs and scatters only",
-            Approx::ColoredGridMedium => {
-                "a grid medium is tracked with one attenuation (as pbrt-v3 requires): the mean of the channels' σa + σs"
+            Approx::NanoVdb => {
+                "NanoVDB files cannot be read (no Rust reader of the format exists): what the medium fills is rendered as vacuum"
             }
         }
     }

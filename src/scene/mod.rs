@@ -264,6 +264,7 @@ impl SceneDescription {
     }
 }
 
-fn union(a: [DVec3; 2], b: [DVec3; 2]) -> [DVec3; 2] {
+/// The box holding both boxes.
+pub fn union(a: [DVec3; 2], b: [DVec3; 2]) -> [DVec3; 2] {
     [a[0].min(b[0]), a[1].max(b[1])]
 }

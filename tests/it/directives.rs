@@ -169,12 +169,12 @@ fn sampler_filter_and_accelerator_are_accepted_quietly() {
 }
 
 #[test]
-fn media_not_rendered_yet_are_skipped_with_one_warning_each() {
+fn media_not_rendered_are_approximated_with_one_warning_each() {
     let s = scene(
-        "MakeNamedMedium \"grid\" \"string type\" \"rgbgrid\"\nWorldBegin\nMediumInterface \"grid\" \"\"\nMediumInterface \"\"\nShape \"sphere\"\n",
+        "MakeNamedMedium \"grid\" \"string type\" \"nanovdb\" \"string filename\" \"f.nvdb\"\nWorldBegin\nMediumInterface \"grid\" \"\"\nMediumInterface \"\"\nShape \"sphere\"\n",
     );
-    assert_eq!(s.skipped.len(), 1);
-    assert_eq!(s.skipped[0].line, 1);
+    assert_eq!(s.approximated.len(), 1);
+    assert_eq!(s.approximated[0].line, 1);
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
     assert!(s.media.is_empty() && s.shapes[0].media == Default::default(), "what it fills is vacuum");
 }

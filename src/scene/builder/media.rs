@@ -106,27 +106,18 @@ impl Builder {
         }
         let (syntax, files, base) = (self.syntax(), self.reader.files.clone(), self.reader.base_dir().to_path_buf());
         let mut warnings = Vec::new();
-        let mut notes = Vec::new();
         let built = {
-            let mut approximate = |s, what, how| notes.push((s, what, how));
             let spectra = SpectrumContext { base_dir: &base, normalize_blackbody: false, files: &files };
-            let mut ctx = MediumContext {
-                syntax,
-                spectra,
-                warnings: &mut warnings,
-                approximate: &mut approximate,
-                medium_to_world,
-                at: e.name_span,
-            };
+            let mut ctx = MediumContext { syntax, spectra, warnings: &mut warnings, medium_to_world, at: e.name_span };
             media::read(&ty, &e.params, &mut ctx)
         };
         self.warnings.append(&mut warnings);
-        for (s, what, how) in notes {
-            self.note(s, what, how);
-        }
         let Some(m) = built? else {
+            // `nanovdb`, the one type pbrt knows that is not read: its parameters are
+            // taken as given and its file left unread.
+            e.params.params.iter().for_each(crate::parser::params::Param::mark_used);
             let what = format!("MakeNamedMedium \"{}\" (\"{ty}\")", e.name);
-            self.skip(at, what, "this medium type is not rendered yet; what it fills is vacuum".into());
+            self.note(at, what, crate::scene::approx::Approx::NanoVdb);
             return Ok(None);
         };
         super::typed::finish_params(&e.params, &mut self.warnings)?;
