@@ -186,6 +186,24 @@ impl RenderScene {
         }
     }
 
+    /// The light direct lighting samples, from a uniform number, and 1 over its
+    /// probability: uniform, as pbrt-v3's SPPM, in a scene without media; by power
+    /// with media.
+    // DEVIATION(pbrt): none in the image (any choice is unbiased), only in its noise.
+    // pbrt's SPPM ignores media; its volpath, the reference for them, picks lights by
+    // a spatial distribution. Uniform choice there doubled the smoke scene's error at
+    // equal iterations (relMSE 8.4e-3 against 3.6e-3 by power).
+    pub fn direct_light_choice(&self, u: f32) -> Option<(usize, f32)> {
+        let n = self.lights.len();
+        if n == 0 {
+            return None;
+        }
+        if self.media.is_empty() {
+            return Some((((u * n as f32) as usize).min(n - 1), n as f32));
+        }
+        self.light_power.sample(u).map(|(i, pmf)| (i, 1.0 / pmf))
+    }
+
     /// The media on either side of a hit shape.
     pub fn media_of(&self, hit: &Hit) -> MediumInterface {
         match self.geometry.shape_of(hit) {

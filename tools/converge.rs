@@ -9,7 +9,7 @@
 //! For each scene, every round runs each peer found in `--peers` (`pbrt-v3`, `pbrt-v4`)
 //! once per iteration count of the ladder (default: the scene's count over 4, over 2 and
 //! as written), with the scene's SPPM and again with `bdpt` and with `path` in its place
-//! (same `maxdepth`) at the samples per pixel that take as long as each SPPM rung
+//! (`volpath` for a scene with media, still labelled "path"; same `maxdepth`) at the samples per pixel that take as long as each SPPM rung
 //! (measured in the first round from runs at 1 and 4 samples), then ours once with a time limit just past the slowest peer run of that
 //! round, writing `ERRORS.csv`. Times are whole processes (loading, rendering, writing);
 //! our per-iteration times get the same loading and writing time added. With `--runs R`
@@ -856,7 +856,12 @@ fn rewrite(src: &str, iterations: Option<u32>, half: bool) -> Res<String> {
 /// beside it, named after the method and count.
 fn method_input(file: &Path, method: Method, max_depth: u32, spp: Option<u32>) -> Res<PathBuf> {
     let src = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
-    let name = if method == Method::Bdpt { "bdpt" } else { "path" };
+    // pbrt's `path` ignores media; its `volpath` is the same integrator with them.
+    let name = match method {
+        Method::Bdpt => "bdpt",
+        _ if src.contains("MakeNamedMedium") => "volpath",
+        _ => "path",
+    };
     let mut text =
         replace_directive(&src, "Integrator", &format!("Integrator \"{name}\" \"integer maxdepth\" [ {max_depth} ]"))?;
     if let Some(n) = spp {

@@ -581,8 +581,9 @@ impl Here<'_> {
     }
 }
 
-/// Direct light from one uniformly chosen light, MIS of light and BSDF sampling
-/// (pbrt-v3 `UniformSampleOneLight`). `specular_too`: a specular BSDF sample counts
+/// Direct light from one light (chosen uniformly as pbrt-v3's `UniformSampleOneLight`,
+/// by power in scenes with media: `RenderScene::direct_light_choice`), MIS of light
+/// and BSDF sampling. `specular_too`: a specular BSDF sample counts
 /// too, alone (light sampling cannot find it), where the path ends here.
 fn direct_light(
     scene: &RenderScene,
@@ -593,11 +594,10 @@ fn direct_light(
     specular_too: bool,
     here: Here,
 ) -> Rgb {
-    let n = scene.lights.len();
-    if n == 0 {
+    if scene.lights.is_empty() {
         return Vec3::ZERO;
     }
-    let idx = ((sampler.get1d() * n as f32) as usize).min(n - 1);
+    let Some((idx, weight)) = scene.direct_light_choice(sampler.get1d()) else { return Vec3::ZERO };
     let light = &scene.lights[idx];
     let (u_light, u_bsdf, u_lobe) = (sampler.get2d(), sampler.get2d(), sampler.get1d());
     let ns = bsdf.shading_normal();
@@ -625,7 +625,7 @@ fn direct_light(
             specular = s.f * s.wi.dot(ns).abs() * emitted_along(scene, si, s.wi, here, sampler) / s.pdf;
         }
     }
-    ld * n as f32 + specular
+    ld * weight + specular
 }
 
 /// The BSDF-sampled half of [`direct_light`] for the chosen light, MIS-weighted.

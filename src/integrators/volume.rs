@@ -94,15 +94,13 @@ pub fn transmittance(scene: &RenderScene, ray: &Ray, medium: Option<u32>, sample
     }
 }
 
-/// Direct light at a medium point from one uniformly chosen light: light sampling and
-/// phase sampling, combined by the power heuristic (pbrt's `UniformSampleOneLight`
-/// with media). Transmittance along both.
+/// Direct light at a medium point from one light chosen by power: light sampling and
+/// phase sampling, combined by the power heuristic. Transmittance along both.
 pub fn direct_light(scene: &RenderScene, mp: &MediumPoint, sampler: &mut impl Sampler) -> Rgb {
-    let n = scene.lights.len();
-    if n == 0 {
+    if scene.lights.is_empty() {
         return Vec3::ZERO;
     }
-    let idx = ((sampler.get1d() * n as f32) as usize).min(n - 1);
+    let Some((idx, weight)) = scene.direct_light_choice(sampler.get1d()) else { return Vec3::ZERO };
     let light = &scene.lights[idx];
     let (u_light, u_phase) = (sampler.get2d(), sampler.get2d());
     let mut ld = Vec3::ZERO;
@@ -135,5 +133,5 @@ pub fn direct_light(scene: &RenderScene, mp: &MediumPoint, sampler: &mut impl Sa
             }
         }
     }
-    ld * n as f32
+    ld * weight
 }
