@@ -287,7 +287,7 @@ fn vcm_renders_the_verification_scenes_as_pbrt_within_the_same_bounds() {
 fn fog_lit_by_a_spot_beam_and_an_area_light_matches_pbrt_v4_bdpt() {
     // pbrt's SPPM ignores media: the reference is pbrt-v4's bdpt (its volpath agrees
     // within 1.4% in every tile). Ours at 64 × 100,000 photons, radius 0.1: worst tile
-    // 5.8–7.9% over four seeds, in the dim top row (SPPM's photon noise is correlated
+    // 5.8–7.1% over three seeds, in the dim top row (SPPM's photon noise is correlated
     // across pixels); 2.8% at 512 × 200,000, where the top tiles stay 2.5–3% low:
     // kernel balls there cross the fog's boundary, which no photon lies beyond.
     assert_matches_reference("v4-fog-box", Fixes::NONE, "v4-fog-box-bdpt", 0.10);
@@ -297,7 +297,7 @@ fn fog_lit_by_a_spot_beam_and_an_area_light_matches_pbrt_v4_bdpt() {
 fn smoke_in_a_density_grid_matches_pbrt_v3_volpath() {
     // pbrt-v3's SPPM ignores media: the reference is its volpath (4096 samples; its
     // 1024-sample image is within 2.2% of it). Ours at 64 × 100,000 photons: worst tile
-    // 5.7–6.2% over three seeds; 3.1% at 256 × 200,000.
+    // 3.1–5.7% over three seeds; 3.1% at 256 × 200,000.
     assert_matches_reference("v3-smoke-grid", Fixes::NONE, "v3-smoke-grid-volpath", 0.10);
 }
 
@@ -305,7 +305,7 @@ fn smoke_in_a_density_grid_matches_pbrt_v3_volpath() {
 fn a_glass_sphere_focuses_a_spot_light_into_haze_as_pbrt_v4_bdpt() {
     // A volumetric caustic: pbrt-v4's SPPM ignores media and its volpath cannot follow
     // the specular chain from the spot light, so the reference is its bdpt (4096
-    // samples). Ours at 48 × 100,000 photons: worst tile 14.6–21.6% over three seeds,
+    // samples). Ours at 48 × 100,000 photons: worst tile 14.9–21.5% over three seeds,
     // in the focused cone (a volume density estimate of few photons); 5.7% at 256 ×
     // 400,000. The bound is for a missing or misplaced cone, not for a few percent.
     assert_matches_reference("v4-volume-caustic", Fixes::NONE, "v4-volume-caustic-bdpt", 0.30);
@@ -315,7 +315,7 @@ fn a_glass_sphere_focuses_a_spot_light_into_haze_as_pbrt_v4_bdpt() {
 fn milk_in_a_glass_sphere_matches_pbrt_v3_bdpt() {
     // A preset medium inside a dielectric: light reaches it only through the glass, so
     // the reference is pbrt-v3's bdpt (16,384 samples). Ours at 64 × 100,000 photons:
-    // worst tile 2.9–3.6% over three seeds; 3.0% at 256 × 200,000 (in the milk's lower
+    // worst tile 3.0–3.7% over three seeds; 3.0% at 256 × 200,000 (in the milk's lower
     // half, where kernel balls cross the glass, beyond which no photon lies).
     assert_matches_reference("v3-milk-glass", Fixes::NONE, "v3-milk-glass-bdpt", 0.06);
 }
@@ -333,7 +333,7 @@ fn glowing_media_light_the_room_as_pbrt_v4_volpath() {
 fn an_rgb_grid_and_a_cloud_match_pbrt_v4_volpath() {
     // pbrt-v4's `rgbgrid` (colored, with unnormalised emission) and procedural `cloud`,
     // under an area light and a spot light; pbrt-v4's volpath at 4,096 samples. Ours
-    // at 32 × 100,000 photons: worst tile 3.5–3.8% over three seeds; 2.7% at 128 ×
+    // at 32 × 100,000 photons: worst tile 3.4–3.9% over three seeds; 2.7% at 128 ×
     // 200,000.
     assert_matches_reference("v4-rgbgrid-cloud", Fixes::NONE, "v4-rgbgrid-cloud-volpath", 0.08);
 }
@@ -342,6 +342,6 @@ fn an_rgb_grid_and_a_cloud_match_pbrt_v4_volpath() {
 fn smoke_in_a_v4_uniform_grid_matches_pbrt_v4_volpath() {
     // The smoke scene as pbrt-v4 writes it (a `uniformgrid`), against pbrt-v4's volpath
     // at 2048 samples (its 1024-sample image is within 1.7% of it). Ours at 64 × 100,000
-    // photons: worst tile 7.6–8.3% over three seeds; 4.1% at 256 × 200,000.
+    // photons: worst tile 3.4–8.0% over three seeds; 4.1% at 256 × 200,000.
     assert_matches_reference("v4-smoke-grid", Fixes::NONE, "v4-smoke-grid-volpath", 0.10);
 }
