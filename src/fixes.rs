@@ -27,6 +27,7 @@ pub enum Fix {
     NormalDerivatives,
     HyperboloidSurface,
     CameraMedium,
+    MediumEmission,
 }
 
 /// Name, the pbrt versions that have the bug, and what fixing it changes.
@@ -38,7 +39,7 @@ pub struct FixInfo {
 }
 
 /// Every fix, in the order `--fix help` lists them.
-pub const FIXES: [FixInfo; 11] = [
+pub const FIXES: [FixInfo; 12] = [
     FixInfo {
         fix: Fix::PlasticFresnel,
         name: "plastic-fresnel",
@@ -120,6 +121,14 @@ pub const FIXES: [FixInfo; 11] = [
         effect: "the camera sits in the outside medium current at its Camera statement, as in pbrt-v4; \
                  pbrt-v3 makes the camera at WorldEnd and gives it the medium current there, so a \
                  MediumInterface at the world's top level moves the camera into (or out of) that medium",
+    },
+    FixInfo {
+        fix: Fix::MediumEmission,
+        name: "medium-emission",
+        versions: "v4",
+        effect: "a temperature grid's blackbody and an rgbgrid's Le are recorded as the same spectrum on a \
+                 light would be; pbrt-v4 normalises neither and its film records them 106.86 (∫ȳ dλ) times \
+                 brighter than the same values on a homogeneous medium or a light",
     },
 ];
 

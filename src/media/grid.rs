@@ -24,7 +24,7 @@
 //! old name — times `temperaturescale`; none below 100 K), peak-normalised, times the
 //! `Lescale` grid. pbrt-v4 does not normalise that blackbody as it does lights: its
 //! film integrates the matching functions over wavelength in nanometres, so a spectrum
-//! of 1 records as 106.86 (∫ȳ), and so do we.
+//! of 1 records as 106.86 (∫ȳ), and so do we (`--fix medium-emission`: as 1).
 
 use super::MediumContext;
 use super::sampled::SampledGrid;
@@ -189,7 +189,8 @@ fn emission(p: &ParamList, ctx: &mut MediumContext, n: [usize; 3]) -> Res<Option
         (Some(le), _) if le.max_element() > 0.0 => Some(Emission::Le { le, scale: le_scale }),
         (_, Some(kelvin)) => {
             let hottest = kelvin.max_over(Vec3::ZERO, Vec3::ONE, |t| ((t - offset) * scale).abs());
-            Some(Emission::Temperature { kelvin, offset, scale, le_scale, table: Blackbody::up_to(hottest) })
+            let table = Blackbody::up_to(hottest, ctx.raw_emission);
+            Some(Emission::Temperature { kelvin, offset, scale, le_scale, table })
         }
         _ => None,
     })
@@ -207,12 +208,14 @@ struct Blackbody {
 impl Blackbody {
     const ENTRIES: usize = 512;
 
-    fn up_to(hottest: f32) -> Blackbody {
+    /// The table to the hottest temperature, each colour times `raw` (what the film
+    /// records for a spectrum of 1).
+    fn up_to(hottest: f32, raw: f32) -> Blackbody {
         let top = hottest.max(200.0);
         let rgb = (0..Self::ENTRIES)
             .map(|i| {
                 let kelvin = 100.0 + (top - 100.0) * i as f32 / (Self::ENTRIES - 1) as f32;
-                crate::spectrum::blackbody(kelvin) * crate::spectrum::CIE_Y_INTEGRAL
+                crate::spectrum::blackbody(kelvin) * raw
             })
             .collect();
         Blackbody { top, rgb }
@@ -236,7 +239,7 @@ mod tests {
 
     #[test]
     fn the_blackbody_table_matches_planck_between_its_entries() {
-        let table = Blackbody::up_to(3000.0);
+        let table = Blackbody::up_to(3000.0, crate::spectrum::CIE_Y_INTEGRAL);
         for k in [150.0, 1234.5, 2000.0, 2999.0] {
             let (got, want) = (table.at(k), crate::spectrum::blackbody(k) * crate::spectrum::CIE_Y_INTEGRAL);
             assert!((got - want).abs().max_element() <= 2e-3 * want.max_element().max(1e-3), "{k} K: {got} vs {want}");

@@ -145,6 +145,10 @@ pub struct MediumContext<'a> {
     pub medium_to_world: DMat4,
     /// The statement's name, for errors about the whole statement.
     pub at: Span,
+    /// What the film records for an emission spectrum of 1 that pbrt-v4 leaves
+    /// unnormalised (a temperature grid's, an rgbgrid's): ∫ȳ dλ = 106.86 as pbrt-v4, 1
+    /// under `--fix medium-emission`.
+    pub raw_emission: f32,
 }
 
 /// pbrt-v4's `Le` (an illuminant: a blackbody is normalised to luminance 1, as for

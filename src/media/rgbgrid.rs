@@ -12,7 +12,8 @@
 //! `nx·ny·nz` samples over the box `p0`–`p1`, interpolated trilinearly; `scale`
 //! multiplies σa and σs, `Lescale` the emission. No density multiplies them. Unlike a
 //! light's or a homogeneous medium's, pbrt-v4 does not normalise this `Le`: its film
-//! records an RGB illuminant of 1 as 106.86 (∫ȳ over nanometres), and so do we.
+//! records an RGB illuminant of 1 as 106.86 (∫ȳ over nanometres), and so do we
+//! (`--fix medium-emission`: as 1).
 
 use super::MediumContext;
 use super::phase::HenyeyGreenstein;
@@ -33,6 +34,7 @@ pub struct RgbGrid {
     sigma_s: Option<SampledGrid<Vec3>>,
     scale: f32,
     le: Option<SampledGrid<Vec3>>,
+    /// `Lescale` times what the film records for an unnormalised spectrum of 1.
     le_scale: f32,
 }
 
@@ -41,7 +43,7 @@ impl Field for RgbGrid {
         let get = |g: &Option<SampledGrid<Vec3>>| g.as_ref().map_or(Vec3::ONE, |g| g.lookup(u));
         let (sigma_a, sigma_s) = (self.scale * get(&self.sigma_a), self.scale * get(&self.sigma_s));
         let emitted = match (&self.le, emission) {
-            (Some(le), true) => sigma_a * (self.le_scale * crate::spectrum::CIE_Y_INTEGRAL) * le.lookup(u),
+            (Some(le), true) => sigma_a * self.le_scale * le.lookup(u),
             _ => Vec3::ZERO,
         };
         Props { sigma_t: sigma_a + sigma_s, sigma_s, emitted }
@@ -85,7 +87,7 @@ pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Tracked> {
         sigma_s: grid(sigma_s)?,
         scale: values::float(p, "scale", 1.0, Range::NonNegative)?,
         le: grid(le)?,
-        le_scale: values::float(p, "Lescale", 1.0, Range::NonNegative)?,
+        le_scale: values::float(p, "Lescale", 1.0, Range::NonNegative)? * ctx.raw_emission,
     };
     let box_to_world = ctx.medium_to_world * super::grid::unit_to_box(p, ctx.at)?;
     super::finite(Tracked::new(box_to_world, HenyeyGreenstein::new(super::asymmetry(p)?), Arc::new(field)), at)

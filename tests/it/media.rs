@@ -295,3 +295,34 @@ fn a_medium_nothing_names_is_left_out() {
     );
     assert!(!s.integrator.media);
 }
+
+/// pbrt-v4 leaves an rgbgrid's `Le` (and a temperature grid's blackbody) unnormalised:
+/// its film records them ∫ȳ dλ = 106.86 times brighter than the same values on a light.
+/// We match it; `check` names the parameter, and `--fix medium-emission` records them
+/// as a light's (the image of a scene lit by such a medium alone scales by 1/106.86).
+#[test]
+fn unnormalised_medium_emission_is_pbrts_by_default_and_a_named_fix() {
+    let text = "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8 \
+        LookAt 0 0 5  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 20 \
+        Sampler \"independent\" \"integer pixelsamples\" 4 Integrator \"sppm\" \"integer photonsperiteration\" 2000 \
+        WorldBegin\n\
+        MakeNamedMedium \"dye\" \"string type\" \"rgbgrid\" \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [0.5 0.5 0.5]\n\
+          \"rgb Le\" [0.02 0.01 0.005] \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1]\n\
+        AttributeBegin MediumInterface \"dye\" \"\" Material \"interface\" Shape \"sphere\" \"float radius\" 1 AttributeEnd\n\
+        Material \"diffuse\" Shape \"bilinearmesh\" \"point3 P\" [-3 -1 -3  3 -1 -3  -3 -1 3  3 -1 3]";
+    let s = scene(text);
+    assert!(s.pbrt_bugs.iter().any(|b| b.name == "medium-emission" && b.line == 3), "{:?}", s.pbrt_bugs);
+    let opts = pbrt_sppm::scene::LoadOptions { fixes: pbrt_sppm::fixes::Fixes::all(), ..Default::default() };
+    let fixed = pbrt_sppm::scene::load_scene_from_bytes(std::path::Path::new("t.pbrt"), text.into(), &opts).unwrap();
+    let settings = RenderSettings::default();
+    let image = |s| pbrt_sppm::integrators::render(&RenderScene::new(s), &settings).expect("renders").image.pixels;
+    let (pbrt, ours) = (mean(&image(&s)), mean(&image(&fixed)));
+    for c in 0..3 {
+        assert!(
+            pbrt[c] > 0.0 && (pbrt[c] / ours[c] / 106.856895 - 1.0).abs() < 1e-3,
+            "channel {c}: {} / {}",
+            pbrt[c],
+            ours[c]
+        );
+    }
+}

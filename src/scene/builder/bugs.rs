@@ -56,6 +56,9 @@ impl Builder {
         if let Some(at) = self.photon_statement() {
             found.push((at, Fix::PhotonsBehind));
         }
+        if syntax == Syntax::V4 {
+            found.extend(self.unnormalized_emitters().map(|at| (at, Fix::MediumEmission)));
+        }
         if syntax == Syntax::V3 && self.camera_media.1 != self.gs.media.1 {
             found.extend(self.render.camera.as_ref().map(|(e, _)| (e.name_span, Fix::CameraMedium)));
         }

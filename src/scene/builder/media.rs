@@ -12,6 +12,7 @@
 //! skipped with a warning, and what refers to them is in vacuum.
 
 use super::{Builder, Res};
+use crate::fixes::Fix;
 use crate::media::{self, MediumContext, MediumDesc, MediumInterface};
 use crate::parser::error::Diagnostic;
 use crate::parser::source::Span;
@@ -65,6 +66,21 @@ impl Builder {
         Ok(())
     }
 
+    /// Where media that a `MediumInterface` names emit what pbrt-v4 leaves unnormalised
+    /// (a `temperature` grid, an `rgbgrid`'s `Le`): the `medium-emission` bug.
+    pub(super) fn unnormalized_emitters(&self) -> impl Iterator<Item = Span> + '_ {
+        let used = self.medium_slots.iter().filter(|s| s.first_use.is_some());
+        used.filter_map(|s| s.definition.as_ref()).filter_map(|(e, _)| {
+            let ty = e.params.named("type").and_then(|p| p.strings().first().cloned()).unwrap_or_default();
+            let param = match ty.as_str() {
+                "uniformgrid" => "temperature",
+                media::rgbgrid::NAME => "Le",
+                _ => return None,
+            };
+            e.params.named(param).map(|p| p.span)
+        })
+    }
+
     /// Builds the defined media in slot order; returns each slot's index among them
     /// (`None` for a type that is not rendered, or a medium nothing names).
     pub(super) fn build_media(&mut self) -> Res<(Vec<MediumDesc>, Vec<Option<u32>>)> {
@@ -105,10 +121,20 @@ impl Builder {
             return Err(Diagnostic::error(at, format!("unknown medium type \"{ty}\"")));
         }
         let (syntax, files, base) = (self.syntax(), self.reader.files.clone(), self.reader.base_dir().to_path_buf());
+        let fixes = self.opts.fixes;
         let mut warnings = Vec::new();
         let built = {
             let spectra = SpectrumContext { base_dir: &base, normalize_blackbody: false, files: &files };
-            let mut ctx = MediumContext { syntax, spectra, warnings: &mut warnings, medium_to_world, at: e.name_span };
+            // DEVIATION(pbrt): appearance, `--fix medium-emission` (see Fix).
+            let raw_emission = if fixes.has(Fix::MediumEmission) { 1.0 } else { crate::spectrum::CIE_Y_INTEGRAL };
+            let mut ctx = MediumContext {
+                syntax,
+                spectra,
+                warnings: &mut warnings,
+                medium_to_world,
+                at: e.name_span,
+                raw_emission,
+            };
             media::read(&ty, &e.params, &mut ctx)
         };
         self.warnings.append(&mut warnings);
