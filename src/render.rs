@@ -349,6 +349,11 @@ impl RenderScene {
             m if matches!(m.kind(), MaterialKind::Mix { rule: MixRule::Choose, .. }) => self.chosen(m, &ctx),
             m => m,
         };
+        // A boundary that does not scatter: nothing to build (rays through media cross
+        // many of these).
+        if matches!(material.kind(), MaterialKind::Interface) {
+            return None;
+        }
         let (ns, dpdu) = match (&material.normal_map, material.bump) {
             (Some(img), _) => normal_map(img, si),
             (None, Some(d)) => bump(&self.textures, d, si, fp),
