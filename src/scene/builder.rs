@@ -357,7 +357,7 @@ impl Builder {
         Ok(())
     }
 
-    fn evidence(&mut self, directive: &str, ty: &str, span: Span) {
+    pub(super) fn evidence(&mut self, directive: &str, ty: &str, span: Span) {
         if let Some(s) = entities::evidence(directive, ty) {
             self.reader.note_evidence(s, span, format!("{directive} \"{ty}\""));
         }

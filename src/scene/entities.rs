@@ -4,6 +4,7 @@
 //! Film "image" ...                 # v3 (v4 writes Film "rgb")
 //! Material "dielectric" ...        # v4 (v3 writes Material "glass")
 //! Shape "cone" ...                 # v3 (v4 removed the cone)
+//! MakeNamedMedium "m" "string type" "uniformgrid"   # v4 (v3 writes "heterogeneous")
 //! ```
 
 use crate::parser::Syntax;
@@ -20,7 +21,11 @@ pub fn evidence(directive: &str, ty: &str) -> Option<Syntax> {
         ("Sampler", "lowdiscrepancy" | "02sequence" | "maxmindist" | "random") => Some(V3),
         ("Sampler", "zsobol" | "pmj02bn" | "paddedsobol" | "independent") => Some(V4),
         ("Integrator", "directlighting" | "whitted") => Some(V3),
-        ("Integrator", "volpath" | "simplepath" | "lightpath" | "simplevolpath" | "randomwalk") => Some(V4),
+        // Both versions have `volpath` (and `path`, `bdpt`, `mlt`, `sppm`,
+        // `ambientocclusion`): no evidence.
+        ("Integrator", "simplepath" | "lightpath" | "simplevolpath" | "randomwalk" | "aov" | "function") => Some(V4),
+        ("MakeNamedMedium", "heterogeneous") => Some(V3),
+        ("MakeNamedMedium", "uniformgrid" | "rgbgrid" | "cloud" | "nanovdb") => Some(V4),
         _ => None,
     }
 }

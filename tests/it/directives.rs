@@ -375,6 +375,11 @@ fn syntax_detection_and_override() {
         ("Film \"rgb\"\nWorldBegin\n", Syntax::V4),
         ("WorldBegin\nMaterial \"dielectric\"\n", Syntax::V4),
         ("WorldBegin\nShape \"cone\"\n", Syntax::V3),
+        // pbrt-v3 has volpath too: a v3 media scene names it before its Film.
+        ("Integrator \"volpath\"\nFilm \"image\"\nWorldBegin\nWorldEnd\n", Syntax::V3),
+        ("Integrator \"simplevolpath\"\nWorldBegin\n", Syntax::V4),
+        ("MakeNamedMedium \"m\" \"string type\" \"heterogeneous\" \"float density\" [1]\nWorldBegin\n", Syntax::V3),
+        ("MakeNamedMedium \"m\" \"string type\" \"uniformgrid\" \"float density\" [1]\nWorldBegin\n", Syntax::V4),
     ];
     for (text, want) in cases {
         assert_eq!(scene(text).syntax, want, "{text}");

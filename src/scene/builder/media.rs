@@ -42,6 +42,10 @@ impl Builder {
     }
 
     pub(super) fn named_medium(&mut self, e: Entity) -> Res<()> {
+        if let Some(ty) = e.params.named("type").and_then(|p| p.strings().first().cloned()) {
+            let at = crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span);
+            self.evidence("MakeNamedMedium", &ty, at);
+        }
         let i = self.medium_slot(&e.name) as usize;
         if self.medium_slots[i].definition.is_some() {
             // DEVIATION(pbrt): robustness. pbrt-v4 refuses a file that redefines a
