@@ -52,7 +52,10 @@ impl Cloud {
             lambda *= 1.99;
         }
         let d = ((1.0 - p.y) * 4.5 * self.density * d).clamp(0.0, 1.0);
-        (d + 2.0 * (0.5 - p.y).max(0.0)).clamp(0.0, 1.0)
+        // DEVIATION(pbrt): robustness. A `frequency` or point so large that the noise
+        // overflows gives NaN in pbrt (NaN pixels); here no medium there.
+        let d = (d + 2.0 * (0.5 - p.y).max(0.0)).clamp(0.0, 1.0);
+        if d.is_nan() { 0.0 } else { d }
     }
 }
 

@@ -76,6 +76,16 @@ impl Field for DensityGrid {
     fn emissive(&self) -> bool {
         self.emission.is_some()
     }
+
+    fn emission_bound(&self) -> f32 {
+        let Some(e) = &self.emission else { return 0.0 };
+        let all = |g: &SampledGrid<f32>| g.max_over(Vec3::ZERO, Vec3::ONE, |v| v);
+        let le = match e {
+            Emission::Le { le, scale } => le.max_element() * all(scale),
+            Emission::Temperature { le_scale, table, .. } => table.max() * all(le_scale),
+        };
+        self.sigma_a.max_element() * all(&self.density) * le
+    }
 }
 
 impl Emission {
@@ -115,8 +125,8 @@ pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Tracked> {
 /// `nx`, `ny`, `nz`, checked against the number of samples given (`count`, written at `at`).
 pub fn resolution(p: &ParamList, count: usize, at: Span) -> Res<[usize; 3]> {
     let n = [p.int("nx")?.unwrap_or(1), p.int("ny")?.unwrap_or(1), p.int("nz")?.unwrap_or(1)];
-    let want = n.iter().map(|&k| k.max(0) as i64).product::<i64>();
-    if n.iter().any(|&k| k < 1) || want != count as i64 {
+    let want = n.iter().map(|&k| k.max(0) as i128).product::<i128>();
+    if n.iter().any(|&k| k < 1) || want != count as i128 {
         let msg = format!("the grid has {count} values; nx·ny·nz = {}·{}·{} = {want} are needed", n[0], n[1], n[2]);
         return Err(Diagnostic::error(at, msg));
     }
@@ -207,11 +217,15 @@ struct Blackbody {
 
 impl Blackbody {
     const ENTRIES: usize = 512;
+    const HOTTEST: f32 = 1e6;
 
     /// The table to the hottest temperature, each colour times `raw` (what the film
     /// records for a spectrum of 1).
     fn up_to(hottest: f32, raw: f32) -> Blackbody {
-        let top = hottest.max(200.0);
+        // DEVIATION(pbrt): robustness. Planck's law underflows past ~1e30 K (NaN pixels
+        // in pbrt); above 1e6 K the peak-normalised visible part is below 1e-9 of the
+        // peak, so hotter is drawn as 1e6 K.
+        let top = hottest.clamp(200.0, Self::HOTTEST);
         let rgb = (0..Self::ENTRIES)
             .map(|i| {
                 let kelvin = 100.0 + (top - 100.0) * i as f32 / (Self::ENTRIES - 1) as f32;
@@ -221,10 +235,18 @@ impl Blackbody {
         Blackbody { top, rgb }
     }
 
+    /// The largest channel in the table.
+    fn max(&self) -> f32 {
+        self.rgb.iter().fold(0f32, |m, c| m.max(c.max_element()))
+    }
+
     /// pbrt-v4: no emission at or below 100 K.
     fn at(&self, kelvin: f32) -> Vec3 {
         if kelvin.is_nan() || kelvin <= 100.0 {
             return Vec3::ZERO;
+        }
+        if self.top <= 100.0 {
+            return self.rgb[0];
         }
         let x = ((kelvin.min(self.top) - 100.0) / (self.top - 100.0)) * (Self::ENTRIES - 1) as f32;
         let i = (x as usize).min(Self::ENTRIES - 2);

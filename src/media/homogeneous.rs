@@ -49,7 +49,7 @@ impl Homogeneous {
     /// Reads the parameters by the rules of the file's version.
     pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Homogeneous> {
         let m = Homogeneous::coefficients(p, ctx, true)?;
-        let le = if ctx.syntax == Syntax::V4 { emission(p, ctx)? } else { Vec3::ZERO };
+        let le = if ctx.syntax == Syntax::V4 { emission(p, ctx, m.sigma_a)? } else { Vec3::ZERO };
         Ok(Homogeneous { le, ..m })
     }
 
@@ -137,10 +137,16 @@ fn preset(p: &ParamList, ctx: &mut MediumContext) -> Res<Option<(Vec3, Vec3)>> {
     Ok(found)
 }
 
-/// pbrt-v4's `Le` times `Lescale`.
-fn emission(p: &ParamList, ctx: &mut MediumContext) -> Res<Vec3> {
+/// pbrt-v4's `Le` times `Lescale`, where σa times it stays finite.
+fn emission(p: &ParamList, ctx: &mut MediumContext, sigma_a: Vec3) -> Res<Vec3> {
     let scale = values::float(p, "Lescale", 1.0, Range::NonNegative)?;
-    Ok(super::read_le(p, ctx)?.unwrap_or(Vec3::ZERO) * scale)
+    let le = super::read_le(p, ctx)?.unwrap_or(Vec3::ZERO) * scale;
+    // DEVIATION(pbrt): robustness, as for σ: an overflowing emission makes NaN pixels.
+    if !(le * sigma_a).is_finite() {
+        let at = values::span_of(p, "Lescale").or(values::span_of(p, "Le")).unwrap_or(ctx.at);
+        return Err(Diagnostic::error(at, "σa times \"Le\" and \"Lescale\" is beyond the range of 32-bit floats"));
+    }
+    Ok(le)
 }
 
 #[cfg(test)]

@@ -168,15 +168,19 @@ pub fn asymmetry(p: &ParamList) -> Res<f32> {
     Ok(g)
 }
 
-/// A tracked medium whose bound of σt is finite: no overflow in `scale`, σa + σs or
-/// the densities (written at `at`).
+/// A tracked medium whose bounds of σt and of its emission are finite: no overflow in
+/// `scale`, σa + σs, the densities, `Le` or `Lescale` (written at `at`).
 // DEVIATION(pbrt): robustness. pbrt lets the coefficients overflow to Inf, and then
 // distances of 0 times Inf make NaN pixels.
 fn finite(t: Tracked, at: Span) -> Res<Tracked> {
-    if t.max_majorant().is_finite() {
-        return Ok(t);
+    if !t.max_majorant().is_finite() {
+        let msg = "σa + σs times the scale and the densities is beyond the range of 32-bit floats";
+        return Err(Diagnostic::error(at, msg));
     }
-    Err(Diagnostic::error(at, "σa + σs times the scale and the densities is beyond the range of 32-bit floats"))
+    if !t.emission_bound().is_finite() {
+        return Err(Diagnostic::error(at, "σa times the emission is beyond the range of 32-bit floats"));
+    }
+    Ok(t)
 }
 
 /// Builds a medium of type `ty`; `Ok(None)` for a type that is not rendered.

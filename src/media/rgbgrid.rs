@@ -58,6 +58,16 @@ impl Field for RgbGrid {
     fn emissive(&self) -> bool {
         self.le.is_some() && self.le_scale > 0.0
     }
+
+    fn emission_bound(&self) -> f32 {
+        let max = |g: &Option<SampledGrid<Vec3>>| {
+            g.as_ref().map_or(1.0, |g| g.max_over(Vec3::ZERO, Vec3::ONE, |v| v.max_element()))
+        };
+        match &self.le {
+            Some(_) => self.scale * max(&self.sigma_a) * self.le_scale * max(&self.le),
+            None => 0.0,
+        }
+    }
 }
 
 /// Reads an `rgbgrid`, placed by the CTM at its statement.

@@ -48,6 +48,10 @@ pub trait Field: std::fmt::Debug + Send + Sync {
     /// An upper bound of every channel of σt over the box `lo`–`hi` of the unit cube.
     fn majorant(&self, lo: Vec3, hi: Vec3) -> f32;
     fn emissive(&self) -> bool;
+    /// An upper bound of every channel of σa·Le anywhere (0 for media that do not emit).
+    fn emission_bound(&self) -> f32 {
+        0.0
+    }
     /// Majorant voxels per axis: 1 where σt has one bound over the whole box.
     fn majorant_res(&self) -> usize {
         RES
@@ -139,6 +143,11 @@ impl Tracked {
     /// The largest majorant (for the overflow check at reading).
     pub fn max_majorant(&self) -> f32 {
         self.majorants.iter().fold(0f32, |m, &v| m.max(v))
+    }
+
+    /// A bound of σa·Le (for the overflow check at reading).
+    pub fn emission_bound(&self) -> f32 {
+        self.field.emission_bound()
     }
 
     /// The part of the world ray (origin, unit direction, length) inside the box.

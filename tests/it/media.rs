@@ -326,3 +326,27 @@ fn unnormalised_medium_emission_is_pbrts_by_default_and_a_named_fix() {
         );
     }
 }
+
+/// Valid but extreme media render finite images: temperatures past where Planck's law
+/// underflows (1e30 K, and an offset that overflows), a cloud whose noise overflows.
+#[test]
+fn extreme_emission_and_noise_render_finite() {
+    for params in [
+        "\"uniformgrid\" \"float density\" [1] \"float temperature\" [1e30]",
+        "\"uniformgrid\" \"float density\" [1] \"float temperature\" [2000] \"float temperatureoffset\" -3e38",
+        "\"cloud\" \"float frequency\" 1e38",
+    ] {
+        let text = format!(
+            "LookAt 0 0 5 0 0 0 0 1 0 Camera \"perspective\" \
+             Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8 \
+             Sampler \"independent\" \"integer pixelsamples\" 2 Integrator \"sppm\" \"integer photonsperiteration\" 500 \
+             WorldBegin LightSource \"point\" \"point3 from\" [0 3 3] \
+             MakeNamedMedium \"m\" \"string type\" {params} \"point3 p0\" [-1 -1 -1] \
+             AttributeBegin MediumInterface \"m\" \"\" Material \"interface\" Shape \"sphere\" AttributeEnd \
+             Material \"diffuse\" Shape \"bilinearmesh\" \"point3 P\" [-3 -1 -3  3 -1 -3  -3 -1 3  3 -1 3]"
+        );
+        let px = render(&text);
+        assert!(px.iter().flatten().all(|v| v.is_finite()), "{params}");
+        assert!(mean(&px).iter().any(|&m| m > 0.0), "{params}: lit");
+    }
+}
