@@ -106,7 +106,7 @@ impl Emission {
 /// Reads a grid medium, placed by the CTM at its statement (`ctx.medium_to_world`).
 pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Tracked> {
     let homogeneous = super::Homogeneous::coefficients(p, ctx, ctx.syntax == Syntax::V3)?;
-    let (at, values) = grid_values(p, "density")?
+    let (at, values) = grid_values(p, "density", ParamType::Float)?
         .ok_or_else(|| Diagnostic::error(ctx.at, "a grid medium needs \"float density\" values"))?;
     let n = resolution(p, values.len(), at)?;
     let box_to_world = ctx.medium_to_world * unit_to_box(p, at)?;
@@ -158,9 +158,10 @@ fn tracked_sigma_t(p: &ParamList, st: Vec3, ctx: &mut MediumContext, fallback: S
     Vec3::splat(st.x)
 }
 
-/// The values of float array `name` (finite, at least 0) and where they are written.
-fn grid_values(p: &ParamList, name: &str) -> Res<Option<(Span, Vec<f32>)>> {
-    let Some(param) = p.array(name, ParamType::Float)? else { return Ok(None) };
+/// The values of array `name` of type `ty` (every number finite and at least 0) and
+/// where they are written.
+pub fn grid_values(p: &ParamList, name: &str, ty: ParamType) -> Res<Option<(Span, Vec<f32>)>> {
+    let Some(param) = p.array(name, ty)? else { return Ok(None) };
     param.mark_used();
     if let Some(v) = param.floats().iter().find(|v| !v.is_finite() || **v < 0.0) {
         return Err(Diagnostic::error(
@@ -173,7 +174,7 @@ fn grid_values(p: &ParamList, name: &str) -> Res<Option<(Span, Vec<f32>)>> {
 
 /// A grid of `name` with `n` samples, or `None` where the parameter is not given.
 fn optional_grid(p: &ParamList, name: &str, n: [usize; 3]) -> Res<Option<SampledGrid<f32>>> {
-    let Some((span, values)) = grid_values(p, name)? else { return Ok(None) };
+    let Some((span, values)) = grid_values(p, name, ParamType::Float)? else { return Ok(None) };
     let want: usize = n.iter().product();
     if values.len() != want {
         let msg = format!("\"{name}\" needs nx·ny·nz = {want} values, as \"density\" has; found {}", values.len());

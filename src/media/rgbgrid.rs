@@ -105,11 +105,6 @@ pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Tracked> {
 
 /// The colours of `rgb name` (finite, at least 0) and where they are written.
 fn rgb_values(p: &ParamList, name: &str) -> Res<Option<(Span, Vec<Vec3>)>> {
-    let Some(param) = p.array(name, ParamType::Rgb)? else { return Ok(None) };
-    param.mark_used();
-    if let Some(v) = param.floats().iter().find(|v| !v.is_finite() || **v < 0.0) {
-        let msg = format!("\"{name}\" values must be finite and at least 0, not {v}");
-        return Err(Diagnostic::error(param.value_span, msg));
-    }
-    Ok(Some((param.value_span, param.floats().chunks_exact(3).map(Vec3::from_slice).collect())))
+    let values = super::grid::grid_values(p, name, ParamType::Rgb)?;
+    Ok(values.map(|(at, v)| (at, v.chunks_exact(3).map(Vec3::from_slice).collect())))
 }

@@ -78,7 +78,7 @@ impl PartialEq for Tracked {
 
 /// Where a ray runs through the box: its origin and direction in the unit cube
 /// (per unit of world length) and the world distances [t0, t1] inside.
-struct Span {
+struct Segment {
     o: Vec3,
     d: Vec3,
     t0: f32,
@@ -151,7 +151,7 @@ impl Tracked {
     }
 
     /// The part of the world ray (origin, unit direction, length) inside the box.
-    fn clip(&self, o: Vec3, d: Vec3, len: f32) -> Option<Span> {
+    fn clip(&self, o: Vec3, d: Vec3, len: f32) -> Option<Segment> {
         let og = self.world_to_unit.transform_point3(o.as_dvec3()).as_vec3();
         let dg = self.world_to_unit.transform_vector3(d.as_dvec3()).as_vec3();
         let (mut t0, mut t1) = (0f32, len);
@@ -168,12 +168,12 @@ impl Tracked {
                 return None;
             }
         }
-        Some(Span { o: og, d: dg, t0, t1 })
+        Some(Segment { o: og, d: dg, t0, t1 })
     }
 
     /// The majorant voxels the span crosses, in order: `visit(ta, tb, majorant)` for
     /// each piece until it returns false; returns whether it never did.
-    fn voxels(&self, s: &Span, mut visit: impl FnMut(f32, f32, f32) -> bool) -> bool {
+    fn voxels(&self, s: &Segment, mut visit: impl FnMut(f32, f32, f32) -> bool) -> bool {
         let n = self.res as i32;
         let p = (s.o + s.d * s.t0) * n as f32;
         let d = s.d * n as f32;
@@ -216,7 +216,7 @@ impl Tracked {
 
     /// Tentative collisions along the span, at each voxel's majorant: `hit(t, μ,
     /// sampler)` for each until it returns false.
-    fn walk<S: Sampler>(&self, s: &Span, sampler: &mut S, mut hit: impl FnMut(f32, f32, &mut S) -> bool) -> Walk {
+    fn walk<S: Sampler>(&self, s: &Segment, sampler: &mut S, mut hit: impl FnMut(f32, f32, &mut S) -> bool) -> Walk {
         let mut steps = 0u32;
         let mut ended = Walk::End;
         self.voxels(s, |ta, tb, mu| {

@@ -42,7 +42,7 @@ impl Builder {
     }
 
     pub(super) fn named_medium(&mut self, e: Entity) -> Res<()> {
-        if let Some(ty) = e.params.named("type").and_then(|p| p.strings().first().cloned()) {
+        if let Some(ty) = medium_type(&e) {
             let at = crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span);
             self.evidence("MakeNamedMedium", &ty, at);
         }
@@ -75,7 +75,7 @@ impl Builder {
     pub(super) fn unnormalized_emitters(&self) -> impl Iterator<Item = Span> + '_ {
         let used = self.medium_slots.iter().filter(|s| s.first_use.is_some());
         used.filter_map(|s| s.definition.as_ref()).filter_map(|(e, _)| {
-            let ty = e.params.named("type").and_then(|p| p.strings().first().cloned()).unwrap_or_default();
+            let ty = medium_type(e).unwrap_or_default();
             let param = match ty.as_str() {
                 "uniformgrid" => "temperature",
                 media::rgbgrid::NAME => "Le",
@@ -179,6 +179,11 @@ impl Builder {
         };
         Ok((built, resolve((None, camera), &remap).outside))
     }
+}
+
+/// A `MakeNamedMedium`'s `"string type"` as written (before the version is known).
+fn medium_type(e: &Entity) -> Option<String> {
+    e.params.named("type").and_then(|p| p.strings().first().cloned())
 }
 
 /// A pair of slots as built media.
