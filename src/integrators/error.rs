@@ -21,10 +21,6 @@ pub enum RenderError {
     AdaptiveIndependent,
     #[error("adaptive photon sampling is for SPPM; vcm and bdpt trace uniform light paths (--photon-sampling uniform)")]
     AdaptiveVcm,
-    #[error(
-        "--integrator {integrator}: this scene has participating media, which only sppm renders so far (--integrator sppm)"
-    )]
-    MediaNeedSppm { integrator: String },
     #[error("not enough memory for the state of {width}x{height} pixels ({bytes} bytes)")]
     OutOfMemory { width: usize, height: usize, bytes: usize },
     #[error("the reference image is {}x{}, the render {}x{}", reference.0, reference.1, render.0, render.1)]

@@ -130,9 +130,6 @@ impl Plan {
     ) -> Result<Plan, RenderError> {
         let algorithm =
             settings.algorithm.unwrap_or_else(|| Algorithm::for_file(&integrator.requested, integrator.media));
-        if integrator.media && algorithm != Algorithm::Sppm {
-            return Err(RenderError::MediaNeedSppm { integrator: algorithm.name() });
-        }
         let mut iterations = settings.iterations.unwrap_or(integrator.iterations);
         if settings.quick {
             iterations = (iterations / 16).max(1);

@@ -31,8 +31,9 @@ pub struct MediumPoint {
     /// Back along the arriving ray, unit length.
     pub wo: Vec3,
     pub phase: HenyeyGreenstein,
-    /// The scattering coefficient here.
+    /// The scattering and attenuation coefficients here.
     pub sigma_s: Rgb,
+    pub sigma_t: Rgb,
     pub medium: u32,
 }
 
@@ -49,8 +50,9 @@ pub fn fly(
     let t_max = hit.map_or(f32::INFINITY, |h| h.t);
     match m.sample(ray.o.0, ray.d.0, t_max, sampler) {
         Flight::Through { weight } => Ok(weight),
-        Flight::Scatter { t, weight, sigma_s } => {
-            let p = MediumPoint { p: ray.at(t).0, wo: -ray.d.0.normalize(), phase: m.phase(), sigma_s, medium };
+        Flight::Scatter { t, weight, sigma_s, sigma_t } => {
+            let p =
+                MediumPoint { p: ray.at(t).0, wo: -ray.d.0.normalize(), phase: m.phase(), sigma_s, sigma_t, medium };
             Err((p, weight))
         }
     }

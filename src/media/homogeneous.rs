@@ -39,8 +39,9 @@ pub struct Homogeneous {
 pub enum Flight {
     /// A scattering point at ray parameter `t`; `weight` is Tr/pdf (times `sigma_s`,
     /// the scattering coefficient there, for a path that scatters; photons deposit
-    /// with it as it is).
-    Scatter { t: f32, weight: Vec3, sigma_s: Vec3 },
+    /// with it as it is); `sigma_t` the attenuation there (bidirectional weights read
+    /// it as the point's density).
+    Scatter { t: f32, weight: Vec3, sigma_s: Vec3, sigma_t: Vec3 },
     /// No interaction before the segment's end: Tr/pdf of reaching it.
     Through { weight: Vec3 },
 }
@@ -115,7 +116,7 @@ impl Homogeneous {
             let pdf = (st * tr).element_sum() / 3.0;
             // A zero density can only come from a point the other channels cannot reach.
             let weight = if pdf > 0.0 { tr / pdf } else { Vec3::ZERO };
-            return Flight::Scatter { t, weight, sigma_s: self.sigma_s };
+            return Flight::Scatter { t, weight, sigma_s: self.sigma_s, sigma_t: st };
         }
         let tr = self.transmittance(t_max * dlen);
         let pdf = tr.element_sum() / 3.0;

@@ -253,7 +253,8 @@ impl Tracked {
             let props = self.field.at(span.o + span.d * t, false);
             let p_real = ((w * props.sigma_t).element_sum() / (mu * w.element_sum())).min(1.0);
             if sampler.get1d() < p_real {
-                scatter = Some(Flight::Scatter { t: t / dlen, weight: w / (mu * p_real), sigma_s: props.sigma_s });
+                let weight = w / (mu * p_real);
+                scatter = Some(Flight::Scatter { t: t / dlen, weight, sigma_s: props.sigma_s, sigma_t: props.sigma_t });
                 return false;
             }
             w *= (Vec3::splat(mu) - props.sigma_t).max(Vec3::ZERO) / (mu * (1.0 - p_real));
@@ -360,7 +361,7 @@ mod tests {
         for _ in 0..n {
             match t.sample_flight(o, d * 2.0, 1.25, &mut rng) {
                 Flight::Through { weight } => through += weight,
-                Flight::Scatter { t: s, weight, sigma_s } => {
+                Flight::Scatter { t: s, weight, sigma_s, .. } => {
                     assert!((0.5..1.25).contains(&s), "scattered outside the box or the segment at t = {s}");
                     scattered += weight * sigma_s;
                 }

@@ -1,16 +1,18 @@
-//! Camera subpaths: one per pixel and pass. At each vertex they count what every
-//! technique gives there: emitters found, next-event estimation, connections to the
-//! vertices of one light subpath, and light vertices merged within the radius.
+//! Camera subpaths: one per pixel and pass. At each vertex, on a surface or in a
+//! medium, they count what every technique gives there: emitters found (and media's
+//! emission along the way), next-event estimation, connections to the vertices of one
+//! light subpath, and light vertices merged within the radius.
 
-use super::light::{LightPass, LightVertex, is_delta, occluded, occluded_between};
+use super::light::{LightPass, LightVertex};
 use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
+use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique, Techniques};
 use crate::accel::Hit;
 use crate::integrators::grid::Grid;
 use crate::integrators::sppm::{Surface, camera_ray, surface};
 use crate::interaction::{Footprint, SurfaceInteraction};
 use crate::lights::Light;
-use crate::materials::{Bsdf, TransportMode};
+use crate::materials::TransportMode;
 use crate::math::{Point3, Ray, Vector3};
 use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash};
 use crate::spectrum::Rgb;
@@ -27,21 +29,15 @@ pub struct Cameras<'a> {
     pub differential_scale: f32,
 }
 
-/// A camera subpath's vertex on a surface.
+/// A camera subpath's vertex on a surface or in a medium.
 struct Vertex<'a> {
-    si: &'a SurfaceInteraction,
-    bsdf: &'a Bsdf,
+    place: Place,
+    at: &'a Scatterer,
     /// Unit direction toward the vertex before.
     wo: Vec3,
     partial: Partial,
     /// Edges from the camera.
     len: u32,
-}
-
-impl Vertex<'_> {
-    fn point(&self) -> (Vec3, Vec3, Vec3) {
-        (self.si.p.0, self.si.p_error, self.si.n.0)
-    }
 }
 
 impl Cameras<'_> {
@@ -72,39 +68,60 @@ impl Cameras<'_> {
         // The last vertex, and where rays left it (past any interfaces since, light
         // densities are measured from there).
         let (mut beta, mut color, mut prev, mut origin) = (Vec3::ONE, Vec3::ZERO, ray.o.0, ray.o.0);
-        let (mut len, mut passes) = (0u32, 0u32);
+        let (mut len, mut passes, mut medium) = (0u32, 0u32, scene.camera_medium);
         loop {
-            let Some(hit) = scene.intersect(&ray) else {
-                if pass.techniques.uses(Technique::EmitterHit) && len < pass.max_len {
-                    color += beta * self.escaped(ray.d.0.normalize(), origin, len, partial);
+            let hit = scene.intersect(&ray);
+            if let Some(m) = medium
+                && pass.techniques.uses(Technique::EmitterHit)
+            {
+                // Media's emission is found by camera paths alone (weight 1), as pbrt's
+                // volpath finds it.
+                let t = hit.map_or(f32::INFINITY, |h| h.t);
+                color += beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, t, s);
+            }
+            let (place, at, wo, surf) = match vertex::flight(scene, &ray, (hit.as_ref(), medium), &mut beta, s) {
+                Some((place, at, wo)) => (place, at, wo, None),
+                None => {
+                    let Some(hit) = hit else {
+                        if pass.techniques.uses(Technique::EmitterHit) && len < pass.max_len {
+                            color += beta * self.escaped(ray.d.0.normalize(), origin, len, partial);
+                        }
+                        break;
+                    };
+                    let si = scene.geometry.interaction(&hit);
+                    let fp = diff.take().map(|d| Footprint::new(&si, &d)).unwrap_or_default();
+                    let d = ray.d.0;
+                    let bsdf = match surface(scene, &hit, &si, &fp, &mut ray, &mut passes) {
+                        Surface::Bsdf(b) => b,
+                        Surface::PassedThrough => {
+                            medium = scene.medium_after(&hit, si.n.0, d, medium);
+                            continue;
+                        }
+                        Surface::Abandon => break,
+                    };
+                    let place = Place::on_surface(scene, &hit, &si, medium);
+                    (place, Scatterer::Surface(bsdf), -ray.d.0.normalize(), Some((hit, si)))
                 }
-                break;
-            };
-            let si = scene.geometry.interaction(&hit);
-            let fp = diff.take().map(|d| Footprint::new(&si, &d)).unwrap_or_default();
-            let bsdf = match surface(scene, &hit, &si, &fp, &mut ray, &mut passes) {
-                Surface::Bsdf(b) => b,
-                Surface::PassedThrough => continue,
-                Surface::Abandon => break,
             };
             len += 1;
-            let wo = -ray.d.0.normalize();
-            let dist2 = (si.p.0 - prev).length_squared() as f64;
-            partial.arrive(Some(dist2), wo.dot(si.n.0) as f64);
-            let v = Vertex { si: &si, bsdf: &bsdf, wo, partial, len };
-            if pass.techniques.uses(Technique::EmitterHit) {
-                color += beta * self.emitted(&hit, &v, origin, dist2);
+            let dist2 = (place.p - prev).length_squared() as f64;
+            partial.arrive(Some(dist2), at.measure(wo, place.ng));
+            let v = Vertex { place, at: &at, wo, partial, len };
+            if let Some((hit, si)) = &surf
+                && pass.techniques.uses(Technique::EmitterHit)
+            {
+                color += beta * self.emitted(hit, si, &v, origin, dist2);
             }
-            if len >= pass.max_len || wo.dot(si.n.0) == 0.0 {
+            if len >= pass.max_len || (surf.is_some() && wo.dot(place.ng) == 0.0) {
                 break;
             }
-            if !is_delta(&bsdf) {
+            if !at.is_delta() {
                 color += beta * self.at_vertex(&v, light_path, s);
             }
             let Some((b, p)) = scatter(pass, &v, beta, s) else { break };
-            (beta, partial, prev) = (b.0, p, si.p.0);
-            ray = si.spawn_ray(Vector3(b.1));
-            origin = ray.o.0;
+            (beta, partial, prev) = (b.0, p, place.p);
+            ray = place.spawn(b.1);
+            (medium, origin) = (place.toward(b.1), ray.o.0);
         }
         color
     }
@@ -123,7 +140,7 @@ impl Cameras<'_> {
             let first_only = t == Techniques::Only(Technique::Connect);
             for lv in light_path.iter().take_while(|lv| lv.len + v.len < self.pass.max_len) {
                 if !first_only || lv.len == 1 {
-                    c += self.connect(v, lv);
+                    c += self.connect(v, lv, s);
                 }
             }
         }
@@ -139,19 +156,19 @@ impl Cameras<'_> {
     /// Light from an area light the path has found, weighted against the techniques
     /// that could have found the same point on it. `prev`: where the ray left the
     /// vertex before (offset off its surface, as light samples are taken from there).
-    fn emitted(&self, hit: &Hit, v: &Vertex, prev: Vec3, dist2: f64) -> Rgb {
+    fn emitted(&self, hit: &Hit, si: &SurfaceInteraction, v: &Vertex, prev: Vec3, dist2: f64) -> Rgb {
         let scene = self.pass.scene;
-        let le = scene.emitted(hit, v.si, v.wo);
+        let le = scene.emitted(hit, si, v.wo);
         if le == Vec3::ZERO || v.len == 1 {
             return le;
         }
         let Some((_, idx)) = scene.emitter(hit) else { return Vec3::ZERO };
         let light = &scene.lights[idx as usize];
         let pick = scene.light_power.pmf(idx as usize) as f64;
-        let cos = v.wo.dot(v.si.n.0).abs() as f64;
+        let cos = v.wo.dot(si.n.0).abs() as f64;
         let direct = pick * light.pdf_li(&scene.geometry.shapes, prev, -v.wo) as f64 * cos / dist2;
-        let out = Ray::new(v.si.p, Vector3(v.wo));
-        let (pos, dir) = light.pdf_le(&scene.geometry.shapes, scene.world, &out, v.si.n.0);
+        let out = Ray::new(si.p, Vector3(v.wo));
+        let (pos, dir) = light.pdf_le(&scene.geometry.shapes, scene.world, &out, si.n.0);
         le * self.pass.techniques.weight(mis::emitter_hit(v.partial, direct, pick * (pos * dir) as f64))
     }
 
@@ -184,85 +201,95 @@ impl Cameras<'_> {
         let (pick_u, u) = (s.get1d(), s.get2d());
         let Some((k, pick)) = scene.light_power.sample(pick_u) else { return Vec3::ZERO };
         let light = &scene.lights[k];
-        let Some(ls) = light.sample_li(&scene.geometry.shapes, v.si.p.0, u) else { return Vec3::ZERO };
+        let Some(ls) = light.sample_li(&scene.geometry.shapes, v.place.p, u) else { return Vec3::ZERO };
         if ls.pdf <= 0.0 || ls.li == Vec3::ZERO || scene.emission_masked(light, ls.surface.as_ref()) {
             return Vec3::ZERO;
         }
-        let e = v.bsdf.eval(v.wo, ls.wi, TransportMode::Radiance);
+        let e = v.at.eval(v.wo, ls.wi, TransportMode::Radiance);
         if e.f == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        let (direct, cos_light, emission) = light_densities(self.pass, light, &ls, v.si.p.0);
+        let (direct, cos_light, emission) = light_densities(self.pass, light, &ls, v.place.p);
         let pick = pick as f64;
         let pdfs = DirectPdfs {
             bsdf: if ls.delta { 0.0 } else { e.pdf as f64 },
             bsdf_rev: e.pdf_rev as f64,
             direct: pick * direct,
             emission: pick * emission,
-            cos_here: ls.wi.dot(v.si.n.0).abs() as f64,
+            cos_here: v.at.measure(ls.wi, v.place.ng),
             cos_light,
         };
         let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs));
-        let c = e.f * ls.wi.dot(v.bsdf.shading_normal()).abs() * ls.li * (w / (pick as f32 * ls.pdf));
-        let blocked = match ls.p_light {
-            Some(p) => occluded(scene, v.point(), p),
-            None => scene.intersect_p(&v.si.spawn_ray(Vector3(ls.wi))),
-        };
-        if blocked || !c.is_finite() { Vec3::ZERO } else { c }
+        let c = e.f * v.at.cos(ls.wi) * ls.li * (w / (pick as f32 * ls.pdf));
+        if !c.is_finite() || c == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        c * match ls.p_light {
+            Some(p) => vertex::visible(scene, &v.place, p, s),
+            None => vertex::visible_along(scene, &v.place, ls.wi, s),
+        }
     }
 
     /// A camera vertex connected to a light vertex.
-    fn connect(&self, v: &Vertex, lv: &LightVertex) -> Rgb {
-        let d = lv.p - v.si.p.0;
+    fn connect(&self, v: &Vertex, lv: &LightVertex, s: &mut impl Sampler) -> Rgb {
+        let pass = self.pass;
+        let d = lv.place.p - v.place.p;
         let dist2 = d.length_squared();
         if dist2 == 0.0 {
             return Vec3::ZERO;
         }
         let dir = d / dist2.sqrt();
-        let ec = v.bsdf.eval(v.wo, dir, TransportMode::Radiance);
-        let el = lv.bsdf.eval(lv.wo, -dir, TransportMode::Importance);
+        let ec = v.at.eval(v.wo, dir, TransportMode::Radiance);
+        let el = lv.at.eval(lv.wo, -dir, TransportMode::Importance);
         if ec.f == Vec3::ZERO || el.f == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        let (cos_c, cos_l, d2) = (dir.dot(v.si.n.0).abs() as f64, dir.dot(lv.ng).abs() as f64, dist2 as f64);
+        let (cos_c, cos_l, d2) = (v.at.measure(dir, v.place.ng), lv.at.measure(dir, lv.place.ng), dist2 as f64);
         let pdfs = ConnectPdfs {
             camera_a: ec.pdf as f64 * cos_l / d2,
             light_a: el.pdf as f64 * cos_c / d2,
             camera_rev: ec.pdf_rev as f64,
             light_rev: el.pdf_rev as f64,
         };
-        let w = self.pass.techniques.weight(mis::connect(lv.partial, v.partial, pdfs, lv.len, self.pass.factors));
-        let g = dir.dot(v.bsdf.shading_normal()).abs() * lv.adjoint_cos(-dir) / dist2;
-        let c = (lv.beta * el.f * ec.f * (g * w)).as_dvec3() * self.pass.scene.photon_scale;
+        let f = (lv.factors(pass), pass.factors.at(v.at.in_medium()));
+        let w = pass.techniques.weight(mis::connect(lv.partial, v.partial, pdfs, lv.len, f));
+        let g = v.at.cos(dir) * lv.adjoint_cos(-dir) / dist2;
+        let c = (lv.beta * el.f * ec.f * (g * w)).as_dvec3() * pass.scene.photon_scale;
         let c = c.as_vec3();
-        if c == Vec3::ZERO || !c.is_finite() || occluded_between(self.pass.scene, v.point(), (lv.p, lv.p_error, lv.ng))
-        {
+        if c == Vec3::ZERO || !c.is_finite() {
             return Vec3::ZERO;
         }
-        c
+        c * vertex::visible_between(pass.scene, &v.place, &lv.place, s)
     }
 
     /// Light vertices within the pass's radius merged at a camera vertex: their
-    /// density estimate.
+    /// density estimate, over a disc on a surface and a ball in a medium (where only
+    /// light vertices in media count, and on a surface only those on surfaces).
     fn merge(&self, v: &Vertex, grid: &Grid) -> Rgb {
         let pass = self.pass;
-        let (p, r2) = (v.si.p.0, pass.radius * pass.radius);
+        let (p, r2, in_medium) = (v.place.p, pass.radius * pass.radius, v.at.in_medium());
+        let f = pass.factors.at(in_medium);
         let mut sum = DVec3::ZERO;
         grid.gather(p, |k| {
             let lv = &self.lights.vertices[k as usize];
             // Direct light (one edge from the light) is never merged (see `mis`).
-            if lv.len < 2 || lv.len + v.len > pass.max_len || (lv.p - p).length_squared() > r2 {
+            if lv.len < 2
+                || lv.len + v.len > pass.max_len
+                || lv.at.in_medium() != in_medium
+                || (lv.place.p - p).length_squared() > r2
+            {
                 return;
             }
-            let e = v.bsdf.eval(v.wo, lv.wo, TransportMode::Radiance);
+            let e = v.at.eval(v.wo, lv.wo, TransportMode::Radiance);
             if e.f == Vec3::ZERO {
                 return;
             }
-            let w =
-                pass.techniques.weight(mis::merge(lv.partial, v.partial, e.pdf as f64, e.pdf_rev as f64, pass.factors));
+            let w = pass.techniques.weight(mis::merge(lv.partial, v.partial, e.pdf as f64, e.pdf_rev as f64, f));
             sum += (e.f * lv.beta * w).as_dvec3();
         });
-        let norm = pass.scene.photon_scale / (std::f64::consts::PI * (r2 as f64) * pass.light_paths as f64);
+        let disc = std::f64::consts::PI * (r2 as f64);
+        let kernel = if in_medium { disc * pass.radius as f64 * (4.0 / 3.0) } else { disc };
+        let norm = pass.scene.photon_scale / (kernel * pass.light_paths as f64);
         (sum * norm).as_vec3()
     }
 }
@@ -285,17 +312,11 @@ fn light_densities(pass: &Pass, light: &Light, ls: &crate::lights::LightSample, 
     }
 }
 
-/// Samples the BSDF at a camera vertex: ((throughput, direction), partial sums)
-/// after it; `None` when absorbed or ended by Russian roulette.
+/// Samples the BSDF (or phase function) at a camera vertex: ((throughput, direction),
+/// partial sums) after it; `None` when absorbed or ended by Russian roulette.
 fn scatter(pass: &Pass, v: &Vertex, beta: Rgb, s: &mut impl Sampler) -> Option<((Rgb, Vec3), Partial)> {
-    let b = v.bsdf;
-    let smp = b.sample_f(v.wo, s.get2d(), s.get1d(), TransportMode::Radiance)?;
-    let pdf = if smp.proportional { b.pdf_mode(v.wo, smp.wi, TransportMode::Radiance) } else { smp.pdf };
-    let pdf_rev = if smp.specular { pdf } else { b.pdf_mode(smp.wi, v.wo, TransportMode::Importance) };
-    if !(pdf > 0.0 && smp.pdf > 0.0) {
-        return None;
-    }
-    let mut beta = beta * smp.f * (smp.wi.dot(b.shading_normal()).abs() / smp.pdf);
+    let smp = v.at.sample(v.wo, s, TransportMode::Radiance, |wi| v.at.cos(wi))?;
+    let mut beta = beta * smp.f * smp.scale;
     // pbrt's path tracer's roulette, after three bounces.
     if v.len > 3 {
         let q = (1.0 - beta.max_element()).max(0.05);
@@ -308,7 +329,7 @@ fn scatter(pass: &Pass, v: &Vertex, beta: Rgb, s: &mut impl Sampler) -> Option<(
         return None;
     }
     let mut partial = v.partial;
-    let cos = smp.wi.dot(v.si.n.0).abs() as f64;
-    partial.scatter(cos, pdf as f64, pdf_rev as f64, smp.specular, true, pass.factors);
+    let m = v.at.measure(smp.wi, v.place.ng);
+    partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, true, pass.factors.at(v.at.in_medium()));
     Some(((beta, smp.wi), partial))
 }

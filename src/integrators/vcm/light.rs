@@ -1,15 +1,16 @@
 //! Light subpaths: emitted from a light chosen by power, scattered by the BSDFs'
-//! adjoints, each non-specular vertex kept (for connections and merging) and seen
-//! through the lens (light tracing).
+//! adjoints and, in media, by phase functions; each vertex that is not purely
+//! specular is kept (for connections and merging) and seen through the lens (light
+//! tracing).
 
-use super::mis::{self, Partial};
+use super::mis::{self, Factors, Partial};
+use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique};
 use crate::integrators::sppm::{Surface, surface};
-use crate::interaction::{Footprint, SHADOW_EPSILON, offset_ray_origin};
+use crate::interaction::Footprint;
 use crate::lights::Light;
-use crate::materials::{Bsdf, TransportMode};
-use crate::math::{Normal3, Point3, Ray, Vector3};
-use crate::render::RenderScene;
+use crate::materials::TransportMode;
+use crate::math::{Ray, Vector3};
 use crate::sampling::{Rng, Sampler, hash};
 use crate::spectrum::{Rgb, luminance};
 use glam::Vec3;
@@ -18,18 +19,15 @@ use rayon::prelude::*;
 /// Light subpaths per parallel work item.
 const CHUNK: u64 = 1024;
 
-/// A light subpath's vertex on a surface that is not purely specular.
+/// A light subpath's vertex on a surface that is not purely specular, or in a medium.
 #[derive(Clone, Debug)]
 pub struct LightVertex {
-    pub p: Vec3,
-    pub p_error: Vec3,
-    /// The geometric normal.
-    pub ng: Vec3,
+    pub place: Place,
     /// Unit direction toward the vertex before (where the light came from).
     pub wo: Vec3,
     /// Throughput up to here, divided by the scene's photon scale.
     pub beta: Rgb,
-    pub bsdf: Bsdf,
+    pub at: Scatterer,
     pub partial: Partial,
     /// Edges from the light.
     pub len: u32,
@@ -38,9 +36,18 @@ pub struct LightVertex {
 impl LightVertex {
     /// The cosine factor of leaving along `wi` for the adjoint BSDF: |ωi·ns| with
     /// pbrt's correction for shading normals, |ωo·ns| |ωi·ng| / |ωo·ng| (Veach §5.3),
-    /// so light subpaths carry what camera subpaths would.
+    /// so light subpaths carry what camera subpaths would; none in a medium.
     pub fn adjoint_cos(&self, wi: Vec3) -> f32 {
-        self.wo.dot(self.bsdf.shading_normal()).abs() * wi.dot(self.ng).abs() / self.wo.dot(self.ng).abs()
+        let ng = self.place.ng;
+        match &self.at {
+            Scatterer::Surface(b) => self.wo.dot(b.shading_normal()).abs() * wi.dot(ng).abs() / self.wo.dot(ng).abs(),
+            Scatterer::Medium(_) => 1.0,
+        }
+    }
+
+    /// The pass's merging constants at this vertex.
+    pub fn factors(&self, pass: &Pass) -> Factors {
+        pass.factors.at(self.at.in_medium())
     }
 }
 
@@ -121,6 +128,8 @@ struct Start<'a> {
     /// The light's choice probability and the cosine at its surface.
     pick: f64,
     cos: f64,
+    /// The medium it emits into.
+    medium: Option<u32>,
 }
 
 /// Emits from a light chosen by power (`None`: nothing emitted).
@@ -144,11 +153,12 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
         _ => pick,
     };
     let cos_used = if is_finite(light) { cos } else { 1.0 };
-    let partial = Partial::light(emission, direct, cos_used, light.is_delta(), pass.factors);
+    let partial = Partial::light(emission, direct, cos_used, light.is_delta(), pass.factors.surface);
     // DEVIATION(pbrt): robustness. Formed in f64 and carried divided by the scene's
     // photon scale, as SPPM's photons, so emitters past f32's range keep their paths.
     let beta = (e.le.as_dvec3() * (cos / emission / scene.photon_scale)).as_vec3();
-    Some(Start { ray: Ray::new(e.ray.o, Vector3(d)), beta, partial, light, pick, cos })
+    let medium = scene.light_medium(li, d, e.n);
+    Some(Start { ray: Ray::new(e.ray.o, Vector3(d)), beta, partial, light, pick, cos, medium })
 }
 
 /// Whether a light has a position (distances to it count).
@@ -156,41 +166,49 @@ pub fn is_finite(light: &Light) -> bool {
     !matches!(light, Light::Distant(_) | Light::Infinite(_))
 }
 
-/// Whether a BSDF only scatters specularly (no connection or merge can use it).
-pub fn is_delta(bsdf: &Bsdf) -> bool {
-    !bsdf.is_diffuse() && !bsdf.is_glossy()
-}
-
 /// One light subpath: appends its usable vertices and its splats; returns the surfaces
 /// hit.
 fn trace(pass: &Pass, s: &mut impl Sampler, out: &mut Vec<LightVertex>, splats: &mut Vec<(u32, Rgb)>) -> u64 {
     let scene = pass.scene;
-    let Some(Start { mut ray, mut beta, mut partial, light, pick, cos }) = emit(pass, s) else { return 0 };
+    let Some(Start { mut ray, mut beta, mut partial, light, pick, cos, mut medium }) = emit(pass, s) else { return 0 };
     let (mut prev, mut len, mut passes, mut hits) = (ray.o.0, 0u32, 0u32, 0u64);
+    // The throughput as it left the last vertex, which Russian roulette compares with.
+    let mut before = beta;
     let keep = pass.techniques.uses(Technique::Connect) || pass.techniques.uses(Technique::Merge);
-    while let Some(hit) = scene.intersect(&ray) {
-        hits += 1;
-        let si = scene.geometry.interaction(&hit);
-        let bsdf = match surface(scene, &hit, &si, &Footprint::default(), &mut ray, &mut passes) {
-            Surface::Bsdf(b) => b,
-            Surface::PassedThrough => continue,
-            Surface::Abandon => break,
+    loop {
+        let hit = scene.intersect(&ray);
+        let (place, at, wo) = match vertex::flight(scene, &ray, (hit.as_ref(), medium), &mut beta, s) {
+            Some(found) => found,
+            None => {
+                let Some(hit) = hit else { break };
+                hits += 1;
+                let si = scene.geometry.interaction(&hit);
+                let d = ray.d.0;
+                let bsdf = match surface(scene, &hit, &si, &Footprint::default(), &mut ray, &mut passes) {
+                    Surface::Bsdf(b) => b,
+                    Surface::PassedThrough => {
+                        medium = scene.medium_after(&hit, si.n.0, d, medium);
+                        continue;
+                    }
+                    Surface::Abandon => break,
+                };
+                (Place::on_surface(scene, &hit, &si, medium), Scatterer::Surface(bsdf), -ray.d.0.normalize())
+            }
         };
         len += 1;
-        let (wo, ng) = (-ray.d.0.normalize(), si.n.0);
-        let dist2 = (si.p.0 - prev).length_squared() as f64;
+        let dist2 = (place.p - prev).length_squared() as f64;
         if len == 1 && matches!(light, Light::Area(_)) {
             // Measured from the point offset off the surface, as light samples are.
-            let from = offset_ray_origin(si.p, si.p_error, si.n, Vector3(wo));
+            let from = place.origin_toward(wo);
             let pdf = light.pdf_li(&scene.geometry.shapes, from.0, wo) as f64;
             partial.vcm *= mis::mis(pick * pdf * cos / dist2);
         }
-        partial.arrive((len > 1 || is_finite(light)).then_some(dist2), wo.dot(ng) as f64);
-        if wo.dot(ng) == 0.0 {
+        partial.arrive((len > 1 || is_finite(light)).then_some(dist2), at.measure(wo, place.ng));
+        if !at.in_medium() && wo.dot(place.ng) == 0.0 {
             break;
         }
-        let v = LightVertex { p: si.p.0, p_error: si.p_error, ng, wo, beta, bsdf, partial, len };
-        if !is_delta(&v.bsdf) {
+        let v = LightVertex { place, wo, beta, at, partial, len };
+        if !v.at.is_delta() {
             if pass.techniques.uses(Technique::LightTrace) && len < pass.max_len {
                 to_camera(pass, &v, s, splats);
             }
@@ -201,25 +219,21 @@ fn trace(pass: &Pass, s: &mut impl Sampler, out: &mut Vec<LightVertex>, splats: 
         if len + 2 > pass.max_len {
             break;
         }
-        let Some((next, b, p)) = scatter(pass, &v, s) else { break };
-        (ray, beta, partial, prev) = (next, b, p, si.p.0);
+        let Some((next, b, p)) = scatter(pass, &v, before, s) else { break };
+        medium = v.place.toward(next.d.0);
+        (ray, beta, before, partial, prev) = (next, b, b, p, v.place.p);
     }
     hits
 }
 
-/// Samples the adjoint BSDF at a light vertex: the ray on, the throughput and the
-/// partial sums after it (`None`: absorbed or ended by Russian roulette).
-fn scatter(pass: &Pass, v: &LightVertex, s: &mut impl Sampler) -> Option<(Ray, Rgb, Partial)> {
-    let b = &v.bsdf;
-    let smp = b.sample_f(v.wo, s.get2d(), s.get1d(), TransportMode::Importance)?;
-    let pdf = if smp.proportional { b.pdf_mode(v.wo, smp.wi, TransportMode::Importance) } else { smp.pdf };
-    let pdf_rev = if smp.specular { pdf } else { b.pdf_mode(smp.wi, v.wo, TransportMode::Radiance) };
-    if !(pdf > 0.0 && smp.pdf > 0.0) {
-        return None;
-    }
-    let bnew = v.beta * smp.f * (v.adjoint_cos(smp.wi) / smp.pdf);
+/// Samples the adjoint BSDF (or the phase function) at a light vertex: the ray on, the
+/// throughput and the partial sums after it (`None`: absorbed or ended by Russian
+/// roulette against `before`, the throughput as the subpath left the vertex before).
+fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> Option<(Ray, Rgb, Partial)> {
+    let smp = v.at.sample(v.wo, s, TransportMode::Importance, |wi| v.adjoint_cos(wi))?;
+    let bnew = v.beta * smp.f * smp.scale;
     // As SPPM's photons: continue with the probability the throughput kept.
-    let q = (1.0 - luminance(bnew) / luminance(v.beta).max(1e-30)).max(0.0);
+    let q = (1.0 - luminance(bnew) / luminance(before).max(1e-30)).max(0.0);
     if s.get1d() < q {
         return None;
     }
@@ -228,46 +242,33 @@ fn scatter(pass: &Pass, v: &LightVertex, s: &mut impl Sampler) -> Option<(Ray, R
         return None;
     }
     let mut partial = v.partial;
-    let cos = smp.wi.dot(v.ng).abs() as f64;
-    partial.scatter(cos, pdf as f64, pdf_rev as f64, smp.specular, v.len > 1, pass.factors);
-    let ray = Ray::new(offset_ray_origin(Point3(v.p), v.p_error, Normal3(v.ng), Vector3(smp.wi)), Vector3(smp.wi));
-    Some((ray, beta, partial))
+    let m = v.at.measure(smp.wi, v.place.ng);
+    partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, v.len > 1, v.factors(pass));
+    Some((v.place.spawn(smp.wi), beta, partial))
 }
 
 /// Light tracing: connects a light vertex to a point on the lens and splats what it
 /// sends there onto the pixel it reaches.
 fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Vec<(u32, Rgb)>) {
     let scene = pass.scene;
-    let Some(cs) = scene.camera.sample_wi(v.p, s.get2d()) else { return };
+    let Some(cs) = scene.camera.sample_wi(v.place.p, s.get2d()) else { return };
     let Some(pixel) = pass.pixel_index(cs.raster) else { return };
-    let e = v.bsdf.eval(v.wo, cs.wi, TransportMode::Importance);
+    let e = v.at.eval(v.wo, cs.wi, TransportMode::Importance);
     if e.f == Vec3::ZERO || cs.pdf <= 0.0 {
         return;
     }
-    let dist2 = (cs.p_lens - v.p).length_squared() as f64;
-    let (_, pdf_dir) = scene.camera.pdf_we(&Ray::new(Point3(cs.p_lens), Vector3(-cs.wi)));
-    let camera_a = pdf_dir as f64 * pass.film_pixels * cs.wi.dot(v.ng).abs() as f64 / dist2;
+    let dist2 = (cs.p_lens - v.place.p).length_squared() as f64;
+    let (_, pdf_dir) = scene.camera.pdf_we(&Ray::new(crate::math::Point3(cs.p_lens), Vector3(-cs.wi)));
+    let camera_a = pdf_dir as f64 * pass.film_pixels * v.at.measure(cs.wi, v.place.ng) / dist2;
     let light_paths = pass.light_paths as f64;
-    let w = mis::to_camera(v.partial, camera_a, e.pdf_rev as f64, v.len, pass.lt_count(), pass.factors);
+    let w = mis::to_camera(v.partial, camera_a, e.pdf_rev as f64, v.len, pass.lt_count(), v.factors(pass));
     let c = v.beta * e.f * v.adjoint_cos(cs.wi) * (cs.we / cs.pdf) * (pass.film_pixels / light_paths) as f32;
     let c = c * pass.techniques.weight(w);
-    if c == Vec3::ZERO || !c.is_finite() || occluded(scene, (v.p, v.p_error, v.ng), cs.p_lens) {
+    if c == Vec3::ZERO || !c.is_finite() {
         return;
     }
-    splats.push((pixel, c));
-}
-
-/// A surface point: position, error bounds, geometric normal.
-pub type SurfacePoint = (Vec3, Vec3, Vec3);
-
-/// Whether anything lies between a surface point and a point `to`.
-pub fn occluded(scene: &RenderScene, (p, err, n): SurfacePoint, to: Vec3) -> bool {
-    let o = offset_ray_origin(Point3(p), err, Normal3(n), Vector3(to - p));
-    scene.intersect_p(&Ray { o, d: Vector3(to - o.0), t_max: 1.0 - SHADOW_EPSILON })
-}
-
-/// Whether anything lies between two surface points (each end offset off its surface).
-pub fn occluded_between(scene: &RenderScene, a: SurfacePoint, b: SurfacePoint) -> bool {
-    let to = offset_ray_origin(Point3(b.0), b.1, Normal3(b.2), Vector3(a.0 - b.0));
-    occluded(scene, a, to.0)
+    let c = c * vertex::visible(scene, &v.place, cs.p_lens, s);
+    if c != Vec3::ZERO {
+        splats.push((pixel, c));
+    }
 }

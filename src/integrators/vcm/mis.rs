@@ -30,7 +30,8 @@ pub fn mis(x: f64) -> f64 {
     x * x
 }
 
-/// The partial sums a subpath carries (the report's dVCM, dVC, dVM).
+/// The partial sums a subpath carries (the report's dVCM, dVC, dVM; dVM with merges
+/// counted in units of a surface merge, see [`Factors::rel`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Partial {
     pub vcm: f64,
@@ -42,7 +43,7 @@ pub struct Partial {
     pub vc_merge_last: f64,
 }
 
-/// An iteration's constants: the heuristic applied to η = π r² · N_light (vertex
+/// The constants of merging at one kind of vertex: the heuristic applied to η (vertex
 /// merging against one connection) and to 1/η; zero for a technique left out.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Factors {
@@ -50,13 +51,42 @@ pub struct Factors {
     pub vm: f64,
     /// The report's "MisVcWeightFactor", mis(1/η): 0 without connections.
     pub vc: f64,
+    /// mis(η / η_surface): 1 on a surface. `Partial::vm` counts merges in units of a
+    /// surface merge, since merges at different kinds of vertex weigh differently.
+    pub rel: f64,
+    /// mis(1/η_surface): the unit `Partial::vm` counts connections in.
+    pub unit_vc: f64,
 }
 
-impl Factors {
+/// An iteration's constants for each kind of vertex. Merging on a surface gathers over
+/// a disc, η = π r² · N_light; in a medium over a ball, η = (4/3) π r³ · N_light, with
+/// densities there per unit volume (Křivánek et al. 2014, "Unifying points, beams, and
+/// paths", §4).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PassFactors {
+    pub surface: Factors,
+    pub medium: Factors,
+}
+
+impl PassFactors {
     /// For merging radius `radius` and `light_paths` light subpaths per iteration.
-    pub fn new(radius: f64, light_paths: f64, connect: bool, merge: bool) -> Factors {
-        let eta = PI * radius * radius * light_paths;
-        Factors { vm: if merge { mis(eta) } else { 0.0 }, vc: if connect { mis(1.0 / eta) } else { 0.0 } }
+    pub fn new(radius: f64, light_paths: f64, connect: bool, merge: bool) -> PassFactors {
+        let disc = PI * radius * radius * light_paths;
+        let ball = disc * radius * (4.0 / 3.0);
+        let unit_vc = if connect { mis(1.0 / disc) } else { 0.0 };
+        let of = |eta: f64| Factors {
+            vm: if merge { mis(eta) } else { 0.0 },
+            vc: if connect { mis(1.0 / eta) } else { 0.0 },
+            rel: mis(eta / disc),
+            unit_vc,
+        };
+        PassFactors { surface: Factors { rel: 1.0, ..of(disc) }, medium: of(ball) }
+    }
+
+    /// The constants at a vertex on a surface, or in a medium.
+    #[inline]
+    pub fn at(&self, in_medium: bool) -> Factors {
+        if in_medium { self.medium } else { self.surface }
     }
 }
 
@@ -68,7 +98,7 @@ impl Partial {
     /// `delta`: no connection can reach the light's position or direction.
     pub fn light(emission: f64, direct: f64, cos: f64, delta: bool, f: Factors) -> Partial {
         let vc = if delta { 0.0 } else { mis(cos / emission) };
-        Partial { vcm: mis(direct / emission), vc, vm: vc * f.vc, vc_merge_last: 0.0 }
+        Partial { vcm: mis(direct / emission), vc, vm: vc * f.unit_vc, vc_merge_last: 0.0 }
     }
 
     /// A camera subpath as it leaves the lens: `camera_pdf` is the solid-angle density
@@ -106,9 +136,9 @@ impl Partial {
             return;
         }
         let g = mis(cos_out / pdf);
-        let (vm_here, one) = if merges { (f.vm, 1.0) } else { (0.0, 0.0) };
+        let (vm_here, one) = if merges { (f.vm, f.rel) } else { (0.0, 0.0) };
         let vc = g * (self.vc * mis(pdf_rev) + self.vcm + vm_here);
-        let vm = g * (self.vm * mis(pdf_rev) + self.vcm * f.vc + one);
+        let vm = g * (self.vm * mis(pdf_rev) + self.vcm * f.unit_vc + one);
         *self = Partial { vcm: mis(1.0 / pdf), vc, vm, vc_merge_last: g * vm_here };
     }
 }
@@ -162,11 +192,12 @@ pub struct ConnectPdfs {
 }
 
 /// The weight of connecting a light vertex to a camera vertex; `light_len`: the light
-/// vertex's edges from its light (at 1, merging there would merge direct light).
-pub fn connect(light: Partial, camera: Partial, p: ConnectPdfs, light_len: u32, f: Factors) -> f64 {
-    let vm = if light_len > 1 { f.vm } else { 0.0 };
+/// vertex's edges from its light (at 1, merging there would merge direct light);
+/// `fl`, `fc`: the constants at the light and the camera vertex.
+pub fn connect(light: Partial, camera: Partial, p: ConnectPdfs, light_len: u32, (fl, fc): (Factors, Factors)) -> f64 {
+    let vm = if light_len > 1 { fl.vm } else { 0.0 };
     let w_light = mis(p.camera_a) * (vm + light.vcm + light.vc * mis(p.light_rev));
-    let w_camera = mis(p.light_a) * (f.vm + camera.vcm + camera.vc * mis(p.camera_rev));
+    let w_camera = mis(p.light_a) * (fc.vm + camera.vcm + camera.vc * mis(p.camera_rev));
     1.0 / (w_light + 1.0 + w_camera)
 }
 
@@ -182,9 +213,12 @@ pub fn to_camera(light: Partial, camera_a: f64, bsdf_rev: f64, light_len: u32, l
 
 /// The weight of merging a light vertex (at least two edges from its light) at a
 /// camera vertex: `pdf` and `pdf_rev` are the camera vertex BSDF's densities of the
-/// light vertex's arrival direction and of the camera subpath's own.
+/// light vertex's arrival direction and of the camera subpath's own; `f` the constants
+/// where they merge.
 pub fn merge(light: Partial, camera: Partial, pdf: f64, pdf_rev: f64, f: Factors) -> f64 {
-    let w_light = light.vcm * f.vc + light.vm * mis(pdf);
-    let w_camera = camera.vcm * f.vc + camera.vm * mis(pdf_rev);
+    // The partial sums count merges in units of a surface merge: here, one of weight
+    // `f.rel` of those.
+    let w_light = (light.vcm * f.unit_vc + light.vm * mis(pdf)) / f.rel;
+    let w_camera = (camera.vcm * f.unit_vc + camera.vm * mis(pdf_rev)) / f.rel;
     1.0 / (w_light + 1.0 + w_camera)
 }

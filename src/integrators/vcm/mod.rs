@@ -24,6 +24,7 @@
 pub mod camera;
 pub mod light;
 pub mod mis;
+pub mod vertex;
 
 use super::error::RenderError;
 use super::grid::{Grid, Grouped, Site};
@@ -33,7 +34,7 @@ use crate::render::RenderScene;
 use crate::sampling::SamplerKind;
 use crate::spectrum::Rgb;
 use glam::DVec3;
-use mis::Factors;
+use mis::PassFactors;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -92,15 +93,15 @@ impl Techniques {
 
     /// The pass's constants: merging counts only where it is used (a technique alone
     /// takes weight 1 and reads none).
-    fn factors(self, radius: f64, light_paths: f64) -> Factors {
-        Factors::new(radius, light_paths, true, self.uses(Technique::Merge))
+    fn factors(self, radius: f64, light_paths: f64) -> PassFactors {
+        PassFactors::new(radius, light_paths, true, self.uses(Technique::Merge))
     }
 }
 
 /// What one pass shares between its light and camera subpaths.
 pub struct Pass<'a> {
     pub scene: &'a RenderScene,
-    pub factors: Factors,
+    pub factors: PassFactors,
     pub techniques: Techniques,
     /// The most edges a path may have (pbrt's `maxdepth` + 1).
     pub max_len: u32,
@@ -230,7 +231,11 @@ impl<'a> Vcm<'a> {
         let t1 = Instant::now();
         let grid = match self.settings.techniques.uses(Technique::Merge) {
             true => Grid::build(
-                &lights.vertices.par_iter().map(|v| Some(Site { p: v.p, radius: pass.radius })).collect::<Vec<_>>(),
+                &lights
+                    .vertices
+                    .par_iter()
+                    .map(|v| Some(Site { p: v.place.p, radius: pass.radius }))
+                    .collect::<Vec<_>>(),
             ),
             false => None,
         };

@@ -1,0 +1,238 @@
+//! What both kinds of subpath vertex share: where the vertex is ([`Place`]: a surface
+//! point or a point in a medium, and the media on its sides) and what scatters there
+//! ([`Scatterer`]: a BSDF or a medium's phase function), and what reaches one point
+//! from another ([`visible`]: a visibility test in vacuum, the transmittance with media).
+//!
+//! ```text
+//! MakeNamedMedium "fog" "string type" "homogeneous" "rgb sigma_s" [0.2 0.2 0.2]
+//! Integrator "bdpt"                 # vcm and bdpt scatter in the fog too
+//! ```
+//!
+//! A medium vertex is to the weights what a surface vertex is, with σt (the mean over
+//! channels) where a surface has the cosine that turns a solid-angle density into an
+//! area density: a distance sampled by free flight has density σt·Tr per unit length,
+//! so σt/d² per unit volume over solid angle, and the transmittance is left out of every
+//! density, as pbrt's bdpt leaves it out (see [`super::mis`]).
+
+use crate::accel::Hit;
+use crate::integrators::volume;
+use crate::interaction::{SHADOW_EPSILON, SurfaceInteraction, offset_ray_origin};
+use crate::materials::{Bsdf, BsdfEval, TransportMode};
+use crate::math::{Normal3, Point3, Ray, Vector3};
+use crate::media::{HenyeyGreenstein, MediumInterface};
+use crate::render::RenderScene;
+use crate::sampling::Sampler;
+use crate::spectrum::Rgb;
+use glam::Vec3;
+
+/// Where a vertex is: its point, the error bounds and geometric normal of a surface
+/// point (zero in a medium: rays leave a medium point from the point itself), and the
+/// media a ray leaving it enters on each side.
+#[derive(Clone, Copy, Debug)]
+pub struct Place {
+    pub p: Vec3,
+    pub p_error: Vec3,
+    pub ng: Vec3,
+    pub sides: MediumInterface,
+}
+
+impl Place {
+    /// A surface point a ray in `medium` arrived at (`hit`, `si`): a medium transition's
+    /// sides, or that medium on both.
+    pub fn on_surface(scene: &RenderScene, hit: &Hit, si: &SurfaceInteraction, medium: Option<u32>) -> Place {
+        let sides = match scene.media.is_empty() {
+            true => MediumInterface::default(),
+            false => match scene.media_of(hit) {
+                mi if mi.is_transition() => mi,
+                _ => MediumInterface { inside: medium, outside: medium },
+            },
+        };
+        Place { p: si.p.0, p_error: si.p_error, ng: si.n.0, sides }
+    }
+
+    /// A point in medium `m`.
+    pub fn in_medium(p: Vec3, m: u32) -> Place {
+        Place { p, p_error: Vec3::ZERO, ng: Vec3::ZERO, sides: MediumInterface { inside: Some(m), outside: Some(m) } }
+    }
+
+    /// The medium a ray leaving in direction `d` travels in.
+    #[inline]
+    pub fn toward(&self, d: Vec3) -> Option<u32> {
+        self.sides.toward(d, self.ng)
+    }
+
+    /// A ray leaving in direction `d`, offset off the surface.
+    pub fn spawn(&self, d: Vec3) -> Ray {
+        Ray::new(self.origin_toward(d), Vector3(d))
+    }
+
+    /// Where a ray leaving in direction `d` starts.
+    pub fn origin_toward(&self, d: Vec3) -> Point3 {
+        offset_ray_origin(Point3(self.p), self.p_error, Normal3(self.ng), Vector3(d))
+    }
+}
+
+/// What scatters at a vertex.
+#[derive(Clone, Debug)]
+pub enum Scatterer {
+    Surface(Bsdf),
+    Medium(Phase),
+}
+
+/// A medium's scattering at a point: f = σs·p(ωo, ωi), the phase function's density p.
+#[derive(Clone, Copy, Debug)]
+pub struct Phase {
+    pub hg: HenyeyGreenstein,
+    pub sigma_s: Rgb,
+    /// σt's mean over channels: the weights' density of stopping here (per unit length,
+    /// transmittance aside).
+    pub density: f64,
+}
+
+impl Phase {
+    pub fn new(hg: HenyeyGreenstein, sigma_s: Rgb, sigma_t: Rgb) -> Phase {
+        // Free flight only stops where σt > 0; the floor keeps a denormal from
+        // dividing the weights by zero.
+        Phase { hg, sigma_s, density: (sigma_t.element_sum() as f64 / 3.0).max(1e-30) }
+    }
+}
+
+/// A direction sampled at a vertex.
+pub struct Sampled {
+    pub wi: Vec3,
+    /// The throughput takes f(ωo, ωi) times `scale`: the cosine it takes over the
+    /// sampling density (for a medium, f = σs and the scale 1).
+    pub f: Rgb,
+    pub scale: f32,
+    /// The density of ωi (for the weights), of ωo from ωi (the reverse walk's).
+    pub pdf: f32,
+    pub pdf_rev: f32,
+    pub specular: bool,
+}
+
+impl Scatterer {
+    /// Whether it only scatters specularly (no connection or merge can use it).
+    pub fn is_delta(&self) -> bool {
+        match self {
+            Scatterer::Surface(b) => !b.is_diffuse() && !b.is_glossy(),
+            Scatterer::Medium(_) => false,
+        }
+    }
+
+    pub fn in_medium(&self) -> bool {
+        matches!(self, Scatterer::Medium(_))
+    }
+
+    /// f and both densities for a pair of directions.
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> BsdfEval {
+        match self {
+            Scatterer::Surface(b) => b.eval(wo, wi, mode),
+            Scatterer::Medium(m) => {
+                let p = m.hg.p(wo, wi);
+                BsdfEval { f: m.sigma_s * p, pdf: p, pdf_rev: p }
+            }
+        }
+    }
+
+    /// What turns a solid-angle density toward this vertex along `w` into the weights'
+    /// density of the vertex: |w·ng| on a surface, σt in a medium.
+    #[inline]
+    pub fn measure(&self, w: Vec3, ng: Vec3) -> f64 {
+        match self {
+            Scatterer::Surface(_) => w.dot(ng).abs() as f64,
+            Scatterer::Medium(m) => m.density,
+        }
+    }
+
+    /// The cosine the radiance carried along `w` takes: |w·ns| on a surface, none in a
+    /// medium.
+    #[inline]
+    pub fn cos(&self, w: Vec3) -> f32 {
+        match self {
+            Scatterer::Surface(b) => w.dot(b.shading_normal()).abs(),
+            Scatterer::Medium(_) => 1.0,
+        }
+    }
+
+    /// Samples a direction for the quantity `mode` carries; `cos` gives the cosine the
+    /// carried quantity takes along the sampled direction (a light vertex's adjoint one).
+    pub fn sample(
+        &self,
+        wo: Vec3,
+        s: &mut impl Sampler,
+        mode: TransportMode,
+        cos: impl Fn(Vec3) -> f32,
+    ) -> Option<Sampled> {
+        let b = match self {
+            Scatterer::Surface(b) => b,
+            Scatterer::Medium(m) => {
+                let ps = m.hg.sample(wo, s.get2d());
+                return Some(Sampled {
+                    wi: ps.wi,
+                    f: m.sigma_s,
+                    scale: 1.0,
+                    pdf: ps.p,
+                    pdf_rev: ps.p,
+                    specular: false,
+                });
+            }
+        };
+        let smp = b.sample_f(wo, s.get2d(), s.get1d(), mode)?;
+        let pdf = if smp.proportional { b.pdf_mode(wo, smp.wi, mode) } else { smp.pdf };
+        let pdf_rev = if smp.specular { pdf } else { b.pdf_mode(smp.wi, wo, mode.adjoint()) };
+        if !(pdf > 0.0 && smp.pdf > 0.0) {
+            return None;
+        }
+        let scale = cos(smp.wi) / smp.pdf;
+        Some(Sampled { wi: smp.wi, f: smp.f, scale, pdf, pdf_rev, specular: smp.specular })
+    }
+}
+
+/// Free flight along `ray` through `medium` (if any) up to `hit`: the medium point
+/// where it scatters, as a place, what scatters there and the unit direction back along
+/// the ray; β takes the flight's weight (Tr/pdf) whether it scatters or not.
+pub fn flight(
+    scene: &RenderScene,
+    ray: &Ray,
+    (hit, medium): (Option<&Hit>, Option<u32>),
+    beta: &mut Rgb,
+    s: &mut impl Sampler,
+) -> Option<(Place, Scatterer, Vec3)> {
+    match volume::fly(scene, ray, hit, medium?, s) {
+        Ok(weight) => {
+            *beta *= weight;
+            None
+        }
+        Err((mp, weight)) => {
+            *beta *= weight;
+            let phase = Phase::new(mp.phase, mp.sigma_s, mp.sigma_t);
+            Some((Place::in_medium(mp.p, mp.medium), Scatterer::Medium(phase), mp.wo))
+        }
+    }
+}
+
+/// What reaches point `to` from a place: 1 or 0 in a scene without media (a visibility
+/// test), the transmittance through media and interface surfaces otherwise (numbers
+/// from `s` for grids).
+pub fn visible(scene: &RenderScene, from: &Place, to: Vec3, s: &mut impl Sampler) -> Rgb {
+    let o = from.origin_toward(to - from.p);
+    let ray = Ray { o, d: Vector3(to - o.0), t_max: 1.0 - SHADOW_EPSILON };
+    if scene.media.is_empty() {
+        return if scene.intersect_p(&ray) { Vec3::ZERO } else { Vec3::ONE };
+    }
+    volume::transmittance(scene, &ray, from.toward(to - from.p), s)
+}
+
+/// What reaches a place from infinitely far along direction `d`.
+pub fn visible_along(scene: &RenderScene, from: &Place, d: Vec3, s: &mut impl Sampler) -> Rgb {
+    let ray = from.spawn(d);
+    if scene.media.is_empty() {
+        return if scene.intersect_p(&ray) { Vec3::ZERO } else { Vec3::ONE };
+    }
+    volume::transmittance(scene, &ray, from.toward(d), s)
+}
+
+/// What reaches one place from another (each end offset off its surface).
+pub fn visible_between(scene: &RenderScene, a: &Place, b: &Place, s: &mut impl Sampler) -> Rgb {
+    visible(scene, a, b.origin_toward(a.p - b.p).0, s)
+}
