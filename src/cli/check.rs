@@ -69,6 +69,8 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
         "integrator": {
             "type": "sppm",
             "requested": i.requested,
+            // What renders it by default (the warnings say why).
+            "rendered_with": crate::integrators::Algorithm::for_file(&i.requested, i.emitting_media).name(),
             "iterations": i.iterations,
             "maxdepth": i.max_depth,
             "photonsperiteration": i.photons_per_iteration,

@@ -977,7 +977,7 @@ impl Builder {
         let mut lights = self.build_lights()?;
         let area_lights = self.build_area_lights()?;
         let (media, camera_medium) = self.resolve_media(&mut objects, &mut lights)?;
-        self.render.has_media = !media.is_empty();
+        self.render.emitting_media = media.iter().any(|m| m.kind.emissive());
         let r = self.resolve_options(syntax)?;
         self.report_left_out();
         // In file order, whatever the order they were found in.

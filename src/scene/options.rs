@@ -79,8 +79,9 @@ pub struct Integrator {
     pub radius: f32,
     /// Whether the file gave `radius` (VCM otherwise picks one by the scene's size).
     pub radius_given: bool,
-    /// Whether the scene has media: only SPPM renders them so far.
-    pub media: bool,
+    /// Whether media in the scene emit light: only SPPM sends light from them (vcm and
+    /// bdpt find it by camera paths alone).
+    pub emitting_media: bool,
     pub seed: u64,
     /// Camera rays' differentials are scaled by max(this, 1/√iterations): pbrt-v3
     /// scales them by 1/√iterations, pbrt-v4 by at least 1/8.
@@ -98,8 +99,8 @@ pub struct RenderOptions {
     pub accelerator: Option<Entity>,
     /// `Option "seed"`, when given.
     pub seed_option: Option<u64>,
-    /// Whether the scene has media to render (known once the file is read).
-    pub has_media: bool,
+    /// Whether the scene has media that emit light (known once the file is read).
+    pub emitting_media: bool,
 }
 
 /// Results and warnings of resolving the options.
@@ -267,7 +268,7 @@ impl RenderOptions {
         let e = self.integrator.as_ref().unwrap_or(&default);
         let p = &e.params;
         if e.name != "sppm" {
-            warn.push(rendered_with(e, self.has_media));
+            warn.push(rendered_with(e, self.emitting_media));
         }
         let positive = |name: &str, v: Option<i32>| -> Res<Option<u32>> {
             match v {
@@ -335,7 +336,7 @@ impl RenderOptions {
             photons_per_iteration: photons,
             radius,
             radius_given: p.named("radius").is_some(),
-            media: self.has_media,
+            emitting_media: self.emitting_media,
             seed,
             differential_floor: if syntax == Syntax::V4 { 0.125 } else { 0.0 },
         })
@@ -358,9 +359,9 @@ impl RenderOptions {
 }
 
 /// The warning for a file asking for an integrator other than SPPM: what renders it.
-fn rendered_with(e: &Entity, media: bool) -> Diagnostic {
+fn rendered_with(e: &Entity, emitting_media: bool) -> Diagnostic {
     let (with, why) = match e.name.as_str() {
-        _ if media => ("sppm", "only sppm renders participating media so far"),
+        _ if emitting_media => ("sppm", "its photons start in the emitting media, which vcm's light paths do not"),
         "bdpt" => ("bdpt", "its bidirectional path tracing"),
         _ => ("vcm", "vertex connection and merging, which converges to the same image"),
     };

@@ -131,6 +131,12 @@ fn film_crop_window_pixel_bounds_and_scale() {
     assert_eq!(r["film"]["pixelbounds"], serde_json::json!([2, 6, 1, 3]));
     assert_eq!((num(&r["film"]["scale"]), r["film"]["filename"].as_str()), (2.0, Some("out.exr")));
     assert_eq!(r["integrator"]["photonsperiteration"], 8, "default photons = pixels in the crop");
+    assert_eq!(r["integrator"]["rendered_with"], "sppm");
+    let path = report("Integrator \"path\"\nWorldBegin\n");
+    assert_eq!(
+        (&path["integrator"]["requested"], &path["integrator"]["rendered_with"]),
+        (&"path".into(), &"vcm".into())
+    );
 }
 
 #[test]

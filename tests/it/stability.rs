@@ -4,8 +4,9 @@
 
 use crate::common::{load_file, root, scene};
 use pbrt_sppm::imageio::metrics::relmse;
-use pbrt_sppm::integrators::RenderSettings;
 use pbrt_sppm::integrators::sppm::Sppm;
+use pbrt_sppm::integrators::vcm::Techniques;
+use pbrt_sppm::integrators::{Algorithm, RenderSettings};
 use pbrt_sppm::render::RenderScene;
 
 fn mean(px: &[[f32; 3]]) -> f64 {
@@ -28,14 +29,23 @@ fn every_stress_scene_renders_finite_and_lit() {
     names.retain(|p| p.extension().is_some_and(|e| e == "pbrt"));
     names.sort();
     assert!(names.len() >= 6, "stress scenes: {names:?}");
+    // Each with SPPM, vcm and bdpt (the media scenes: dense fog and grids, albedo 1 at
+    // maxdepth 100, coincident boundaries, a camera on a boundary).
+    let bidirectional = [Algorithm::Vcm(Techniques::All), Algorithm::Vcm(Techniques::Bdpt)];
     for path in names {
         let s = load_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let out = pbrt_sppm::integrators::render(&RenderScene::new(&s), &quick())
+        for algorithm in [Algorithm::Sppm].into_iter().chain(bidirectional) {
+            let settings = RenderSettings { algorithm: Some(algorithm), ..quick() };
+            let out = pbrt_sppm::integrators::render(
+                &RenderScene::for_integrator(&s, algorithm != Algorithm::Sppm),
+                &settings,
+            )
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let name = path.file_name().unwrap().to_string_lossy().into_owned();
-        assert_finite(&name, &out.image.pixels);
-        assert!(mean(&out.image.pixels) > 0.0, "{name}: black");
-        assert!(out.stats.photons.hits > 0, "{name}: no photon hit anything");
+            let name = format!("{} ({})", path.file_name().unwrap().to_string_lossy(), algorithm.name());
+            assert_finite(&name, &out.image.pixels);
+            assert!(mean(&out.image.pixels) > 0.0, "{name}: black");
+            assert!(out.stats.photons.hits > 0, "{name}: no photon hit anything");
+        }
     }
 }
 

@@ -120,7 +120,7 @@ impl AbstractPath {
 
     /// The merging constants at x_i.
     fn at(&self, i: usize) -> Factors {
-        self.f.at(self.medium[i])
+        self.f.at(self.medium[i].then_some(self.a[i]))
     }
 
     /// The light subpath's partial sums on arriving at x_i.

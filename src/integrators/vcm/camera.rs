@@ -251,7 +251,7 @@ impl Cameras<'_> {
             camera_rev: ec.pdf_rev as f64,
             light_rev: el.pdf_rev as f64,
         };
-        let f = (lv.factors(pass), pass.factors.at(v.at.in_medium()));
+        let f = (lv.factors(pass), v.at.factors(&pass.factors));
         let w = pass.techniques.weight(mis::connect(lv.partial, v.partial, pdfs, lv.len, f));
         let g = v.at.cos(dir) * lv.adjoint_cos(-dir) / dist2;
         let c = (lv.beta * el.f * ec.f * (g * w)).as_dvec3() * pass.scene.photon_scale;
@@ -268,7 +268,10 @@ impl Cameras<'_> {
     fn merge(&self, v: &Vertex, grid: &Grid) -> Rgb {
         let pass = self.pass;
         let (p, r2, in_medium) = (v.place.p, pass.radius * pass.radius, v.at.in_medium());
-        let f = pass.factors.at(in_medium);
+        let f = v.at.factors(&pass.factors);
+        if f.vm == 0.0 {
+            return Vec3::ZERO;
+        }
         let mut sum = DVec3::ZERO;
         grid.gather(p, |k| {
             let lv = &self.lights.vertices[k as usize];
@@ -330,6 +333,6 @@ fn scatter(pass: &Pass, v: &Vertex, beta: Rgb, s: &mut impl Sampler) -> Option<(
     }
     let mut partial = v.partial;
     let m = v.at.measure(smp.wi, v.place.ng);
-    partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, true, pass.factors.at(v.at.in_medium()));
+    partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, true, v.at.factors(&pass.factors));
     Some(((beta, smp.wi), partial))
 }

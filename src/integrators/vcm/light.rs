@@ -47,7 +47,7 @@ impl LightVertex {
 
     /// The pass's merging constants at this vertex.
     pub fn factors(&self, pass: &Pass) -> Factors {
-        pass.factors.at(self.at.in_medium())
+        self.at.factors(&pass.factors)
     }
 }
 

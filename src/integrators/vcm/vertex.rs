@@ -14,6 +14,7 @@
 //! so σt/d² per unit volume over solid angle, and the transmittance is left out of every
 //! density, as pbrt's bdpt leaves it out (see [`super::mis`]).
 
+use super::mis::{Factors, PassFactors};
 use crate::accel::Hit;
 use crate::integrators::volume;
 use crate::interaction::{SHADOW_EPSILON, SurfaceInteraction, offset_ray_origin};
@@ -121,6 +122,15 @@ impl Scatterer {
 
     pub fn in_medium(&self) -> bool {
         matches!(self, Scatterer::Medium(_))
+    }
+
+    /// The pass's merging constants here.
+    #[inline]
+    pub fn factors(&self, f: &PassFactors) -> Factors {
+        f.at(match self {
+            Scatterer::Surface(_) => None,
+            Scatterer::Medium(m) => Some(m.density),
+        })
     }
 
     /// f and both densities for a pair of directions.
