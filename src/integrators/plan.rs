@@ -46,7 +46,7 @@ impl Algorithm {
 }
 
 /// The smallest initial radius: its square is a normal f32.
-pub const MIN_RADIUS: f32 = 1e-18;
+pub use crate::scene::options::MIN_RADIUS;
 
 /// How to render: overrides of the scene's SPPM parameters and the pass plan. Nothing
 /// here is about reporting or output (see [`super::Monitor`]).

@@ -91,7 +91,7 @@ fn quoted(i: &[u8]) -> LexResult<'_, TokenKind> {
     let (mut rest, _) = tag("\"").parse(i)?;
     loop {
         let fail = |r: &[u8], message| Err(nom::Err::Failure(Failure { remaining: r.len(), message }));
-        match rest.iter().position(|&c| matches!(c, b'"' | b'\\' | b'\n' | b'\r')) {
+        match rest.iter().position(|&c| matches!(c, b'"' | b'\\' | b'\n' | b'\r' | 0)) {
             None => return fail(&rest[rest.len()..], "premature EOF inside a quoted string"),
             Some(p) => match rest[p] {
                 b'"' => return Ok((&rest[p + 1..], TokenKind::Str)),
@@ -100,6 +100,9 @@ fn quoted(i: &[u8]) -> LexResult<'_, TokenKind> {
                     Some(b'b' | b'f' | b'n' | b'r' | b't' | b'\\' | b'\'' | b'"') => rest = &rest[p + 2..],
                     Some(_) => return fail(&rest[p..], "unexpected escaped character"),
                 },
+                // DEVIATION(pbrt): robustness. pbrt takes a NUL into the string, and
+                // then reports the name as unknown, printed cut short at the NUL.
+                0 => return fail(&rest[p..], "NUL byte inside a quoted string"),
                 _ => return fail(&rest[p..], "unterminated string (line break inside quotes)"),
             },
         }

@@ -103,6 +103,10 @@ pub struct RenderOptions {
     pub emitting_media: bool,
 }
 
+/// The smallest photon radius: its square is a normal f32 (the gather compares squared
+/// distances; below it no photon is ever found).
+pub const MIN_RADIUS: f32 = 1e-18;
+
 /// Results and warnings of resolving the options.
 pub struct Resolved {
     pub camera: Camera,
@@ -321,6 +325,11 @@ impl RenderOptions {
             over("photonsperiteration", photons, limits.photons, "photonsperiteration")?;
         }
         let radius = values::float(p, "radius", 1.0, Range::Positive)?;
+        if radius < MIN_RADIUS {
+            let at = p.named("radius").map_or(e.name_span, |r| r.value_span);
+            let message = format!("\"float radius\" must be at least {MIN_RADIUS:e}, not {radius:e}");
+            return Err(Diagnostic::error(at, message));
+        }
         let seed = match p.int("seed")? {
             Some(s) => s as u64,
             None => self.seed_option.unwrap_or(0),

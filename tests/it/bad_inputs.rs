@@ -68,6 +68,26 @@ fn a_missing_scene_file_is_an_error_not_a_panic() {
     assert!(stderr.starts_with("no/such/scene.pbrt: error: cannot read"), "{stderr}");
 }
 
+/// A mistyped command is refused naming the commands (not taken for a scene file), and
+/// `check --shapes` asks for `--json` rather than being ignored.
+#[test]
+fn unknown_commands_and_shapes_without_json_are_usage_errors() {
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm")).args(args).output().expect("run");
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (code, stderr) = run(&["info", "x.pbrt"]);
+    assert_eq!(code, Some(2));
+    assert!(stderr.contains("unknown command \"info\"") && stderr.contains("render, check, export"), "{stderr}");
+    let (code, stderr) = run(&["check", "--shapes", "no-such.pbrt"]);
+    assert_eq!(code, Some(2));
+    assert!(stderr.contains("--json"), "{stderr}");
+    // A file name is still a render.
+    let (code, stderr) = run(&["no/such/scene.pbrt"]);
+    assert_eq!(code, Some(1));
+    assert!(stderr.starts_with("no/such/scene.pbrt: error: cannot read"), "{stderr}");
+}
+
 #[test]
 fn utf16_files_are_rejected_with_a_message() {
     let dir = std::env::temp_dir().join(format!("pbrt-sppm-utf16-{}", std::process::id()));

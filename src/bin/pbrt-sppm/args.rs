@@ -11,7 +11,7 @@ use pbrt_sppm::integrators::{Algorithm, RenderSettings};
 use pbrt_sppm::job::Request;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::sampling::SamplerKind;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
 #[command(name = "pbrt-sppm", version, about = "Renders pbrt-v3/v4 scenes with stochastic progressive photon mapping")]
@@ -28,11 +28,11 @@ pub enum Command {
     Check {
         /// The scene file (`-` reads standard input).
         scene: PathBuf,
-        /// Print one JSON object (design.md §3) instead of a summary.
+        /// Print one JSON object (its fields: README, "Command line") instead of a summary.
         #[arg(long)]
         json: bool,
-        /// Add one entry per created shape to the JSON.
-        #[arg(long)]
+        /// Add one entry per created shape to the JSON (with --json only).
+        #[arg(long, requires = "json")]
         shapes: bool,
         #[command(flatten)]
         common: Common,
@@ -302,14 +302,26 @@ fn parse_positive(s: &str) -> Result<f32, String> {
     if v > 0.0 && v.is_finite() { Ok(v) } else { Err(format!("must be a positive number, not {s}")) }
 }
 
-/// `pbrt-sppm scene.pbrt ...` means `pbrt-sppm render scene.pbrt ...`.
-pub fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+/// `pbrt-sppm scene.pbrt ...` means `pbrt-sppm render scene.pbrt ...`. A first argument
+/// that is a bare word (no `.`, no path separator, no such file) is a mistyped command:
+/// the error names the commands.
+pub fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Result<Vec<std::ffi::OsString>, String> {
     const KNOWN: [&str; 11] =
         ["render", "check", "trace", "export", "merge", "plan", "help", "--help", "-h", "--version", "-V"];
-    if args.len() > 1 && !KNOWN.iter().any(|k| args[1] == *k) {
-        args.insert(1, "render".into());
+    let Some(first) = args.get(1) else { return Ok(args) };
+    if KNOWN.iter().any(|k| first == *k) {
+        return Ok(args);
     }
-    args
+    let word = first.to_string_lossy();
+    let bare = !word.starts_with('-') && !word.contains(['.', '/', '\\']) && word != "-";
+    if bare && !Path::new(first).exists() {
+        return Err(format!(
+            "unknown command \"{word}\": the commands are render, check, export, merge, plan and trace \
+             (a scene file alone means render)"
+        ));
+    }
+    args.insert(1, "render".into());
+    Ok(args)
 }
 
 /// Whether the arguments hold `--fix help` (or `--fix=help`), which lists the fixes

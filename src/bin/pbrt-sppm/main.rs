@@ -26,7 +26,14 @@ fn main() -> ExitCode {
     if args::asks_fix_help(std::env::args_os().skip(1)) {
         return print(&Fixes::help());
     }
-    let cli = Cli::parse_from(args::with_default_subcommand(std::env::args_os().collect()));
+    let args = match args::with_default_subcommand(std::env::args_os().collect()) {
+        Ok(args) => args,
+        Err(e) => {
+            eprintln!("pbrt-sppm: error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let cli = Cli::parse_from(args);
     let result = match cli.command {
         Command::Check { scene, json, shapes, common } => load(&scene, &common).map(|s| match json {
             true => print(&(serde_json::to_string_pretty(&check::report(&s, shapes)).unwrap_or_default() + "\n")),
