@@ -42,7 +42,12 @@ use std::process::{Command, ExitCode};
 use std::time::Instant;
 
 fn main() -> ExitCode {
+    quiet_on_closed_pipe();
     let args: Vec<String> = std::env::args().collect();
+    if let Some(text) = help(&args) {
+        print!("{text}");
+        return ExitCode::SUCCESS;
+    }
     let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).cloned();
     match args.get(1).map(String::as_str) {
         Some("parse") => {
@@ -72,10 +77,79 @@ fn main() -> ExitCode {
 }
 
 fn usage() -> ExitCode {
-    eprintln!(
-        "usage: pbrt-bench parse|rays|sppm|converge|stress [--runs N] [--dir DIR] [--dump] [--sse] [SCENE.pbrt ...]"
-    );
+    eprint!("{HELP}");
     ExitCode::FAILURE
+}
+
+const HELP: &str = "\
+pbrt-bench: benchmarks (whole processes, medians; speed claims live here, never in tests)
+
+Usage: pbrt-bench <COMMAND> [OPTIONS]      (pbrt-bench <COMMAND> --help: its options)
+
+Commands:
+  sppm      seconds per SPPM iteration and per million photons, 1 and 2 threads
+  converge  error (relMSE) against wall time, ours beside pbrt-v3 and pbrt-v4
+  parse     loading speed and peak memory on generated scenes, beside pbrt-v3
+  rays      BVH build and ray throughput on a 1M-triangle mesh
+  stress    numerical stress sweeps (spawned rays, closed meshes, grazing rays, furnace)
+";
+
+const HELP_SPPM: &str = "\
+Usage: pbrt-bench sppm [--runs N] [SCENE.pbrt ...]
+
+Renders each scene (default: pbrt-scenes/v3/*.pbrt) at 1 and 2 threads and prints the
+median seconds per iteration and per million photons.
+  --runs N   runs per scene and thread count (default 3)
+";
+
+const HELP_PARSE: &str = "\
+Usage: pbrt-bench parse [--runs N] [--dir DIR] [--peers DIR]
+
+Writes three large scenes (a 50 MB inline mesh, a 1M-triangle binary PLY, 25,000
+instances of a 30,000-triangle PLY) into DIR, then loads each in fresh processes and
+prints the median time, MB/s and peak memory; pbrt-v3 reads the same files in
+alternate runs when DIR holds it.
+  --runs N      loads per scene (default 5)
+  --dir DIR     where the generated scenes go (default target/bench-data; about 90 MB)
+  --peers DIR   where pbrt-v3 is (default ../shared/peers)
+";
+
+const HELP_RAYS: &str = "\
+Usage: pbrt-bench rays [--runs N] [--dir DIR] [--dump] [--sse]
+
+Builds a 1M-triangle bumpy sphere (through a binary PLY), times the BVH build, then 1M
+coherent and 1M incoherent rays, closest and any hit, on 1 and 2 threads.
+  --runs N    repetitions, median (default 5)
+  --dir DIR   where the PLY goes (default target/bench-data)
+  --dump      also write the mesh and rays as raw arrays for tools/embree_bench.py
+  --sse       time the SSE node test instead of AVX2
+";
+
+/// The help a `--help` (or `-h`, or `help`) asks for, if any: the whole tool's or a
+/// command's. Asking never starts a benchmark.
+fn help(args: &[String]) -> Option<String> {
+    let asked = args.iter().skip(1).any(|a| a == "--help" || a == "-h") || args.get(1).is_some_and(|a| a == "help");
+    if !asked {
+        return None;
+    }
+    Some(match args.get(1).map(String::as_str) {
+        Some("sppm") => HELP_SPPM.into(),
+        Some("parse") => HELP_PARSE.into(),
+        Some("rays") => HELP_RAYS.into(),
+        Some("converge") => converge::HELP.into(),
+        Some("stress") => stress::HELP.into(),
+        _ => HELP.into(),
+    })
+}
+
+/// A closed pipe (`pbrt-bench ... | head`) ends the process quietly, as it ends a C
+/// tool, instead of panicking in `println!`.
+fn quiet_on_closed_pipe() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: sets the default disposition of one signal before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
 }
 
 /// Loads one scene in this process; prints `seconds peak_kib triangles`.

@@ -53,6 +53,26 @@ use std::time::Instant;
 
 type Res<T> = Result<T, String>;
 
+/// `pbrt-bench converge --help`.
+pub const HELP: &str = "\
+Usage: pbrt-bench converge [SCENE.pbrt[@half] ...] [OPTIONS]
+
+Error (relMSE) against wall time: each round runs pbrt-v3 and pbrt-v4 (those found in
+--peers) with the scene's SPPM at each iteration count of the ladder, and with bdpt and
+path (volpath with media) at the samples that take as long, then ours with a time limit
+just past the slowest peer run; all against a reference of ours with a seed of its own.
+Without scenes: the README's suite. @half renders at half resolution.
+  --runs N                    rounds; every figure is the median over them (default 3)
+  --iterations A,B,C          the ladder (default: the scene's count over 4, over 2, as written)
+  --reference-iterations N    the reference's iterations (default 32 x the longest rung)
+  --reference-args \"ARGS\"     options for the reference render (e.g. \"--integrator bdpt\")
+  --ours-args \"ARGS\"          options for our timed runs only (e.g. \"--integrator vcm\")
+  --peers DIR                 where pbrt-v3 and pbrt-v4 are (default ../shared/peers)
+  --out DIR                   tables, ERRORS.csv files, plots, cached references (default target/converge)
+  --nthreads N                threads for every run, ours and pbrt's (default 2)
+  --doc FILE                  write the suite table into FILE between <!-- BEGIN converge --> and <!-- END converge -->
+";
+
 /// A scene of the suite, at its own or at half resolution.
 struct SceneSpec {
     path: PathBuf,

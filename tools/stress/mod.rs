@@ -22,6 +22,22 @@ use pbrt_sppm::math::{Point3, Ray, Vector3};
 use pbrt_sppm::sampling::{Rng, uniform_sphere};
 use std::process::ExitCode;
 
+/// `pbrt-bench stress --help`.
+pub const HELP: &str = "\
+Usage: pbrt-bench stress [spawn|mesh|grazing|furnace] [OPTIONS]
+
+Numerical stress sweeps, each printing a table and a summary; without a part, all four
+in that order. Shapes are placed at scales 1e-6..1e6 and up to 1e7 from the origin.
+  spawn     spawned rays that hit their own surface again, per shape family
+  mesh      rays from inside closed meshes that escape them
+  grazing   rays tangent to the quadrics, through rims and poles, against f64
+  furnace   a long progressive SPPM run against its analytic value
+  --shapes N       shapes per case (spawn: default 500; grazing: 100)
+  --rays N         rays per shape or mesh (spawn 500, mesh 5000, grazing 400)
+  --meshes N       closed meshes (mesh: default 20)
+  --iterations N   SPPM iterations (furnace: default 100000)
+";
+
 const FAMILIES: [&str; 7] = ["sphere", "cylinder", "disk", "cone", "paraboloid", "hyperboloid", "triangle"];
 const KINDS: [&str; 3] = ["plain", "mirror+shear", "near-singular"];
 const DISTANCES: [f64; 3] = [0.0, 1e6, 1e7];
@@ -88,9 +104,7 @@ pub fn main(args: &[String]) -> ExitCode {
     let part = args.first().filter(|a| !a.starts_with("--")).map(String::as_str);
     let all = part.is_none();
     if !matches!(part, None | Some("spawn" | "mesh" | "grazing" | "furnace")) {
-        eprintln!(
-            "usage: pbrt-bench stress [spawn|mesh|grazing|furnace] [--shapes N] [--rays N] [--meshes N] [--iterations N]"
-        );
+        eprint!("{HELP}");
         return ExitCode::FAILURE;
     }
     if all || part == Some("spawn") {
