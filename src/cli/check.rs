@@ -187,23 +187,29 @@ fn quadric_params(q: &Quadric) -> Value {
 
 /// The text `check` prints: the scene in a few lines, then every skipped, approximated
 /// and pbrt-bug statement at its location.
+/// The scene's nonzero counts on one line ("sphere 2, trianglemesh 1, triangles 12, …").
+pub fn counts_line(s: &SceneDescription) -> String {
+    let c = counts(s);
+    let parts: Vec<String> = c
+        .as_object()
+        .map(|c| c.iter().filter(|(_, v)| v.as_u64() != Some(0)).map(|(k, v)| format!("{k} {v}")).collect())
+        .unwrap_or_default();
+    parts.join(", ")
+}
+
 pub fn summary(s: &SceneDescription) -> String {
     use std::fmt::Write as _;
-    let r = report(s, false);
     let mut out = String::new();
     let _ = writeln!(out, "syntax      {}", s.syntax.name());
     let _ = writeln!(out, "film        {}x{} -> {}", s.film.x_resolution, s.film.y_resolution, s.film.filename);
     let i = &s.integrator;
+    let method = crate::integrators::Algorithm::for_file(&i.requested, i.emitting_media).name();
     let _ = writeln!(
         out,
-        "sppm        {} iterations, maxdepth {}, {} photons/iteration, radius {}",
-        i.iterations, i.max_depth, i.photons_per_iteration, i.radius
+        "integrator  \"{}\", rendered with {method}: {} iterations, maxdepth {}, {} photons/iteration, radius {}",
+        i.requested, i.iterations, i.max_depth, i.photons_per_iteration, i.radius
     );
-    if let Some(c) = r["counts"].as_object() {
-        let parts: Vec<String> =
-            c.iter().filter(|(_, v)| v.as_u64() != Some(0)).map(|(k, v)| format!("{k} {v}")).collect();
-        let _ = writeln!(out, "counts      {}", parts.join(", "));
-    }
+    let _ = writeln!(out, "counts      {}", counts_line(s));
     for k in &s.skipped {
         let _ = writeln!(out, "skipped     {}:{}:{}: {} ({})", k.file, k.line, k.column, k.what, k.why);
     }

@@ -137,6 +137,8 @@ fn film_crop_window_pixel_bounds_and_scale() {
         (&path["integrator"]["requested"], &path["integrator"]["rendered_with"]),
         (&"path".into(), &"vcm".into())
     );
+    let summary = pbrt_sppm::cli::check::summary(&scene("Integrator \"path\"\nWorldBegin\n"));
+    assert!(summary.contains("integrator  \"path\", rendered with vcm"), "{summary}");
 }
 
 #[test]

@@ -47,9 +47,27 @@ fn main() -> ExitCode {
             Ok(merge(&parts, outfile.as_deref(), partial.as_deref(), allow_gaps, quiet))
         }
         Command::Plan(args) => Ok(plan(&args)),
-        Command::Render(args) => load(&args.scene, &args.common).map(|s| render(s, &args)),
+        Command::Render(args) => loading(&args.scene, &args.common).map(|s| render(s, &args)),
     };
     result.unwrap_or_else(|code| code)
+}
+
+/// [`load`] for a render: on a terminal (and without `--quiet`) a line says that loading
+/// started and, when it ends, how long it took and what the scene holds, so a large
+/// scene is not a silent wait.
+fn loading(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> {
+    let tell = !common.quiet && std::io::stderr().is_terminal();
+    if tell {
+        eprint!("loading {} ...", scene.display());
+    }
+    let start = std::time::Instant::now();
+    let loaded = load(scene, common);
+    if tell && let Ok(s) = &loaded {
+        let i = &s.integrator;
+        let method = pbrt_sppm::integrators::Algorithm::for_file(&i.requested, i.emitting_media).name();
+        eprintln!(" {:.2} s: {}; {method}", start.elapsed().as_secs_f64(), check::counts_line(s));
+    }
+    loaded
 }
 
 /// Loads a scene (`-`: standard input) under the command line's limits and fixes,

@@ -50,6 +50,7 @@ pub fn rendered(job: &Job, out: &RenderOutput, args: &RenderArgs) -> ExitCode {
     let what = if out.interrupted { "interrupted after" } else { "rendered" };
     let done = match &out.pass_sums {
         Some(_) => format!("independent passes {}", out.passes),
+        None if out.stats.iterations == 1 => "1 iteration".to_string(),
         None => format!("{} iterations", out.stats.iterations),
     };
     let image = job.image.as_ref().map(|i| i.0.as_path());
