@@ -55,20 +55,16 @@ pub fn warnings(s: &SceneDescription) -> Vec<String> {
     s.warnings.iter().map(|w| w.message.clone()).collect()
 }
 
-/// A prerequisite an opt-in (`#[ignore]`d) test lacks: under CI (`CI=true`) that is a
-/// failure unless `PBRT_SPPM_ALLOW_SKIP=1`; elsewhere the test prints why and returns.
-pub fn missing_prerequisite(why: &str) {
-    let ci = std::env::var("CI").is_ok_and(|v| v == "true");
-    let allowed = std::env::var("PBRT_SPPM_ALLOW_SKIP").is_ok_and(|v| v == "1");
-    assert!(!ci || allowed, "cannot run under CI: {why} (set PBRT_SPPM_ALLOW_SKIP=1 to allow the skip)");
-    eprintln!("SKIPPED: {why}");
-}
-
-/// A test that cannot run here and is not a failure for it (a service the machine
-/// cannot start): it says so on stderr and in `target/tmp/skipped-tests.txt`, which
-/// `.ci/run` prints after the test summary.
-pub fn skipped(test: &str, why: &str) {
+/// An opt-in (`#[ignore]`d) test of `kind` (`scenes`, `mitsuba`, `slurm`) that cannot
+/// run here fails, saying why, so a run never counts it as passed; unless
+/// `PBRT_SPPM_ALLOW_SKIP` allows the kind (`1` allows every kind, else a comma list):
+/// then it says so on stderr and in `target/tmp/skipped-tests.txt`, which `.ci/run`
+/// prints after the test summary, and returns.
+pub fn cannot_run(kind: &str, test: &str, why: &str) {
     use std::io::Write;
+    let allowed = std::env::var("PBRT_SPPM_ALLOW_SKIP").unwrap_or_default();
+    let allowed = allowed == "1" || allowed.split(',').any(|k| k.trim() == kind);
+    assert!(allowed, "{test} cannot run here: {why} (PBRT_SPPM_ALLOW_SKIP={kind} lets it skip)");
     eprintln!("SKIPPED: {test}: {why}");
     let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join("skipped-tests.txt");
     if let Ok(mut f) = std::fs::OpenOptions::new().create(true).append(true).open(path) {

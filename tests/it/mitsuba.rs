@@ -309,7 +309,7 @@ fn mitsuba_python() -> Option<PathBuf> {
     match VENV.get_or_init(make_mitsuba_venv) {
         Ok(python) => Some(python.clone()),
         Err(why) => {
-            crate::common::missing_prerequisite(&format!("mitsuba cross-check: {why}"));
+            crate::common::cannot_run("mitsuba", "the Mitsuba cross-check", why);
             None
         }
     }

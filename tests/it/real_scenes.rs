@@ -10,7 +10,7 @@ fn shared() -> Option<PathBuf> {
     if dir.is_dir() {
         Some(dir)
     } else {
-        crate::common::missing_prerequisite("../shared/scenes is not present next to the repository");
+        crate::common::cannot_run("scenes", "the shared-scene tests", "../shared/scenes is not next to the repository");
         None
     }
 }

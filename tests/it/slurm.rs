@@ -1,9 +1,10 @@
 //! A real one-node Slurm cluster (`tools/slurm/local-cluster.sh`: munged, slurmctld
 //! and slurmd on localhost) runs the script `pbrt-sppm plan --slurm` prints: a
 //! 4-shard job array and a merge job waiting on it. The merged image must equal the
-//! single-machine render. Where Slurm cannot start, the test says it was skipped.
+//! single-machine render. Where Slurm cannot start, the test fails unless
+//! `PBRT_SPPM_ALLOW_SKIP` allows `slurm` (`.ci/run` does).
 
-use crate::common::{root, skipped};
+use crate::common::{cannot_run, root};
 use crate::shards::{assert_same_image, dir};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -48,7 +49,7 @@ fn a_four_shard_render_on_slurm_equals_the_single_machine_render() {
     let d = dir("slurm");
     let cluster = match start(&d) {
         Ok(c) => c,
-        Err(why) => return skipped(TEST, &format!("Slurm could not start: {why}")),
+        Err(why) => return cannot_run("slurm", TEST, &format!("Slurm could not start: {why}")),
     };
     let conf = cluster.0.join("slurm.conf");
     let bin = env!("CARGO_BIN_EXE_pbrt-sppm");
