@@ -34,6 +34,7 @@ struct Cli {
 enum Command {
     /// Error metrics of A against the reference B (relMSE = mean((a−b)²/(b² + 0.01))).
     Diff {
+        /// The image to compare (EXR or PNG).
         a: String,
         /// The reference.
         b: String,
@@ -54,10 +55,15 @@ enum Command {
         heatmap: Option<PathBuf>,
     },
     /// Size, windows, metadata and per-channel statistics.
-    Info { image: String },
+    Info {
+        /// The image (EXR or PNG).
+        image: String,
+    },
     /// EXR → PNG (exposure, then sRGB) or PNG → EXR (sRGB decoded).
     Convert {
+        /// The image to read (EXR or PNG).
         input: String,
+        /// The image to write: .png from an EXR, .exr from a PNG.
         output: PathBuf,
         /// Exposure in stops.
         #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
@@ -69,6 +75,7 @@ enum Command {
     /// Channel means of A against the reference B, whole image and each tile of a grid;
     /// exits with status 1 when the worst relative deviation is above --tolerance.
     Tiles {
+        /// The image to compare (EXR or PNG).
         a: String,
         /// The reference.
         b: String,
@@ -84,18 +91,24 @@ enum Command {
     },
     /// Error against seconds or iterations, log-log, one line per ERRORS.csv.
     Plot {
+        /// ERRORS.csv files (`render --mse-reference-out`), one line each.
         #[arg(required = true)]
         csv: Vec<String>,
+        /// The plot to write (PNG; default: the first CSV's name with .png).
         #[arg(short, long)]
-        o: PathBuf,
+        o: Option<PathBuf>,
+        /// The horizontal axis.
         #[arg(long, default_value = "seconds", value_parser = ["seconds", "iterations"])]
         x: String,
+        /// The error plotted.
         #[arg(long, default_value = "relmse", value_parser = ["relmse", "rmse", "mse"])]
         metric: String,
     },
     /// Render a scene once and report its error at each budget against a reference.
     Report {
+        /// The scene to render (once, writing its ERRORS.csv as it goes).
         scene: PathBuf,
+        /// The reference image the error is measured against.
         #[arg(long)]
         reference: PathBuf,
         /// Budgets in seconds, e.g. 1,2,4,8.
@@ -107,8 +120,10 @@ enum Command {
         /// The report (its folder is made if needed); report.csv, .png, .exr go beside it.
         #[arg(short, long, default_value = "report.md")]
         o: PathBuf,
+        /// Photons per iteration (default: the scene's).
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
         photons: Option<u64>,
+        /// The render's seed (default: the scene's).
         #[arg(long)]
         seed: Option<u64>,
         /// Worker threads (0: every core).
@@ -132,7 +147,10 @@ fn main() -> ExitCode {
         Command::Info { image } => info(&image),
         Command::Convert { input, output, exposure, half } => convert(&input, &output, exposure, half),
         Command::Tiles { a, b, grid, floor, tolerance } => tiles(&a, &b, grid as usize, floor, tolerance),
-        Command::Plot { csv, o, x, metric } => plot(&csv, &o, &x, &metric),
+        Command::Plot { csv, o, x, metric } => {
+            let out = o.unwrap_or_else(|| Path::new(&csv[0]).with_extension("png"));
+            plot(&csv, &out, &x, &metric).and_then(|_| say(&format!("wrote {}\n", out.display())))
+        }
         Command::Report { scene, reference, seconds, iterations, o, photons, seed, nthreads } => {
             let r = report::ReportArgs { scene, reference, out: o, seconds, iterations, photons, seed, nthreads };
             report::report(&r).and_then(|()| say(&format!("wrote {}\n", r.out.display())))
@@ -166,16 +184,34 @@ fn tiles(x: &str, y: &str, grid: usize, floor: f64, tolerance: Option<f64>) -> R
         return Err(format!("{x} is {}x{}, {y} is {}x{}", ia.width, ia.height, ib.width, ib.height));
     }
     let (w, h) = (ia.width, ia.height);
+    let whole = (metrics::tile_means(&ia.pixels, w, h, 1)[0], metrics::tile_means(&ib.pixels, w, h, 1)[0]);
+    let mut text = tile_line("image", whole.0, whole.1, whole.1, floor);
     let (ma, mb) = (metrics::tile_means(&ia.pixels, w, h, grid), metrics::tile_means(&ib.pixels, w, h, grid));
-    let mut text = String::new();
     for (k, (a, b)) in ma.iter().zip(&mb).enumerate() {
-        let ratio = [0, 1, 2].map(|c| if b[c] > 0.0 { format!("{:.4}", a[c] / b[c]) } else { "-".into() });
-        text += &format!("tile ({}, {}): ratio {}\n", k % grid, k / grid, ratio.join(" "));
+        text += &tile_line(&format!("tile ({}, {})", k % grid, k / grid), *a, *b, whole.1, floor);
     }
     let (d, at, c) = metrics::worst_mean_deviation(&ia.pixels, &ib.pixels, w, h, grid, floor);
-    text += &format!("worst deviation {:.4}% at {at}, channel {}\n", 100.0 * d, ["R", "G", "B"][c]);
+    text += &format!(
+        "worst deviation {:.4}% at {at}, channel {} (|A − B| over B's mean, or over {}% of B's image mean \
+         where that is larger)\n",
+        100.0 * d,
+        ["R", "G", "B"][c],
+        100.0 * floor
+    );
     say(&text)?;
     Ok(if tolerance.is_some_and(|t| d > t) { ExitCode::FAILURE } else { ExitCode::SUCCESS })
+}
+
+/// One row of `tiles`: the ratio of A's channel means to B's, and for a region darker
+/// than the floor the deviation it is held to (against the floor, not the ratio).
+fn tile_line(at: &str, a: [f64; 3], b: [f64; 3], image: [f64; 3], floor: f64) -> String {
+    let ratio = [0, 1, 2].map(|c| if b[c] > 0.0 { format!("{:.4}", a[c] / b[c]) } else { "-".into() });
+    let dark: Vec<String> = (0..3)
+        .filter(|&c| b[c] < floor * image[c])
+        .map(|c| format!("{} {:.2}%", ["R", "G", "B"][c], 100.0 * (a[c] - b[c]).abs() / (floor * image[c]).max(1e-30)))
+        .collect();
+    let note = if dark.is_empty() { String::new() } else { format!("  (below the floor: {})", dark.join(", ")) };
+    format!("{at}: ratio {}{note}\n", ratio.join(" "))
 }
 
 fn diff(

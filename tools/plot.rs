@@ -35,7 +35,9 @@ pub fn read_series(path: &Path, x: &str, metric: &str) -> Result<Series, String>
 
 /// The named columns of every row of an `ERRORS.csv`-shaped file, in the order named.
 pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| format!("{}: not a CSV file (it is not text; plot reads ERRORS.csv files)", path.display()))?;
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap_or_default().split(',').map(str::trim).collect();
     let columns: Vec<usize> = names
@@ -55,7 +57,7 @@ pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, String
 
 /// Registers the bundled font once (plotters' `ab_glyph` backend has no system fonts).
 fn register_font() -> Result<(), String> {
-    static FONT: &[u8] = include_bytes!("fonts/DejaVuSansMono.ttf");
+    static FONT: &[u8] = include_bytes!("fonts/DejaVuSans.ttf");
     plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
         .map_err(|_| "the bundled font could not be loaded".to_string())
 }
@@ -89,15 +91,17 @@ fn render(
             .x_label_area_size(45)
             .y_label_area_size(80)
             // Padding keeps single points and flat lines inside a visible range.
-            .build_cartesian_2d((x0 / 1.2..x1 * 1.2).log_scale(), (y0 / 1.5..y1 * 1.5).log_scale())
+            .build_cartesian_2d(
+                (x0 / 1.2..x1 * 1.2).log_scale().with_key_points(key_points(x0 / 1.2, x1 * 1.2)),
+                (y0 / 1.5..y1 * 1.5).log_scale().with_key_points(key_points(y0 / 1.5, y1 * 1.5)),
+            )
             .map_err(e)?;
         chart
             .configure_mesh()
             .x_desc(x_label)
             .y_desc(metric)
-            .x_labels(6)
             .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| format!("{v:.1e}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
             .draw()
             .map_err(e)?;
         for (i, s) in series.iter().enumerate() {
@@ -119,6 +123,16 @@ fn render(
         root.present().map_err(e)?;
     }
     Ok(())
+}
+
+/// Ticks at 1, 2 and 5 times the powers of ten within [lo, hi] (plotters' log axes
+/// label only powers of ten, so a run from 0.85 to 7.75 s had a single tick).
+fn key_points(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return Vec::new();
+    }
+    let (k0, k1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    (k0..=k1).flat_map(|k| [1.0, 2.0, 5.0].map(|m| m * 10f64.powi(k))).filter(|v| (lo..=hi).contains(v)).collect()
 }
 
 /// A short tick label: up to three significant decimals, no trailing zeros.

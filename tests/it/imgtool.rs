@@ -190,3 +190,50 @@ fn report_tabulates_the_ladder_and_writes_its_files() {
     assert_eq!(code, Some(0), "{err}");
     assert!(nested.exists());
 }
+
+/// `tiles` prints the whole image's line, each tile's, marks the tiles held to the floor
+/// with the deviation it takes there, and a worst line that agrees with the rows.
+#[test]
+fn tiles_prints_the_whole_image_and_explains_the_floor() {
+    let d = dir();
+    // 2 × 2 pixels, a tile each: the lower row is dark (below 5% of the image mean).
+    let square = |px: Vec<[f32; 3]>| {
+        let mut img = RgbImage::new(2, 2);
+        img.pixels = px;
+        img
+    };
+    let reference = square(vec![[1.0; 3], [1.0; 3], [0.01; 3], [0.01; 3]]);
+    let ours = square(vec![[1.02; 3], [1.02; 3], [0.011; 3], [0.011; 3]]);
+    let (a, b) = (d.join("tiles-a.exr"), d.join("tiles-b.exr"));
+    write_image(&a, &ours).unwrap();
+    write_image(&b, &reference).unwrap();
+    let (code, out, err) =
+        tool(&["tiles", a.to_str().unwrap(), b.to_str().unwrap(), "--grid", "2", "--tolerance", "0.05"]);
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(lines[0].starts_with("image: ratio 1.0208"), "{out}{err}");
+    assert!(lines[1].starts_with("tile (0, 0): ratio 1.0200") && !lines[1].contains("floor"), "{out}");
+    // |0.011 − 0.01| against 5% of the image mean 0.505: 3.96%, not the ratio's 10%.
+    assert!(lines[3].contains("ratio 1.1000") && lines[3].contains("below the floor: R 3.96%"), "{out}");
+    assert!(out.contains("worst deviation 3.9604% at tile (0, 1)") && out.contains("5% of B's image mean"), "{out}");
+    assert_eq!(code, Some(0), "3.96% is within --tolerance 0.05");
+    let (code, ..) = tool(&["tiles", a.to_str().unwrap(), b.to_str().unwrap(), "--grid", "2", "--tolerance", "0.03"]);
+    assert_eq!(code, Some(1));
+}
+
+/// `plot` without `-o` writes beside the first CSV; a file that is not text is "not a
+/// CSV", not a UTF-8 complaint.
+#[test]
+fn plot_writes_beside_the_csv_and_names_a_file_that_is_not_one() {
+    let d = dir();
+    let csv = d.join("run-errors.csv");
+    std::fs::write(&csv, "iteration,seconds,photons,mse,rmse,relmse\n1,0.5,10,0.4,0.6,0.4\n2,1,20,0.2,0.4,0.2\n")
+        .unwrap();
+    let (code, out, err) = tool(&["plot", csv.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(out.contains("run-errors.png") && d.join("run-errors.png").is_file(), "{out}");
+    let exr = d.join("not-a-csv.exr");
+    write_image(&exr, &image(vec![[1.0; 3]])).unwrap();
+    let (code, _, err) = tool(&["plot", exr.to_str().unwrap(), "-o", d.join("p.png").to_str().unwrap()]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains("not a CSV file"), "{err}");
+}
