@@ -258,6 +258,22 @@ fn plan_prints_a_job_array_and_a_merge_that_waits_for_it() {
     let check = Command::new("sh").args(["-n", "-c", &s]).status().unwrap();
     assert!(check.success(), "the script is not valid sh");
     ok(&d, &["plan", "--slurm", "--passes", "4", "--shards", "2", "scene.pbrt", "--write", "submit.sh"]);
+    // A scene in another folder: its parts and image still go to the current folder,
+    // and the script names every path without `..`.
+    std::fs::create_dir_all(d.join("elsewhere")).unwrap();
+    std::fs::copy(d.join("scene.pbrt"), d.join("elsewhere/away.pbrt")).unwrap();
+    let o = run(
+        &d.join("elsewhere/.."),
+        &["plan", "--slurm", "--passes", "4", "--shards", "2", "elsewhere/../elsewhere/away.pbrt"],
+    );
+    let s = String::from_utf8_lossy(&o.stdout);
+    let root = std::fs::canonicalize(&d).unwrap_or(d.clone());
+    assert!(o.status.success() && !s.contains("/../") && !s.contains("/./"), "{s}");
+    assert!(
+        s.contains(&format!("parts='{}/away.parts'", root.display()))
+            || s.contains(&format!("parts={}/away.parts", root.display())),
+        "{s}"
+    );
     assert!(std::fs::read_to_string(d.join("submit.sh")).unwrap().contains("--array=0-1"));
     let e = error(&d, &["plan", "--slurm", "--passes", "3", "--shards", "4", "scene.pbrt"]);
     assert!(e.contains("empty"), "{e}");

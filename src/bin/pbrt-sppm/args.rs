@@ -202,10 +202,10 @@ pub struct PlanArgs {
     #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u32, 1>)]
     pub shards: u32,
     /// The folder the parts are written to, which every node must reach (default:
-    /// SCENE's name with `.parts`, beside it).
+    /// SCENE's name with `.parts`, in the current folder).
     #[arg(long)]
     pub parts: Option<PathBuf>,
-    /// The merged image (default: SCENE's name with `.exr`, beside it).
+    /// The merged image (default: SCENE's name with `.exr`, in the current folder).
     #[arg(long)]
     pub outfile: Option<PathBuf>,
     /// Cores per shard (sbatch --cpus-per-task; the shard renders with as many threads).

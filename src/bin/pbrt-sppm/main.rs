@@ -232,8 +232,10 @@ fn plan(args: &PlanArgs) -> ExitCode {
     if let Err(code) = load(&args.scene, &common) {
         return code;
     }
-    let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf()).display().to_string();
-    let beside = |ext: &str| args.scene.with_extension(ext);
+    let absolute = |p: &Path| normalized(p).display().to_string();
+    // Under the current folder, not beside the scene (which may be someone else's).
+    let stem = args.scene.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+    let beside = |ext: &str| PathBuf::from(format!("{stem}.{ext}"));
     let binary = args.binary.clone().or_else(|| std::env::current_exe().ok()).unwrap_or_else(|| "pbrt-sppm".into());
     let plan = farm::ShardPlan::new(farm::ShardPlan {
         binary: absolute(&binary),
@@ -256,6 +258,24 @@ fn plan(args: &PlanArgs) -> ExitCode {
         },
         None => print(&script),
     }
+}
+
+/// An absolute path with `.` and `..` resolved by name (the file need not exist), so
+/// the scripts `plan` writes name every file one way.
+fn normalized(p: &Path) -> PathBuf {
+    use std::path::Component;
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let mut out = PathBuf::new();
+    for c in abs.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                out.pop();
+            }
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// Answers ray queries line by line; a malformed line is an error naming the line.
