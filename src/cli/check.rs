@@ -1,8 +1,9 @@
 //! `pbrt-sppm check SCENE --json [--shapes]`: the loaded scene as one JSON object.
 //!
-//! The layout is a contract (design.md §3): `syntax`, `camera`, `film`, `integrator`,
-//! `counts`, `world_bounds`, `warnings`, `skipped`, `approximated`, `pbrt_bugs` (each
-//! pbrt bug the scene triggers, where, and whether `--fix` fixes it), and with `--shapes` one entry per
+//! The layout is a contract (README, "Command line"; extended, never broken): `syntax`,
+//! `camera`, `film`, `integrator`, `counts`, `world_bounds`, `warnings`, `skipped`,
+//! `approximated`, `pbrt_bugs` (each pbrt bug the scene triggers, where, and whether
+//! `--fix` fixes it), and with `--shapes` one entry per
 //! created shape (world shapes in creation order, then each instance's shapes) with its
 //! parameters after defaults and clamps, row-major `object_to_world`, orientation flags,
 //! world-space area and bounds.
