@@ -37,6 +37,22 @@ impl<'a> Engine<'a> {
         })
     }
 
+    /// Camera paths per iteration: the rendered window's pixels.
+    pub fn pixel_count(&self) -> usize {
+        match self {
+            Engine::Sppm(s) => s.pixels.len(),
+            Engine::Vcm(v) => v.pixel_count(),
+        }
+    }
+
+    /// The counts of the iteration under way.
+    pub fn live(&self) -> std::sync::Arc<super::report::Live> {
+        match self {
+            Engine::Sppm(s) => s.live.clone(),
+            Engine::Vcm(v) => v.live.clone(),
+        }
+    }
+
     pub fn iterate(&mut self) {
         match self {
             Engine::Sppm(s) => s.iterate(),

@@ -104,7 +104,7 @@ pub fn run(
         if engine.iteration() >= plan.range.end || (engine.passes_done() > 0 && over_time) {
             break false;
         }
-        engine.iterate();
+        iterate(&mut engine, monitor, plan, &progress);
         after_iteration(&engine, monitor, plan, &mut progress);
     };
     if monitor.progress {
@@ -123,6 +123,31 @@ pub fn run(
     let pass_sums = independent.then(|| engine.pass_sums().iter().map(|s| s.to_array()).collect());
     let stats = engine.stats().clone();
     Ok(RenderOutput { image, stats, errors: progress.errors, seconds, interrupted, passes, pass_sums })
+}
+
+/// One iteration; with a progress bar, a thread redraws it every half second while the
+/// iteration runs longer than one (camera paths and photons done so far).
+fn iterate(engine: &mut Engine, monitor: &Monitor, plan: &Plan, progress: &Progress) {
+    if !monitor.progress {
+        return engine.iterate();
+    }
+    let (live, done) = (engine.live(), std::sync::atomic::AtomicBool::new(false));
+    let totals = (engine.pixel_count() as u64, plan.photons);
+    let (passes, total) = (engine.passes_done(), plan.range.len() as u32);
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            let start = Instant::now();
+            while !done.load(Ordering::Relaxed) {
+                std::thread::sleep(std::time::Duration::from_millis(100));
+                let t = start.elapsed().as_secs_f64();
+                if t >= 1.0 && (t * 2.0).fract() < 0.2 && !done.load(Ordering::Relaxed) {
+                    super::report::progress_inside(passes, total, progress.seconds(), &live, totals);
+                }
+            }
+        });
+        engine.iterate();
+        done.store(true, Ordering::Relaxed);
+    });
 }
 
 /// The error row, progress bar, partial image and checkpoint due after an iteration.

@@ -124,6 +124,8 @@ pub struct Sppm<'a> {
     /// The first pass's radius.
     r1: f64,
     pub stats: Stats,
+    /// The iteration under way's counts, for progress.
+    pub live: std::sync::Arc<super::report::Live>,
 }
 
 /// max(floor, 1/√iterations).
@@ -169,6 +171,7 @@ impl<'a> Sppm<'a> {
             first: 0,
             r1: radius as f64,
             stats: Stats::default(),
+            live: Default::default(),
         })
     }
 
@@ -225,6 +228,7 @@ impl<'a> Sppm<'a> {
     /// One full iteration: camera pass, grid, photons, update.
     pub fn iterate(&mut self) {
         let t = Instant::now();
+        self.live.reset();
         if let PassMode::Independent { alpha } = self.passes {
             let r = passes::radius(self.r1, alpha, self.iteration);
             self.pixels.par_iter_mut().for_each(|p| p.radius = r);
@@ -253,8 +257,11 @@ impl<'a> Sppm<'a> {
     fn camera_pass(&mut self) {
         let (scene, width, origin, iter, seed, max_depth) =
             (self.scene, self.width, self.origin, self.iteration, self.seed, self.max_depth);
-        let (diff_scale, kind) = (self.differential_scale, self.sampler);
+        let (diff_scale, kind, live) = (self.differential_scale, self.sampler, &self.live);
         self.pixels.par_iter_mut().enumerate().with_max_len(super::PIXELS_PER_TASK).for_each(|(i, px)| {
+            if i % 256 == 0 {
+                live.add_camera(256);
+            }
             let (x, y) = (origin.0 as usize + i % width, origin.1 as usize + i / width);
             let pixel = [x as f32, y as f32];
             // Low discrepancy: the pixel's iterations are the points of one sequence.
@@ -318,6 +325,7 @@ impl<'a> Sppm<'a> {
                 }
                 n.uniform = (total - c * PHOTON_CHUNK as u64).min(PHOTON_CHUNK as u64);
                 n.traced = n.uniform;
+                self.live.add_photons(n.uniform);
                 (out, n)
             })
             .collect();

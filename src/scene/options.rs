@@ -324,12 +324,7 @@ impl RenderOptions {
         if p.named("photonsperiteration").is_some() {
             over("photonsperiteration", photons, limits.photons, "photonsperiteration")?;
         }
-        let radius = values::float(p, "radius", 1.0, Range::Positive)?;
-        if radius < MIN_RADIUS {
-            let at = p.named("radius").map_or(e.name_span, |r| r.value_span);
-            let message = format!("\"float radius\" must be at least {MIN_RADIUS:e}, not {radius:e}");
-            return Err(Diagnostic::error(at, message));
-        }
+        let radius = photon_radius(e)?;
         let seed = match p.int("seed")? {
             Some(s) => s as u64,
             None => self.seed_option.unwrap_or(0),
@@ -365,6 +360,18 @@ impl RenderOptions {
         }
         Ok(n as u32)
     }
+}
+
+/// The Integrator's `radius`: positive, and at least [`MIN_RADIUS`].
+fn photon_radius(e: &Entity) -> Res<f32> {
+    let p = &e.params;
+    let radius = values::float(p, "radius", 1.0, Range::Positive)?;
+    if radius < MIN_RADIUS {
+        let at = p.named("radius").map_or(e.name_span, |r| r.value_span);
+        let message = format!("\"float radius\" must be at least {MIN_RADIUS:e}, not {radius:e}");
+        return Err(Diagnostic::error(at, message));
+    }
+    Ok(radius)
 }
 
 /// The warning for a file asking for an integrator other than SPPM: what renders it.

@@ -88,7 +88,7 @@ struct Chunk {
 
 /// Traces the pass's light subpaths in parallel; subpath k draws from a generator
 /// seeded by (seed, pass, k).
-pub fn trace_all(pass: &Pass, seed: u64, iteration: u32) -> LightPass {
+pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrators::report::Live) -> LightPass {
     let n = pass.light_paths;
     let mut chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
@@ -101,6 +101,7 @@ pub fn trace_all(pass: &Pass, seed: u64, iteration: u32) -> LightPass {
                 out.lens.push((out.vertices.len() - before) as u32);
                 out.counts.paths += 1;
             }
+            live.add_photons(out.counts.paths);
             out
         })
         .collect();

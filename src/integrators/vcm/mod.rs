@@ -158,6 +158,8 @@ pub struct Vcm<'a> {
     /// Camera rays' differential scale (as SPPM's).
     differential_scale: f32,
     pub stats: Stats,
+    /// The pass under way's counts, for progress.
+    pub live: std::sync::Arc<super::report::Live>,
 }
 
 impl<'a> Vcm<'a> {
@@ -189,11 +191,17 @@ impl<'a> Vcm<'a> {
             settings,
             differential_scale: (1.0 / (iterations.max(1) as f32).sqrt()).max(floor),
             stats: Stats::default(),
+            live: Default::default(),
         })
     }
 
     pub fn passes_done(&self) -> u32 {
         self.iteration.saturating_sub(self.first)
+    }
+
+    /// Camera subpaths per pass: the rendered window's pixels.
+    pub fn pixel_count(&self) -> usize {
+        self.sums.len()
     }
 
     pub fn first_pass(&self) -> u32 {
@@ -226,8 +234,9 @@ impl<'a> Vcm<'a> {
     /// One pass: light subpaths, the grid of their vertices, camera subpaths, splats.
     pub fn iterate(&mut self) {
         let t0 = Instant::now();
+        self.live.reset();
         let pass = self.pass();
-        let lights = light::trace_all(&pass, self.settings.seed, self.iteration);
+        let lights = light::trace_all(&pass, self.settings.seed, self.iteration, &self.live);
         let t1 = Instant::now();
         let grid = match self.settings.techniques.uses(Technique::Merge) {
             true => Grid::build(
@@ -249,8 +258,11 @@ impl<'a> Vcm<'a> {
             sampler: self.settings.sampler,
             differential_scale: self.differential_scale,
         };
-        let width = self.size.0;
+        let (width, live) = (self.size.0, &self.live);
         self.sums.par_iter_mut().enumerate().with_max_len(crate::integrators::PIXELS_PER_TASK).for_each(|(i, s)| {
+            if i % 256 == 0 {
+                live.add_camera(256);
+            }
             *s += cams.pixel(i, width).as_dvec3();
         });
         let t3 = Instant::now();
