@@ -47,6 +47,8 @@ pub struct Request {
     pub quiet: bool,
     /// Raised to stop after the iteration under way.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// `--display-server HOST:PORT`: tev, shown the image as it converges.
+    pub display_server: Option<String>,
 }
 
 /// Why a job cannot start or finish, located at the flag, parameter or file to change.
@@ -122,6 +124,10 @@ impl Job {
             checkpoint: checkpoint_target(&request, &fingerprint),
             partial_images: request.partial_images.then(|| image.as_ref().map(|i| i.0.clone())).flatten(),
             interrupt: request.interrupt.clone(),
+            display: request.display_server.as_deref().map(|a| {
+                let title = request.scene.file_name().map_or("pbrt-sppm".into(), |n| n.to_string_lossy().into_owned());
+                Arc::new(std::sync::Mutex::new(crate::imageio::tev::Tev::new(a, &title)))
+            }),
         };
         let scene = RenderScene::for_integrator(scene, plan.algorithm != crate::integrators::Algorithm::Sppm);
         Ok(Job { request, scene, plan, fingerprint, image, monitor })

@@ -5,6 +5,7 @@
 
 pub mod lookup;
 pub mod metrics;
+pub mod tev;
 
 pub use lookup::{Wrap, lookup};
 

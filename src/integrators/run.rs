@@ -30,6 +30,8 @@ pub struct Monitor {
     pub partial_images: Option<PathBuf>,
     /// Raised (by a signal handler) to stop after the iteration under way.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// Show the image in tev as it converges (`--display-server`).
+    pub display: Option<Arc<std::sync::Mutex<crate::imageio::tev::Tev>>>,
 }
 
 /// Where and how often a render saves its state, and what it was made from.
@@ -110,6 +112,7 @@ pub fn run(
     if monitor.progress {
         eprintln!();
     }
+    show(&engine, monitor, true);
     if let Some(t) = &monitor.checkpoint
         && progress.saved.0 != engine.iteration()
     {
@@ -150,6 +153,18 @@ fn iterate(engine: &mut Engine, monitor: &Monitor, plan: &Plan, progress: &Progr
     });
 }
 
+/// The image in tev (`--display-server`): after iterations at most four times a second,
+/// and `last` at the end.
+fn show(engine: &Engine, monitor: &Monitor, last: bool) {
+    if let Some(d) = &monitor.display
+        && let Ok(mut tev) = d.lock()
+    {
+        let [x0, x1, y0, y1] = engine.scene().film.pixel_bounds;
+        let size = ((x1 - x0) as usize, (y1 - y0) as usize);
+        tev.show_now_and_then(|| engine.image(), size, last);
+    }
+}
+
 /// The error row, progress bar, partial image and checkpoint due after an iteration.
 fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &mut Progress) {
     let seconds = progress.seconds();
@@ -169,6 +184,7 @@ fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &m
     if monitor.progress {
         progress_bar(engine.passes_done(), plan.range.len() as u32, seconds);
     }
+    show(engine, monitor, false);
     if let Some(path) = &monitor.partial_images
         && engine.passes_done().is_power_of_two()
         && let image = image(engine, plan.photons, seconds)

@@ -26,6 +26,7 @@ mod shapes;
 mod shards;
 mod slurm;
 mod stability;
+mod tev;
 mod tokenizer;
 mod truncation;
 mod vcm;

@@ -168,6 +168,10 @@ pub struct RenderArgs {
     /// Write the image after iterations 1, 2, 4, 8, … as well as at the end.
     #[arg(long)]
     pub write_partial_images: bool,
+    /// Show the image in tev as it converges (tev's address, as pbrt-v4 spells it:
+    /// HOST:PORT, tev's default being localhost:14158).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub display_server: Option<String>,
     /// `classic` (pbrt's SPPM, the default) or `independent` (Knaus–Zwicker: each
     /// pass's radius depends only on its index, so passes can be rendered apart and
     /// merged).
@@ -368,6 +372,7 @@ impl RenderArgs {
             progress: std::io::IsTerminal::is_terminal(&std::io::stderr()) && !quiet,
             quiet,
             interrupt: Some(interrupt),
+            display_server: self.display_server.clone(),
         })
     }
 
