@@ -72,6 +72,11 @@ fn bad_media_are_located_errors() {
             "unknown medium type \"plasma\"",
         ),
         ("MakeNamedMedium \"m\" \"rgb sigma_a\" [1 1 1] MediumInterface \"m\" \"\"".into(), "needs a \"string type\""),
+        // pbrt-v4 creates every named medium, used or not, and has no "heterogeneous".
+        (
+            "Film \"rgb\" MakeNamedMedium \"m\" \"string type\" \"heterogeneous\" WorldBegin".into(),
+            "pbrt-v4 has no medium type \"heterogeneous\"",
+        ),
         (grid("\"integer nx\" 2 \"float density\" [1 2 3]"), "3 values; nx·ny·nz = 2·1·1 = 2"),
         (grid("\"integer nx\" 0 \"float density\" []"), "nx·ny·nz = 0·1·1"),
         (grid(""), "needs \"float density\" values"),
@@ -402,4 +407,15 @@ fn vcm_does_not_merge_where_the_ball_spans_many_mean_free_paths() {
     };
     let (vcm, bdpt) = (mean(Techniques::All), mean(Techniques::Bdpt));
     assert!(bdpt > 0.0 && (vcm / bdpt - 1.0).abs() < 0.02, "vcm {vcm}, bdpt {bdpt}");
+}
+
+/// pbrt-v3 does not know pbrt-v4's medium types: it warns and what they fill is vacuum.
+#[test]
+fn a_v4_medium_type_in_a_v3_file_is_vacuum_with_a_warning() {
+    let text = "Film \"image\" MakeNamedMedium \"smoke\" \"string type\" \"uniformgrid\" \"float density\" [1] \
+                WorldBegin AttributeBegin MediumInterface \"smoke\" \"\" Material \"\" Shape \"sphere\" AttributeEnd WorldEnd";
+    let s = scene(text);
+    assert!(s.media.is_empty(), "{:?}", s.media);
+    let skipped: Vec<_> = s.skipped.iter().filter(|k| k.what.contains("uniformgrid")).collect();
+    assert!(skipped.len() == 1 && skipped[0].why.contains("pbrt-v3 has no such medium type"), "{:?}", s.skipped);
 }

@@ -14,6 +14,7 @@
 use super::{Builder, Res};
 use crate::fixes::Fix;
 use crate::media::{self, MediumContext, MediumDesc, MediumInterface};
+use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
@@ -89,7 +90,7 @@ impl Builder {
     /// (`None` for a type that is not rendered, or a medium nothing names).
     pub(super) fn build_media(&mut self) -> Res<(Vec<MediumDesc>, Vec<Option<u32>>)> {
         let mut built = Vec::new();
-        let mut remap = Vec::new();
+        let (mut remap, syntax) = (Vec::new(), self.syntax());
         for i in 0..self.medium_slots.len() {
             let slot = &mut self.medium_slots[i];
             // The medium's own transform (the CTM at its statement) matters to grids only.
@@ -100,6 +101,7 @@ impl Builder {
                     format!("medium \"{}\" is not defined (MakeNamedMedium)", slot.name),
                 ));
             };
+            checked_type(&e, syntax)?;
             // Never named by a MediumInterface: nothing is in it (listed, not built).
             if slot.first_use.is_none() {
                 let what = format!("MakeNamedMedium \"{}\"", e.name);
@@ -116,15 +118,17 @@ impl Builder {
     }
 
     fn build_medium(&mut self, e: &Entity, medium_to_world: DMat4) -> Res<Option<media::Medium>> {
-        let ty = e.params.string("type")?.unwrap_or_default();
-        let at = crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span);
-        if ty.is_empty() {
-            return Err(Diagnostic::error(e.name_span, "MakeNamedMedium needs a \"string type\""));
+        let (ty, at) = checked_type(e, self.syntax())?;
+        let syntax = self.syntax();
+        if syntax == Syntax::V3 && ty != "homogeneous" && ty != "heterogeneous" {
+            // pbrt-v3 warns that it does not know the type and leaves the medium out:
+            // what it would fill is vacuum.
+            e.params.params.iter().for_each(crate::parser::params::Param::mark_used);
+            let why = "pbrt-v3 has no such medium type (a pbrt-v4 one): what it fills is vacuum, as in pbrt-v3";
+            self.skipped.push((Some(at), format!("MakeNamedMedium \"{}\" (\"{ty}\")", e.name), why.into()));
+            return Ok(None);
         }
-        if !media::known(&ty) {
-            return Err(Diagnostic::error(at, format!("unknown medium type \"{ty}\"")));
-        }
-        let (syntax, files, base) = (self.syntax(), self.reader.files.clone(), self.reader.base_dir().to_path_buf());
+        let (files, base) = (self.reader.files.clone(), self.reader.base_dir().to_path_buf());
         let fixes = self.opts.fixes;
         let mut warnings = Vec::new();
         let built = {
@@ -153,6 +157,27 @@ impl Builder {
         super::typed::finish_params(&e.params, &mut self.warnings)?;
         Ok(Some(m))
     }
+}
+
+/// A MakeNamedMedium's `type` and where it is written, checked as the file's pbrt
+/// checks it, used or not: required, known to pbrt, and for pbrt-v4 not pbrt-v3's
+/// `heterogeneous` (pbrt-v4 creates every named medium, and stops at that one).
+fn checked_type(e: &Entity, syntax: Syntax) -> Res<(String, Span)> {
+    let ty = e.params.string("type")?.unwrap_or_default();
+    let at = crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span);
+    if ty.is_empty() {
+        return Err(Diagnostic::error(e.name_span, "MakeNamedMedium needs a \"string type\""));
+    }
+    if !media::known(&ty) {
+        return Err(Diagnostic::error(at, format!("unknown medium type \"{ty}\"")));
+    }
+    if syntax == Syntax::V4 && ty == "heterogeneous" {
+        return Err(Diagnostic::error(
+            at,
+            "pbrt-v4 has no medium type \"heterogeneous\" (its grid is \"uniformgrid\")",
+        ));
+    }
+    Ok((ty, at))
 }
 
 impl Builder {
