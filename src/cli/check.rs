@@ -71,7 +71,7 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
             "type": "sppm",
             "requested": i.requested,
             // What renders it by default (the warnings say why).
-            "rendered_with": crate::integrators::Algorithm::for_file(&i.requested, i.emitting_media).name(),
+            "rendered_with": crate::integrators::Algorithm::by_default(i).name(),
             "iterations": i.iterations,
             "maxdepth": i.max_depth,
             "photonsperiteration": i.photons_per_iteration,
@@ -204,7 +204,7 @@ pub fn summary(s: &SceneDescription) -> String {
     let _ = writeln!(out, "syntax      {}", s.syntax.name());
     let _ = writeln!(out, "film        {}x{} -> {}", s.film.x_resolution, s.film.y_resolution, s.film.filename);
     let i = &s.integrator;
-    let method = crate::integrators::Algorithm::for_file(&i.requested, i.emitting_media).name();
+    let method = crate::integrators::Algorithm::by_default(i).name();
     let _ = writeln!(
         out,
         "integrator  \"{}\", rendered with {method}: {} iterations, maxdepth {}, {} photons/iteration, radius {}",

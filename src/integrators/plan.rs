@@ -34,6 +34,12 @@ impl Algorithm {
         }
     }
 
+    /// What renders a scene with these Integrator settings when `--integrator` does
+    /// not say.
+    pub fn by_default(integrator: &Integrator) -> Algorithm {
+        Algorithm::for_file(&integrator.requested, integrator.emitting_media)
+    }
+
     /// The name `--integrator` takes.
     pub fn name(self) -> String {
         match self {
@@ -130,8 +136,7 @@ impl Plan {
         world_radius: impl FnOnce() -> f32,
         settings: &RenderSettings,
     ) -> Result<Plan, RenderError> {
-        let algorithm =
-            settings.algorithm.unwrap_or_else(|| Algorithm::for_file(&integrator.requested, integrator.emitting_media));
+        let algorithm = settings.algorithm.unwrap_or_else(|| Algorithm::by_default(integrator));
         let mut iterations = settings.iterations.unwrap_or(integrator.iterations);
         if settings.quick {
             iterations = (iterations / 16).max(1);

@@ -428,14 +428,14 @@ pub(super) enum Surface {
 }
 
 /// The BSDF at a hit, or for an interface the ray moved past it (at most
-/// [`MAX_PASSES`] in a row).
+/// [`MAX_PASSES`] in a row), into the medium on its other side if it is a transition.
 pub(super) fn surface(
     scene: &RenderScene,
-    hit: &crate::accel::Hit,
-    si: &crate::interaction::SurfaceInteraction,
+    (hit, si): (&crate::accel::Hit, &crate::interaction::SurfaceInteraction),
     fp: &Footprint,
     ray: &mut crate::math::Ray,
     passes: &mut u32,
+    medium: &mut Option<u32>,
 ) -> Surface {
     if let Some(b) = scene.bsdf(hit, si, fp) {
         return Surface::Bsdf(b);
@@ -444,6 +444,7 @@ pub(super) fn surface(
     if *passes > MAX_PASSES {
         return Surface::Abandon;
     }
+    *medium = scene.medium_after(hit, si.n.0, ray.d.0, *medium);
     *ray = si.spawn_ray(ray.d);
     Surface::PassedThrough
 }
@@ -504,13 +505,9 @@ fn camera_path(
         };
         let si = scene.geometry.interaction(&hit);
         let fp = diff.take().map(|d| Footprint::new(&si, &d)).unwrap_or_default();
-        let d = ray.d.0;
-        let bsdf = match surface(scene, &hit, &si, &fp, &mut ray, &mut passes) {
+        let bsdf = match surface(scene, (&hit, &si), &fp, &mut ray, &mut passes, &mut medium) {
             Surface::Bsdf(b) => b,
-            Surface::PassedThrough => {
-                medium = scene.medium_after(&hit, si.n.0, d, medium);
-                continue;
-            }
+            Surface::PassedThrough => continue,
             Surface::Abandon => break,
         };
         let wo = -ray.d.0.normalize();
@@ -761,8 +758,7 @@ fn trace_photon(
         hits += 1;
         let si = scene.geometry.interaction(&hit);
         let wi = -ray.d.0;
-        let d = ray.d.0;
-        let at = surface(scene, &hit, &si, &Footprint::default(), &mut ray, &mut passes);
+        let at = surface(scene, (&hit, &si), &Footprint::default(), &mut ray, &mut passes, &mut medium);
         // DEVIATION(pbrt): appearance, in scenes with media only (which pbrt's SPPM does
         // not render). pbrt gathers photons where they cross an interface as well as
         // where they land, counting them twice near a medium's boundary (13% too bright
@@ -773,10 +769,7 @@ fn trace_photon(
         }
         let bsdf = match at {
             Surface::Bsdf(b) => b,
-            Surface::PassedThrough => {
-                medium = scene.medium_after(&hit, si.n.0, d, medium);
-                continue;
-            }
+            Surface::PassedThrough => continue,
             Surface::Abandon => break,
         };
         let Some(s) = bsdf.sample_f(wi, sampler.get2d(), sampler.get1d(), TransportMode::Importance) else { break };

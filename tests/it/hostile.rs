@@ -354,16 +354,27 @@ fn a_full_or_closed_standard_output_is_an_error_not_a_panic() {
     // A reader that goes away (`| head`): the write fails, and that is reported, not a panic.
     let img = dir("stdout").join("a.exr");
     pbrt_sppm::imageio::write_image(&img, &pbrt_sppm::imageio::RgbImage::new(2, 2)).unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_pbrt-imgtool"))
-        .args(["info", img.to_str().unwrap()])
+    let out =
+        with_stdout_closed(Command::new(env!("CARGO_BIN_EXE_pbrt-imgtool")).args(["info", img.to_str().unwrap()]));
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+    // pbrt-bench ends quietly (it panicked in `println!`).
+    let mut bench = Command::new(env!("CARGO_BIN_EXE_pbrt-bench"));
+    let out = with_stdout_closed(bench.args(["stress", "spawn", "--shapes", "5", "--rays", "5"]));
+    assert_ne!(out.status.code(), Some(101), "panicked: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+}
+
+/// Runs a command whose standard output is closed before it prints anything (a reader
+/// that went away, as `| head` does).
+fn with_stdout_closed(cmd: &mut Command) -> std::process::Output {
+    let mut child = cmd
         .current_dir(root())
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
     drop(child.stdout.take());
-    let out = child.wait_with_output().unwrap();
-    assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+    child.wait_with_output().unwrap()
 }
 
 #[test]

@@ -64,7 +64,7 @@ fn loading(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> 
     let loaded = load(scene, common);
     if tell && let Ok(s) = &loaded {
         let i = &s.integrator;
-        let method = pbrt_sppm::integrators::Algorithm::for_file(&i.requested, i.emitting_media).name();
+        let method = pbrt_sppm::integrators::Algorithm::by_default(i).name();
         eprintln!(" {:.2} s: {}; {method}", start.elapsed().as_secs_f64(), check::counts_line(s));
     }
     loaded

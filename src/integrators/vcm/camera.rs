@@ -90,13 +90,9 @@ impl Cameras<'_> {
                     };
                     let si = scene.geometry.interaction(&hit);
                     let fp = diff.take().map(|d| Footprint::new(&si, &d)).unwrap_or_default();
-                    let d = ray.d.0;
-                    let bsdf = match surface(scene, &hit, &si, &fp, &mut ray, &mut passes) {
+                    let bsdf = match surface(scene, (&hit, &si), &fp, &mut ray, &mut passes, &mut medium) {
                         Surface::Bsdf(b) => b,
-                        Surface::PassedThrough => {
-                            medium = scene.medium_after(&hit, si.n.0, d, medium);
-                            continue;
-                        }
+                        Surface::PassedThrough => continue,
                         Surface::Abandon => break,
                     };
                     let place = Place::on_surface(scene, &hit, &si, medium);

@@ -184,13 +184,10 @@ fn trace(pass: &Pass, s: &mut impl Sampler, out: &mut Vec<LightVertex>, splats: 
                 let Some(hit) = hit else { break };
                 hits += 1;
                 let si = scene.geometry.interaction(&hit);
-                let d = ray.d.0;
-                let bsdf = match surface(scene, &hit, &si, &Footprint::default(), &mut ray, &mut passes) {
+                let fp = Footprint::default();
+                let bsdf = match surface(scene, (&hit, &si), &fp, &mut ray, &mut passes, &mut medium) {
                     Surface::Bsdf(b) => b,
-                    Surface::PassedThrough => {
-                        medium = scene.medium_after(&hit, si.n.0, d, medium);
-                        continue;
-                    }
+                    Surface::PassedThrough => continue,
                     Surface::Abandon => break,
                 };
                 (Place::on_surface(scene, &hit, &si, medium), Scatterer::Surface(bsdf), -ray.d.0.normalize())
