@@ -128,6 +128,7 @@ impl Job {
                 let title = request.scene.file_name().map_or("pbrt-sppm".into(), |n| n.to_string_lossy().into_owned());
                 Arc::new(std::sync::Mutex::new(crate::imageio::tev::Tev::new(a, &title)))
             }),
+            observer: None,
         };
         let scene = RenderScene::for_integrator(scene, plan.algorithm != crate::integrators::Algorithm::Sppm);
         Ok(Job { request, scene, plan, fingerprint, image, monitor })
@@ -243,7 +244,7 @@ fn check_outputs(r: &Request, image: Option<&(PathBuf, String)>) -> Result<(), J
 }
 
 /// Command-line values the scene's limits also bound.
-fn check_overrides(l: &Limits, s: &RenderSettings) -> Result<(), JobError> {
+pub fn check_overrides(l: &Limits, s: &RenderSettings) -> Result<(), JobError> {
     if let Some(n) = s.iterations.filter(|&n| n as u64 > l.iterations) {
         let message = Limits::over(format!("{n} iterations"), "iterations", l.iterations);
         return Err(JobError::Option { flag: "--spp", message });

@@ -186,8 +186,6 @@ fn quadric_params(q: &Quadric) -> Value {
     Value::Object(q.params().into_iter().map(|(name, v)| (name.to_string(), value(v))).collect())
 }
 
-/// The text `check` prints: the scene in a few lines, then every skipped, approximated
-/// and pbrt-bug statement at its location.
 /// The scene's nonzero counts on one line ("sphere 2, trianglemesh 1, triangles 12, …").
 pub fn counts_line(s: &SceneDescription) -> String {
     let c = counts(s);
@@ -198,6 +196,8 @@ pub fn counts_line(s: &SceneDescription) -> String {
     parts.join(", ")
 }
 
+/// The text `check` prints: the scene in a few lines, then every skipped, approximated
+/// and pbrt-bug statement at its location.
 pub fn summary(s: &SceneDescription) -> String {
     use std::fmt::Write as _;
     let mut out = String::new();

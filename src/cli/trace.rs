@@ -70,28 +70,73 @@ impl Tracer {
         Ok(Some(self.trace(&ray)))
     }
 
+    /// One ray's answer as the contract's JSON object.
     pub fn trace(&self, ray: &Ray) -> Value {
-        let Some(hit) = self.geometry.intersect(ray) else { return json!({"hit": false}) };
-        let si = self.geometry.interaction(&hit);
+        let Some(h) = self.hit(ray) else { return json!({"hit": false}) };
         let v = |a: [f32; 3]| a.map(f32_json);
         let mut out = json!({
             "hit": true,
-            "t": f32_json(hit.t),
-            "p": v(si.p.to_array()),
-            "p_error": v(si.p_error.to_array()),
-            "n": v(si.n.to_array()),
-            "ns": v(si.shading.n.to_array()),
-            "uv": si.uv.map(f32_json),
-            "dpdu": v(si.dpdu.to_array()),
-            "dpdv": v(si.dpdv.to_array()),
-            "shape": self.kinds.get(hit.shape_index as usize).copied().unwrap_or("?"),
-            "shape_index": hit.shape_index,
+            "t": f32_json(h.t),
+            "p": v(h.p),
+            "p_error": v(h.p_error),
+            "n": v(h.n),
+            "ns": v(h.ns),
+            "uv": h.uv.map(f32_json),
+            "dpdu": v(h.dpdu),
+            "dpdv": v(h.dpdv),
+            "shape": h.shape,
+            "shape_index": h.shape_index,
         });
-        match hit.local {
-            LocalHit::Triangle { mesh, tri, .. } => out["triangle"] = json!(self.geometry.triangle_id(mesh, tri)),
-            LocalHit::Patch { patch, .. } => out["patch"] = json!(patch),
-            LocalHit::Quadric(..) => {}
+        if let Some(k) = h.triangle {
+            out["triangle"] = json!(k);
+        }
+        if let Some(k) = h.patch {
+            out["patch"] = json!(k);
         }
         out
     }
+
+    /// One ray's first hit, with the fields of the `trace` contract.
+    pub fn hit(&self, ray: &Ray) -> Option<TraceHit> {
+        let hit = self.geometry.intersect(ray)?;
+        let si = self.geometry.interaction(&hit);
+        let (triangle, patch) = match hit.local {
+            LocalHit::Triangle { mesh, tri, .. } => (Some(self.geometry.triangle_id(mesh, tri)), None),
+            LocalHit::Patch { patch, .. } => (None, Some(patch)),
+            LocalHit::Quadric(..) => (None, None),
+        };
+        Some(TraceHit {
+            t: hit.t,
+            p: si.p.to_array(),
+            p_error: si.p_error.to_array(),
+            n: si.n.to_array(),
+            ns: si.shading.n.to_array(),
+            uv: si.uv,
+            dpdu: si.dpdu.to_array(),
+            dpdv: si.dpdv.to_array(),
+            shape: self.kinds.get(hit.shape_index as usize).copied().unwrap_or("?"),
+            shape_index: hit.shape_index,
+            triangle,
+            patch,
+        })
+    }
+}
+
+/// A ray's first hit as `trace` reports it (see the module docs for each field).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TraceHit {
+    pub t: f32,
+    pub p: [f32; 3],
+    pub p_error: [f32; 3],
+    pub n: [f32; 3],
+    pub ns: [f32; 3],
+    pub uv: [f32; 2],
+    pub dpdu: [f32; 3],
+    pub dpdv: [f32; 3],
+    pub shape: &'static str,
+    pub shape_index: u32,
+    /// The triangle's index in its mesh as the file gave it (meshes only).
+    pub triangle: Option<u32>,
+    /// The patch's index in its bilinear mesh (`bilinearmesh` only).
+    pub patch: Option<u32>,
 }

@@ -30,6 +30,31 @@ impl PassMode {
     pub fn is_independent(self) -> bool {
         matches!(self, PassMode::Independent { .. })
     }
+
+    /// The mode `--passes` (`independent`: `Some(true)`), `--alpha` and a split render
+    /// (`--pass-range` or `--partial`) ask for. Classic SPPM unless independent passes
+    /// are asked for or implied by the split; with `vcm`/`bdpt` (`bidirectional`), whose
+    /// passes are independent already, α is its radius schedule.
+    pub fn asked(
+        independent: Option<bool>,
+        alpha: Option<f64>,
+        split: bool,
+        bidirectional: bool,
+    ) -> Result<PassMode, String> {
+        let independent = match independent {
+            Some(false) if split => {
+                return Err("classic SPPM cannot be split: --pass-range and --partial need independent passes".into());
+            }
+            Some(i) => i,
+            None => split,
+        };
+        match (independent, alpha) {
+            (false, Some(alpha)) if bidirectional => Ok(PassMode::Independent { alpha }),
+            (false, Some(_)) => Err("--alpha sets the radius of independent passes: add --passes independent".into()),
+            (false, None) => Ok(PassMode::Classic),
+            (true, alpha) => Ok(PassMode::Independent { alpha: alpha.unwrap_or(DEFAULT_ALPHA) }),
+        }
+    }
 }
 
 impl fmt::Display for PassMode {

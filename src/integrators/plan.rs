@@ -51,6 +51,24 @@ impl Algorithm {
     }
 }
 
+impl std::str::FromStr for Algorithm {
+    type Err = String;
+
+    /// `sppm`, `vcm`, `bdpt`, or `vcm-only-T` for technique T alone (weight 1).
+    fn from_str(s: &str) -> Result<Algorithm, String> {
+        match s {
+            "sppm" => Ok(Algorithm::Sppm),
+            "vcm" => Ok(Algorithm::Vcm(Techniques::All)),
+            "bdpt" => Ok(Algorithm::Vcm(Techniques::Bdpt)),
+            _ => super::vcm::Technique::ALL
+                .into_iter()
+                .map(|t| Algorithm::Vcm(Techniques::Only(t)))
+                .find(|a| a.name() == s)
+                .ok_or_else(|| format!("\"{s}\" is not an integrator: sppm, vcm or bdpt")),
+        }
+    }
+}
+
 /// The smallest initial radius: its square is a normal f32.
 pub use crate::scene::options::MIN_RADIUS;
 

@@ -32,6 +32,28 @@ pub struct Monitor {
     pub interrupt: Option<Arc<AtomicBool>>,
     /// Show the image in tev as it converges (`--display-server`).
     pub display: Option<Arc<std::sync::Mutex<crate::imageio::tev::Tev>>>,
+    /// Told after every iteration (the Python package's `progress` callback).
+    pub observer: Option<Observer>,
+}
+
+/// What an [`Observer`] is told after an iteration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IterationDone {
+    /// Iterations (passes) rendered so far in this run, and planned.
+    pub done: u32,
+    pub planned: u32,
+    /// Seconds since the render started (a resumed render's earlier runs included).
+    pub seconds: f64,
+}
+
+/// A function called on the rendering thread after each iteration.
+#[derive(Clone)]
+pub struct Observer(pub Arc<dyn Fn(IterationDone) + Send + Sync>);
+
+impl std::fmt::Debug for Observer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Observer")
+    }
 }
 
 /// Where and how often a render saves its state, and what it was made from.
@@ -183,6 +205,9 @@ fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &m
     }
     if monitor.progress {
         progress_bar(engine.passes_done(), plan.range.len() as u32, seconds);
+    }
+    if let Some(Observer(tell)) = &monitor.observer {
+        tell(IterationDone { done: engine.passes_done(), planned: plan.range.len() as u32, seconds });
     }
     show(engine, monitor, false);
     if let Some(path) = &monitor.partial_images

@@ -4,6 +4,7 @@ use pbrt_sppm::parser::error::LoadError;
 use pbrt_sppm::scene::{LoadOptions, SceneDescription, load_scene, load_scene_from_bytes};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
 /// The repository root (tests run there, but be explicit).
 pub fn root() -> PathBuf {
@@ -70,4 +71,45 @@ pub fn cannot_run(kind: &str, test: &str, why: &str) {
     if let Ok(mut f) = std::fs::OpenOptions::new().create(true).append(true).open(path) {
         let _ = writeln!(f, "{test}: {why}");
     }
+}
+
+/// The Python of a virtual environment `name` under the target directory holding
+/// `packages`, made once (and kept across runs while `probe` still runs in it). An
+/// error says why it cannot be made: no python3 with `venv` (`.ci/run` installs it
+/// where it can), or an unreachable package index.
+pub fn python_venv(name: &str, packages: &[&str], probe: &str) -> Result<PathBuf, String> {
+    let venv = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let python = venv.join("bin/python");
+    let ready = |py: &Path| Command::new(py).args(["-c", probe]).output().is_ok_and(|o| o.status.success());
+    if python.exists() && ready(&python) {
+        return Ok(python);
+    }
+    // Built aside and renamed, so an interrupted install never looks finished.
+    let building = venv.with_extension(format!("tmp{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&building);
+    let made = Command::new("python3").args(["-m", "venv"]).arg(&building).output();
+    if !made.as_ref().is_ok_and(|o| o.status.success()) {
+        let why = made.map_or_else(|e| e.to_string(), |o| String::from_utf8_lossy(&o.stderr).trim().to_string());
+        return Err(format!("python3 cannot make a virtual environment ({why})"));
+    }
+    let py = building.join("bin/python");
+    let pip = |args: &[&str]| Command::new(&py).args(["-m", "pip"]).args(args).output().expect("pip runs");
+    let first = packages[0].split(['<', '>', '=', '!', '~', ' ']).next().unwrap_or_default();
+    let probe_index = pip(&["index", "versions", first]);
+    if !probe_index.status.success() {
+        let _ = std::fs::remove_dir_all(&building);
+        let last = String::from_utf8_lossy(&probe_index.stderr).lines().last().unwrap_or("no message").to_string();
+        return Err(format!("the package index is unreachable ({last})"));
+    }
+    let install = pip(&[&["install", "--quiet"], packages].concat());
+    assert!(install.status.success(), "pip install {packages:?} failed: {}", String::from_utf8_lossy(&install.stderr));
+    // Another test process may have finished first; then its environment is used.
+    if !(python.exists() && ready(&python)) {
+        let _ = std::fs::remove_dir_all(&venv);
+        std::fs::rename(&building, &venv).unwrap();
+    }
+    let _ = std::fs::remove_dir_all(&building);
+    // A venv's scripts name its directory, so check the moved one still works.
+    assert!(ready(&python), "{} cannot run {probe:?}", python.display());
+    Ok(python)
 }

@@ -18,6 +18,7 @@ mod layout;
 mod media;
 mod mitsuba;
 mod pbrt_refs;
+mod python;
 mod real_scenes;
 mod registries;
 mod render;

@@ -301,53 +301,17 @@ fn run(cmd: &mut Command) -> std::process::Output {
 }
 
 /// A virtual environment with `mitsuba`, made once under the target directory and
-/// shared by the tests of this process; `None` (with a message) when the package index
-/// cannot be reached, or when there is no python3 with `venv` (`.ci/run` installs it
-/// where it can).
+/// shared by the tests of this process; `None` (with a message) when it cannot be made
+/// (see [`crate::common::python_venv`]).
 fn mitsuba_python() -> Option<PathBuf> {
     static VENV: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
-    match VENV.get_or_init(make_mitsuba_venv) {
+    match VENV.get_or_init(|| crate::common::python_venv("mitsuba-venv", &["mitsuba"], "import mitsuba")) {
         Ok(python) => Some(python.clone()),
         Err(why) => {
             crate::common::cannot_run("mitsuba", "the Mitsuba cross-check", why);
             None
         }
     }
-}
-
-fn make_mitsuba_venv() -> Result<PathBuf, String> {
-    let venv = Path::new(env!("CARGO_TARGET_TMPDIR")).join("mitsuba-venv");
-    let python = venv.join("bin/python");
-    let has_mitsuba = |py: &Path| run(Command::new(py).args(["-c", "import mitsuba"])).status.success();
-    if python.exists() && has_mitsuba(&python) {
-        return Ok(python);
-    }
-    // Built aside and renamed, so an interrupted install never looks finished.
-    let building = venv.with_extension(format!("tmp{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&building);
-    let made = Command::new("python3").args(["-m", "venv"]).arg(&building).output();
-    if !made.as_ref().is_ok_and(|o| o.status.success()) {
-        let why = made.map_or_else(|e| e.to_string(), |o| String::from_utf8_lossy(&o.stderr).trim().to_string());
-        return Err(format!("python3 cannot make a virtual environment ({why})"));
-    }
-    let py = building.join("bin/python");
-    let probe = run(Command::new(&py).args(["-m", "pip", "index", "versions", "mitsuba"]));
-    if !probe.status.success() {
-        let _ = std::fs::remove_dir_all(&building);
-        let last = String::from_utf8_lossy(&probe.stderr).lines().last().unwrap_or("no message").to_string();
-        return Err(format!("the package index is unreachable ({last})"));
-    }
-    let install = run(Command::new(&py).args(["-m", "pip", "install", "--quiet", "mitsuba"]));
-    assert!(install.status.success(), "pip install mitsuba failed: {}", String::from_utf8_lossy(&install.stderr));
-    // Another test process may have finished first; then its environment is used.
-    if !(python.exists() && has_mitsuba(&python)) {
-        let _ = std::fs::remove_dir_all(&venv);
-        std::fs::rename(&building, &venv).unwrap();
-    }
-    let _ = std::fs::remove_dir_all(&building);
-    // A venv's scripts name its directory, so check the moved one still works.
-    assert!(has_mitsuba(&python), "{} cannot import mitsuba", python.display());
-    Ok(python)
 }
 
 /// Stated bound: relMSE ≤ 1.5e-3 and every channel's mean within 1%. Measured on this

@@ -5,8 +5,7 @@ use clap::{Parser, Subcommand};
 use pbrt_sppm::fixes::Fixes;
 use pbrt_sppm::integrators::adaptive::PhotonSampling;
 use pbrt_sppm::integrators::checkpoint::Every;
-use pbrt_sppm::integrators::passes::{DEFAULT_ALPHA, PassMode};
-use pbrt_sppm::integrators::vcm::{Technique, Techniques};
+use pbrt_sppm::integrators::passes::PassMode;
 use pbrt_sppm::integrators::{Algorithm, RenderSettings};
 use pbrt_sppm::job::Request;
 use pbrt_sppm::parser::Syntax;
@@ -246,21 +245,11 @@ fn parse_photon_sampling(s: &str) -> Result<PhotonSampling, String> {
     }
 }
 
-/// `independent` → true.
 fn parse_integrator(s: &str) -> Result<Algorithm, String> {
-    match s {
-        "sppm" => Ok(Algorithm::Sppm),
-        "vcm" => Ok(Algorithm::Vcm(Techniques::All)),
-        "bdpt" => Ok(Algorithm::Vcm(Techniques::Bdpt)),
-        // One technique alone (weight 1), to see what each contributes.
-        _ => Technique::ALL
-            .into_iter()
-            .map(|t| Algorithm::Vcm(Techniques::Only(t)))
-            .find(|a| a.name() == s)
-            .ok_or_else(|| format!("\"{s}\" is not an integrator: sppm, vcm or bdpt")),
-    }
+    s.parse()
 }
 
+/// `independent` → true.
 fn parse_passes(s: &str) -> Result<bool, String> {
     match s {
         "classic" => Ok(false),
@@ -376,26 +365,11 @@ impl RenderArgs {
         })
     }
 
-    /// Classic SPPM unless asked for independent passes, which a pass range or a part
-    /// implies.
+    /// See [`PassMode::asked`].
     fn pass_mode(&self) -> Result<PassMode, String> {
-        let sharded = self.pass_range.is_some() || self.partial.is_some();
-        let independent = match self.passes {
-            Some(false) if sharded => {
-                return Err("classic SPPM cannot be split: --pass-range and --partial need independent passes".into());
-            }
-            Some(i) => i,
-            None => sharded,
-        };
-        match (independent, self.alpha) {
-            // VCM's passes are independent already: α is its radius schedule.
-            (false, Some(alpha)) if self.integrator.is_some_and(|a| a != Algorithm::Sppm) => {
-                Ok(PassMode::Independent { alpha })
-            }
-            (false, Some(_)) => Err("--alpha sets the radius of independent passes: add --passes independent".into()),
-            (false, None) => Ok(PassMode::Classic),
-            (true, alpha) => Ok(PassMode::Independent { alpha: alpha.unwrap_or(DEFAULT_ALPHA) }),
-        }
+        let split = self.pass_range.is_some() || self.partial.is_some();
+        let bidirectional = self.integrator.is_some_and(|a| a != Algorithm::Sppm);
+        PassMode::asked(self.passes, self.alpha, split, bidirectional)
     }
 }
 
