@@ -70,6 +70,8 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
         "integrator": {
             "type": "sppm",
             "requested": i.requested,
+            // No Integrator line: `requested` is pbrt's default for the version.
+            "implied": i.implied,
             // What renders it by default (the warnings say why).
             "rendered_with": crate::integrators::Algorithm::by_default(i).name(),
             "iterations": i.iterations,
@@ -186,6 +188,21 @@ fn quadric_params(q: &Quadric) -> Value {
     Value::Object(q.params().into_iter().map(|(name, v)| (name.to_string(), value(v))).collect())
 }
 
+/// For a file without an Integrator line, the notice a render prints: what the file's
+/// pbrt would use and what renders it here.
+pub fn implied_integrator(s: &SceneDescription) -> Option<String> {
+    let i = &s.integrator;
+    i.implied.then(|| {
+        let with = crate::integrators::Algorithm::by_default(i).name();
+        format!(
+            "note: no Integrator line, so {} would render with \"{}\"; rendering with {with}, which converges \
+             to the same image (--integrator, or Integrator \"sppm\" in the file, picks another)",
+            s.syntax.pbrt(),
+            i.requested
+        )
+    })
+}
+
 /// The scene's nonzero counts on one line ("sphere 2, trianglemesh 1, triangles 12, …").
 pub fn counts_line(s: &SceneDescription) -> String {
     let c = counts(s);
@@ -205,9 +222,11 @@ pub fn summary(s: &SceneDescription) -> String {
     let _ = writeln!(out, "film        {}x{} -> {}", s.film.x_resolution, s.film.y_resolution, s.film.filename);
     let i = &s.integrator;
     let method = crate::integrators::Algorithm::by_default(i).name();
+    let implied =
+        if i.implied { format!(" ({}'s default: no Integrator line)", s.syntax.pbrt()) } else { String::new() };
     let _ = writeln!(
         out,
-        "integrator  \"{}\", rendered with {method}: {} iterations, maxdepth {}, {} photons/iteration, radius {}",
+        "integrator  \"{}\"{implied}, rendered with {method}: {} iterations, maxdepth {}, {} photons/iteration, radius {}",
         i.requested, i.iterations, i.max_depth, i.photons_per_iteration, i.radius
     );
     let _ = writeln!(out, "counts      {}", counts_line(s));

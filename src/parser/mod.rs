@@ -24,4 +24,12 @@ impl Syntax {
             Syntax::V4 => "v4",
         }
     }
+
+    /// The renderer that reads this syntax: "pbrt-v3" or "pbrt-v4".
+    pub fn pbrt(self) -> &'static str {
+        match self {
+            Syntax::V3 => "pbrt-v3",
+            Syntax::V4 => "pbrt-v4",
+        }
+    }
 }

@@ -73,6 +73,9 @@ impl Film {
 pub struct Integrator {
     /// The integrator the file asked for (see `integrators::Algorithm::for_file`).
     pub requested: String,
+    /// No Integrator line: `requested` is the file's pbrt's default (`path` in v3,
+    /// `volpath` in v4).
+    pub implied: bool,
     pub iterations: u32,
     pub max_depth: u32,
     pub photons_per_iteration: u64,
@@ -268,40 +271,16 @@ impl RenderOptions {
     }
 
     fn integrator(&self, syntax: Syntax, film: &Film, limits: &Limits, warn: &mut Vec<Diagnostic>) -> Res<Integrator> {
-        let default = Entity::default_named("sppm");
+        // Without an Integrator line pbrt path-traces: `path` in pbrt-v3, `volpath` in
+        // pbrt-v4 (the render says what renders it instead; no warning, as the file is
+        // valid and silent).
+        let default = Entity::default_named(if syntax == Syntax::V4 { "volpath" } else { "path" });
         let e = self.integrator.as_ref().unwrap_or(&default);
         let p = &e.params;
-        if e.name != "sppm" {
+        if e.name != "sppm" && self.integrator.is_some() {
             warn.push(rendered_with(e, self.emitting_media));
         }
-        let positive = |name: &str, v: Option<i32>| -> Res<Option<u32>> {
-            match v {
-                Some(v) if v < 1 => Err(err_at(
-                    p.find(name, &[ParamType::Integer]),
-                    e,
-                    format!("\"{name}\" must be at least 1, not {v}"),
-                )),
-                v => Ok(v.map(|v| v as u32)),
-            }
-        };
-        let explicit = match p.int("iterations")? {
-            Some(v) => positive("iterations", Some(v))?,
-            None => positive("numiterations", p.int("numiterations")?)?,
-        };
-        let iterations = match (explicit, syntax) {
-            (Some(n), _) => n,
-            // Other integrators take one path per pixel sample, in either version.
-            (None, _) if e.name != "sppm" => self.pixel_samples()?,
-            (None, Syntax::V3) => 64,
-            (None, Syntax::V4) => self.pixel_samples()?,
-        };
-        if iterations as u64 > limits.iterations {
-            let sampler = self.sampler.as_ref().and_then(|s| s.params.named("pixelsamples"));
-            let named = p.named("iterations").or(p.named("numiterations")).or(sampler);
-            let at = named.map_or(e.name_span, |x| x.value_span);
-            let what = format!("{iterations} SPPM iterations");
-            return Err(Diagnostic::error(at, Limits::over(what, "iterations", limits.iterations)));
-        }
+        let iterations = self.iterations(e, syntax, limits)?;
         let max_depth = match p.int("maxdepth")? {
             Some(d) if d < 0 => {
                 return Err(err_at(p.named("maxdepth"), e, format!("\"maxdepth\" must be at least 0, not {d}")));
@@ -335,6 +314,7 @@ impl RenderOptions {
         }
         Ok(Integrator {
             requested: e.name.clone(),
+            implied: self.integrator.is_none(),
             iterations,
             max_depth,
             photons_per_iteration: photons,
@@ -344,6 +324,41 @@ impl RenderOptions {
             seed,
             differential_floor: if syntax == Syntax::V4 { 0.125 } else { 0.0 },
         })
+    }
+
+    /// SPPM's `iterations` (or `numiterations`), else one pass per pixel sample (SPPM's
+    /// 64 in pbrt-v3), checked against the iteration limit.
+    fn iterations(&self, e: &Entity, syntax: Syntax, limits: &Limits) -> Res<u32> {
+        let p = &e.params;
+        let positive = |name: &str, v: Option<i32>| -> Res<Option<u32>> {
+            match v {
+                Some(v) if v < 1 => Err(err_at(
+                    p.find(name, &[ParamType::Integer]),
+                    e,
+                    format!("\"{name}\" must be at least 1, not {v}"),
+                )),
+                v => Ok(v.map(|v| v as u32)),
+            }
+        };
+        let explicit = match p.int("iterations")? {
+            Some(v) => positive("iterations", Some(v))?,
+            None => positive("numiterations", p.int("numiterations")?)?,
+        };
+        let iterations = match (explicit, syntax) {
+            (Some(n), _) => n,
+            // Other integrators take one path per pixel sample, in either version.
+            (None, _) if e.name != "sppm" => self.pixel_samples()?,
+            (None, Syntax::V3) => 64,
+            (None, Syntax::V4) => self.pixel_samples()?,
+        };
+        if iterations as u64 > limits.iterations {
+            let sampler = self.sampler.as_ref().and_then(|s| s.params.named("pixelsamples"));
+            let named = p.named("iterations").or(p.named("numiterations")).or(sampler);
+            let at = named.map_or(e.name_span, |x| x.value_span);
+            let what = format!("{iterations} SPPM iterations");
+            return Err(Diagnostic::error(at, Limits::over(what, "iterations", limits.iterations)));
+        }
+        Ok(iterations)
     }
 
     /// The sampler's samples per pixel (pbrt-v4's SPPM iteration count), default 16.

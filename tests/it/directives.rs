@@ -1,6 +1,7 @@
 //! Every directive of pbrt-v3 and pbrt-v4, each checked for its effect.
 
 use crate::common::{close, load, load_file, matrix, num, report, root, scene, warnings, world_shapes};
+use pbrt_sppm::integrators::Algorithm;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::scene::{Geometry, LoadOptions, load_scene};
 
@@ -131,14 +132,35 @@ fn film_crop_window_pixel_bounds_and_scale() {
     assert_eq!(r["film"]["pixelbounds"], serde_json::json!([2, 6, 1, 3]));
     assert_eq!((num(&r["film"]["scale"]), r["film"]["filename"].as_str()), (2.0, Some("out.exr")));
     assert_eq!(r["integrator"]["photonsperiteration"], 8, "default photons = pixels in the crop");
-    assert_eq!(r["integrator"]["rendered_with"], "sppm");
+    // No Integrator line: pbrt-v4's default, volpath, which vcm renders.
+    let i = &r["integrator"];
+    assert_eq!((&i["requested"], &i["implied"], &i["rendered_with"]), (&"volpath".into(), &true.into(), &"vcm".into()));
+    assert!(r["warnings"].as_array().unwrap().is_empty(), "a valid, silent file gets no warning");
     let path = report("Integrator \"path\"\nWorldBegin\n");
     assert_eq!(
         (&path["integrator"]["requested"], &path["integrator"]["rendered_with"]),
         (&"path".into(), &"vcm".into())
     );
+    assert_eq!(path["integrator"]["implied"], false);
     let summary = pbrt_sppm::cli::check::summary(&scene("Integrator \"path\"\nWorldBegin\n"));
     assert!(summary.contains("integrator  \"path\", rendered with vcm"), "{summary}");
+}
+
+#[test]
+fn without_an_integrator_line_pbrt_path_traces_and_vcm_renders() {
+    use pbrt_sppm::cli::check::{implied_integrator, summary};
+    let v3 = scene("Film \"image\"\nWorldBegin\n");
+    let (i, s) = (&v3.integrator, summary(&v3));
+    assert_eq!((i.requested.as_str(), i.implied, i.iterations), ("path", true, 16));
+    assert!(s.contains("integrator  \"path\" (pbrt-v3's default: no Integrator line), rendered with vcm"), "{s}");
+    let note = implied_integrator(&v3).expect("a note");
+    assert!(note.contains("pbrt-v3 would render with \"path\"; rendering with vcm"), "{note}");
+    let v4 = scene("Film \"rgb\"\nSampler \"zsobol\" \"integer pixelsamples\" 8\nWorldBegin\n");
+    assert_eq!((v4.integrator.requested.as_str(), v4.integrator.iterations), ("volpath", 8));
+    let sppm = scene("Film \"rgb\"\nIntegrator \"sppm\"\nWorldBegin\n");
+    assert!(!sppm.integrator.implied && implied_integrator(&sppm).is_none());
+    assert_eq!(Algorithm::by_default(&sppm.integrator), Algorithm::Sppm);
+    assert_eq!(Algorithm::by_default(&v4.integrator).name(), "vcm");
 }
 
 #[test]

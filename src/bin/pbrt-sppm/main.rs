@@ -114,8 +114,8 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         Ok(r) => r,
         Err(e) => return fail(Path::new("--passes"), e),
     };
-    if scene.lights.is_empty() && scene.area_lights.is_empty() && !quiet {
-        say!("{}: warning: the scene has no lights; the image will be black", args.scene.display());
+    if !quiet {
+        print::before_render(&scene, args);
     }
     let pool = match rayon::ThreadPoolBuilder::new().num_threads(args.nthreads.unwrap_or(0)).build() {
         Ok(p) => p,

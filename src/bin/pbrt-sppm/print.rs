@@ -5,6 +5,7 @@ use crate::args::RenderArgs;
 use pbrt_sppm::integrators::RenderOutput;
 use pbrt_sppm::integrators::part::Merged;
 use pbrt_sppm::job::Job;
+use pbrt_sppm::scene::SceneDescription;
 use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
@@ -29,6 +30,20 @@ pub fn print(text: &str) -> ExitCode {
     match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => fail(Path::new("<stdout>"), format!("cannot write: {e}")),
+    }
+}
+
+/// What a render should know before it starts: a scene without lights, and for a file
+/// without an Integrator line, what renders it instead of pbrt's path tracer.
+pub fn before_render(scene: &SceneDescription, args: &RenderArgs) {
+    let at = args.scene.display();
+    if scene.lights.is_empty() && scene.area_lights.is_empty() {
+        say!("{at}: warning: the scene has no lights; the image will be black");
+    }
+    if args.integrator.is_none()
+        && let Some(note) = pbrt_sppm::cli::check::implied_integrator(scene)
+    {
+        say!("{at}: {note}");
     }
 }
 

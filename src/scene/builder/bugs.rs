@@ -94,13 +94,14 @@ impl Builder {
         }
     }
 
-    /// Where SPPM is asked for: the `Integrator` statement, or `WorldBegin` when there
-    /// is none (`None` for a scene with nothing to render).
+    /// Where SPPM is asked for: the `Integrator "sppm"` statement (`None` for another
+    /// integrator, or a scene with nothing to render).
     fn photon_statement(&self) -> Option<Span> {
         if self.shapes.is_empty() && self.objects.is_empty() {
             return None;
         }
-        self.render.integrator.as_ref().map(|e| e.name_span).or(self.world_begin)
+        // Only pbrt's SPPM has it: without `Integrator "sppm"` pbrt path-traces.
+        self.render.integrator.as_ref().filter(|e| e.name == "sppm").map(|e| e.name_span)
     }
 }
 

@@ -95,12 +95,17 @@ pub fn render<'py>(
         .map_err(|e| PyValueError::new_err(format!("threads: {e}")))?;
     let stop = Arc::new(AtomicBool::new(false));
     let (tx, rx) = mpsc::channel();
+    // With a callback the render waits for it after each iteration, so returning False
+    // stops the render exactly there.
+    let (ack, acked) = mpsc::channel::<()>();
+    let (wait, acked) = (progress.is_some(), std::sync::Mutex::new(acked));
     let monitor = Monitor {
         reference,
         interrupt: Some(stop.clone()),
         observer: Some(Observer(Arc::new(move |d: IterationDone| {
-            // The receiver outlives the render: the send cannot fail.
-            let _ = tx.send(d);
+            if tx.send(d).is_ok() && wait {
+                let _ = acked.lock().map(|r| r.recv());
+            }
         }))),
         ..Default::default()
     };
@@ -113,7 +118,7 @@ pub fn render<'py>(
                     run(&scene, &plan, &monitor, None)
                 })
             });
-            let raised = watch(&rx, &stop, progress.as_ref(), || worker.is_finished());
+            let raised = watch((&rx, &ack), &stop, progress.as_ref(), || worker.is_finished());
             (worker.join(), raised)
         })
     });
@@ -126,11 +131,12 @@ pub fn render<'py>(
     result(py, &out, &name)
 }
 
-/// Until the render has finished: progress to the callback and Ctrl-C to Python. The
-/// first exception (KeyboardInterrupt, or one raised by the callback) raises `stop`
-/// and is returned; a callback returning `False` raises `stop` alone.
+/// Until the render has finished: progress to the callback (each answered on `ack`)
+/// and Ctrl-C to Python. The first exception (KeyboardInterrupt, or one raised by the
+/// callback) raises `stop` and is returned; a callback returning `False` raises `stop`
+/// alone.
 fn watch(
-    rx: &mpsc::Receiver<IterationDone>,
+    (rx, ack): (&mpsc::Receiver<IterationDone>, &mpsc::Sender<()>),
     stop: &AtomicBool,
     progress: Option<&Py<PyAny>>,
     finished: impl Fn() -> bool,
@@ -145,11 +151,14 @@ fn watch(
         };
         Python::attach(|py| {
             let answer = match (news, progress) {
-                (Some(d), Some(f)) => {
+                (Some(d), Some(f)) if raised.is_none() => {
                     f.call1(py, (d.done, d.planned, d.seconds)).map(|v| !v.bind(py).is(PyBool::new(py, false)))
                 }
                 _ => py.check_signals().map(|()| true),
             };
+            if news.is_some() {
+                let _ = ack.send(());
+            }
             match answer {
                 Ok(true) => {}
                 Ok(false) => stop.store(true, Ordering::SeqCst),
