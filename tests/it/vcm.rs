@@ -7,7 +7,7 @@ use pbrt_sppm::integrators::vcm::mis::{self, ConnectPdfs, DirectPdfs, Factors, P
 use pbrt_sppm::integrators::vcm::{Technique, Techniques};
 use pbrt_sppm::integrators::{Algorithm, RenderSettings};
 use pbrt_sppm::render::RenderScene;
-use pbrt_sppm::sampling::Rng;
+use pbrt_sppm::sampling::{Rng, SamplerKind};
 
 /// A path x0 (on a light) … x_{k−1} (on surfaces or in media), then the camera, with
 /// every density and cosine the techniques need, drawn at random. At a medium vertex
@@ -287,11 +287,11 @@ fn each_technique_alone_converges_to_the_image_of_all_combined() {
         indirect_room,
         (256, 5),
         [
-            (Technique::EmitterHit, 512, 0.05),
+            (Technique::EmitterHit, 1024, 0.05),
             (Technique::Direct, 128, 0.04),
             (Technique::Connect, 256, 0.05),
             (Technique::LightTrace, 64, 0.04),
-            (Technique::Merge, 256, 0.05),
+            (Technique::Merge, 512, 0.05),
         ],
     );
 }
@@ -416,4 +416,46 @@ fn a_white_furnace_gives_the_geometric_series_with_every_technique_combined() {
             "{algorithm:?}: emitting sphere {mean}, expected {expected}"
         );
     }
+}
+
+/// Under `--sampler sobol` a pass's light subpaths are the points of one scrambled
+/// Sobol' sequence, so they stratify where the lights emit and in which directions:
+/// light tracing alone of a floor under a square light (direct light only), one pass
+/// of 65,536 subpaths, varies less across seeds than with independent random numbers,
+/// and both estimate the same mean. Measured over these 32 seeds: the standard
+/// deviation of the image mean is 0.58 of the random one's (5.5e-4 and 9.5e-4); equal
+/// samplers give 1 ± 0.18.
+#[test]
+fn sobol_light_subpaths_stratify_a_pass() {
+    let text = "LookAt 0 3 3  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 40 \
+                Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16 \
+                Integrator \"bdpt\" \"integer maxdepth\" 1 \"integer photonsperiteration\" 65536 \
+                WorldBegin Material \"diffuse\" \"rgb reflectance\" [.5 .5 .5] \
+                Shape \"trianglemesh\" \"point3 P\" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] \"integer indices\" [0 1 2 0 2 3] \
+                AttributeBegin Translate 0 1 0 AreaLightSource \"diffuse\" \"rgb L\" [4 4 4] \
+                Shape \"trianglemesh\" \"point3 P\" [-.5 0 -.5  .5 0 -.5  .5 0 .5  -.5 0 .5] \
+                \"integer indices\" [0 1 2 0 2 3] AttributeEnd";
+    let rs = RenderScene::new(&scene(text));
+    let spread = |sampler: SamplerKind| {
+        let m: Vec<f64> = (1..=32u64)
+            .map(|seed| {
+                let settings = RenderSettings {
+                    algorithm: Some(Algorithm::Vcm(Techniques::Only(Technique::LightTrace))),
+                    iterations: Some(1),
+                    seed: Some(seed),
+                    sampler,
+                    ..Default::default()
+                };
+                let px = pbrt_sppm::integrators::render(&rs, &settings).expect("renders").image.pixels;
+                means(&px, 16)[0]
+            })
+            .collect();
+        let mean = m.iter().sum::<f64>() / m.len() as f64;
+        let var = m.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (m.len() - 1) as f64;
+        (mean, var.sqrt())
+    };
+    let (sobol, random) = (spread(SamplerKind::Sobol), spread(SamplerKind::Random));
+    assert!(random.0 > 0.01, "the floor is lit: {random:?}");
+    assert!((sobol.0 / random.0 - 1.0).abs() < 3.0 * random.1 / random.0, "{sobol:?} vs {random:?}");
+    assert!(sobol.1 < 0.75 * random.1, "spread over seeds: sobol {:.3e}, random {:.3e}", sobol.1, random.1);
 }

@@ -113,8 +113,8 @@ pub struct RenderArgs {
     /// The seed every random number derives from (default: the Integrator's `seed`).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u64, 0>)]
     pub seed: Option<u64>,
-    /// What drives camera and photon paths: `sobol` (scrambled low-discrepancy points,
-    /// the default) or `random` (independent random numbers).
+    /// What drives camera paths and vcm's light subpaths: `sobol` (scrambled
+    /// low-discrepancy points, the default) or `random` (independent random numbers).
     #[arg(long, value_parser = parse_sampler)]
     pub sampler: Option<SamplerKind>,
     /// How photon paths are drawn: `uniform` (independent photons, as pbrt; the

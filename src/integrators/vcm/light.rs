@@ -11,7 +11,7 @@ use crate::interaction::Footprint;
 use crate::lights::Light;
 use crate::materials::TransportMode;
 use crate::math::{Ray, Vector3};
-use crate::sampling::{Rng, Sampler, hash};
+use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash};
 use crate::spectrum::{Rgb, luminance};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -86,18 +86,28 @@ struct Chunk {
     counts: Counts,
 }
 
-/// Traces the pass's light subpaths in parallel; subpath k draws from a generator
-/// seeded by (seed, pass, k).
+/// Traces the pass's light subpaths in parallel. Under `--sampler sobol` subpath k is
+/// point k of a scrambled Sobol' sequence of the pass (seeded by (seed, pass)), so the
+/// pass's subpaths stratify the lights' positions and directions; under `random` it
+/// draws from a generator seeded by (seed, pass, k).
 pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrators::report::Live) -> LightPass {
     let n = pass.light_paths;
+    let stream = hash(&[seed, iteration as u64, 3]);
     let mut chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
             let mut out = Chunk::default();
             for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                let mut rng = Rng::new(hash(&[seed, iteration as u64, k, 3]));
                 let before = out.vertices.len();
-                out.counts.hits += trace(pass, &mut rng, &mut out.vertices, &mut out.splats);
+                out.counts.hits += match pass.sampler {
+                    SamplerKind::Sobol => {
+                        trace(pass, &mut SobolSample::new(stream, k as u32), &mut out.vertices, &mut out.splats)
+                    }
+                    SamplerKind::Random => {
+                        let mut rng = Rng::new(hash(&[seed, iteration as u64, k, 3]));
+                        trace(pass, &mut rng, &mut out.vertices, &mut out.splats)
+                    }
+                };
                 out.lens.push((out.vertices.len() - before) as u32);
                 out.counts.paths += 1;
             }

@@ -114,6 +114,8 @@ pub struct Pass<'a> {
     /// The rendered window: its first pixel and its width and height.
     pub origin: (u32, u32),
     pub size: (usize, usize),
+    /// What drives the light subpaths (`--sampler`).
+    pub sampler: crate::sampling::SamplerKind,
 }
 
 impl Pass<'_> {
@@ -287,6 +289,7 @@ impl<'a> Vcm<'a> {
             radius: radius as f32,
             origin: self.origin,
             size: self.size,
+            sampler: self.settings.sampler,
         }
     }
 
