@@ -107,8 +107,8 @@ impl AbstractPath {
         for s in 2..k {
             p.push(if spec(s - 1) || spec(s) { 0.0 } else { pl(s) * pc(s) });
         }
-        // Light tracing (n_light of them per camera path's one).
-        p.push(if spec(k - 1) { 0.0 } else { self.n_light * pl(k) });
+        // Light tracing (n_light of them per camera path's one); never of direct light.
+        p.push(if spec(k - 1) || k == 2 { 0.0 } else { self.n_light * pl(k) });
         // Merging at x_i takes a light subpath of i edges; direct light (i = 1) is
         // never merged.
         for i in 1..k {
@@ -153,7 +153,11 @@ impl AbstractPath {
         let spec = |i: usize| i > 0 && self.specular[i];
         let mut w = Vec::new();
         let emission = self.p0 * self.e_dir;
-        w.push(if self.delta_light { 0.0 } else { mis::emitter_hit(self.camera_state(0), self.direct_a, emission) });
+        w.push(if self.delta_light {
+            0.0
+        } else {
+            mis::emitter_hit(self.camera_state(0), self.direct_a, emission, k == 2)
+        });
         let direct = self.direct_a * self.d2[0] / self.b[0];
         let pdfs = DirectPdfs {
             bsdf: if self.delta_light { 0.0 } else { self.fwd_c[1] },
@@ -163,7 +167,7 @@ impl AbstractPath {
             cos_here: self.a[1],
             cos_light: if self.delta_light { 1.0 } else { self.b[0] },
         };
-        w.push(if spec(1) { 0.0 } else { mis::direct(self.camera_state(1), pdfs) });
+        w.push(if spec(1) { 0.0 } else { mis::direct(self.camera_state(1), pdfs, k == 2) });
         for s in 2..k {
             let pdfs = ConnectPdfs {
                 camera_a: self.fwd_c[s] * self.b[s - 1] / self.d2[s - 1],
@@ -282,7 +286,8 @@ fn means(px: &[[f32; 3]], w: usize) -> Vec<f64> {
 #[test]
 fn each_technique_alone_converges_to_the_image_of_all_combined() {
     // Budgets and tolerances: about three standard deviations of each estimate
-    // (measured over seeds), the camera-side techniques being the noisier.
+    // (measured over seeds), the camera-side techniques being the noisier. Merging
+    // alone: a quarter's mean varies by 5.6% over 32 seeds at 32 passes, 1% at 1,024.
     each_technique_alone_matches(
         indirect_room,
         (256, 5),
@@ -291,7 +296,7 @@ fn each_technique_alone_converges_to_the_image_of_all_combined() {
             (Technique::Direct, 128, 0.04),
             (Technique::Connect, 256, 0.05),
             (Technique::LightTrace, 64, 0.04),
-            (Technique::Merge, 512, 0.05),
+            (Technique::Merge, 1024, 0.05),
         ],
     );
 }

@@ -165,7 +165,7 @@ impl Cameras<'_> {
         let direct = pick * light.pdf_li(&scene.geometry.shapes, prev, -v.wo) as f64 * cos / dist2;
         let out = Ray::new(si.p, Vector3(v.wo));
         let (pos, dir) = light.pdf_le(&scene.geometry.shapes, scene.world, &out, si.n.0);
-        le * self.pass.techniques.weight(mis::emitter_hit(v.partial, direct, pick * (pos * dir) as f64))
+        le * self.pass.techniques.weight(mis::emitter_hit(v.partial, direct, pick * (pos * dir) as f64, v.len == 2))
     }
 
     /// Light from lights at infinity along a ray that left the scene after `len` edges.
@@ -185,7 +185,7 @@ impl Cameras<'_> {
             let direct = pick * light.pdf_li(&scene.geometry.shapes, prev, d) as f64;
             let (pos, dir) =
                 light.pdf_le(&scene.geometry.shapes, scene.world, &Ray::new(Point3(prev), Vector3(-d)), -d);
-            let w = mis::emitter_hit(partial, direct, pick * (pos * dir) as f64);
+            let w = mis::emitter_hit(partial, direct, pick * (pos * dir) as f64, len == 1);
             sum += le * self.pass.techniques.weight(w);
         }
         sum
@@ -215,7 +215,7 @@ impl Cameras<'_> {
             cos_here: v.at.measure(ls.wi, v.place.ng),
             cos_light,
         };
-        let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs));
+        let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs, v.len == 1));
         let c = e.f * v.at.cos(ls.wi) * ls.li * (w / (pick as f32 * ls.pdf));
         if !c.is_finite() || c == Vec3::ZERO {
             return Vec3::ZERO;

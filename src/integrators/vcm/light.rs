@@ -5,7 +5,7 @@
 
 use super::mis::{self, Factors, Partial};
 use super::vertex::{self, Place, Scatterer};
-use super::{Pass, Technique};
+use super::{Pass, Technique, Techniques};
 use crate::integrators::sppm::{Surface, surface};
 use crate::interaction::Footprint;
 use crate::lights::Light;
@@ -217,7 +217,9 @@ fn trace(pass: &Pass, s: &mut impl Sampler, out: &mut Vec<LightVertex>, splats: 
         }
         let v = LightVertex { place, wo, beta, at, partial, len };
         if !v.at.is_delta() {
-            if pass.techniques.uses(Technique::LightTrace) && len < pass.max_len {
+            // Direct light is not light-traced (`mis`), unless light tracing is alone.
+            let traced = len > 1 || pass.techniques == Techniques::Only(Technique::LightTrace);
+            if pass.techniques.uses(Technique::LightTrace) && len < pass.max_len && traced {
                 to_camera(pass, &v, s, splats);
             }
             if keep && len < pass.max_len {
