@@ -63,11 +63,7 @@ impl Tracer {
             [ox, oy, oz, dx, dy, dz, t] => ([*ox, *oy, *oz], [*dx, *dy, *dz], *t),
             _ => return Err(format!("expected 6 or 7 numbers (ox oy oz dx dy dz [tmax]), found {}", nums.len())),
         };
-        if d == [0.0; 3] || !o.iter().chain(&d).all(|x| x.is_finite()) || t_max.is_nan() {
-            return Err("the origin and direction must be finite and the direction nonzero".into());
-        }
-        let ray = Ray { o: Point3::new(o[0], o[1], o[2]), d: Vector3::new(d[0], d[1], d[2]), t_max };
-        Ok(Some(self.trace(&ray)))
+        Ok(Some(self.trace(&query(o, d, t_max)?)))
     }
 
     /// One ray's answer as the contract's JSON object.
@@ -120,6 +116,14 @@ impl Tracer {
             patch,
         })
     }
+}
+
+/// A query's ray: the origin and direction finite, the direction nonzero, tmax not NaN.
+pub fn query(o: [f32; 3], d: [f32; 3], t_max: f32) -> Result<Ray, String> {
+    if d == [0.0; 3] || !o.iter().chain(&d).all(|x| x.is_finite()) || t_max.is_nan() {
+        return Err("the origin and direction must be finite and the direction nonzero".into());
+    }
+    Ok(Ray { o: Point3::new(o[0], o[1], o[2]), d: Vector3::new(d[0], d[1], d[2]), t_max })
 }
 
 /// A ray's first hit as `trace` reports it (see the module docs for each field).

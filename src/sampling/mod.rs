@@ -20,6 +20,19 @@ pub enum SamplerKind {
     Random,
 }
 
+impl std::str::FromStr for SamplerKind {
+    type Err = String;
+
+    /// `--sampler`'s names: `sobol` or `random`.
+    fn from_str(s: &str) -> Result<SamplerKind, String> {
+        match s {
+            "sobol" => Ok(SamplerKind::Sobol),
+            "random" => Ok(SamplerKind::Random),
+            _ => Err(format!("expected sobol or random, not \"{s}\"")),
+        }
+    }
+}
+
 /// A small, fast generator (PCG-XSH-RR 64/32).
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Rng {

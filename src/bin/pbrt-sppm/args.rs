@@ -274,11 +274,7 @@ fn parse_every(s: &str) -> Result<Every, String> {
 }
 
 fn parse_sampler(s: &str) -> Result<SamplerKind, String> {
-    match s {
-        "sobol" => Ok(SamplerKind::Sobol),
-        "random" => Ok(SamplerKind::Random),
-        _ => Err(format!("expected sobol or random, not \"{s}\"")),
-    }
+    s.parse()
 }
 
 /// A whole number of at least `MIN`.

@@ -11,10 +11,11 @@
 mod render;
 mod tools;
 
-use pbrt_sppm::cli::{check, trace::Tracer};
+use pbrt_sppm::cli::check;
+use pbrt_sppm::cli::trace::{self, Tracer};
 use pbrt_sppm::fixes::Fixes;
 use pbrt_sppm::limits::Limits;
-use pbrt_sppm::math::{Point3, Ray, Vector3};
+use pbrt_sppm::math::Ray;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::parser::error::LoadError;
 use pbrt_sppm::scene::{LoadOptions, SceneDescription, load_scene, load_scene_from_bytes};
@@ -155,12 +156,8 @@ fn rays(origins: &[u8], directions: &[u8], tmax: Option<&[u8]>) -> PyResult<Vec<
     }
     (0..n)
         .map(|i| {
-            let (oi, di) = (&o[3 * i..3 * i + 3], &d[3 * i..3 * i + 3]);
-            if di.iter().all(|&x| x == 0.0) || !oi.iter().chain(di).all(|x| x.is_finite()) || t[i].is_nan() {
-                let why = "the origin and direction must be finite and the direction nonzero";
-                return Err(PyValueError::new_err(format!("ray {i}: {why}")));
-            }
-            Ok(Ray { o: Point3::new(oi[0], oi[1], oi[2]), d: Vector3::new(di[0], di[1], di[2]), t_max: t[i] })
+            let (oi, di) = ([o[3 * i], o[3 * i + 1], o[3 * i + 2]], [d[3 * i], d[3 * i + 1], d[3 * i + 2]]);
+            trace::query(oi, di, t[i]).map_err(|why| PyValueError::new_err(format!("ray {i}: {why}")))
         })
         .collect()
 }

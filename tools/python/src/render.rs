@@ -37,11 +37,8 @@ impl Settings {
     /// The library's settings, each value checked as the command line checks it.
     fn checked(self) -> Result<RenderSettings, String> {
         let algorithm = self.integrator.as_deref().map(str::parse::<Algorithm>).transpose()?;
-        let sampler = match self.sampler.as_deref() {
-            None | Some("sobol") => SamplerKind::Sobol,
-            Some("random") => SamplerKind::Random,
-            Some(s) => return Err(format!("sampler: expected \"sobol\" or \"random\", not \"{s}\"")),
-        };
+        let sampler = self.sampler.as_deref().map(str::parse::<SamplerKind>).transpose();
+        let sampler = sampler.map_err(|e| format!("sampler: {e}"))?.unwrap_or_default();
         let independent = match self.passes.as_deref() {
             None => None,
             Some("classic") => Some(false),
