@@ -153,9 +153,6 @@ fn watch(
                 }
                 _ => py.check_signals().map(|()| true),
             };
-            if news.is_some() {
-                let _ = ack.send(());
-            }
             match answer {
                 Ok(true) => {}
                 Ok(false) => stop.store(true, Ordering::SeqCst),
@@ -163,6 +160,11 @@ fn watch(
                     stop.store(true, Ordering::SeqCst);
                     raised.get_or_insert(e);
                 }
+            }
+            // The stop flag is set before the render is let go, or it could start
+            // another iteration before it sees the flag.
+            if news.is_some() {
+                let _ = ack.send(());
             }
         });
     }
