@@ -1,6 +1,7 @@
 //! Shapes with pbrt's parameters: the six quadrics (each with its defaults, clamps and
-//! swaps applied in `new`), triangle meshes and bilinear patch meshes. [`set`] is where
-//! the renderer dispatches on a shape's family.
+//! swaps applied in `new`), triangle meshes and bilinear patch meshes, and the shapes
+//! pbrt turns into triangle meshes at load (loop subdivision; pbrt-v3's height fields
+//! and NURBS). [`set`] is where the renderer dispatches on a shape's family.
 //!
 //! ```text
 //! Shape "sphere"      "float radius" 1 "float zmin" -1 "float zmax" 1 "float phimax" 360
@@ -10,6 +11,8 @@
 //! Shape "paraboloid"  "float radius" 1 "float zmin" 0 "float zmax" 1 "float phimax" 360 # v3
 //! Shape "hyperboloid" "point p1" [0 0 0] "point p2" [1 1 1] "float phimax" 360        # v3
 //! Shape "bilinearmesh" "point3 P" [...] "integer indices" [...]                        # v4
+//! Shape "heightfield" "integer nu" 2 "integer nv" 2 "float Pz" [...]                   # v3
+//! Shape "nurbs" "integer nu" 4 "integer uorder" 3 "float uknots" [...] ... "point P" [...] # v3
 //! ```
 //! Every quadric is described by a parametric map p(u, v) on [0,1]² with z as its axis,
 //! φ = u·φmax. [`Quadric::point`], [`Quadric::dpdu`] and [`Quadric::dpdv`] evaluate it in
@@ -34,9 +37,11 @@ pub mod bilinear;
 pub mod cone;
 pub mod cylinder;
 pub mod disk;
+pub mod heightfield;
 pub mod hyperboloid;
 pub mod loopsubdiv;
 pub mod mesh_params;
+pub mod nurbs;
 pub mod objmesh;
 pub mod paraboloid;
 pub mod params;
@@ -261,19 +266,18 @@ pub const QUADRIC_NAMES: [&str; 6] =
     [sphere::NAME, cylinder::NAME, disk::NAME, cone::NAME, paraboloid::NAME, hyperboloid::NAME];
 
 /// The pbrt version a shape type name proves, for syntax detection: pbrt-v4 dropped
-/// the cone, paraboloid and hyperboloid (and heightfield and nurbs, which we do not
-/// render) and added the bilinear mesh.
+/// the cone, paraboloid, hyperboloid, heightfield and nurbs and added the bilinear mesh.
 pub fn evidence(ty: &str) -> Option<crate::parser::Syntax> {
     use crate::parser::Syntax::{V3, V4};
     match ty {
-        cone::NAME | paraboloid::NAME | hyperboloid::NAME | "heightfield" | "nurbs" => Some(V3),
+        cone::NAME | paraboloid::NAME | hyperboloid::NAME | heightfield::NAME | nurbs::NAME => Some(V3),
         bilinear::NAME => Some(V4),
         _ => None,
     }
 }
 
 /// Every `Shape` type we render.
-pub const REGISTRY: [ShapeType; 11] = [
+pub const REGISTRY: [ShapeType; 13] = [
     quadric_type!(sphere),
     quadric_type!(cylinder),
     quadric_type!(disk),
@@ -285,6 +289,8 @@ pub const REGISTRY: [ShapeType; 11] = [
     ShapeType { name: loopsubdiv::NAME, read: loopsubdiv::read },
     ShapeType { name: plymesh::NAME, read: plymesh::read },
     ShapeType { name: objmesh::NAME, read: objmesh::read },
+    ShapeType { name: heightfield::NAME, read: heightfield::read },
+    ShapeType { name: nurbs::NAME, read: nurbs::read },
 ];
 
 /// Builds a shape's geometry in object space, or `None` for a type we do not render

@@ -237,6 +237,14 @@ fn a_fixed_hyperboloid_is_the_surface_its_segment_sweeps() {
 }
 
 #[test]
+fn nurbs_patches_and_height_fields_are_diced_as_pbrt_v3_dices_them() {
+    // A rational bicubic patch (weights 0.6–2.5), a quadratic one over part of its
+    // knot range, a height field with a checkerboard in its (u, v). Its control points
+    // taken as weight-1 points: 245% off pbrt-v3 here.
+    assert_matches_pbrt("v3-nurbs-heightfield", 0.02);
+}
+
+#[test]
 fn an_alpha_cut_light_still_emits_and_a_scaled_bumped_sphere_shades_as_in_pbrt_v3() {
     // With `--fix area-alpha` ours is 49% off pbrt-v3 here (the cut-away squares stop
     // emitting); `--fix normal-derivatives` moves no tile by more than the noise.
