@@ -13,6 +13,7 @@ use crate::interaction::SurfaceInteraction;
 use crate::math::float::gamma;
 use crate::math::{Bounds3, Point3, Ray, Vector3};
 use crate::scene::{Geometry as ShapeGeometry, SceneDescription, ShapeDesc};
+use crate::shapes::curve::CurveShape;
 pub use crate::shapes::{LocalHit, ShapeRef};
 use crate::shapes::{
     MeshFlags, QuadricShape, ShapeSet, TriangleHit, TriangleMesh, WatertightRay, edge_candidates, watertight,
@@ -88,7 +89,7 @@ pub struct Geometry {
     avx: Option<Avx>,
 }
 
-fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>) -> ShapeRef {
+fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>, curves: &mut Vec<CurveShape>) -> ShapeRef {
     let flags = MeshFlags { reverse_orientation: s.reverse_orientation, swaps_handedness: s.swaps_handedness() };
     match &s.geometry {
         ShapeGeometry::Quadric(q) => {
@@ -97,6 +98,10 @@ fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>) -> ShapeRef {
         }
         ShapeGeometry::Mesh { mesh, .. } => ShapeRef::Mesh { mesh: *mesh, flags },
         ShapeGeometry::Patches { mesh, .. } => ShapeRef::Patches { mesh: *mesh, flags },
+        ShapeGeometry::Curves { curves: c, .. } => {
+            curves.push(CurveShape::new(c.clone(), s.object_to_world, s.reverse_orientation));
+            ShapeRef::Curves(curves.len() as u32 - 1)
+        }
     }
 }
 
@@ -365,10 +370,11 @@ impl Geometry {
     /// Builds the acceleration structures over the scene's shapes (sharing its meshes
     /// until the BVHs reorder their triangles into copies of their own).
     pub fn new(scene: &SceneDescription) -> Geometry {
-        let mut set = ShapeSet { meshes: scene.meshes.clone(), patches: scene.patches.clone(), quadrics: Vec::new() };
-        let world_shapes: Vec<ShapeRef> = scene.shapes.iter().map(|s| shape_ref(s, &mut set.quadrics)).collect();
+        let mut set = ShapeSet { meshes: scene.meshes.clone(), patches: scene.patches.clone(), ..Default::default() };
+        let mut refs = |s: &ShapeDesc| shape_ref(s, &mut set.quadrics, &mut set.curves);
+        let world_shapes: Vec<ShapeRef> = scene.shapes.iter().map(&mut refs).collect();
         let object_shapes: Vec<Vec<ShapeRef>> =
-            scene.objects.iter().map(|o| o.shapes.iter().map(|s| shape_ref(s, &mut set.quadrics)).collect()).collect();
+            scene.objects.iter().map(|o| o.shapes.iter().map(&mut refs).collect()).collect();
         let pbrt_dndu = !scene.fixes.has(crate::fixes::Fix::NormalDerivatives);
         let pbrt_hyperboloid = !scene.fixes.has(crate::fixes::Fix::HyperboloidSurface);
         for q in &mut set.quadrics {

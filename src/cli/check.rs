@@ -98,7 +98,7 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
 fn counts(scene: &SceneDescription) -> Value {
     let mut n = [0u64; 6];
     let (mut meshes, mut triangles, mut emitters) = (0u64, 0u64, 0u64);
-    let (mut patch_meshes, mut patches) = (0u64, 0u64);
+    let (mut patch_meshes, mut patches, mut curves) = (0u64, 0u64, 0u64);
     for p in scene.placed_shapes() {
         let tris = scene.triangle_count(p.shape) as u64;
         match &p.shape.geometry {
@@ -111,6 +111,7 @@ fn counts(scene: &SceneDescription) -> Value {
                 patch_meshes += 1;
                 patches += scene.prim_count(p.shape) as u64;
             }
+            Geometry::Curves { .. } => curves += 1,
         }
         // pbrt makes one light per emissive shape (one per triangle or patch for
         // meshes); area lights inside object definitions are ignored.
@@ -124,6 +125,7 @@ fn counts(scene: &SceneDescription) -> Value {
     counts.insert("triangles".into(), triangles.into());
     counts.insert(crate::shapes::bilinear::NAME.into(), patch_meshes.into());
     counts.insert("patches".into(), patches.into());
+    counts.insert(crate::shapes::curve::NAME.into(), curves.into());
     counts.insert("instances".into(), scene.instances.len().into());
     counts.insert("lights".into(), (scene.lights.len() as u64 + emitters).into());
     counts.insert("materials".into(), scene.materials.len().into());
@@ -154,6 +156,7 @@ fn shape(scene: &SceneDescription, index: usize, p: &PlacedShape) -> Value {
             let m = &scene.patches[*mesh as usize];
             json!({ "filename": filename, "vertices": m.p.len(), "normals": m.n.is_some(), "uv": m.uv.is_some() })
         }
+        Geometry::Curves { curves } => curves.params(),
     };
     let area = scene.placed_area(p);
     let mut v = json!({
@@ -171,6 +174,7 @@ fn shape(scene: &SceneDescription, index: usize, p: &PlacedShape) -> Value {
     match &s.geometry {
         Geometry::Mesh { .. } => v["triangles"] = json!(scene.prim_count(s)),
         Geometry::Patches { .. } => v["patches"] = json!(scene.prim_count(s)),
+        Geometry::Curves { .. } => v["pieces"] = json!(scene.prim_count(s)),
         Geometry::Quadric(_) => {}
     }
     if let Some(i) = p.instance {

@@ -283,6 +283,11 @@ fn shape(scene: &SceneDescription, s: &ShapeDesc, world: bool, index: u32, notes
             let m = &scene.patches[*mesh as usize];
             mesh_out(&m.to_triangles(PATCH_CELLS), s.reverse_orientation, s.swaps_handedness())
         }
+        Geometry::Curves { curves } => {
+            let what = format!("shape {index} (curve)");
+            notes.push(note("", &what, "exported as round tubes of its width (Mitsuba's curves need files)"));
+            mesh_out(&curves.tubes(&s.object_to_world), s.reverse_orientation, false)
+        }
     };
     ShapeOut { geometry, material: s.material, emission, shape_index: index }
 }

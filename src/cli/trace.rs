@@ -99,7 +99,7 @@ impl Tracer {
         let (triangle, patch) = match hit.local {
             LocalHit::Triangle { mesh, tri, .. } => (Some(self.geometry.triangle_id(mesh, tri)), None),
             LocalHit::Patch { patch, .. } => (None, Some(patch)),
-            LocalHit::Quadric(..) => (None, None),
+            LocalHit::Quadric(..) | LocalHit::Curve { .. } => (None, None),
         };
         Some(TraceHit {
             t: hit.t,

@@ -759,6 +759,14 @@ impl Builder {
         };
         let alpha = alpha_params(p)?;
         typed::finish_params(p, &mut self.warnings)?;
+        let area_light = match built {
+            Built::Curves(_) if area_light.is_some() => {
+                let why = "pbrt cannot sample curves and stops; the curve is rendered without emission";
+                self.skip(at, "an area light on a curve".into(), why.into());
+                None
+            }
+            _ => area_light,
+        };
         let mut geometries = Vec::new();
         self.add_geometry(built, s, &mut geometries)?;
         let area_light = area_light.map(|a| self.use_area_light(a));
@@ -793,6 +801,7 @@ impl Builder {
                 self.patches.push(m);
                 Geometry::Patches { mesh: self.patches.len() as u32 - 1, kind, filename }
             }
+            Built::Curves(c) => Geometry::Curves { curves: std::sync::Arc::new(c) },
             Built::Several(parts) => {
                 return parts.into_iter().try_for_each(|b| self.add_geometry(b, s, out));
             }

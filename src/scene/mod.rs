@@ -44,6 +44,10 @@ pub enum Geometry {
         kind: &'static str,
         filename: Option<String>,
     },
+    /// A `curve` statement's Bézier segments, in object space.
+    Curves {
+        curves: std::sync::Arc<crate::shapes::curve::Curves>,
+    },
 }
 
 /// One created shape.
@@ -92,6 +96,7 @@ impl ShapeDesc {
         match &self.geometry {
             Geometry::Quadric(q) => q.name(),
             Geometry::Mesh { kind, .. } | Geometry::Patches { kind, .. } => kind,
+            Geometry::Curves { .. } => crate::shapes::curve::NAME,
         }
     }
 
@@ -206,6 +211,7 @@ impl SceneDescription {
             Geometry::Quadric(q) => Some(transform_bounds(&s.object_to_world, q.object_bounds())),
             Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].bounds(),
             Geometry::Patches { mesh, .. } => self.patches[*mesh as usize].bounds(),
+            Geometry::Curves { curves } => Some(transform_bounds(&s.object_to_world, curves.object_bounds())),
         }
     }
 
@@ -221,6 +227,7 @@ impl SceneDescription {
             Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].area(),
             Geometry::Patches { mesh, .. } if p.instance.is_some() => self.patches[*mesh as usize].area_under(extra()),
             Geometry::Patches { mesh, .. } => self.patches[*mesh as usize].area(),
+            Geometry::Curves { curves } => curves.area_under(glam::DMat3::from_mat4(p.object_to_world)),
         }
     }
 
@@ -249,17 +256,19 @@ impl SceneDescription {
     pub fn triangle_count(&self, s: &ShapeDesc) -> usize {
         match &s.geometry {
             Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].triangle_count(),
-            Geometry::Quadric(_) | Geometry::Patches { .. } => 0,
+            Geometry::Quadric(_) | Geometry::Patches { .. } | Geometry::Curves { .. } => 0,
         }
     }
 
-    /// Primitives of a shape: one per triangle or patch, one for a quadric. An emitting
+    /// Primitives of a shape: one per triangle or patch, one for a quadric, one per curve
+    /// piece. An emitting
     /// shape is that many lights.
     pub fn prim_count(&self, s: &ShapeDesc) -> usize {
         match &s.geometry {
             Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].triangle_count(),
             Geometry::Patches { mesh, .. } => self.patches[*mesh as usize].patch_count(),
             Geometry::Quadric(_) => 1,
+            Geometry::Curves { curves } => curves.pieces.len(),
         }
     }
 }

@@ -11,6 +11,7 @@
 //! Shape "paraboloid"  "float radius" 1 "float zmin" 0 "float zmax" 1 "float phimax" 360 # v3
 //! Shape "hyperboloid" "point p1" [0 0 0] "point p2" [1 1 1] "float phimax" 360        # v3
 //! Shape "bilinearmesh" "point3 P" [...] "integer indices" [...]                        # v4
+//! Shape "curve" "point3 P" [...] "string type" "flat" "float width" 1
 //! Shape "heightfield" "integer nu" 2 "integer nv" 2 "float Pz" [...]                   # v3
 //! Shape "nurbs" "integer nu" 4 "integer uorder" 3 "float uknots" [...] ... "point P" [...] # v3
 //! ```
@@ -35,6 +36,7 @@ macro_rules! dispatch_quadric {
 
 pub mod bilinear;
 pub mod cone;
+pub mod curve;
 pub mod cylinder;
 pub mod disk;
 pub mod heightfield;
@@ -221,6 +223,8 @@ pub enum Built {
     },
     /// A pbrt-v4 PLY file of triangles and quads: two shapes, as in pbrt-v4.
     Several(Vec<Built>),
+    /// Bézier curves, in object space.
+    Curves(curve::Curves),
 }
 
 /// What reading a shape needs besides its parameters.
@@ -277,7 +281,7 @@ pub fn evidence(ty: &str) -> Option<crate::parser::Syntax> {
 }
 
 /// Every `Shape` type we render.
-pub const REGISTRY: [ShapeType; 13] = [
+pub const REGISTRY: [ShapeType; 14] = [
     quadric_type!(sphere),
     quadric_type!(cylinder),
     quadric_type!(disk),
@@ -291,6 +295,7 @@ pub const REGISTRY: [ShapeType; 13] = [
     ShapeType { name: objmesh::NAME, read: objmesh::read },
     ShapeType { name: heightfield::NAME, read: heightfield::read },
     ShapeType { name: nurbs::NAME, read: nurbs::read },
+    ShapeType { name: curve::NAME, read: curve::read },
 ];
 
 /// Builds a shape's geometry in object space, or `None` for a type we do not render

@@ -10,6 +10,7 @@
 //! [`Piece`], and an arm in each method below.
 
 use super::bilinear::{PatchHit, PatchMesh};
+use super::curve::{CurveHit, CurveShape};
 use super::quadric::{QuadricHit, QuadricShape};
 use super::sampling::{QuadricSampler, ShapeSample, area_to_solid_angle};
 use super::triangle::{MeshFlags, TriangleHit, TriangleMesh, WatertightRay, watertight};
@@ -23,6 +24,8 @@ use std::sync::Arc;
 pub const QUADRIC_COST: f32 = 8.0;
 /// A bilinear patch's: one quadratic, two closest-approach solves.
 pub const PATCH_COST: f32 = 4.0;
+/// A curve piece's: a transform, a frame and a few levels of subdivision.
+pub const CURVE_COST: f32 = 16.0;
 
 /// Every shape rays can hit, by family.
 #[derive(Default)]
@@ -30,6 +33,7 @@ pub struct ShapeSet {
     pub quadrics: Vec<QuadricShape>,
     pub meshes: Vec<Arc<TriangleMesh>>,
     pub patches: Vec<Arc<PatchMesh>>,
+    pub curves: Vec<CurveShape>,
 }
 
 /// One shape of a BVH: an index into its family's list, and the orientation flags of
@@ -39,6 +43,7 @@ pub enum ShapeRef {
     Quadric(u32),
     Mesh { mesh: u32, flags: MeshFlags },
     Patches { mesh: u32, flags: MeshFlags },
+    Curves(u32),
 }
 
 /// Which primitive a ray hit, and what finishing the interaction needs.
@@ -47,6 +52,7 @@ pub enum LocalHit {
     Quadric(u32, QuadricHit),
     Triangle { mesh: u32, tri: u32, flags: MeshFlags, hit: TriangleHit },
     Patch { mesh: u32, patch: u32, flags: MeshFlags, hit: PatchHit },
+    Curve { curves: u32, piece: u32, hit: CurveHit },
 }
 
 impl LocalHit {
@@ -56,6 +62,7 @@ impl LocalHit {
             LocalHit::Quadric(..) => 0,
             LocalHit::Triangle { tri, .. } => *tri,
             LocalHit::Patch { patch, .. } => *patch,
+            LocalHit::Curve { piece, .. } => *piece,
         }
     }
 }
@@ -75,6 +82,7 @@ impl ShapeSet {
             ShapeRef::Quadric(_) => 1,
             ShapeRef::Mesh { mesh, .. } => self.meshes[mesh as usize].triangle_count(),
             ShapeRef::Patches { mesh, .. } => self.patches[mesh as usize].patch_count(),
+            ShapeRef::Curves(c) => self.curves[c as usize].piece_count(),
         }
     }
 
@@ -90,6 +98,7 @@ impl ShapeSet {
                 let m = &self.patches[mesh as usize];
                 (!m.is_degenerate(prim)).then(|| m.patch_bounds(prim))
             }
+            ShapeRef::Curves(c) => Some(self.curves[c as usize].bounds(prim)),
         }
     }
 
@@ -99,6 +108,7 @@ impl ShapeSet {
             ShapeRef::Quadric(_) => QUADRIC_COST,
             ShapeRef::Mesh { .. } => 1.0,
             ShapeRef::Patches { .. } => PATCH_COST,
+            ShapeRef::Curves(_) => CURVE_COST,
         }
     }
 
@@ -126,6 +136,10 @@ impl ShapeSet {
                 let hit = self.patches[mesh as usize].intersect(prim as usize, ray, t_max)?;
                 Some((hit.t, LocalHit::Patch { mesh, patch: prim, flags, hit }))
             }
+            ShapeRef::Curves(curves) => {
+                let hit = self.curves[curves as usize].intersect(prim as usize, ray, t_max)?;
+                Some((hit.t, LocalHit::Curve { curves, piece: prim, hit }))
+            }
         }
     }
 
@@ -139,6 +153,7 @@ impl ShapeSet {
             LocalHit::Patch { mesh, patch, flags, hit } => {
                 self.patches[mesh as usize].interaction(patch as usize, &hit, flags)
             }
+            LocalHit::Curve { curves, hit, .. } => self.curves[curves as usize].interaction(&hit),
         }
     }
 
@@ -173,6 +188,8 @@ impl ShapeSet {
                 let m = &self.patches[mesh as usize];
                 (0..m.patch_count()).map(|k| (Piece::Patch { mesh, patch: k as u32, flags }, m.patch_area(k))).collect()
             }
+            // Curves never emit: the scene builder drops area lights on them.
+            ShapeRef::Curves(_) => Vec::new(),
         }
     }
 

@@ -62,6 +62,16 @@ fn every_shared_scene_in_the_subset_loads() {
 
 #[test]
 #[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
+fn all_shapes_loads_with_its_curves_and_nothing_skipped() {
+    let Some(dir) = shared() else { return };
+    let scene = load_file(&dir.join("pbrt-v3-rs/scenes/shapes/all-shapes.pbrt")).expect("loads");
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    let curves = scene.shapes.iter().filter(|s| s.kind() == pbrt_sppm::shapes::curve::NAME).count();
+    assert_eq!(curves, 2);
+}
+
+#[test]
+#[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
 fn caustic_glass_is_read_as_pbrt_reads_it() {
     let Some(dir) = shared() else { return };
     let s = load_file(&dir.join("pbrt-v3-scenes/caustic-glass/f16-9a.pbrt")).expect("loads");

@@ -38,7 +38,7 @@ in that order. Shapes are placed at scales 1e-6..1e6 and up to 1e7 from the orig
   --iterations N   SPPM iterations (furnace: default 100000)
 ";
 
-const FAMILIES: [&str; 7] = ["sphere", "cylinder", "disk", "cone", "paraboloid", "hyperboloid", "triangle"];
+const FAMILIES: [&str; 8] = ["sphere", "cylinder", "disk", "cone", "paraboloid", "hyperboloid", "triangle", "curve"];
 const KINDS: [&str; 3] = ["plain", "mirror+shear", "near-singular"];
 const DISTANCES: [f64; 3] = [0.0, 1e6, 1e7];
 

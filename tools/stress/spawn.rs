@@ -11,7 +11,8 @@
 //! random directions. A failure is a spawned ray that hits the shape again where it
 //! cannot: anywhere, for rays leaving a convex shape outward or leaving a planar one;
 //! within 2 p_error of the start (the surface it left) for rays going inward or leaving
-//! the saddle-shaped hyperboloid. Inward rays are checked only where p_error is below
+//! the saddle-shaped hyperboloid; for a straight cylinder curve (width 0.1, 8 pieces),
+//! anywhere, for rays leaving on the side the first ray came from. Inward rays are checked only where p_error is below
 //! 1e-4 of the shape's smallest size and of the point's distance from the axis, and
 //! only at least 1e-2 from tangent.
 //!
@@ -23,6 +24,7 @@ use super::{DISTANCES, FAMILIES, KINDS, cases, dir, to_ray, transform};
 use glam::{DMat4, DVec3, Vec3};
 use pbrt_sppm::math::{Ray, Vector3};
 use pbrt_sppm::sampling::{Rng, hash};
+use pbrt_sppm::shapes::curve::{CurveShape, CurveType, Curves, Segment};
 use pbrt_sppm::shapes::sphere::Sphere;
 use pbrt_sppm::shapes::triangle::TriangleMesh;
 use pbrt_sppm::shapes::{Cone, Cylinder, Disk, Hyperboloid, MeshFlags, Paraboloid, Quadric, QuadricShape};
@@ -34,6 +36,7 @@ use rayon::prelude::*;
 enum Shape {
     Quadric(QuadricShape, Quadric, DMat4),
     Triangle(TriangleMesh),
+    Curve(CurveShape),
 }
 
 impl Shape {
@@ -43,6 +46,10 @@ impl Shape {
             Shape::Triangle(m) => {
                 m.intersect_triangle(0, r, f32::INFINITY).map(|h| m.interaction(0, &h, MeshFlags::default()))
             }
+            Shape::Curve(c) => {
+                let hits = (0..c.piece_count()).filter_map(|k| c.intersect(k, r, f32::INFINITY));
+                hits.min_by(|a, b| a.t.total_cmp(&b.t)).map(|h| c.interaction(&h))
+            }
         }
     }
 
@@ -50,6 +57,9 @@ impl Shape {
         match self {
             Shape::Quadric(s, ..) => s.intersect_t(r, f32::INFINITY).map(|h| h.t),
             Shape::Triangle(m) => m.intersect_triangle(0, r, f32::INFINITY).map(|h| h.t),
+            Shape::Curve(c) => {
+                (0..c.piece_count()).filter_map(|k| c.intersect(k, r, f32::INFINITY)).map(|h| h.t).reduce(f32::min)
+            }
         }
     }
 
@@ -62,6 +72,9 @@ impl Shape {
                 let (u, v) = (rng.uniform() as f64, rng.uniform() as f64);
                 let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
                 a + u * (b - a) + v * (c - a)
+            }
+            Shape::Curve(c) => {
+                c.render_from_object.transform_point3(DVec3::new(rng.uniform() as f64 * 2.0 - 1.0, 0.0, 0.0))
             }
         }
     }
@@ -82,6 +95,13 @@ fn unit_quadric(family: usize) -> Quadric {
 }
 
 fn make(family: usize, m: DMat4) -> Shape {
+    if family == 7 {
+        let cp = [-1.0, -1.0 / 3.0, 1.0 / 3.0, 1.0].map(|x| Vec3::new(x, 0.0, 0.0));
+        let segments = vec![Segment { cp, width: [0.1, 0.1], normals: None }];
+        let pieces = (0..8).map(|i| (0, i as f32 / 8.0, (i + 1) as f32 / 8.0)).collect();
+        let curves = Curves { kind: CurveType::Cylinder, segments, pieces };
+        return Shape::Curve(CurveShape::new(std::sync::Arc::new(curves), m, false));
+    }
     if family == 6 {
         let p = [DVec3::ZERO, DVec3::X, DVec3::Y].map(|v| m.transform_point3(v).as_vec3().to_array());
         return Shape::Triangle(TriangleMesh { p: p.to_vec(), indices: vec![0, 1, 2], ..Default::default() });
@@ -108,9 +128,12 @@ fn one_shape(family: usize, kind: usize, scale: f64, distance: f64, rays: usize,
             let n_obj = m.transpose().transform_vector3(n);
             if (m.inverse().transform_point3(si.p.0.as_dvec3()) - c).dot(n_obj) >= 0.0 { n } else { -n }
         }
-        Shape::Triangle(_) => n,
+        // The side the first ray came from.
+        Shape::Triangle(_) | Shape::Curve(_) => n,
     };
     let planar = matches!(family, 2 | 6);
+    let curve = family == 7;
+    let outward = if curve && outward.dot(o - target) < 0.0 { -outward } else { outward };
     let convex = family != 5;
     let err = si.p_error.length() as f64;
     // Inward rays may meet the far side close by where the shape narrows (a cone's
@@ -126,7 +149,13 @@ fn one_shape(family: usize, kind: usize, scale: f64, distance: f64, rays: usize,
         let r = si.spawn_ray(Vector3(w.as_vec3()));
         let Some(t) = shape.hits(&r) else { continue };
         let near = (r.at(t).0 - si.p.0).length() as f64 <= 2.0 * err;
-        let fail = if planar || (convex && cos > 0.0) { true } else { resolvable && cos.abs() >= 1e-2 && near };
+        let fail = if curve {
+            cos > 0.0
+        } else if planar || (convex && cos > 0.0) {
+            true
+        } else {
+            resolvable && cos.abs() >= 1e-2 && near
+        };
         fails += fail as u64;
     }
     (true, rays as u64, fails)

@@ -77,6 +77,7 @@ impl Builder {
             Geometry::Quadric(_) => 1,
             Geometry::Mesh { mesh, .. } => self.meshes[*mesh as usize].triangle_count(),
             Geometry::Patches { mesh, .. } => self.patches[*mesh as usize].patch_count(),
+            Geometry::Curves { curves } => curves.pieces.len(),
         };
         if syntax == Syntax::V4 && pieces > 1 && e.params.named("power").is_some() {
             found.push((e.name_span, Fix::MeshPower));
