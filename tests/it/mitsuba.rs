@@ -234,7 +234,7 @@ fn what_mitsuba_cannot_render_alike_is_reported() {
     assert!(has("two-sided area light"), "{why:?}");
     assert!(has("mean over (u, v)"), "{why:?}");
     assert!(has("\"plastic\""), "{why:?}");
-    assert!(has("inline.pbrt:") && has("curve"), "the skipped curve keeps its location: {why:?}");
+    assert!(has("(curve): exported as round tubes"), "curves are exported as tubes, and say so: {why:?}");
     // The checkerboard's mean is grey; the distant light travels from `from` to `to`.
     let diffuse = e.materials.iter().find_map(|m| match m {
         MaterialOut::Diffuse { reflectance } if reflectance[0] > 0.4 && reflectance[0] < 0.6 => Some(reflectance),

@@ -123,6 +123,12 @@ fn every_registered_shape_type_reads_as_itself() {
         "objmesh" => "\"string filename\" \"../v3/geometry/cube.obj\"",
         // The default p1, p2 meet the z axis, where pbrt-v3 hangs (an error here).
         "hyperboloid" => "\"point3 p1\" [1 0 -1] \"point3 p2\" [0 1 1]",
+        "heightfield" => "\"integer nu\" 2 \"integer nv\" 2 \"float Pz\" [0 1 1 0]",
+        "nurbs" => {
+            "\"integer nu\" 2 \"integer nv\" 2 \"integer uorder\" 2 \"integer vorder\" 2 \
+             \"float uknots\" [0 0 1 1] \"float vknots\" [0 0 1 1] \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 1]"
+        }
+        "curve" => "\"point3 P\" [0 0 0 1 1 0 2 -1 0 3 0 0]",
         "sphere" | "cylinder" | "disk" | "cone" | "paraboloid" => "",
         other => panic!("shape {other:?} is registered but this test does not know its parameters"),
     };

@@ -129,7 +129,7 @@ fn spawned_rays_never_hit_their_own_surface_at_any_scale_or_distance() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8_lossy(&out.stdout);
     let summary: Vec<&str> = text.lines().skip_while(|l| !l.contains("under 50% hit at")).skip(1).collect();
-    assert_eq!(summary.len(), 7, "{text}");
+    assert_eq!(summary.len(), 8, "{text}");
     for line in summary {
         let cols: Vec<&str> = line.split_whitespace().collect();
         let (rays, failures): (u64, u64) = (cols[1].parse().unwrap(), cols[2].parse().unwrap());
