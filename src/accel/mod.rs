@@ -18,7 +18,7 @@ pub use crate::shapes::{LocalHit, ShapeRef};
 use crate::shapes::{
     MeshFlags, QuadricShape, ShapeSet, TriangleHit, TriangleMesh, WatertightRay, edge_candidates, watertight,
 };
-use glam::{DMat3, DMat4, DVec3, Vec3};
+use glam::{DMat3, DMat4, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
@@ -361,9 +361,7 @@ fn instance_bounds(m: &DMat4, b: Bounds3) -> Bounds3 {
     if b.is_empty() {
         return b;
     }
-    let [lo, hi] = crate::math::bounds::transform_bounds(m, [b.min.as_dvec3(), b.max.as_dvec3()]);
-    let grow = |v: DVec3, s: f64| (v + s * (v.abs() * 1e-6 + DVec3::splat(1e-30))).as_vec3();
-    Bounds3 { min: grow(lo, -1.0), max: grow(hi, 1.0) }
+    crate::math::bounds::transform_bounds_widened(m, [b.min.as_dvec3(), b.max.as_dvec3()])
 }
 
 impl Geometry {

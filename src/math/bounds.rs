@@ -13,6 +13,14 @@ pub fn transform_bounds(m: &DMat4, b: [DVec3; 2]) -> [DVec3; 2] {
         .fold([DVec3::INFINITY, DVec3::NEG_INFINITY], |[lo, hi], p| [lo.min(p), hi.max(p)])
 }
 
+/// [`transform_bounds`] in f32, widened by a relative 1e-6 (and a little more) so the
+/// rounding to f32 never leaves a corner outside.
+pub fn transform_bounds_widened(m: &DMat4, b: [DVec3; 2]) -> Bounds3 {
+    let [lo, hi] = transform_bounds(m, b);
+    let grow = |v: DVec3, s: f64| (v + s * (v.abs() * 1e-6 + DVec3::splat(1e-30))).as_vec3();
+    Bounds3 { min: grow(lo, -1.0), max: grow(hi, 1.0) }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds3 {
     pub min: Vec3,

@@ -164,6 +164,18 @@ struct Query<'a> {
     z_max: f32,
 }
 
+impl Segment {
+    /// The width at `u`.
+    fn width_at(&self, u: f32) -> f32 {
+        lerp1(u, self.width[0], self.width[1])
+    }
+
+    /// The larger width at the two ends of [u0, u1] (widths are linear in u).
+    fn max_width(&self, u0: f32, u1: f32) -> f32 {
+        self.width_at(u0).max(self.width_at(u1))
+    }
+}
+
 impl Curves {
     /// The pieces' object-space box, each grown by half its width.
     pub fn object_bounds(&self) -> [DVec3; 2] {
@@ -187,7 +199,7 @@ impl Curves {
                 let seg = &self.segments[s as usize];
                 let cp = blossom_segment(&seg.cp, u0, u1).map(|p| m * p.as_dvec3());
                 let length: f64 = cp.windows(2).map(|w| w[0].distance(w[1])).sum();
-                let width = 0.5 * (lerp1(u0, seg.width[0], seg.width[1]) + lerp1(u1, seg.width[0], seg.width[1]));
+                let width = 0.5 * (seg.width_at(u0) + seg.width_at(u1));
                 length * width as f64 * scale
             })
             .sum()
@@ -215,7 +227,7 @@ impl Curves {
                 let u = i as f32 / ALONG as f32;
                 let (p, d) = eval_bezier(&seg.cp, u);
                 let (a, b) = d.normalize_or_zero().any_orthonormal_pair();
-                let r = 0.5 * lerp1(u, seg.width[0], seg.width[1]);
+                let r = 0.5 * seg.width_at(u);
                 for k in 0..AROUND {
                     let phi = std::f32::consts::TAU * k as f32 / AROUND as f32;
                     let q = p + r * (phi.cos() * a + phi.sin() * b);
@@ -247,12 +259,10 @@ impl CurveShape {
         let (s, u0, u1) = self.curves.pieces[piece];
         let seg = &self.curves.segments[s as usize];
         let cp = blossom_segment(&seg.cp, u0, u1);
-        let h = 0.5 * lerp1(u0, seg.width[0], seg.width[1]).max(lerp1(u1, seg.width[0], seg.width[1]));
+        let h = 0.5 * seg.max_width(u0, u1);
         let lo = cp.iter().fold(Vec3::INFINITY, |a, &p| a.min(p)) - Vec3::splat(h);
         let hi = cp.iter().fold(Vec3::NEG_INFINITY, |a, &p| a.max(p)) + Vec3::splat(h);
-        let b = crate::math::bounds::transform_bounds(&self.render_from_object, [lo.as_dvec3(), hi.as_dvec3()]);
-        let grow = |v: DVec3, s: f64| (v + s * (v.abs() * 1e-6 + DVec3::splat(1e-30))).as_vec3();
-        Bounds3 { min: grow(b[0], -1.0), max: grow(b[1], 1.0) }
+        crate::math::bounds::transform_bounds_widened(&self.render_from_object, [lo.as_dvec3(), hi.as_dvec3()])
     }
 
     /// The hit of a piece before `t_max` (pbrt's `Curve::Intersect`).
@@ -270,8 +280,7 @@ impl CurveShape {
         let cp = cp_obj.map(|p| frame.point(p));
         let ray_length = d.length();
         let z_max = ray_length * t_max;
-        let max_width = lerp1(u0, seg.width[0], seg.width[1]).max(lerp1(u1, seg.width[0], seg.width[1]));
-        if box_misses(&cp, max_width, z_max) {
+        if box_misses(&cp, seg.max_width(u0, u1), z_max) {
             return None;
         }
         let mut l0 = 0.0f32;
@@ -331,12 +340,10 @@ fn recurse(q: &Query, cp: &[Vec3; 4], u: [f32; 2], depth: i32, best: &mut Option
     }
     let split = subdivide(cp);
     let us = [u[0], (u[0] + u[1]) / 2.0, u[1]];
-    let w = q.seg.width;
     for half in 0..2 {
         let cps: [Vec3; 4] = split[3 * half..3 * half + 4].try_into().unwrap();
-        let max_width = lerp1(us[half], w[0], w[1]).max(lerp1(us[half + 1], w[0], w[1]));
         let z_max = best.map_or(q.z_max, |b| b.t * q.ray_length);
-        if !box_misses(&cps, max_width, z_max) {
+        if !box_misses(&cps, q.seg.max_width(us[half], us[half + 1]), z_max) {
             recurse(q, &cps, [us[half], us[half + 1]], depth - 1, best);
         }
     }
@@ -358,7 +365,7 @@ fn leaf(q: &Query, cp: &[Vec3; 4], [u0, u1]: [f32; 2]) -> Option<CurveHit> {
     let w = (-cp[0].truncate()).dot(dir) / denom;
     let u = lerp1(w, u0, u1).clamp(u0, u1);
     let seg = q.seg;
-    let mut hit_width = lerp1(u, seg.width[0], seg.width[1]);
+    let mut hit_width = seg.width_at(u);
     let mut n_hit = Vec3::ZERO;
     if let (CurveType::Ribbon, Some((n, angle, inv_sin))) = (q.kind, seg.normals) {
         // DEVIATION(pbrt): robustness. pbrt-v3 divides by sin 0 for a ribbon whose end
@@ -372,7 +379,9 @@ fn leaf(q: &Query, cp: &[Vec3; 4], [u0, u1]: [f32; 2]) -> Option<CurveHit> {
     }
     let (pc, dpcdw) = eval_bezier(cp, w.clamp(0.0, 1.0));
     let dist2 = pc.x * pc.x + pc.y * pc.y;
-    if dist2 > hit_width * hit_width * 0.25 || pc.z < 0.0 || pc.z > q.z_max {
+    // DEVIATION(pbrt): robustness. A width of 0 (a ribbon seen edge-on, a curve tapering
+    // to nothing) is never hit: pbrt's v of 0/0 there gives NaN normals.
+    if hit_width.is_nan() || hit_width <= 0.0 || dist2 > hit_width * hit_width * 0.25 || pc.z < 0.0 || pc.z > q.z_max {
         return None;
     }
     let dist = dist2.sqrt();
@@ -420,6 +429,9 @@ pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     }
     let points = p.array("P", ParamType::Point3)?.ok_or_else(|| Diagnostic::error(span, "curve needs \"point3 P\""))?;
     let cp: Vec<Vec3> = points.floats().chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+    if !cp.iter().all(|p| p.is_finite()) {
+        return Err(Diagnostic::error(points.value_span, "curve: a control point is not finite"));
+    }
     let count = if basis == "bezier" {
         (cp.len() > degree && (cp.len() - 1).is_multiple_of(degree)).then(|| (cp.len() - 1) / degree)
     } else {
@@ -493,7 +505,12 @@ fn ribbon_normals(
             Err(Diagnostic::error(n.value_span, msg))
         }
         (CurveType::Ribbon, Some(n)) => {
-            Ok(Some(n.floats().chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()))
+            let normals: Vec<Vec3> = n.floats().chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+            // pbrt normalises them blindly: NaN widths and normals for a zero normal.
+            if !normals.iter().all(|v| v.is_finite() && v.length_squared() > 0.0) {
+                return Err(Diagnostic::error(n.value_span, "curve: a ribbon normal is zero or not finite"));
+            }
+            Ok(Some(normals))
         }
         (_, Some(n)) => {
             ctx.warn

@@ -45,20 +45,41 @@ pub fn read(_: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
         for i in 0..DICE {
             let (s, t) = (at(&u, i), at(&v, j));
             let (point, dpdu, dpdv) = surface(&u, &v, &cp, s, t);
-            let normal = dpdu.cross(dpdv).normalize();
-            if !point.is_finite() || !normal.is_finite() {
+            if !point.is_finite() {
                 let msg = format!(
                     "nurbs: the surface is not defined at (u, v) = ({s}, {t}) (a weight of 0 or a repeated knot)"
                 );
                 return Err(Diagnostic::error(p.named("Pw").or(p.named("P")).map_or(span, |q| q.value_span), msg));
             }
             mesh.p.push(point.to_array());
-            n.push(normal.to_array());
+            n.push(dpdu.cross(dpdv).normalize());
             uv.push([s, t]);
         }
     }
-    (mesh.n, mesh.uv) = (Some(n), Some(uv));
+    mend_normals(&mut n);
+    (mesh.n, mesh.uv) = (Some(n.iter().map(|v| v.to_array()).collect()), Some(uv));
     Ok(Built::Mesh { mesh, kind: NAME, filename: None })
+}
+
+/// Gives each vertex where the surface has no normal (a collapsed edge, as at the poles
+/// of a NURBS sphere, where ∂p/∂u × ∂p/∂v = 0) the mean of its grid neighbours'.
+// DEVIATION(pbrt): robustness. pbrt-v3 normalises the zero vector there: NaN shading
+// normals in every triangle at the pole.
+fn mend_normals(n: &mut [Vec3]) {
+    let at = |i: i64, j: i64| (0..DICE as i64).contains(&i) && (0..DICE as i64).contains(&j);
+    for k in 0..n.len() {
+        if n[k].is_finite() {
+            continue;
+        }
+        let (i, j) = ((k as u32 % DICE) as i64, (k as u32 / DICE) as i64);
+        let mut sum = Vec3::ZERO;
+        for (di, dj) in [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)] {
+            let (a, b) = (i + di, j + dj);
+            let m = n.get((a + b * DICE as i64) as usize).copied().filter(|m| at(a, b) && m.is_finite());
+            sum += m.unwrap_or(Vec3::ZERO);
+        }
+        n[k] = sum.try_normalize().unwrap_or(Vec3::Z);
+    }
 }
 
 fn lerp(t: f32, a: f32, b: f32) -> f32 {
@@ -181,6 +202,18 @@ mod tests {
             // The tangent is perpendicular to the radius.
             assert!(deriv.normalize().dot(p).abs() < 1e-5, "{t}: {deriv}");
         }
+    }
+
+    #[test]
+    fn a_collapsed_edge_gets_its_neighbours_normal_not_nan() {
+        // A cone-like patch: the whole v = 0 row of control points is one apex.
+        let mut n = vec![Vec3::NAN; (DICE * DICE) as usize];
+        for (k, v) in n.iter_mut().enumerate().skip(DICE as usize) {
+            *v = Vec3::new(0.1 * (k % 7) as f32, 0.0, 1.0).normalize();
+        }
+        mend_normals(&mut n);
+        assert!(n.iter().all(|v| v.is_finite() && (v.length() - 1.0).abs() < 1e-5));
+        assert!(n[3].z > 0.9, "{}", n[3]);
     }
 
     #[test]

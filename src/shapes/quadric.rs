@@ -73,9 +73,7 @@ impl QuadricShape {
 
     /// Render-space bounds of the object bounds' corners, widened by a few ulps.
     pub fn bounds(&self) -> Bounds3 {
-        let b = crate::math::bounds::transform_bounds(&self.render_from_object, self.quadric.object_bounds());
-        let grow = |v: DVec3, s: f64| (v + s * (v.abs() * 1e-6 + DVec3::splat(1e-30))).as_vec3();
-        Bounds3 { min: grow(b[0], -1.0), max: grow(b[1], 1.0) }
+        crate::math::bounds::transform_bounds_widened(&self.render_from_object, self.quadric.object_bounds())
     }
 
     /// The ray in object space, each coordinate with its f64 rounding bound.
