@@ -58,6 +58,20 @@ pub fn offset_ray_origin(p: Point3, p_error: Vec3, n: Normal3, w: Vector3) -> Po
     Point3(po)
 }
 
+/// Where direct light is sampled from at a surface point `p` (error `p_error`, normal
+/// `n`) seen from `wo`: pbrt-v3 uses the point; pbrt-v4 (`v4`) moves it as a spawned
+/// ray's origin is moved, to the side light leaves by when only one side does (`sides`:
+/// reflects, transmits; its `SampleLd`). That is an ulp or so for most shapes, but a
+/// curve's error bound is its width: a point light near a wide curve is that much
+/// nearer to it in pbrt-v4.
+pub fn light_sample_point(v4: bool, p: Point3, p_error: Vec3, n: Normal3, sides: (bool, bool), wo: Vec3) -> Point3 {
+    match (v4, sides) {
+        (true, (true, false)) => offset_ray_origin(p, p_error, n, Vector3(wo)),
+        (true, (false, true)) => offset_ray_origin(p, p_error, n, Vector3(-wo)),
+        _ => p,
+    }
+}
+
 impl SurfaceInteraction {
     pub fn spawn_ray(&self, d: Vector3) -> Ray {
         Ray::new(offset_ray_origin(self.p, self.p_error, self.n, d), d)
@@ -161,6 +175,17 @@ impl Footprint {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pbrt_v4_samples_lights_from_the_side_light_leaves_by() {
+        let (p, err, n) = (Point3(Vec3::new(1.0, 2.0, 0.0)), Vec3::splat(0.25), Normal3(Vec3::Z));
+        let wo = Vec3::new(0.6, 0.0, 0.8);
+        let at = |v4, sides| light_sample_point(v4, p, err, n, sides, wo).0;
+        assert_eq!(at(false, (true, false)), p.0, "pbrt-v3: the point itself");
+        assert_eq!(at(true, (true, true)), p.0, "both sides: the point itself");
+        assert!(at(true, (true, false)).z >= 0.25, "reflecting: toward wo's side");
+        assert!(at(true, (false, true)).z <= -0.25, "transmitting: the other side");
+    }
 
     /// A hit at the origin of the plane z = 0 with p(u, v) = (2u, 3v, 0).
     fn plane_hit() -> SurfaceInteraction {

@@ -89,7 +89,7 @@ pub struct Geometry {
     avx: Option<Avx>,
 }
 
-fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>, curves: &mut Vec<CurveShape>) -> ShapeRef {
+fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>, curves: &mut Vec<CurveShape>, v4: bool) -> ShapeRef {
     let flags = MeshFlags { reverse_orientation: s.reverse_orientation, swaps_handedness: s.swaps_handedness() };
     match &s.geometry {
         ShapeGeometry::Quadric(q) => {
@@ -99,7 +99,8 @@ fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>, curves: &mut Vec<C
         ShapeGeometry::Mesh { mesh, .. } => ShapeRef::Mesh { mesh: *mesh, flags },
         ShapeGeometry::Patches { mesh, .. } => ShapeRef::Patches { mesh: *mesh, flags },
         ShapeGeometry::Curves { curves: c, .. } => {
-            curves.push(CurveShape::new(c.clone(), s.object_to_world, s.reverse_orientation));
+            let curve = CurveShape::new(c.clone(), s.object_to_world, s.reverse_orientation);
+            curves.push(CurveShape { error_widths: if v4 { 1.0 } else { 2.0 }, ..curve });
             ShapeRef::Curves(curves.len() as u32 - 1)
         }
     }
@@ -369,7 +370,8 @@ impl Geometry {
     /// until the BVHs reorder their triangles into copies of their own).
     pub fn new(scene: &SceneDescription) -> Geometry {
         let mut set = ShapeSet { meshes: scene.meshes.clone(), patches: scene.patches.clone(), ..Default::default() };
-        let mut refs = |s: &ShapeDesc| shape_ref(s, &mut set.quadrics, &mut set.curves);
+        let v4 = scene.syntax == crate::parser::Syntax::V4;
+        let mut refs = |s: &ShapeDesc| shape_ref(s, &mut set.quadrics, &mut set.curves, v4);
         let world_shapes: Vec<ShapeRef> = scene.shapes.iter().map(&mut refs).collect();
         let object_shapes: Vec<Vec<ShapeRef>> =
             scene.objects.iter().map(|o| o.shapes.iter().map(&mut refs).collect()).collect();

@@ -607,7 +607,9 @@ fn direct_light(
     let (u_light, u_bsdf, u_lobe) = (sampler.get2d(), sampler.get2d(), sampler.get1d());
     let ns = bsdf.shading_normal();
     let mut ld = Vec3::ZERO;
-    if let Some(ls) = light.sample_li(&scene.geometry.shapes, si.p.0, u_light)
+    let v4 = scene.syntax == crate::parser::Syntax::V4;
+    let from = crate::interaction::light_sample_point(v4, si.p, si.p_error, si.n, bsdf.sides(), wo);
+    if let Some(ls) = light.sample_li(&scene.geometry.shapes, from.0, u_light)
         && !scene.emission_masked(light, ls.surface.as_ref())
     {
         let f = bsdf.f(wo, ls.wi) * ls.wi.dot(ns).abs();

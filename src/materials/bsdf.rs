@@ -146,6 +146,15 @@ impl Bsdf {
         self.lobes().iter().any(|l| l.sides().1)
     }
 
+    /// Whether some lobe reflects, and whether some transmits (pbrt-v4's
+    /// `IsReflective`/`IsTransmissive` of its flags; the coated layers only reflect).
+    pub fn sides(&self) -> (bool, bool) {
+        match &self.lobes {
+            Lobes::Layered(_) => (true, false),
+            _ => (self.lobes().iter().any(|l| l.sides().0), self.transmits()),
+        }
+    }
+
     /// The sum of the lobes, combined by the [`Convention`].
     fn f_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
         let (o, i) = (self.local(wo), self.local(wi));

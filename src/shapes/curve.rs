@@ -63,6 +63,8 @@ pub struct CurveShape {
     pub render_from_object: DMat4,
     pub object_from_render: DMat4,
     pub reverse_orientation: bool,
+    /// The error bound in widths at the hit: 2 in pbrt-v3, 1 in pbrt-v4.
+    pub error_widths: f32,
 }
 
 /// The cheap result of a ray–curve test, in object space.
@@ -246,8 +248,10 @@ impl Curves {
 }
 
 impl CurveShape {
+    /// Curves with pbrt-v3's error bound (see [`CurveShape::error_widths`]).
     pub fn new(curves: Arc<Curves>, render_from_object: DMat4, reverse_orientation: bool) -> CurveShape {
-        CurveShape { curves, object_from_render: render_from_object.inverse(), render_from_object, reverse_orientation }
+        let object_from_render = render_from_object.inverse();
+        CurveShape { curves, object_from_render, render_from_object, reverse_orientation, error_widths: 2.0 }
     }
 
     pub fn piece_count(&self) -> usize {
@@ -304,8 +308,9 @@ impl CurveShape {
         let n = dpdu.cross(dpdv).normalize_or_zero();
         let n = Normal3(if self.reverse_orientation { -n } else { n }.as_vec3());
         let p = m.transform_point3(hit.p.as_dvec3());
-        // pbrt's bound: twice the width in object space, mapped to render space.
-        let p_error = (m3.abs() * DVec3::splat(2.0 * hit.width as f64)).as_vec3()
+        // pbrt's bound: the width (v4) or twice it (v3) in object space, mapped to render
+        // space.
+        let p_error = (m3.abs() * DVec3::splat((self.error_widths * hit.width) as f64)).as_vec3()
             + crate::math::float::gamma(3) * p.abs().as_vec3()
             + Vec3::splat(f32::MIN_POSITIVE);
         let (dpdu, dpdv) = (Vector3(dpdu.as_vec3()), Vector3(dpdv.as_vec3()));

@@ -10,10 +10,10 @@ use super::{Pass, Technique, Techniques};
 use crate::accel::Hit;
 use crate::integrators::grid::Grid;
 use crate::integrators::sppm::{Surface, camera_ray, surface};
-use crate::interaction::{Footprint, SurfaceInteraction};
+use crate::interaction::{Footprint, SurfaceInteraction, light_sample_point};
 use crate::lights::Light;
 use crate::materials::TransportMode;
-use crate::math::{Point3, Ray, Vector3};
+use crate::math::{Normal3, Point3, Ray, Vector3};
 use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash};
 use crate::spectrum::Rgb;
 use glam::{DVec3, Vec3};
@@ -197,7 +197,14 @@ impl Cameras<'_> {
         let (pick_u, u) = (s.get1d(), s.get2d());
         let Some((k, pick)) = scene.light_power.sample(pick_u) else { return Vec3::ZERO };
         let light = &scene.lights[k];
-        let Some(ls) = light.sample_li(&scene.geometry.shapes, v.place.p, u) else { return Vec3::ZERO };
+        let from = match v.at {
+            Scatterer::Surface(b) => {
+                let (place, v4) = (&v.place, scene.syntax == crate::parser::Syntax::V4);
+                light_sample_point(v4, Point3(place.p), place.p_error, Normal3(place.ng), b.sides(), v.wo).0
+            }
+            Scatterer::Medium(_) => v.place.p,
+        };
+        let Some(ls) = light.sample_li(&scene.geometry.shapes, from, u) else { return Vec3::ZERO };
         if ls.pdf <= 0.0 || ls.li == Vec3::ZERO || scene.emission_masked(light, ls.surface.as_ref()) {
             return Vec3::ZERO;
         }
@@ -205,7 +212,7 @@ impl Cameras<'_> {
         if e.f == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        let (direct, cos_light, emission) = light_densities(self.pass, light, &ls, v.place.p);
+        let (direct, cos_light, emission) = light_densities(self.pass, light, &ls, from);
         let pick = pick as f64;
         let pdfs = DirectPdfs {
             bsdf: if ls.delta { 0.0 } else { e.pdf as f64 },
