@@ -124,7 +124,11 @@ impl RenderScene {
         let camera = Camera::new(&scene.camera, &scene.film);
         let textures = Textures::new(&scene.textures, scene.fixes);
         let needs_differentials = textures.use_footprint() || scene.materials.iter().any(|m| m.bump.is_some());
-        let materials: Vec<Material> = scene.materials.iter().map(|m| Material::from_desc(m, scene.fixes)).collect();
+        let material = |m| match Material::from_desc(m, scene.fixes) {
+            m if bidirectional => m.bidirectional(),
+            m => m,
+        };
+        let materials: Vec<Material> = scene.materials.iter().map(material).collect();
         let world_shape_material = scene.shapes.iter().map(|s| s.material).collect();
         let object_shape_material =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.material).collect()).collect();

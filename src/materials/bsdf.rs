@@ -4,6 +4,7 @@
 //! or transmission) the geometric normal says the pair is on. pbrt-v4's coated materials
 //! take the place of the lobes with their layered random walk (`layered`).
 
+use super::hair::HairBxdf;
 use super::layered::Layered;
 use super::lobes::{Kind, Lobe, MAX_LOBES};
 use super::transport::TransportMode;
@@ -69,6 +70,8 @@ enum Lobes {
     Many(Box<[Lobe]>),
     /// pbrt-v4's coated materials, estimated by random walks.
     Layered(Box<Layered>),
+    /// pbrt's hair fibre.
+    Hair(Box<HairBxdf>),
 }
 
 impl Bsdf {
@@ -89,9 +92,14 @@ impl Bsdf {
         Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng: Vec3::ZERO, lobes: Lobes::Layered(Box::new(layered)) }
     }
 
+    /// A hair fibre's BSDF (x along the fibre).
+    pub fn hair(frame: [Vec3; 3], hair: HairBxdf) -> Bsdf {
+        Bsdf { ss: frame[0], ts: frame[1], ns: frame[2], ng: Vec3::ZERO, lobes: Lobes::Hair(Box::new(hair)) }
+    }
+
     pub fn lobes(&self) -> &[Lobe] {
         match &self.lobes {
-            Lobes::None | Lobes::Layered(_) => &[],
+            Lobes::None | Lobes::Layered(_) | Lobes::Hair(_) => &[],
             Lobes::One(l) => std::slice::from_ref(l),
             Lobes::Many(l) => l,
         }
@@ -137,20 +145,22 @@ impl Bsdf {
     pub fn is_glossy(&self) -> bool {
         match &self.lobes {
             Lobes::Layered(l) => l.is_glossy(),
+            Lobes::Hair(_) => true,
             _ => self.has(Kind::Glossy),
         }
     }
 
     /// Whether some lobe transmits (light from behind the surface reaches the front).
     pub fn transmits(&self) -> bool {
-        self.lobes().iter().any(|l| l.sides().1)
+        matches!(self.lobes, Lobes::Hair(_)) || self.lobes().iter().any(|l| l.sides().1)
     }
 
     /// Whether some lobe reflects, and whether some transmits (pbrt-v4's
-    /// `IsReflective`/`IsTransmissive` of its flags; the coated layers only reflect).
+    /// `IsReflective`/`IsTransmissive` of its flags; the coated layers only reflect, and
+    /// so, by its flags, does hair).
     pub fn sides(&self) -> (bool, bool) {
         match &self.lobes {
-            Lobes::Layered(_) => (true, false),
+            Lobes::Layered(_) | Lobes::Hair(_) => (true, false),
             _ => (self.lobes().iter().any(|l| l.sides().0), self.transmits()),
         }
     }
@@ -176,6 +186,7 @@ impl Bsdf {
                     l.f(o, i, mode)
                 }
             }
+            Lobes::Hair(h) => h.f_mode(o, i, mode),
         }
     }
 
@@ -193,8 +204,10 @@ impl Bsdf {
     /// material's walk depends on it; lobes' densities do not).
     pub fn pdf_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> f32 {
         let (o, i) = (self.local(wo), self.local(wi));
-        if let Lobes::Layered(l) = &self.lobes {
-            return if o.z == 0.0 { 0.0 } else { l.pdf(o, i, mode) };
+        match &self.lobes {
+            Lobes::Layered(l) => return if o.z == 0.0 { 0.0 } else { l.pdf(o, i, mode) },
+            Lobes::Hair(h) => return h.pdf(o, i),
+            _ => {}
         }
         let n = self.lobes().len().max(1) as f32;
         self.lobes().iter().map(|l| l.pdf(o, i)).sum::<f32>() / n
@@ -214,8 +227,15 @@ impl Bsdf {
     /// Samples ωi for ωo; `u_lobe` chooses the lobe and then, rescaled, between a
     /// lobe's parts (a dielectric's reflection or refraction).
     pub fn sample_f(&self, wo: Vec3, u: [f32; 2], u_lobe: f32, mode: TransportMode) -> Option<BsdfSample> {
-        if let Lobes::Layered(l) = &self.lobes {
-            return self.sample_layered(l, wo, u, u_lobe, mode);
+        match &self.lobes {
+            Lobes::Layered(l) => return self.sample_layered(l, wo, u, u_lobe, mode),
+            Lobes::Hair(h) => {
+                let o = self.local(wo);
+                let (wi, _, pdf) = h.sample(o, u_lobe, u)?;
+                let f = h.f_mode(o, wi, mode);
+                return Some(BsdfSample { wi: self.world(wi), f, pdf, specular: false, proportional: false });
+            }
+            _ => {}
         }
         let n = self.lobes().len();
         if n == 0 {

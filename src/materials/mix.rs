@@ -53,6 +53,9 @@ pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mat
     if materials.iter().any(|&m| r.material_type(m).is_some_and(|t| super::coated::NAMES.contains(&t))) {
         r.approximate(at, "pbrt-v4 coated material in a pbrt-v3 mix".into(), Approx::CoatInBlend);
     }
+    if materials.iter().any(|&m| r.material_type(m) == Some(super::hair::NAME)) {
+        r.approximate(at, "hair in a pbrt-v3 mix".into(), Approx::HairInBlend);
+    }
     Ok(MaterialKind::Mix { materials, amount, rule: MixRule::Blend })
 }
 

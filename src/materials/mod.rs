@@ -25,6 +25,7 @@ pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
 pub mod diffusetransmission;
+pub mod hair;
 pub mod inputs;
 pub mod interface;
 pub mod layered;
@@ -81,7 +82,7 @@ const V3: Option<Syntax> = Some(Syntax::V3);
 const V4: Option<Syntax> = Some(Syntax::V4);
 
 /// Every `Material` type we render.
-pub const REGISTRY: [MaterialType; 18] = [
+pub const REGISTRY: [MaterialType; 19] = [
     ty(matte::NAME, V3, matte::read),
     ty(diffuse::NAME, V4, diffuse::read),
     ty(mirror::NAME, V3, mirror::read),
@@ -100,6 +101,7 @@ pub const REGISTRY: [MaterialType; 18] = [
     ty(interface::NAMES[1], V3, interface::read),
     ty(interface::NAMES[2], V3, interface::read),
     ty(mix::NAME, None, mix::read),
+    ty(hair::NAME, None, hair::read),
 ];
 
 /// Types we do not render that still say which pbrt a file is for.
@@ -202,6 +204,8 @@ pub enum MaterialKind {
     },
     /// pbrt-v4 `coateddiffuse` / `coatedconductor`: a dielectric coat over a base.
     Coated(Box<Coated>),
+    /// pbrt's hair fibre (`hair`).
+    Hair(Box<hair::Hair>),
     /// No surface: rays continue straight through.
     Interface,
     /// Two materials (built indices) mixed by `amount`.
@@ -244,6 +248,7 @@ impl MaterialDesc {
             MaterialKind::Substrate { kd, .. } => substrate::mitsuba(*kd, e),
             MaterialKind::DiffuseTransmission { reflectance, .. } => diffusetransmission::mitsuba(*reflectance, e),
             MaterialKind::Coated(c) => coated::mitsuba(c, e),
+            MaterialKind::Hair(_) => hair::mitsuba(e),
             MaterialKind::Interface => interface::mitsuba(),
             MaterialKind::Mix { .. } => mix::mitsuba(e),
         }
@@ -266,6 +271,8 @@ pub struct Material {
     pub normal_map: Option<Arc<RgbImage>>,
     /// The pbrt bugs fixed (`--fix`).
     fixes: Fixes,
+    /// Light subpaths meet camera paths (vcm, bdpt): hair takes its adjoint for them.
+    bidirectional: bool,
 }
 
 impl Material {
@@ -274,7 +281,20 @@ impl Material {
         let (max_reflectance, convention) =
             if v3 { (f32::INFINITY, Convention::PbrtV3) } else { (1.0, Convention::PbrtV4) };
         let normal_map = m.normal_map.clone();
-        Material { kind: m.kind.clone(), max_reflectance, convention, bump: m.bump, normal_map, fixes }
+        Material {
+            kind: m.kind.clone(),
+            max_reflectance,
+            convention,
+            bump: m.bump,
+            normal_map,
+            fixes,
+            bidirectional: false,
+        }
+    }
+
+    /// The material for vcm and bdpt, whose light and camera paths meet.
+    pub fn bidirectional(self) -> Material {
+        Material { bidirectional: true, ..self }
     }
 
     pub fn kind(&self) -> &MaterialKind {
@@ -296,8 +316,13 @@ impl Material {
 
     #[inline(never)]
     fn layered_bsdf(&self, inputs: &Inputs<impl Fn() -> TexCtx>, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
-        if let MaterialKind::Coated(c) = &self.kind {
-            return Some(Bsdf::layered(frame, coated::layers(c, inputs)));
+        match &self.kind {
+            MaterialKind::Coated(c) => return Some(Bsdf::layered(frame, coated::layers(c, inputs))),
+            MaterialKind::Hair(h) => {
+                let fibre = hair::bxdf(h, inputs, (inputs.ctx)().uv[1]).with_adjoint(self.bidirectional);
+                return Some(Bsdf::hair(frame, fibre));
+            }
+            _ => {}
         }
         let mut lobes = Lobes::<MATERIAL_LOBES>::default();
         self.lobes(inputs, &mut lobes)?;
@@ -340,8 +365,9 @@ impl Material {
             MaterialKind::Substrate { kd, ks, roughness, remap } => {
                 substrate::lobes([*kd, *ks], roughness, *remap, i, out)
             }
-            // Mixes are resolved by the scene, which holds their materials.
-            MaterialKind::Interface | MaterialKind::Mix { .. } => return None,
+            // Mixes are resolved by the scene, which holds their materials; a fibre is
+            // not a sum of lobes.
+            MaterialKind::Interface | MaterialKind::Mix { .. } | MaterialKind::Hair(_) => return None,
         }
         Some(())
     }

@@ -10,6 +10,7 @@
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Approx {
     CoatInBlend,
+    HairInBlend,
     UnsupportedMaterial,
     UnsupportedTexture,
     MissingImage,
@@ -22,8 +23,9 @@ pub enum Approx {
 }
 
 impl Approx {
-    pub const ALL: [Approx; 10] = [
+    pub const ALL: [Approx; 11] = [
         Approx::CoatInBlend,
+        Approx::HairInBlend,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
         Approx::MissingImage,
@@ -39,6 +41,9 @@ impl Approx {
     pub fn how(self) -> &'static str {
         match self {
             Approx::CoatInBlend => "a pbrt-v3 mix blends lobes: its coated part adds only the base under the coat",
+            Approx::HairInBlend => {
+                "a pbrt-v3 mix blends lobes: its hair part adds nothing (a fibre is not kept as lobes)"
+            }
             Approx::UnsupportedMaterial => "this material type is not supported; rendered as diffuse 0.5",
             Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
             Approx::MissingImage => {

@@ -409,14 +409,17 @@ fn approximations_are_listed_and_the_readme_names_every_kind() {
         "WorldBegin MakeNamedMaterial \"c\" \"string type\" \"coateddiffuse\" \
          MakeNamedMaterial \"m\" \"string type\" \"matte\" \
          Material \"mix\" \"string namedmaterial1\" \"c\" \"string namedmaterial2\" \"m\" Shape \"disk\" \
+         MakeNamedMaterial \"h\" \"string type\" \"hair\" \
+         Material \"mix\" \"string namedmaterial1\" \"h\" \"string namedmaterial2\" \"m\" Shape \"disk\" \
          Texture \"f\" \"float\" \"ptex\" \
          Material \"matte\" \"texture sigma\" \"f\" Shape \"disk\" Material \"weird\" Shape \"disk\"",
     );
     let how: Vec<&str> = s.approximated.iter().map(|a| a.how.as_str()).collect();
     use pbrt_sppm::scene::Approx;
-    assert_eq!(how, [Approx::CoatInBlend.how(), Approx::UnsupportedTexture.how(), Approx::UnsupportedMaterial.how()]);
+    let expected = [Approx::CoatInBlend, Approx::HairInBlend, Approx::UnsupportedTexture, Approx::UnsupportedMaterial];
+    assert_eq!(how, expected.map(Approx::how));
     let json = pbrt_sppm::cli::check::report(&s, false);
-    assert_eq!(json["approximated"].as_array().map(Vec::len), Some(3));
+    assert_eq!(json["approximated"].as_array().map(Vec::len), Some(4));
     assert_eq!(json["approximated"][0]["line"], 1);
     let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
     for a in Approx::ALL {

@@ -49,6 +49,7 @@ fn material_variant(name: &str) -> &'static str {
         "diffusetransmission" => "DiffuseTransmission",
         "interface" | "none" | "" => "Interface",
         "mix" => "Mix",
+        "hair" => "Hair",
         other => panic!("material {other:?} is registered but this test does not know it"),
     }
 }
