@@ -1,10 +1,15 @@
-//! Perspective and orthographic cameras with pbrt's conventions.
+//! Perspective, orthographic and spherical cameras with pbrt's conventions.
 //!
 //! ```text
 //! LookAt 0 1 5  0 1 0  0 1 0
 //! Camera "perspective" "float fov" 40 "float lensradius" 0.05 "float focaldistance" 5
 //! Camera "orthographic" "float screenwindow" [-2 2 -1.5 1.5]
+//! Camera "environment"                                   # v3: latitude-longitude
+//! Camera "spherical" "string mapping" "equalarea"        # v4; or "equirectangular"
 //! ```
+//! The spherical cameras see every direction from their position: the film's (u, v)
+//! in [0, 1]² is laid on the sphere (pbrt-v3's environment camera and pbrt-v4's
+//! equirectangular mapping alike, or pbrt-v4's equal-area square), +y up.
 //! Camera space is left-handed: +x is image right, +y up, +z the viewing direction. The
 //! screen window spans [−1, 1] on the image's shorter axis, so `fov` is the full angle
 //! of the shorter axis. Raster (0, 0) is the top-left pixel corner and y grows
@@ -14,10 +19,13 @@
 //! also gives its importance `we` for a ray leaving the lens, the densities `pdf_we`
 //! with which `generate_ray` makes it, and `sample_wi`, a lens point seen from a scene
 //! point, as pbrt-v3's `PerspectiveCamera` does. An orthographic camera cannot be
-//! reached by chance (its rays are parallel), so it has none, as in pbrt.
+//! reached by chance (its rays are parallel), so it has none, as in pbrt; nor have the
+//! spherical ones (pbrt has no importance for them either), so light paths never end
+//! on them.
 
 use crate::math::ray::RayDifferential;
 use crate::math::{Point3, Ray, Vector3};
+use crate::scene::options::SphericalMapping;
 use crate::scene::{Camera as CameraDesc, CameraKind, Film};
 use glam::Vec3;
 use glam::{DMat4, DVec3};
@@ -78,8 +86,11 @@ impl Camera {
                 DVec3::new((sx * self.tan_half_fov) as f64, (sy * self.tan_half_fov) as f64, 1.0).normalize(),
             ),
             CameraKind::Orthographic => (DVec3::new(sx as f64, sy as f64, 0.0), DVec3::Z),
+            CameraKind::Environment => (DVec3::ZERO, self.spherical(p_raster, SphericalMapping::Equirectangular)),
+            CameraKind::Spherical(m) => (DVec3::ZERO, self.spherical(p_raster, m)),
         };
-        if self.lens_radius > 0.0 {
+        let has_lens = matches!(self.kind, CameraKind::Perspective | CameraKind::Orthographic);
+        if self.lens_radius > 0.0 && has_lens {
             let lens = (self.lens_radius * crate::sampling::concentric_disk(u_lens)).as_dvec2();
             let ft = self.focal_distance as f64 / d.z;
             let focus = o + d * ft;
@@ -89,6 +100,21 @@ impl Camera {
         let ow = self.world_from_camera.transform_point3(o);
         let dw = self.world_from_camera.transform_vector3(d).normalize();
         Ray::new(Point3(ow.as_vec3()), Vector3(dw.as_vec3()))
+    }
+
+    /// The camera-space direction of a raster point on a spherical camera: the film's
+    /// (u, v) in [0, 1]² laid on the sphere by `mapping`, with y up (pbrt's swap of y
+    /// and z); v = 0 looks straight up.
+    fn spherical(&self, p_raster: [f32; 2], mapping: SphericalMapping) -> DVec3 {
+        let (u, v) = ((p_raster[0] / self.resolution[0]) as f64, (p_raster[1] / self.resolution[1]) as f64);
+        let d = match mapping {
+            SphericalMapping::Equirectangular => {
+                let (theta, phi) = (std::f64::consts::PI * v, 2.0 * std::f64::consts::PI * u);
+                DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+            }
+            SphericalMapping::EqualArea => equal_area_square_to_sphere(wrap_equal_area_square([u, v])),
+        };
+        DVec3::new(d.x, d.z, d.y)
     }
 
     /// The film's area at distance 1 in camera space (pbrt's `A`).
@@ -167,6 +193,36 @@ impl Camera {
     }
 }
 
+/// Clarberg's equal-area map of the unit square onto the sphere (pbrt-v4's
+/// `EqualAreaSquareToSphere`), +z at the square's centre.
+fn equal_area_square_to_sphere([px, py]: [f64; 2]) -> DVec3 {
+    let (u, v) = (2.0 * px - 1.0, 2.0 * py - 1.0);
+    let (up, vp) = (u.abs(), v.abs());
+    let signed_distance = 1.0 - (up + vp);
+    let r = 1.0 - signed_distance.abs();
+    let phi = (if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 }) * std::f64::consts::FRAC_PI_4;
+    let z = (1.0 - r * r).copysign(signed_distance);
+    let (cos_phi, sin_phi) = (phi.cos().copysign(u), phi.sin().copysign(v));
+    let s = r * (2.0 - r * r).max(0.0).sqrt();
+    DVec3::new(cos_phi * s, sin_phi * s, z)
+}
+
+/// Folds a point outside the unit square back onto it as the equal-area map's
+/// symmetries do (pbrt-v4's `WrapEqualAreaSquare`).
+fn wrap_equal_area_square([mut u, mut v]: [f64; 2]) -> [f64; 2] {
+    if u < 0.0 {
+        (u, v) = (-u, 1.0 - v);
+    } else if u > 1.0 {
+        (u, v) = (2.0 - u, 1.0 - v);
+    }
+    if v < 0.0 {
+        (u, v) = (1.0 - u, -v);
+    } else if v > 1.0 {
+        (u, v) = (1.0 - u, 2.0 - v);
+    }
+    [u, v]
+}
+
 /// Importance arriving at a scene point from a lens point (see [`Camera::sample_wi`]).
 #[derive(Clone, Copy, Debug)]
 pub struct CameraSample {
@@ -177,4 +233,28 @@ pub struct CameraSample {
     pub pdf: f32,
     pub p_lens: Vec3,
     pub raster: [f32; 2],
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_equal_area_square_covers_the_sphere_evenly() {
+        assert!((equal_area_square_to_sphere([0.5, 0.5]) - DVec3::Z).length() < 1e-12);
+        assert!((equal_area_square_to_sphere([0.0, 0.0]) + DVec3::Z).length() < 1e-12);
+        // Unit directions, and equal areas: a grid's cells split the upper hemisphere
+        // (the square's inner diamond) from the lower one half and half.
+        let n = 200;
+        let mut upper = 0;
+        for j in 0..n {
+            for i in 0..n {
+                let d = equal_area_square_to_sphere([(i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64]);
+                assert!((d.length() - 1.0).abs() < 1e-9);
+                upper += usize::from(d.z > 0.0);
+            }
+        }
+        assert!((upper as f64 / (n * n) as f64 - 0.5).abs() < 0.01, "{upper}");
+        assert_eq!(wrap_equal_area_square([-0.25, 0.25]), [0.25, 0.75]);
+    }
 }

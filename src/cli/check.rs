@@ -48,7 +48,7 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
         "syntax": scene.syntax.name(),
         "syntax_evidence": scene.syntax_evidence,
         "camera": {
-            "type": match c.kind { CameraKind::Perspective => "perspective", CameraKind::Orthographic => "orthographic" },
+            "type": c.kind.name(),
             "fov": f32_json(c.fov),
             "lensradius": f32_json(c.lens_radius),
             "focaldistance": f32_json(c.focal_distance),
@@ -88,6 +88,12 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
         "pbrt_bugs": scene.pbrt_bugs,
         "fixes": scene.fixes.names(),
     });
+    if let CameraKind::Spherical(m) = c.kind {
+        out["camera"]["mapping"] = json!(match m {
+            crate::scene::options::SphericalMapping::EqualArea => "equalarea",
+            crate::scene::options::SphericalMapping::Equirectangular => "equirectangular",
+        });
+    }
     if with_shapes {
         let shapes: Vec<Value> = scene.placed_shapes().enumerate().map(|(k, p)| shape(scene, k, &p)).collect();
         out["shapes"] = Value::Array(shapes);

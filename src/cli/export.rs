@@ -214,8 +214,13 @@ fn camera(scene: &SceneDescription, notes: &mut Vec<Unsupported>) -> CameraOut {
     }
     CameraOut {
         kind: match c.kind {
-            CameraKind::Perspective => "perspective",
             CameraKind::Orthographic => "orthographic",
+            CameraKind::Perspective => "perspective",
+            CameraKind::Environment | CameraKind::Spherical(_) => {
+                let why = "Mitsuba 3 has no camera that sees every direction; exported as a perspective one";
+                notes.push(note("", &format!("camera \"{}\"", c.kind.name()), why));
+                "perspective"
+            }
         },
         world_from_camera: row_major(&c.camera_from_world.inverse()),
         fov: c.fov,

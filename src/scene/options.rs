@@ -22,11 +22,36 @@ use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use glam::DMat4;
 
-/// Perspective or orthographic.
+/// The camera models we render.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CameraKind {
     Perspective,
     Orthographic,
+    /// pbrt-v3's `environment`: every direction, by latitude and longitude.
+    Environment,
+    /// pbrt-v4's `spherical`, by its `mapping`.
+    Spherical(SphericalMapping),
+}
+
+/// How pbrt-v4's spherical camera lays the sphere of directions on the film.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SphericalMapping {
+    /// Clarberg's equal-area square (pbrt-v4's default).
+    EqualArea,
+    /// Latitude and longitude, as pbrt-v3's environment camera.
+    Equirectangular,
+}
+
+impl CameraKind {
+    /// The name scenes use.
+    pub fn name(self) -> &'static str {
+        match self {
+            CameraKind::Perspective => "perspective",
+            CameraKind::Orthographic => "orthographic",
+            CameraKind::Environment => "environment",
+            CameraKind::Spherical(_) => "spherical",
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -223,6 +248,18 @@ impl RenderOptions {
         let kind = match e.name.as_str() {
             "perspective" => CameraKind::Perspective,
             "orthographic" => CameraKind::Orthographic,
+            "environment" => CameraKind::Environment,
+            "spherical" => CameraKind::Spherical(match p.string("mapping")?.as_deref() {
+                None | Some("equalarea") => SphericalMapping::EqualArea,
+                Some("equirectangular") => SphericalMapping::Equirectangular,
+                Some(m) => {
+                    let at = p.named("mapping").map_or(e.name_span, |q| q.value_span);
+                    let msg = format!(
+                        "spherical camera: unknown mapping \"{m}\" (expected \"equalarea\" or \"equirectangular\")"
+                    );
+                    return Err(Diagnostic::error(at, msg));
+                }
+            }),
             other => {
                 notes.push((e.name_span, format!("Camera \"{other}\""), Approx::Camera));
                 p.mark_all_used();
