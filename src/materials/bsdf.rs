@@ -4,7 +4,7 @@
 //! or transmission) the geometric normal says the pair is on. pbrt-v4's coated materials
 //! take the place of the lobes with their layered random walk (`layered`).
 
-use super::hair::HairBxdf;
+use super::fibre::HairBxdf;
 use super::layered::Layered;
 use super::lobes::{Kind, Lobe, MAX_LOBES};
 use super::transport::TransportMode;

@@ -25,6 +25,7 @@ pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
 pub mod diffusetransmission;
+pub mod fibre;
 pub mod hair;
 pub mod inputs;
 pub mod interface;
