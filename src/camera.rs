@@ -23,6 +23,7 @@
 //! spherical ones (pbrt has no importance for them either), so light paths never end
 //! on them.
 
+use crate::math::equal_area;
 use crate::math::ray::RayDifferential;
 use crate::math::{Point3, Ray, Vector3};
 use crate::scene::options::SphericalMapping;
@@ -112,7 +113,7 @@ impl Camera {
                 let (theta, phi) = (std::f64::consts::PI * v, 2.0 * std::f64::consts::PI * u);
                 DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
             }
-            SphericalMapping::EqualArea => equal_area_square_to_sphere(wrap_equal_area_square([u, v])),
+            SphericalMapping::EqualArea => equal_area::square_to_sphere(equal_area::wrap([u, v])),
         };
         DVec3::new(d.x, d.z, d.y)
     }
@@ -193,36 +194,6 @@ impl Camera {
     }
 }
 
-/// Clarberg's equal-area map of the unit square onto the sphere (pbrt-v4's
-/// `EqualAreaSquareToSphere`), +z at the square's centre.
-fn equal_area_square_to_sphere([px, py]: [f64; 2]) -> DVec3 {
-    let (u, v) = (2.0 * px - 1.0, 2.0 * py - 1.0);
-    let (up, vp) = (u.abs(), v.abs());
-    let signed_distance = 1.0 - (up + vp);
-    let r = 1.0 - signed_distance.abs();
-    let phi = (if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 }) * std::f64::consts::FRAC_PI_4;
-    let z = (1.0 - r * r).copysign(signed_distance);
-    let (cos_phi, sin_phi) = (phi.cos().copysign(u), phi.sin().copysign(v));
-    let s = r * (2.0 - r * r).max(0.0).sqrt();
-    DVec3::new(cos_phi * s, sin_phi * s, z)
-}
-
-/// Folds a point outside the unit square back onto it as the equal-area map's
-/// symmetries do (pbrt-v4's `WrapEqualAreaSquare`).
-fn wrap_equal_area_square([mut u, mut v]: [f64; 2]) -> [f64; 2] {
-    if u < 0.0 {
-        (u, v) = (-u, 1.0 - v);
-    } else if u > 1.0 {
-        (u, v) = (2.0 - u, 1.0 - v);
-    }
-    if v < 0.0 {
-        (u, v) = (1.0 - u, -v);
-    } else if v > 1.0 {
-        (u, v) = (1.0 - u, 2.0 - v);
-    }
-    [u, v]
-}
-
 /// Importance arriving at a scene point from a lens point (see [`Camera::sample_wi`]).
 #[derive(Clone, Copy, Debug)]
 pub struct CameraSample {
@@ -233,28 +204,4 @@ pub struct CameraSample {
     pub pdf: f32,
     pub p_lens: Vec3,
     pub raster: [f32; 2],
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_equal_area_square_covers_the_sphere_evenly() {
-        assert!((equal_area_square_to_sphere([0.5, 0.5]) - DVec3::Z).length() < 1e-12);
-        assert!((equal_area_square_to_sphere([0.0, 0.0]) + DVec3::Z).length() < 1e-12);
-        // Unit directions, and equal areas: a grid's cells split the upper hemisphere
-        // (the square's inner diamond) from the lower one half and half.
-        let n = 200;
-        let mut upper = 0;
-        for j in 0..n {
-            for i in 0..n {
-                let d = equal_area_square_to_sphere([(i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64]);
-                assert!((d.length() - 1.0).abs() < 1e-9);
-                upper += usize::from(d.z > 0.0);
-            }
-        }
-        assert!((upper as f64 / (n * n) as f64 - 0.5).abs() < 0.01, "{upper}");
-        assert_eq!(wrap_equal_area_square([-0.25, 0.25]), [0.25, 0.75]);
-    }
 }

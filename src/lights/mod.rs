@@ -1,6 +1,6 @@
 //! Light sources, one module per type, each owning its parameters (defaults per
 //! version, located errors), its sampling and evaluation, and its Mitsuba export:
-//! [`point`], [`spot`], [`distant`], [`infinite`] (with [`envmap`]) and the area light
+//! [`point`], [`spot`], [`goniometric`], [`distant`], [`infinite`] (with [`envmap`]) and the area light
 //! [`diffuse`]. [`REGISTRY`] is the one list of `LightSource` types.
 //!
 //! ```text
@@ -8,6 +8,7 @@
 //! LightSource "spot" "blackbody I" [5500 125] "point from" [0 5 9] "point to" [-5 2.75 0]
 //! LightSource "distant" "point3 from" [0 0 0] "point3 to" [0 0 1] "rgb L" [3 3 3] "float illuminance" 2
 //! LightSource "infinite" "rgb L" [.1 .1 .1]      # or "string mapname" (v3) / "filename" (v4)
+//! LightSource "goniometric" "rgb I" [1 1 1] "string mapname" "profile.exr"   # v4: filename
 //! AreaLightSource "diffuse" "rgb L" [4 4 4] "bool twosided" true "float power" 100   # v4 power
 //! ```
 //! Every light, through one dispatch ([`Light`]), can be sampled for direct lighting
@@ -24,6 +25,7 @@
 pub mod diffuse;
 pub mod distant;
 pub mod envmap;
+pub mod goniometric;
 pub mod infinite;
 pub mod params;
 pub mod point;
@@ -49,11 +51,12 @@ pub struct LightType {
 }
 
 /// Every `LightSource` type we render; any other is skipped with a warning.
-pub const REGISTRY: [LightType; 4] = [
+pub const REGISTRY: [LightType; 5] = [
     LightType { name: point::NAME, read: point::read },
     LightType { name: spot::NAME, read: spot::read },
     LightType { name: distant::NAME, read: distant::read },
     LightType { name: infinite::NAME, read: infinite::read },
+    LightType { name: goniometric::NAME, read: goniometric::read },
 ];
 
 /// A `LightSource` of type `ty`, or `None` for a type we do not render.
@@ -70,6 +73,7 @@ pub enum LightKind {
     Spot(spot::Spot),
     Distant(distant::Distant),
     Infinite(infinite::Infinite),
+    Goniometric(goniometric::Goniometric),
 }
 
 /// A `LightSource` of a supported type.
@@ -90,6 +94,7 @@ impl LightDesc {
             LightKind::Spot(_) => spot::NAME,
             LightKind::Distant(_) => distant::NAME,
             LightKind::Infinite(_) => infinite::NAME,
+            LightKind::Goniometric(_) => goniometric::NAME,
         }
     }
 
@@ -100,6 +105,7 @@ impl LightDesc {
             LightKind::Spot(l) => l.mitsuba(notes),
             LightKind::Distant(l) => l.mitsuba(),
             LightKind::Infinite(l) => l.mitsuba(&self.world_from_light, notes),
+            LightKind::Goniometric(l) => l.mitsuba(notes),
         }
     }
 }
@@ -111,6 +117,7 @@ pub enum Light {
     Spot(spot::SpotLight),
     Distant(distant::DistantLight),
     Infinite(infinite::InfiniteLight),
+    Goniometric(goniometric::GoniometricLight),
     Area(AreaLight),
 }
 
@@ -161,11 +168,12 @@ impl Light {
             LightKind::Spot(l) => Light::Spot(spot::SpotLight::new(l)),
             LightKind::Distant(l) => Light::Distant(distant::DistantLight::new(l)),
             LightKind::Infinite(l) => Light::Infinite(infinite::InfiniteLight::new(l)),
+            LightKind::Goniometric(l) => Light::Goniometric(goniometric::GoniometricLight::new(l)),
         }
     }
 
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Point(_) | Light::Spot(_) | Light::Distant(_))
+        matches!(self, Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Distant(_))
     }
 
     /// Total emitted power, for choosing photon sources (luminance; in f64, so that a
@@ -175,6 +183,7 @@ impl Light {
         match self {
             Light::Point(l) => l.power(),
             Light::Spot(l) => l.power(),
+            Light::Goniometric(l) => l.power(),
             Light::Distant(l) => l.power(world),
             Light::Infinite(l) => l.power(world),
             Light::Area(l) => l.power(),
@@ -187,6 +196,7 @@ impl Light {
         match self {
             Light::Point(l) => l.sample_li(p),
             Light::Spot(l) => l.sample_li(p),
+            Light::Goniometric(l) => l.sample_li(p),
             Light::Distant(l) => Some(l.sample_li()),
             Light::Infinite(l) => l.sample_li(u),
             Light::Area(l) => l.sample_li(shapes, p, u),
@@ -200,7 +210,7 @@ impl Light {
         match self {
             Light::Infinite(l) => l.pdf_li(wi),
             Light::Area(l) => l.pdf_li(shapes, p, wi),
-            Light::Point(_) | Light::Spot(_) | Light::Distant(_) => 0.0,
+            Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Distant(_) => 0.0,
         }
     }
 
@@ -211,6 +221,7 @@ impl Light {
         match self {
             Light::Point(l) => Some(l.sample_le(u1)),
             Light::Spot(l) => Some(l.sample_le(u1)),
+            Light::Goniometric(l) => Some(l.sample_le(u1)),
             Light::Distant(l) => Some(l.sample_le(world, u1)),
             Light::Infinite(l) => l.sample_le(world, u1, u2),
             Light::Area(l) => l.sample_le(shapes, u1, u2),
@@ -226,6 +237,7 @@ impl Light {
         match self {
             Light::Point(l) => l.pdf_le(),
             Light::Spot(l) => l.pdf_le(ray.d.0),
+            Light::Goniometric(l) => l.pdf_le(),
             Light::Distant(l) => l.pdf_le(world),
             Light::Infinite(l) => l.pdf_le(world, ray.d.0),
             Light::Area(l) => l.pdf_le(shapes, ray.o.0, n, ray.d.0),

@@ -2,6 +2,7 @@
 //! propagation, bounds with pbrt's conservative slab test, rays and frames.
 
 pub mod bounds;
+pub mod equal_area;
 pub mod float;
 pub mod frame;
 pub mod ray;
