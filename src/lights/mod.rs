@@ -1,6 +1,7 @@
 //! Light sources, one module per type, each owning its parameters (defaults per
 //! version, located errors), its sampling and evaluation, and its Mitsuba export:
-//! [`point`], [`spot`], [`goniometric`], [`distant`], [`infinite`] (with [`envmap`]) and the area light
+//! [`point`], [`spot`], [`goniometric`], [`projection`], [`distant`], [`infinite`] (with
+//! [`envmap`]) and the area light
 //! [`diffuse`]. [`REGISTRY`] is the one list of `LightSource` types.
 //!
 //! ```text
@@ -9,6 +10,7 @@
 //! LightSource "distant" "point3 from" [0 0 0] "point3 to" [0 0 1] "rgb L" [3 3 3] "float illuminance" 2
 //! LightSource "infinite" "rgb L" [.1 .1 .1]      # or "string mapname" (v3) / "filename" (v4)
 //! LightSource "goniometric" "rgb I" [1 1 1] "string mapname" "profile.exr"   # v4: filename
+//! LightSource "projection" "rgb I" [1 1 1] "string mapname" "slide.exr" "float fov" 45
 //! AreaLightSource "diffuse" "rgb L" [4 4 4] "bool twosided" true "float power" 100   # v4 power
 //! ```
 //! Every light, through one dispatch ([`Light`]), can be sampled for direct lighting
@@ -29,6 +31,7 @@ pub mod goniometric;
 pub mod infinite;
 pub mod params;
 pub mod point;
+pub mod projection;
 pub mod spot;
 
 pub use diffuse::{AreaLight, AreaLightDesc};
@@ -51,12 +54,13 @@ pub struct LightType {
 }
 
 /// Every `LightSource` type we render; any other is skipped with a warning.
-pub const REGISTRY: [LightType; 5] = [
+pub const REGISTRY: [LightType; 6] = [
     LightType { name: point::NAME, read: point::read },
     LightType { name: spot::NAME, read: spot::read },
     LightType { name: distant::NAME, read: distant::read },
     LightType { name: infinite::NAME, read: infinite::read },
     LightType { name: goniometric::NAME, read: goniometric::read },
+    LightType { name: projection::NAME, read: projection::read },
 ];
 
 /// A `LightSource` of type `ty`, or `None` for a type we do not render.
@@ -74,6 +78,7 @@ pub enum LightKind {
     Distant(distant::Distant),
     Infinite(infinite::Infinite),
     Goniometric(goniometric::Goniometric),
+    Projection(projection::Projection),
 }
 
 /// A `LightSource` of a supported type.
@@ -95,6 +100,7 @@ impl LightDesc {
             LightKind::Distant(_) => distant::NAME,
             LightKind::Infinite(_) => infinite::NAME,
             LightKind::Goniometric(_) => goniometric::NAME,
+            LightKind::Projection(_) => projection::NAME,
         }
     }
 
@@ -106,6 +112,7 @@ impl LightDesc {
             LightKind::Distant(l) => l.mitsuba(),
             LightKind::Infinite(l) => l.mitsuba(&self.world_from_light, notes),
             LightKind::Goniometric(l) => l.mitsuba(notes),
+            LightKind::Projection(l) => l.mitsuba(notes),
         }
     }
 }
@@ -118,6 +125,7 @@ pub enum Light {
     Distant(distant::DistantLight),
     Infinite(infinite::InfiniteLight),
     Goniometric(goniometric::GoniometricLight),
+    Projection(projection::ProjectionLight),
     Area(AreaLight),
 }
 
@@ -169,11 +177,15 @@ impl Light {
             LightKind::Distant(l) => Light::Distant(distant::DistantLight::new(l)),
             LightKind::Infinite(l) => Light::Infinite(infinite::InfiniteLight::new(l)),
             LightKind::Goniometric(l) => Light::Goniometric(goniometric::GoniometricLight::new(l)),
+            LightKind::Projection(l) => Light::Projection(projection::ProjectionLight::new(l)),
         }
     }
 
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Distant(_))
+        matches!(
+            self,
+            Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Projection(_) | Light::Distant(_)
+        )
     }
 
     /// Total emitted power, for choosing photon sources (luminance; in f64, so that a
@@ -184,6 +196,7 @@ impl Light {
             Light::Point(l) => l.power(),
             Light::Spot(l) => l.power(),
             Light::Goniometric(l) => l.power(),
+            Light::Projection(l) => l.power(),
             Light::Distant(l) => l.power(world),
             Light::Infinite(l) => l.power(world),
             Light::Area(l) => l.power(),
@@ -197,6 +210,7 @@ impl Light {
             Light::Point(l) => l.sample_li(p),
             Light::Spot(l) => l.sample_li(p),
             Light::Goniometric(l) => l.sample_li(p),
+            Light::Projection(l) => l.sample_li(p),
             Light::Distant(l) => Some(l.sample_li()),
             Light::Infinite(l) => l.sample_li(u),
             Light::Area(l) => l.sample_li(shapes, p, u),
@@ -210,7 +224,7 @@ impl Light {
         match self {
             Light::Infinite(l) => l.pdf_li(wi),
             Light::Area(l) => l.pdf_li(shapes, p, wi),
-            Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Distant(_) => 0.0,
+            Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Projection(_) | Light::Distant(_) => 0.0,
         }
     }
 
@@ -222,6 +236,7 @@ impl Light {
             Light::Point(l) => Some(l.sample_le(u1)),
             Light::Spot(l) => Some(l.sample_le(u1)),
             Light::Goniometric(l) => Some(l.sample_le(u1)),
+            Light::Projection(l) => Some(l.sample_le(u1)),
             Light::Distant(l) => Some(l.sample_le(world, u1)),
             Light::Infinite(l) => l.sample_le(world, u1, u2),
             Light::Area(l) => l.sample_le(shapes, u1, u2),
@@ -238,6 +253,7 @@ impl Light {
             Light::Point(l) => l.pdf_le(),
             Light::Spot(l) => l.pdf_le(ray.d.0),
             Light::Goniometric(l) => l.pdf_le(),
+            Light::Projection(l) => l.pdf_le(ray.d.0),
             Light::Distant(l) => l.pdf_le(world),
             Light::Infinite(l) => l.pdf_le(world, ray.d.0),
             Light::Area(l) => l.pdf_le(shapes, ray.o.0, n, ray.d.0),

@@ -313,7 +313,9 @@ fn light_densities(pass: &Pass, light: &Light, ls: &crate::lights::LightSample, 
         Light::Area(_) => (ls.pdf as f64, n.dot(ls.wi).abs() as f64, pos * dir),
         Light::Infinite(_) => (ls.pdf as f64, 1.0, pos * dir),
         // Delta positions and directions: their densities cancel (taken as 1).
-        Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) => ((from - p).length_squared() as f64, 1.0, dir),
+        Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Projection(_) => {
+            ((from - p).length_squared() as f64, 1.0, dir)
+        }
         Light::Distant(_) => (1.0, 1.0, pos),
     }
 }
