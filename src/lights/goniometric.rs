@@ -75,7 +75,9 @@ pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Re
         }
     };
     let mut i = emission(p, "I", &ctx.spectra)?;
-    if let Some(w) = power(p)? {
+    if profile == Profile::EqualArea
+        && let Some(w) = power(p)?
+    {
         let mean = image.as_ref().map_or(1.0, |img| mean_of(img, profile));
         i *= w / (4.0 * PI * mean).max(1e-30);
     }

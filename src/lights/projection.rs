@@ -71,7 +71,7 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
         },
     };
     let tan_half = (fov.to_radians() / 2.0).tan();
-    let mut i = if v4 {
+    let i = if v4 {
         Vec3::splat(values::float(p, "scale", 1.0, Range::NonNegative)?)
     } else {
         emission(p, "I", &ctx.spectra)?
@@ -80,9 +80,8 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
     let light_from_world = flip * DMat3::from_mat4(*m).inverse();
     let mut light =
         Projection { position: m.transform_point3(DVec3::ZERO), light_from_world, i, image, tan_half, nearest: v4 };
-    if let (Some(w), true) = (power(p)?, v4) {
-        i *= w / light.unit_power().max(1e-30);
-        light.i = i;
+    if v4 && let Some(w) = power(p)? {
+        light.i *= w / light.unit_power().max(1e-30);
     }
     Ok(LightKind::Projection(light))
 }

@@ -283,7 +283,7 @@ fn lights_and_area_lights() {
     let s = scene(
         r#"WorldBegin
         LightSource "point" "rgb I" [1 1 1] "float bogus" 1
-        LightSource "goniometric" "string filename" "x.exr"
+        LightSource "laser" "string filename" "x.exr"
         AttributeBegin AreaLightSource "diffuse" "rgb L" [1 1 1] Shape "sphere" Shape "disk" AttributeEnd
         AttributeBegin AreaLightSource "projection" Shape "sphere" AttributeEnd
         Shape "sphere""#,
@@ -294,7 +294,7 @@ fn lights_and_area_lights() {
     assert_eq!(lit, [true, true, false, false]);
     assert_eq!(
         s.skipped.iter().map(|k| k.what.as_str()).collect::<Vec<_>>(),
-        ["LightSource \"goniometric\"", "AreaLightSource \"projection\""]
+        ["LightSource \"laser\"", "AreaLightSource \"projection\""]
     );
     let unused = s.warnings.iter().find(|w| w.message.contains("bogus")).expect("unused-parameter warning");
     assert_eq!((unused.line, unused.column), (2, 45));
