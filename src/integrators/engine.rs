@@ -5,6 +5,7 @@
 use super::adaptive::Chain;
 use super::error::RenderError;
 use super::plan::{Algorithm, Plan};
+use super::preview::Preview;
 use super::sppm::{PixelState, Sppm, Stats};
 use super::vcm::{Vcm, VcmSettings};
 use crate::render::RenderScene;
@@ -45,6 +46,12 @@ impl<'a> Engine<'a> {
         }
     }
 
+    /// The rendered window's width and height.
+    pub fn size(&self) -> (usize, usize) {
+        let [x0, x1, y0, y1] = self.scene().film.pixel_bounds;
+        ((x1 - x0) as usize, (y1 - y0) as usize)
+    }
+
     /// The counts of the iteration under way.
     pub fn live(&self) -> std::sync::Arc<super::report::Live> {
         match self {
@@ -53,10 +60,11 @@ impl<'a> Engine<'a> {
         }
     }
 
-    pub fn iterate(&mut self) {
+    /// One iteration; with a `preview`, provisional images part way through it.
+    pub fn iterate(&mut self, preview: Option<&mut Preview>) {
         match self {
-            Engine::Sppm(s) => s.iterate(),
-            Engine::Vcm(v) => v.iterate(),
+            Engine::Sppm(s) => s.iterate_showing(preview),
+            Engine::Vcm(v) => v.iterate_showing(preview),
         }
     }
 

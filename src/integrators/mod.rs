@@ -3,7 +3,7 @@
 //! through [`engine`]. [`grid`] is the photon (and light vertex) lookup grid,
 //! [`adaptive`] adaptive photon chains, [`plan`] what a run is asked and runs with, [`run`] the render loop, [`error`] what stops
 //! it, [`checkpoint`] saved and resumed state, [`passes`] independent passes, [`part`]
-//! shard files and their merge, [`report`] `ERRORS.csv` and progress. Data flows one
+//! shard files and their merge, [`report`] `ERRORS.csv` and progress, [`preview`] images inside a long iteration. Data flows one
 //! way: the render-ready scene (`render`) in, an image out.
 
 pub mod adaptive;
@@ -14,6 +14,7 @@ pub mod grid;
 pub mod part;
 pub mod passes;
 pub mod plan;
+pub mod preview;
 pub mod report;
 pub mod run;
 pub mod sppm;

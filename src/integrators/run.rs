@@ -7,6 +7,7 @@ use super::engine::Engine;
 use super::error::RenderError;
 use super::passes::PassSet;
 pub use super::plan::{Algorithm, MIN_RADIUS, Plan, RenderSettings};
+use super::preview::Preview;
 use super::report::{ErrorRow, progress_bar};
 use crate::imageio::{ImageMeta, RgbImage, metrics, write_image};
 use crate::render::RenderScene;
@@ -120,6 +121,7 @@ pub fn run(
         engine.restore(c.iteration, &c.pixels, c.chains, c.stats)?;
         (progress.prior, progress.errors, progress.saved.0) = (c.seconds, c.errors, c.iteration);
     }
+    let mut took = None;
     let interrupted = loop {
         if monitor.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
             break true;
@@ -128,13 +130,15 @@ pub fn run(
         if engine.iteration() >= plan.range.end || (engine.passes_done() > 0 && over_time) {
             break false;
         }
-        iterate(&mut engine, monitor, plan, &progress);
+        let start = Instant::now();
+        iterate(&mut engine, monitor, plan, &progress, took.is_none_or(|t: f64| t >= LONG_ITERATION));
+        took = Some(start.elapsed().as_secs_f64());
         after_iteration(&engine, monitor, plan, &mut progress);
     };
     if monitor.progress {
         eprintln!();
     }
-    show(&engine, monitor, true);
+    show(monitor, engine.size(), &|| engine.image(), true);
     if let Some(t) = &monitor.checkpoint
         && progress.saved.0 != engine.iteration()
     {
@@ -150,11 +154,19 @@ pub fn run(
     Ok(RenderOutput { image, stats, errors: progress.errors, seconds, interrupted, passes, pass_sums })
 }
 
+/// An iteration at least this long (seconds) is shown in tev while it runs.
+const LONG_ITERATION: f64 = 1.0;
+
 /// One iteration; with a progress bar, a thread redraws it every half second while the
-/// iteration runs longer than one (camera paths and photons done so far).
-fn iterate(engine: &mut Engine, monitor: &Monitor, plan: &Plan, progress: &Progress) {
+/// iteration runs longer than one (camera paths and photons done so far). With
+/// `--display-server` and a `long` iteration expected (the run's first, or after one
+/// that took [`LONG_ITERATION`]), tev is shown provisional images as it goes.
+fn iterate(engine: &mut Engine, monitor: &Monitor, plan: &Plan, progress: &Progress, long: bool) {
+    let size = engine.size();
+    let mut preview = |image: &dyn Fn() -> Vec<[f32; 3]>| show(monitor, size, image, false);
+    let preview = (monitor.display.is_some() && long).then_some(&mut preview as &mut Preview);
     if !monitor.progress {
-        return engine.iterate();
+        return engine.iterate(preview);
     }
     let (live, done) = (engine.live(), std::sync::atomic::AtomicBool::new(false));
     let totals = (engine.pixel_count() as u64, plan.photons);
@@ -170,20 +182,18 @@ fn iterate(engine: &mut Engine, monitor: &Monitor, plan: &Plan, progress: &Progr
                 }
             }
         });
-        engine.iterate();
+        engine.iterate(preview);
         done.store(true, Ordering::Relaxed);
     });
 }
 
-/// The image in tev (`--display-server`): after iterations at most four times a second,
-/// and `last` at the end.
-fn show(engine: &Engine, monitor: &Monitor, last: bool) {
+/// An image in tev (`--display-server`): at most four times a second, and `last` (the
+/// final image) always.
+fn show(monitor: &Monitor, size: (usize, usize), image: &dyn Fn() -> Vec<[f32; 3]>, last: bool) {
     if let Some(d) = &monitor.display
         && let Ok(mut tev) = d.lock()
     {
-        let [x0, x1, y0, y1] = engine.scene().film.pixel_bounds;
-        let size = ((x1 - x0) as usize, (y1 - y0) as usize);
-        tev.show_now_and_then(|| engine.image(), size, last);
+        tev.show_now_and_then(image, size, last);
     }
 }
 
@@ -209,7 +219,7 @@ fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &m
     if let Some(Observer(tell)) = &monitor.observer {
         tell(IterationDone { done: engine.passes_done(), planned: plan.range.len() as u32, seconds });
     }
-    show(engine, monitor, false);
+    show(monitor, engine.size(), &|| engine.image(), false);
     if let Some(path) = &monitor.partial_images
         && engine.passes_done().is_power_of_two()
         && let image = image(engine, plan.photons, seconds)

@@ -18,6 +18,7 @@ use super::adaptive::{self, Chain, Deposit, PhotonCounts, PhotonSampling};
 use super::error::RenderError;
 use super::grid::{Grid, Grouped, Site};
 use super::passes::{self, PassMode};
+use super::preview::{self, Preview};
 use super::volume::{self, MediumPoint};
 use crate::fixes::Fix;
 use crate::interaction::Footprint;
@@ -32,10 +33,14 @@ use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash};
 use crate::spectrum::{Rgb, luminance};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
+use std::ops::Range;
 use std::time::Instant;
 
 const GAMMA: f64 = 2.0 / 3.0;
 const PHOTON_CHUNK: usize = 1024;
+/// The most photon chunks traced before their deposits are summed: a bound on the
+/// memory deposits hold (f16-11b at 10⁶ photons held 440 MB of them at once).
+const DEPOSIT_BAND: usize = 256;
 /// Pixel ranges photon deposits are grouped into for the parallel reduction.
 const DEPOSIT_RANGES: usize = 64;
 /// Interfaces crossed by one path before it is abandoned (guards against loops).
@@ -227,18 +232,30 @@ impl<'a> Sppm<'a> {
 
     /// One full iteration: camera pass, grid, photons, update.
     pub fn iterate(&mut self) {
+        self.iterate_showing(None)
+    }
+
+    /// One iteration, offering `preview` provisional images as it goes (see
+    /// [`super::preview`]); the image it ends with is the same either way.
+    pub fn iterate_showing(&mut self, mut preview: Option<&mut Preview>) {
         let t = Instant::now();
         self.live.reset();
         if let PassMode::Independent { alpha } = self.passes {
             let r = passes::radius(self.r1, alpha, self.iteration);
             self.pixels.par_iter_mut().for_each(|p| p.radius = r);
         }
-        self.camera_pass();
+        let n = self.pixels.len();
+        for band in preview::bands(n, 4 * super::PIXELS_PER_TASK, usize::MAX, preview.is_some()) {
+            self.camera_pass(band.clone());
+            if let Some(show) = preview.as_mut() {
+                show(&|| self.provisional(band.end, None));
+            }
+        }
         let t1 = Instant::now();
         self.stats.visible_points += self.pixels.iter().filter(|p| p.vp.is_some()).count() as u64;
         let grid = Grid::build(&self.sites());
         let t2 = Instant::now();
-        let (phi, m) = self.photon_pass(grid.as_ref());
+        let (phi, m) = self.photon_pass(grid.as_ref(), preview);
         let t3 = Instant::now();
         self.update(&phi, &m);
         let t4 = Instant::now();
@@ -248,18 +265,20 @@ impl<'a> Sppm<'a> {
         s.grid_seconds += (t2 - t1).as_secs_f64();
         s.photon_seconds += (t3 - t2).as_secs_f64();
         s.update_seconds += (t4 - t3).as_secs_f64();
-        s.camera_rays += self.pixels.len() as u64;
+        s.camera_rays += n as u64;
         s.iterations = self.iteration;
     }
 
-    /// Phase 1: trace one camera path per pixel to its first diffuse vertex, adding
-    /// emitted and directly reflected light on the way.
-    fn camera_pass(&mut self) {
+    /// Phase 1, for the pixels in `band`: trace one camera path per pixel to its first
+    /// diffuse vertex, adding emitted and directly reflected light on the way.
+    fn camera_pass(&mut self, band: Range<usize>) {
         let (scene, width, origin, iter, seed, max_depth) =
             (self.scene, self.width, self.origin, self.iteration, self.seed, self.max_depth);
         let (diff_scale, kind, live) = (self.differential_scale, self.sampler, &self.live);
-        self.pixels.par_iter_mut().enumerate().with_max_len(super::PIXELS_PER_TASK).for_each(|(i, px)| {
-            if i % 256 == 0 {
+        let first = band.start;
+        self.pixels[band].par_iter_mut().enumerate().with_max_len(super::PIXELS_PER_TASK).for_each(|(i, px)| {
+            let i = first + i;
+            if i.is_multiple_of(256) {
                 live.add_camera(256);
             }
             let (x, y) = (origin.0 as usize + i % width, origin.1 as usize + i / width);
@@ -280,35 +299,47 @@ impl<'a> Sppm<'a> {
         });
     }
 
-    /// Phase 3: trace photons; returns per-pixel flux Φ and photon counts M.
-    fn photon_pass(&mut self, grid: Option<&Grid>) -> (Vec<DVec3>, Vec<u64>) {
+    /// Phase 3: trace photons; returns per-pixel flux Φ and photon counts M. Uniform
+    /// photons run in bands of chunks when a preview is wanted; the deposits are summed
+    /// band after band, which is the order one sum of them all takes.
+    fn photon_pass(&mut self, grid: Option<&Grid>, mut preview: Option<&mut Preview>) -> (Vec<DVec3>, Vec<u64>) {
         let n = self.pixels.len();
-        let (phi, m) = (vec![DVec3::ZERO; n], vec![0u64; n]);
+        let (mut phi, mut m) = (vec![DVec3::ZERO; n], vec![0u64; n]);
         let Some(grid) = grid else { return (phi, m) };
         if self.scene.photon_sources.is_empty() {
             return (phi, m);
         }
-        let (scene, pixels, max_depth) = (self.scene, &self.pixels, self.max_depth);
-        let trace = |s: &mut adaptive::PrimarySample, out: &mut Vec<Deposit>| {
-            let path = trace_photon(scene, grid, pixels, s, max_depth, out);
-            (path.hits, path.near)
-        };
-        let (deposits, weight, counts) = match &mut self.chains {
-            Some(chains) => adaptive::pass(chains, self.photons_per_iteration, &trace),
-            None => self.uniform_photons(grid),
-        };
-        self.stats.photons = self.stats.photons.plus(counts);
-        sum_deposits(deposits, weight as f64 * self.scene.photon_scale, phi, m)
+        let w = self.scene.photon_scale;
+        if let Some(chains) = &mut self.chains {
+            let (scene, pixels, max_depth) = (self.scene, &self.pixels, self.max_depth);
+            let trace = |s: &mut adaptive::PrimarySample, out: &mut Vec<Deposit>| {
+                let path = trace_photon(scene, grid, pixels, s, max_depth, out);
+                (path.hits, path.near)
+            };
+            let (deposits, weight, counts) = adaptive::pass(chains, self.photons_per_iteration, &trace);
+            self.stats.photons = self.stats.photons.plus(counts);
+            return sum_deposits(deposits, weight as f64 * w, phi, m);
+        }
+        let chunks = self.photons_per_iteration.div_ceil(PHOTON_CHUNK as u64) as usize;
+        for band in preview::bands(chunks, 8, DEPOSIT_BAND, preview.is_some()) {
+            let (deposits, counts) = self.uniform_photons(grid, band.start as u64..band.end as u64);
+            self.stats.photons = self.stats.photons.plus(counts);
+            (phi, m) = sum_deposits(deposits, w, phi, m);
+            if let Some(show) = preview.as_mut() {
+                let done = band.end as f64 / chunks as f64;
+                show(&|| self.provisional(n, Some((&phi, done))));
+            }
+        }
+        (phi, m)
     }
 
-    /// Independent photons, in chunks of a fixed size; each chunk's deposits in
-    /// photon order.
-    fn uniform_photons(&self, grid: &Grid) -> (Vec<Vec<Deposit>>, f32, PhotonCounts) {
+    /// Independent photons of the chunks in `chunks` (of a fixed size); each chunk's
+    /// deposits in photon order.
+    fn uniform_photons(&self, grid: &Grid, chunks: Range<u64>) -> (Vec<Vec<Deposit>>, PhotonCounts) {
         let (scene, pixels, iter, seed, max_depth) =
             (self.scene, &self.pixels, self.iteration as u64, self.seed, self.max_depth);
         let total = self.photons_per_iteration;
-        let chunks = total.div_ceil(PHOTON_CHUNK as u64);
-        let results: Vec<(Vec<Deposit>, PhotonCounts)> = (0..chunks)
+        let results: Vec<(Vec<Deposit>, PhotonCounts)> = chunks
             .into_par_iter()
             .map(|c| {
                 let (mut out, mut n) = (Vec::new(), PhotonCounts::default());
@@ -330,7 +361,7 @@ impl<'a> Sppm<'a> {
             })
             .collect();
         let counts = results.iter().fold(PhotonCounts::default(), |a, r| a.plus(r.1));
-        (results.into_iter().map(|r| r.0).collect(), 1.0, counts)
+        (results.into_iter().map(|r| r.0).collect(), counts)
     }
 
     /// Where photons are gathered: each pixel's visible point, if it can reflect.
@@ -389,6 +420,35 @@ impl<'a> Sppm<'a> {
                 (l * scale).as_vec3().to_array()
             })
             .collect()
+    }
+
+    /// The image part way through an iteration: the first `camera_done` pixels with this
+    /// iteration's direct light, the rest as they were; indirect light as it was, or,
+    /// once `photons` (Φ so far and the share of the iteration's photons traced) are
+    /// given, blended with this iteration's estimate from them, scaled up to the whole.
+    fn provisional(&self, camera_done: usize, photons: Option<(&[DVec3], f64)>) -> Vec<[f32; 3]> {
+        let independent = self.passes.is_independent();
+        let k = if independent { self.passes_done() } else { self.iteration } as f64;
+        let np = self.photons_per_iteration.max(1) as f64;
+        let scale = self.scene.film.scale as f64;
+        let area = |p: &Pixel| std::f64::consts::PI * p.radius * p.radius;
+        let pixel = |(i, p): (usize, &Pixel)| {
+            let old = match (k > 0.0, independent) {
+                (false, _) => DVec3::ZERO,
+                (true, true) => p.tau / (np * k),
+                (true, false) => p.tau / (k * np * area(p)),
+            };
+            let indirect = match photons {
+                Some((phi, share)) => {
+                    let beta = p.vp.as_ref().map_or(DVec3::ZERO, |vp| vp.beta.as_dvec3());
+                    (old * k + beta * phi[i] / (share * np * area(p))) / (k + 1.0)
+                }
+                None => old,
+            };
+            let ld = p.ld / if i < camera_done { k + 1.0 } else { k.max(1.0) };
+            ((ld + indirect) * scale).as_vec3().to_array()
+        };
+        self.pixels.par_iter().enumerate().map(pixel).collect()
     }
 
     /// With independent passes, the sum of the passes' estimates Ld + τ/P per pixel,

@@ -235,6 +235,12 @@ impl<'a> Vcm<'a> {
 
     /// One pass: light subpaths, the grid of their vertices, camera subpaths, splats.
     pub fn iterate(&mut self) {
+        self.iterate_showing(None)
+    }
+
+    /// One pass, offering `preview` provisional images between bands of camera
+    /// subpaths (see [`super::preview`]); the image it ends with is the same either way.
+    pub fn iterate_showing(&mut self, mut preview: Option<&mut super::preview::Preview>) {
         let t0 = Instant::now();
         self.live.reset();
         let pass = self.pass();
@@ -261,12 +267,19 @@ impl<'a> Vcm<'a> {
             differential_scale: self.differential_scale,
         };
         let (width, live) = (self.size.0, &self.live);
-        self.sums.par_iter_mut().enumerate().with_max_len(crate::integrators::PIXELS_PER_TASK).for_each(|(i, s)| {
-            if i % 256 == 0 {
-                live.add_camera(256);
+        let tasks = crate::integrators::PIXELS_PER_TASK;
+        for band in super::preview::bands(self.sums.len(), 4 * tasks, usize::MAX, preview.is_some()) {
+            let first = band.start;
+            self.sums[band.clone()].par_iter_mut().enumerate().with_max_len(tasks).for_each(|(i, s)| {
+                if (first + i) % 256 == 0 {
+                    live.add_camera(256);
+                }
+                *s += cams.pixel(first + i, width).as_dvec3();
+            });
+            if let Some(show) = preview.as_mut() {
+                show(&|| self.provisional(band.end));
             }
-            *s += cams.pixel(i, width).as_dvec3();
-        });
+        }
         let t3 = Instant::now();
         let scale = self.scene.photon_scale;
         add_splats(&mut self.sums, lights.splats, scale);
@@ -312,6 +325,16 @@ impl<'a> Vcm<'a> {
         let k = self.passes_done().max(1) as f64;
         let scale = self.scene.film.scale as f64;
         self.sums.iter().map(|s| (*s * scale / k).as_vec3().to_array()).collect()
+    }
+
+    /// The image part way through a pass: the first `camera_done` pixels with this
+    /// pass's camera subpaths (its light tracing is added when the pass ends), the rest
+    /// as they were.
+    fn provisional(&self, camera_done: usize) -> Vec<[f32; 3]> {
+        let k = self.passes_done() as f64;
+        let scale = self.scene.film.scale as f64;
+        let pixel = |(i, s): (usize, &DVec3)| *s * scale / if i < camera_done { k + 1.0 } else { k.max(1.0) };
+        self.sums.par_iter().enumerate().map(|p| pixel(p).as_vec3().to_array()).collect()
     }
 
     /// The sum of the passes' estimates per pixel, times the film's scale (what a shard
