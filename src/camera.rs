@@ -23,6 +23,7 @@
 //! spherical ones (pbrt has no importance for them either), so light paths never end
 //! on them.
 
+use crate::math::animated::AnimatedTransform;
 use crate::math::equal_area;
 use crate::math::ray::RayDifferential;
 use crate::math::{Point3, Ray, Vector3};
@@ -35,7 +36,10 @@ use glam::{DMat4, DVec3};
 #[derive(Clone, Debug)]
 pub struct Camera {
     kind: CameraKind,
+    /// At the start of the shutter; `motion` has it over time when the camera moves.
     world_from_camera: DMat4,
+    motion: Option<AnimatedTransform>,
+    shutter: [f32; 2],
     /// Screen window [x0, x1, y0, y1] and the full film resolution.
     window: [f32; 4],
     resolution: [f32; 2],
@@ -49,12 +53,38 @@ impl Camera {
         Camera {
             kind: desc.kind,
             world_from_camera: desc.camera_from_world.inverse(),
+            motion: desc.camera_from_world_end.map(|(end, times)| {
+                let frame = desc.world_from_render;
+                AnimatedTransform::framed(
+                    desc.camera_from_world.inverse(),
+                    end.inverse(),
+                    times,
+                    frame,
+                    DMat4::IDENTITY,
+                )
+            }),
+            shutter: [desc.shutter_open, desc.shutter_close],
             window: desc.screen_window,
             resolution: [film.x_resolution as f32, film.y_resolution as f32],
             tan_half_fov: (desc.fov.to_radians() / 2.0).tan(),
             lens_radius: desc.lens_radius,
             focal_distance: desc.focal_distance,
         }
+    }
+
+    /// Whether the camera moves while the shutter is open.
+    pub fn moves(&self) -> bool {
+        self.motion.is_some()
+    }
+
+    /// A ray's time for a sample `u` in [0, 1): within the shutter (pbrt's lerp).
+    pub fn time(&self, u: f32) -> f32 {
+        self.shutter[0] + (self.shutter[1] - self.shutter[0]) * u
+    }
+
+    /// World-from-camera at `time`.
+    fn world_from_camera_at(&self, time: f32) -> DMat4 {
+        self.motion.as_ref().map_or(self.world_from_camera, |m| m.at(time as f64))
     }
 
     /// The screen-space point of a raster position.
@@ -70,16 +100,22 @@ impl Camera {
         p_raster: [f32; 2],
         u_lens: [f32; 2],
         scale: f32,
+        time: f32,
     ) -> (Ray, RayDifferential) {
-        let ray = self.generate_ray(p_raster, u_lens);
-        let rx = self.generate_ray([p_raster[0] + 1.0, p_raster[1]], u_lens);
-        let ry = self.generate_ray([p_raster[0], p_raster[1] + 1.0], u_lens);
+        let ray = self.generate_ray_at(p_raster, u_lens, time);
+        let rx = self.generate_ray_at([p_raster[0] + 1.0, p_raster[1]], u_lens, time);
+        let ry = self.generate_ray_at([p_raster[0], p_raster[1] + 1.0], u_lens, time);
         (ray, RayDifferential { rx, ry }.scaled(&ray, scale))
     }
 
-    /// A world-space ray through raster position `p_raster`; `u_lens` picks the lens
-    /// point (ignored for a pinhole). Directions are unit length.
+    /// A world-space ray through raster position `p_raster` at time 0; `u_lens` picks
+    /// the lens point (ignored for a pinhole). Directions are unit length.
     pub fn generate_ray(&self, p_raster: [f32; 2], u_lens: [f32; 2]) -> Ray {
+        self.generate_ray_at(p_raster, u_lens, 0.0)
+    }
+
+    /// As [`Camera::generate_ray`], at `time` (where a moving camera then is).
+    pub fn generate_ray_at(&self, p_raster: [f32; 2], u_lens: [f32; 2], time: f32) -> Ray {
         let [sx, sy] = self.screen(p_raster);
         let (mut o, mut d) = match self.kind {
             CameraKind::Perspective => (
@@ -98,9 +134,10 @@ impl Camera {
             o = DVec3::new(o.x + lens.x, o.y + lens.y, 0.0);
             d = (focus - o).normalize();
         }
-        let ow = self.world_from_camera.transform_point3(o);
-        let dw = self.world_from_camera.transform_vector3(d).normalize();
-        Ray::new(Point3(ow.as_vec3()), Vector3(dw.as_vec3()))
+        let world_from_camera = self.world_from_camera_at(time);
+        let ow = world_from_camera.transform_point3(o);
+        let dw = world_from_camera.transform_vector3(d).normalize();
+        Ray::new(Point3(ow.as_vec3()), Vector3(dw.as_vec3())).at_time(time)
     }
 
     /// The camera-space direction of a raster point on a spherical camera: the film's
@@ -136,7 +173,7 @@ impl Camera {
         if self.kind != CameraKind::Perspective {
             return None;
         }
-        let camera_from_world = self.world_from_camera.inverse();
+        let camera_from_world = self.world_from_camera_at(ray.time).inverse();
         let d = camera_from_world.transform_vector3(ray.d.0.as_dvec3()).normalize();
         if d.z <= 0.0 {
             return None;
@@ -165,19 +202,21 @@ impl Camera {
 
     /// A point on the lens seen from the scene point `p`: the unit direction from `p`
     /// to it, the importance arriving there, the solid-angle density at `p`, the lens
-    /// point and the raster point (pbrt-v3's `Sample_Wi`).
-    pub fn sample_wi(&self, p: Vec3, u: [f32; 2]) -> Option<CameraSample> {
+    /// point and the raster point (pbrt-v3's `Sample_Wi`), with the camera where it is
+    /// at `time`.
+    pub fn sample_wi(&self, p: Vec3, u: [f32; 2], time: f32) -> Option<CameraSample> {
         let lens = self.lens_radius * crate::sampling::concentric_disk(u);
         let on_lens = DVec3::new(lens.x as f64, lens.y as f64, 0.0);
-        let p_lens = self.world_from_camera.transform_point3(on_lens).as_vec3();
+        let world_from_camera = self.world_from_camera_at(time);
+        let p_lens = world_from_camera.transform_point3(on_lens).as_vec3();
         let to_lens = p_lens - p;
         let dist2 = to_lens.length_squared();
         if dist2 == 0.0 {
             return None;
         }
         let wi = to_lens / dist2.sqrt();
-        let (we, raster) = self.we(&Ray::new(Point3(p_lens), Vector3(-wi)))?;
-        let axis = self.world_from_camera.transform_vector3(DVec3::Z).normalize().as_vec3();
+        let (we, raster) = self.we(&Ray::new(Point3(p_lens), Vector3(-wi)).at_time(time))?;
+        let axis = world_from_camera.transform_vector3(DVec3::Z).normalize().as_vec3();
         let pdf = dist2 / (axis.dot(wi).abs() * self.lens_area());
         Some(CameraSample { wi, we, pdf, p_lens, raster })
     }

@@ -38,6 +38,8 @@ pub struct SurfaceInteraction {
     pub dndu: Normal3,
     pub dndv: Normal3,
     pub shading: Shading,
+    /// The time of the ray that found it (motion blur); rays spawned here carry it.
+    pub time: f32,
 }
 
 /// The origin for a ray leaving `p` in direction `w`.
@@ -74,13 +76,13 @@ pub fn light_sample_point(v4: bool, p: Point3, p_error: Vec3, n: Normal3, sides:
 
 impl SurfaceInteraction {
     pub fn spawn_ray(&self, d: Vector3) -> Ray {
-        Ray::new(offset_ray_origin(self.p, self.p_error, self.n, d), d)
+        Ray::new(offset_ray_origin(self.p, self.p_error, self.n, d), d).at_time(self.time)
     }
 
     /// A ray from here to `p2` with `t_max` just short of it.
     pub fn spawn_ray_to(&self, p2: Point3) -> Ray {
         let o = offset_ray_origin(self.p, self.p_error, self.n, p2 - self.p);
-        Ray { o, d: p2 - o, t_max: 1.0 - SHADOW_EPSILON }
+        Ray { o, d: p2 - o, t_max: 1.0 - SHADOW_EPSILON, time: self.time }
     }
 
     /// The interaction seen through the f64 affine map `m` (instance to world).
@@ -124,6 +126,7 @@ impl SurfaceInteraction {
                 dndu: nrm(self.shading.dndu),
                 dndv: nrm(self.shading.dndv),
             },
+            time: self.time,
         }
     }
 }

@@ -82,6 +82,9 @@ pub struct RenderScene {
     /// Whether shading uses a pixel's footprint (bump maps, noise textures): camera
     /// rays then carry differentials.
     pub needs_differentials: bool,
+    /// Whether anything moves while the shutter is open (a shape, an instance or the
+    /// camera): camera rays, photons and light subpaths then draw a time.
+    pub motion: bool,
     /// Per world shape (by `check --shapes` index): its emission, if it emits.
     pub emitters: Vec<Option<EmitterInfo>>,
     pub lights: Vec<Light>,
@@ -174,6 +177,7 @@ impl RenderScene {
             fixes: if bidirectional { scene.fixes.with(Fix::ShapeSampling) } else { scene.fixes },
             syntax: scene.syntax,
             needs_differentials,
+            motion: scene.camera.camera_from_world_end.is_some() || scene.instances.iter().any(|i| i.motion.is_some()),
             emitters,
             lights,
             light_power,

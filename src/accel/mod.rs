@@ -10,6 +10,7 @@ pub use bvh::{Avx, Bvh, Isa, Leaf, Sse};
 use leaves::LeafBlocks;
 
 use crate::interaction::SurfaceInteraction;
+use crate::math::animated::AnimatedTransform;
 use crate::math::float::gamma;
 use crate::math::{Bounds3, Point3, Ray, Vector3};
 use crate::scene::{Geometry as ShapeGeometry, SceneDescription, ShapeDesc};
@@ -61,6 +62,26 @@ pub struct Instance {
     first_shape_index: u32,
     /// The instance's position among the scene's `ObjectInstance`s.
     pub index: u32,
+    /// Its motion, when its transform is animated (then the maps above are its start).
+    motion: Option<Box<AnimatedTransform>>,
+}
+
+impl Instance {
+    /// Instance-from-render at `time`.
+    fn instance_from_render_at(&self, time: f32) -> std::borrow::Cow<'_, DMat4> {
+        match &self.motion {
+            None => std::borrow::Cow::Borrowed(&self.instance_from_render),
+            Some(m) => std::borrow::Cow::Owned(m.at(time as f64).inverse()),
+        }
+    }
+
+    /// Render-from-instance at `time`.
+    fn render_from_instance_at(&self, time: f32) -> std::borrow::Cow<'_, DMat4> {
+        match &self.motion {
+            None => std::borrow::Cow::Borrowed(&self.render_from_instance),
+            Some(m) => std::borrow::Cow::Owned(m.at(time as f64)),
+        }
+    }
 }
 
 /// The closest hit of a ray.
@@ -73,6 +94,8 @@ pub struct Hit {
     pub shape_index: u32,
     /// Index into [`Geometry::instances`].
     pub instance: Option<u32>,
+    /// The ray's time (where a moving instance was when hit).
+    pub time: f32,
 }
 
 /// Everything rays can hit.
@@ -354,7 +377,7 @@ fn instance_ray(instance_from_render: &DMat4, r: &Ray) -> (Ray, f32) {
     let o_err = gamma(2) * o32.abs() + (o - o32.as_dvec3()).abs().as_vec3();
     let len2 = d.length_squared();
     let dt = if len2 > 0.0 { d.abs().dot(o_err) / len2 } else { 0.0 };
-    (Ray { o: Point3(o32 + d * dt), d: Vector3(d), t_max: r.t_max - dt }, dt)
+    (Ray { o: Point3(o32 + d * dt), d: Vector3(d), t_max: r.t_max - dt, time: r.time }, dt)
 }
 
 /// Render-space bounds of an object's bounds under an instance map, widened a little.
@@ -411,12 +434,16 @@ impl Geometry {
                     object: i.object,
                     first_shape_index,
                     index: k as u32,
+                    motion: i.motion.clone().map(Box::new),
                 }
             })
             .collect();
         let bounds: Vec<Bounds3> = instances
             .iter()
-            .map(|i| instance_bounds(&i.render_from_instance, objects[i.object as usize].bvh.bounds()))
+            .map(|i| {
+                let b = objects[i.object as usize].bvh.bounds();
+                i.motion.as_ref().map_or_else(|| instance_bounds(&i.render_from_instance, b), |m| m.motion_bounds(b))
+            })
             .collect();
         let (tlas, order) = Bvh::build(&bounds, |_| INSTANCE_COST);
         instances = order.iter().map(|&k| instances[k as usize].clone()).collect();
@@ -440,14 +467,15 @@ impl Geometry {
         let mut t_max = ray.t_max;
         if let Some((t, shape, local)) = self.world.intersect(self, ray, t_max) {
             t_max = t;
-            best = Some(Hit { t, local, shape_index: shape, instance: None });
+            best = Some(Hit { t, local, shape_index: shape, instance: None, time: ray.time });
         }
         self.tlas.intersect(ray, t_max, |k, t_max| {
             let inst = &self.instances[k];
-            let (r, dt) = instance_ray(&inst.instance_from_render, ray);
+            let (r, dt) = instance_ray(&inst.instance_from_render_at(ray.time), ray);
             let (t, shape, local) = self.objects[inst.object as usize].intersect(self, &r, t_max - dt)?;
             let t = t + dt;
-            best = Some(Hit { t, local, shape_index: inst.first_shape_index + shape, instance: Some(k as u32) });
+            let shape_index = inst.first_shape_index + shape;
+            best = Some(Hit { t, local, shape_index, instance: Some(k as u32), time: ray.time });
             Some(t)
         });
         best
@@ -460,17 +488,18 @@ impl Geometry {
         }
         self.tlas.intersect_p(ray, ray.t_max, |k, t_max| {
             let inst = &self.instances[k];
-            let (r, dt) = instance_ray(&inst.instance_from_render, ray);
+            let (r, dt) = instance_ray(&inst.instance_from_render_at(ray.time), ray);
             self.objects[inst.object as usize].intersect_p(self, &r, t_max - dt)
         })
     }
 
     /// The full interaction of a hit, in render space.
     pub fn interaction(&self, hit: &Hit) -> SurfaceInteraction {
-        let si = self.shapes.interaction(&hit.local);
+        let si = SurfaceInteraction { time: hit.time, ..self.shapes.interaction(&hit.local) };
         match hit.instance {
             Some(k) => {
-                SurfaceInteraction { t: hit.t, ..si.transformed_f64(&self.instances[k as usize].render_from_instance) }
+                let m = self.instances[k as usize].render_from_instance_at(hit.time);
+                SurfaceInteraction { t: hit.t, ..si.transformed_f64(&m) }
             }
             None => si,
         }

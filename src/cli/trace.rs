@@ -123,7 +123,7 @@ pub fn query(o: [f32; 3], d: [f32; 3], t_max: f32) -> Result<Ray, String> {
     if d == [0.0; 3] || !o.iter().chain(&d).all(|x| x.is_finite()) || t_max.is_nan() {
         return Err("the origin and direction must be finite and the direction nonzero".into());
     }
-    Ok(Ray { o: Point3::new(o[0], o[1], o[2]), d: Vector3::new(d[0], d[1], d[2]), t_max })
+    Ok(Ray { o: Point3::new(o[0], o[1], o[2]), d: Vector3::new(d[0], d[1], d[2]), t_max, time: 0.0 })
 }
 
 /// A ray's first hit as `trace` reports it (see the module docs for each field).

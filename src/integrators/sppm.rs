@@ -519,13 +519,15 @@ pub(super) fn camera_ray(
 ) -> (crate::math::Ray, Option<crate::math::ray::RayDifferential>) {
     let u = sampler.get2d();
     let (p_raster, u_lens) = ([pixel[0] + u[0], pixel[1] + u[1]], sampler.get2d());
+    // Only scenes with motion draw a time, so that others keep their sample sequence.
+    let time = if scene.motion { scene.camera.time(sampler.get1d()) } else { 0.0 };
     // As in pbrt, only the camera ray has differentials: rays spawned later have none.
     // Scenes whose shading never reads a footprint skip them.
     if scene.needs_differentials {
-        let (ray, diff) = scene.camera.generate_ray_differential(p_raster, u_lens, diff_scale);
+        let (ray, diff) = scene.camera.generate_ray_differential(p_raster, u_lens, diff_scale, time);
         (ray, Some(diff))
     } else {
-        (scene.camera.generate_ray(p_raster, u_lens), None)
+        (scene.camera.generate_ray_at(p_raster, u_lens, time), None)
     }
 }
 
@@ -863,8 +865,11 @@ struct Photon {
 /// A photon leaving a light or an emitting medium chosen by power.
 fn emit_photon(scene: &RenderScene, sampler: &mut impl Sampler) -> Option<Photon> {
     let (li, pick) = scene.photon_sources.sample(sampler.get1d())?;
+    // Only scenes with motion draw a time, so that others keep their numbers.
+    let time = if scene.motion { scene.camera.time(sampler.get1d()) } else { 0.0 };
     if li >= scene.lights.len() {
-        return emit_from_medium(scene, li - scene.lights.len(), pick, sampler);
+        let p = emit_from_medium(scene, li - scene.lights.len(), pick, sampler)?;
+        return Some(Photon { ray: p.ray.at_time(time), ..p });
     }
     let light: &Light = &scene.lights[li];
     let (u1, u2) = (sampler.get2d(), sampler.get2d());
@@ -879,7 +884,7 @@ fn emit_photon(scene: &RenderScene, sampler: &mut impl Sampler) -> Option<Photon
     let pdf = pick as f64 * e.pdf_pos as f64 * e.pdf_dir as f64;
     let beta = (e.le.as_dvec3() * (e.n.dot(d).abs() as f64 / pdf / scene.photon_scale)).as_vec3();
     let medium = if scene.media.is_empty() { None } else { scene.light_medium(li, d, e.n) };
-    Some(Photon { beta, ray: crate::math::Ray::new(e.ray.o, Vector3(d)), medium, from_medium: false })
+    Some(Photon { beta, ray: crate::math::Ray::new(e.ray.o, Vector3(d)).at_time(time), medium, from_medium: false })
 }
 
 /// A photon from emitting medium `k` of `scene.medium_emitters` (picked with
@@ -961,5 +966,5 @@ fn scatter_in_medium(
     if !beta.is_finite() || beta == Vec3::ZERO {
         return None;
     }
-    Some((beta, crate::math::Ray::new(Point3(mp.p), Vector3(s.wi))))
+    Some((beta, crate::math::Ray::new(Point3(mp.p), Vector3(s.wi)).at_time(mp.time)))
 }

@@ -35,6 +35,8 @@ pub struct MediumPoint {
     pub sigma_s: Rgb,
     pub sigma_t: Rgb,
     pub medium: u32,
+    /// The arriving ray's time.
+    pub time: f32,
 }
 
 /// Free flight along `ray` in `medium` up to `hit`: `Ok(weight)` when the ray gets
@@ -51,8 +53,15 @@ pub fn fly(
     match m.sample(ray.o.0, ray.d.0, t_max, sampler) {
         Flight::Through { weight } => Ok(weight),
         Flight::Scatter { t, weight, sigma_s, sigma_t } => {
-            let p =
-                MediumPoint { p: ray.at(t).0, wo: -ray.d.0.normalize(), phase: m.phase(), sigma_s, sigma_t, medium };
+            let p = MediumPoint {
+                p: ray.at(t).0,
+                wo: -ray.d.0.normalize(),
+                phase: m.phase(),
+                sigma_s,
+                sigma_t,
+                medium,
+                time: ray.time,
+            };
             Err((p, weight))
         }
     }
@@ -116,8 +125,9 @@ pub fn direct_light(scene: &RenderScene, mp: &MediumPoint, sampler: &mut impl Sa
                 o: Point3(mp.p),
                 d: crate::math::Vector3(p - mp.p),
                 t_max: 1.0 - crate::interaction::SHADOW_EPSILON,
+                time: mp.time,
             },
-            None => Ray::new(Point3(mp.p), crate::math::Vector3(ls.wi)),
+            None => Ray::new(Point3(mp.p), crate::math::Vector3(ls.wi)).at_time(mp.time),
         };
         let tr = transmittance(scene, &ray, Some(mp.medium), sampler);
         let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, f) };
@@ -125,7 +135,7 @@ pub fn direct_light(scene: &RenderScene, mp: &MediumPoint, sampler: &mut impl Sa
     }
     if !light.is_delta() {
         let s = mp.phase.sample(mp.wo, u_phase);
-        let ray = Ray::new(Point3(mp.p), crate::math::Vector3(s.wi));
+        let ray = Ray::new(Point3(mp.p), crate::math::Vector3(s.wi)).at_time(mp.time);
         let (hit, tr) = trace(scene, &ray, Some(mp.medium), sampler);
         let li = scene.chosen_light_along(hit.as_ref(), idx, s.wi);
         if li != Vec3::ZERO {

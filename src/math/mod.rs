@@ -1,6 +1,7 @@
 //! Geometry math: error-bounded floats, points/vectors/normals, transforms with error
 //! propagation, bounds with pbrt's conservative slab test, rays and frames.
 
+pub mod animated;
 pub mod bounds;
 pub mod equal_area;
 pub mod float;

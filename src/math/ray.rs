@@ -1,4 +1,5 @@
-//! Rays: origin, direction (not necessarily normalised) and the parametric limit.
+//! Rays: origin, direction (not necessarily normalised), the parametric limit and the
+//! time (within the camera's shutter; it places moving shapes).
 
 use super::vector::{Point3, Vector3};
 
@@ -7,12 +8,20 @@ pub struct Ray {
     pub o: Point3,
     pub d: Vector3,
     pub t_max: f32,
+    pub time: f32,
 }
 
 impl Ray {
+    /// A ray at time 0 (see [`Ray::at_time`]).
     pub fn new(o: Point3, d: Vector3) -> Ray {
-        Ray { o, d, t_max: f32::INFINITY }
+        Ray { o, d, t_max: f32::INFINITY, time: 0.0 }
     }
+
+    /// The same ray at `time`.
+    pub fn at_time(self, time: f32) -> Ray {
+        Ray { time, ..self }
+    }
+
     pub fn at(&self, t: f32) -> Point3 {
         self.o + self.d * t
     }
@@ -33,6 +42,7 @@ impl RayDifferential {
             o: Point3(main.o.0 + (r.o.0 - main.o.0) * s),
             d: Vector3(main.d.0 + (r.d.0 - main.d.0) * s),
             t_max: r.t_max,
+            time: r.time,
         };
         RayDifferential { rx: scale(&self.rx), ry: scale(&self.ry) }
     }

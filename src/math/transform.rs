@@ -101,7 +101,7 @@ impl Transform {
             o = o + d * dt;
             t_max -= dt;
         }
-        (Ray { o, d, t_max }, dt)
+        (Ray { o, d, t_max, time: r.time }, dt)
     }
 
     /// Bounds of the 8 transformed corners.
@@ -138,7 +138,7 @@ mod tests {
     #[test]
     fn ray_origin_moves_forward_by_its_error_and_keeps_t() {
         let t = Transform::from_dmat4(DMat4::from_translation(glam::DVec3::new(1e4, 0.0, 0.0)));
-        let r = Ray { o: Point3::new(0.5, 0.0, 0.0), d: Vector3::new(2.0, 0.0, 0.0), t_max: 10.0 };
+        let r = Ray { o: Point3::new(0.5, 0.0, 0.0), d: Vector3::new(2.0, 0.0, 0.0), t_max: 10.0, time: 0.0 };
         let (tr, dt) = t.ray(&r);
         assert!(dt > 0.0, "the origin has rounding error at x = 1e4");
         assert_eq!(tr.t_max, 10.0 - dt);

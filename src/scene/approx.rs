@@ -49,7 +49,9 @@ impl Approx {
             Approx::MissingImage => {
                 "the image cannot be read; as in pbrt-v3, an image texture is a grey texel of 0.5 (sRGB-decoded where `gamma` is on, as it is for PNG and TGA) times `scale`, an environment map a constant sky, a normal map a smooth surface"
             }
-            Approx::Motion => "animated transforms are not supported; the start transform is used",
+            Approx::Motion => {
+                "a moving shape inside an object definition keeps its start transform (motion nests there in pbrt)"
+            }
             Approx::Camera => "this camera type is not supported; a perspective camera is used",
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",
             Approx::ColorSpace => "only sRGB is supported; RGB values are taken as sRGB",

@@ -29,6 +29,7 @@ use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, 
 use crate::imageio::RgbImage;
 use crate::limits::{Files, Limits};
 use crate::materials::MaterialDesc;
+use crate::math::animated::AnimatedTransform;
 use crate::parser::Syntax;
 use crate::parser::error::{Diagnostic, LoadError, Located};
 use crate::parser::params::ParamList;
@@ -192,7 +193,12 @@ struct Builder {
     objects: Vec<PendingObject>,
     object_names: HashMap<String, u32>,
     current_object: Option<u32>,
-    instance_uses: Vec<(String, DMat4, Span)>,
+    instance_uses: Vec<(String, [DMat4; 2], Span)>,
+    /// Moving world shapes, each alone in an object placed by its start and end
+    /// transforms (as pbrt wraps them).
+    moving_shapes: Vec<(u32, [DMat4; 2])>,
+    /// `TransformTimes`: when the start and end transforms hold.
+    transform_times: [f64; 2],
     /// `LightSource` statements (outside object definitions) and the CTM at each.
     pending_lights: Vec<(Entity, DMat4)>,
     area_light_entities: Vec<(Entity, Option<u32>)>,
@@ -263,6 +269,8 @@ impl Builder {
             object_names: HashMap::new(),
             current_object: None,
             instance_uses: Vec::new(),
+            moving_shapes: Vec::new(),
+            transform_times: [0.0, 1.0],
             pending_lights: Vec::new(),
             area_light_entities: Vec::new(),
             area_lights_used: Vec::new(),
@@ -381,7 +389,10 @@ impl Builder {
             K::ConcatTransform(m) => self.concat(span, DMat4::from_cols_array(&m)),
             K::CoordinateSystem(name) => self.coordinate_system(name),
             K::CoordSysTransform(name) => self.coord_sys_transform(&name, span),
-            K::TransformTimes(_) => Ok(()),
+            K::TransformTimes(t) => {
+                self.transform_times = t;
+                Ok(())
+            }
             K::ActiveTransform(a) => self.active_transform(a),
             K::ReverseOrientation => self.reverse_orientation(),
             K::Option { name, value } => self.option(name, value, span),
@@ -522,8 +533,7 @@ impl Builder {
         if self.current_object.is_some() {
             return Err(Diagnostic::error(span, "ObjectInstance is not allowed inside an object definition"));
         }
-        self.instance_uses.push((name, self.gs.ctm[0], span));
-        self.warn_motion(span);
+        self.instance_uses.push((name, self.gs.ctm, span));
         Ok(())
     }
 
@@ -564,8 +574,10 @@ impl Builder {
         self.transform(span, |i| ctm[i] * m)
     }
 
+    /// A moving shape inside an object definition (pbrt nests its motion inside the
+    /// instance's; here it keeps its start transform).
     fn warn_motion(&mut self, span: Span) {
-        if self.gs.ctm[0] != self.gs.ctm[1] && !self.motion_warned {
+        if self.current_object.is_some() && self.gs.ctm[0] != self.gs.ctm[1] && !self.motion_warned {
             self.motion_warned = true;
             self.note(span, "ActiveTransform".into(), Approx::Motion);
         }
@@ -579,6 +591,7 @@ impl Builder {
         }
         self.named_coords.insert("camera".into(), inv);
         self.render.camera = Some((e, ctm[0]));
+        self.render.camera_end = (ctm[1] != ctm[0]).then_some((ctm[1], self.transform_times));
         self.camera_media = self.gs.media;
         Ok(())
     }
@@ -689,6 +702,9 @@ impl Builder {
             scope: self.gs.scope.clone(),
             media: self.gs.media,
         };
+        if self.current_object.is_none() && self.gs.ctm[0] != self.gs.ctm[1] {
+            return self.moving_shape(pending, span);
+        }
         match self.current_object {
             Some(obj) => {
                 if self.gs.area_light.is_some() {
@@ -715,6 +731,48 @@ impl Builder {
             }
         }
         Ok(())
+    }
+
+    /// A world shape whose transform moves: alone in an object of its own, made with the
+    /// identity and placed by an instance with the two transforms, as pbrt does.
+    fn moving_shape(&mut self, mut pending: PendingShape, span: Span) -> Res<()> {
+        if self.gs.area_light.is_some() {
+            // DEVIATION(pbrt): input leniency. pbrt-v4 stops on an animated area light;
+            // pbrt-v3 drops the light with a warning, as here for both.
+            let why = "an area light on a moving shape is ignored (pbrt-v3 drops it, pbrt-v4 stops)";
+            self.warnings.push(Diagnostic::warning(span, why));
+        }
+        pending.ctm = DMat4::IDENTITY;
+        let idx = self.objects.len() as u32;
+        let name = format!("moving {} {idx}", pending.entity.name);
+        self.objects.push(PendingObject { name, span, shapes: vec![pending], used: true });
+        self.moving_shapes.push((idx, self.gs.ctm));
+        Ok(())
+    }
+
+    /// Where motion is interpolated: pbrt-v3 in world space (the identity); pbrt-v4 in
+    /// its rendering space, world moved by the camera's position at mid-shutter
+    /// (returned as world-from-render). Fixes the camera's motion times: pbrt-v3 takes
+    /// the last `TransformTimes`, pbrt-v4 those current at `Camera`.
+    fn motion_frame(&mut self, syntax: Syntax) -> DMat4 {
+        if let Some((_, times)) = &mut self.render.camera_end
+            && syntax == Syntax::V3
+        {
+            *times = self.transform_times;
+        }
+        if syntax == Syntax::V3 {
+            return DMat4::IDENTITY;
+        }
+        let start = self.render.camera.as_ref().map_or(DMat4::IDENTITY, |c| c.1).inverse();
+        let eye = match &self.render.camera_end {
+            Some((end, times)) => {
+                let world_from_camera = AnimatedTransform::new(start, end.inverse(), *times);
+                world_from_camera.at((times[0] + times[1]) / 2.0).w_axis.truncate()
+            }
+            None => start.w_axis.truncate(),
+        };
+        self.render.world_from_render = DMat4::from_translation(eye);
+        self.render.world_from_render
     }
 
     /// The file's pbrt version, if known yet: given on the command line, or settled by
@@ -974,11 +1032,24 @@ impl Builder {
         self.build_deferred_shapes()?;
         self.materials[0].ty =
             if syntax == Syntax::V3 { crate::materials::matte::NAME } else { crate::materials::diffuse::NAME }.into();
+        let moving = self.moving_shapes.len();
         let uses = self.resolve_instances()?;
         let (mut objects, remap) = self.build_objects()?;
+        let frame = self.motion_frame(syntax);
+        let named = uses.len() - moving;
         let instances = uses
             .into_iter()
-            .map(|(obj, m)| InstanceDesc { object: remap[obj as usize], world_from_instance: m })
+            .enumerate()
+            .map(|(k, (obj, [m0, m1]))| InstanceDesc {
+                object: remap[obj as usize],
+                world_from_instance: m0,
+                motion: (m0 != m1).then(|| {
+                    // pbrt-v4 interpolates an instance in rendering space, a shape from
+                    // its own space there.
+                    let inner = if k < named { frame.inverse() } else { DMat4::IDENTITY };
+                    AnimatedTransform::framed(m0, m1, self.transform_times, frame, inner)
+                }),
+            })
             .collect();
         self.resolve_world_shapes()?;
         self.drop_interface_emitters();
@@ -1092,9 +1163,11 @@ impl Builder {
     }
 
     /// Instances name objects that may be defined later (v4); unknown names are errors.
-    fn resolve_instances(&mut self) -> Res<Vec<(u32, DMat4)>> {
+    /// Moving shapes come after the instances the file names.
+    fn resolve_instances(&mut self) -> Res<Vec<(u32, [DMat4; 2])>> {
         let uses = std::mem::take(&mut self.instance_uses);
-        uses.into_iter()
+        let named: Vec<(u32, [DMat4; 2])> = uses
+            .into_iter()
             .map(|(name, m, span)| {
                 let &obj = self
                     .object_names
@@ -1103,7 +1176,8 @@ impl Builder {
                 self.objects[obj as usize].used = true;
                 Ok((obj, m))
             })
-            .collect()
+            .collect::<Res<_>>()?;
+        Ok(named.into_iter().chain(std::mem::take(&mut self.moving_shapes)).collect())
     }
 
     /// Builds the objects that are instanced (opening their mesh files); returns them

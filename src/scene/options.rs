@@ -68,6 +68,18 @@ pub struct Camera {
     pub shutter_close: f32,
     /// The CTM at the `Camera` statement.
     pub camera_from_world: DMat4,
+    /// The end CTM at the `Camera` statement and the `TransformTimes`, when the camera
+    /// moves.
+    pub camera_from_world_end: Option<(DMat4, [f64; 2])>,
+    /// The frame its motion is interpolated in (see [`crate::math::animated`]).
+    pub world_from_render: DMat4,
+}
+
+impl Camera {
+    /// A ray's time for a sample `u` in [0, 1): within the shutter (pbrt's lerp).
+    pub fn time(&self, u: f32) -> f32 {
+        self.shutter_open + (self.shutter_close - self.shutter_open) * u
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -120,6 +132,10 @@ pub struct Integrator {
 #[derive(Default)]
 pub struct RenderOptions {
     pub camera: Option<(Entity, DMat4)>,
+    /// The camera's end transform and the transform times, when it moves.
+    pub camera_end: Option<(DMat4, [f64; 2])>,
+    /// The frame motion is interpolated in (pbrt-v4's rendering space; identity for v3).
+    pub world_from_render: DMat4,
     pub film: Option<Entity>,
     pub sampler: Option<Entity>,
     pub integrator: Option<Entity>,
@@ -304,6 +320,8 @@ impl RenderOptions {
             shutter_open: open,
             shutter_close: close,
             camera_from_world: *camera_from_world,
+            camera_from_world_end: self.camera_end,
+            world_from_render: self.world_from_render,
         })
     }
 

@@ -262,6 +262,7 @@ impl PatchMesh {
                 dndu: Normal3(dndu),
                 dndv: Normal3(dndv),
             },
+            time: 0.0,
         };
         if let Some(ns) = self.normal_at(patch, hit.uv) {
             self.shading_geometry(patch, hit.uv, ns, [duds, dudt, dvds, dvdt], &mut si);

@@ -326,6 +326,7 @@ impl CurveShape {
             dndu: shading.dndu,
             dndv: shading.dndv,
             shading,
+            time: 0.0,
         }
     }
 }

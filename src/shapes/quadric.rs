@@ -218,6 +218,7 @@ impl QuadricShape {
             dndu: shading.dndu,
             dndv: shading.dndv,
             shading,
+            time: 0.0,
         }
     }
 }

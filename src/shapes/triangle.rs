@@ -429,6 +429,7 @@ impl TriangleMesh {
             dndu: Normal3::default(),
             dndv: Normal3::default(),
             shading: Shading { n: Normal3(n), dpdu: Vector3(dpdu), dpdv: Vector3(dpdv), ..Default::default() },
+            time: 0.0,
         };
         if self.n.is_some() || self.s.is_some() {
             self.shading_geometry(tri, hit, flags, &mut si);

@@ -47,7 +47,7 @@ fn v3_alpha_zero_cuts_and_anything_else_is_opaque() {
 fn v3_shadowalpha_masks_shadow_rays_only() {
     let s = two_quads(true, "\"float shadowalpha\" 0", "");
     assert_eq!(stop(&s, 0.0, 0.0), Some(0.0), "camera and photon rays still hit it");
-    let to_middle = Ray { o: Point3::new(0.0, 0.0, -1.0), d: Vector3::new(0.0, 0.0, 1.5), t_max: 1.0 };
+    let to_middle = Ray { o: Point3::new(0.0, 0.0, -1.0), d: Vector3::new(0.0, 0.0, 1.5), t_max: 1.0, time: 0.0 };
     assert!(!s.intersect_p(&to_middle), "a shadow ray passes through");
     let plain = two_quads(true, "", "");
     assert!(plain.intersect_p(&to_middle));

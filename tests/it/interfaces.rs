@@ -180,7 +180,7 @@ fn camera_sample_wi_agrees_with_we() {
     let mut found = 0;
     for _ in 0..500 {
         let p = Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * 2.0;
-        let Some(s) = rs.camera.sample_wi(p, rng.uniform2()) else { continue };
+        let Some(s) = rs.camera.sample_wi(p, rng.uniform2(), 0.0) else { continue };
         let (we, raster) = rs.camera.we(&Ray::new(Point3(s.p_lens), Vector3(-s.wi))).expect("on the film");
         assert!(close(we, s.we, 1e-5) && raster == s.raster);
         assert!((s.p_lens + -s.wi * (s.p_lens - p).length() - p).length() < 1e-4);

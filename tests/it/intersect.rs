@@ -288,6 +288,7 @@ fn triangle_bad_case_from_pbrt() {
         o: Point3::new(-1081.47925, 99.9999542, 87.7701111),
         d: Vector3::new(-32.1072998, -183.355865, -144.607635),
         t_max: 0.9999,
+        time: 0.0,
     };
     assert!(mesh.intersect_triangle(0, &ray, ray.t_max).is_none());
     assert!(mesh.intersect_triangle(0, &ray, f32::INFINITY).is_none());

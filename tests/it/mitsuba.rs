@@ -147,7 +147,7 @@ fn assert_front_faces_agree(text: &str) {
     let (mut agree, mut inconclusive) = (0, 0);
     for (index, p, n, size) in front_faces(&e) {
         let eps = 0.25 * size;
-        let ray = Ray { o: Point3(p + eps * n), d: Vector3(-n), t_max: 2.0 * eps };
+        let ray = Ray { o: Point3(p + eps * n), d: Vector3(-n), t_max: 2.0 * eps, time: 0.0 };
         let hit = tracer.trace(&ray);
         if hit["hit"] != true || hit["shape_index"] != index {
             inconclusive += 1;

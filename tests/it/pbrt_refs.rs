@@ -432,3 +432,12 @@ fn bdpt_and_vcm_render_media_as_pbrt() {
     assert_renders_as("v4-fog-box", Fixes::NONE, Algorithm::Vcm(Techniques::Bdpt), "v4-fog-box-bdpt", 0.04);
     assert_renders_as("v3-smoke-grid", Fixes::NONE, Algorithm::Vcm(Techniques::All), "v3-smoke-grid-volpath", 0.04);
 }
+
+#[test]
+fn motion_blur_moves_shapes_instances_and_the_camera_as_pbrt_v3() {
+    // A sphere sliding, an instance turning a third of a circle and the camera panning
+    // while the shutter is open. pbrt-v3's own 64-iteration image: worst tile 2.0%;
+    // ours 1.6–2.9% over seeds 0–3. With the start transforms only (the old
+    // behaviour): 81% off.
+    assert_matches_pbrt("v3-motion", 0.035);
+}

@@ -135,7 +135,7 @@ fn sampled_solid_angle(s: &QuadricShape, p: DVec3, n: u64) -> f64 {
     for i in 0..n {
         let u = [radical_inverse(2, i) as f32, radical_inverse(3, i) as f32];
         let Some(smp) = s.sample_solid_angle(&sampler, reference, u) else { continue };
-        let ray = Ray { o: reference, d: Vector3(smp.p.0 - reference.0), t_max: 0.999 };
+        let ray = Ray { o: reference, d: Vector3(smp.p.0 - reference.0), t_max: 0.999, time: 0.0 };
         if smp.pdf > 0.0 && !s.intersect_p(&ray, ray.t_max) {
             sum += 1.0 / smp.pdf as f64;
         }

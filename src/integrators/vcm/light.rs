@@ -169,7 +169,9 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     // photon scale, as SPPM's photons, so emitters past f32's range keep their paths.
     let beta = (e.le.as_dvec3() * (cos / emission / scene.photon_scale)).as_vec3();
     let medium = scene.light_medium(li, d, e.n);
-    Some(Start { ray: Ray::new(e.ray.o, Vector3(d)), beta, partial, light, pick, cos, medium })
+    let time = if scene.motion { scene.camera.time(s.get1d()) } else { 0.0 };
+    let ray = Ray::new(e.ray.o, Vector3(d)).at_time(time);
+    Some(Start { ray, beta, partial, light, pick, cos, medium })
 }
 
 /// Whether a light has a position (distances to it count).
@@ -261,14 +263,15 @@ fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> O
 /// sends there onto the pixel it reaches.
 fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Vec<(u32, Rgb)>) {
     let scene = pass.scene;
-    let Some(cs) = scene.camera.sample_wi(v.place.p, s.get2d()) else { return };
+    let Some(cs) = scene.camera.sample_wi(v.place.p, s.get2d(), v.place.time) else { return };
     let Some(pixel) = pass.pixel_index(cs.raster) else { return };
     let e = v.at.eval(v.wo, cs.wi, TransportMode::Importance);
     if e.f == Vec3::ZERO || cs.pdf <= 0.0 {
         return;
     }
     let dist2 = (cs.p_lens - v.place.p).length_squared() as f64;
-    let (_, pdf_dir) = scene.camera.pdf_we(&Ray::new(crate::math::Point3(cs.p_lens), Vector3(-cs.wi)));
+    let (_, pdf_dir) =
+        scene.camera.pdf_we(&Ray::new(crate::math::Point3(cs.p_lens), Vector3(-cs.wi)).at_time(v.place.time));
     let camera_a = pdf_dir as f64 * pass.film_pixels * v.at.measure(cs.wi, v.place.ng) / dist2;
     let light_paths = pass.light_paths as f64;
     let w = mis::to_camera(v.partial, camera_a, e.pdf_rev as f64, v.len, pass.lt_count(), v.factors(pass));

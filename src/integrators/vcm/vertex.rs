@@ -35,6 +35,8 @@ pub struct Place {
     pub p_error: Vec3,
     pub ng: Vec3,
     pub sides: MediumInterface,
+    /// The path's time (motion blur): rays leaving here carry it.
+    pub time: f32,
 }
 
 impl Place {
@@ -48,12 +50,13 @@ impl Place {
                 _ => MediumInterface { inside: medium, outside: medium },
             },
         };
-        Place { p: si.p.0, p_error: si.p_error, ng: si.n.0, sides }
+        Place { p: si.p.0, p_error: si.p_error, ng: si.n.0, sides, time: si.time }
     }
 
     /// A point in medium `m`.
-    pub fn in_medium(p: Vec3, m: u32) -> Place {
-        Place { p, p_error: Vec3::ZERO, ng: Vec3::ZERO, sides: MediumInterface { inside: Some(m), outside: Some(m) } }
+    pub fn in_medium(p: Vec3, m: u32, time: f32) -> Place {
+        let sides = MediumInterface { inside: Some(m), outside: Some(m) };
+        Place { p, p_error: Vec3::ZERO, ng: Vec3::ZERO, sides, time }
     }
 
     /// The medium a ray leaving in direction `d` travels in.
@@ -64,7 +67,7 @@ impl Place {
 
     /// A ray leaving in direction `d`, offset off the surface.
     pub fn spawn(&self, d: Vec3) -> Ray {
-        Ray::new(self.origin_toward(d), Vector3(d))
+        Ray::new(self.origin_toward(d), Vector3(d)).at_time(self.time)
     }
 
     /// Where a ray leaving in direction `d` starts.
@@ -216,7 +219,7 @@ pub fn flight(
         Err((mp, weight)) => {
             *beta *= weight;
             let phase = Phase::new(mp.phase, mp.sigma_s, mp.sigma_t);
-            Some((Place::in_medium(mp.p, mp.medium), Scatterer::Medium(phase), mp.wo))
+            Some((Place::in_medium(mp.p, mp.medium, mp.time), Scatterer::Medium(phase), mp.wo))
         }
     }
 }
@@ -226,7 +229,7 @@ pub fn flight(
 /// from `s` for grids).
 pub fn visible(scene: &RenderScene, from: &Place, to: Vec3, s: &mut impl Sampler) -> Rgb {
     let o = from.origin_toward(to - from.p);
-    let ray = Ray { o, d: Vector3(to - o.0), t_max: 1.0 - SHADOW_EPSILON };
+    let ray = Ray { o, d: Vector3(to - o.0), t_max: 1.0 - SHADOW_EPSILON, time: from.time };
     if scene.media.is_empty() {
         return if scene.intersect_p(&ray) { Vec3::ZERO } else { Vec3::ONE };
     }
