@@ -28,6 +28,7 @@ pub enum Fix {
     HyperboloidSurface,
     CameraMedium,
     MediumEmission,
+    MotionTime,
 }
 
 /// Name, the pbrt versions that have the bug, and what fixing it changes.
@@ -39,7 +40,7 @@ pub struct FixInfo {
 }
 
 /// Every fix, in the order `--fix help` lists them.
-pub const FIXES: [FixInfo; 12] = [
+pub const FIXES: [FixInfo; 13] = [
     FixInfo {
         fix: Fix::PlasticFresnel,
         name: "plastic-fresnel",
@@ -129,6 +130,14 @@ pub const FIXES: [FixInfo; 12] = [
         effect: "a temperature grid's blackbody and an rgbgrid's Le are recorded as the same spectrum on a \
                  light would be; pbrt-v4 normalises neither and its film records them 106.86 (∫ȳ dλ) times \
                  brighter than the same values on a homogeneous medium or a light",
+    },
+    FixInfo {
+        fix: Fix::MotionTime,
+        name: "motion-time",
+        versions: "v3",
+        effect: "each SPPM pass renders at one time within the shutter, as pbrt-v4's does; pbrt-v3 draws \
+                 every photon's time apart from the camera paths', so a moving surface gathers the photons \
+                 that landed where it is at other times and is lit too little by indirect light",
     },
 ];
 

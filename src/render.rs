@@ -113,6 +113,22 @@ pub struct RenderScene {
 }
 
 impl RenderScene {
+    /// The time every ray of pass `iteration` takes, or `None` when each camera path
+    /// and photon draws its own within the shutter (pbrt-v3's SPPM). A scene without
+    /// motion draws none (its rays keep time 0 and its sample sequences). pbrt-v4's SPPM
+    /// renders a pass at one time, `RadicalInverse(2, iteration)` across the shutter, so
+    /// that photons light the moving surfaces where the camera sees them; vcm and bdpt
+    /// do the same whatever the version, for the same reason between their subpaths.
+    pub fn pass_time(&self, iteration: u32, bidirectional: bool) -> Option<f32> {
+        // DEVIATION(pbrt): appearance, `--fix motion-time` (pbrt-v3's independent times).
+        let one_time = bidirectional || self.syntax == Syntax::V4 || self.fixes.has(crate::fixes::Fix::MotionTime);
+        match self.motion && one_time {
+            _ if !self.motion => Some(0.0),
+            true => Some(self.camera.time(crate::sampling::radical_inverse_5(iteration as u64))),
+            false => None,
+        }
+    }
+
     pub fn new(scene: &SceneDescription) -> RenderScene {
         RenderScene::for_integrator(scene, false)
     }

@@ -434,7 +434,7 @@ impl Geometry {
                     object: i.object,
                     first_shape_index,
                     index: k as u32,
-                    motion: i.motion.clone().map(Box::new),
+                    motion: i.motion.clone(),
                 }
             })
             .collect();

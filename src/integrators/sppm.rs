@@ -275,6 +275,7 @@ impl<'a> Sppm<'a> {
         let (scene, width, origin, iter, seed, max_depth) =
             (self.scene, self.width, self.origin, self.iteration, self.seed, self.max_depth);
         let (diff_scale, kind, live) = (self.differential_scale, self.sampler, &self.live);
+        let time = scene.pass_time(iter, false);
         let first = band.start;
         self.pixels[band].par_iter_mut().enumerate().with_max_len(super::PIXELS_PER_TASK).for_each(|(i, px)| {
             let i = first + i;
@@ -287,11 +288,11 @@ impl<'a> Sppm<'a> {
             let (ld, vp) = match kind {
                 SamplerKind::Sobol => {
                     let mut s = SobolSample::new(hash(&[seed, x as u64, y as u64, 0]), iter);
-                    camera_path(scene, pixel, &mut s, max_depth, diff_scale)
+                    camera_path(scene, pixel, &mut s, max_depth, (diff_scale, time))
                 }
                 SamplerKind::Random => {
                     let mut rng = Rng::new(hash(&[seed, x as u64, y as u64, iter as u64, 0]));
-                    camera_path(scene, pixel, &mut rng, max_depth, diff_scale)
+                    camera_path(scene, pixel, &mut rng, max_depth, (diff_scale, time))
                 }
             };
             px.ld += ld.as_dvec3();
@@ -312,8 +313,9 @@ impl<'a> Sppm<'a> {
         let w = self.scene.photon_scale;
         if let Some(chains) = &mut self.chains {
             let (scene, pixels, max_depth) = (self.scene, &self.pixels, self.max_depth);
+            let time = scene.pass_time(self.iteration, false);
             let trace = |s: &mut adaptive::PrimarySample, out: &mut Vec<Deposit>| {
-                let path = trace_photon(scene, grid, pixels, s, max_depth, out);
+                let path = trace_photon(scene, grid, pixels, s, max_depth, out, time);
                 (path.hits, path.near)
             };
             let (deposits, weight, counts) = adaptive::pass(chains, self.photons_per_iteration, &trace);
@@ -339,6 +341,7 @@ impl<'a> Sppm<'a> {
         let (scene, pixels, iter, seed, max_depth) =
             (self.scene, &self.pixels, self.iteration as u64, self.seed, self.max_depth);
         let total = self.photons_per_iteration;
+        let time = scene.pass_time(self.iteration, false);
         let results: Vec<(Vec<Deposit>, PhotonCounts)> = chunks
             .into_par_iter()
             .map(|c| {
@@ -349,7 +352,7 @@ impl<'a> Sppm<'a> {
                     // over the whole render, gained nothing measurable (docs/sampling.md).
                     let mut rng = Rng::new(hash(&[seed, iter, k, 1]));
                     let before = out.len();
-                    let path = trace_photon(scene, grid, pixels, &mut rng, max_depth, &mut out);
+                    let path = trace_photon(scene, grid, pixels, &mut rng, max_depth, &mut out, time);
                     n.hits += path.hits;
                     n.uniform_visible += path.near as u64;
                     n.uniform_deposited += (out.len() > before) as u64;
@@ -516,11 +519,12 @@ pub(super) fn camera_ray(
     pixel: [f32; 2],
     sampler: &mut impl Sampler,
     diff_scale: f32,
+    time: Option<f32>,
 ) -> (crate::math::Ray, Option<crate::math::ray::RayDifferential>) {
     let u = sampler.get2d();
     let (p_raster, u_lens) = ([pixel[0] + u[0], pixel[1] + u[1]], sampler.get2d());
-    // Only scenes with motion draw a time, so that others keep their sample sequence.
-    let time = if scene.motion { scene.camera.time(sampler.get1d()) } else { 0.0 };
+    // The pass's time (see `RenderScene::pass_time`), or one of the ray's own.
+    let time = time.unwrap_or_else(|| scene.camera.time(sampler.get1d()));
     // As in pbrt, only the camera ray has differentials: rays spawned later have none.
     // Scenes whose shading never reads a footprint skip them.
     if scene.needs_differentials {
@@ -537,9 +541,9 @@ fn camera_path(
     pixel: [f32; 2],
     sampler: &mut impl Sampler,
     max_depth: u32,
-    diff_scale: f32,
+    (diff_scale, time): (f32, Option<f32>),
 ) -> (Rgb, Option<VisiblePoint>) {
-    let (mut ray, mut diff) = camera_ray(scene, pixel, sampler, diff_scale);
+    let (mut ray, mut diff) = camera_ray(scene, pixel, sampler, diff_scale, time);
     let (mut beta, mut ld) = (Vec3::ONE, Vec3::ZERO);
     let (mut specular_bounce, mut depth, mut passes) = (false, 0, 0);
     let mut medium = scene.camera_medium;
@@ -792,8 +796,9 @@ fn trace_photon(
     sampler: &mut impl Sampler,
     max_depth: u32,
     out: &mut Vec<(u32, Vec3)>,
+    time: Option<f32>,
 ) -> PhotonPath {
-    let Some(Photon { mut beta, mut ray, mut medium, from_medium }) = emit_photon(scene, sampler) else {
+    let Some(Photon { mut beta, mut ray, mut medium, from_medium }) = emit_photon(scene, sampler, time) else {
         return PhotonPath::default();
     };
     let (mut depth, mut passes, mut hits, mut near) = (0, 0, 0, false);
@@ -863,10 +868,10 @@ struct Photon {
 }
 
 /// A photon leaving a light or an emitting medium chosen by power.
-fn emit_photon(scene: &RenderScene, sampler: &mut impl Sampler) -> Option<Photon> {
+fn emit_photon(scene: &RenderScene, sampler: &mut impl Sampler, time: Option<f32>) -> Option<Photon> {
     let (li, pick) = scene.photon_sources.sample(sampler.get1d())?;
-    // Only scenes with motion draw a time, so that others keep their numbers.
-    let time = if scene.motion { scene.camera.time(sampler.get1d()) } else { 0.0 };
+    // The pass's time (see `RenderScene::pass_time`), or one of the photon's own.
+    let time = time.unwrap_or_else(|| scene.camera.time(sampler.get1d()));
     if li >= scene.lights.len() {
         let p = emit_from_medium(scene, li - scene.lights.len(), pick, sampler)?;
         return Some(Photon { ray: p.ray.at_time(time), ..p });

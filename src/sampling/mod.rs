@@ -101,6 +101,17 @@ impl Rng {
 
 /// Veach's power heuristic (β = 2): the MIS weight of a sample drawn with density `f`
 /// against another strategy's density `g`.
+/// The base-5 radical inverse of `i` (pbrt's `RadicalInverse(2, i)`), in [0, 1).
+pub fn radical_inverse_5(mut i: u64) -> f32 {
+    let (mut inv, mut f) = (0.0f64, 1.0f64);
+    while i > 0 {
+        f /= 5.0;
+        inv += (i % 5) as f64 * f;
+        i /= 5;
+    }
+    (inv as f32).min(1.0 - f32::EPSILON / 2.0)
+}
+
 pub fn power_heuristic(f: f32, g: f32) -> f32 {
     let (f2, g2) = (f * f, g * g);
     if f2.is_infinite() { 1.0 } else { f2 / (f2 + g2) }

@@ -199,6 +199,8 @@ struct Builder {
     moving_shapes: Vec<(u32, [DMat4; 2])>,
     /// `TransformTimes`: when the start and end transforms hold.
     transform_times: [f64; 2],
+    /// The first statement that makes something move (a shape, an instance, the camera).
+    first_motion: Option<Span>,
     /// `LightSource` statements (outside object definitions) and the CTM at each.
     pending_lights: Vec<(Entity, DMat4)>,
     area_light_entities: Vec<(Entity, Option<u32>)>,
@@ -271,6 +273,7 @@ impl Builder {
             instance_uses: Vec::new(),
             moving_shapes: Vec::new(),
             transform_times: [0.0, 1.0],
+            first_motion: None,
             pending_lights: Vec::new(),
             area_light_entities: Vec::new(),
             area_lights_used: Vec::new(),
@@ -533,6 +536,9 @@ impl Builder {
         if self.current_object.is_some() {
             return Err(Diagnostic::error(span, "ObjectInstance is not allowed inside an object definition"));
         }
+        if self.gs.ctm[0] != self.gs.ctm[1] {
+            self.first_motion.get_or_insert(span);
+        }
         self.instance_uses.push((name, self.gs.ctm, span));
         Ok(())
     }
@@ -592,6 +598,9 @@ impl Builder {
         self.named_coords.insert("camera".into(), inv);
         self.render.camera = Some((e, ctm[0]));
         self.render.camera_end = (ctm[1] != ctm[0]).then_some((ctm[1], self.transform_times));
+        if ctm[1] != ctm[0] {
+            self.first_motion.get_or_insert(span);
+        }
         self.camera_media = self.gs.media;
         Ok(())
     }
@@ -743,6 +752,7 @@ impl Builder {
             self.warnings.push(Diagnostic::warning(span, why));
         }
         pending.ctm = DMat4::IDENTITY;
+        self.first_motion.get_or_insert(span);
         let idx = self.objects.len() as u32;
         let name = format!("moving {} {idx}", pending.entity.name);
         self.objects.push(PendingObject { name, span, shapes: vec![pending], used: true });
@@ -1047,7 +1057,7 @@ impl Builder {
                     // pbrt-v4 interpolates an instance in rendering space, a shape from
                     // its own space there.
                     let inner = if k < named { frame.inverse() } else { DMat4::IDENTITY };
-                    AnimatedTransform::framed(m0, m1, self.transform_times, frame, inner)
+                    Box::new(AnimatedTransform::framed(m0, m1, self.transform_times, frame, inner))
                 }),
             })
             .collect();

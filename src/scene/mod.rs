@@ -120,7 +120,7 @@ pub struct InstanceDesc {
     pub world_from_instance: DMat4,
     /// Its motion between the `TransformTimes`, when its transform is animated
     /// (`world_from_instance` is then the start transform).
-    pub motion: Option<crate::math::animated::AnimatedTransform>,
+    pub motion: Option<Box<crate::math::animated::AnimatedTransform>>,
 }
 
 /// Something the scene asked for that is not built, and why.

@@ -175,6 +175,7 @@ impl RenderOptions {
         let camera = self.camera(&film, notes)?;
         let mut film = film;
         if syntax == Syntax::V4 {
+            self.check_shutter_opens()?;
             film.scale *= exposure_scale * (camera.shutter_close - camera.shutter_open);
         }
         let integrator = self.integrator(syntax, &film, limits, warn)?;
@@ -255,6 +256,22 @@ impl RenderOptions {
             scale,
         };
         Ok((film, iso / 100.0))
+    }
+
+    /// pbrt-v4 stops when `shutterclose` is not after `shutteropen` (the film's exposure
+    /// would be zero or negative: a black image); pbrt-v3 swaps a reversed pair.
+    fn check_shutter_opens(&self) -> Res<()> {
+        let Some((e, _)) = &self.camera else { return Ok(()) };
+        let open = values::float(&e.params, "shutteropen", 0.0, Range::Any)?;
+        let close = values::float(&e.params, "shutterclose", 1.0, Range::Any)?;
+        if close - open > 0.0 {
+            return Ok(());
+        }
+        let at = e.params.named("shutterclose").or(e.params.named("shutteropen")).map_or(e.name_span, |p| p.value_span);
+        let msg = format!(
+            "the shutter does not open (shutterclose {close} is not after shutteropen {open}): the image would be black"
+        );
+        Err(Diagnostic::error(at, msg))
     }
 
     fn camera(&self, film: &Film, notes: &mut Notes) -> Res<Camera> {

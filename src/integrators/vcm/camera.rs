@@ -61,7 +61,7 @@ impl Cameras<'_> {
 
     fn path(&self, i: usize, pixel: [f32; 2], s: &mut impl Sampler) -> Rgb {
         let (pass, scene) = (self.pass, self.pass.scene);
-        let (mut ray, mut diff) = camera_ray(scene, pixel, s, self.differential_scale);
+        let (mut ray, mut diff) = camera_ray(scene, pixel, s, self.differential_scale, self.pass.time);
         let camera_pdf = scene.camera.pdf_we(&ray).1 as f64 * pass.film_pixels;
         let mut partial = Partial::camera(camera_pdf, pass.lt_count());
         let light_path = self.lights.path(i % pass.light_paths as usize);

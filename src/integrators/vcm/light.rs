@@ -169,7 +169,7 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     // photon scale, as SPPM's photons, so emitters past f32's range keep their paths.
     let beta = (e.le.as_dvec3() * (cos / emission / scene.photon_scale)).as_vec3();
     let medium = scene.light_medium(li, d, e.n);
-    let time = if scene.motion { scene.camera.time(s.get1d()) } else { 0.0 };
+    let time = pass.time.unwrap_or_else(|| scene.camera.time(s.get1d()));
     let ray = Ray::new(e.ray.o, Vector3(d)).at_time(time);
     Some(Start { ray, beta, partial, light, pick, cos, medium })
 }

@@ -116,6 +116,8 @@ pub struct Pass<'a> {
     pub size: (usize, usize),
     /// What drives the light subpaths (`--sampler`).
     pub sampler: crate::sampling::SamplerKind,
+    /// The time of every ray of the pass (see [`RenderScene::pass_time`]).
+    pub time: Option<f32>,
 }
 
 impl Pass<'_> {
@@ -303,6 +305,7 @@ impl<'a> Vcm<'a> {
             origin: self.origin,
             size: self.size,
             sampler: self.settings.sampler,
+            time: scene.pass_time(self.iteration, true),
         }
     }
 

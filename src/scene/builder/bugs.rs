@@ -59,6 +59,11 @@ impl Builder {
         if syntax == Syntax::V4 {
             found.extend(self.unnormalized_emitters().map(|at| (at, Fix::MediumEmission)));
         }
+        if syntax == Syntax::V3
+            && let Some(at) = self.first_motion
+        {
+            found.push((at, Fix::MotionTime));
+        }
         if syntax == Syntax::V3 && self.camera_media.1 != self.gs.media.1 {
             found.extend(self.render.camera.as_ref().map(|(e, _)| (e.name_span, Fix::CameraMedium)));
         }
