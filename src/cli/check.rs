@@ -57,6 +57,8 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
             "shutteropen": f32_json(c.shutter_open),
             "shutterclose": f32_json(c.shutter_close),
             "camera_from_world": row_major(&c.camera_from_world),
+            "camera_from_world_end": c.camera_from_world_end.map(|(m, _)| row_major(&m)),
+            "transformtimes": c.camera_from_world_end.map(|(_, t)| t),
         },
         "film": {
             "type": f.ty,
@@ -133,6 +135,7 @@ fn counts(scene: &SceneDescription) -> Value {
     counts.insert("patches".into(), patches.into());
     counts.insert(crate::shapes::curve::NAME.into(), curves.into());
     counts.insert("instances".into(), scene.instances.len().into());
+    counts.insert("moving_instances".into(), scene.instances.iter().filter(|i| i.motion.is_some()).count().into());
     counts.insert("lights".into(), (scene.lights.len() as u64 + emitters).into());
     counts.insert("materials".into(), scene.materials.len().into());
     counts.insert("media".into(), scene.media.len().into());

@@ -925,6 +925,10 @@ impl Builder {
         if let Some(p) = e.params.named("mapname") {
             self.reader.note_evidence(Syntax::V3, p.span, "\"mapname\"");
         }
+        if self.gs.ctm[0] != self.gs.ctm[1] {
+            let why = "lights do not move (as in pbrt): the start transform is used";
+            self.warnings.push(Diagnostic::warning(e.name_span, why));
+        }
         let params = self.with_attributes("light", e.params);
         self.pending_lights.push((Entity { params, ..e }, self.gs.ctm[0]));
         self.pending_light_media.push(self.gs.media.1);
