@@ -147,6 +147,11 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         what: format!("MakeNamedMedium \"{}\"", m.name),
         why: "media are not exported: Mitsuba renders the scene in vacuum".into(),
     }));
+    let moving = scene.instances.iter().filter(|i| i.motion.is_some()).count();
+    if moving > 0 || scene.camera.camera_from_world_end.is_some() {
+        let why = "motion is not exported: moving shapes, instances and the camera stand at their start";
+        notes.push(note(source, &format!("ActiveTransform ({moving} moving instances)"), why));
+    }
     let textures = Textures::new(&scene.textures, scene.fixes);
     let materials = scene.materials.iter().enumerate().map(|(i, m)| material(m, &textures, i, &mut notes)).collect();
     let shapes = scene.shapes.iter().enumerate().map(|(i, s)| shape(scene, s, true, i as u32, &mut notes)).collect();
