@@ -96,6 +96,14 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
             crate::scene::options::SphericalMapping::Equirectangular => "equirectangular",
         });
     }
+    if let Some(l) = &c.lens {
+        out["camera"]["lens"] = json!({
+            "interfaces": l.data.len() / 4,
+            "aperturediameter": l.aperture_diameter,
+            "focusdistance": l.focus_distance,
+            "filmdiagonal": f32_json(f.diagonal_mm),
+        });
+    }
     if with_shapes {
         let shapes: Vec<Value> = scene.placed_shapes().enumerate().map(|(k, p)| shape(scene, k, &p)).collect();
         out["shapes"] = Value::Array(shapes);

@@ -226,6 +226,11 @@ fn camera(scene: &SceneDescription, notes: &mut Vec<Unsupported>) -> CameraOut {
                 notes.push(note("", &format!("camera \"{}\"", c.kind.name()), why));
                 "perspective"
             }
+            CameraKind::Realistic => {
+                let why = "Mitsuba 3 has no lens-system camera; exported as a pinhole perspective one";
+                notes.push(note("", "camera \"realistic\"", why));
+                "perspective"
+            }
         },
         world_from_camera: row_major(&c.camera_from_world.inverse()),
         fov: c.fov,

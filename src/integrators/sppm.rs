@@ -520,19 +520,19 @@ pub(super) fn camera_ray(
     sampler: &mut impl Sampler,
     diff_scale: f32,
     time: Option<f32>,
-) -> (crate::math::Ray, Option<crate::math::ray::RayDifferential>) {
+) -> (crate::math::Ray, Option<crate::math::ray::RayDifferential>, f32) {
     let u = sampler.get2d();
     let (p_raster, u_lens) = ([pixel[0] + u[0], pixel[1] + u[1]], sampler.get2d());
     // The pass's time (see `RenderScene::pass_time`), or one of the ray's own.
     let time = time.unwrap_or_else(|| scene.camera.time(sampler.get1d()));
     // As in pbrt, only the camera ray has differentials: rays spawned later have none.
     // Scenes whose shading never reads a footprint skip them.
-    if scene.needs_differentials {
-        let (ray, diff) = scene.camera.generate_ray_differential(p_raster, u_lens, diff_scale, time);
-        (ray, Some(diff))
-    } else {
-        (scene.camera.generate_ray_at(p_raster, u_lens, time), None)
-    }
+    // A realistic camera's lens may stop the ray (weight 0) or weight it.
+    let Some((ray, weight)) = scene.camera.generate_ray_weighted(p_raster, u_lens, time) else {
+        return (crate::math::Ray::new(crate::math::Point3(Vec3::ZERO), Vector3(Vec3::Z)), None, 0.0);
+    };
+    let diff = scene.needs_differentials.then(|| scene.camera.differentials(&ray, p_raster, u_lens, diff_scale));
+    (ray, diff, weight)
 }
 
 /// A camera path: (direct and emitted light gathered, the visible point).
@@ -543,8 +543,11 @@ fn camera_path(
     max_depth: u32,
     (diff_scale, time): (f32, Option<f32>),
 ) -> (Rgb, Option<VisiblePoint>) {
-    let (mut ray, mut diff) = camera_ray(scene, pixel, sampler, diff_scale, time);
-    let (mut beta, mut ld) = (Vec3::ONE, Vec3::ZERO);
+    let (mut ray, mut diff, weight) = camera_ray(scene, pixel, sampler, diff_scale, time);
+    if weight == 0.0 {
+        return (Vec3::ZERO, None);
+    }
+    let (mut beta, mut ld) = (Vec3::splat(weight), Vec3::ZERO);
     let (mut specular_bounce, mut depth, mut passes) = (false, 0, 0);
     let mut medium = scene.camera_medium;
     // DEVIATION(pbrt): appearance, `--fix sky-after-glossy`. pbrt-v3 adds infinite

@@ -596,6 +596,10 @@ impl Builder {
             return Err(Diagnostic::error(span, "the camera transform is not invertible"));
         }
         self.named_coords.insert("camera".into(), inv);
+        self.render.lens_data = match e.name.as_str() {
+            "realistic" => Some(self.lens_file(&e)?),
+            _ => None,
+        };
         self.render.camera = Some((e, ctm[0]));
         self.render.camera_end = (ctm[1] != ctm[0]).then_some((ctm[1], self.transform_times));
         if ctm[1] != ctm[0] {
@@ -603,6 +607,25 @@ impl Builder {
         }
         self.camera_media = self.gs.media;
         Ok(())
+    }
+
+    /// A realistic camera's lens file, read where `lensfile` names it (relative to the
+    /// scene file); pbrt stops without one, and so do we.
+    fn lens_file(&self, e: &Entity) -> Res<Vec<f64>> {
+        let Some(name) = e.params.string("lensfile")? else {
+            return Err(Diagnostic::error(e.name_span, "a realistic camera needs a \"lensfile\""));
+        };
+        let at = e.params.named("lensfile").map_or(e.name_span, |p| p.value_span);
+        let path = self.reader.resolve_path(&name);
+        // The file as the scene names it, wherever the scene is read from.
+        let bytes = self
+            .reader
+            .files
+            .read(&path)
+            .map_err(|why| Diagnostic::error(at, why.replace(&path.display().to_string(), &name)))?;
+        let text = String::from_utf8_lossy(&bytes);
+        crate::camera::realistic::read_lens_file(&text)
+            .map_err(|why| Diagnostic::error(at, format!("lens file \"{name}\": {why}")))
     }
 
     // ---- attribute stack --------------------------------------------------------

@@ -14,6 +14,7 @@
 
 use super::approx::Approx;
 use super::values::{self, Range};
+use crate::camera::realistic::{LensDesc, Weighting};
 use crate::limits::Limits;
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
@@ -31,6 +32,8 @@ pub enum CameraKind {
     Environment,
     /// pbrt-v4's `spherical`, by its `mapping`.
     Spherical(SphericalMapping),
+    /// pbrt's `realistic`: a lens system ([`Camera::lens`]).
+    Realistic,
 }
 
 /// How pbrt-v4's spherical camera lays the sphere of directions on the film.
@@ -50,6 +53,7 @@ impl CameraKind {
             CameraKind::Orthographic => "orthographic",
             CameraKind::Environment => "environment",
             CameraKind::Spherical(_) => "spherical",
+            CameraKind::Realistic => "realistic",
         }
     }
 }
@@ -73,6 +77,8 @@ pub struct Camera {
     pub camera_from_world_end: Option<(DMat4, [f64; 2])>,
     /// The frame its motion is interpolated in (see [`crate::math::animated`]).
     pub world_from_render: DMat4,
+    /// A realistic camera's lens system and settings.
+    pub lens: Option<std::sync::Arc<crate::camera::realistic::LensDesc>>,
 }
 
 impl Camera {
@@ -97,6 +103,8 @@ pub struct Film {
     pub pixel_bounds: [u32; 4],
     /// Output multiplier: v3 `scale`, v4 `iso`/100 × exposure time.
     pub scale: f32,
+    /// The film's diagonal in millimetres (a realistic camera's film size).
+    pub diagonal_mm: f32,
 }
 
 impl Film {
@@ -134,6 +142,8 @@ pub struct RenderOptions {
     pub camera: Option<(Entity, DMat4)>,
     /// The camera's end transform and the transform times, when it moves.
     pub camera_end: Option<(DMat4, [f64; 2])>,
+    /// A realistic camera's lens file, read where the `Camera` statement names it.
+    pub lens_data: Option<Vec<f64>>,
     /// The frame motion is interpolated in (pbrt-v4's rendering space; identity for v3).
     pub world_from_render: DMat4,
     pub film: Option<Entity>,
@@ -172,7 +182,7 @@ impl RenderOptions {
         notes: &mut Notes,
     ) -> Res<Resolved> {
         let (film, exposure_scale) = self.film(syntax, limits, warn, notes)?;
-        let camera = self.camera(&film, notes)?;
+        let camera = self.camera(&film, syntax, notes)?;
         let mut film = film;
         if syntax == Syntax::V4 {
             self.check_shutter_opens()?;
@@ -237,7 +247,8 @@ impl RenderOptions {
         let scale = values::float(p, "scale", 1.0, Range::NonNegative)?;
         let iso = values::float(p, "iso", 100.0, Range::Positive)?;
         // Output format and spectral-film details: nothing in the pixel values changes.
-        values::no_effect(p, &["diagonal", "savefp16", "coordinatesystem", "buckets", "lambdamin", "lambdamax"]);
+        let diagonal_mm = values::float(p, "diagonal", 35.0, Range::Positive)?;
+        values::no_effect(p, &["savefp16", "coordinatesystem", "buckets", "lambdamin", "lambdamax"]);
         let why = "pixel values are not clamped, and colours are not white-balanced";
         values::ignored(p, &["maxsampleluminance", "maxcomponentvalue", "whitebalance", "sensor"], why, warn);
         match e.name.as_str() {
@@ -254,6 +265,7 @@ impl RenderOptions {
             crop_window,
             pixel_bounds: bounds,
             scale,
+            diagonal_mm,
         };
         Ok((film, iso / 100.0))
     }
@@ -274,7 +286,39 @@ impl RenderOptions {
         Err(Diagnostic::error(at, msg))
     }
 
-    fn camera(&self, film: &Film, notes: &mut Notes) -> Res<Camera> {
+    /// A realistic camera's lens: the file's interfaces, the stop's diameter, the focus
+    /// distance and the weighting (a located error where the lens cannot focus).
+    fn lens(
+        &self,
+        kind: CameraKind,
+        e: &Entity,
+        film: &Film,
+        (syntax, notes): (Syntax, &mut Notes),
+    ) -> Res<Option<std::sync::Arc<LensDesc>>> {
+        let (CameraKind::Realistic, Some(data)) = (kind, &self.lens_data) else { return Ok(None) };
+        let p = &e.params;
+        if let Some(a) = p.named("aperture") {
+            a.mark_used();
+            notes.push((a.span, "Camera \"realistic\" \"aperture\"".into(), Approx::LensAperture));
+        }
+        let aperture_diameter = values::float(p, "aperturediameter", 1.0, Range::Positive)? as f64;
+        let focus_distance = values::float(p, "focusdistance", 10.0, Range::Positive)? as f64;
+        let simple = syntax == Syntax::V3 && p.bool("simpleweighting")?.unwrap_or(true);
+        let shutter = (values::float(p, "shutterclose", 1.0, Range::Any)?
+            - values::float(p, "shutteropen", 0.0, Range::Any)?)
+        .abs();
+        let weighting = match (simple, syntax) {
+            (true, _) => Weighting::Simple,
+            (false, Syntax::V3) => Weighting::Physical(shutter as f64),
+            (false, _) => Weighting::Physical(1.0),
+        };
+        let desc = LensDesc { data: data.clone(), aperture_diameter, focus_distance, weighting };
+        crate::camera::realistic::check_focus(&desc, film.diagonal_mm as f64)
+            .map_err(|why| Diagnostic::error(p.named("focusdistance").map_or(e.name_span, |f| f.value_span), why))?;
+        Ok(Some(std::sync::Arc::new(desc)))
+    }
+
+    fn camera(&self, film: &Film, syntax: Syntax, notes: &mut Notes) -> Res<Camera> {
         let default = (Entity::default_named("perspective"), DMat4::IDENTITY);
         let (e, camera_from_world) = self.camera.as_ref().unwrap_or(&default);
         let p = &e.params;
@@ -293,6 +337,7 @@ impl RenderOptions {
                     return Err(Diagnostic::error(at, msg));
                 }
             }),
+            "realistic" => CameraKind::Realistic,
             other => {
                 notes.push((e.name_span, format!("Camera \"{other}\""), Approx::Camera));
                 p.mark_all_used();
@@ -339,6 +384,7 @@ impl RenderOptions {
             camera_from_world: *camera_from_world,
             camera_from_world_end: self.camera_end,
             world_from_render: self.world_from_render,
+            lens: self.lens(kind, e, film, (syntax, notes))?,
         })
     }
 

@@ -542,3 +542,25 @@ fn v3_glass_ignores_roughness_as_pbrt_v3_does_and_v4_dielectric_reads_it() {
     let MaterialKind::Dielectric { roughness, .. } = &s.materials[0].kind else { panic!("{:?}", s.materials[0]) };
     assert_eq!(*roughness, [TexValue::Const(glam::Vec3::splat(0.3)); 2]);
 }
+
+#[test]
+fn a_realistic_camera_reads_its_lens_and_reports_it() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("realistic");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("lens.dat"), "# r t eta d\n0 2 1 20\n50 5 1.5 20\n-50 45 1 20\n").unwrap();
+    let scene = |camera: &str, film: &str| {
+        let text = format!("Camera \"realistic\" \"string lensfile\" \"lens.dat\" {camera}\n{film}\nWorldBegin\n");
+        std::fs::write(dir.join("s.pbrt"), text).unwrap();
+        load_file(&dir.join("s.pbrt")).unwrap()
+    };
+    let s = scene("\"float aperturediameter\" 6 \"float focusdistance\" 3", "Film \"image\" \"float diagonal\" 50");
+    let r = pbrt_sppm::cli::check::report(&s, false);
+    assert_eq!(r["camera"]["type"], "realistic");
+    assert_eq!(r["camera"]["lens"]["interfaces"], 3);
+    assert_eq!((num(&r["camera"]["lens"]["aperturediameter"]), num(&r["camera"]["lens"]["focusdistance"])), (6.0, 3.0));
+    assert_eq!(num(&r["camera"]["lens"]["filmdiagonal"]), 50.0);
+    assert!(s.approximated.is_empty() && s.warnings.is_empty(), "{:?} {:?}", s.approximated, s.warnings);
+    // pbrt-v4's aperture shapes and images are not read: listed.
+    let s = scene("\"string aperture\" \"pentagon\"", "Film \"rgb\"");
+    assert!(s.approximated.iter().any(|a| a.what.contains("aperture")), "{:?}", s.approximated);
+}

@@ -61,13 +61,16 @@ impl Cameras<'_> {
 
     fn path(&self, i: usize, pixel: [f32; 2], s: &mut impl Sampler) -> Rgb {
         let (pass, scene) = (self.pass, self.pass.scene);
-        let (mut ray, mut diff) = camera_ray(scene, pixel, s, self.differential_scale, self.pass.time);
+        let (mut ray, mut diff, weight) = camera_ray(scene, pixel, s, self.differential_scale, self.pass.time);
+        if weight == 0.0 {
+            return Rgb::ZERO;
+        }
         let camera_pdf = scene.camera.pdf_we(&ray).1 as f64 * pass.film_pixels;
         let mut partial = Partial::camera(camera_pdf, pass.lt_count());
         let light_path = self.lights.path(i % pass.light_paths as usize);
         // The last vertex, and where rays left it (past any interfaces since, light
         // densities are measured from there).
-        let (mut beta, mut color, mut prev, mut origin) = (Vec3::ONE, Vec3::ZERO, ray.o.0, ray.o.0);
+        let (mut beta, mut color, mut prev, mut origin) = (Vec3::splat(weight), Vec3::ZERO, ray.o.0, ray.o.0);
         let (mut len, mut passes, mut medium) = (0u32, 0u32, scene.camera_medium);
         loop {
             let hit = scene.intersect(&ray);

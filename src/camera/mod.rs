@@ -6,6 +6,7 @@
 //! Camera "orthographic" "float screenwindow" [-2 2 -1.5 1.5]
 //! Camera "environment"                                   # v3: latitude-longitude
 //! Camera "spherical" "string mapping" "equalarea"        # v4; or "equirectangular"
+//! Camera "realistic" "string lensfile" "lens.dat"        # see [`realistic`]
 //! ```
 //! The spherical cameras see every direction from their position: the film's (u, v)
 //! in [0, 1]² is laid on the sphere (pbrt-v3's environment camera and pbrt-v4's
@@ -22,6 +23,8 @@
 //! reached by chance (its rays are parallel), so it has none, as in pbrt; nor have the
 //! spherical ones (pbrt has no importance for them either), so light paths never end
 //! on them.
+
+pub mod realistic;
 
 use crate::math::animated::AnimatedTransform;
 use crate::math::equal_area;
@@ -40,6 +43,8 @@ pub struct Camera {
     world_from_camera: DMat4,
     motion: Option<AnimatedTransform>,
     shutter: [f32; 2],
+    /// A realistic camera's lens system.
+    lens: Option<std::sync::Arc<realistic::Lens>>,
     /// Screen window [x0, x1, y0, y1] and the full film resolution.
     window: [f32; 4],
     resolution: [f32; 2],
@@ -64,6 +69,10 @@ impl Camera {
                 )
             }),
             shutter: [desc.shutter_open, desc.shutter_close],
+            lens: desc.lens.as_ref().and_then(|l| {
+                let lens = realistic::Lens::new(l, [film.x_resolution, film.y_resolution], film.diagonal_mm as f64);
+                lens.ok().map(std::sync::Arc::new)
+            }),
             window: desc.screen_window,
             resolution: [film.x_resolution as f32, film.y_resolution as f32],
             tan_half_fov: (desc.fov.to_radians() / 2.0).tan(),
@@ -93,19 +102,26 @@ impl Camera {
         [x0 + p_raster[0] / self.resolution[0] * (x1 - x0), y1 - p_raster[1] / self.resolution[1] * (y1 - y0)]
     }
 
-    /// The ray through `p_raster` and its differentials: the rays through the same lens
-    /// point from one pixel over in x and in y, their offsets scaled by `scale`.
-    pub fn generate_ray_differential(
-        &self,
-        p_raster: [f32; 2],
-        u_lens: [f32; 2],
-        scale: f32,
-        time: f32,
-    ) -> (Ray, RayDifferential) {
-        let ray = self.generate_ray_at(p_raster, u_lens, time);
-        let rx = self.generate_ray_at([p_raster[0] + 1.0, p_raster[1]], u_lens, time);
-        let ry = self.generate_ray_at([p_raster[0], p_raster[1] + 1.0], u_lens, time);
-        (ray, RayDifferential { rx, ry }.scaled(&ray, scale))
+    /// The differentials of `ray` (made for `p_raster`, `u_lens`): the rays through the
+    /// same lens point from one pixel over in x and in y, their offsets scaled by
+    /// `scale` (the ray itself where the lens stops one, as pbrt has none then).
+    pub fn differentials(&self, ray: &Ray, p_raster: [f32; 2], u_lens: [f32; 2], scale: f32) -> RayDifferential {
+        let shifted = |dx: f32, dy: f32| {
+            self.generate_ray_weighted([p_raster[0] + dx, p_raster[1] + dy], u_lens, ray.time).map_or(*ray, |r| r.0)
+        };
+        RayDifferential { rx: shifted(1.0, 0.0), ry: shifted(0.0, 1.0) }.scaled(ray, scale)
+    }
+
+    /// The ray through `p_raster` and lens sample `u_lens` at `time` with its weight:
+    /// 1 but for a realistic camera, whose lens may stop it (`None`) or weight it.
+    pub fn generate_ray_weighted(&self, p_raster: [f32; 2], u_lens: [f32; 2], time: f32) -> Option<(Ray, f32)> {
+        let Some(lens) = &self.lens else { return Some((self.generate_ray_at(p_raster, u_lens, time), 1.0)) };
+        let uv = [(p_raster[0] / self.resolution[0]) as f64, (p_raster[1] / self.resolution[1]) as f64];
+        let (o, d, weight) = lens.ray(uv, u_lens)?;
+        let world_from_camera = self.world_from_camera_at(time);
+        let ow = world_from_camera.transform_point3(o);
+        let dw = world_from_camera.transform_vector3(d).normalize();
+        Some((Ray::new(Point3(ow.as_vec3()), Vector3(dw.as_vec3())).at_time(time), weight))
     }
 
     /// A world-space ray through raster position `p_raster` at time 0; `u_lens` picks
@@ -118,7 +134,9 @@ impl Camera {
     pub fn generate_ray_at(&self, p_raster: [f32; 2], u_lens: [f32; 2], time: f32) -> Ray {
         let [sx, sy] = self.screen(p_raster);
         let (mut o, mut d) = match self.kind {
-            CameraKind::Perspective => (
+            // A realistic camera's rays come from its lens (`generate_ray_weighted`);
+            // here, for tools that want a ray per film point, a pinhole's.
+            CameraKind::Perspective | CameraKind::Realistic => (
                 DVec3::ZERO,
                 DVec3::new((sx * self.tan_half_fov) as f64, (sy * self.tan_half_fov) as f64, 1.0).normalize(),
             ),

@@ -1,0 +1,386 @@
+//! pbrt's `realistic` camera: rays traced from the film through a system of spherical
+//! lens elements and an aperture stop, as pbrt-v3 and pbrt-v4 trace them.
+//!
+//! ```text
+//! Camera "realistic" "string lensfile" "dgauss.50mm.dat" "float aperturediameter" 6
+//!        "float focusdistance" 1.5 "bool simpleweighting" true     # v3 only
+//! Film "image" "float diagonal" 35                                  # mm
+//! ```
+//! The lens file lists each interface from the scene side to the film as four numbers,
+//! in millimetres: curvature radius (0 for the aperture stop), thickness to the next,
+//! index of refraction (0 for air) and aperture diameter; `#` starts a comment. The
+//! stop's diameter becomes `aperturediameter` (never larger than the file's). The film
+//! is placed by pbrt's thick-lens approximation to focus at `focusdistance`; a ray
+//! leaves the film towards the rear element within the exit pupil's bounds (64 bands of
+//! distance from the film centre, each found by tracing a million film-to-rear rays)
+//! and carries pbrt's weight: cos⁴θ times the bound's area, over the centre bound's
+//! area (pbrt-v3's `simpleweighting`, its default) or over the rear element's distance
+//! squared (pbrt-v4, and pbrt-v3 without it, times the shutter's length).
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// One interface, in metres.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Element {
+    curvature_radius: f64,
+    thickness: f64,
+    eta: f64,
+    aperture_radius: f64,
+}
+
+/// A lens system focused for a film, with its exit pupil bounds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lens {
+    elements: Vec<Element>,
+    /// Per band of film radius: [x0, y0, x1, y1] on the rear element's plane.
+    pupils: Vec<[f64; 4]>,
+    /// The film's physical width and height (metres) and its diagonal.
+    extent: [f64; 2],
+    diagonal: f64,
+    weighting: Weighting,
+}
+
+/// How a ray's weight is normalised.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Weighting {
+    /// pbrt-v3's `simpleweighting` (its default): over the centre band's pupil area.
+    Simple,
+    /// Over the rear element's distance squared, times this (pbrt-v3: the shutter's
+    /// length without `simpleweighting`; pbrt-v4: 1, its film takes the exposure).
+    Physical(f64),
+}
+
+/// What a lens file and the camera's parameters give.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LensDesc {
+    /// Four numbers per interface, as the file has them (millimetres).
+    pub data: Vec<f64>,
+    pub aperture_diameter: f64,
+    pub focus_distance: f64,
+    pub weighting: Weighting,
+}
+
+/// pbrt's `Refract`: the direction transmitted for incident `wi` (pointing away) about
+/// normal `n` (on its side) with relative index `eta` = ηi/ηt; `None` past the critical
+/// angle.
+fn refract(wi: DVec3, n: DVec3, eta: f64) -> Option<DVec3> {
+    let cos_i = n.dot(wi);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some(eta * -wi + (eta * cos_i - cos_t) * n)
+}
+
+/// The hit of a ray (lens space) with a spherical interface centred on the axis at
+/// `z_center`: its t and the normal facing back along the ray.
+fn intersect_spherical(radius: f64, z_center: f64, o: DVec3, d: DVec3) -> Option<(f64, DVec3)> {
+    let oc = o - DVec3::new(0.0, 0.0, z_center);
+    let (a, b, c) = (d.dot(d), 2.0 * d.dot(oc), oc.dot(oc) - radius * radius);
+    let disc = b * b - 4.0 * a * c;
+    if disc < 0.0 {
+        return None;
+    }
+    let q = if b < 0.0 { -0.5 * (b - disc.sqrt()) } else { -0.5 * (b + disc.sqrt()) };
+    let (mut t0, mut t1) = (q / a, c / q);
+    if t0 > t1 {
+        std::mem::swap(&mut t0, &mut t1);
+    }
+    let closer = (d.z > 0.0) ^ (radius < 0.0);
+    let t = if closer { t0 } else { t1 };
+    if t.is_nan() || t < 0.0 {
+        return None;
+    }
+    let n = (oc + t * d).normalize();
+    Some((t, if n.dot(-d) < 0.0 { -n } else { n }))
+}
+
+impl Element {
+    fn is_stop(&self) -> bool {
+        self.curvature_radius == 0.0
+    }
+
+    /// Moves a lens-space ray to this interface (at `z`) and through it into `eta_t`
+    /// from `eta_i`; `None` when it misses, is stopped or reflects totally.
+    fn pass(&self, z: f64, (o, d): (DVec3, DVec3), eta_i: f64, eta_t: f64) -> Option<(DVec3, DVec3)> {
+        let (t, n) = if self.is_stop() {
+            (d.z != 0.0).then_some(((z - o.z) / d.z, DVec3::ZERO))?
+        } else {
+            intersect_spherical(self.curvature_radius, z + self.curvature_radius, o, d)?
+        };
+        if t.is_nan() || t < 0.0 {
+            return None;
+        }
+        let p = o + t * d;
+        if p.x * p.x + p.y * p.y > self.aperture_radius * self.aperture_radius {
+            return None;
+        }
+        let d = if self.is_stop() { d } else { refract((-d).normalize(), n, eta_i / eta_t)? };
+        Some((p, d))
+    }
+}
+
+// DEVIATION(pbrt): input leniency. A curved interface whose index is 0 is air both
+// ways; pbrt-v3's trace from the film divides by it (rays then leave along the normal).
+fn air(eta: f64) -> f64 {
+    if eta == 0.0 { 1.0 } else { eta }
+}
+
+/// Traces a camera-space ray from the film (z = 0, looking down +z) out through the
+/// elements; the ray leaving the front element, in camera space.
+fn trace_from_film(elements: &[Element], o: DVec3, d: DVec3) -> Option<(DVec3, DVec3)> {
+    let flip = DVec3::new(1.0, 1.0, -1.0);
+    let (mut ray, mut z) = ((o * flip, d * flip), 0.0);
+    for i in (0..elements.len()).rev() {
+        let e = &elements[i];
+        z -= e.thickness;
+        if e.is_stop() && ray.1.z >= 0.0 {
+            return None;
+        }
+        let eta_t = if i > 0 { air(elements[i - 1].eta) } else { 1.0 };
+        ray = e.pass(z, ray, air(e.eta), eta_t)?;
+    }
+    Some((ray.0 * flip, ray.1 * flip))
+}
+
+/// Traces a camera-space ray from the scene in through the elements to the film side.
+fn trace_from_scene(elements: &[Element], o: DVec3, d: DVec3) -> Option<(DVec3, DVec3)> {
+    let flip = DVec3::new(1.0, 1.0, -1.0);
+    let (mut ray, mut z) = ((o * flip, d * flip), -front_z(elements));
+    for (i, e) in elements.iter().enumerate() {
+        let eta_i = if i == 0 { 1.0 } else { air(elements[i - 1].eta) };
+        ray = e.pass(z, ray, eta_i, air(e.eta))?;
+        z += e.thickness;
+    }
+    Some((ray.0 * flip, ray.1 * flip))
+}
+
+fn front_z(elements: &[Element]) -> f64 {
+    elements.iter().map(|e| e.thickness).sum()
+}
+
+fn rear_z(elements: &[Element]) -> f64 {
+    elements.last().map_or(0.0, |e| e.thickness)
+}
+
+fn rear_radius(elements: &[Element]) -> f64 {
+    elements.last().map_or(0.0, |e| e.aperture_radius)
+}
+
+/// pbrt's cardinal points from a ray in and the ray out: (principal plane z, focal z).
+fn cardinal_points(r_in: (DVec3, DVec3), r_out: (DVec3, DVec3)) -> (f64, f64) {
+    let tf = -r_out.0.x / r_out.1.x;
+    let tp = (r_in.0.x - r_out.0.x) / r_out.1.x;
+    (-(r_out.0.z + tp * r_out.1.z), -(r_out.0.z + tf * r_out.1.z))
+}
+
+/// The film distance that focuses at `focus_distance` by pbrt's thick-lens
+/// approximation (the rear element's thickness to the film); an error when the lens
+/// cannot focus that close or no paraxial ray gets through.
+fn focus_thick_lens(elements: &[Element], diagonal: f64, focus_distance: f64) -> Result<f64, String> {
+    let x = 0.001 * diagonal;
+    let r_scene = (DVec3::new(x, 0.0, front_z(elements) + 1.0), DVec3::new(0.0, 0.0, -1.0));
+    let no_ray = "no ray parallel to the axis gets through the lens system (is the aperture stop tiny?)";
+    let r_film = trace_from_scene(elements, r_scene.0, r_scene.1).ok_or(no_ray)?;
+    let (pz0, fz0) = cardinal_points(r_scene, r_film);
+    let r_film2 = (DVec3::new(x, 0.0, rear_z(elements) - 1.0), DVec3::new(0.0, 0.0, 1.0));
+    let r_scene2 = trace_from_film(elements, r_film2.0, r_film2.1).ok_or(no_ray)?;
+    let (pz1, _) = cardinal_points(r_film2, r_scene2);
+    let f = fz0 - pz0;
+    let z = -focus_distance;
+    let c = (pz1 - z - pz0) * (pz1 - z - 4.0 * f - pz0);
+    if c.is_nan() || c <= 0.0 {
+        return Err(format!(
+            "the lens cannot focus at {} m (too close for its focal length {f:.4} m)",
+            focus_distance as f32
+        ));
+    }
+    Ok(rear_z(elements) + 0.5 * (pz1 - z + pz0 - c.sqrt()))
+}
+
+/// The bounds on the rear element's plane of the rays from film points between x0 and
+/// x1 (on the x axis) that get through, as pbrt finds them: 1024² points on a square
+/// 1.5 times the rear element, widened by two sample spacings.
+fn bound_exit_pupil(elements: &[Element], x0: f64, x1: f64) -> [f64; 4] {
+    const N: usize = 1024 * 1024;
+    let r = 1.5 * rear_radius(elements);
+    let z = rear_z(elements);
+    let inside = |b: &[f64; 4], x: f64, y: f64| x >= b[0] && x <= b[2] && y >= b[1] && y <= b[3];
+    let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut any = false;
+    for i in 0..N {
+        let film = DVec3::new(x0 + (x1 - x0) * (i as f64 + 0.5) / N as f64, 0.0, 0.0);
+        let (u, v) = (radical_inverse(2, i as u64), radical_inverse(3, i as u64));
+        let rear = DVec3::new(-r + 2.0 * r * u, -r + 2.0 * r * v, z);
+        if inside(&b, rear.x, rear.y) || trace_from_film(elements, film, rear - film).is_some() {
+            b = [b[0].min(rear.x), b[1].min(rear.y), b[2].max(rear.x), b[3].max(rear.y)];
+            any = true;
+        }
+    }
+    if !any {
+        return [-r, -r, r, r];
+    }
+    let grow = 2.0 * (2.0 * r * std::f64::consts::SQRT_2) / (N as f64).sqrt();
+    [b[0] - grow, b[1] - grow, b[2] + grow, b[3] + grow]
+}
+
+fn radical_inverse(base: u64, mut i: u64) -> f64 {
+    let (mut inv, mut f) = (0.0, 1.0);
+    while i > 0 {
+        f /= base as f64;
+        inv += (i % base) as f64 * f;
+        i /= base;
+    }
+    inv
+}
+
+fn area(b: &[f64; 4]) -> f64 {
+    (b[2] - b[0]) * (b[3] - b[1])
+}
+
+impl Lens {
+    /// The lens of `desc`, focused, for a film of `resolution` pixels and a diagonal of
+    /// `diagonal_mm`.
+    pub fn new(desc: &LensDesc, resolution: [u32; 2], diagonal_mm: f64) -> Result<Lens, String> {
+        let mut elements = elements_of(desc);
+        let diagonal = diagonal_mm * 0.001;
+        let film = focus_thick_lens(&elements, diagonal, desc.focus_distance)?;
+        if let Some(last) = elements.last_mut() {
+            last.thickness = film;
+        }
+        let aspect = resolution[1] as f64 / resolution[0] as f64;
+        let x = (diagonal * diagonal / (1.0 + aspect * aspect)).sqrt();
+        let pupils = (0..64)
+            .into_par_iter()
+            .map(|i| {
+                bound_exit_pupil(&elements, i as f64 / 64.0 * diagonal / 2.0, (i + 1) as f64 / 64.0 * diagonal / 2.0)
+            })
+            .collect();
+        Ok(Lens { elements, pupils, extent: [x, aspect * x], diagonal, weighting: desc.weighting })
+    }
+
+    /// The camera-space ray for a raster position (as a fraction of the full film,
+    /// [0, 1]²) and a lens sample, with its weight; `None` when the lens stops it.
+    pub fn ray(&self, film_uv: [f64; 2], u: [f32; 2]) -> Option<(DVec3, DVec3, f32)> {
+        let p2 =
+            [-self.extent[0] / 2.0 + film_uv[0] * self.extent[0], -self.extent[1] / 2.0 + film_uv[1] * self.extent[1]];
+        let film = DVec3::new(-p2[0], p2[1], 0.0);
+        let r = (film.x * film.x + film.y * film.y).sqrt();
+        let band = ((r / (self.diagonal / 2.0) * self.pupils.len() as f64) as usize).min(self.pupils.len() - 1);
+        let b = &self.pupils[band];
+        let (lx, ly) = (b[0] + (b[2] - b[0]) * u[0] as f64, b[1] + (b[3] - b[1]) * u[1] as f64);
+        let (sin, cos) = if r != 0.0 { (film.y / r, film.x / r) } else { (0.0, 1.0) };
+        let rear = DVec3::new(cos * lx - sin * ly, sin * lx + cos * ly, rear_z(&self.elements));
+        let d = rear - film;
+        let (o, dir) = trace_from_film(&self.elements, film, d)?;
+        let cos_theta = d.normalize().z;
+        let cos4 = cos_theta.powi(4);
+        let weight = match self.weighting {
+            Weighting::Simple => cos4 * area(b) / area(&self.pupils[0]),
+            Weighting::Physical(k) => k * cos4 * area(b) / (rear_z(&self.elements) * rear_z(&self.elements)),
+        };
+        Some((o, dir.normalize(), weight as f32))
+    }
+}
+
+/// Whether the lens of `desc` can focus at its distance on a film of `diagonal_mm`
+/// (the reason when it cannot).
+pub fn check_focus(desc: &LensDesc, diagonal_mm: f64) -> Result<(), String> {
+    let elements: Vec<Element> = elements_of(desc);
+    focus_thick_lens(&elements, diagonal_mm * 0.001, desc.focus_distance).map(|_| ())
+}
+
+/// The interfaces of a lens file in metres, the stop narrowed to the asked diameter
+/// (a larger one is clamped to the file's, as pbrt does with a warning).
+fn elements_of(desc: &LensDesc) -> Vec<Element> {
+    desc.data
+        .chunks_exact(4)
+        .map(|c| Element {
+            curvature_radius: c[0] * 0.001,
+            thickness: c[1] * 0.001,
+            eta: c[2],
+            aperture_radius: if c[0] == 0.0 { desc.aperture_diameter.min(c[3]) } else { c[3] } * 0.001 / 2.0,
+        })
+        .collect()
+}
+
+/// Reads a lens file's numbers (pbrt's `ReadFloatFile`: numbers separated by white
+/// space, `#` to the end of a line a comment); an error names what is not a number or
+/// a count that is not a multiple of four.
+pub fn read_lens_file(text: &str) -> Result<Vec<f64>, String> {
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("");
+        for word in line.split_whitespace() {
+            let v: f64 = word.parse().map_err(|_| format!("line {}: \"{word}\" is not a number", n + 1))?;
+            if !v.is_finite() {
+                return Err(format!("line {}: {word} is not finite", n + 1));
+            }
+            out.push(v);
+        }
+    }
+    if out.is_empty() || !out.len().is_multiple_of(4) {
+        return Err(format!("a lens file has four numbers per interface; this one has {}", out.len()));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A single biconvex lens (radius 50 mm both sides, 5 mm thick, η 1.5) with a stop
+    /// in front of it.
+    fn simple() -> LensDesc {
+        let data = vec![0.0, 2.0, 0.0, 20.0, 50.0, 5.0, 1.5, 20.0, -50.0, 40.0, 0.0, 20.0];
+        LensDesc { data, aperture_diameter: 10.0, focus_distance: 1.0, weighting: Weighting::Simple }
+    }
+
+    #[test]
+    fn a_focused_lens_images_a_point_on_the_axis_to_the_film_centre() {
+        let lens = Lens::new(&simple(), [64, 64], 35.0).unwrap();
+        // Rays from a point 1 m in front (the focus distance, measured from the film)
+        // through several lens points all meet the film near its centre.
+        let p = DVec3::new(0.0, 0.0, 1.0);
+        let mut hits = 0;
+        for (x, y) in [(0.002, 0.0), (0.0, 0.003), (-0.004, 0.001), (0.001, -0.002)] {
+            let front = DVec3::new(x, y, front_z(&lens.elements));
+            let Some((o, d)) = trace_from_scene(&lens.elements, p, front - p) else { continue };
+            let t = -o.z / d.z;
+            let on_film = o + t * d;
+            assert!(on_film.truncate().length() < 2e-4, "{on_film}");
+            hits += 1;
+        }
+        assert!(hits >= 3);
+        // The stop was narrowed to the asked diameter.
+        assert_eq!(lens.elements[0].aperture_radius, 0.005);
+    }
+
+    #[test]
+    fn exit_pupils_hold_every_ray_that_gets_through() {
+        let lens = Lens::new(&simple(), [64, 64], 35.0).unwrap();
+        let z = rear_z(&lens.elements);
+        let r = rear_radius(&lens.elements);
+        let mut through = 0;
+        for i in 0..20_000u64 {
+            let film = DVec3::new(radical_inverse(5, i) * 0.0175, 0.0, 0.0);
+            let rear = DVec3::new((radical_inverse(2, i) * 2.0 - 1.0) * r, (radical_inverse(3, i) * 2.0 - 1.0) * r, z);
+            if trace_from_film(&lens.elements, film, rear - film).is_some() {
+                let band = ((film.x / 0.0175 * 64.0) as usize).min(63);
+                let b = &lens.pupils[band];
+                assert!(rear.x >= b[0] && rear.x <= b[2] && rear.y >= b[1] && rear.y <= b[3]);
+                through += 1;
+            }
+        }
+        assert!(through > 100);
+    }
+
+    #[test]
+    fn lens_files_read_as_pbrt_reads_them() {
+        assert_eq!(read_lens_file("# r t eta d\n0 1 0 2\n3 4 1.5 5 # last\n").unwrap().len(), 8);
+        assert!(read_lens_file("1 2 3").unwrap_err().contains("four numbers"));
+        assert!(read_lens_file("1 2 x 4").unwrap_err().contains("\"x\""));
+    }
+}
