@@ -39,6 +39,7 @@ pub struct Lens {
     extent: [f64; 2],
     diagonal: f64,
     weighting: Weighting,
+    aperture: Option<Aperture>,
 }
 
 /// How a ray's weight is normalised.
@@ -59,6 +60,108 @@ pub struct LensDesc {
     pub aperture_diameter: f64,
     pub focus_distance: f64,
     pub weighting: Weighting,
+    /// pbrt-v4's `aperture`: the stop's shape or image (round without).
+    pub aperture: Option<Aperture>,
+}
+
+/// pbrt-v4's aperture image: the stop's transmission over [−r, r]², one channel, its
+/// rows flipped and scaled so that its mean is π/4 (a round stop's), as pbrt-v4 keeps
+/// it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Aperture {
+    width: usize,
+    height: usize,
+    values: Vec<f32>,
+}
+
+impl Aperture {
+    /// From `width` × `height` values, top row first (an image as read).
+    pub fn from_rows(width: usize, height: usize, mut values: Vec<f32>) -> Option<Aperture> {
+        if width == 0 || height == 0 || values.len() != width * height {
+            return None;
+        }
+        let flipped: Vec<f32> = (0..height).rev().flat_map(|y| values[y * width..(y + 1) * width].to_vec()).collect();
+        values = flipped;
+        let mean = values.iter().map(|&v| v as f64).sum::<f64>() / values.len() as f64;
+        if !(mean > 0.0 && mean.is_finite()) {
+            return None;
+        }
+        let scale = (std::f64::consts::FRAC_PI_4 / mean) as f32;
+        values.iter_mut().for_each(|v| *v *= scale);
+        Some(Aperture { width, height, values })
+    }
+
+    /// One of pbrt-v4's built-in shapes (`gaussian`, `square`, `pentagon`, `star`) at
+    /// 256², as it draws them.
+    pub fn builtin(name: &str) -> Option<Aperture> {
+        const RES: usize = 256;
+        let at = |x: usize, y: usize| {
+            [-1.0 + 2.0 * (x as f32 + 0.5) / RES as f32, -1.0 + 2.0 * (y as f32 + 0.5) / RES as f32]
+        };
+        let image = |f: &dyn Fn([f32; 2], usize, usize) -> f32| {
+            (0..RES).flat_map(|y| (0..RES).map(move |x| (x, y))).map(|(x, y)| f(at(x, y), x, y)).collect::<Vec<f32>>()
+        };
+        let values = match name {
+            "gaussian" => image(&|p, _, _| ((-(p[0] * p[0] + p[1] * p[1])).exp() - (-1.0f32).exp()).max(0.0)),
+            "square" => image(&|_, x, y| {
+                let inside = |v: usize| v >= RES / 4 && v < 3 * RES / 4;
+                if inside(x) && inside(y) { 4.0 } else { 0.0 }
+            }),
+            "pentagon" => {
+                let (c1, c2) = ((5f32.sqrt() - 1.0) / 4.0, (5f32.sqrt() + 1.0) / 4.0);
+                let s1 = (10.0 + 2.0 * 5f32.sqrt()).sqrt() / 4.0;
+                let s2 = (10.0 - 2.0 * 5f32.sqrt()).sqrt() / 4.0;
+                let vert = [[0.0, 1.0], [s1, c1], [s2, -c2], [-s2, -c2], [-s1, c1]].map(|v| [v[0] * 0.8, v[1] * 0.8]);
+                image(&|p, _, _| winding(&vert, p))
+            }
+            "star" => {
+                let inner = 72f32.to_radians().cos() / 36f32.to_radians().cos();
+                let mut vert: Vec<[f32; 2]> = (0..10)
+                    .map(|i| {
+                        let r = if i & 1 == 1 { 1.0 } else { inner };
+                        let a = std::f32::consts::PI * i as f32 / 5.0;
+                        [r * a.cos(), r * a.sin()]
+                    })
+                    .collect();
+                vert.reverse();
+                image(&|p, _, _| winding(&vert, p))
+            }
+            _ => return None,
+        };
+        Aperture::from_rows(RES, RES, values)
+    }
+
+    /// The transmission at a stop point (x, y) over its radius: bilinear, 0 outside.
+    fn at(&self, x: f64, y: f64) -> f32 {
+        let (u, v) = ((x + 1.0) / 2.0 * self.width as f64 - 0.5, (y + 1.0) / 2.0 * self.height as f64 - 0.5);
+        let (x0, y0) = (u.floor(), v.floor());
+        let (fx, fy) = ((u - x0) as f32, (v - y0) as f32);
+        let texel = |x: f64, y: f64| {
+            let inside = x >= 0.0 && y >= 0.0 && (x as usize) < self.width && (y as usize) < self.height;
+            if inside { self.values[y as usize * self.width + x as usize] } else { 0.0 }
+        };
+        (1.0 - fx) * (1.0 - fy) * texel(x0, y0)
+            + fx * (1.0 - fy) * texel(x0 + 1.0, y0)
+            + (1.0 - fx) * fy * texel(x0, y0 + 1.0)
+            + fx * fy * texel(x0 + 1.0, y0 + 1.0)
+    }
+}
+
+/// 1 inside the polygon `vert` (non-zero winding, pbrt-v4's edge test), 0 outside.
+fn winding(vert: &[[f32; 2]], p: [f32; 2]) -> f32 {
+    let mut w = 0;
+    for i in 0..vert.len() {
+        let (a, b) = (vert[i], vert[(i + 1) % vert.len()]);
+        let e = (p[0] - a[0]) * (b[1] - a[1]) - (p[1] - a[1]) * (b[0] - a[0]);
+        if a[1] <= p[1] {
+            if b[1] > p[1] && e > 0.0 {
+                w += 1;
+            }
+        } else if b[1] <= p[1] && e < 0.0 {
+            w -= 1;
+        }
+    }
+    if w == 0 { 0.0 } else { 1.0 }
 }
 
 /// pbrt's `Refract`: the direction transmitted for incident `wi` (pointing away) about
@@ -129,20 +232,35 @@ fn air(eta: f64) -> f64 {
 }
 
 /// Traces a camera-space ray from the film (z = 0, looking down +z) out through the
-/// elements; the ray leaving the front element, in camera space.
-fn trace_from_film(elements: &[Element], o: DVec3, d: DVec3) -> Option<(DVec3, DVec3)> {
+/// elements; the ray leaving the front element, in camera space, and the aperture
+/// image's transmission where it crossed the stop (1 for a round stop).
+fn trace_from_film(
+    elements: &[Element],
+    aperture: Option<&Aperture>,
+    o: DVec3,
+    d: DVec3,
+) -> Option<(DVec3, DVec3, f32)> {
     let flip = DVec3::new(1.0, 1.0, -1.0);
-    let (mut ray, mut z) = ((o * flip, d * flip), 0.0);
+    let (mut ray, mut z, mut weight) = ((o * flip, d * flip), 0.0, 1.0);
     for i in (0..elements.len()).rev() {
         let e = &elements[i];
         z -= e.thickness;
         if e.is_stop() && ray.1.z >= 0.0 {
             return None;
         }
+        if let (true, Some(a)) = (e.is_stop(), aperture) {
+            let p = ray.0 + (z - ray.0.z) / ray.1.z * ray.1;
+            weight = a.at(p.x / e.aperture_radius, p.y / e.aperture_radius);
+            if weight == 0.0 {
+                return None;
+            }
+            ray.0 = p;
+            continue;
+        }
         let eta_t = if i > 0 { air(elements[i - 1].eta) } else { 1.0 };
         ray = e.pass(z, ray, air(e.eta), eta_t)?;
     }
-    Some((ray.0 * flip, ray.1 * flip))
+    Some((ray.0 * flip, ray.1 * flip, weight))
 }
 
 /// Traces a camera-space ray from the scene in through the elements to the film side.
@@ -186,8 +304,8 @@ fn focus_thick_lens(elements: &[Element], diagonal: f64, focus_distance: f64) ->
     let r_film = trace_from_scene(elements, r_scene.0, r_scene.1).ok_or(no_ray)?;
     let (pz0, fz0) = cardinal_points(r_scene, r_film);
     let r_film2 = (DVec3::new(x, 0.0, rear_z(elements) - 1.0), DVec3::new(0.0, 0.0, 1.0));
-    let r_scene2 = trace_from_film(elements, r_film2.0, r_film2.1).ok_or(no_ray)?;
-    let (pz1, _) = cardinal_points(r_film2, r_scene2);
+    let r_scene2 = trace_from_film(elements, None, r_film2.0, r_film2.1).ok_or(no_ray)?;
+    let (pz1, _) = cardinal_points(r_film2, (r_scene2.0, r_scene2.1));
     let f = fz0 - pz0;
     let z = -focus_distance;
     let c = (pz1 - z - pz0) * (pz1 - z - 4.0 * f - pz0);
@@ -203,7 +321,7 @@ fn focus_thick_lens(elements: &[Element], diagonal: f64, focus_distance: f64) ->
 /// The bounds on the rear element's plane of the rays from film points between x0 and
 /// x1 (on the x axis) that get through, as pbrt finds them: 1024² points on a square
 /// 1.5 times the rear element, widened by two sample spacings.
-fn bound_exit_pupil(elements: &[Element], x0: f64, x1: f64) -> [f64; 4] {
+fn bound_exit_pupil(elements: &[Element], aperture: Option<&Aperture>, x0: f64, x1: f64) -> [f64; 4] {
     const N: usize = 1024 * 1024;
     let r = 1.5 * rear_radius(elements);
     let z = rear_z(elements);
@@ -214,7 +332,7 @@ fn bound_exit_pupil(elements: &[Element], x0: f64, x1: f64) -> [f64; 4] {
         let film = DVec3::new(x0 + (x1 - x0) * (i as f64 + 0.5) / N as f64, 0.0, 0.0);
         let (u, v) = (radical_inverse(2, i as u64), radical_inverse(3, i as u64));
         let rear = DVec3::new(-r + 2.0 * r * u, -r + 2.0 * r * v, z);
-        if inside(&b, rear.x, rear.y) || trace_from_film(elements, film, rear - film).is_some() {
+        if inside(&b, rear.x, rear.y) || trace_from_film(elements, aperture, film, rear - film).is_some() {
             b = [b[0].min(rear.x), b[1].min(rear.y), b[2].max(rear.x), b[3].max(rear.y)];
             any = true;
         }
@@ -255,10 +373,12 @@ impl Lens {
         let pupils = (0..64)
             .into_par_iter()
             .map(|i| {
-                bound_exit_pupil(&elements, i as f64 / 64.0 * diagonal / 2.0, (i + 1) as f64 / 64.0 * diagonal / 2.0)
+                let (r0, r1) = (i as f64 / 64.0 * diagonal / 2.0, (i + 1) as f64 / 64.0 * diagonal / 2.0);
+                bound_exit_pupil(&elements, desc.aperture.as_ref(), r0, r1)
             })
             .collect();
-        Ok(Lens { elements, pupils, extent: [x, aspect * x], diagonal, weighting: desc.weighting })
+        let aperture = desc.aperture.clone();
+        Ok(Lens { elements, pupils, extent: [x, aspect * x], diagonal, weighting: desc.weighting, aperture })
     }
 
     /// The camera-space ray for a raster position (as a fraction of the full film,
@@ -274,14 +394,14 @@ impl Lens {
         let (sin, cos) = if r != 0.0 { (film.y / r, film.x / r) } else { (0.0, 1.0) };
         let rear = DVec3::new(cos * lx - sin * ly, sin * lx + cos * ly, rear_z(&self.elements));
         let d = rear - film;
-        let (o, dir) = trace_from_film(&self.elements, film, d)?;
+        let (o, dir, transmission) = trace_from_film(&self.elements, self.aperture.as_ref(), film, d)?;
         let cos_theta = d.normalize().z;
         let cos4 = cos_theta.powi(4);
         let weight = match self.weighting {
             Weighting::Simple => cos4 * area(b) / area(&self.pupils[0]),
             Weighting::Physical(k) => k * cos4 * area(b) / (rear_z(&self.elements) * rear_z(&self.elements)),
         };
-        Some((o, dir.normalize(), weight as f32))
+        Some((o, dir.normalize(), weight as f32 * transmission))
     }
 }
 
@@ -335,7 +455,7 @@ mod tests {
     /// in front of it.
     fn simple() -> LensDesc {
         let data = vec![0.0, 2.0, 0.0, 20.0, 50.0, 5.0, 1.5, 20.0, -50.0, 40.0, 0.0, 20.0];
-        LensDesc { data, aperture_diameter: 10.0, focus_distance: 1.0, weighting: Weighting::Simple }
+        LensDesc { data, aperture_diameter: 10.0, focus_distance: 1.0, weighting: Weighting::Simple, aperture: None }
     }
 
     #[test]
@@ -367,7 +487,7 @@ mod tests {
         for i in 0..20_000u64 {
             let film = DVec3::new(radical_inverse(5, i) * 0.0175, 0.0, 0.0);
             let rear = DVec3::new((radical_inverse(2, i) * 2.0 - 1.0) * r, (radical_inverse(3, i) * 2.0 - 1.0) * r, z);
-            if trace_from_film(&lens.elements, film, rear - film).is_some() {
+            if trace_from_film(&lens.elements, None, film, rear - film).is_some() {
                 let band = ((film.x / 0.0175 * 64.0) as usize).min(63);
                 let b = &lens.pupils[band];
                 assert!(rear.x >= b[0] && rear.x <= b[2] && rear.y >= b[1] && rear.y <= b[3]);
@@ -375,6 +495,24 @@ mod tests {
             }
         }
         assert!(through > 100);
+    }
+
+    #[test]
+    fn builtin_apertures_have_a_round_stops_mean_and_their_shapes() {
+        for name in ["gaussian", "square", "pentagon", "star"] {
+            let a = Aperture::builtin(name).unwrap();
+            let mean = a.values.iter().map(|&v| v as f64).sum::<f64>() / a.values.len() as f64;
+            assert!((mean - std::f64::consts::FRAC_PI_4).abs() < 1e-4, "{name}: mean {mean}");
+            assert!(a.at(0.0, 0.0) > 0.0, "{name}: closed at the centre");
+            assert_eq!(a.at(0.99, 0.99), 0.0, "{name}: open in the corner");
+        }
+        // The square is open to half the radius; the pentagon's top vertex is 0.8 up
+        // and its base 0.65 down (pbrt flips the rows: here the base is up).
+        let square = Aperture::builtin("square").unwrap();
+        assert!(square.at(0.4, -0.4) > 0.0 && square.at(0.6, 0.0) == 0.0);
+        let pentagon = Aperture::builtin("pentagon").unwrap();
+        assert!(pentagon.at(0.0, -0.75) > 0.0 && pentagon.at(0.0, 0.75) == 0.0);
+        assert!(Aperture::builtin("hexagon").is_none());
     }
 
     #[test]

@@ -20,11 +20,10 @@ pub enum Approx {
     ColorSpace,
     EqualAreaMap,
     NanoVdb,
-    LensAperture,
 }
 
 impl Approx {
-    pub const ALL: [Approx; 12] = [
+    pub const ALL: [Approx; 11] = [
         Approx::CoatInBlend,
         Approx::HairInBlend,
         Approx::UnsupportedMaterial,
@@ -36,7 +35,6 @@ impl Approx {
         Approx::ColorSpace,
         Approx::EqualAreaMap,
         Approx::NanoVdb,
-        Approx::LensAperture,
     ];
 
     /// How it is rendered instead (the README lists these texts).
@@ -58,7 +56,6 @@ impl Approx {
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",
             Approx::ColorSpace => "only sRGB is supported; RGB values are taken as sRGB",
             Approx::EqualAreaMap => "pbrt-v4's equal-area environment maps are read as equirectangular ones",
-            Approx::LensAperture => "the realistic camera's aperture shape or image is not read: the stop is round",
             Approx::NanoVdb => {
                 "NanoVDB files cannot be read (no Rust reader of the format exists): what the medium fills is rendered as vacuum"
             }

@@ -596,9 +596,9 @@ impl Builder {
             return Err(Diagnostic::error(span, "the camera transform is not invertible"));
         }
         self.named_coords.insert("camera".into(), inv);
-        self.render.lens_data = match e.name.as_str() {
-            "realistic" => Some(self.lens_file(&e)?),
-            _ => None,
+        (self.render.lens_data, self.render.lens_aperture) = match e.name.as_str() {
+            "realistic" => (Some(self.lens_file(&e)?), self.lens_aperture(&e)?),
+            _ => (None, None),
         };
         self.render.camera = Some((e, ctm[0]));
         self.render.camera_end = (ctm[1] != ctm[0]).then_some((ctm[1], self.transform_times));
@@ -626,6 +626,28 @@ impl Builder {
         let text = String::from_utf8_lossy(&bytes);
         crate::camera::realistic::read_lens_file(&text)
             .map_err(|why| Diagnostic::error(at, format!("lens file \"{name}\": {why}")))
+    }
+
+    /// pbrt-v4's `aperture` for a realistic camera: a built-in shape (`gaussian`,
+    /// `square`, `pentagon`, `star`) or an image whose channels are averaged.
+    fn lens_aperture(&self, e: &Entity) -> Res<Option<crate::camera::realistic::Aperture>> {
+        use crate::camera::realistic::Aperture;
+        let Some(name) = e.params.string("aperture")? else { return Ok(None) };
+        if let Some(a) = Aperture::builtin(&name) {
+            return Ok(Some(a));
+        }
+        let at = e.params.named("aperture").map_or(e.name_span, |p| p.value_span);
+        let path = self.reader.resolve_path(&name);
+        let image = crate::imageio::read_image_within(&path, &self.reader.files).map_err(|why| {
+            Diagnostic::error(
+                at,
+                format!("aperture \"{name}\": {}", why.to_string().replace(&path.display().to_string(), &name)),
+            )
+        })?;
+        let mean = image.pixels.iter().map(|p| (p[0] + p[1] + p[2]) / 3.0).collect();
+        Aperture::from_rows(image.width, image.height, mean)
+            .map(Some)
+            .ok_or_else(|| Diagnostic::error(at, format!("aperture \"{name}\": the image lets no light through")))
     }
 
     // ---- attribute stack --------------------------------------------------------

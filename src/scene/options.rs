@@ -144,6 +144,8 @@ pub struct RenderOptions {
     pub camera_end: Option<(DMat4, [f64; 2])>,
     /// A realistic camera's lens file, read where the `Camera` statement names it.
     pub lens_data: Option<Vec<f64>>,
+    /// pbrt-v4's `aperture` of a realistic camera: a built-in shape or an image.
+    pub lens_aperture: Option<crate::camera::realistic::Aperture>,
     /// The frame motion is interpolated in (pbrt-v4's rendering space; identity for v3).
     pub world_from_render: DMat4,
     pub film: Option<Entity>,
@@ -288,19 +290,9 @@ impl RenderOptions {
 
     /// A realistic camera's lens: the file's interfaces, the stop's diameter, the focus
     /// distance and the weighting (a located error where the lens cannot focus).
-    fn lens(
-        &self,
-        kind: CameraKind,
-        e: &Entity,
-        film: &Film,
-        (syntax, notes): (Syntax, &mut Notes),
-    ) -> Res<Option<std::sync::Arc<LensDesc>>> {
+    fn lens(&self, kind: CameraKind, e: &Entity, film: &Film, syntax: Syntax) -> Res<Option<std::sync::Arc<LensDesc>>> {
         let (CameraKind::Realistic, Some(data)) = (kind, &self.lens_data) else { return Ok(None) };
         let p = &e.params;
-        if let Some(a) = p.named("aperture") {
-            a.mark_used();
-            notes.push((a.span, "Camera \"realistic\" \"aperture\"".into(), Approx::LensAperture));
-        }
         let aperture_diameter = values::float(p, "aperturediameter", 1.0, Range::Positive)? as f64;
         let focus_distance = values::float(p, "focusdistance", 10.0, Range::Positive)? as f64;
         let simple = syntax == Syntax::V3 && p.bool("simpleweighting")?.unwrap_or(true);
@@ -312,7 +304,8 @@ impl RenderOptions {
             (false, Syntax::V3) => Weighting::Physical(shutter as f64),
             (false, _) => Weighting::Physical(1.0),
         };
-        let desc = LensDesc { data: data.clone(), aperture_diameter, focus_distance, weighting };
+        let aperture = self.lens_aperture.clone();
+        let desc = LensDesc { data: data.clone(), aperture_diameter, focus_distance, weighting, aperture };
         crate::camera::realistic::check_focus(&desc, film.diagonal_mm as f64)
             .map_err(|why| Diagnostic::error(p.named("focusdistance").map_or(e.name_span, |f| f.value_span), why))?;
         Ok(Some(std::sync::Arc::new(desc)))
@@ -384,7 +377,7 @@ impl RenderOptions {
             camera_from_world: *camera_from_world,
             camera_from_world_end: self.camera_end,
             world_from_render: self.world_from_render,
-            lens: self.lens(kind, e, film, (syntax, notes))?,
+            lens: self.lens(kind, e, film, syntax)?,
         })
     }
 

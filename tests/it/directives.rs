@@ -560,7 +560,16 @@ fn a_realistic_camera_reads_its_lens_and_reports_it() {
     assert_eq!((num(&r["camera"]["lens"]["aperturediameter"]), num(&r["camera"]["lens"]["focusdistance"])), (6.0, 3.0));
     assert_eq!(num(&r["camera"]["lens"]["filmdiagonal"]), 50.0);
     assert!(s.approximated.is_empty() && s.warnings.is_empty(), "{:?} {:?}", s.approximated, s.warnings);
-    // pbrt-v4's aperture shapes and images are not read: listed.
+    // pbrt-v4's built-in aperture shapes are read (no approximation, no unused
+    // parameter); an unknown name is an image file that must exist.
     let s = scene("\"string aperture\" \"pentagon\"", "Film \"rgb\"");
-    assert!(s.approximated.iter().any(|a| a.what.contains("aperture")), "{:?}", s.approximated);
+    assert!(s.approximated.is_empty() && s.warnings.is_empty(), "{:?} {:?}", s.approximated, s.warnings);
+    assert!(s.camera.lens.as_ref().is_some_and(|l| l.aperture.is_some()));
+    std::fs::write(
+        dir.join("s.pbrt"),
+        "Camera \"realistic\" \"string lensfile\" \"lens.dat\" \"string aperture\" \"hex.exr\"\nWorldBegin\n",
+    )
+    .unwrap();
+    let e = load_file(&dir.join("s.pbrt")).unwrap_err().to_string();
+    assert!(e.contains("aperture \"hex.exr\""), "{e}");
 }
