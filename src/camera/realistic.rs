@@ -104,7 +104,7 @@ impl Aperture {
         let values = match name {
             "gaussian" => image(&|p, _, _| ((-(p[0] * p[0] + p[1] * p[1])).exp() - (-1.0f32).exp()).max(0.0)),
             "square" => image(&|_, x, y| {
-                let inside = |v: usize| v >= RES / 4 && v < 3 * RES / 4;
+                let inside = |v: usize| (RES / 4..3 * RES / 4).contains(&v);
                 if inside(x) && inside(y) { 4.0 } else { 0.0 }
             }),
             "pentagon" => {
