@@ -122,10 +122,12 @@ impl RenderScene {
     pub fn pass_time(&self, iteration: u32, bidirectional: bool) -> Option<f32> {
         // DEVIATION(pbrt): appearance, `--fix motion-time` (pbrt-v3's independent times).
         let one_time = bidirectional || self.syntax == Syntax::V4 || self.fixes.has(crate::fixes::Fix::MotionTime);
-        match self.motion && one_time {
-            _ if !self.motion => Some(0.0),
-            true => Some(self.camera.time(crate::sampling::radical_inverse_5(iteration as u64))),
-            false => None,
+        if !self.motion {
+            Some(0.0)
+        } else if one_time {
+            Some(self.camera.time(crate::sampling::radical_inverse_5(iteration as u64)))
+        } else {
+            None
         }
     }
 
