@@ -39,6 +39,12 @@ pub struct AnimatedTransform {
 fn decompose(m: &DMat4) -> (DVec3, DQuat, DMat3) {
     let t = m.w_axis.truncate();
     let linear = DMat3::from_mat4(*m);
+    // DEVIATION(pbrt): robustness. A singular map (a shape scaled to nothing) has no
+    // polar factor; pbrt's inverse fails and interpolates garbage. Here it is all "rest":
+    // no rotation, the map itself interpolated linearly.
+    if linear.determinant().abs() <= 1e-300 || !linear.is_finite() {
+        return (t, DQuat::IDENTITY, linear);
+    }
     let mut r = linear;
     for _ in 0..100 {
         let next = (r + r.transpose().inverse()) * 0.5;
@@ -157,6 +163,13 @@ mod tests {
         let mirror = DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0)) * DMat4::from_rotation_y(0.7);
         let m = AnimatedTransform::new(mirror, mirror * DMat4::from_translation(DVec3::X), [0.0, 1.0]);
         assert!(close(m.at(1e-12), mirror));
+    }
+
+    #[test]
+    fn a_shape_scaled_to_nothing_shrinks_linearly() {
+        let a = AnimatedTransform::new(DMat4::IDENTITY, DMat4::from_scale(DVec3::ZERO), [0.0, 1.0]);
+        assert!(close(a.at(0.25), DMat4::from_scale(DVec3::splat(0.75))), "{:?}", a.at(0.25));
+        assert!(a.at(0.5).is_finite());
     }
 
     #[test]

@@ -595,6 +595,12 @@ impl Builder {
         if !(inv[0].is_finite() && ctm[0].determinant() != 0.0) {
             return Err(Diagnostic::error(span, "the camera transform is not invertible"));
         }
+        if !(inv[1].is_finite() && ctm[1].determinant() != 0.0) {
+            return Err(Diagnostic::error(
+                span,
+                "the camera's end transform (ActiveTransform EndTime) is not invertible",
+            ));
+        }
         self.named_coords.insert("camera".into(), inv);
         (self.render.lens_data, self.render.lens_aperture) = match e.name.as_str() {
             "realistic" => (Some(self.lens_file(&e)?), self.lens_aperture(&e)?),
