@@ -608,7 +608,7 @@ impl Builder {
         };
         self.render.camera = Some((e, ctm[0]));
         self.render.camera_end = (ctm[1] != ctm[0]).then_some((ctm[1], self.transform_times));
-        if ctm[1] != ctm[0] {
+        if self.render.camera_end.is_some() {
             self.first_motion.get_or_insert(span);
         }
         self.camera_media = self.gs.media;
@@ -623,12 +623,7 @@ impl Builder {
         };
         let at = e.params.named("lensfile").map_or(e.name_span, |p| p.value_span);
         let path = self.reader.resolve_path(&name);
-        // The file as the scene names it, wherever the scene is read from.
-        let bytes = self
-            .reader
-            .files
-            .read(&path)
-            .map_err(|why| Diagnostic::error(at, why.replace(&path.display().to_string(), &name)))?;
+        let bytes = self.reader.files.read(&path).map_err(|why| Diagnostic::error(at, as_named(why, &path, &name)))?;
         let text = String::from_utf8_lossy(&bytes);
         crate::camera::realistic::read_lens_file(&text)
             .map_err(|why| Diagnostic::error(at, format!("lens file \"{name}\": {why}")))
@@ -644,12 +639,8 @@ impl Builder {
         }
         let at = e.params.named("aperture").map_or(e.name_span, |p| p.value_span);
         let path = self.reader.resolve_path(&name);
-        let image = crate::imageio::read_image_within(&path, &self.reader.files).map_err(|why| {
-            Diagnostic::error(
-                at,
-                format!("aperture \"{name}\": {}", why.to_string().replace(&path.display().to_string(), &name)),
-            )
-        })?;
+        let image = crate::imageio::read_image_within(&path, &self.reader.files)
+            .map_err(|why| Diagnostic::error(at, format!("aperture \"{name}\": {}", as_named(why, &path, &name))))?;
         let mean = image.pixels.iter().map(|p| (p[0] + p[1] + p[2]) / 3.0).collect();
         Aperture::from_rows(image.width, image.height, mean)
             .map(Some)
@@ -1286,6 +1277,12 @@ impl Builder {
         }
         self.skipped.extend(left.into_iter().map(|(s, what, why)| (Some(s), what, why)));
     }
+}
+
+/// A file error naming the file as the scene does, not by the path it resolved to, so
+/// the message is the same wherever the scene is read from.
+fn as_named(why: impl ToString, path: &std::path::Path, name: &str) -> String {
+    why.to_string().replace(&path.display().to_string(), name)
 }
 
 /// pbrt's LookAt: camera-from-world for eye, look and up (`None` when degenerate).
