@@ -22,7 +22,8 @@ impl<'a> Engine<'a> {
         Ok(match p.algorithm {
             Algorithm::Sppm => Engine::Sppm(Box::new(
                 Sppm::new(scene, p.iterations, p.photons, p.radius, p.seed, (p.sampler, p.photon_sampling))?
-                    .with_passes(p.passes, p.range.start)?,
+                    .with_passes(p.passes, p.range.start)?
+                    .with_volume_gather(p.volume_gather),
             )),
             Algorithm::Vcm(techniques) => {
                 let settings = VcmSettings {

@@ -21,6 +21,10 @@ pub enum RenderError {
     AdaptiveIndependent,
     #[error("adaptive photon sampling is for SPPM; vcm and bdpt trace uniform light paths (--photon-sampling uniform)")]
     AdaptiveVcm,
+    #[error("--volume-gather is SPPM's; vcm and bdpt connect and merge in media as they do on surfaces")]
+    VolumeGatherVcm,
+    #[error("--volume-gather beams needs uniform photons (--photon-sampling uniform)")]
+    AdaptiveBeams,
     #[error("not enough memory for the state of {width}x{height} pixels ({bytes} bytes)")]
     OutOfMemory { width: usize, height: usize, bytes: usize },
     #[error("the reference image is {}x{}, the render {}x{}", reference.0, reference.1, render.0, render.1)]

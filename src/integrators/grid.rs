@@ -149,15 +149,73 @@ impl Grid {
         if (0..3).any(|a| c[a] < 0.0 || c[a] >= self.res[a] as f32) {
             return false;
         }
-        let key = self.key(self.cell(p));
-        let b = bucket(key, self.offsets.len() - 1);
-        let range = self.offsets[b] as usize..self.offsets[b + 1] as usize;
         let mut any = false;
-        for e in self.entries[range].iter().filter(|e| e.0 == key) {
-            f(e.1);
+        self.cell_sites(self.key(self.cell(p)), |i| {
+            f(i);
             any = true;
-        }
+        });
         any
+    }
+}
+
+impl Grid {
+    /// The key of the cell holding `p` (points outside count in the nearest cell).
+    pub fn key_of(&self, p: Vec3) -> u64 {
+        self.key(self.cell(p))
+    }
+
+    /// Calls `f(cell key, site)` for every site binned in every cell the segment
+    /// `o + t·d`, t in `t0..t1`, crosses (a 3D DDA, cells in order along the ray).
+    pub fn along(&self, o: Vec3, d: Vec3, (t0, t1): (f32, f32), mut f: impl FnMut(u64, u32)) {
+        let (co, cd) = ((o - self.lo) * self.inv_cell, d * self.inv_cell);
+        let res = [0, 1, 2].map(|a| self.res[a] as f32);
+        let (mut ta, mut tb) = (t0, t1);
+        for a in 0..3 {
+            if cd[a] == 0.0 {
+                if co[a] < 0.0 || co[a] >= res[a] {
+                    return;
+                }
+                continue;
+            }
+            let (n, far) = ((0.0 - co[a]) / cd[a], (res[a] - co[a]) / cd[a]);
+            (ta, tb) = (ta.max(n.min(far)), tb.min(n.max(far)));
+        }
+        if ta.partial_cmp(&tb).is_none_or(|o| o.is_gt()) || !tb.is_finite() {
+            return;
+        }
+        let p = co + cd * ta;
+        let (mut cell, mut next, mut delta, mut step) = ([0i64; 3], [f32::INFINITY; 3], [0f32; 3], [0i64; 3]);
+        for a in 0..3 {
+            cell[a] = (p[a].floor() as i64).clamp(0, self.res[a] as i64 - 1);
+            if cd[a] > 0.0 {
+                (step[a], delta[a]) = (1, 1.0 / cd[a]);
+                next[a] = ta + (cell[a] as f32 + 1.0 - p[a]) / cd[a];
+            } else if cd[a] < 0.0 {
+                (step[a], delta[a]) = (-1, -1.0 / cd[a]);
+                next[a] = ta + (cell[a] as f32 - p[a]) / cd[a];
+            }
+        }
+        loop {
+            let key = self.key(cell.map(|c| c as u64));
+            self.cell_sites(key, |i| f(key, i));
+            let a = (0..3).fold(0, |m, a| if next[a] < next[m] { a } else { m });
+            if next[a] >= tb {
+                return;
+            }
+            cell[a] += step[a];
+            if !(0..self.res[a] as i64).contains(&cell[a]) {
+                return;
+            }
+            next[a] += delta[a];
+        }
+    }
+
+    /// Calls `f` for every site binned in the cell with this key.
+    fn cell_sites(&self, key: u64, mut f: impl FnMut(u32)) {
+        let b = bucket(key, self.offsets.len() - 1);
+        for e in self.entries[self.offsets[b] as usize..self.offsets[b + 1] as usize].iter().filter(|e| e.0 == key) {
+            f(e.1);
+        }
     }
 }
 

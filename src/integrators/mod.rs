@@ -7,6 +7,7 @@
 //! way: the render-ready scene (`render`) in, an image out.
 
 pub mod adaptive;
+pub mod beams;
 pub mod checkpoint;
 pub mod engine;
 pub mod error;

@@ -2,6 +2,7 @@
 //! settings it runs with once combined with the scene's ([`Plan`]).
 
 use super::adaptive::PhotonSampling;
+use super::beams::VolumeGather;
 use super::error::RenderError;
 use super::passes::{DEFAULT_ALPHA, PassMode};
 use super::vcm::Techniques;
@@ -86,6 +87,9 @@ pub struct RenderSettings {
     pub sampler: SamplerKind,
     /// How photon paths are drawn (`--photon-sampling`).
     pub photon_sampling: PhotonSampling,
+    /// How SPPM gathers photons in media (`--volume-gather`; default beams, points
+    /// with adaptive photons).
+    pub volume_gather: Option<VolumeGather>,
     /// Divide the iteration count by 16 (pbrt-v3's `--quick`).
     pub quick: bool,
     /// Stop once this many seconds have passed (the iteration under way is finished).
@@ -107,6 +111,7 @@ pub struct Plan {
     pub seed: u64,
     pub sampler: SamplerKind,
     pub photon_sampling: PhotonSampling,
+    pub volume_gather: VolumeGather,
     pub passes: PassMode,
     /// The passes this run renders, within `0..iterations`.
     pub range: Range<u32>,
@@ -131,6 +136,11 @@ impl Plan {
         .into_iter()
         // SPPM's fingerprint stays as it was before other integrators existed.
         .chain((self.algorithm != Algorithm::Sppm).then(|| ("integrator", self.algorithm.name())))
+        // The default for the photon sampling leaves it out, as before it existed.
+        .chain(
+            (self.volume_gather == VolumeGather::Points && self.photon_sampling == PhotonSampling::Uniform)
+                .then(|| ("volume-gather", self.volume_gather.name().into())),
+        )
         .map(|(k, v)| (k.to_string(), v))
         .collect()
     }
@@ -176,6 +186,16 @@ impl Plan {
         if !sppm && settings.photon_sampling == PhotonSampling::Adaptive {
             return Err(RenderError::AdaptiveVcm);
         }
+        if !sppm && settings.volume_gather.is_some() {
+            return Err(RenderError::VolumeGatherVcm);
+        }
+        let adaptive = settings.photon_sampling == PhotonSampling::Adaptive;
+        if settings.volume_gather == Some(VolumeGather::Beams) && adaptive {
+            return Err(RenderError::AdaptiveBeams);
+        }
+        // Beams need every photon in a medium kept; adaptive chains deposit as they go.
+        let volume_gather =
+            settings.volume_gather.unwrap_or(if adaptive { VolumeGather::Points } else { VolumeGather::Beams });
         Ok(Plan {
             algorithm,
             passes: settings.passes,
@@ -186,6 +206,7 @@ impl Plan {
             seed: settings.seed.unwrap_or(integrator.seed),
             sampler: settings.sampler,
             photon_sampling: settings.photon_sampling,
+            volume_gather,
             time_limit: settings.time_limit,
         })
     }

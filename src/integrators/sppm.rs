@@ -15,6 +15,7 @@
 //! image.
 
 use super::adaptive::{self, Chain, Deposit, PhotonCounts, PhotonSampling};
+use super::beams::{self, Beam, VolumeGather, VolumePhoton};
 use super::error::RenderError;
 use super::grid::{Grid, Grouped, Site};
 use super::passes::{self, PassMode};
@@ -41,6 +42,9 @@ const PHOTON_CHUNK: usize = 1024;
 /// The most photon chunks traced before their deposits are summed: a bound on the
 /// memory deposits hold (f16-11b at 10⁶ photons held 440 MB of them at once).
 const DEPOSIT_BAND: usize = 256;
+/// The most photon chunks traced at a time with beams: a bound on the memory of the
+/// photons in media they keep before [`beams::Gather`] takes them.
+const BEAM_BAND: usize = 32;
 /// Pixel ranges photon deposits are grouped into for the parallel reduction.
 const DEPOSIT_RANGES: usize = 64;
 /// Interfaces crossed by one path before it is abandoned (guards against loops).
@@ -75,6 +79,9 @@ pub struct Pixel {
     pub tau: DVec3,
     pub n: f64,
     pub vp: Option<VisiblePoint>,
+    /// With `--volume-gather beams`, the medium segments of this iteration's camera
+    /// path.
+    pub beams: Vec<Beam>,
 }
 
 /// One pixel's progressive state as a checkpoint saves it.
@@ -128,6 +135,8 @@ pub struct Sppm<'a> {
     first: u32,
     /// The first pass's radius.
     r1: f64,
+    /// How camera paths gather photons in media.
+    volume: VolumeGather,
     pub stats: Stats,
     /// The iteration under way's counts, for progress.
     pub live: std::sync::Arc<super::report::Live>,
@@ -152,7 +161,8 @@ impl<'a> Sppm<'a> {
     ) -> Result<Sppm<'a>, RenderError> {
         let [x0, x1, y0, y1] = scene.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
-        let pixel = Pixel { radius: radius as f64, ld: DVec3::ZERO, tau: DVec3::ZERO, n: 0.0, vp: None };
+        let pixel =
+            Pixel { radius: radius as f64, ld: DVec3::ZERO, tau: DVec3::ZERO, n: 0.0, vp: None, beams: Vec::new() };
         let mut pixels = Vec::new();
         pixels.try_reserve_exact(w * h).map_err(|_| RenderError::OutOfMemory {
             width: w,
@@ -175,6 +185,7 @@ impl<'a> Sppm<'a> {
             passes: PassMode::Classic,
             first: 0,
             r1: radius as f64,
+            volume: VolumeGather::Points,
             stats: Stats::default(),
             live: Default::default(),
         })
@@ -188,6 +199,15 @@ impl<'a> Sppm<'a> {
         }
         (self.passes, self.first, self.iteration) = (mode, first, first);
         Ok(self)
+    }
+
+    /// Gathers photons in media at points or along beams ([`super::beams`]); a scene
+    /// without media has nothing to gather there, and renders as it always has.
+    pub fn with_volume_gather(mut self, volume: VolumeGather) -> Sppm<'a> {
+        if !self.scene.media.is_empty() {
+            self.volume = volume;
+        }
+        self
     }
 
     /// Passes rendered by this run (a resumed run counts those before it).
@@ -255,9 +275,13 @@ impl<'a> Sppm<'a> {
         self.stats.visible_points += self.pixels.iter().filter(|p| p.vp.is_some()).count() as u64;
         let grid = Grid::build(&self.sites());
         let t2 = Instant::now();
-        let (phi, m) = self.photon_pass(grid.as_ref(), preview);
+        let (phi, m, beam_sums) = self.photon_pass(grid.as_ref(), preview);
         let t3 = Instant::now();
         self.update(&phi, &m);
+        if let Some(sums) = beam_sums {
+            // Averaged over iterations as the direct light is.
+            self.pixels.par_iter_mut().zip(sums).for_each(|(p, s)| p.ld += s);
+        }
         let t4 = Instant::now();
         self.iteration += 1;
         let s = &mut self.stats;
@@ -275,6 +299,7 @@ impl<'a> Sppm<'a> {
         let (scene, width, origin, iter, seed, max_depth) =
             (self.scene, self.width, self.origin, self.iteration, self.seed, self.max_depth);
         let (diff_scale, kind, live) = (self.differential_scale, self.sampler, &self.live);
+        let with_beams = self.volume == VolumeGather::Beams;
         let time = scene.pass_time(iter, false);
         let first = band.start;
         self.pixels[band].par_iter_mut().enumerate().with_max_len(super::PIXELS_PER_TASK).for_each(|(i, px)| {
@@ -284,15 +309,17 @@ impl<'a> Sppm<'a> {
             }
             let (x, y) = (origin.0 as usize + i % width, origin.1 as usize + i / width);
             let pixel = [x as f32, y as f32];
+            px.beams.clear();
+            let beams = with_beams.then_some(&mut px.beams);
             // Low discrepancy: the pixel's iterations are the points of one sequence.
             let (ld, vp) = match kind {
                 SamplerKind::Sobol => {
                     let mut s = SobolSample::new(hash(&[seed, x as u64, y as u64, 0]), iter);
-                    camera_path(scene, pixel, &mut s, max_depth, (diff_scale, time))
+                    camera_path(scene, pixel, &mut s, max_depth, (diff_scale, time), beams)
                 }
                 SamplerKind::Random => {
                     let mut rng = Rng::new(hash(&[seed, x as u64, y as u64, iter as u64, 0]));
-                    camera_path(scene, pixel, &mut rng, max_depth, (diff_scale, time))
+                    camera_path(scene, pixel, &mut rng, max_depth, (diff_scale, time), beams)
                 }
             };
             px.ld += ld.as_dvec3();
@@ -300,71 +327,94 @@ impl<'a> Sppm<'a> {
         });
     }
 
-    /// Phase 3: trace photons; returns per-pixel flux Φ and photon counts M. Uniform
-    /// photons run in bands of chunks when a preview is wanted; the deposits are summed
-    /// band after band, which is the order one sum of them all takes.
-    fn photon_pass(&mut self, grid: Option<&Grid>, mut preview: Option<&mut Preview>) -> (Vec<DVec3>, Vec<u64>) {
+    /// Phase 3: trace photons; returns per-pixel flux Φ and photon counts M, and with
+    /// beams each pixel's beam estimate. Uniform photons run in bands of chunks when a
+    /// preview is wanted; the deposits are summed band after band, which is the order
+    /// one sum of them all takes.
+    fn photon_pass(&mut self, grid: Option<&Grid>, mut preview: Option<&mut Preview>) -> PhotonPass {
         let n = self.pixels.len();
         let (mut phi, mut m) = (vec![DVec3::ZERO; n], vec![0u64; n]);
-        let Some(grid) = grid else { return (phi, m) };
-        if self.scene.photon_sources.is_empty() {
-            return (phi, m);
+        let beams = self.volume == VolumeGather::Beams;
+        if (grid.is_none() && !beams) || self.scene.photon_sources.is_empty() {
+            return (phi, m, beams.then(|| vec![DVec3::ZERO; n]));
         }
         let w = self.scene.photon_scale;
-        if let Some(chains) = &mut self.chains {
+        if let (Some(chains), Some(grid)) = (&mut self.chains, grid) {
             let (scene, pixels, max_depth) = (self.scene, &self.pixels, self.max_depth);
             let time = scene.pass_time(self.iteration, false);
             let trace = |s: &mut adaptive::PrimarySample, out: &mut Vec<Deposit>| {
-                let path = trace_photon(scene, grid, pixels, s, max_depth, out, time);
+                let path = trace_photon(scene, (Some(grid), pixels), s, max_depth, (out, None), time);
                 (path.hits, path.near)
             };
             let (deposits, weight, counts) = adaptive::pass(chains, self.photons_per_iteration, &trace);
             self.stats.photons = self.stats.photons.plus(counts);
-            return sum_deposits(deposits, weight as f64 * w, phi, m);
+            let (phi, m) = sum_deposits(deposits, weight as f64 * w, phi, m);
+            return (phi, m, None);
         }
         let chunks = self.photons_per_iteration.div_ceil(PHOTON_CHUNK as u64) as usize;
-        for band in preview::bands(chunks, 8, DEPOSIT_BAND, preview.is_some()) {
-            let (deposits, counts) = self.uniform_photons(grid, band.start as u64..band.end as u64);
+        let scale = w / self.photons_per_iteration.max(1) as f64;
+        let r = self.beam_radius();
+        let mut gather =
+            beams.then(|| beams::Gather::new(self.pixels.iter().map(|p| p.beams.as_slice()).collect(), r, scale));
+        let most = if beams { BEAM_BAND } else { DEPOSIT_BAND };
+        for band in preview::bands(chunks, 8, most, preview.is_some()) {
+            let (deposits, more, counts) = self.uniform_photons(grid, band.start as u64..band.end as u64);
             self.stats.photons = self.stats.photons.plus(counts);
             (phi, m) = sum_deposits(deposits, w, phi, m);
+            if let Some(g) = gather.as_mut() {
+                more.into_iter().for_each(|chunk| g.add(chunk));
+            }
             if let Some(show) = preview.as_mut() {
                 let done = band.end as f64 / chunks as f64;
                 show(&|| self.provisional(n, Some((&phi, done))));
             }
         }
-        (phi, m)
+        (phi, m, gather.map(beams::Gather::finish))
     }
 
     /// Independent photons of the chunks in `chunks` (of a fixed size); each chunk's
-    /// deposits in photon order.
-    fn uniform_photons(&self, grid: &Grid, chunks: Range<u64>) -> (Vec<Vec<Deposit>>, PhotonCounts) {
+    /// deposits and (with beams) photons in media, in photon order.
+    fn uniform_photons(&self, grid: Option<&Grid>, chunks: Range<u64>) -> UniformPhotons {
         let (scene, pixels, iter, seed, max_depth) =
             (self.scene, &self.pixels, self.iteration as u64, self.seed, self.max_depth);
         let total = self.photons_per_iteration;
         let time = scene.pass_time(self.iteration, false);
-        let results: Vec<(Vec<Deposit>, PhotonCounts)> = chunks
+        let beams = self.volume == VolumeGather::Beams;
+        let results: Vec<(Vec<Deposit>, Vec<VolumePhoton>, PhotonCounts)> = chunks
             .into_par_iter()
             .map(|c| {
-                let (mut out, mut n) = (Vec::new(), PhotonCounts::default());
+                let (mut out, mut volume, mut n) = (Vec::new(), Vec::new(), PhotonCounts::default());
                 for k in c * PHOTON_CHUNK as u64..((c + 1) * PHOTON_CHUNK as u64).min(total) {
                     // Independent numbers for photons under either sampler: Sobol'
                     // points, padded per iteration or as one five-dimensional sequence
                     // over the whole render, gained nothing measurable (docs/sampling.md).
                     let mut rng = Rng::new(hash(&[seed, iter, k, 1]));
-                    let before = out.len();
-                    let path = trace_photon(scene, grid, pixels, &mut rng, max_depth, &mut out, time);
+                    let before = out.len() + volume.len();
+                    let sink = (&mut out, beams.then_some(&mut volume));
+                    let path = trace_photon(scene, (grid, pixels), &mut rng, max_depth, sink, time);
                     n.hits += path.hits;
                     n.uniform_visible += path.near as u64;
-                    n.uniform_deposited += (out.len() > before) as u64;
+                    n.uniform_deposited += (out.len() + volume.len() > before) as u64;
                 }
                 n.uniform = (total - c * PHOTON_CHUNK as u64).min(PHOTON_CHUNK as u64);
                 n.traced = n.uniform;
                 self.live.add_photons(n.uniform);
-                (out, n)
+                (out, volume, n)
             })
             .collect();
-        let counts = results.iter().fold(PhotonCounts::default(), |a, r| a.plus(r.1));
-        (results.into_iter().map(|r| r.0).collect(), counts)
+        let counts = results.iter().fold(PhotonCounts::default(), |a, r| a.plus(r.2));
+        let (deposits, volume): (Vec<_>, Vec<_>) = results.into_iter().map(|r| (r.0, r.1)).unzip();
+        (deposits, volume, counts)
+    }
+
+    /// This iteration's beam radius: one for all pixels, shrinking from the first
+    /// radius as independent passes' does (α = 2/3 in classic SPPM, as its γ).
+    fn beam_radius(&self) -> f32 {
+        let alpha = match self.passes {
+            PassMode::Independent { alpha } => alpha,
+            PassMode::Classic => GAMMA,
+        };
+        passes::radius(self.r1, alpha, self.iteration) as f32
     }
 
     /// Where photons are gathered: each pixel's visible point, if it can reflect.
@@ -463,6 +513,11 @@ impl<'a> Sppm<'a> {
     }
 }
 
+/// Φ and M per pixel, and with beams each pixel's beam estimate.
+type PhotonPass = (Vec<DVec3>, Vec<u64>, Option<Vec<DVec3>>);
+/// Per chunk of photons: deposits, photons in media (with beams); the counts.
+type UniformPhotons = (Vec<Vec<Deposit>>, Vec<Vec<VolumePhoton>>, PhotonCounts);
+
 /// Φ and M per pixel from lists of deposits, each deposit's flux times `w`. Each
 /// pixel sums its contributions in a fixed order (list by list, deposit by deposit),
 /// whatever the thread count; the lists are grouped by pixel range first, so that
@@ -542,6 +597,7 @@ fn camera_path(
     sampler: &mut impl Sampler,
     max_depth: u32,
     (diff_scale, time): (f32, Option<f32>),
+    mut beams: Option<&mut Vec<Beam>>,
 ) -> (Rgb, Option<VisiblePoint>) {
     let (mut ray, mut diff, weight) = camera_ray(scene, pixel, sampler, diff_scale, time);
     if weight == 0.0 {
@@ -558,10 +614,10 @@ fn camera_path(
     while depth < max_depth {
         let hit = scene.intersect(&ray);
         if let Some(m) = medium {
-            ld +=
-                beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, hit.map_or(f32::INFINITY, |h| h.t), sampler);
-            if let Some((direct, vp)) = scatter_on_camera_path(scene, &ray, (hit.as_ref(), m), &mut beta, sampler) {
-                return (ld + direct, Some(vp));
+            let (light, vp) = in_medium(scene, &ray, (hit.as_ref(), m), &mut beta, beams.as_deref_mut(), sampler);
+            ld += light;
+            if vp.is_some() {
+                return (ld, vp);
             }
         }
         let Some(hit) = hit else {
@@ -616,6 +672,28 @@ fn camera_path(
     (ld, None)
 }
 
+/// A camera path's segment in medium `m` up to `hit`: the light it adds there (the
+/// medium's emission, the direct light where it scatters) and, gathering at points,
+/// the visible point where it stops; along `beams`, the segment is one more beam.
+fn in_medium(
+    scene: &RenderScene,
+    ray: &crate::math::Ray,
+    (hit, m): (Option<&crate::accel::Hit>, u32),
+    beta: &mut Rgb,
+    beams: Option<&mut Vec<Beam>>,
+    sampler: &mut impl Sampler,
+) -> (Rgb, Option<VisiblePoint>) {
+    let t_max = hit.map_or(f32::INFINITY, |h| h.t);
+    let emitted = *beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, t_max, sampler);
+    match beams {
+        Some(list) => (emitted + beam_on_camera_path(scene, ray, (hit, m), beta, list, sampler), None),
+        None => match scatter_on_camera_path(scene, ray, (hit, m), beta, sampler) {
+            Some((direct, vp)) => (emitted + direct, Some(vp)),
+            None => (emitted, None),
+        },
+    }
+}
+
 /// A camera path's flight through medium `m` up to `hit`: β takes the flight's weight;
 /// where the path scatters, the direct light there and the medium visible point.
 // DEVIATION(pbrt): pbrt's SPPM ignores media; here a camera path that scatters in one
@@ -639,6 +717,29 @@ fn scatter_on_camera_path(
             Some((direct, vp))
         }
     }
+}
+
+/// A camera path's segment in medium `m` up to `hit`, with beams: the segment becomes a
+/// beam, the direct light is taken at one point drawn by free flight (the photons
+/// leave it out, as on surfaces), and β takes the transmittance over the segment, as
+/// the path goes on to the surface behind. Returns the direct light.
+// DEVIATION(pbrt): pbrt's SPPM ignores media (see `beams`).
+fn beam_on_camera_path(
+    scene: &RenderScene,
+    ray: &crate::math::Ray,
+    (hit, m): (Option<&crate::accel::Hit>, u32),
+    beta: &mut Rgb,
+    beams: &mut Vec<Beam>,
+    sampler: &mut impl Sampler,
+) -> Rgb {
+    let direct = match volume::fly(scene, ray, hit, m, sampler) {
+        Err((mp, weight)) => *beta * weight * mp.sigma_s * volume::direct_light(scene, &mp, sampler),
+        Ok(_) => Vec3::ZERO,
+    };
+    let (beam, tr) = Beam::along(scene, ray, (m, hit.map_or(f32::INFINITY, |h| h.t)), *beta, sampler);
+    beams.push(beam);
+    *beta *= tr;
+    direct
 }
 
 /// The surface a path is at and the medium it arrived in: which medium a ray leaving
@@ -792,13 +893,15 @@ pub struct PhotonPath {
 }
 
 /// One photon path; appends (pixel, β·f) for each visible point it reaches.
+/// Without a grid (no surface visible point, with beams) nothing lands on surfaces;
+/// with `volume` (beams) photons that scatter in media are kept there instead of
+/// deposited on medium visible points.
 fn trace_photon(
     scene: &RenderScene,
-    grid: &Grid,
-    pixels: &[Pixel],
+    (grid, pixels): (Option<&Grid>, &[Pixel]),
     sampler: &mut impl Sampler,
     max_depth: u32,
-    out: &mut Vec<(u32, Vec3)>,
+    (out, mut volume): (&mut Vec<(u32, Vec3)>, Option<&mut Vec<VolumePhoton>>),
     time: Option<f32>,
 ) -> PhotonPath {
     let Some(Photon { mut beta, mut ray, mut medium, from_medium }) = emit_photon(scene, sampler, time) else {
@@ -817,7 +920,15 @@ fn trace_photon(
                 Err((mp, weight)) => {
                     // Direct light in media is the camera side's, as on surfaces.
                     if depth >= first_deposit {
-                        near |= deposit_in_medium(grid, pixels, &mp, beta * weight, out);
+                        let flux = beta * weight;
+                        near |= match (volume.as_deref_mut(), grid) {
+                            (Some(v), _) => {
+                                v.push(VolumePhoton { p: mp.p, wo: mp.wo, flux: flux * mp.sigma_s, medium: mp.medium });
+                                true
+                            }
+                            (None, Some(grid)) => deposit_in_medium(grid, pixels, &mp, flux, out),
+                            (None, None) => false,
+                        };
                     }
                     let Some(next) = scatter_in_medium(&mp, beta * weight, beta, sampler) else { break };
                     (beta, ray) = next;
@@ -836,7 +947,10 @@ fn trace_photon(
         // where they land, counting them twice near a medium's boundary (13% too bright
         // on a floor just under a fog box, against pbrt's volpath); with media we gather
         // at scattering surfaces only. Scenes without media keep pbrt's rule.
-        if depth >= first_deposit && (scene.media.is_empty() || matches!(at, Surface::Bsdf(_))) {
+        if let Some(grid) = grid
+            && depth >= first_deposit
+            && (scene.media.is_empty() || matches!(at, Surface::Bsdf(_)))
+        {
             near |= deposit_on_surface(grid, pixels, si.p.0, (wi, beta), skip_behind, out);
         }
         let bsdf = match at {

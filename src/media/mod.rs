@@ -104,6 +104,15 @@ impl Medium {
         }
     }
 
+    /// The transmittance profile over `dist` world units from `o` along unit
+    /// direction `d` (see [`Profile`]).
+    pub fn profile(&self, o: Vec3, d: Vec3, dist: f32, sampler: &mut impl Sampler) -> Profile {
+        match self {
+            Medium::Homogeneous(h) => Profile::Exact(h.sigma_t()),
+            Medium::Tracked(g) => Profile::Steps(g.transmittance_steps(o, d, dist, sampler)),
+        }
+    }
+
     /// Transmittance along the segment `o + t·d`, t in [0, `t_max`] (an unbiased
     /// estimate for grids, exact for homogeneous media).
     pub fn transmittance(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler) -> Vec3 {
@@ -111,6 +120,33 @@ impl Medium {
         match self {
             Medium::Homogeneous(h) => h.transmittance(t_max * dlen),
             Medium::Tracked(g) => g.transmittance(o, d / dlen, t_max * dlen, sampler),
+        }
+    }
+}
+
+/// The transmittance along one segment of a ray at every distance from its start, as
+/// the beam radiance estimate reads it: exact in homogeneous media, one ratio-tracking
+/// walk's records in the others.
+#[derive(Clone, Debug)]
+pub enum Profile {
+    /// σt of a homogeneous medium.
+    Exact(Vec3),
+    /// (distance, transmittance from there on) in increasing distance.
+    Steps(Vec<(f32, Vec3)>),
+}
+
+impl Profile {
+    /// The transmittance over the first `t` world units.
+    pub fn at(&self, t: f32) -> Vec3 {
+        match self {
+            Profile::Exact(st) => {
+                let tr = |s: f32| if s == 0.0 { 1.0 } else { (-s * t).exp() };
+                Vec3::new(tr(st.x), tr(st.y), tr(st.z))
+            }
+            Profile::Steps(steps) => match steps.partition_point(|s| s.0 <= t) {
+                0 => Vec3::ONE,
+                k => steps[k - 1].1,
+            },
         }
     }
 }

@@ -280,6 +280,26 @@ impl Tracked {
         }
     }
 
+    /// Ratio tracking over `dist` world units from `o` along unit direction `d`,
+    /// recording (distance, transmittance so far) at each tentative collision: the
+    /// transmittance to any distance t is the last record at or before t (1 before the
+    /// first), an unbiased estimate for every t at once (the beam radiance estimate
+    /// reads it at each photon it gathers).
+    pub fn transmittance_steps(&self, o: Vec3, d: Vec3, dist: f32, sampler: &mut impl Sampler) -> Vec<(f32, Vec3)> {
+        let mut steps = Vec::new();
+        let Some(span) = self.clip(o, d, dist) else { return steps };
+        let mut tr = Vec3::ONE;
+        let walk = self.walk(&span, sampler, |t, mu, sampler| {
+            let more = ratio_step(&mut tr, self.field.at(span.o + span.d * t, false), mu, sampler);
+            steps.push((t, tr));
+            more
+        });
+        if let (Walk::Exhausted, Some(last)) = (walk, steps.last_mut()) {
+            last.1 = Vec3::ZERO;
+        }
+        steps
+    }
+
     /// An unbiased estimate of the emission ∫ Tr·σa·Le dt over `dist` world units from
     /// `o` along unit direction `d`: σa·Le/μ at each tentative collision, weighted by
     /// the ratio-tracking transmittance up to it.

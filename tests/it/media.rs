@@ -4,6 +4,7 @@
 
 use crate::common::{load, scene, warnings};
 use pbrt_sppm::integrators::RenderSettings;
+use pbrt_sppm::integrators::beams::VolumeGather;
 use pbrt_sppm::media::Medium;
 use pbrt_sppm::render::RenderScene;
 
@@ -149,8 +150,11 @@ fn shapes_lights_and_the_camera_get_the_media_current_at_their_statements() {
 }
 
 fn render(text: &str) -> Vec<[f32; 3]> {
-    let settings = RenderSettings::default();
-    pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), &settings).expect("renders").image.pixels
+    render_with(text, &RenderSettings::default())
+}
+
+fn render_with(text: &str, settings: &RenderSettings) -> Vec<[f32; 3]> {
+    pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), settings).expect("renders").image.pixels
 }
 
 /// The world block of a slab test, after WorldBegin: a box of half-size `h` across and
@@ -219,7 +223,8 @@ fn an_emitting_slab_glows_with_its_integrated_emission() {
 /// Inside a closed sphere that emits L = 1 (two-sided) and reflects nothing, filled with a
 /// medium that scatters without absorbing, radiance is 1 everywhere and in every
 /// direction: direct light from the walls and the photons' multiple scattering must
-/// add up to exactly that (the volume estimate's normalization included).
+/// add up to exactly that (the volume estimate's normalization included), gathered at
+/// points or along beams.
 #[test]
 fn a_scattering_furnace_holds_radiance_one_everywhere() {
     let text = "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8 \
@@ -232,9 +237,11 @@ fn a_scattering_furnace_holds_radiance_one_everywhere() {
         WorldBegin AttributeBegin MediumInterface \"cloud\" \"\" \
         AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" \"true\" Material \"matte\" \"rgb Kd\" [0 0 0] \
         Shape \"sphere\" \"float radius\" 2 AttributeEnd WorldEnd";
-    let m = mean(&render(text));
-    for (c, v) in m.iter().enumerate() {
-        assert!((v - 1.0).abs() < 0.03, "channel {c}: {v}");
+    for gather in [VolumeGather::Points, VolumeGather::Beams] {
+        let m = mean(&render_with(text, &RenderSettings { volume_gather: Some(gather), ..Default::default() }));
+        for (c, v) in m.iter().enumerate() {
+            assert!((v - 1.0).abs() < 0.03, "{gather:?}, channel {c}: {v}");
+        }
     }
 }
 
@@ -418,4 +425,29 @@ fn a_v4_medium_type_in_a_v3_file_is_vacuum_with_a_warning() {
     assert!(s.media.is_empty(), "{:?}", s.media);
     let skipped: Vec<_> = s.skipped.iter().filter(|k| k.what.contains("uniformgrid")).collect();
     assert!(skipped.len() == 1 && skipped[0].why.contains("pbrt-v3 has no such medium type"), "{:?}", s.skipped);
+}
+
+/// With beams, photons in media are gathered in blocks that fill at the same photon
+/// chunks whatever the bands a preview cuts the photon pass into: the image is the same
+/// bit for bit with tev watching or not, and the beams add light the points would
+/// (the fog box's in-scattered indirect light).
+#[test]
+fn beams_give_the_same_image_with_a_preview_and_without() {
+    use pbrt_sppm::integrators::sppm::Sppm;
+    let desc = crate::common::load_file(&crate::common::root().join("pbrt-scenes/verify/v4-fog-box.pbrt")).unwrap();
+    let rs = RenderScene::new(&desc);
+    let render = |gather, preview: bool| {
+        let mut sppm = Sppm::new(&rs, 2, 60_000, 0.1, 0, Default::default()).unwrap().with_volume_gather(gather);
+        for _ in 0..2 {
+            let mut shown = 0;
+            let mut show = |_: &dyn Fn() -> Vec<[f32; 3]>| shown += 1;
+            sppm.iterate_showing(preview.then_some(&mut show));
+            assert_eq!(shown > 0, preview);
+        }
+        sppm.image()
+    };
+    let (watched, alone) = (render(VolumeGather::Beams, true), render(VolumeGather::Beams, false));
+    assert!(watched == alone, "a preview changed the image");
+    let (beams, points) = (mean(&alone), mean(&render(VolumeGather::Points, false)));
+    assert!((beams[1] / points[1] - 1.0).abs() < 0.1, "beams {beams:?}, points {points:?}");
 }

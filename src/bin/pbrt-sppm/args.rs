@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use pbrt_sppm::fixes::Fixes;
 use pbrt_sppm::integrators::adaptive::PhotonSampling;
+use pbrt_sppm::integrators::beams::VolumeGather;
 use pbrt_sppm::integrators::checkpoint::Every;
 use pbrt_sppm::integrators::passes::PassMode;
 use pbrt_sppm::integrators::{Algorithm, RenderSettings};
@@ -122,6 +123,11 @@ pub struct RenderArgs {
     /// sees, for scenes where most photons land out of view).
     #[arg(long, value_parser = parse_photon_sampling)]
     pub photon_sampling: Option<PhotonSampling>,
+    /// How SPPM gathers photons in participating media: `points` (a camera path
+    /// scatters at a point and gathers photons in a ball there; the default) or
+    /// `beams` (every medium segment of a camera path gathers the photons near it).
+    #[arg(long, value_parser = str::parse::<VolumeGather>)]
+    pub volume_gather: Option<VolumeGather>,
     /// `sppm`, `vcm` (vertex connection and merging) or `bdpt` (vcm without merging);
     /// default: what the file asks for (`sppm` → sppm, `bdpt` → bdpt, other
     /// integrators → vcm). `vcm-only-T` renders technique T alone (emitterhit, direct,
@@ -338,6 +344,7 @@ impl RenderArgs {
             seed: self.seed,
             sampler: self.sampler.unwrap_or_default(),
             photon_sampling: self.photon_sampling.unwrap_or_default(),
+            volume_gather: self.volume_gather,
             quick: self.quick,
             time_limit: self.time_limit.map(f64::from),
             passes: self.pass_mode()?,

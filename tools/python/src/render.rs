@@ -4,6 +4,7 @@
 //! render after the iteration under way, and is raised once it has stopped.
 
 use crate::tools;
+use pbrt_sppm::integrators::beams::VolumeGather;
 use pbrt_sppm::integrators::passes::PassMode;
 use pbrt_sppm::integrators::run::{IterationDone, Observer, run};
 use pbrt_sppm::integrators::{Algorithm, Monitor, Plan, RenderOutput, RenderSettings};
@@ -31,6 +32,7 @@ pub struct Settings {
     sampler: Option<String>,
     passes: Option<String>,
     alpha: Option<f64>,
+    volume_gather: Option<String>,
 }
 
 impl Settings {
@@ -55,6 +57,8 @@ impl Settings {
         if self.alpha.is_some_and(|a| !(a > 0.0 && a < 1.0)) {
             return Err("alpha must be between 0 and 1 (exclusive)".into());
         }
+        let volume_gather = self.volume_gather.as_deref().map(str::parse::<VolumeGather>).transpose();
+        let volume_gather = volume_gather.map_err(|e| format!("volume_gather: {e}"))?;
         let bidirectional = algorithm.is_some_and(|a| a != Algorithm::Sppm);
         Ok(RenderSettings {
             algorithm,
@@ -64,6 +68,7 @@ impl Settings {
             seed: self.seed,
             sampler,
             time_limit: self.time_limit,
+            volume_gather,
             passes: PassMode::asked(independent, self.alpha, false, bidirectional)?,
             ..Default::default()
         })

@@ -150,6 +150,22 @@ def test_render_is_the_command_lines_image(tmp_path):
     np.testing.assert_array_equal(ours, theirs)
 
 
+@needs_bin
+def test_volume_gather_is_the_command_lines(tmp_path):
+    fog = ROOT / "pbrt-scenes/verify/v4-fog-box.pbrt"
+    out_exr = tmp_path / "beams.exr"
+    r = cli(fog, "--spp", 2, "--photons", 20000, "--volume-gather", "beams", "--quiet", "--outfile", out_exr)
+    assert r.returncode == 0, r.stderr
+    s = pbrt_sppm.load(fog)
+    beams = s.render(spp=2, photons=20000, volume_gather="beams", threads=1)
+    np.testing.assert_array_equal(beams, pbrt_sppm.read_image(out_exr))
+    assert not np.array_equal(beams, s.render(spp=2, photons=20000, volume_gather="points"))
+    with pytest.raises(ValueError, match="volume_gather"):
+        s.render(spp=1, volume_gather="rays")
+    with pytest.raises(ValueError, match="SPPM"):
+        s.render(spp=1, volume_gather="beams", integrator="vcm")
+
+
 def test_render_options_and_progress():
     s = pbrt_sppm.load(SPHERE)
     seen = []

@@ -143,7 +143,8 @@ class Scene:
         progress(done, planned, seconds) is called after every iteration; returning
         False stops the render after it (the image so far is returned).
         More options, as on the command line: photons, radius, time_limit,
-        sampler ("sobol"/"random"), passes ("classic"/"independent"), alpha.
+        sampler ("sobol"/"random"), passes ("classic"/"independent"), alpha,
+        volume_gather ("points"/"beams": how SPPM gathers photons in media).
 
         The GIL is released while rendering. Ctrl-C (or an exception raised by
         progress) stops the render after the iteration under way and is then raised."""
@@ -163,7 +164,7 @@ class Scene:
         return image, {c: np.array([r[i] for r in rows], dtype=t) for i, (c, t) in enumerate(zip(cols, types))}
 
     def _render(self, spp, integrator, seed, threads, progress, reference, options):
-        known = {"photons", "radius", "time_limit", "sampler", "passes", "alpha"}
+        known = {"photons", "radius", "time_limit", "sampler", "passes", "alpha", "volume_gather"}
         unknown = set(options) - known
         if unknown:
             raise TypeError(f"render() got unknown options {sorted(unknown)}; the options are {sorted(known)}")
