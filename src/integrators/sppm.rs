@@ -923,7 +923,7 @@ fn trace_photon(
                         let flux = beta * weight;
                         near |= match (volume.as_deref_mut(), grid) {
                             (Some(v), _) => {
-                                v.push(VolumePhoton { p: mp.p, wo: mp.wo, flux: flux * mp.sigma_s, medium: mp.medium });
+                                v.push(VolumePhoton { p: mp.p, wo: mp.wo, flux: flux * mp.sigma_s });
                                 true
                             }
                             (None, Some(grid)) => deposit_in_medium(grid, pixels, &mp, flux, out),
