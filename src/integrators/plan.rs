@@ -136,11 +136,8 @@ impl Plan {
         .into_iter()
         // SPPM's fingerprint stays as it was before other integrators existed.
         .chain((self.algorithm != Algorithm::Sppm).then(|| ("integrator", self.algorithm.name())))
-        // The default for the photon sampling leaves it out, as before it existed.
-        .chain(
-            (self.volume_gather == VolumeGather::Points && self.photon_sampling == PhotonSampling::Uniform)
-                .then(|| ("volume-gather", self.volume_gather.name().into())),
-        )
+        // Checkpoints made before it existed (without it) still resume.
+        .chain((self.algorithm == Algorithm::Sppm).then(|| ("volume-gather", self.volume_gather.name().into())))
         .map(|(k, v)| (k.to_string(), v))
         .collect()
     }

@@ -203,8 +203,10 @@ impl<'a> Sppm<'a> {
 
     /// Gathers photons in media at points or along beams ([`super::beams`]); a scene
     /// without media has nothing to gather there, and renders as it always has.
+    /// Adaptive photons gather at points (their chains deposit as they go; the plan
+    /// refuses beams with them).
     pub fn with_volume_gather(mut self, volume: VolumeGather) -> Sppm<'a> {
-        if !self.scene.media.is_empty() {
+        if !self.scene.media.is_empty() && self.chains.is_none() {
             self.volume = volume;
         }
         self

@@ -255,3 +255,35 @@ fn a_moving_scene_resumed_from_a_checkpoint_matches_an_uninterrupted_one() {
         std::fs::remove_file(d.join("m.ckpt")).ok();
     }
 }
+
+/// Fog resumes bit for bit with beams and with points: the beams' radius comes from the
+/// iteration, their estimates live in the pixels' direct light.
+#[test]
+fn a_foggy_scene_resumed_from_a_checkpoint_matches_an_uninterrupted_one() {
+    let d = dir("fog");
+    let foggy = SCENE.replace(
+        "WorldBegin\n",
+        "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb sigma_s\" [0.4 0.4 0.4] \"rgb sigma_a\" [0.1 0.1 0.1]\n\
+         MediumInterface \"\" \"fog\"\nWorldBegin\n",
+    );
+    std::fs::write(d.join("scene.pbrt"), foggy).unwrap();
+    let mut images = Vec::new();
+    for gather in ["beams", "points"] {
+        let whole = run(&d, &["--volume-gather", gather, "--spp", "6", "-q", "--outfile", "whole.exr"]);
+        assert!(whole.status.success(), "{}", String::from_utf8_lossy(&whole.stderr));
+        let common = ["--volume-gather", gather, "--spp", "6", "-q", "--outfile", "part.exr", "--checkpoint", "f.ckpt"];
+        let first = run(&d, &[&common[..], &["--time-limit", "0.000001"]].concat());
+        assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+        let rest = run(&d, &[&common[..], &["--resume", "f.ckpt"]].concat());
+        assert!(rest.status.success(), "{}", String::from_utf8_lossy(&rest.stderr));
+        assert!(pixels(&d.join("part.exr")) == pixels(&d.join("whole.exr")), "{gather}: resumed differs");
+        // A checkpoint of one gather is refused by the other.
+        let other = if gather == "beams" { "points" } else { "beams" };
+        let mixed =
+            run(&d, &["--volume-gather", other, "--spp", "6", "-q", "--outfile", "x.exr", "--resume", "f.ckpt"]);
+        assert!(!mixed.status.success() && String::from_utf8_lossy(&mixed.stderr).contains("volume-gather"));
+        images.push(pixels(&d.join("whole.exr")));
+        std::fs::remove_file(d.join("f.ckpt")).ok();
+    }
+    assert!(images[0] != images[1], "beams and points rendered the same image");
+}
