@@ -79,9 +79,6 @@ pub struct Pixel {
     pub tau: DVec3,
     pub n: f64,
     pub vp: Option<VisiblePoint>,
-    /// With `--volume-gather beams`, the medium segments of this iteration's camera
-    /// path.
-    pub beams: Vec<Beam>,
 }
 
 /// One pixel's progressive state as a checkpoint saves it.
@@ -137,6 +134,9 @@ pub struct Sppm<'a> {
     r1: f64,
     /// How camera paths gather photons in media.
     volume: VolumeGather,
+    /// With beams, each pixel's medium segments of this iteration's camera path (empty
+    /// otherwise: nothing per pixel where no medium is).
+    beams: Vec<Vec<Beam>>,
     pub stats: Stats,
     /// The iteration under way's counts, for progress.
     pub live: std::sync::Arc<super::report::Live>,
@@ -161,8 +161,7 @@ impl<'a> Sppm<'a> {
     ) -> Result<Sppm<'a>, RenderError> {
         let [x0, x1, y0, y1] = scene.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
-        let pixel =
-            Pixel { radius: radius as f64, ld: DVec3::ZERO, tau: DVec3::ZERO, n: 0.0, vp: None, beams: Vec::new() };
+        let pixel = Pixel { radius: radius as f64, ld: DVec3::ZERO, tau: DVec3::ZERO, n: 0.0, vp: None };
         let mut pixels = Vec::new();
         pixels.try_reserve_exact(w * h).map_err(|_| RenderError::OutOfMemory {
             width: w,
@@ -186,6 +185,7 @@ impl<'a> Sppm<'a> {
             first: 0,
             r1: radius as f64,
             volume: VolumeGather::Points,
+            beams: Vec::new(),
             stats: Stats::default(),
             live: Default::default(),
         })
@@ -208,6 +208,8 @@ impl<'a> Sppm<'a> {
     pub fn with_volume_gather(mut self, volume: VolumeGather) -> Sppm<'a> {
         if !self.scene.media.is_empty() && self.chains.is_none() {
             self.volume = volume;
+            let n = if volume == VolumeGather::Beams { self.pixels.len() } else { 0 };
+            self.beams = vec![Vec::new(); n];
         }
         self
     }
@@ -301,18 +303,15 @@ impl<'a> Sppm<'a> {
         let (scene, width, origin, iter, seed, max_depth) =
             (self.scene, self.width, self.origin, self.iteration, self.seed, self.max_depth);
         let (diff_scale, kind, live) = (self.differential_scale, self.sampler, &self.live);
-        let with_beams = self.volume == VolumeGather::Beams;
         let time = scene.pass_time(iter, false);
         let first = band.start;
-        self.pixels[band].par_iter_mut().enumerate().with_max_len(super::PIXELS_PER_TASK).for_each(|(i, px)| {
+        let trace = |i: usize, px: &mut Pixel, beams: Option<&mut Vec<Beam>>| {
             let i = first + i;
             if i.is_multiple_of(256) {
                 live.add_camera(256);
             }
             let (x, y) = (origin.0 as usize + i % width, origin.1 as usize + i / width);
             let pixel = [x as f32, y as f32];
-            px.beams.clear();
-            let beams = with_beams.then_some(&mut px.beams);
             // Low discrepancy: the pixel's iterations are the points of one sequence.
             let (ld, vp) = match kind {
                 SamplerKind::Sobol => {
@@ -326,7 +325,17 @@ impl<'a> Sppm<'a> {
             };
             px.ld += ld.as_dvec3();
             px.vp = vp;
-        });
+        };
+        let pixels = self.pixels[band.clone()].par_iter_mut();
+        if self.volume == VolumeGather::Beams {
+            let beams = self.beams[band].par_iter_mut();
+            pixels.zip(beams).enumerate().with_max_len(super::PIXELS_PER_TASK).for_each(|(i, (p, b))| {
+                b.clear();
+                trace(i, p, Some(b))
+            });
+        } else {
+            pixels.enumerate().with_max_len(super::PIXELS_PER_TASK).for_each(|(i, p)| trace(i, p, None));
+        }
     }
 
     /// Phase 3: trace photons; returns per-pixel flux Φ and photon counts M, and with
@@ -356,8 +365,7 @@ impl<'a> Sppm<'a> {
         let chunks = self.photons_per_iteration.div_ceil(PHOTON_CHUNK as u64) as usize;
         let scale = w / self.photons_per_iteration.max(1) as f64;
         let r = self.beam_radius();
-        let mut gather =
-            beams.then(|| beams::Gather::new(self.pixels.iter().map(|p| p.beams.as_slice()).collect(), r, scale));
+        let mut gather = beams.then(|| beams::Gather::new(self.beams.iter().map(Vec::as_slice).collect(), r, scale));
         let most = if beams { BEAM_BAND } else { DEPOSIT_BAND };
         for band in preview::bands(chunks, 8, most, preview.is_some()) {
             let (deposits, more, counts) = self.uniform_photons(grid, band.start as u64..band.end as u64);
