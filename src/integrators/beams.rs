@@ -145,13 +145,15 @@ pub struct Gather<'a> {
     sums: Vec<DVec3>,
     r: f32,
     scale: f64,
+    /// Time spent gathering.
+    seconds: f64,
 }
 
 impl<'a> Gather<'a> {
     /// `beams[i]`: pixel i's beams; `r` the radius, `scale` the photons' flux scale.
     pub fn new(beams: Vec<&'a [Beam]>, r: f32, scale: f64) -> Gather<'a> {
         let sums = vec![DVec3::ZERO; beams.len()];
-        Gather { beams, block: BLOCK, pending: Vec::new(), sums, r, scale }
+        Gather { beams, block: BLOCK, pending: Vec::new(), sums, r, scale, seconds: 0.0 }
     }
 
     /// The next chunk's photons.
@@ -166,15 +168,17 @@ impl<'a> Gather<'a> {
         if self.pending.is_empty() {
             return;
         }
+        let t = std::time::Instant::now();
         let e = estimate(&self.beams, &self.pending, self.r, self.scale);
         self.sums.par_iter_mut().zip(e).for_each(|(s, e)| *s += e);
         self.pending.clear();
+        self.seconds += t.elapsed().as_secs_f64();
     }
 
-    /// Each pixel's estimate.
-    pub fn finish(mut self) -> Vec<DVec3> {
+    /// Each pixel's estimate, and the seconds spent gathering.
+    pub fn finish(mut self) -> (Vec<DVec3>, f64) {
         self.flush();
-        self.sums
+        (self.sums, self.seconds)
     }
 }
 
@@ -264,7 +268,7 @@ mod tests {
             g.add(chunk.to_vec());
             assert!(g.pending.len() < 700);
         }
-        let blocks = g.finish();
+        let (blocks, _) = g.finish();
         assert!(whole.iter().filter(|s| s.max_element() > 0.0).count() > 50, "too few pixels gather anything");
         for (a, b) in blocks.iter().zip(&whole) {
             assert!((*a - *b).abs().max_element() <= 1e-5 * b.max_element().max(1e-30), "{a} vs {b}");

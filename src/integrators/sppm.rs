@@ -97,6 +97,9 @@ pub struct Stats {
     pub grid_seconds: f64,
     pub photon_seconds: f64,
     pub update_seconds: f64,
+    /// With beams, the part of `photon_seconds` spent gathering photons along them.
+    #[serde(default)]
+    pub beam_seconds: f64,
     pub camera_rays: u64,
     /// Photon paths traced, surfaces hit, uniform photons that deposited nothing
     /// (wasted), adaptive mutations.
@@ -379,7 +382,12 @@ impl<'a> Sppm<'a> {
                 show(&|| self.provisional(n, Some((&phi, done))));
             }
         }
-        (phi, m, gather.map(beams::Gather::finish))
+        let sums = gather.map(|g| {
+            let (sums, seconds) = g.finish();
+            self.stats.beam_seconds += seconds;
+            sums
+        });
+        (phi, m, sums)
     }
 
     /// Independent photons of the chunks in `chunks` (of a fixed size); each chunk's

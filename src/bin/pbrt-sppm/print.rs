@@ -108,8 +108,10 @@ fn stats(out: &RenderOutput) {
         );
         return;
     }
+    let beams =
+        if s.beam_seconds > 0.0 { format!(" (gathering along beams {:.3} s)", s.beam_seconds) } else { String::new() };
     say!(
-        "stats: camera pass {:.3} s, grid {:.3} s, photons {:.3} s, update {:.3} s",
+        "stats: camera pass {:.3} s, grid {:.3} s, photons {:.3} s{beams}, update {:.3} s",
         s.camera_seconds,
         s.grid_seconds,
         s.photon_seconds,
