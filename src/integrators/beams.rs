@@ -182,11 +182,27 @@ impl<'a> Gather<'a> {
     }
 }
 
+/// The most grid cells of 2r a beam walks across the photons' box, per axis: a radius
+/// far below the box's size bins photons in cells of 1/`MAX_CELLS` of it instead
+/// (still counting only those within r), so that no beam walks a million cells.
+const MAX_CELLS: usize = 2048;
+
+/// The largest side of the photons' bounding box.
+fn extent(photons: &[VolumePhoton]) -> f32 {
+    let empty = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    let (lo, hi) = photons
+        .par_iter()
+        .fold(|| empty, |(lo, hi), p| (lo.min(p.p), hi.max(p.p)))
+        .reduce(|| empty, |a, b| (a.0.min(b.0), a.1.max(b.1)));
+    (hi - lo).max_element().max(0.0)
+}
+
 /// Each pixel's beam estimate Σ β·Tr·p·Φ/(π r²), the photons' flux times `scale`.
 /// Pixels sum their beams in order, each beam its cells in order along it and each
 /// cell's photons in the order they were traced: the same for any thread count.
 pub fn estimate(beams: &[&[Beam]], photons: &[VolumePhoton], r: f32, scale: f64) -> Vec<DVec3> {
-    let sites: Vec<Option<Site>> = photons.par_iter().map(|p| Some(Site { p: p.p, radius: r })).collect();
+    let bin = r.max(extent(photons) / MAX_CELLS as f32);
+    let sites: Vec<Option<Site>> = photons.par_iter().map(|p| Some(Site { p: p.p, radius: bin })).collect();
     let Some(grid) = Grid::build(&sites) else { return vec![DVec3::ZERO; beams.len()] };
     let norm = scale / (std::f64::consts::PI * r as f64 * r as f64);
     beams
@@ -243,6 +259,43 @@ mod tests {
                 (got - want).abs().max_element() <= 1e-3 * want.max_element().max(1.0),
                 "beam {k}: {got} vs {want}"
             );
+        }
+    }
+
+    /// A radius far below the photons' box (here 1 in 10,000) bins them in coarser
+    /// cells, so no beam walks millions of them; it still gathers exactly the photons
+    /// within r.
+    #[test]
+    fn a_tiny_radius_in_a_huge_box_gathers_what_brute_force_does() {
+        let mut rng = Rng::new(11);
+        let mut u3 = || Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+        let mut photons: Vec<VolumePhoton> =
+            (0..5000).map(|_| VolumePhoton { p: u3() * 1e4 - 5e3, wo: Vec3::Z, flux: Vec3::ONE }).collect();
+        photons.extend((0..20_000).map(|_| {
+            let u = u3();
+            VolumePhoton { p: Vec3::new(200.0 * u.x - 100.0, 4.0 * u.y - 2.0, 4.0 * u.z - 2.0), wo: Vec3::Z, flux: u }
+        }));
+        assert!(extent(&photons) / MAX_CELLS as f32 > 4.0);
+        let r = 1.0;
+        let pixels: Vec<Vec<Beam>> = (0..50)
+            .map(|k| {
+                let o = Vec3::new(-150.0, (k % 7) as f32 * 0.3 - 1.0, (k % 5) as f32 * 0.4 - 0.8);
+                let d = Vec3::new(1.0, 0.01 * (k % 3) as f32, -0.004 * (k % 4) as f32).normalize();
+                vec![beam(o, d, 60.0 + 4.0 * k as f32, Profile::Exact(Vec3::ZERO))]
+            })
+            .collect();
+        let lists: Vec<&[Beam]> = pixels.iter().map(|b| b.as_slice()).collect();
+        let got = estimate(&lists, &photons, r, 1.0);
+        let uniform = HenyeyGreenstein::new(0.0).p(Vec3::Z, Vec3::Z) as f64;
+        for (k, b) in pixels.iter().enumerate() {
+            let b = &b[0];
+            let near = photons.iter().filter(|p| {
+                let t = (p.p - b.o).dot(b.d);
+                (0.0..=b.len).contains(&t) && (p.p - (b.o + b.d * t)).length_squared() <= r * r
+            });
+            let want = near.map(|p| p.flux.as_dvec3()).sum::<DVec3>() * uniform / std::f64::consts::PI;
+            assert!(want.x > 0.0, "beam {k} passes no photon");
+            assert!((got[k] - want).abs().max_element() <= 1e-4 * want.max_element(), "beam {k}: {} vs {want}", got[k]);
         }
     }
 

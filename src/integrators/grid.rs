@@ -149,11 +149,11 @@ impl Grid {
         if (0..3).any(|a| c[a] < 0.0 || c[a] >= self.res[a] as f32) {
             return false;
         }
-        // The photon pass's inner loop, kept written out as it was before `cell_sites`.
         let key = self.key(self.cell(p));
         let b = bucket(key, self.offsets.len() - 1);
+        let range = self.offsets[b] as usize..self.offsets[b + 1] as usize;
         let mut any = false;
-        for e in self.entries[self.offsets[b] as usize..self.offsets[b + 1] as usize].iter().filter(|e| e.0 == key) {
+        for e in self.entries[range].iter().filter(|e| e.0 == key) {
             f(e.1);
             any = true;
         }
