@@ -131,7 +131,9 @@ impl Beam {
 }
 
 /// Photons in media gathered at most this many at a time, so that their memory stays
-/// bounded in scenes where photons scatter a hundred times (albedo 1, `maxdepth` 100).
+/// bounded in scenes where photons scatter a hundred times (albedo 1, `maxdepth` 100):
+/// 4M photons of 36 bytes and their grid (up to 8 entries of 16 bytes each) come to
+/// about 700 MB at most. Scenes with fewer (all the bundled ones) gather once.
 const BLOCK: usize = 1 << 22;
 
 /// An iteration's beam estimates, from photons in media handed over chunk by chunk in
