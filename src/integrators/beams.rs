@@ -219,6 +219,12 @@ mod tests {
     use super::*;
     use crate::sampling::Rng;
 
+    /// The profile of a homogeneous medium that absorbs with σt = `sigma`.
+    fn exact(sigma: Vec3) -> Profile {
+        let phase = HenyeyGreenstein::new(0.0);
+        Profile::Exact(crate::media::Homogeneous { sigma_a: sigma, sigma_s: Vec3::ZERO, phase, le: Vec3::ZERO })
+    }
+
     fn beam(o: Vec3, d: Vec3, len: f32, tr: Profile) -> Beam {
         Beam { o, d, len, beta: Vec3::ONE, phase: HenyeyGreenstein::new(0.0), tr }
     }
@@ -247,7 +253,7 @@ mod tests {
             }
             let d = d.normalize();
             let len = if k % 7 == 0 { f32::INFINITY } else { 6.0 * u3().x };
-            let b = beam(o, d, len, Profile::Exact(Vec3::ZERO));
+            let b = beam(o, d, len, exact(Vec3::ZERO));
             let got = b.gather(&grid, &photons, r);
             let want: Vec3 = photons
                 .iter()
@@ -283,7 +289,7 @@ mod tests {
             .map(|k| {
                 let o = Vec3::new(-150.0, (k % 7) as f32 * 0.3 - 1.0, (k % 5) as f32 * 0.4 - 0.8);
                 let d = Vec3::new(1.0, 0.01 * (k % 3) as f32, -0.004 * (k % 4) as f32).normalize();
-                vec![beam(o, d, 60.0 + 4.0 * k as f32, Profile::Exact(Vec3::ZERO))]
+                vec![beam(o, d, 60.0 + 4.0 * k as f32, exact(Vec3::ZERO))]
             })
             .collect();
         let lists: Vec<&[Beam]> = pixels.iter().map(|b| b.as_slice()).collect();
@@ -312,7 +318,7 @@ mod tests {
         let pixels: Vec<Vec<Beam>> = (0..300)
             .map(|k| {
                 let (o, d) = (u3() * 4.0 - 2.0, (u3() - 0.5).normalize());
-                (0..k % 3).map(|_| beam(o, d, 3.0, Profile::Exact(Vec3::splat(0.3)))).collect()
+                (0..k % 3).map(|_| beam(o, d, 3.0, exact(Vec3::splat(0.3)))).collect()
             })
             .collect();
         let lists = || pixels.iter().map(|b| b.as_slice()).collect::<Vec<_>>();
@@ -343,7 +349,7 @@ mod tests {
         let photons = [&photons[..], &[ph(5.0, 0.11, toward)]].concat();
         let sites: Vec<Option<Site>> = photons.iter().map(|p| Some(Site { p: p.p, radius: 0.1 })).collect();
         let Some(grid) = Grid::build(&sites) else { panic!("no grid") };
-        let mut b = beam(Vec3::ZERO, Vec3::X, 10.0, Profile::Exact(Vec3::new(0.5, 1.0, 0.0)));
+        let mut b = beam(Vec3::ZERO, Vec3::X, 10.0, exact(Vec3::new(0.5, 1.0, 0.0)));
         b.phase = HenyeyGreenstein::new(0.5);
         let got = b.gather(&grid, &photons, 0.1);
         let (fwd, back) = (b.phase.p(-Vec3::X, toward), b.phase.p(-Vec3::X, away));

@@ -108,7 +108,7 @@ impl Medium {
     /// direction `d` (see [`Profile`]).
     pub fn profile(&self, o: Vec3, d: Vec3, dist: f32, sampler: &mut impl Sampler) -> Profile {
         match self {
-            Medium::Homogeneous(h) => Profile::Exact(h.sigma_t()),
+            Medium::Homogeneous(h) => Profile::Exact(*h),
             Medium::Tracked(g) => Profile::Steps(g.transmittance_steps(o, d, dist, sampler)),
         }
     }
@@ -129,8 +129,8 @@ impl Medium {
 /// walk's records in the others.
 #[derive(Clone, Debug)]
 pub enum Profile {
-    /// σt of a homogeneous medium.
-    Exact(Vec3),
+    /// A homogeneous medium.
+    Exact(Homogeneous),
     /// (distance, transmittance from there on) in increasing distance.
     Steps(Vec<(f32, Vec3)>),
 }
@@ -139,10 +139,7 @@ impl Profile {
     /// The transmittance over the first `t` world units.
     pub fn at(&self, t: f32) -> Vec3 {
         match self {
-            Profile::Exact(st) => {
-                let tr = |s: f32| if s == 0.0 { 1.0 } else { (-s * t).exp() };
-                Vec3::new(tr(st.x), tr(st.y), tr(st.z))
-            }
+            Profile::Exact(h) => h.transmittance(t),
             Profile::Steps(steps) => match steps.partition_point(|s| s.0 <= t) {
                 0 => Vec3::ONE,
                 k => steps[k - 1].1,
