@@ -110,12 +110,27 @@ impl AbstractPath {
         // Light tracing (n_light of them per camera path's one); never of direct light.
         p.push(if spec(k - 1) || k == 2 { 0.0 } else { self.n_light * pl(k) });
         // Merging at x_i takes a light subpath of i edges; direct light (i = 1) is
-        // never merged.
+        // never merged, nor is a camera subpath past a specular bounce after a
+        // diffuse one.
         for i in 1..k {
             let eta = self.at(i).vm.sqrt();
-            p.push(if spec(i) || i == 1 { 0.0 } else { eta * pl(i + 1) * pc(i) });
+            p.push(if spec(i) || i == 1 || !self.camera_merges(i) { 0.0 } else { eta * pl(i + 1) * pc(i) });
         }
         p
+    }
+
+    /// Whether a camera subpath merges at x_i: read from the camera, x_{k−1} … x_{i+1}
+    /// hold no specular vertex after a diffuse one.
+    fn camera_merges(&self, i: usize) -> bool {
+        let mut diffuse = false;
+        for j in (i + 1..self.k).rev() {
+            match self.specular[j] {
+                true if diffuse => return false,
+                true => {}
+                false => diffuse = true,
+            }
+        }
+        true
     }
 
     /// The merging constants at x_i.
@@ -130,6 +145,9 @@ impl AbstractPath {
         s.arrive(Some(self.d2[0]), self.a[1]);
         for j in 1..i {
             s.scatter(self.b[j], self.fwd_l[j], self.fwd_c[j], self.specular[j], j > 1, self.at(j));
+            if self.specular[j] {
+                s.forget_merges();
+            }
             s.arrive(Some(self.d2[j]), self.a[j + 1]);
         }
         s
@@ -141,7 +159,7 @@ impl AbstractPath {
         let mut s = Partial::camera(self.cam, self.n_light);
         s.arrive(Some(self.d2[k - 1]), self.b[k - 1]);
         for j in (i + 1..k).rev() {
-            s.scatter(self.a[j], self.fwd_c[j], self.fwd_l[j], self.specular[j], true, self.at(j));
+            s.scatter(self.a[j], self.fwd_c[j], self.fwd_l[j], self.specular[j], self.camera_merges(j), self.at(j));
             s.arrive(Some(self.d2[j - 1]), self.b[j - 1]);
         }
         s
@@ -178,7 +196,8 @@ impl AbstractPath {
             let ok = !(spec(s - 1) || spec(s));
             let light = self.light_state(s - 1);
             let f = (self.at(s - 1), self.at(s));
-            w.push(if ok { mis::connect(light, self.camera_state(s), pdfs, s as u32 - 1, f) } else { 0.0 });
+            let merges = self.camera_merges(s);
+            w.push(if ok { mis::connect(light, self.camera_state(s), pdfs, s as u32 - 1, f, merges) } else { 0.0 });
         }
         let camera_a = self.cam * self.b[k - 1] / self.d2[k - 1];
         let f = self.at(k - 1);
@@ -186,7 +205,7 @@ impl AbstractPath {
         w.push(if spec(k - 1) { 0.0 } else { lt });
         for i in 1..k {
             let m = mis::merge(self.light_state(i), self.camera_state(i), self.fwd_c[i], self.fwd_l[i], self.at(i));
-            w.push(if spec(i) || i == 1 { 0.0 } else { m });
+            w.push(if spec(i) || i == 1 || !self.camera_merges(i) { 0.0 } else { m });
         }
         w
     }
@@ -195,7 +214,7 @@ impl AbstractPath {
 #[test]
 fn mis_weights_of_all_techniques_sum_to_one_and_match_the_full_path_formula() {
     let mut rng = Rng::new(7);
-    let (mut checked, mut through_media) = (0, 0);
+    let (mut checked, mut through_media, mut past_specular) = (0, 0, 0);
     for k in 2..=7 {
         for _ in 0..400 {
             let path = AbstractPath::random(&mut rng, k);
@@ -217,10 +236,12 @@ fn mis_weights_of_all_techniques_sum_to_one_and_match_the_full_path_formula() {
             }
             checked += 1;
             through_media += path.medium.iter().filter(|&&m| m).count().min(1);
+            past_specular += (2..k).any(|i| !path.specular[i] && !path.camera_merges(i)) as usize;
         }
     }
     assert!(checked > 2000, "{checked} paths checked");
     assert!(through_media > 1000, "{through_media} paths with medium vertices");
+    assert!(past_specular > 300, "{past_specular} paths with a vertex not merged past a specular bounce");
 }
 
 /// A closed box lit only through its ceiling: a light faces up from above the camera,
@@ -463,4 +484,32 @@ fn sobol_light_subpaths_stratify_a_pass() {
     assert!(random.0 > 0.01, "the floor is lit: {random:?}");
     assert!((sobol.0 / random.0 - 1.0).abs() < 3.0 * random.1 / random.0, "{sobol:?} vs {random:?}");
     assert!(sobol.1 < 0.75 * random.1, "spread over seeds: sobol {:.3e}, random {:.3e}", sobol.1, random.1);
+}
+
+/// A glass sphere focusing a small bright light onto a floor it shadows, seen from
+/// above: camera subpaths from the floor that bounce into the sphere and out onto the
+/// focused spot may not merge there (`mis`), so that light comes from the techniques
+/// left, chiefly merging at the floor first seen; the image must still be bdpt's.
+#[test]
+fn merging_left_out_past_a_specular_bounce_keeps_the_image_of_bdpt() {
+    let text = |n: u32| {
+        format!(
+            "LookAt 0 3 -3  0 0.4 0.3  0 1 0 Camera \"perspective\" \"float fov\" 40 \
+             Film \"rgb\" \"integer xresolution\" 12 \"integer yresolution\" 12 \
+             Integrator \"bdpt\" \"integer maxdepth\" 6 \"integer iterations\" {n} \
+             \"integer photonsperiteration\" 4000 \"float radius\" 0.05 \
+             WorldBegin AttributeBegin Translate 0 3 0.3 AreaLightSource \"diffuse\" \"rgb L\" [400 400 400] \
+             Shape \"sphere\" \"float radius\" 0.05 AttributeEnd \
+             AttributeBegin Material \"dielectric\" \"float eta\" 1.5 Translate 0 .8 .3 \
+             Shape \"sphere\" \"float radius\" .6 AttributeEnd \
+             Material \"diffuse\" \"rgb reflectance\" [.6 .6 .6] \
+             Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]"
+        )
+    };
+    let vcm = means(&render_with(&text(256), Algorithm::Vcm(Techniques::All)), 12);
+    let bdpt = means(&render_with(&text(256), Algorithm::Vcm(Techniques::Bdpt)), 12);
+    eprintln!("vcm {vcm:?}\nbdpt {bdpt:?}");
+    for (k, (a, b)) in vcm.iter().zip(&bdpt).enumerate() {
+        assert!((a / b - 1.0).abs() < 0.03, "region {k}: vcm {a}, bdpt {b}");
+    }
 }

@@ -38,6 +38,9 @@ struct Vertex<'a> {
     partial: Partial,
     /// Edges from the camera.
     len: u32,
+    /// Merging here is a technique: the camera subpath has not bounced specularly
+    /// after a diffuse bounce (`mis`).
+    merges: bool,
 }
 
 impl Cameras<'_> {
@@ -72,6 +75,9 @@ impl Cameras<'_> {
         // densities are measured from there).
         let (mut beta, mut color, mut prev, mut origin) = (Vec3::splat(weight), Vec3::ZERO, ray.o.0, ray.o.0);
         let (mut len, mut passes, mut medium) = (0u32, 0u32, scene.camera_medium);
+        // Whether the subpath has scattered diffusely, and specularly after that (then
+        // merging is no technique at its vertices beyond, see `mis`).
+        let (mut diffuse, mut past_diffuse_specular) = (false, false);
         loop {
             let hit = scene.intersect(&ray);
             if let Some(m) = medium
@@ -105,7 +111,7 @@ impl Cameras<'_> {
             len += 1;
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
-            let v = Vertex { place, at: &at, wo, partial, len };
+            let v = Vertex { place, at: &at, wo, partial, len, merges: !past_diffuse_specular && !at.is_delta() };
             if let Some((hit, si)) = &surf
                 && pass.techniques.uses(Technique::EmitterHit)
             {
@@ -117,7 +123,9 @@ impl Cameras<'_> {
             if !at.is_delta() {
                 color += beta * self.at_vertex(&v, light_path, s);
             }
-            let Some((b, p)) = scatter(pass, &v, beta, s) else { break };
+            let Some((b, p, specular)) = scatter(pass, &v, beta, s) else { break };
+            past_diffuse_specular |= specular && diffuse;
+            diffuse |= !specular;
             (beta, partial, prev) = (b.0, p, place.p);
             ray = place.spawn(b.1);
             (medium, origin) = (place.toward(b.1), ray.o.0);
@@ -144,6 +152,7 @@ impl Cameras<'_> {
             }
         }
         if t.uses(Technique::Merge)
+            && v.merges
             && (t != Techniques::Only(Technique::Merge) || v.len == 1)
             && let Some(grid) = self.grid
         {
@@ -258,7 +267,7 @@ impl Cameras<'_> {
             light_rev: el.pdf_rev as f64,
         };
         let f = (lv.factors(pass), v.at.factors(&pass.factors));
-        let w = pass.techniques.weight(mis::connect(lv.partial, v.partial, pdfs, lv.len, f));
+        let w = pass.techniques.weight(mis::connect(lv.partial, v.partial, pdfs, lv.len, f, v.merges));
         let g = v.at.cos(dir) * lv.adjoint_cos(-dir) / dist2;
         let c = (lv.beta * el.f * ec.f * (g * w)).as_dvec3() * pass.scene.photon_scale;
         let c = c.as_vec3();
@@ -324,8 +333,9 @@ fn light_densities(pass: &Pass, light: &Light, ls: &crate::lights::LightSample, 
 }
 
 /// Samples the BSDF (or phase function) at a camera vertex: ((throughput, direction),
-/// partial sums) after it; `None` when absorbed or ended by Russian roulette.
-fn scatter(pass: &Pass, v: &Vertex, beta: Rgb, s: &mut impl Sampler) -> Option<((Rgb, Vec3), Partial)> {
+/// partial sums, whether it was specular) after it; `None` when absorbed or ended by
+/// Russian roulette.
+fn scatter(pass: &Pass, v: &Vertex, beta: Rgb, s: &mut impl Sampler) -> Option<((Rgb, Vec3), Partial, bool)> {
     let smp = v.at.sample(v.wo, s, TransportMode::Radiance, |wi| v.at.cos(wi))?;
     let mut beta = beta * smp.f * smp.scale;
     // pbrt's path tracer's roulette, after three bounces.
@@ -341,6 +351,6 @@ fn scatter(pass: &Pass, v: &Vertex, beta: Rgb, s: &mut impl Sampler) -> Option<(
     }
     let mut partial = v.partial;
     let m = v.at.measure(smp.wi, v.place.ng);
-    partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, true, v.at.factors(&pass.factors));
-    Some(((beta, smp.wi), partial))
+    partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, v.merges, v.at.factors(&pass.factors));
+    Some(((beta, smp.wi), partial, smp.specular))
 }

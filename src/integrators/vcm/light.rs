@@ -256,6 +256,9 @@ fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> O
     let mut partial = v.partial;
     let m = v.at.measure(smp.wi, v.place.ng);
     partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, v.len > 1, v.factors(pass));
+    if smp.specular {
+        partial.forget_merges();
+    }
     Some((v.place.spawn(smp.wi), beta, partial))
 }
 
