@@ -513,3 +513,30 @@ fn merging_left_out_past_a_specular_bounce_keeps_the_image_of_bdpt() {
         assert!((a / b - 1.0).abs() < 0.03, "region {k}: vcm {a}, bdpt {b}");
     }
 }
+
+/// Direct light from a large quad light (two triangle lights, so next-event estimation
+/// samples both, `NEE_ALL_LIGHTS_MAX`) onto a floor: all techniques combined must give
+/// next-event estimation's image, which fails if the emitter-hit weights take the
+/// light's choice by power where next-event estimation took every light.
+#[test]
+fn every_light_sampled_keeps_the_weights_of_direct_light_summing_to_one() {
+    let text = |n: u32| {
+        format!(
+            "LookAt 0 1.5 -2  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50 \
+             Film \"rgb\" \"integer xresolution\" 12 \"integer yresolution\" 12 \
+             Integrator \"bdpt\" \"integer maxdepth\" 1 \"integer iterations\" {n} \
+             \"integer photonsperiteration\" 200 \
+             WorldBegin AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [2 2 2] \
+             Shape \"trianglemesh\" \"point3 P\" [-2 3 -2  2 3 -2  2 3 2  -2 3 2] \"integer indices\" [0 1 2 0 2 3] \
+             AttributeEnd Material \"diffuse\" \"rgb reflectance\" [.6 .6 .6] \
+             Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]"
+        )
+    };
+    let all = means(&render_with(&text(64), Algorithm::Vcm(Techniques::All)), 12);
+    let direct = means(&render_with(&text(64), Algorithm::Vcm(Techniques::Only(Technique::Direct))), 12);
+    eprintln!("all {all:?}\ndirect {direct:?}");
+    assert!(all[0] > 0.01, "the floor is lit: {all:?}");
+    for (k, (a, b)) in all.iter().zip(&direct).enumerate() {
+        assert!((a / b - 1.0).abs() < 0.01, "region {k}: all {a}, next-event estimation alone {b}");
+    }
+}

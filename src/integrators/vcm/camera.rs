@@ -174,7 +174,8 @@ impl Cameras<'_> {
         let light = &scene.lights[idx as usize];
         let pick = scene.light_power.pmf(idx as usize) as f64;
         let cos = v.wo.dot(si.n.0).abs() as f64;
-        let direct = pick * light.pdf_li(&scene.geometry.shapes, prev, -v.wo) as f64 * cos / dist2;
+        let direct =
+            self.pass.nee_pick(idx as usize) * light.pdf_li(&scene.geometry.shapes, prev, -v.wo) as f64 * cos / dist2;
         let out = Ray::new(si.p, Vector3(v.wo));
         let (pos, dir) = light.pdf_le(&scene.geometry.shapes, scene.world, &out, si.n.0);
         le * self.pass.techniques.weight(mis::emitter_hit(v.partial, direct, pick * (pos * dir) as f64, v.len == 2))
@@ -194,7 +195,7 @@ impl Cameras<'_> {
                 continue;
             }
             let pick = scene.light_power.pmf(k) as f64;
-            let direct = pick * light.pdf_li(&scene.geometry.shapes, prev, d) as f64;
+            let direct = self.pass.nee_pick(k) * light.pdf_li(&scene.geometry.shapes, prev, d) as f64;
             let (pos, dir) =
                 light.pdf_le(&scene.geometry.shapes, scene.world, &Ray::new(Point3(prev), Vector3(-d)), -d);
             let w = mis::emitter_hit(partial, direct, pick * (pos * dir) as f64, len == 1);
@@ -203,11 +204,21 @@ impl Cameras<'_> {
         sum
     }
 
-    /// Next-event estimation: one point drawn on a light chosen by power.
+    /// Next-event estimation: one point drawn on a light chosen by power, or on every
+    /// light when the pass samples them all ([`Pass::nee_all`]).
     fn direct(&self, v: &Vertex, s: &mut impl Sampler) -> Rgb {
         let scene = self.pass.scene;
+        if self.pass.nee_all {
+            return (0..scene.lights.len()).map(|k| self.direct_from(v, k, 1.0, s.get2d(), s)).sum();
+        }
         let (pick_u, u) = (s.get1d(), s.get2d());
         let Some((k, pick)) = scene.light_power.sample(pick_u) else { return Vec3::ZERO };
+        self.direct_from(v, k, pick, u, s)
+    }
+
+    /// One next-event estimate from light `k`, chosen with probability `pick`.
+    fn direct_from(&self, v: &Vertex, k: usize, pick: f32, u: [f32; 2], s: &mut impl Sampler) -> Rgb {
+        let scene = self.pass.scene;
         let light = &scene.lights[k];
         let from = match v.at {
             Scatterer::Surface(b) => {
@@ -225,17 +236,16 @@ impl Cameras<'_> {
             return Vec3::ZERO;
         }
         let (direct, cos_light, emission) = light_densities(self.pass, light, &ls, from);
-        let pick = pick as f64;
         let pdfs = DirectPdfs {
             bsdf: if ls.delta { 0.0 } else { e.pdf as f64 },
             bsdf_rev: e.pdf_rev as f64,
-            direct: pick * direct,
-            emission: pick * emission,
+            direct: pick as f64 * direct,
+            emission: scene.light_power.pmf(k) as f64 * emission,
             cos_here: v.at.measure(ls.wi, v.place.ng),
             cos_light,
         };
         let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs, v.len == 1));
-        let c = e.f * v.at.cos(ls.wi) * ls.li * (w / (pick as f32 * ls.pdf));
+        let c = e.f * v.at.cos(ls.wi) * ls.li * (w / (pick * ls.pdf));
         if !c.is_finite() || c == Vec3::ZERO {
             return Vec3::ZERO;
         }

@@ -136,7 +136,8 @@ struct Start<'a> {
     beta: Rgb,
     partial: Partial,
     light: &'a Light,
-    /// The light's choice probability and the cosine at its surface.
+    /// Next-event estimation's probability of choosing the light, and the cosine at
+    /// its surface.
     pick: f64,
     cos: f64,
     /// The medium it emits into.
@@ -158,10 +159,11 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let emission = pick * e.pdf_pos as f64 * e.pdf_dir as f64;
     // Next-event estimation's density of the same emission point: an area light's is
     // found at the first hit (it may depend on the point lit).
+    let nee = pass.nee_pick(li);
     let direct = match light {
-        Light::Infinite(_) => pick * e.pdf_dir as f64,
+        Light::Infinite(_) => nee * e.pdf_dir as f64,
         Light::Area(_) => 1.0,
-        _ => pick,
+        _ => nee,
     };
     let cos_used = if is_finite(light) { cos } else { 1.0 };
     let partial = Partial::light(emission, direct, cos_used, light.is_delta(), pass.factors.surface);
@@ -171,7 +173,7 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let medium = scene.light_medium(li, d, e.n);
     let time = pass.time.unwrap_or_else(|| scene.camera.time(s.get1d()));
     let ray = Ray::new(e.ray.o, Vector3(d)).at_time(time);
-    Some(Start { ray, beta, partial, light, pick, cos, medium })
+    Some(Start { ray, beta, partial, light, pick: nee, cos, medium })
 }
 
 /// Whether a light has a position (distances to it count).
