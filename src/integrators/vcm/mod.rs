@@ -41,9 +41,9 @@ use std::time::Instant;
 /// Next-event estimation samples every light when there are at most this many, and
 /// one chosen by power when there are more. Choosing one adds the choice's noise to
 /// every estimate: on `sppm-bench` (a point light and a disk) sampling both left an
-/// eighth of the error at equal passes for a fifth more time a pass, and the other
-/// scenes of the suite (one to two lights, counting a quad's two triangles) 0.74–0.95
-/// of the error × time (`docs/vcm.md`, "Every light, when there are few"). Past a few
+/// eighth of the error at equal passes for a fifth more time a pass, and four other
+/// scenes of the suite (two lights each, counting a quad's two triangles) 0.74–0.95 of
+/// the error × time (`docs/vcm.md`, "Every light, when there are few"). Past a few
 /// lights the shadow rays cost more than the choice: a mesh emitter has a light per
 /// triangle.
 pub const NEE_ALL_LIGHTS_MAX: usize = 8;
