@@ -492,11 +492,10 @@ fn sobol_light_subpaths_stratify_a_pass() {
 /// left, chiefly merging at the floor first seen; the image must still be bdpt's.
 #[test]
 fn merging_left_out_past_a_specular_bounce_keeps_the_image_of_bdpt() {
-    let text = |n: u32| {
-        format!(
-            "LookAt 0 3 -3  0 0.4 0.3  0 1 0 Camera \"perspective\" \"float fov\" 40 \
+    let text = format!(
+        "LookAt 0 3 -3  0 0.4 0.3  0 1 0 Camera \"perspective\" \"float fov\" 40 \
              Film \"rgb\" \"integer xresolution\" 12 \"integer yresolution\" 12 \
-             Integrator \"bdpt\" \"integer maxdepth\" 6 \"integer iterations\" {n} \
+             Integrator \"bdpt\" \"integer maxdepth\" 6 \"integer iterations\" 256 \
              \"integer photonsperiteration\" 4000 \"float radius\" 0.05 \
              WorldBegin AttributeBegin Translate 0 3 0.3 AreaLightSource \"diffuse\" \"rgb L\" [400 400 400] \
              Shape \"sphere\" \"float radius\" 0.05 AttributeEnd \
@@ -504,14 +503,8 @@ fn merging_left_out_past_a_specular_bounce_keeps_the_image_of_bdpt() {
              Shape \"sphere\" \"float radius\" .6 AttributeEnd \
              Material \"diffuse\" \"rgb reflectance\" [.6 .6 .6] \
              Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]"
-        )
-    };
-    let vcm = means(&render_with(&text(256), Algorithm::Vcm(Techniques::All)), 12);
-    let bdpt = means(&render_with(&text(256), Algorithm::Vcm(Techniques::Bdpt)), 12);
-    eprintln!("vcm {vcm:?}\nbdpt {bdpt:?}");
-    for (k, (a, b)) in vcm.iter().zip(&bdpt).enumerate() {
-        assert!((a / b - 1.0).abs() < 0.03, "region {k}: vcm {a}, bdpt {b}");
-    }
+    );
+    assert_means_agree(&text, Algorithm::Vcm(Techniques::All), Algorithm::Vcm(Techniques::Bdpt), 0.03);
 }
 
 /// Direct light from a large quad light (two triangle lights, so next-event estimation
@@ -520,23 +513,33 @@ fn merging_left_out_past_a_specular_bounce_keeps_the_image_of_bdpt() {
 /// light's choice by power where next-event estimation took every light.
 #[test]
 fn every_light_sampled_keeps_the_weights_of_direct_light_summing_to_one() {
-    let text = |n: u32| {
-        format!(
-            "LookAt 0 1.5 -2  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50 \
+    let text = format!(
+        "LookAt 0 1.5 -2  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50 \
              Film \"rgb\" \"integer xresolution\" 12 \"integer yresolution\" 12 \
-             Integrator \"bdpt\" \"integer maxdepth\" 1 \"integer iterations\" {n} \
+             Integrator \"bdpt\" \"integer maxdepth\" 1 \"integer iterations\" 64 \
              \"integer photonsperiteration\" 200 \
              WorldBegin AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [2 2 2] \
              Shape \"trianglemesh\" \"point3 P\" [-2 3 -2  2 3 -2  2 3 2  -2 3 2] \"integer indices\" [0 1 2 0 2 3] \
              AttributeEnd Material \"diffuse\" \"rgb reflectance\" [.6 .6 .6] \
              Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]"
-        )
-    };
-    let all = means(&render_with(&text(64), Algorithm::Vcm(Techniques::All)), 12);
-    let direct = means(&render_with(&text(64), Algorithm::Vcm(Techniques::Only(Technique::Direct))), 12);
-    eprintln!("all {all:?}\ndirect {direct:?}");
+    );
+    let all = assert_means_agree(
+        &text,
+        Algorithm::Vcm(Techniques::All),
+        Algorithm::Vcm(Techniques::Only(Technique::Direct)),
+        0.01,
+    );
     assert!(all[0] > 0.01, "the floor is lit: {all:?}");
-    for (k, (a, b)) in all.iter().zip(&direct).enumerate() {
-        assert!((a / b - 1.0).abs() < 0.01, "region {k}: all {a}, next-event estimation alone {b}");
+}
+
+/// Renders `text` with two algorithms and asserts that the means of every region of a
+/// 12×12 image agree within the relative `tolerance`; returns the first one's means.
+fn assert_means_agree(text: &str, a: Algorithm, b: Algorithm, tolerance: f64) -> Vec<f64> {
+    let first = means(&render_with(text, a), 12);
+    let second = means(&render_with(text, b), 12);
+    eprintln!("{a:?}: {first:?}\n{b:?}: {second:?}");
+    for (k, (x, y)) in first.iter().zip(&second).enumerate() {
+        assert!((x / y - 1.0).abs() < tolerance, "region {k}: {a:?} {x}, {b:?} {y}");
     }
+    first
 }
