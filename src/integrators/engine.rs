@@ -33,10 +33,20 @@ impl<'a> Engine<'a> {
                     seed: p.seed,
                     sampler: p.sampler,
                     techniques,
+                    balance: p.balances(),
                 };
                 Engine::Vcm(Box::new(Vcm::new(scene, p.iterations, p.range.start, settings)?))
             }
         })
+    }
+
+    /// Photons (light subpaths) the last iteration traced: the plan's, unless vcm
+    /// chose its own ([`super::vcm::balance`]).
+    pub fn photons(&self, planned: u64) -> u64 {
+        match self {
+            Engine::Sppm(_) => planned,
+            Engine::Vcm(v) => v.light_paths(v.iteration.saturating_sub(1)),
+        }
     }
 
     /// Camera paths per iteration: the rendered window's pixels.

@@ -107,6 +107,9 @@ pub struct Plan {
     pub algorithm: Algorithm,
     pub iterations: u32,
     pub photons: u64,
+    /// vcm chooses its light subpaths per pass from `photons` ([`super::vcm::balance`]):
+    /// no `--photons` was given.
+    pub balance_light_paths: bool,
     pub radius: f32,
     pub seed: u64,
     pub sampler: SamplerKind,
@@ -136,10 +139,17 @@ impl Plan {
         .into_iter()
         // SPPM's fingerprint stays as it was before other integrators existed.
         .chain((self.algorithm != Algorithm::Sppm).then(|| ("integrator", self.algorithm.name())))
+        .chain(self.balances().then(|| ("light-subpaths", "balanced".to_string())))
         // Checkpoints made before it existed (without it) still resume.
         .chain((self.algorithm == Algorithm::Sppm).then(|| ("volume-gather", self.volume_gather.name().into())))
         .map(|(k, v)| (k.to_string(), v))
         .collect()
+    }
+
+    /// Whether a vcm render chooses its light subpaths per pass (not when `--photons`
+    /// fixed them, nor for a technique alone, whose tests count on the file's count).
+    pub fn balances(&self) -> bool {
+        matches!(self.algorithm, Algorithm::Vcm(Techniques::All | Techniques::Bdpt)) && self.balance_light_paths
     }
 
     /// How fast a VCM render's merging radius shrinks: the independent passes' α.
@@ -199,6 +209,7 @@ impl Plan {
             range,
             iterations,
             photons: settings.photons.unwrap_or(integrator.photons_per_iteration).max(1),
+            balance_light_paths: settings.photons.is_none(),
             radius,
             seed: settings.seed.unwrap_or(integrator.seed),
             sampler: settings.sampler,
@@ -209,10 +220,10 @@ impl Plan {
     }
 }
 
-// VCM's light subpaths per pass are the photon count, as SPPM's photons: the file's
-// `photonsperiteration` (default one per pixel, as SmallVCM) unless `--photons`. One
-// per pixel suits connections (on `doorway`, 100,000 per pass left 1.8 times the error
-// of 19,200 at equal time), more suit merging (`pool`'s caustic).
+// VCM's light subpaths per pass start from the photon count, as SPPM's photons: the
+// file's `photonsperiteration` (default one per pixel, as SmallVCM) unless `--photons`
+// fixes them; without it vcm chooses the count after a pilot (`vcm::balance`): one per
+// pixel suits connections (`doorway`), more suit merging (`pool`'s caustic).
 
 /// The first radius when none is given: SPPM's is the Integrator's `radius`; VCM takes
 /// it when the file gives one, else 0.003 of the scene's bounding radius (SmallVCM's

@@ -145,7 +145,7 @@ pub fn run(
         save(&engine, t, &mut progress, monitor.quiet);
     }
     let seconds = progress.seconds();
-    let image = image(&engine, plan.photons, seconds);
+    let image = image(&engine, engine.photons(plan.photons), seconds);
     check_finite(&image)?;
     let passes = PassSet::from_range(engine.first_pass()..engine.iteration());
     let independent = plan.passes.is_independent() || plan.algorithm != Algorithm::Sppm;
@@ -222,7 +222,7 @@ fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &m
     show(monitor, engine.size(), &|| engine.image(), false);
     if let Some(path) = &monitor.partial_images
         && engine.passes_done().is_power_of_two()
-        && let image = image(engine, plan.photons, seconds)
+        && let image = image(engine, engine.photons(plan.photons), seconds)
         && let Err(e) = check_finite(&image)
             .map_err(|e| e.to_string())
             .and_then(|()| write_image(path, &image).map_err(|e| e.to_string()))

@@ -492,8 +492,7 @@ fn sobol_light_subpaths_stratify_a_pass() {
 /// left, chiefly merging at the floor first seen; the image must still be bdpt's.
 #[test]
 fn merging_left_out_past_a_specular_bounce_keeps_the_image_of_bdpt() {
-    let text = format!(
-        "LookAt 0 3 -3  0 0.4 0.3  0 1 0 Camera \"perspective\" \"float fov\" 40 \
+    let text = "LookAt 0 3 -3  0 0.4 0.3  0 1 0 Camera \"perspective\" \"float fov\" 40 \
              Film \"rgb\" \"integer xresolution\" 12 \"integer yresolution\" 12 \
              Integrator \"bdpt\" \"integer maxdepth\" 6 \"integer iterations\" 256 \
              \"integer photonsperiteration\" 4000 \"float radius\" 0.05 \
@@ -502,9 +501,8 @@ fn merging_left_out_past_a_specular_bounce_keeps_the_image_of_bdpt() {
              AttributeBegin Material \"dielectric\" \"float eta\" 1.5 Translate 0 .8 .3 \
              Shape \"sphere\" \"float radius\" .6 AttributeEnd \
              Material \"diffuse\" \"rgb reflectance\" [.6 .6 .6] \
-             Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]"
-    );
-    assert_means_agree(&text, Algorithm::Vcm(Techniques::All), Algorithm::Vcm(Techniques::Bdpt), 0.03);
+             Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]";
+    assert_means_agree(text, Algorithm::Vcm(Techniques::All), Algorithm::Vcm(Techniques::Bdpt), 0.03);
 }
 
 /// Direct light from a large quad light (two triangle lights, so next-event estimation
@@ -513,18 +511,16 @@ fn merging_left_out_past_a_specular_bounce_keeps_the_image_of_bdpt() {
 /// light's choice by power where next-event estimation took every light.
 #[test]
 fn every_light_sampled_keeps_the_weights_of_direct_light_summing_to_one() {
-    let text = format!(
-        "LookAt 0 1.5 -2  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50 \
+    let text = "LookAt 0 1.5 -2  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50 \
              Film \"rgb\" \"integer xresolution\" 12 \"integer yresolution\" 12 \
              Integrator \"bdpt\" \"integer maxdepth\" 1 \"integer iterations\" 64 \
              \"integer photonsperiteration\" 200 \
              WorldBegin AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [2 2 2] \
              Shape \"trianglemesh\" \"point3 P\" [-2 3 -2  2 3 -2  2 3 2  -2 3 2] \"integer indices\" [0 1 2 0 2 3] \
              AttributeEnd Material \"diffuse\" \"rgb reflectance\" [.6 .6 .6] \
-             Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]"
-    );
+             Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]";
     let all = assert_means_agree(
-        &text,
+        text,
         Algorithm::Vcm(Techniques::All),
         Algorithm::Vcm(Techniques::Only(Technique::Direct)),
         0.01,
@@ -542,4 +538,52 @@ fn assert_means_agree(text: &str, a: Algorithm, b: Algorithm, tolerance: f64) ->
         assert!((x / y - 1.0).abs() < tolerance, "region {k}: {a:?} {x}, {b:?} {y}");
     }
     first
+}
+
+/// The light subpaths per pass follow what carries the light (`balance`): a room lit
+/// only through a small hole by a point light outside (merging and light tracing carry
+/// everything: the pilot's halves of subpaths disagree) takes more than the file's
+/// count after the pilot, a floor under a large area light (next-event estimation
+/// carries nearly everything) fewer; `--photons` fixes the count.
+#[test]
+fn light_subpaths_per_pass_follow_what_carries_the_light() {
+    let header = |photons: u32| {
+        format!(
+            "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32 \
+             Integrator \"sppm\" \"integer maxdepth\" 5 \"integer photonsperiteration\" {photons} \"float radius\" 0.1 \
+             WorldBegin Material \"diffuse\" \"rgb reflectance\" [.7 .7 .7] "
+        )
+    };
+    let hole = format!(
+        "LookAt 0.8 1.5 0.8  -1 0.5 -0.3  0 1 0 Camera \"perspective\" \"float fov\" 75 {} \
+         LightSource \"point\" \"rgb I\" [40 40 40] \"point from\" [3 2.2 0] \
+         Shape \"trianglemesh\" \"point3 P\" [-1 0 -1  1 0 -1  1 0 1  -1 0 1  -1 2 -1  1 2 -1  1 2 1  -1 2 1] \
+         \"integer indices\" [0 1 2 0 2 3  4 6 5 4 7 6  0 4 5 0 5 1  3 2 6 3 6 7  0 3 7 0 7 4] \
+         Shape \"trianglemesh\" \"point3 P\" [1 0 -1  1 2 -1  1 2 1  1 0 1  1 1.2 -.1  1 1.4 -.1  1 1.4 .1  1 1.2 .1] \
+         \"integer indices\" [0 1 5 0 5 4  1 2 6 1 6 5  2 3 7 2 7 6  3 0 4 3 4 7]",
+        header(20000)
+    );
+    let lamp = format!(
+        "LookAt 0 2 -3  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50 {} \
+         AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [2 2 2] \
+         Shape \"trianglemesh\" \"point3 P\" [-2 3 -2  2 3 -2  2 3 2  -2 3 2] \"integer indices\" [0 1 2 0 2 3] AttributeEnd \
+         Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]",
+        header(4000)
+    );
+    let chosen = |text: &str, photons: Option<u64>| {
+        let settings = RenderSettings {
+            algorithm: Some(Algorithm::Vcm(Techniques::All)),
+            iterations: Some(5),
+            photons,
+            ..Default::default()
+        };
+        let out = pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), &settings).expect("renders");
+        assert!(out.image.pixels.iter().any(|p| p[0] > 0.0), "the image is black");
+        out.image.meta.photons_per_iteration.expect("the count is recorded")
+    };
+    let (through_hole, under_lamp) = (chosen(&hole, None), chosen(&lamp, None));
+    eprintln!("through a hole: {through_hole}, under a lamp: {under_lamp}");
+    assert!(through_hole > 20000 * 5 / 4, "through a hole: {through_hole}");
+    assert!(under_lamp < 4000 / 2, "under a lamp: {under_lamp}");
+    assert_eq!(chosen(&hole, Some(4000)), 4000);
 }

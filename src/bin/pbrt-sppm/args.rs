@@ -143,7 +143,8 @@ pub struct RenderArgs {
     /// Print the time per phase, the paths traced and the peak memory.
     #[arg(long)]
     pub stats: bool,
-    /// Photons per iteration (at least 1), overriding `photonsperiteration`.
+    /// Photons per iteration (at least 1), overriding `photonsperiteration`; for vcm and
+    /// bdpt, fixes the light subpaths per pass (otherwise chosen after four passes).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u64, 1>)]
     pub photons: Option<u64>,
     /// The initial photon radius (positive), overriding `radius`.

@@ -29,6 +29,45 @@ pub struct Cameras<'a> {
     pub differential_scale: f32,
 }
 
+/// What one camera subpath gives its pixel: the light of the techniques that trace
+/// from the camera (emitters found, next-event estimation, connections), apart from
+/// that of merging the light vertices of each half of the pass's subpaths
+/// ([`super::light::half`]); and the work it took ([`super::balance`] weighs both).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PixelSample {
+    pub traced: Rgb,
+    pub merged: [Rgb; 2],
+    pub work: Work,
+}
+
+impl PixelSample {
+    pub fn total(&self) -> Rgb {
+        self.traced + self.merged[0] + self.merged[1]
+    }
+}
+
+/// Work done, counted in whole units so that sums are the same in any order.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Work {
+    /// Rays traced: closest hits and shadow rays.
+    pub rays: u64,
+    /// Vertices scattered at (a BSDF built and sampled).
+    pub vertices: u64,
+    /// Light vertices a merge lookup looked at.
+    pub candidates: u64,
+}
+
+impl std::ops::Add for Work {
+    type Output = Work;
+    fn add(self, o: Work) -> Work {
+        Work {
+            rays: self.rays + o.rays,
+            vertices: self.vertices + o.vertices,
+            candidates: self.candidates + o.candidates,
+        }
+    }
+}
+
 /// A camera subpath's vertex on a surface or in a medium.
 struct Vertex<'a> {
     place: Place,
@@ -46,7 +85,7 @@ struct Vertex<'a> {
 impl Cameras<'_> {
     /// The radiance pixel `i` of the rendered window (`width` wide) gets from its
     /// camera subpath this pass.
-    pub fn pixel(&self, i: usize, width: usize) -> Rgb {
+    pub fn pixel(&self, i: usize, width: usize) -> PixelSample {
         let (x, y) =
             ((self.pass.origin.0 as usize + i % width) as u64, (self.pass.origin.1 as usize + i / width) as u64);
         let pixel = [x as f32, y as f32];
@@ -62,38 +101,40 @@ impl Cameras<'_> {
         }
     }
 
-    fn path(&self, i: usize, pixel: [f32; 2], s: &mut impl Sampler) -> Rgb {
+    fn path(&self, i: usize, pixel: [f32; 2], s: &mut impl Sampler) -> PixelSample {
         let (pass, scene) = (self.pass, self.pass.scene);
         let (mut ray, mut diff, weight) = camera_ray(scene, pixel, s, self.differential_scale, self.pass.time);
+        let mut out = PixelSample::default();
         if weight == 0.0 {
-            return Rgb::ZERO;
+            return out;
         }
         let camera_pdf = scene.camera.pdf_we(&ray).1 as f64 * pass.film_pixels;
         let mut partial = Partial::camera(camera_pdf, pass.lt_count());
         let light_path = self.lights.path(i % pass.light_paths as usize);
         // The last vertex, and where rays left it (past any interfaces since, light
         // densities are measured from there).
-        let (mut beta, mut color, mut prev, mut origin) = (Vec3::splat(weight), Vec3::ZERO, ray.o.0, ray.o.0);
+        let (mut beta, mut prev, mut origin) = (Vec3::splat(weight), ray.o.0, ray.o.0);
         let (mut len, mut passes, mut medium) = (0u32, 0u32, scene.camera_medium);
         // Whether the subpath has scattered diffusely, and specularly after that (then
         // merging is no technique at its vertices beyond, see `mis`).
         let (mut diffuse, mut past_diffuse_specular) = (false, false);
         loop {
             let hit = scene.intersect(&ray);
+            out.work.rays += 1;
             if let Some(m) = medium
                 && pass.techniques.uses(Technique::EmitterHit)
             {
                 // Media's emission is found by camera paths alone (weight 1), as pbrt's
                 // volpath finds it.
                 let t = hit.map_or(f32::INFINITY, |h| h.t);
-                color += beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, t, s);
+                out.traced += beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, t, s);
             }
             let (place, at, wo, surf) = match vertex::flight(scene, &ray, (hit.as_ref(), medium), &mut beta, s) {
                 Some((place, at, wo)) => (place, at, wo, None),
                 None => {
                     let Some(hit) = hit else {
                         if pass.techniques.uses(Technique::EmitterHit) && len < pass.max_len {
-                            color += beta * self.escaped(ray.d.0.normalize(), origin, len, partial);
+                            out.traced += beta * self.escaped(ray.d.0.normalize(), origin, len, partial);
                         }
                         break;
                     };
@@ -115,13 +156,16 @@ impl Cameras<'_> {
             if let Some((hit, si)) = &surf
                 && pass.techniques.uses(Technique::EmitterHit)
             {
-                color += beta * self.emitted(hit, si, &v, origin, dist2);
+                out.traced += beta * self.emitted(hit, si, &v, origin, dist2);
             }
             if len >= pass.max_len || (surf.is_some() && wo.dot(place.ng) == 0.0) {
                 break;
             }
+            out.work.vertices += 1;
             if !at.is_delta() {
-                color += beta * self.at_vertex(&v, light_path, s);
+                let (traced, [a, b]) = self.at_vertex(&v, light_path, s, &mut out.work);
+                out.traced += beta * traced;
+                out.merged = [out.merged[0] + beta * a, out.merged[1] + beta * b];
             }
             let Some((b, p, specular)) = scatter(pass, &v, beta, s) else { break };
             past_diffuse_specular |= specular && diffuse;
@@ -130,15 +174,24 @@ impl Cameras<'_> {
             ray = place.spawn(b.1);
             (medium, origin) = (place.toward(b.1), ray.o.0);
         }
-        color
+        out
     }
 
-    /// What next-event estimation, connections and merging give at a vertex.
-    fn at_vertex(&self, v: &Vertex, light_path: &[LightVertex], s: &mut impl Sampler) -> Rgb {
+    /// What next-event estimation and connections give at a vertex, and what merging
+    /// each half's light vertices gives; `work` counts the shadow rays and merge
+    /// candidates.
+    fn at_vertex(
+        &self,
+        v: &Vertex,
+        light_path: &[LightVertex],
+        s: &mut impl Sampler,
+        work: &mut Work,
+    ) -> (Rgb, [Rgb; 2]) {
         let t = self.pass.techniques;
         let mut c = Vec3::ZERO;
         if t.uses(Technique::Direct) {
             c += self.direct(v, s);
+            work.rays += if self.pass.nee_all { self.pass.scene.lights.len() as u64 } else { 1 };
         }
         // Alone, each counts one strategy, so that every path is counted once: the
         // light subpath's first vertex for connections, the camera subpath's first for
@@ -148,6 +201,7 @@ impl Cameras<'_> {
             for lv in light_path.iter().take_while(|lv| lv.len + v.len < self.pass.max_len) {
                 if !first_only || lv.len == 1 {
                     c += self.connect(v, lv, s);
+                    work.rays += 1;
                 }
             }
         }
@@ -156,9 +210,9 @@ impl Cameras<'_> {
             && (t != Techniques::Only(Technique::Merge) || v.len == 1)
             && let Some(grid) = self.grid
         {
-            c += self.merge(v, grid);
+            return (c, self.merge(v, grid, &mut work.candidates));
         }
-        c
+        (c, [Vec3::ZERO; 2])
     }
 
     /// Light from an area light the path has found, weighted against the techniques
@@ -290,15 +344,16 @@ impl Cameras<'_> {
     /// Light vertices within the pass's radius merged at a camera vertex: their
     /// density estimate, over a disc on a surface and a ball in a medium (where only
     /// light vertices in media count, and on a surface only those on surfaces).
-    fn merge(&self, v: &Vertex, grid: &Grid) -> Rgb {
+    fn merge(&self, v: &Vertex, grid: &Grid, candidates: &mut u64) -> [Rgb; 2] {
         let pass = self.pass;
         let (p, r2, in_medium) = (v.place.p, pass.radius * pass.radius, v.at.in_medium());
         let f = v.at.factors(&pass.factors);
         if f.vm == 0.0 {
-            return Vec3::ZERO;
+            return [Vec3::ZERO; 2];
         }
-        let mut sum = DVec3::ZERO;
+        let mut sum = [DVec3::ZERO; 2];
         grid.gather(p, |k| {
+            *candidates += 1;
             let lv = &self.lights.vertices[k as usize];
             // Direct light (one edge from the light) is never merged (see `mis`).
             if lv.len < 2
@@ -313,12 +368,12 @@ impl Cameras<'_> {
                 return;
             }
             let w = pass.techniques.weight(mis::merge(lv.partial, v.partial, e.pdf as f64, e.pdf_rev as f64, f));
-            sum += (e.f * lv.beta * w).as_dvec3();
+            sum[lv.half as usize] += (e.f * lv.beta * w).as_dvec3();
         });
         let disc = std::f64::consts::PI * (r2 as f64);
         let kernel = if in_medium { disc * pass.radius as f64 * (4.0 / 3.0) } else { disc };
         let norm = pass.scene.photon_scale / (kernel * pass.light_paths as f64);
-        (sum * norm).as_vec3()
+        sum.map(|s| (s * norm).as_vec3())
     }
 }
 

@@ -17,7 +17,18 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 /// Light subpaths per parallel work item.
-const CHUNK: u64 = 1024;
+pub const CHUNK: u64 = 1024;
+
+/// Which half of a pass's light subpaths subpath `k` is in: even and odd (the pilot
+/// compares the halves, [`super::balance`]).
+pub fn half(k: u64) -> bool {
+    k % 2 == 1
+}
+
+/// How many of a pass's `n` light subpaths are in each half.
+pub fn halves(n: u64) -> [u64; 2] {
+    [n.div_ceil(2), n / 2]
+}
 
 /// A light subpath's vertex on a surface that is not purely specular, or in a medium.
 #[derive(Clone, Debug)]
@@ -31,6 +42,8 @@ pub struct LightVertex {
     pub partial: Partial,
     /// Edges from the light.
     pub len: u32,
+    /// The half of the pass's subpaths its subpath is in ([`half`]).
+    pub half: bool,
 }
 
 impl LightVertex {
@@ -51,15 +64,30 @@ impl LightVertex {
     }
 }
 
-/// Paths traced and surfaces hit.
+/// Paths traced, surfaces hit and the work done (rays traced, vertices scattered at).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Counts {
     pub paths: u64,
     pub hits: u64,
+    pub rays: u64,
+    pub vertices: u64,
+}
+
+impl std::ops::Add for Counts {
+    type Output = Counts;
+    fn add(self, o: Counts) -> Counts {
+        Counts {
+            paths: self.paths + o.paths,
+            hits: self.hits + o.hits,
+            rays: self.rays + o.rays,
+            vertices: self.vertices + o.vertices,
+        }
+    }
 }
 
 /// A pass's light subpaths: their vertices in subpath order, where each begins, and
-/// the lists of light-tracing splats (pixel, radiance), one per work item.
+/// the lists of light-tracing splats (pixel, radiance), two per work item (list j
+/// holds half j mod 2's, [`half`]).
 pub struct LightPass {
     pub vertices: Vec<LightVertex>,
     /// Subpath k holds `vertices[starts[k]..starts[k + 1]]`.
@@ -82,7 +110,7 @@ impl LightPass {
 struct Chunk {
     vertices: Vec<LightVertex>,
     lens: Vec<u32>,
-    splats: Vec<(u32, Rgb)>,
+    splats: [Vec<(u32, Rgb)>; 2],
     counts: Counts,
 }
 
@@ -99,17 +127,18 @@ pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrato
             let mut out = Chunk::default();
             for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 let before = out.vertices.len();
-                out.counts.hits += match pass.sampler {
-                    SamplerKind::Sobol => {
-                        trace(pass, &mut SobolSample::new(stream, k as u32), &mut out.vertices, &mut out.splats)
-                    }
-                    SamplerKind::Random => {
-                        let mut rng = Rng::new(hash(&[seed, iteration as u64, k, 3]));
-                        trace(pass, &mut rng, &mut out.vertices, &mut out.splats)
-                    }
-                };
+                out.counts = out.counts
+                    + match pass.sampler {
+                        SamplerKind::Sobol => {
+                            let splats = &mut out.splats[half(k) as usize];
+                            trace(pass, &mut SobolSample::new(stream, k as u32), half(k), &mut out.vertices, splats)
+                        }
+                        SamplerKind::Random => {
+                            let mut rng = Rng::new(hash(&[seed, iteration as u64, k, 3]));
+                            trace(pass, &mut rng, half(k), &mut out.vertices, &mut out.splats[half(k) as usize])
+                        }
+                    };
                 out.lens.push((out.vertices.len() - before) as u32);
-                out.counts.paths += 1;
             }
             live.add_photons(out.counts.paths);
             out
@@ -122,10 +151,8 @@ pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrato
         at += len;
         starts.push(at);
     }
-    let counts = chunks
-        .iter()
-        .fold(Counts::default(), |a, c| Counts { paths: a.paths + c.counts.paths, hits: a.hits + c.counts.hits });
-    let splats = chunks.iter_mut().map(|c| std::mem::take(&mut c.splats)).collect();
+    let counts = chunks.iter().fold(Counts::default(), |a, c| a + c.counts);
+    let splats = chunks.iter_mut().flat_map(|c| std::mem::take(&mut c.splats)).collect();
     let vertices = chunks.into_par_iter().flat_map_iter(|c| c.vertices).collect();
     LightPass { vertices, starts, splats, counts }
 }
@@ -181,22 +208,30 @@ pub fn is_finite(light: &Light) -> bool {
     !matches!(light, Light::Distant(_) | Light::Infinite(_))
 }
 
-/// One light subpath: appends its usable vertices and its splats; returns the surfaces
-/// hit.
-fn trace(pass: &Pass, s: &mut impl Sampler, out: &mut Vec<LightVertex>, splats: &mut Vec<(u32, Rgb)>) -> u64 {
+/// One light subpath: appends its usable vertices and its splats; returns its counts
+/// (one path, the surfaces hit, the rays and vertices).
+fn trace(
+    pass: &Pass,
+    s: &mut impl Sampler,
+    half: bool,
+    out: &mut Vec<LightVertex>,
+    splats: &mut Vec<(u32, Rgb)>,
+) -> Counts {
     let scene = pass.scene;
-    let Some(Start { mut ray, mut beta, mut partial, light, pick, cos, mut medium }) = emit(pass, s) else { return 0 };
-    let (mut prev, mut len, mut passes, mut hits) = (ray.o.0, 0u32, 0u32, 0u64);
+    let mut n = Counts { paths: 1, ..Default::default() };
+    let Some(Start { mut ray, mut beta, mut partial, light, pick, cos, mut medium }) = emit(pass, s) else { return n };
+    let (mut prev, mut len, mut passes) = (ray.o.0, 0u32, 0u32);
     // The throughput as it left the last vertex, which Russian roulette compares with.
     let mut before = beta;
     let keep = pass.techniques.uses(Technique::Connect) || pass.techniques.uses(Technique::Merge);
     loop {
         let hit = scene.intersect(&ray);
+        n.rays += 1;
         let (place, at, wo) = match vertex::flight(scene, &ray, (hit.as_ref(), medium), &mut beta, s) {
             Some(found) => found,
             None => {
                 let Some(hit) = hit else { break };
-                hits += 1;
+                n.hits += 1;
                 let si = scene.geometry.interaction(&hit);
                 let fp = Footprint::default();
                 let bsdf = match surface(scene, (&hit, &si), &fp, &mut ray, &mut passes, &mut medium) {
@@ -208,6 +243,7 @@ fn trace(pass: &Pass, s: &mut impl Sampler, out: &mut Vec<LightVertex>, splats: 
             }
         };
         len += 1;
+        n.vertices += 1;
         let dist2 = (place.p - prev).length_squared() as f64;
         if len == 1 && matches!(light, Light::Area(_)) {
             // Measured from the point offset off the surface, as light samples are.
@@ -219,12 +255,12 @@ fn trace(pass: &Pass, s: &mut impl Sampler, out: &mut Vec<LightVertex>, splats: 
         if !at.in_medium() && wo.dot(place.ng) == 0.0 {
             break;
         }
-        let v = LightVertex { place, wo, beta, at, partial, len };
+        let v = LightVertex { place, wo, beta, at, partial, len, half };
         if !v.at.is_delta() {
             // Direct light is not light-traced (`mis`), unless light tracing is alone.
             let traced = len > 1 || pass.techniques == Techniques::Only(Technique::LightTrace);
             if pass.techniques.uses(Technique::LightTrace) && len < pass.max_len && traced {
-                to_camera(pass, &v, s, splats);
+                n.rays += to_camera(pass, &v, s, splats) as u64;
             }
             if keep && len < pass.max_len {
                 out.push(v.clone());
@@ -237,7 +273,7 @@ fn trace(pass: &Pass, s: &mut impl Sampler, out: &mut Vec<LightVertex>, splats: 
         medium = v.place.toward(next.d.0);
         (ray, beta, before, partial, prev) = (next, b, b, p, v.place.p);
     }
-    hits
+    n
 }
 
 /// Samples the adjoint BSDF (or the phase function) at a light vertex: the ray on, the
@@ -265,14 +301,14 @@ fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> O
 }
 
 /// Light tracing: connects a light vertex to a point on the lens and splats what it
-/// sends there onto the pixel it reaches.
-fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Vec<(u32, Rgb)>) {
+/// sends there onto the pixel it reaches; says whether it traced a shadow ray.
+fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Vec<(u32, Rgb)>) -> bool {
     let scene = pass.scene;
-    let Some(cs) = scene.camera.sample_wi(v.place.p, s.get2d(), v.place.time) else { return };
-    let Some(pixel) = pass.pixel_index(cs.raster) else { return };
+    let Some(cs) = scene.camera.sample_wi(v.place.p, s.get2d(), v.place.time) else { return false };
+    let Some(pixel) = pass.pixel_index(cs.raster) else { return false };
     let e = v.at.eval(v.wo, cs.wi, TransportMode::Importance);
     if e.f == Vec3::ZERO || cs.pdf <= 0.0 {
-        return;
+        return false;
     }
     let dist2 = (cs.p_lens - v.place.p).length_squared() as f64;
     let (_, pdf_dir) =
@@ -283,10 +319,11 @@ fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Ve
     let c = v.beta * e.f * v.adjoint_cos(cs.wi) * (cs.we / cs.pdf) * (pass.film_pixels / light_paths) as f32;
     let c = c * pass.techniques.weight(w);
     if c == Vec3::ZERO || !c.is_finite() {
-        return;
+        return false;
     }
     let c = c * vertex::visible(scene, &v.place, cs.p_lens, s);
     if c != Vec3::ZERO {
         splats.push((pixel, c));
     }
+    true
 }

@@ -21,6 +21,7 @@
 //! light vertices keep their subpaths' order; splats are summed per pixel in light-path
 //! order; so the thread count never changes the image.
 
+pub mod balance;
 pub mod camera;
 pub mod light;
 pub mod mis;
@@ -168,6 +169,19 @@ pub struct VcmSettings {
     pub seed: u64,
     pub sampler: SamplerKind,
     pub techniques: Techniques,
+    /// Choose the light subpaths of the passes after the pilot ([`balance`]), starting
+    /// from `light_paths`.
+    pub balance: bool,
+}
+
+/// The choice of light subpaths per pass under way: the pilot's measurements while it
+/// runs, then the count chosen.
+enum Balance {
+    Measuring(Box<balance::Pilot>),
+    Chosen(u64),
+    /// The pilot is to be rendered again before the first pass past it (a render that
+    /// did not start at pass 0).
+    Unknown,
 }
 
 /// The progressive state of a render: each pixel's sum over the passes so far.
@@ -184,6 +198,16 @@ pub struct Vcm<'a> {
     pub stats: Stats,
     /// The pass under way's counts, for progress.
     pub live: std::sync::Arc<super::report::Live>,
+    balance: Option<Balance>,
+}
+
+/// What a pass did besides adding to the sums.
+struct Done {
+    light_paths: u64,
+    counts: light::Counts,
+    stored: usize,
+    camera: camera::Work,
+    times: [Instant; 5],
 }
 
 impl<'a> Vcm<'a> {
@@ -205,6 +229,10 @@ impl<'a> Vcm<'a> {
         })?;
         sums.resize(w * h, DVec3::ZERO);
         let floor = scene.integrator.differential_floor;
+        let balance = settings.balance.then(|| match first {
+            0 => Balance::Measuring(Box::new(balance::Pilot::new(w * h))),
+            _ => Balance::Unknown,
+        });
         Ok(Vcm {
             scene,
             sums,
@@ -216,7 +244,17 @@ impl<'a> Vcm<'a> {
             differential_scale: (1.0 / (iterations.max(1) as f32).sqrt()).max(floor),
             stats: Stats::default(),
             live: Default::default(),
+            balance,
         })
+    }
+
+    /// The light subpaths pass `iteration` traces: the pilot's count, then the one
+    /// chosen ([`balance`]).
+    pub fn light_paths(&self, iteration: u32) -> u64 {
+        match &self.balance {
+            Some(Balance::Chosen(n)) if iteration >= balance::PILOT_PASSES => *n,
+            _ => self.settings.light_paths.max(1),
+        }
     }
 
     pub fn passes_done(&self) -> u32 {
@@ -252,6 +290,9 @@ impl<'a> Vcm<'a> {
             *s = DVec3::from(p.ld);
         }
         (self.iteration, self.stats) = (iteration, stats);
+        if self.balance.is_some() && iteration > 0 {
+            self.balance = Some(Balance::Unknown);
+        }
         Ok(())
     }
 
@@ -262,11 +303,52 @@ impl<'a> Vcm<'a> {
 
     /// One pass, offering `preview` provisional images between bands of camera
     /// subpaths (see [`super::preview`]); the image it ends with is the same either way.
-    pub fn iterate_showing(&mut self, mut preview: Option<&mut super::preview::Preview>) {
+    pub fn iterate_showing(&mut self, preview: Option<&mut super::preview::Preview>) {
+        if matches!(self.balance, Some(Balance::Unknown)) && self.iteration >= balance::PILOT_PASSES {
+            self.rehearse_pilot();
+        }
+        let measuring = matches!(self.balance, Some(Balance::Measuring(_)));
+        let mut parts = measuring.then(|| vec![[0f32; 2]; self.sums.len()]);
+        let mut sums = std::mem::take(&mut self.sums);
+        let done = self.render_pass(self.iteration, &mut sums, parts.as_deref_mut(), preview);
+        self.sums = sums;
+        if let (Some(parts), Some(Balance::Measuring(pilot))) = (&parts, &mut self.balance) {
+            pilot.add(parts, done.light_paths, done.counts, done.camera, done.stored as u64);
+            if pilot.complete() {
+                self.balance = Some(Balance::Chosen(pilot.choose(self.settings.light_paths.max(1))));
+            }
+        }
+        self.iteration += 1;
+        self.note(&done.counts, done.stored, done.times);
+    }
+
+    /// Renders the pilot passes again, apart from the image, to choose the count as a
+    /// render from pass 0 did.
+    fn rehearse_pilot(&mut self) {
+        let mut pilot = balance::Pilot::new(self.sums.len());
+        let mut scratch = vec![DVec3::ZERO; self.sums.len()];
+        for k in 0..balance::PILOT_PASSES {
+            let mut parts = vec![[0f32; 2]; self.sums.len()];
+            let done = self.render_pass(k, &mut scratch, Some(&mut parts), None);
+            pilot.add(&parts, done.light_paths, done.counts, done.camera, done.stored as u64);
+        }
+        self.balance = Some(Balance::Chosen(pilot.choose(self.settings.light_paths.max(1))));
+    }
+
+    /// Pass `iteration` added to `sums`: light subpaths, the grid of their vertices,
+    /// camera subpaths, splats; with `parts`, each pixel's camera-traced and light-side
+    /// values of the pass (channel means, for the pilot).
+    fn render_pass(
+        &self,
+        iteration: u32,
+        sums: &mut [DVec3],
+        mut parts: Option<&mut [[f32; 2]]>,
+        mut preview: Option<&mut super::preview::Preview>,
+    ) -> Done {
         let t0 = Instant::now();
         self.live.reset();
-        let pass = self.pass();
-        let lights = light::trace_all(&pass, self.settings.seed, self.iteration, &self.live);
+        let pass = self.pass(iteration);
+        let lights = light::trace_all(&pass, self.settings.seed, iteration, &self.live);
         let t1 = Instant::now();
         let grid = match self.settings.techniques.uses(Technique::Merge) {
             true => Grid::build(
@@ -284,36 +366,65 @@ impl<'a> Vcm<'a> {
             lights: &lights,
             grid: grid.as_ref(),
             seed: self.settings.seed,
-            iteration: self.iteration,
+            iteration,
             sampler: self.settings.sampler,
             differential_scale: self.differential_scale,
         };
         let (width, live) = (self.size.0, &self.live);
         let tasks = crate::integrators::PIXELS_PER_TASK;
-        for band in super::preview::bands(self.sums.len(), 4 * tasks, usize::MAX, preview.is_some()) {
+        let mut work = camera::Work::default();
+        // Each half's light-side estimate scaled to stand for the whole pass.
+        let scale_half = light::halves(pass.light_paths).map(|h| pass.light_paths as f32 / h.max(1) as f32);
+        let mean = |c: Rgb| c.element_sum() / 3.0;
+        for band in super::preview::bands(sums.len(), 4 * tasks, usize::MAX, preview.is_some()) {
             let first = band.start;
-            self.sums[band.clone()].par_iter_mut().enumerate().with_max_len(tasks).for_each(|(i, s)| {
-                if (first + i) % 256 == 0 {
+            let pixel = |i: usize, s: &mut DVec3| {
+                if (first + i).is_multiple_of(256) {
                     live.add_camera(256);
                 }
-                *s += cams.pixel(first + i, width).as_dvec3();
-            });
+                let p = cams.pixel(first + i, width);
+                *s += p.total().as_dvec3();
+                p
+            };
+            let band_sums = sums[band.clone()].par_iter_mut().enumerate().with_max_len(tasks);
+            work = work
+                + match parts.as_deref_mut() {
+                    Some(parts) => band_sums
+                        .zip(parts[band.clone()].par_iter_mut())
+                        .map(|((i, s), part)| {
+                            let p = pixel(i, s);
+                            let d = mean(p.merged[0]) * scale_half[0] - mean(p.merged[1]) * scale_half[1];
+                            *part = [mean(p.total()), d];
+                            p.work
+                        })
+                        .reduce(Default::default, |a, b| a + b),
+                    None => band_sums.map(|(i, s)| pixel(i, s).work).reduce(Default::default, |a, b| a + b),
+                };
             if let Some(show) = preview.as_mut() {
-                show(&|| self.provisional(band.end));
+                show(&|| provisional(sums, self.passes_done(), self.scene.film.scale, band.end));
             }
         }
         let t3 = Instant::now();
         let scale = self.scene.photon_scale;
-        add_splats(&mut self.sums, lights.splats, scale);
-        let t4 = Instant::now();
-        self.iteration += 1;
-        self.note(&lights.counts, lights.vertices.len(), [t0, t1, t2, t3, t4]);
+        if let Some(parts) = parts {
+            for (j, list) in lights.splats.iter().enumerate() {
+                for &(pixel, c) in list {
+                    let c = (mean(c) as f64 * scale) as f32;
+                    let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
+                    parts[pixel as usize][0] += c;
+                    parts[pixel as usize][1] += sign * c * scale_half[j % 2];
+                }
+            }
+        }
+        let (counts, stored) = (lights.counts, lights.vertices.len());
+        add_splats(sums, lights.splats, scale);
+        Done { light_paths: pass.light_paths, counts, stored, camera: work, times: [t0, t1, t2, t3, Instant::now()] }
     }
 
-    fn pass(&self) -> Pass<'a> {
+    fn pass(&self, iteration: u32) -> Pass<'a> {
         let scene = self.scene;
-        let radius = self.radius();
-        let n = self.settings.light_paths.max(1);
+        let radius = passes::radius(self.settings.radius, self.settings.alpha, iteration);
+        let n = self.light_paths(iteration);
         Pass {
             scene,
             factors: self.settings.techniques.factors(radius, n as f64),
@@ -325,7 +436,7 @@ impl<'a> Vcm<'a> {
             origin: self.origin,
             size: self.size,
             sampler: self.settings.sampler,
-            time: scene.pass_time(self.iteration, true),
+            time: scene.pass_time(iteration, true),
             nee_all: scene.lights.len() <= NEE_ALL_LIGHTS_MAX,
         }
     }
@@ -351,22 +462,22 @@ impl<'a> Vcm<'a> {
         self.sums.iter().map(|s| (*s * scale / k).as_vec3().to_array()).collect()
     }
 
-    /// The image part way through a pass: the first `camera_done` pixels with this
-    /// pass's camera subpaths (its light tracing is added when the pass ends), the rest
-    /// as they were.
-    fn provisional(&self, camera_done: usize) -> Vec<[f32; 3]> {
-        let k = self.passes_done() as f64;
-        let scale = self.scene.film.scale as f64;
-        let pixel = |(i, s): (usize, &DVec3)| *s * scale / if i < camera_done { k + 1.0 } else { k.max(1.0) };
-        self.sums.par_iter().enumerate().map(|p| pixel(p).as_vec3().to_array()).collect()
-    }
-
     /// The sum of the passes' estimates per pixel, times the film's scale (what a shard
     /// writes and a merge adds up).
     pub fn pass_sums(&self) -> Vec<DVec3> {
         let scale = self.scene.film.scale as f64;
         self.sums.iter().map(|s| *s * scale).collect()
     }
+}
+
+/// The image part way through a pass: the first `camera_done` pixels with this pass's
+/// camera subpaths (its light tracing is added when the pass ends), the rest as they
+/// were after `passes_done` passes.
+fn provisional(sums: &[DVec3], passes_done: u32, film_scale: f32, camera_done: usize) -> Vec<[f32; 3]> {
+    let k = passes_done as f64;
+    let scale = film_scale as f64;
+    let pixel = |(i, s): (usize, &DVec3)| *s * scale / if i < camera_done { k + 1.0 } else { k.max(1.0) };
+    sums.par_iter().enumerate().map(|p| pixel(p).as_vec3().to_array()).collect()
 }
 
 /// Adds light tracing's splats to the pixels' sums, each pixel in a fixed order (list by
