@@ -23,8 +23,9 @@
 //! through a keyhole (merging) wanted ten times the file's photons, a room lit
 //! through a doorway (connections) a fifth (`docs/vcm.md`).
 
-use super::camera::Work;
+use super::camera::{PixelSample, Work};
 use super::light::Counts;
+use crate::spectrum::Rgb;
 
 /// Passes whose spread the choice is measured from.
 pub const PILOT_PASSES: u32 = 4;
@@ -130,6 +131,40 @@ impl Pilot {
         }
         ((all - light).max(0.0), light)
     }
+}
+
+/// A pilot pass's values per pixel: the whole, and the difference of the light-side
+/// estimates of the pass's two halves of light subpaths ([`super::light::half`]), each
+/// scaled to stand for the pass (channel means).
+pub struct Halves {
+    scale: [f32; 2],
+}
+
+impl Halves {
+    pub fn new(light_paths: u64) -> Halves {
+        Halves { scale: super::light::halves(light_paths).map(|h| light_paths as f32 / h.max(1) as f32) }
+    }
+
+    /// A camera subpath's (whole, halves' difference).
+    pub fn part(&self, p: &PixelSample) -> [f32; 2] {
+        [mean(p.total()), mean(p.merged[0]) * self.scale[0] - mean(p.merged[1]) * self.scale[1]]
+    }
+
+    /// Adds the light-tracing splats (list j from half j mod 2) times `scale`.
+    pub fn add_splats(&self, parts: &mut [[f32; 2]], lists: &[Vec<(u32, Rgb)>], scale: f64) {
+        for (j, list) in lists.iter().enumerate() {
+            let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
+            for &(pixel, c) in list {
+                let c = (mean(c) as f64 * scale) as f32;
+                parts[pixel as usize][0] += c;
+                parts[pixel as usize][1] += sign * c * self.scale[j % 2];
+            }
+        }
+    }
+}
+
+fn mean(c: Rgb) -> f32 {
+    c.element_sum() / 3.0
 }
 
 /// A pair of figures for the camera-traced part and the light side.

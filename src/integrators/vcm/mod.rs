@@ -373,9 +373,7 @@ impl<'a> Vcm<'a> {
         let (width, live) = (self.size.0, &self.live);
         let tasks = crate::integrators::PIXELS_PER_TASK;
         let mut work = camera::Work::default();
-        // Each half's light-side estimate scaled to stand for the whole pass.
-        let scale_half = light::halves(pass.light_paths).map(|h| pass.light_paths as f32 / h.max(1) as f32);
-        let mean = |c: Rgb| c.element_sum() / 3.0;
+        let halves = balance::Halves::new(pass.light_paths);
         for band in super::preview::bands(sums.len(), 4 * tasks, usize::MAX, preview.is_some()) {
             let first = band.start;
             let pixel = |i: usize, s: &mut DVec3| {
@@ -393,8 +391,7 @@ impl<'a> Vcm<'a> {
                         .zip(parts[band.clone()].par_iter_mut())
                         .map(|((i, s), part)| {
                             let p = pixel(i, s);
-                            let d = mean(p.merged[0]) * scale_half[0] - mean(p.merged[1]) * scale_half[1];
-                            *part = [mean(p.total()), d];
+                            *part = halves.part(&p);
                             p.work
                         })
                         .reduce(Default::default, |a, b| a + b),
@@ -407,14 +404,7 @@ impl<'a> Vcm<'a> {
         let t3 = Instant::now();
         let scale = self.scene.photon_scale;
         if let Some(parts) = parts {
-            for (j, list) in lights.splats.iter().enumerate() {
-                for &(pixel, c) in list {
-                    let c = (mean(c) as f64 * scale) as f32;
-                    let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
-                    parts[pixel as usize][0] += c;
-                    parts[pixel as usize][1] += sign * c * scale_half[j % 2];
-                }
-            }
+            halves.add_splats(parts, &lights.splats, scale);
         }
         let (counts, stored) = (lights.counts, lights.vertices.len());
         add_splats(sums, lights.splats, scale);
