@@ -7,9 +7,10 @@
 //!
 //! The noise of merging and light tracing falls with the pass's light subpaths; that
 //! of the techniques traced from the camera (emitters found, next-event estimation,
-//! connections) does not. With a pass's relative variance `V_l/n + V_c` at `n` light
-//! subpaths, and its cost `c_l·n + C_c`, the error at equal time is least at
-//! `n = sqrt(V_l·C_c / (V_c·c_l))`. The first [`PILOT_PASSES`] passes trace the
+//! connections) does not. With a pass's relative variance `V_l·n₀/n + V_c` at `n`
+//! light subpaths, and its cost `c_l·n + C_c`, the error at equal time is least at
+//! `n = n₀·sqrt(V_l·C_c / (V_c·c_l·n₀))`; below `n₀` the light side's variance grows
+//! only as `(n₀/n)^½` (its paths go to connections as its weights fall), see `fewer`. The first [`PILOT_PASSES`] passes trace the
 //! starting count (the file's `photonsperiteration`) and measure: each pixel's
 //! variance between passes (all of it), the part of it the light subpaths cause (each
 //! pass's two halves of subpaths, merged and light-traced apart, differ by it: for
