@@ -10,15 +10,17 @@
 //! connections) does not. With a pass's relative variance `V_l·n₀/n + V_c` at `n`
 //! light subpaths, and its cost `c_l·n + C_c`, the error at equal time is least at
 //! `n = n₀·sqrt(V_l·C_c / (V_c·c_l·n₀))`; below `n₀` the light side's variance grows
-//! only as `(n₀/n)^½` (its paths go to connections as its weights fall), see `fewer`. The first [`PILOT_PASSES`] passes trace the
-//! starting count (the file's `photonsperiteration`) and measure: each pixel's
-//! variance between passes (all of it), the part of it the light subpaths cause (each
-//! pass's two halves of subpaths, merged and light-traced apart, differ by it: for
-//! halves of n/2, E[(X₁ − X₂)²] = 4·Var(X | camera subpaths)), the rest being the
-//! camera's; and both parts of the cost in work counted (rays, vertices, merge
-//! candidates: whole numbers, so the choice is the same for any thread count and on
-//! any machine). Every later pass traces the count chosen. A render that starts past the pilot (a shard, a resumed
-//! checkpoint) renders the pilot passes again to make the same choice.
+//! only as `(n₀/n)^½` (its paths go to connections as its weights fall), see `fewer`.
+//!
+//! The first [`PILOT_PASSES`] passes trace the starting count (the file's
+//! `photonsperiteration`) and measure: each pixel's variance between passes (all of
+//! it), the part of it the light subpaths cause (each pass's two halves of subpaths,
+//! merged and light-traced apart, differ by it: for halves of n/2,
+//! E[(X₁ − X₂)²] = 4·Var(X | camera subpaths)), the rest being the camera's; and both
+//! parts of the cost in work counted (rays, vertices, merge candidates: whole numbers,
+//! so the choice is the same for any thread count and on any machine). Every later
+//! pass traces the count chosen. A render that starts past the pilot (a shard, a
+//! resumed checkpoint) renders the pilot passes again to make the same choice.
 //!
 //! The same scene wants opposite things by what carries its light: a room lit
 //! through a keyhole (merging) wanted ten times the file's photons, a room lit
