@@ -17,7 +17,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 /// Light subpaths per parallel work item.
-pub const CHUNK: u64 = 1024;
+const CHUNK: u64 = 1024;
 
 /// Which half of a pass's light subpaths subpath `k` is in: even and odd (the pilot
 /// compares the halves, [`super::balance`]).
@@ -64,24 +64,18 @@ impl LightVertex {
     }
 }
 
-/// Paths traced, surfaces hit and the work done (rays traced, vertices scattered at).
+/// Paths traced, surfaces hit and vertices scattered at.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Counts {
     pub paths: u64,
     pub hits: u64,
-    pub rays: u64,
     pub vertices: u64,
 }
 
 impl std::ops::Add for Counts {
     type Output = Counts;
     fn add(self, o: Counts) -> Counts {
-        Counts {
-            paths: self.paths + o.paths,
-            hits: self.hits + o.hits,
-            rays: self.rays + o.rays,
-            vertices: self.vertices + o.vertices,
-        }
+        Counts { paths: self.paths + o.paths, hits: self.hits + o.hits, vertices: self.vertices + o.vertices }
     }
 }
 
@@ -209,7 +203,7 @@ pub fn is_finite(light: &Light) -> bool {
 }
 
 /// One light subpath: appends its usable vertices and its splats; returns its counts
-/// (one path, the surfaces hit, the rays and vertices).
+/// (one path, the surfaces hit, the vertices).
 fn trace(
     pass: &Pass,
     s: &mut impl Sampler,
@@ -226,7 +220,6 @@ fn trace(
     let keep = pass.techniques.uses(Technique::Connect) || pass.techniques.uses(Technique::Merge);
     loop {
         let hit = scene.intersect(&ray);
-        n.rays += 1;
         let (place, at, wo) = match vertex::flight(scene, &ray, (hit.as_ref(), medium), &mut beta, s) {
             Some(found) => found,
             None => {
@@ -260,7 +253,7 @@ fn trace(
             // Direct light is not light-traced (`mis`), unless light tracing is alone.
             let traced = len > 1 || pass.techniques == Techniques::Only(Technique::LightTrace);
             if pass.techniques.uses(Technique::LightTrace) && len < pass.max_len && traced {
-                n.rays += to_camera(pass, &v, s, splats) as u64;
+                to_camera(pass, &v, s, splats);
             }
             if keep && len < pass.max_len {
                 out.push(v.clone());
@@ -301,14 +294,14 @@ fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> O
 }
 
 /// Light tracing: connects a light vertex to a point on the lens and splats what it
-/// sends there onto the pixel it reaches; says whether it traced a shadow ray.
-fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Vec<(u32, Rgb)>) -> bool {
+/// sends there onto the pixel it reaches.
+fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Vec<(u32, Rgb)>) {
     let scene = pass.scene;
-    let Some(cs) = scene.camera.sample_wi(v.place.p, s.get2d(), v.place.time) else { return false };
-    let Some(pixel) = pass.pixel_index(cs.raster) else { return false };
+    let Some(cs) = scene.camera.sample_wi(v.place.p, s.get2d(), v.place.time) else { return };
+    let Some(pixel) = pass.pixel_index(cs.raster) else { return };
     let e = v.at.eval(v.wo, cs.wi, TransportMode::Importance);
     if e.f == Vec3::ZERO || cs.pdf <= 0.0 {
-        return false;
+        return;
     }
     let dist2 = (cs.p_lens - v.place.p).length_squared() as f64;
     let (_, pdf_dir) =
@@ -319,11 +312,10 @@ fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Ve
     let c = v.beta * e.f * v.adjoint_cos(cs.wi) * (cs.we / cs.pdf) * (pass.film_pixels / light_paths) as f32;
     let c = c * pass.techniques.weight(w);
     if c == Vec3::ZERO || !c.is_finite() {
-        return false;
+        return;
     }
     let c = c * vertex::visible(scene, &v.place, cs.p_lens, s);
     if c != Vec3::ZERO {
         splats.push((pixel, c));
     }
-    true
 }

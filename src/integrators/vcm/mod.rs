@@ -203,7 +203,6 @@ pub struct Vcm<'a> {
 
 /// What a pass did besides adding to the sums.
 struct Done {
-    light_paths: u64,
     counts: light::Counts,
     stored: usize,
     camera: camera::Work,
@@ -312,8 +311,9 @@ impl<'a> Vcm<'a> {
         let mut sums = std::mem::take(&mut self.sums);
         let done = self.render_pass(self.iteration, &mut sums, parts.as_deref_mut(), preview);
         self.sums = sums;
+        let n = self.light_paths(self.iteration);
         if let (Some(parts), Some(Balance::Measuring(pilot))) = (&parts, &mut self.balance) {
-            pilot.add(parts, done.light_paths, done.counts, done.camera, done.stored as u64);
+            pilot.add(parts, n, done.counts, done.camera, done.stored as u64);
             if pilot.complete() {
                 self.balance = Some(Balance::Chosen(pilot.choose(self.settings.light_paths.max(1))));
             }
@@ -330,7 +330,7 @@ impl<'a> Vcm<'a> {
         for k in 0..balance::PILOT_PASSES {
             let mut parts = vec![[0f32; 2]; self.sums.len()];
             let done = self.render_pass(k, &mut scratch, Some(&mut parts), None);
-            pilot.add(&parts, done.light_paths, done.counts, done.camera, done.stored as u64);
+            pilot.add(&parts, self.light_paths(k), done.counts, done.camera, done.stored as u64);
         }
         self.balance = Some(Balance::Chosen(pilot.choose(self.settings.light_paths.max(1))));
     }
@@ -408,7 +408,7 @@ impl<'a> Vcm<'a> {
         }
         let (counts, stored) = (lights.counts, lights.vertices.len());
         add_splats(sums, lights.splats, scale);
-        Done { light_paths: pass.light_paths, counts, stored, camera: work, times: [t0, t1, t2, t3, Instant::now()] }
+        Done { counts, stored, camera: work, times: [t0, t1, t2, t3, Instant::now()] }
     }
 
     fn pass(&self, iteration: u32) -> Pass<'a> {
