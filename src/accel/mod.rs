@@ -461,6 +461,12 @@ impl Geometry {
         self.avx = if on { Avx::detect() } else { None };
     }
 
+    /// The box around everything a ray can hit, over the shutter (`None`: nothing).
+    pub fn bounds(&self) -> Option<Bounds3> {
+        let b = self.world.bvh.bounds().union(self.tlas.bounds());
+        (!b.is_empty()).then_some(b)
+    }
+
     /// The closest hit along the ray before `ray.t_max`.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let mut best = None;

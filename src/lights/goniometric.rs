@@ -135,7 +135,7 @@ impl GoniometricLight {
     }
 
     /// The intensity leaving along the world direction `w` (pbrt's `Scale` times I).
-    fn intensity(&self, w: Vec3) -> Rgb {
+    pub fn intensity(&self, w: Vec3) -> Rgb {
         let Some(img) = &self.image else { return self.i };
         let wl = (self.light_from_world * w.as_dvec3()).normalize();
         // The image's pole is light space's y axis.

@@ -243,6 +243,30 @@ impl Light {
         }
     }
 
+    /// A light with a position and no extent (point, spot, goniometric, projection):
+    /// where it is and its `sample_le` direction density (`None` for other lights).
+    pub fn point_source(&self) -> Option<(Vec3, f32)> {
+        match self {
+            Light::Point(l) => Some((l.p, l.pdf_le().1)),
+            Light::Spot(l) => Some((l.p, l.sample_le([0.5, 0.5]).pdf_dir)),
+            Light::Goniometric(l) => Some((l.p, l.pdf_le().1)),
+            Light::Projection(l) => Some((l.p, l.sample_le([0.5, 0.5]).pdf_dir)),
+            Light::Distant(_) | Light::Infinite(_) | Light::Area(_) => None,
+        }
+    }
+
+    /// The intensity a [`Light::point_source`] sends along the unit world direction
+    /// `w` (zero for other lights).
+    pub fn intensity(&self, w: Vec3) -> Rgb {
+        match self {
+            Light::Point(l) => l.intensity(),
+            Light::Spot(l) => l.intensity(w),
+            Light::Goniometric(l) => l.intensity(w),
+            Light::Projection(l) => l.intensity(w),
+            Light::Distant(_) | Light::Infinite(_) | Light::Area(_) => Vec3::ZERO,
+        }
+    }
+
     /// The (position, direction) densities `sample_le` has for an emission it did not
     /// necessarily draw: a ray leaving `ray.o` (on an area light, where its oriented
     /// normal is `n`) along the unit direction `ray.d` (pbrt's `PDF_Le`). Delta

@@ -60,6 +60,12 @@ impl PointLight {
         PointLight { p: d.position.as_vec3(), i: d.i }
     }
 
+    /// The intensity leaving along any direction.
+    #[inline]
+    pub fn intensity(&self) -> Rgb {
+        self.i
+    }
+
     #[inline]
     pub fn power(&self) -> f64 {
         4.0 * std::f64::consts::PI * luminance(self.i) as f64

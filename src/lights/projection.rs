@@ -159,7 +159,7 @@ impl ProjectionLight {
     }
 
     /// The intensity leaving along the world direction `w` (pbrt's `Projection` times I).
-    fn intensity(&self, w: Vec3) -> Rgb {
+    pub fn intensity(&self, w: Vec3) -> Rgb {
         let wl = (self.light_from_world * w.as_dvec3()).normalize().as_vec3();
         if wl.z < HITHER {
             return Vec3::ZERO;

@@ -99,6 +99,12 @@ impl SpotLight {
         }
     }
 
+    /// The intensity leaving along the unit world direction `w`: I times the falloff.
+    #[inline]
+    pub fn intensity(&self, w: Vec3) -> Rgb {
+        self.i * self.falloff(w)
+    }
+
     /// The share of I emitted along the unit direction `w` (away from the light).
     #[inline]
     fn falloff(&self, w: Vec3) -> f32 {

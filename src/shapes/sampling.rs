@@ -208,7 +208,7 @@ impl QuadricShape {
             n = -n;
         }
         let pdf = 1.0 / (TAU * (1.0 - cos_max));
-        let uv = self.uv_of_object_point(self.render_from_object.inverse().transform_point3(p)).map(|x| x as f32);
+        let uv = self.uv_of_object_point(self.object_from_render.transform_point3(p)).map(|x| x as f32);
         Some(ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), uv, pdf: pdf as f32 })
     }
 
@@ -217,7 +217,7 @@ impl QuadricShape {
         if let QuadricSampler::Pbrt { object_area } = s {
             return (1.0 / object_area) as f32;
         }
-        let uv = self.uv_of_object_point(self.render_from_object.inverse().transform_point3(p.0.as_dvec3()));
+        let uv = self.uv_of_object_point(self.object_from_render.transform_point3(p.0.as_dvec3()));
         self.pdf_area_uv(s, uv) as f32
     }
 

@@ -289,7 +289,7 @@ impl Cameras<'_> {
         if e.f == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        let (direct, cos_light, emission) = light_densities(self.pass, light, &ls, from);
+        let (direct, cos_light, emission) = light_densities(self.pass, k, &ls, from);
         let pdfs = DirectPdfs {
             bsdf: if ls.delta { 0.0 } else { e.pdf as f64 },
             bsdf_rev: e.pdf_rev as f64,
@@ -379,9 +379,10 @@ impl Cameras<'_> {
 
 /// A light sample's densities as the weights take them: (solid-angle density of the
 /// sample, a point light's being the squared distance; the cosine at the light; the
-/// density of the light emitting toward `p`), each without the light's choice.
-fn light_densities(pass: &Pass, light: &Light, ls: &crate::lights::LightSample, p: Vec3) -> (f64, f64, f64) {
-    let scene = pass.scene;
+/// density of the light emitting toward `p`, aimed or not), each without the light's
+/// choice.
+fn light_densities(pass: &Pass, k: usize, ls: &crate::lights::LightSample, p: Vec3) -> (f64, f64, f64) {
+    let (scene, light) = (pass.scene, &pass.scene.lights[k]);
     let from = ls.p_light.unwrap_or(p + ls.wi);
     let n = ls.surface.map_or(-ls.wi, |s| s.n.0);
     let (pos, dir) = light.pdf_le(&scene.geometry.shapes, scene.world, &Ray::new(Point3(from), Vector3(-ls.wi)), n);
@@ -391,6 +392,7 @@ fn light_densities(pass: &Pass, light: &Light, ls: &crate::lights::LightSample, 
         Light::Infinite(_) => (ls.pdf as f64, 1.0, pos * dir),
         // Delta positions and directions: their densities cancel (taken as 1).
         Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Projection(_) => {
+            let dir = pass.cones[k].map_or(dir, |c| c.density(-ls.wi));
             ((from - p).length_squared() as f64, 1.0, dir)
         }
         Light::Distant(_) => (1.0, 1.0, pos),

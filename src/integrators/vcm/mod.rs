@@ -21,6 +21,7 @@
 //! light vertices keep their subpaths' order; splats are summed per pixel in light-path
 //! order; so the thread count never changes the image.
 
+pub mod aim;
 pub mod balance;
 pub mod camera;
 pub mod light;
@@ -131,6 +132,8 @@ pub struct Pass<'a> {
     pub time: Option<f32>,
     /// Next-event estimation samples every light, not one chosen by power.
     pub nee_all: bool,
+    /// Per light, the cone its subpaths are aimed in ([`aim`]).
+    pub cones: std::sync::Arc<[Option<aim::Cone>]>,
 }
 
 impl Pass<'_> {
@@ -199,6 +202,7 @@ pub struct Vcm<'a> {
     /// The pass under way's counts, for progress.
     pub live: std::sync::Arc<super::report::Live>,
     balance: Option<Balance>,
+    cones: std::sync::Arc<[Option<aim::Cone>]>,
 }
 
 /// What a pass did besides adding to the sums.
@@ -244,6 +248,7 @@ impl<'a> Vcm<'a> {
             stats: Stats::default(),
             live: Default::default(),
             balance,
+            cones: aim::cones(scene).into(),
         })
     }
 
@@ -428,6 +433,7 @@ impl<'a> Vcm<'a> {
             sampler: self.settings.sampler,
             time: scene.pass_time(iteration, true),
             nee_all: scene.lights.len() <= NEE_ALL_LIGHTS_MAX,
+            cones: self.cones.clone(),
         }
     }
 
