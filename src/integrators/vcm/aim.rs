@@ -114,6 +114,8 @@ pub fn cones(scene: &RenderScene) -> Vec<Option<Cone>> {
 /// An aimed emission from `light`, as its `sample_le` reports one (`None` when the
 /// light sends nothing along the direction drawn).
 pub fn emit(light: &Light, cone: &Cone, u: [f32; 2]) -> Option<Emission> {
+    // DEVIATION(pbrt): always on, sampling only. pbrt's bdpt draws over the light's own
+    // directions; the image's mean is the same (README, "Other differences").
     let d = cone.sample(u);
     let le = light.intensity(d);
     let ray = Ray::new(Point3(cone.from), Vector3(d));
