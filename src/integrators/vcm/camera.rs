@@ -355,11 +355,9 @@ impl Cameras<'_> {
         grid.gather(p, |k| {
             *candidates += 1;
             let lv = &self.lights.vertices[k as usize];
-            // Direct light (one edge from the light) is never merged (see `mis`).
-            if lv.len < 2
-                || lv.len + v.len > pass.max_len
-                || lv.at.in_medium() != in_medium
-                || (lv.place.p - p).length_squared() > r2
+            // Direct light (one edge from the light) is never merged (see `mis`): first
+            // light vertices are not in the grid.
+            if lv.len + v.len > pass.max_len || lv.at.in_medium() != in_medium || (lv.place.p - p).length_squared() > r2
             {
                 return;
             }

@@ -115,21 +115,25 @@ struct Chunk {
 pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrators::report::Live) -> LightPass {
     let n = pass.light_paths;
     let stream = hash(&[seed, iteration as u64, 3]);
+    // Camera subpath i connects to light subpath i mod n: past the pixel count, no
+    // subpath's first vertex (used only by connections) is ever read.
+    let pixels = (pass.size.0 * pass.size.1) as u64;
     let mut chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
             let mut out = Chunk::default();
             for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 let before = out.vertices.len();
+                let to = Keep { half: half(k), first: k < pixels, vertices: &mut out.vertices };
                 out.counts = out.counts
                     + match pass.sampler {
                         SamplerKind::Sobol => {
                             let splats = &mut out.splats[half(k) as usize];
-                            trace(pass, &mut SobolSample::new(stream, k as u32), half(k), &mut out.vertices, splats)
+                            trace(pass, &mut SobolSample::new(stream, k as u32), to, splats)
                         }
                         SamplerKind::Random => {
                             let mut rng = Rng::new(hash(&[seed, iteration as u64, k, 3]));
-                            trace(pass, &mut rng, half(k), &mut out.vertices, &mut out.splats[half(k) as usize])
+                            trace(pass, &mut rng, to, &mut out.splats[half(k) as usize])
                         }
                     };
                 out.lens.push((out.vertices.len() - before) as u32);
@@ -205,15 +209,17 @@ pub fn is_finite(light: &Light) -> bool {
     !matches!(light, Light::Distant(_) | Light::Infinite(_))
 }
 
+/// Where a light subpath keeps its vertices: the half of the pass it is in, whether a
+/// camera subpath connects to it (else its first vertex is not kept), the list.
+struct Keep<'a> {
+    half: bool,
+    first: bool,
+    vertices: &'a mut Vec<LightVertex>,
+}
+
 /// One light subpath: appends its usable vertices and its splats; returns its counts
 /// (one path, the surfaces hit, the vertices).
-fn trace(
-    pass: &Pass,
-    s: &mut impl Sampler,
-    half: bool,
-    out: &mut Vec<LightVertex>,
-    splats: &mut Vec<(u32, Rgb)>,
-) -> Counts {
+fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut Vec<(u32, Rgb)>) -> Counts {
     let scene = pass.scene;
     let mut n = Counts { paths: 1, ..Default::default() };
     let Some(Start { mut ray, mut beta, mut partial, light, pick, cos, mut medium }) = emit(pass, s) else { return n };
@@ -251,15 +257,15 @@ fn trace(
         if !at.in_medium() && wo.dot(place.ng) == 0.0 {
             break;
         }
-        let v = LightVertex { place, wo, beta, at, partial, len, half };
+        let v = LightVertex { place, wo, beta, at, partial, len, half: to.half };
         if !v.at.is_delta() {
             // Direct light is not light-traced (`mis`), unless light tracing is alone.
             let traced = len > 1 || pass.techniques == Techniques::Only(Technique::LightTrace);
             if pass.techniques.uses(Technique::LightTrace) && len < pass.max_len && traced {
                 to_camera(pass, &v, s, splats);
             }
-            if keep && len < pass.max_len {
-                out.push(v.clone());
+            if keep && len < pass.max_len && (len > 1 || to.first) {
+                to.vertices.push(v.clone());
             }
         }
         if len + 2 > pass.max_len {

@@ -360,7 +360,8 @@ impl<'a> Vcm<'a> {
                 &lights
                     .vertices
                     .par_iter()
-                    .map(|v| Some(Site { p: v.place.p, radius: pass.radius }))
+                    // A first vertex is direct light, never merged (`mis`).
+                    .map(|v| (v.len >= 2).then_some(Site { p: v.place.p, radius: pass.radius }))
                     .collect::<Vec<_>>(),
             ),
             false => None,
