@@ -10,7 +10,8 @@
 //! connections) does not. With a pass's relative variance `V_l·n₀/n + V_c` at `n`
 //! light subpaths, and its cost `c_l·n + C_c`, the error at equal time is least at
 //! `n = n₀·sqrt(V_l·C_c / (V_c·c_l·n₀))`; below `n₀` the light side's variance grows
-//! only as `(n₀/n)^½` (its paths go to connections as its weights fall), see `fewer`.
+//! more slowly, as `(n₀/n)^a` with a between ½ and 1 (its paths go to connections as
+//! its weights fall, where connections can make them), see `growth` and `fewer`.
 //!
 //! The first [`PILOT_PASSES`] passes trace the starting count (the file's
 //! `photonsperiteration`) and measure: each pixel's variance between passes (all of
