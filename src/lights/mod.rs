@@ -248,9 +248,9 @@ impl Light {
     pub fn point_source(&self) -> Option<(Vec3, f32)> {
         match self {
             Light::Point(l) => Some((l.p, l.pdf_le().1)),
-            Light::Spot(l) => Some((l.p, l.sample_le([0.5, 0.5]).pdf_dir)),
+            Light::Spot(l) => Some((l.p, l.pdf_dir())),
             Light::Goniometric(l) => Some((l.p, l.pdf_le().1)),
-            Light::Projection(l) => Some((l.p, l.sample_le([0.5, 0.5]).pdf_dir)),
+            Light::Projection(l) => Some((l.p, l.pdf_dir())),
             Light::Distant(_) | Light::Infinite(_) | Light::Area(_) => None,
         }
     }

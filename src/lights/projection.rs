@@ -208,7 +208,8 @@ impl ProjectionLight {
         Emission { ray, n: d, pdf_pos: 1.0, pdf_dir: self.pdf_dir(), le: self.intensity(d), surface: None }
     }
 
-    fn pdf_dir(&self) -> f32 {
+    /// The density of `sample_le`'s directions: uniform within the frustum's cone.
+    pub fn pdf_dir(&self) -> f32 {
         1.0 / (2.0 * PI * (1.0 - self.cos_total))
     }
 

@@ -144,7 +144,7 @@ impl SpotLight {
     }
 
     /// The density of `sample_le`'s directions: uniform within the cone.
-    fn pdf_dir(&self) -> f32 {
+    pub fn pdf_dir(&self) -> f32 {
         1.0 / (2.0 * PI * (1.0 - self.cos_total))
     }
 

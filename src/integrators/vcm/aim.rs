@@ -111,16 +111,16 @@ pub fn cones(scene: &RenderScene) -> Vec<Option<Cone>> {
         .collect()
 }
 
-/// An aimed emission from `light`, as its `sample_le` reports one (`None` when the
-/// light sends nothing along the direction drawn).
-pub fn emit(light: &Light, cone: &Cone, u: [f32; 2]) -> Option<Emission> {
+/// An aimed emission from `light`, as its `sample_le` reports one (its `le` zero where
+/// the light sends nothing along the direction drawn).
+pub fn emit(light: &Light, cone: &Cone, u: [f32; 2]) -> Emission {
     // DEVIATION(pbrt): always on, sampling only. pbrt's bdpt draws over the light's own
     // directions; the image's mean is the same (README, "Other differences").
     let d = cone.sample(u);
     let le = light.intensity(d);
     let ray = Ray::new(Point3(cone.from), Vector3(d));
     let pdf_dir = (1.0 / cone.solid_angle()) as f32;
-    (le != Vec3::ZERO).then_some(Emission { ray, n: d, pdf_pos: 1.0, pdf_dir, le, surface: None })
+    Emission { ray, n: d, pdf_pos: 1.0, pdf_dir, le, surface: None }
 }
 
 #[cfg(test)]

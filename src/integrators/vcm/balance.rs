@@ -250,7 +250,7 @@ mod tests {
         // where it holds 80% (the fourth).
         let cases = [(0.3, 1.0, 2.0, 0.7), (4.0, 1.0, 1.0, 1.0), (1.0, 0.84, 0.81, 1.0), (1.0, 4.0, 1.0, 5.0)];
         for (vt, vl, ct, cl) in cases {
-            let a = 0.5 + (vl / (vl + vt) - 0.5f64).max(0.0);
+            let a = growth(vl, vt);
             let f = |n: f64| {
                 let r = 1000.0 / n;
                 (vl * if r <= 1.0 { r } else { r.powf(a) } + vt) * (cl * n / 1000.0 + ct)

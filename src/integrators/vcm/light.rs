@@ -176,7 +176,7 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let light = &scene.lights[li];
     let (u1, u2) = (s.get2d(), s.get2d());
     let e = match &pass.cones[li] {
-        Some(cone) => super::aim::emit(light, cone, u1)?,
+        Some(cone) => super::aim::emit(light, cone, u1),
         None => light.sample_le(&scene.geometry.shapes, scene.world, u1, u2)?,
     };
     if scene.emission_masked(light, e.surface.as_ref()) || e.pdf_pos <= 0.0 || e.pdf_dir <= 0.0 || e.le == Vec3::ZERO {
