@@ -16,7 +16,11 @@
 //! rounds, each figure is the median over the rounds, with the range beside it.
 //!
 //! Error is relMSE against a reference that neither side's samples are part of: ours at
-//! `--reference-iterations` (default 32 × the longest rung) with a seed of its own. A
+//! `--reference-iterations` (default 32 × the longest rung), rendered as two halves with
+//! seeds of their own and averaged. The reference's own noise adds to every relMSE
+//! against it (E[(x − y)²] = E[(x − truth)²] + Var(y) for independent x and y); the
+//! halves' difference measures it (Var(y) = E[(a − b)²]/4), and the table's first line
+//! gives it, so a ratio near the floor can be read for what it is. A
 //! pbrt reference would flatter pbrt: pbrt's samples do not depend on the iteration
 //! count, so its short run is the start of its long one. The peer rows show how far each
 //! peer's mean sits from the reference's, so a systematic difference is visible.
@@ -28,7 +32,8 @@
 //! the project's target. The scene files are rewritten into `--out` (iteration count,
 //! `@half` resolution) beside links to everything else in the scene's folder, so
 //! relative paths still resolve. References are cached in `--out/refs` under a hash of
-//! the rewritten file; delete them to rebuild.
+//! the rewritten file, the reference's options and our binary (a rebuilt renderer
+//! renders its own); delete them to rebuild.
 //!
 //! `--ours-args` passes options to our timed runs only (not to the reference), so one
 //! of our settings can be set beside the peers; give each setting its own `--out`.
@@ -60,7 +65,8 @@ Usage: pbrt-bench converge [SCENE.pbrt[@half] ...] [OPTIONS]
 Error (relMSE) against wall time: each round runs pbrt-v3 and pbrt-v4 (those found in
 --peers) with the scene's SPPM at each iteration count of the ladder, and with bdpt and
 path (volpath with media) at the samples that take as long, then ours with a time limit
-just past the slowest peer run; all against a reference of ours with a seed of its own.
+just past the slowest peer run; all against a reference of ours with seeds of its own
+(two halves, averaged; their difference gives the reference's own noise, in the table).
 Without scenes: the README's suite. @half renders at half resolution.
   --runs N                    rounds; every figure is the median over them (default 3)
   --iterations A,B,C          the ladder (default: the scene's count over 4, over 2, as written)
@@ -145,6 +151,8 @@ struct Prepared {
     /// Our reference for `ours` and `v3`, its file, and the one for `v4`.
     reference: RgbImage,
     reference_file: PathBuf,
+    /// The reference's own relMSE (its noise), which every figure against it contains.
+    reference_noise: Option<f64>,
     reference_iterations: u32,
     reference_v4: Option<RgbImage>,
     /// The scene's own iteration count and photons per iteration, for the suite table.
@@ -380,7 +388,7 @@ fn calibrate(p: &Prepared, peer: &Peer, times: Vec<f64>, nthreads: usize) -> Res
 fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<(String, String)> {
     let our_curve = our_curve(&rounds.our_runs);
     let mut table = format!(
-        "{}: {} rounds, {} threads, reference ours at {} iterations{}, another seed{}\n\n\
+        "{}: {} rounds, {} threads, reference ours at {} iterations{}, another seed{}{}\n\n\
          | renderer | iterations | seconds (range) | relMSE | mean / reference | ours at that time | ours / peer |\n\
          |---|---|---|---|---|---|---|\n",
         p.label,
@@ -388,7 +396,10 @@ fn report(o: &Options, p: &Prepared, peers: &[Peer], rounds: &Rounds) -> Res<(St
         o.nthreads,
         p.reference_iterations,
         if o.reference_args.is_empty() { String::new() } else { format!(" with {}", o.reference_args.join(" ")) },
-        if o.ours_args.is_empty() { String::new() } else { format!("; ours with {}", o.ours_args.join(" ")) }
+        if o.ours_args.is_empty() { String::new() } else { format!("; ours with {}", o.ours_args.join(" ")) },
+        p.reference_noise.map_or(String::new(), |e| format!(
+            "; the reference's own noise (from its two halves), which every relMSE below contains: {e:.3e}"
+        ))
     );
     let mut series = vec![curve_series("ours", &our_curve)];
     let mut ratios = Vec::new();
@@ -592,7 +603,7 @@ fn prepare(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<Pr
     }
     let top = ladder.iter().max().copied().unwrap_or(1);
     let reference_iterations = o.reference_iterations.unwrap_or(32 * top);
-    let (reference_file, reference) = render_reference(o, ours, &ours_file, &at_res, reference_iterations)?;
+    let reference = render_reference(o, ours, &ours_file, &at_res, reference_iterations)?;
     let v4 = match peers.iter().find(|p| p.kind == PeerKind::V4) {
         Some(_) if syntax == pbrt_sppm::parser::Syntax::V4 => Some(ours_file.clone()),
         Some(peer) => v4_upgrade(&peer.exe, &ours_file, &dir, &stem)?,
@@ -601,9 +612,9 @@ fn prepare(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<Pr
     let reference_v4 = match &v4 {
         Some(f) if f != &ours_file => {
             let text = std::fs::read_to_string(f).map_err(|e| e.to_string())?;
-            Some(render_reference(o, ours, f, &text, reference_iterations)?.1)
+            Some(render_reference(o, ours, f, &text, reference_iterations)?.image)
         }
-        Some(_) => Some(reference.clone()),
+        Some(_) => Some(reference.image.clone()),
         None => None,
     };
     Ok(Prepared {
@@ -613,8 +624,9 @@ fn prepare(o: &Options, spec: &SceneSpec, ours: &Path, peers: &[Peer]) -> Res<Pr
         ours: ours_file,
         v3,
         v4,
-        reference,
-        reference_file,
+        reference_noise: reference.noise,
+        reference_file: reference.path,
+        reference: reference.image,
         reference_iterations,
         reference_v4,
         iterations: written,
@@ -696,32 +708,89 @@ fn output(cmd: &mut Command) -> Res<std::process::Output> {
 }
 
 /// Our image of `file` at `n` iterations with a seed of its own, cached by content.
-fn render_reference(o: &Options, ours: &Path, file: &Path, text: &str, n: u32) -> Res<(PathBuf, RgbImage)> {
-    let key = pbrt_sppm::sampling::hash(&[fnv(text.as_bytes()), n as u64, fnv(o.reference_args.join(" ").as_bytes())]);
+/// Our reference for `file`: two renders of half the iterations each, with seeds of
+/// their own, averaged. Their difference measures the reference's own noise, which
+/// every relMSE against it contains: E[(x − y)²] = E[(x − truth)²] + Var(y) for an
+/// image x independent of the reference y, and Var(y) = E[(a − b)²]/4 for the mean y of
+/// two independent halves a and b. Cached under `--out/refs` by the scene's text, the
+/// iterations, `--reference-args` and our binary's bytes (a rebuilt renderer renders a
+/// new reference rather than reusing an older estimator's).
+fn render_reference(o: &Options, ours: &Path, file: &Path, text: &str, n: u32) -> Res<Reference> {
+    let binary = std::fs::read(ours).map_err(|e| format!("{}: {e}", ours.display()))?;
+    let key = pbrt_sppm::sampling::hash(&[
+        fnv(text.as_bytes()),
+        n as u64,
+        fnv(o.reference_args.join(" ").as_bytes()),
+        fnv(&binary),
+    ]);
     let refs = o.out.join("refs");
-    std::fs::create_dir_all(&refs).map_err(|e| format!("{}: {e}", refs.display()))?;
+    let halves_dir = refs.join("halves");
+    std::fs::create_dir_all(&halves_dir).map_err(|e| format!("{}: {e}", halves_dir.display()))?;
     let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let path = refs.join(format!("{stem}-{n}-{key:016x}.exr"));
-    if !path.exists() {
-        println!("rendering the reference {} ({n} iterations)", path.display());
-        let t = Instant::now();
-        let status = Command::new(ours)
-            .arg("render")
-            .arg(file)
-            .args(["--quiet", "--seed", "1000003", "--spp", &n.to_string(), "--nthreads", &o.nthreads.to_string()])
-            .args(&o.reference_args)
-            .arg("--outfile")
-            .arg(&path)
-            .stdin(Stdio::null())
-            .status()
-            .map_err(|e| format!("{}: {e}", ours.display()))?;
-        if !status.success() {
-            return Err(format!("the reference render of {} failed", file.display()));
+    let counts = [n.div_ceil(2), n / 2];
+    let mut halves = Vec::new();
+    for (k, &count) in counts.iter().enumerate().filter(|(_, c)| **c > 0) {
+        let half = halves_dir.join(format!("{stem}-{n}-{key:016x}-{k}.exr"));
+        if !half.exists() {
+            println!("rendering the reference {} (part {} of 2, {count} iterations)", path.display(), k + 1);
+            let t = Instant::now();
+            render_part(o, ours, file, count, 1_000_003 + k as u64, &half)?;
+            println!("  {:.1} s", t.elapsed().as_secs_f64());
         }
-        println!("  {:.1} s", t.elapsed().as_secs_f64());
+        halves.push(read_image(&half).map_err(|e| format!("{}: {e}", half.display()))?);
     }
-    let image = read_image(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok((path, image))
+    let (image, noise) = average(&halves)?;
+    if !path.exists() {
+        pbrt_sppm::imageio::write_exr(&path, &image).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(Reference { path, image, noise })
+}
+
+/// A reference and its own relMSE (None when it was rendered in one part).
+struct Reference {
+    path: PathBuf,
+    image: RgbImage,
+    noise: Option<f64>,
+}
+
+fn render_part(o: &Options, ours: &Path, file: &Path, n: u32, seed: u64, out: &Path) -> Res<()> {
+    let status = Command::new(ours)
+        .arg("render")
+        .arg(file)
+        .args(["--quiet", "--seed", &seed.to_string(), "--spp", &n.to_string()])
+        .args(["--nthreads", &o.nthreads.to_string()])
+        .args(&o.reference_args)
+        .arg("--outfile")
+        .arg(out)
+        .stdin(Stdio::null())
+        .status()
+        .map_err(|e| format!("{}: {e}", ours.display()))?;
+    if !status.success() {
+        return Err(format!("the reference render of {} failed", file.display()));
+    }
+    Ok(())
+}
+
+/// The mean of a reference's parts, and the relMSE the mean has against the truth by
+/// its noise alone: per channel ((a − b)/2)² over the mean's square + 0.01, as
+/// `metrics::relmse` weighs it.
+fn average(parts: &[RgbImage]) -> Res<(RgbImage, Option<f64>)> {
+    let [a, b] = parts else { return Ok((parts[0].clone(), None)) };
+    if a.pixels.len() != b.pixels.len() {
+        return Err("the reference's two parts differ in size".into());
+    }
+    let mut mean = a.clone();
+    let mut noise = 0.0;
+    for (m, q) in mean.pixels.iter_mut().zip(&b.pixels) {
+        for c in 0..3 {
+            let (x, y) = (m[c] as f64, q[c] as f64);
+            let mid = 0.5 * (x + y);
+            noise += (0.5 * (x - y)).powi(2) / (mid * mid + 0.01);
+            m[c] = mid as f32;
+        }
+    }
+    Ok((mean, Some(noise / (3 * a.pixels.len()).max(1) as f64)))
 }
 
 fn fnv(bytes: &[u8]) -> u64 {

@@ -4,7 +4,7 @@
 //! the peer's error is measured against the reference the tool reports, and the errors.
 #![cfg(unix)]
 
-use pbrt_sppm::imageio::{metrics, read_image};
+use pbrt_sppm::imageio::{RgbImage, metrics, read_image};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -109,6 +109,7 @@ fn converge_rewrites_each_rung_and_measures_the_peer_against_the_reference() {
         .expect("the reference is cached under refs/");
     let reference = read_image(&reference).unwrap();
     assert_eq!((reference.width, reference.height), (24, 16), "@half halves the film");
+    let noise = reference_noise_from_halves(&out.join("refs/halves"), &reference);
     let mut errors = Vec::new();
     for n in [2u32, 4, 8] {
         let img = read_image(&folder.join(format!("pbrt-v3-{n}.exr"))).unwrap();
@@ -126,11 +127,34 @@ fn converge_rewrites_each_rung_and_measures_the_peer_against_the_reference() {
     assert!(seconds.len() >= 2 && seconds.windows(2).all(|w| w[0] <= w[1]), "{ours}");
     let table = std::fs::read_to_string(folder.join("converge.md")).unwrap();
     assert_eq!(table.lines().filter(|l| l.starts_with("| pbrt-v3 |")).count(), 3);
+    let shown: f64 = table.lines().next().and_then(|l| l.rsplit(": ").next()).and_then(|v| v.parse().ok()).unwrap();
+    assert!((shown - noise).abs() <= 1e-3 * noise, "the reference's noise: table {shown}, recomputed {noise}");
+    assert!(noise > 0.0 && noise < errors[2], "a reference quieter than the peer's longest rung: {noise} {errors:?}");
     let last = table.lines().find(|l| l.starts_with("| pbrt-v3 | 8 |")).unwrap();
     let ratio: f64 = last.split('|').nth(7).and_then(|s| s.trim().parse().ok()).unwrap_or(f64::NAN);
     assert!(ratio > 0.0 && ratio.is_finite(), "an equal-time ratio at the longest rung: {last}");
     assert!(folder.join("converge.png").is_file());
     assert!(stdout.contains("- scene@half: "), "{stdout}");
+}
+
+/// The reference is the mean of its two halves (16 iterations each, other seeds), and
+/// its own relMSE is a quarter of their squared difference, weighed as relMSE weighs.
+fn reference_noise_from_halves(halves: &Path, reference: &RgbImage) -> f64 {
+    let mut parts: Vec<PathBuf> = std::fs::read_dir(halves).unwrap().flatten().map(|e| e.path()).collect();
+    parts.sort();
+    assert_eq!(parts.len(), 2, "two halves: {parts:?}");
+    let [a, b] = [&parts[0], &parts[1]].map(|p| read_image(p).unwrap());
+    assert_eq!(a.meta.samples_per_pixel, Some(16));
+    assert_ne!(a.pixels, b.pixels, "the halves have seeds of their own");
+    let mut sum = 0.0;
+    for ((p, q), r) in a.pixels.iter().zip(&b.pixels).zip(&reference.pixels) {
+        for c in 0..3 {
+            let mid = 0.5 * (p[c] as f64 + q[c] as f64);
+            assert!((mid - r[c] as f64).abs() <= 1e-6 * (1.0 + mid.abs()), "the reference is the halves' mean");
+            sum += (0.5 * (p[c] - q[c]) as f64).powi(2) / (mid * mid + 0.01);
+        }
+    }
+    sum / (3 * a.pixels.len()) as f64
 }
 
 #[test]
