@@ -401,7 +401,7 @@ fn light_densities(pass: &Pass, k: usize, ls: &crate::lights::LightSample, p: Ve
 /// partial sums, whether it was specular) after it; `None` when absorbed or ended by
 /// Russian roulette.
 fn scatter(pass: &Pass, v: &Vertex, beta: Rgb, s: &mut impl Sampler) -> Option<((Rgb, Vec3), Partial, bool)> {
-    let smp = v.at.sample(v.wo, s, TransportMode::Radiance, |wi| v.at.cos(wi))?;
+    let smp = v.at.sample(v.wo, s, TransportMode::Radiance, |wi, _| v.at.cos(wi))?;
     let mut beta = beta * smp.f * smp.scale;
     // pbrt's path tracer's roulette, after three bounces.
     if v.len > 3 {

@@ -134,6 +134,10 @@ pub struct Pass<'a> {
     pub nee_all: bool,
     /// Per light, the cone its subpaths are aimed in ([`aim`]).
     pub cones: std::sync::Arc<[Option<aim::Cone>]>,
+    /// Light subpaths take the shading-normal correction on specular bounces too (as
+    /// pbrt's bdpt; not for files asking for SPPM, whose photons cross them without it:
+    /// [`light::LightVertex::leaving_cos`]).
+    pub correct_specular: bool,
 }
 
 impl Pass<'_> {
@@ -435,6 +439,7 @@ impl<'a> Vcm<'a> {
             time: scene.pass_time(iteration, true),
             nee_all: scene.lights.len() <= NEE_ALL_LIGHTS_MAX,
             cones: self.cones.clone(),
+            correct_specular: scene.integrator.requested != "sppm",
         }
     }
 

@@ -167,14 +167,15 @@ impl Scatterer {
         }
     }
 
-    /// Samples a direction for the quantity `mode` carries; `cos` gives the cosine the
-    /// carried quantity takes along the sampled direction (a light vertex's adjoint one).
+    /// Samples a direction for the quantity `mode` carries; `cos(wi, specular)` gives the
+    /// cosine the carried quantity takes along the sampled direction (a light vertex's
+    /// adjoint one).
     pub fn sample(
         &self,
         wo: Vec3,
         s: &mut impl Sampler,
         mode: TransportMode,
-        cos: impl Fn(Vec3) -> f32,
+        cos: impl Fn(Vec3, bool) -> f32,
     ) -> Option<Sampled> {
         let b = match self {
             Scatterer::Surface(b) => b,
@@ -196,7 +197,7 @@ impl Scatterer {
         if !(pdf > 0.0 && smp.pdf > 0.0) {
             return None;
         }
-        let scale = cos(smp.wi) / smp.pdf;
+        let scale = cos(smp.wi, smp.specular) / smp.pdf;
         Some(Sampled { wi: smp.wi, f: smp.f, scale, pdf, pdf_rev, specular: smp.specular })
     }
 }
