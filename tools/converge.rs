@@ -707,7 +707,6 @@ fn output(cmd: &mut Command) -> Res<std::process::Output> {
     cmd.stdin(Stdio::null()).output().map_err(|e| format!("{exe}: {e}"))
 }
 
-/// Our image of `file` at `n` iterations with a seed of its own, cached by content.
 /// Our reference for `file`: two renders of half the iterations each, with seeds of
 /// their own, averaged. Their difference measures the reference's own noise, which
 /// every relMSE against it contains: E[(x − y)²] = E[(x − truth)²] + Var(y) for an
