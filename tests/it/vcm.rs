@@ -627,18 +627,23 @@ fn lights_outside_the_scene_aim_their_subpaths_and_keep_the_image() {
 /// normal to the face and leaves at 0.6 of that, so pbrt's shading-normal correction
 /// (|ωo·ns| |ωi·ng| / (|ωo·ng| |ωi·ns|), which pbrt's bdpt takes and its SPPM's photons
 /// do not) makes the caustic 0.6 times as bright. A file asking for SPPM gets SPPM's
-/// caustic from vcm too; one asking for bdpt gets bdpt's.
+/// caustic from vcm too; one asking for bdpt gets bdpt's. With a small disk light in
+/// the spot's place, camera subpaths find the light through the mirror too, and the
+/// weights mix their corrected value in: the mean must still be SPPM's for an SPPM file
+/// (pbrt-v3 at 256 samples: its SPPM 1, its bdpt 0.635; ours 0.998 and 0.639).
 #[test]
 fn light_subpaths_cross_specular_bounces_as_the_files_integrator_does() {
-    let text = |integrator: &str| {
+    let spot = "LightSource \"spot\" \"color I\" [50 50 50] \"point from\" [0 1 0] \"point to\" [0 2 0] \
+                \"float coneangle\" 10";
+    let disk = "AttributeBegin Translate 0 1 0 Rotate -90 1 0 0 AreaLightSource \"diffuse\" \"color L\" [200 200 200] \
+                Shape \"disk\" \"float radius\" 0.05 AttributeEnd";
+    let text = |integrator: &str, light: &str| {
         format!(
             "LookAt 2.6 1.2 3  2.6 0 0  0 1 0 Camera \"perspective\" \"float fov\" 40 \
              Film \"image\" \"integer xresolution\" 12 \"integer yresolution\" 12 \
              Integrator \"{integrator}\" \"integer maxdepth\" 2 \"integer numiterations\" 32 \
              \"integer photonsperiteration\" 20000 \"float radius\" 0.05 \
-             WorldBegin \
-             LightSource \"spot\" \"color I\" [50 50 50] \"point from\" [0 1 0] \"point to\" [0 2 0] \
-               \"float coneangle\" 10 \
+             WorldBegin {light} \
              AttributeBegin Material \"mirror\" \"color Kr\" [1 1 1] \
              Shape \"trianglemesh\" \"point P\" [-1 2 -1  1 2 -1  1 2 1  -1 2 1] \"integer indices\" [0 1 2  0 2 3] \
                \"normal N\" [.447 -.894 0  .447 -.894 0  .447 -.894 0  .447 -.894 0] AttributeEnd \
@@ -647,14 +652,16 @@ fn light_subpaths_cross_specular_bounces_as_the_files_integrator_does() {
         )
     };
     let mean = |text: &str, algorithm| means(&render_with(text, algorithm), 12)[0];
-    let sppm = mean(&text("sppm"), Algorithm::Sppm);
-    let vcm = mean(&text("sppm"), Algorithm::Vcm(Techniques::All));
-    let bdpt = mean(&text("bdpt"), Algorithm::Vcm(Techniques::Bdpt));
-    let vcm_of_bdpt_file = mean(&text("bdpt"), Algorithm::Vcm(Techniques::All));
-    eprintln!("sppm {sppm}, vcm {vcm}, bdpt {bdpt}, vcm of a bdpt file {vcm_of_bdpt_file}");
-    assert!(sppm > 0.01, "the caustic is in view: {sppm}");
-    assert!((vcm / sppm - 1.0).abs() < 0.03, "vcm of an SPPM file {vcm}, SPPM {sppm}");
-    for corrected in [bdpt, vcm_of_bdpt_file] {
-        assert!((corrected / sppm - 0.6).abs() < 0.03, "a bdpt file {corrected}, SPPM {sppm}: 0.6 of it");
+    for (light, corrected_range) in [(spot, 0.57..0.63), (disk, 0.5..0.75)] {
+        let sppm = mean(&text("sppm", light), Algorithm::Sppm);
+        let vcm = mean(&text("sppm", light), Algorithm::Vcm(Techniques::All));
+        let bdpt = mean(&text("bdpt", light), Algorithm::Vcm(Techniques::Bdpt));
+        let vcm_of_bdpt_file = mean(&text("bdpt", light), Algorithm::Vcm(Techniques::All));
+        eprintln!("sppm {sppm}, vcm {vcm}, bdpt {bdpt}, vcm of a bdpt file {vcm_of_bdpt_file}");
+        assert!(sppm > 0.001, "the caustic is in view: {sppm}");
+        assert!((vcm / sppm - 1.0).abs() < 0.03, "vcm of an SPPM file {vcm}, SPPM {sppm}");
+        for corrected in [bdpt, vcm_of_bdpt_file] {
+            assert!(corrected_range.contains(&(corrected / sppm)), "a bdpt file {corrected}, SPPM {sppm}");
+        }
     }
 }
