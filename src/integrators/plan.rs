@@ -26,9 +26,12 @@ impl Algorithm {
     /// A scene whose media emit light gets SPPM whatever it asks for: SPPM's photons
     /// start in them, while vcm finds their light by camera paths alone (2× volpath's
     /// error at equal time on `v4-glow`, where SPPM has 1/20 of it: docs/media-benchmark.md).
+    /// pbrt-v3's `whitted` and `directlighting` leave out indirect light, so their
+    /// image is not vcm's: they get their own ([`Techniques::Direct`]).
     pub fn for_file(requested: &str, emitting_media: bool) -> Algorithm {
         match requested {
             "sppm" => Algorithm::Sppm,
+            "whitted" | "directlighting" => Algorithm::Vcm(Techniques::Direct),
             _ if emitting_media => Algorithm::Sppm,
             "bdpt" => Algorithm::Vcm(Techniques::Bdpt),
             _ => Algorithm::Vcm(Techniques::All),
@@ -48,6 +51,7 @@ impl Algorithm {
             Algorithm::Vcm(Techniques::All) => "vcm".into(),
             Algorithm::Vcm(Techniques::Bdpt) => "bdpt".into(),
             Algorithm::Vcm(Techniques::Only(t)) => format!("vcm-only-{t:?}").to_lowercase(),
+            Algorithm::Vcm(Techniques::Direct) => "direct".into(),
         }
     }
 }
@@ -55,17 +59,18 @@ impl Algorithm {
 impl std::str::FromStr for Algorithm {
     type Err = String;
 
-    /// `sppm`, `vcm`, `bdpt`, or `vcm-only-T` for technique T alone (weight 1).
+    /// `sppm`, `vcm`, `bdpt`, `direct`, or `vcm-only-T` for technique T alone (weight 1).
     fn from_str(s: &str) -> Result<Algorithm, String> {
         match s {
             "sppm" => Ok(Algorithm::Sppm),
             "vcm" => Ok(Algorithm::Vcm(Techniques::All)),
             "bdpt" => Ok(Algorithm::Vcm(Techniques::Bdpt)),
+            "direct" => Ok(Algorithm::Vcm(Techniques::Direct)),
             _ => super::vcm::Technique::ALL
                 .into_iter()
                 .map(|t| Algorithm::Vcm(Techniques::Only(t)))
                 .find(|a| a.name() == s)
-                .ok_or_else(|| format!("\"{s}\" is not an integrator: sppm, vcm or bdpt")),
+                .ok_or_else(|| format!("\"{s}\" is not an integrator: sppm, vcm, bdpt or direct")),
         }
     }
 }

@@ -503,6 +503,10 @@ fn photon_radius(e: &Entity) -> Res<f32> {
 /// The warning for a file asking for an integrator other than SPPM: what renders it.
 fn rendered_with(e: &Entity, emitting_media: bool) -> Diagnostic {
     let (with, why) = match e.name.as_str() {
+        "whitted" | "directlighting" => (
+            "direct",
+            "direct light and perfectly specular reflection and refraction only, as pbrt-v3's, without media",
+        ),
         _ if emitting_media => ("sppm", "its photons start in the emitting media, which vcm's light paths do not"),
         "bdpt" => ("bdpt", "its bidirectional path tracing"),
         _ => ("vcm", "vertex connection and merging, which converges to the same image"),

@@ -128,10 +128,11 @@ pub struct RenderArgs {
     /// `beams` (every medium segment of a camera path gathers the photons near it).
     #[arg(long, value_parser = str::parse::<VolumeGather>)]
     pub volume_gather: Option<VolumeGather>,
-    /// `sppm`, `vcm` (vertex connection and merging) or `bdpt` (vcm without merging);
-    /// default: what the file asks for (`sppm` → sppm, `bdpt` → bdpt, other
-    /// integrators → vcm). `vcm-only-T` renders technique T alone (emitterhit, direct,
-    /// connect, lighttrace, merge).
+    /// `sppm`, `vcm` (vertex connection and merging), `bdpt` (vcm without merging) or
+    /// `direct` (pbrt-v3's whitted and directlighting image: direct light and specular
+    /// chains only); default: what the file asks for (`sppm` → sppm, `bdpt` → bdpt,
+    /// `whitted` and `directlighting` → direct, other integrators → vcm). `vcm-only-T`
+    /// renders technique T alone (emitterhit, direct, connect, lighttrace, merge).
     #[arg(long, value_parser = parse_integrator)]
     pub integrator: Option<Algorithm>,
     /// SPPM iterations (at least 1), overriding the scene's.

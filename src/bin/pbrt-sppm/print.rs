@@ -53,7 +53,10 @@ pub fn rendered(job: &Job, out: &RenderOutput, args: &RenderArgs) -> ExitCode {
     if args.common.quiet {
         return code;
     }
-    if out.stats.visible_points == 0 {
+    // SPPM's visible points; vcm counts light vertices there, which a render without
+    // light subpaths (`direct`) never stores.
+    let stores = !out.stats.bidirectional || out.stats.photons.traced > 0;
+    if out.stats.visible_points == 0 && stores {
         say!(
             "{}: warning: no camera path reached a diffuse surface; the image holds only direct emission",
             args.scene.display()
@@ -70,13 +73,13 @@ pub fn rendered(job: &Job, out: &RenderOutput, args: &RenderArgs) -> ExitCode {
     };
     let image = job.image.as_ref().map(|i| i.0.as_path());
     let to: Vec<String> = image.into_iter().chain(args.partial.as_deref()).map(|p| p.display().to_string()).collect();
-    let each = if out.stats.bidirectional { "light subpaths" } else { "photons" };
-    say!(
-        "{what} {done} ({} {each} each) in {:.2} s -> {}",
-        out.image.meta.photons_per_iteration.unwrap_or(0),
-        out.seconds,
-        to.join(", ")
-    );
+    let each = match (out.stats.bidirectional, out.image.meta.photons_per_iteration.unwrap_or(0)) {
+        // `direct` traces none.
+        (true, 0) => String::new(),
+        (true, n) => format!(" ({n} light subpaths each)"),
+        (false, n) => format!(" ({n} photons each)"),
+    };
+    say!("{what} {done}{each} in {:.2} s -> {}", out.seconds, to.join(", "));
     if out.interrupted
         && let Some(c) = job.checkpoint_path()
     {

@@ -2,6 +2,25 @@
 //! medium, they count what every technique gives there: emitters found (and media's
 //! emission along the way), next-event estimation, connections to the vertices of one
 //! light subpath, and light vertices merged within the radius.
+//!
+//! Files asking for pbrt-v3's `whitted` or `directlighting` get the image those render
+//! ([`super::Techniques::Direct`]), which leaves out indirect light:
+//!
+//! ```text
+//! Integrator "directlighting" "integer maxdepth" 5   # rendered with direct
+//! Integrator "whitted"                               # the same image
+//! ```
+//!
+//! Every vertex takes light straight from the lights: next-event estimation and the
+//! BSDF's own sample finding an emitter, weighted against each other by the power
+//! heuristic (the two strategies directlighting combines; whitted samples the lights
+//! alone, for the same mean). The path goes on only through perfectly specular
+//! bounces, and only below maxdepth; a bounce off another lobe ends it once that one
+//! sample has looked for an emitter. pbrt follows every specular lobe (a dielectric's
+//! reflection and its refraction) as a tree; one path picking among them with the
+//! BSDF's own probabilities has the tree's mean. No light subpaths are traced. Media
+//! are left out as pbrt-v3 leaves them there: camera rays cross them untouched and
+//! shadow rays stop at any shape, a medium's boundary too.
 
 use super::light::{LightPass, LightVertex};
 use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
@@ -13,6 +32,7 @@ use crate::integrators::sppm::{Surface, camera_ray, surface};
 use crate::interaction::{Footprint, SurfaceInteraction, light_sample_point};
 use crate::lights::Light;
 use crate::materials::TransportMode;
+use crate::math::ray::RayDifferential;
 use crate::math::{Normal3, Point3, Ray, Vector3};
 use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash};
 use crate::spectrum::Rgb;
@@ -82,6 +102,20 @@ struct Vertex<'a> {
     merges: bool,
 }
 
+/// Where a camera ray goes next ([`Cameras::next`]). Made and taken apart once per
+/// vertex: boxing the vertex would allocate there.
+#[allow(clippy::large_enum_variant)]
+enum Next {
+    /// A vertex in a medium, or on a surface with its hit.
+    Vertex(Place, Scatterer, Vec3, Option<(Hit, SurfaceInteraction)>),
+    /// It crossed a surface without a material: trace on.
+    Through,
+    /// It left the scene.
+    Escaped,
+    /// It crossed too many surfaces without a material.
+    Abandon,
+}
+
 impl Cameras<'_> {
     /// The radiance pixel `i` of the rendered window (`width` wide) gets from its
     /// camera subpath this pass.
@@ -110,45 +144,30 @@ impl Cameras<'_> {
         }
         let camera_pdf = scene.camera.pdf_we(&ray).1 as f64 * pass.film_pixels;
         let mut partial = Partial::camera(camera_pdf, pass.lt_count());
-        let light_path = self.lights.path(i % pass.light_paths as usize);
+        let light_path = self.lights.path(i % pass.light_paths.max(1) as usize);
         // The last vertex, and where rays left it (past any interfaces since, light
         // densities are measured from there).
         let (mut beta, mut prev, mut origin) = (Vec3::splat(weight), ray.o.0, ray.o.0);
-        let (mut len, mut passes, mut medium) = (0u32, 0u32, scene.camera_medium);
+        let direct = pass.techniques == Techniques::Direct;
+        let (mut len, mut passes, mut medium) = (0u32, 0u32, self.in_media(scene.camera_medium));
         // Whether the subpath has scattered diffusely, and specularly after that (then
-        // merging is no technique at its vertices beyond, see `mis`).
-        let (mut diffuse, mut past_diffuse_specular) = (false, false);
+        // merging is no technique at its vertices beyond, see `mis`); with `direct`,
+        // whether the last bounce was not specular, so the path ends at the next vertex
+        // once it has counted the emitter it may have found.
+        let (mut diffuse, mut past_diffuse_specular, mut last) = (false, false, false);
         loop {
-            let hit = scene.intersect(&ray);
-            out.work.rays += 1;
-            if let Some(m) = medium
-                && pass.techniques.uses(Technique::EmitterHit)
-            {
-                // Media's emission is found by camera paths alone (weight 1), as pbrt's
-                // volpath finds it.
-                let t = hit.map_or(f32::INFINITY, |h| h.t);
-                out.traced += beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, t, s);
-            }
-            let (place, at, wo, surf) = match vertex::flight(scene, &ray, (hit.as_ref(), medium), &mut beta, s) {
-                Some((place, at, wo)) => (place, at, wo, None),
-                None => {
-                    let Some(hit) = hit else {
+            let (place, at, wo, surf) =
+                match self.next(&mut ray, &mut diff, (&mut passes, &mut medium), &mut beta, &mut out, s) {
+                    Next::Vertex(place, at, wo, surf) => (place, at, wo, surf),
+                    Next::Through => continue,
+                    Next::Escaped => {
                         if pass.techniques.uses(Technique::EmitterHit) && len < pass.max_len {
                             out.traced += beta * self.escaped(ray.d.0.normalize(), origin, len, partial);
                         }
                         break;
-                    };
-                    let si = scene.geometry.interaction(&hit);
-                    let fp = diff.take().map(|d| Footprint::new(&si, &d)).unwrap_or_default();
-                    let bsdf = match surface(scene, (&hit, &si), &fp, &mut ray, &mut passes, &mut medium) {
-                        Surface::Bsdf(b) => b,
-                        Surface::PassedThrough => continue,
-                        Surface::Abandon => break,
-                    };
-                    let place = Place::on_surface(scene, &hit, &si, medium);
-                    (place, Scatterer::Surface(bsdf), -ray.d.0.normalize(), Some((hit, si)))
-                }
-            };
+                    }
+                    Next::Abandon => break,
+                };
             len += 1;
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
@@ -158,7 +177,7 @@ impl Cameras<'_> {
             {
                 out.traced += beta * self.emitted(hit, si, &v, origin, dist2);
             }
-            if len >= pass.max_len || (surf.is_some() && wo.dot(place.ng) == 0.0) {
+            if last || len >= pass.max_len || (surf.is_some() && wo.dot(place.ng) == 0.0) {
                 break;
             }
             out.work.vertices += 1;
@@ -168,13 +187,64 @@ impl Cameras<'_> {
                 out.merged = [out.merged[0] + beta * a, out.merged[1] + beta * b];
             }
             let Some((b, p, specular)) = scatter(pass, &v, beta, s) else { break };
+            // pbrt-v3's whitted and directlighting recurse through perfectly specular
+            // bounces only, and only below maxdepth.
+            if direct && specular && len + 1 >= pass.max_len {
+                break;
+            }
+            last = direct && !specular;
             past_diffuse_specular |= specular && diffuse;
             diffuse |= !specular;
             (beta, partial, prev) = (b.0, p, place.p);
             ray = place.spawn(b.1);
-            (medium, origin) = (place.toward(b.1), ray.o.0);
+            (medium, origin) = (self.in_media(place.toward(b.1)), ray.o.0);
         }
         out
+    }
+
+    /// The medium a ray travels in: none for pbrt-v3's whitted and directlighting,
+    /// which leave media out.
+    fn in_media(&self, medium: Option<u32>) -> Option<u32> {
+        if self.pass.techniques == Techniques::Direct { None } else { medium }
+    }
+
+    /// Where the ray finds its next vertex, in a medium or on a surface; adds the light
+    /// media emit along the way (found by camera paths alone, weight 1, as pbrt's
+    /// volpath finds it).
+    fn next(
+        &self,
+        ray: &mut Ray,
+        diff: &mut Option<RayDifferential>,
+        (passes, medium): (&mut u32, &mut Option<u32>),
+        beta: &mut Rgb,
+        out: &mut PixelSample,
+        s: &mut impl Sampler,
+    ) -> Next {
+        let (pass, scene) = (self.pass, self.pass.scene);
+        let hit = scene.intersect(ray);
+        out.work.rays += 1;
+        if let Some(m) = *medium
+            && pass.techniques.uses(Technique::EmitterHit)
+        {
+            let t = hit.map_or(f32::INFINITY, |h| h.t);
+            out.traced += *beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, t, s);
+        }
+        if let Some((place, at, wo)) = vertex::flight(scene, ray, (hit.as_ref(), *medium), beta, s) {
+            return Next::Vertex(place, at, wo, None);
+        }
+        let Some(hit) = hit else { return Next::Escaped };
+        let si = scene.geometry.interaction(&hit);
+        let fp = diff.take().map(|d| Footprint::new(&si, &d)).unwrap_or_default();
+        let surface = surface(scene, (&hit, &si), &fp, ray, passes, medium);
+        *medium = self.in_media(*medium);
+        match surface {
+            Surface::Bsdf(bsdf) => {
+                let place = Place::on_surface(scene, &hit, &si, *medium);
+                Next::Vertex(place, Scatterer::Surface(bsdf), -ray.d.0.normalize(), Some((hit, si)))
+            }
+            Surface::PassedThrough => Next::Through,
+            Surface::Abandon => Next::Abandon,
+        }
     }
 
     /// What next-event estimation and connections give at a vertex, and what merging
@@ -232,7 +302,8 @@ impl Cameras<'_> {
             self.pass.nee_pick(idx as usize) * light.pdf_li(&scene.geometry.shapes, prev, -v.wo) as f64 * cos / dist2;
         let out = Ray::new(si.p, Vector3(v.wo));
         let (pos, dir) = light.pdf_le(&scene.geometry.shapes, scene.world, &out, si.n.0);
-        le * self.pass.techniques.weight(mis::emitter_hit(v.partial, direct, pick * (pos * dir) as f64, v.len == 2))
+        let direct_light = v.len == 2 || self.pass.techniques == Techniques::Direct;
+        le * self.pass.techniques.weight(mis::emitter_hit(v.partial, direct, pick * (pos * dir) as f64, direct_light))
     }
 
     /// Light from lights at infinity along a ray that left the scene after `len` edges.
@@ -252,7 +323,8 @@ impl Cameras<'_> {
             let direct = self.pass.nee_pick(k) * light.pdf_li(&scene.geometry.shapes, prev, d) as f64;
             let (pos, dir) =
                 light.pdf_le(&scene.geometry.shapes, scene.world, &Ray::new(Point3(prev), Vector3(-d)), -d);
-            let w = mis::emitter_hit(partial, direct, pick * (pos * dir) as f64, len == 1);
+            let direct_light = len == 1 || self.pass.techniques == Techniques::Direct;
+            let w = mis::emitter_hit(partial, direct, pick * (pos * dir) as f64, direct_light);
             sum += le * self.pass.techniques.weight(w);
         }
         sum
@@ -298,14 +370,18 @@ impl Cameras<'_> {
             cos_here: v.at.measure(ls.wi, v.place.ng),
             cos_light,
         };
-        let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs, v.len == 1));
+        let only_direct = self.pass.techniques == Techniques::Direct;
+        let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs, v.len == 1 || only_direct));
         let c = e.f * v.at.cos(ls.wi) * ls.li * (w / (pick * ls.pdf));
         if !c.is_finite() || c == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        c * match ls.p_light {
-            Some(p) => vertex::visible(scene, &v.place, p, s),
-            None => vertex::visible_along(scene, &v.place, ls.wi, s),
+        c * match (ls.p_light, only_direct) {
+            (Some(p), false) => vertex::visible(scene, &v.place, p, s),
+            (None, false) => vertex::visible_along(scene, &v.place, ls.wi, s),
+            // pbrt-v3's whitted and directlighting leave media out.
+            (Some(p), true) => vertex::unoccluded(scene, &vertex::toward_point(&v.place, p)),
+            (None, true) => vertex::unoccluded(scene, &v.place.spawn(ls.wi)),
         }
     }
 

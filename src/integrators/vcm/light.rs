@@ -99,6 +99,7 @@ impl std::ops::Add for Counts {
 /// A pass's light subpaths: their vertices in subpath order, where each begins, and
 /// the lists of light-tracing splats (pixel, radiance), two per work item (list j
 /// holds half j mod 2's, [`half`]).
+#[derive(Default)]
 pub struct LightPass {
     pub vertices: Vec<LightVertex>,
     /// Subpath k holds `vertices[starts[k]..starts[k + 1]]`.

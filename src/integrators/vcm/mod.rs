@@ -83,6 +83,11 @@ pub enum Techniques {
     /// One alone with weight 1, to check each converges to the same image. Connections
     /// and merging then keep one strategy each (see [`camera`]), so each path counts once.
     Only(Technique),
+    /// pbrt-v3's `whitted` and `directlighting`: light straight from the lights (next-
+    /// event estimation and emitters found by sampling the BSDF, weighted against each
+    /// other) at every vertex of a camera path that goes on only through perfectly
+    /// specular bounces, no light subpaths ([`camera`]'s module docs).
+    Direct,
 }
 
 impl Techniques {
@@ -91,7 +96,13 @@ impl Techniques {
             Techniques::All => true,
             Techniques::Bdpt => t != Technique::Merge,
             Techniques::Only(o) => o == t,
+            Techniques::Direct => matches!(t, Technique::EmitterHit | Technique::Direct),
         }
+    }
+
+    /// Whether passes trace light subpaths at all.
+    pub fn traces_lights(self) -> bool {
+        self != Techniques::Direct
     }
 
     /// The weight to apply: the MIS weight, or 1 for a technique alone.
@@ -106,7 +117,7 @@ impl Techniques {
     /// The pass's constants: merging counts only where it is used (a technique alone
     /// takes weight 1 and reads none).
     fn factors(self, radius: f64, light_paths: f64) -> PassFactors {
-        PassFactors::new(radius, light_paths, true, self.uses(Technique::Merge))
+        PassFactors::new(radius, light_paths.max(1.0), self.traces_lights(), self.uses(Technique::Merge))
     }
 }
 
@@ -259,6 +270,9 @@ impl<'a> Vcm<'a> {
     /// The light subpaths pass `iteration` traces: the pilot's count, then the one
     /// chosen ([`balance`]).
     pub fn light_paths(&self, iteration: u32) -> u64 {
+        if !self.settings.techniques.traces_lights() {
+            return 0;
+        }
         match &self.balance {
             Some(Balance::Chosen(n)) if iteration >= balance::PILOT_PASSES => *n,
             _ => self.settings.light_paths.max(1),
@@ -357,7 +371,10 @@ impl<'a> Vcm<'a> {
         let t0 = Instant::now();
         self.live.reset();
         let pass = self.pass(iteration);
-        let lights = light::trace_all(&pass, self.settings.seed, iteration, &self.live);
+        let lights = match pass.techniques.traces_lights() {
+            true => light::trace_all(&pass, self.settings.seed, iteration, &self.live),
+            false => light::LightPass::default(),
+        };
         let t1 = Instant::now();
         let grid = match self.settings.techniques.uses(Technique::Merge) {
             true => Grid::build(

@@ -229,10 +229,9 @@ pub fn flight(
 /// test), the transmittance through media and interface surfaces otherwise (numbers
 /// from `s` for grids).
 pub fn visible(scene: &RenderScene, from: &Place, to: Vec3, s: &mut impl Sampler) -> Rgb {
-    let o = from.origin_toward(to - from.p);
-    let ray = Ray { o, d: Vector3(to - o.0), t_max: 1.0 - SHADOW_EPSILON, time: from.time };
+    let ray = toward_point(from, to);
     if scene.media.is_empty() {
-        return if scene.intersect_p(&ray) { Vec3::ZERO } else { Vec3::ONE };
+        return unoccluded(scene, &ray);
     }
     volume::transmittance(scene, &ray, from.toward(to - from.p), s)
 }
@@ -241,9 +240,21 @@ pub fn visible(scene: &RenderScene, from: &Place, to: Vec3, s: &mut impl Sampler
 pub fn visible_along(scene: &RenderScene, from: &Place, d: Vec3, s: &mut impl Sampler) -> Rgb {
     let ray = from.spawn(d);
     if scene.media.is_empty() {
-        return if scene.intersect_p(&ray) { Vec3::ZERO } else { Vec3::ONE };
+        return unoccluded(scene, &ray);
     }
     volume::transmittance(scene, &ray, from.toward(d), s)
+}
+
+/// The shadow ray from a place to a point, stopping short of it.
+pub fn toward_point(from: &Place, to: Vec3) -> Ray {
+    let o = from.origin_toward(to - from.p);
+    Ray { o, d: Vector3(to - o.0), t_max: 1.0 - SHADOW_EPSILON, time: from.time }
+}
+
+/// 1 where a shadow ray hits nothing, media left out and every shape opaque (a
+/// medium's boundary too, as pbrt-v3's `VisibilityTester::Unoccluded`).
+pub fn unoccluded(scene: &RenderScene, ray: &Ray) -> Rgb {
+    if scene.intersect_p(ray) { Vec3::ZERO } else { Vec3::ONE }
 }
 
 /// What reaches one place from another (each end offset off its surface).

@@ -138,7 +138,8 @@ class Scene:
         """Renders and returns the image as float32, (height, width, 3), linear RGB.
 
         spp: iterations (pixel samples), default the scene's. integrator: "sppm",
-        "vcm" or "bdpt" (default: what the file asks for, as the command line).
+        "vcm", "bdpt" or "direct" (default: what the file asks for, as the command
+        line).
         seed: default the Integrator's. threads: default every core.
         progress(done, planned, seconds) is called after every iteration; returning
         False stops the render after it (the image so far is returned).
