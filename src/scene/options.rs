@@ -509,6 +509,10 @@ fn rendered_with(e: &Entity, emitting_media: bool) -> Diagnostic {
         ),
         _ if emitting_media => ("sppm", "its photons start in the emitting media, which vcm's light paths do not"),
         "bdpt" => ("bdpt", "its bidirectional path tracing"),
+        // Images of something other than light: not implemented.
+        "ambientocclusion" | "aov" | "function" => {
+            ("vcm", "vertex connection and merging: the scene's light, not this integrator's output")
+        }
         _ => ("vcm", "vertex connection and merging, which converges to the same image"),
     };
     let message = format!("integrator \"{}\" is rendered with {with} ({why}); --integrator picks another", e.name);

@@ -118,6 +118,16 @@ fn directlighting_and_whitted_files_render_pbrt_v3s_image() {
     let mean = |p: &[[f32; 3]]| p.iter().map(|c| (c[0] + c[1] + c[2]) as f64).sum::<f64>();
     let ratio = mean(&vcm.image.pixels) / mean(&reference.pixels);
     assert!(ratio > 1.5, "vcm over pbrt-v3's directlighting: {ratio}");
+    // The warning says what renders each file, and never claims vcm's image for an
+    // integrator whose output is not light.
+    let said = |integrator: &str| {
+        let s = crate::common::scene(&format!("Integrator \"{integrator}\" Film \"rgb\" WorldBegin Shape \"sphere\""));
+        crate::common::warnings(&s).join("\n")
+    };
+    assert!(said("whitted").contains("\"whitted\" is rendered with direct"), "{}", said("whitted"));
+    assert!(said("path").contains("converges to the same image"), "{}", said("path"));
+    let ao = said("ambientocclusion");
+    assert!(ao.contains("not this integrator's output") && !ao.contains("same image"), "{ao}");
 }
 
 #[test]
