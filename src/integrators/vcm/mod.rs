@@ -446,7 +446,7 @@ impl<'a> Vcm<'a> {
             scene,
             factors: self.settings.techniques.factors(radius, n as f64),
             techniques: self.settings.techniques,
-            max_len: scene.integrator.max_depth + 1,
+            max_len: self.max_len(),
             light_paths: n,
             film_pixels: scene.film.x_resolution as f64 * scene.film.y_resolution as f64,
             radius: radius as f32,
@@ -457,6 +457,17 @@ impl<'a> Vcm<'a> {
             nee_all: scene.lights.len() <= NEE_ALL_LIGHTS_MAX,
             cones: self.cones.clone(),
             correct_specular: scene.integrator.requested != "sppm",
+        }
+    }
+
+    /// The most edges a path may have: pbrt's `maxdepth` bounces and one more edge to
+    /// an emitter. pbrt-v3's whitted and directlighting light their first hit even at
+    /// `maxdepth` 0 (their depth only bounds the specular recursion).
+    fn max_len(&self) -> u32 {
+        let depth = self.scene.integrator.max_depth;
+        match self.settings.techniques {
+            Techniques::Direct => depth.max(1) + 1,
+            _ => depth + 1,
         }
     }
 
