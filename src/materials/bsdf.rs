@@ -257,6 +257,15 @@ impl Bsdf {
         (pdf > 0.0).then_some(BsdfSample { wi, f, pdf, specular: false, proportional: false })
     }
 
+    /// Every specular direction for ωo with the weight it carries (f·|cos θi|), lobe by
+    /// lobe (a dielectric's reflection and refraction apart): what pbrt's Whitted-style
+    /// integrators follow. None for layered and hair BSDFs.
+    pub fn specular_branches(&self, wo: Vec3, mode: TransportMode) -> impl Iterator<Item = (Vec3, Rgb)> + '_ {
+        let o = self.local(wo);
+        let branches = self.lobes().iter().flat_map(move |l| l.specular_branches(o, mode)).flatten();
+        branches.map(|(i, w)| (self.world(i), w))
+    }
+
     fn sample_layered(&self, l: &Layered, wo: Vec3, u: [f32; 2], uc: f32, mode: TransportMode) -> Option<BsdfSample> {
         let o = self.local(wo);
         if o.z == 0.0 {

@@ -174,6 +174,32 @@ impl Lobe {
         }
     }
 
+    /// A specular lobe's directions for `o`, each with the weight it carries (f·|cos θi|
+    /// of that delta, a dielectric's Fresnel share included): reflection, then
+    /// refraction; none for a lobe that is not specular. pbrt's Whitted-style
+    /// integrators follow each of them.
+    pub fn specular_branches(&self, o: Vec3, mode: TransportMode) -> [Option<(Vec3, Rgb)>; 2] {
+        if o.z == 0.0 {
+            return [None, None];
+        }
+        let mirror = Vec3::new(-o.x, -o.y, o.z);
+        // As `sample` weighs them (Fresnel at the refracted direction for pbrt-v3's
+        // SpecularTransmission, at ωo for FresnelSpecular).
+        let refracted = |eta: f32| refraction(o, eta, mode).filter(|(i, _)| i.z != 0.0);
+        match *self {
+            Lobe::SpecularReflection { r, fresnel } => [Some((mirror, fresnel.eval(mirror.z) * r)), None],
+            Lobe::SpecularTransmission { t, eta } => {
+                [refracted(eta).map(|(i, ft)| (i, t * ft * (1.0 - fr_dielectric(i.z, 1.0, eta)))), None]
+            }
+            Lobe::FresnelSpecular { r, t, eta } => {
+                let fr = fr_dielectric(o.z, 1.0, eta);
+                let t_branch = (fr < 1.0).then(|| refracted(eta).map(|(i, ft)| (i, t * ft * (1.0 - fr)))).flatten();
+                [(fr > 0.0).then_some((mirror, fr * r)), t_branch]
+            }
+            _ => [None, None],
+        }
+    }
+
     /// Samples a direction for `o`; `u_choice` picks between sub-lobes (glass's
     /// reflection or refraction, substrate's diffuse or glossy part).
     pub fn sample(&self, o: Vec3, u: [f32; 2], u_choice: f32, mode: TransportMode) -> Option<LobeSample> {

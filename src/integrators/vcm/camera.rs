@@ -2,25 +2,9 @@
 //! medium, they count what every technique gives there: emitters found (and media's
 //! emission along the way), next-event estimation, connections to the vertices of one
 //! light subpath, and light vertices merged within the radius.
-//!
-//! Files asking for pbrt-v3's `whitted` or `directlighting` get the image those render
-//! ([`super::Techniques::Direct`]), which leaves out indirect light:
-//!
-//! ```text
-//! Integrator "directlighting" "integer maxdepth" 5   # rendered with direct
-//! Integrator "whitted"                               # the same image
-//! ```
-//!
-//! Every vertex takes light straight from the lights: next-event estimation and the
-//! BSDF's own sample finding an emitter, weighted against each other by the power
-//! heuristic (the two strategies directlighting combines; whitted samples the lights
-//! alone, for the same mean). The path goes on only through perfectly specular
-//! bounces, and only below maxdepth; a bounce off another lobe ends it once that one
-//! sample has looked for an emitter. pbrt follows every specular lobe (a dielectric's
-//! reflection and its refraction) as a tree; one path picking among them with the
-//! BSDF's own probabilities has the tree's mean. No light subpaths are traced. Media
-//! are left out as pbrt-v3 leaves them there: camera rays cross them untouched and
-//! shadow rays stop at any shape, a medium's boundary too.
+//! Files asking for pbrt-v3's `whitted` or `directlighting` take their own path ([`direct`]).
+
+mod direct;
 
 use super::light::{LightPass, LightVertex};
 use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
@@ -144,17 +128,17 @@ impl Cameras<'_> {
         }
         let camera_pdf = scene.camera.pdf_we(&ray).1 as f64 * pass.film_pixels;
         let mut partial = Partial::camera(camera_pdf, pass.lt_count());
+        if pass.techniques == Techniques::Direct {
+            return self.direct_path(ray, diff, Vec3::splat(weight), partial, s);
+        }
         let light_path = self.lights.path(i % pass.light_paths.max(1) as usize);
         // The last vertex, and where rays left it (past any interfaces since, light
         // densities are measured from there).
         let (mut beta, mut prev, mut origin) = (Vec3::splat(weight), ray.o.0, ray.o.0);
-        let direct = pass.techniques == Techniques::Direct;
-        let (mut len, mut passes, mut medium) = (0u32, 0u32, self.in_media(scene.camera_medium));
+        let (mut len, mut passes, mut medium) = (0u32, 0u32, scene.camera_medium);
         // Whether the subpath has scattered diffusely, and specularly after that (then
-        // merging is no technique at its vertices beyond, see `mis`); with `direct`,
-        // whether the last bounce was not specular, so the path ends at the next vertex
-        // once it has counted the emitter it may have found.
-        let (mut diffuse, mut past_diffuse_specular, mut last) = (false, false, false);
+        // merging is no technique at its vertices beyond, see `mis`).
+        let (mut diffuse, mut past_diffuse_specular) = (false, false);
         loop {
             let (place, at, wo, surf) =
                 match self.next(&mut ray, &mut diff, (&mut passes, &mut medium), &mut beta, &mut out, s) {
@@ -177,7 +161,7 @@ impl Cameras<'_> {
             {
                 out.traced += beta * self.emitted(hit, si, &v, origin, dist2);
             }
-            if last || len >= pass.max_len || (surf.is_some() && wo.dot(place.ng) == 0.0) {
+            if len >= pass.max_len || (surf.is_some() && wo.dot(place.ng) == 0.0) {
                 break;
             }
             out.work.vertices += 1;
@@ -187,17 +171,11 @@ impl Cameras<'_> {
                 out.merged = [out.merged[0] + beta * a, out.merged[1] + beta * b];
             }
             let Some((b, p, specular)) = scatter(pass, &v, beta, s) else { break };
-            // pbrt-v3's whitted and directlighting recurse through perfectly specular
-            // bounces only, and only below maxdepth.
-            if direct && specular && len + 1 >= pass.max_len {
-                break;
-            }
-            last = direct && !specular;
             past_diffuse_specular |= specular && diffuse;
             diffuse |= !specular;
             (beta, partial, prev) = (b.0, p, place.p);
             ray = place.spawn(b.1);
-            (medium, origin) = (self.in_media(place.toward(b.1)), ray.o.0);
+            (medium, origin) = (place.toward(b.1), ray.o.0);
         }
         out
     }
