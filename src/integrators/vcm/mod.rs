@@ -86,7 +86,7 @@ pub enum Techniques {
     /// pbrt-v3's `whitted` and `directlighting`: light straight from the lights (next-
     /// event estimation and emitters found by sampling the BSDF, weighted against each
     /// other) at every vertex of a camera path that goes on only through perfectly
-    /// specular bounces, no light subpaths ([`camera`]'s module docs).
+    /// specular bounces, no light subpaths (`camera/direct.rs`).
     Direct,
 }
 
