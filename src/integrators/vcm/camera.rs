@@ -180,12 +180,6 @@ impl Cameras<'_> {
         out
     }
 
-    /// The medium a ray travels in: none for pbrt-v3's whitted and directlighting,
-    /// which leave media out.
-    fn in_media(&self, medium: Option<u32>) -> Option<u32> {
-        if self.pass.techniques == Techniques::Direct { None } else { medium }
-    }
-
     /// Where the ray finds its next vertex, in a medium or on a surface; adds the light
     /// media emit along the way (found by camera paths alone, weight 1, as pbrt's
     /// volpath finds it).
@@ -213,9 +207,7 @@ impl Cameras<'_> {
         let Some(hit) = hit else { return Next::Escaped };
         let si = scene.geometry.interaction(&hit);
         let fp = diff.take().map(|d| Footprint::new(&si, &d)).unwrap_or_default();
-        let surface = surface(scene, (&hit, &si), &fp, ray, passes, medium);
-        *medium = self.in_media(*medium);
-        match surface {
+        match surface(scene, (&hit, &si), &fp, ray, passes, medium) {
             Surface::Bsdf(bsdf) => {
                 let place = Place::on_surface(scene, &hit, &si, *medium);
                 Next::Vertex(place, Scatterer::Surface(bsdf), -ray.d.0.normalize(), Some((hit, si)))

@@ -49,7 +49,7 @@ struct Branch {
 }
 
 /// What a ray found: its vertex (the place, what scatters there, the direction back,
-/// the surface hit) and where it left from.
+/// the surface hit).
 type Found = (Place, Scatterer, Vec3, Option<(Hit, SurfaceInteraction)>);
 
 impl Cameras<'_> {
@@ -91,8 +91,9 @@ impl Cameras<'_> {
         }
         out.work.vertices += 1;
         if !at.is_delta() {
-            out.traced += beta * self.direct(&v, s);
-            out.work.rays += if pass.nee_all { pass.scene.lights.len() as u64 } else { 1 };
+            // Next-event estimation alone: the mode uses no other technique there.
+            let (nee, _) = self.at_vertex(&v, &[], s, &mut out.work);
+            out.traced += beta * nee;
             let found = self.bsdf_emitter(&v, s, out);
             out.traced += beta * found;
         }
@@ -133,7 +134,8 @@ impl Cameras<'_> {
         loop {
             match self.next(&mut ray, &mut diff, (&mut passes, &mut medium), beta, out, s) {
                 Next::Vertex(place, at, wo, surf) => return Some((place, at, wo, surf)),
-                Next::Through => continue,
+                // pbrt-v3 leaves media out: a boundary crossed leads into none.
+                Next::Through => medium = None,
                 Next::Escaped => {
                     if len < self.pass.max_len {
                         out.traced += *beta * self.escaped(ray.d.0.normalize(), origin, len, partial);
