@@ -588,6 +588,42 @@ fn light_subpaths_per_pass_follow_what_carries_the_light() {
     assert_eq!(chosen(&hole, Some(4000)), 4000);
 }
 
+/// Caustics keep the light subpaths that make them (`balance`): a spot light focused by
+/// a glass ball onto a floor the camera sees directly (light no camera technique finds,
+/// whose noise grows as the subpaths fall) takes more after the pilot than the same
+/// scene with a diffuse ball (light that next-event estimation and connections take
+/// over), and the pilot sees the caustic as one: counted as the rest of the light
+/// side, its count fell to the diffuse ball's.
+#[test]
+fn caustics_keep_the_light_subpaths_that_make_them() {
+    let text = |ball: &str| {
+        format!(
+            "LookAt 0 2.5 -1.5  0 0 0.2  0 1 0 Camera \"perspective\" \"float fov\" 40 \
+             Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32 \
+             Integrator \"sppm\" \"integer maxdepth\" 5 \"integer photonsperiteration\" 20000 \"float radius\" 0.03 \
+             WorldBegin LightSource \"spot\" \"rgb I\" [30 30 30] \"point from\" [0 3 0.3] \"point to\" [0 0 0.3] \
+               \"float coneangle\" 15 \
+             LightSource \"point\" \"rgb I\" [1 1 1] \"point from\" [1 2 -1] \
+             AttributeBegin Material {ball} Translate 0 .8 .3 Shape \"sphere\" \"float radius\" .6 AttributeEnd \
+             Material \"diffuse\" \"rgb reflectance\" [.6 .6 .6] \
+             Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]"
+        )
+    };
+    let chosen = |text: &str| {
+        let settings = RenderSettings {
+            algorithm: Some(Algorithm::Vcm(Techniques::All)),
+            iterations: Some(5),
+            ..Default::default()
+        };
+        let out = pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), &settings).expect("renders");
+        out.image.meta.photons_per_iteration.expect("the count is recorded")
+    };
+    let glass = chosen(&text("\"dielectric\" \"float eta\" 1.5"));
+    let diffuse = chosen(&text("\"diffuse\" \"rgb reflectance\" [.6 .6 .6]"));
+    eprintln!("glass ball: {glass}, diffuse ball: {diffuse}");
+    assert!(glass > 2 * diffuse, "glass ball: {glass}, diffuse ball: {diffuse}");
+}
+
 /// A floor and a ball lit by a point light and a wide spot, both far outside them
 /// (`aim`): their light subpaths are drawn within the cone that holds the scene, so
 /// nearly all of them hit it, and the image keeps its mean: light tracing alone (the

@@ -6,7 +6,7 @@
 
 mod direct;
 
-use super::light::{LightPass, LightVertex};
+use super::light::{Kind, LightPass, LightVertex};
 use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
 use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique, Techniques};
@@ -35,18 +35,18 @@ pub struct Cameras<'a> {
 
 /// What one camera subpath gives its pixel: the light of the techniques that trace
 /// from the camera (emitters found, next-event estimation, connections), apart from
-/// that of merging the light vertices of each half of the pass's subpaths
-/// ([`super::light::half`]); and the work it took ([`super::balance`] weighs both).
+/// that of merging light vertices, by the pilot's kinds ([`super::light::Kind`]); and
+/// the work it took ([`super::balance`] weighs both).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PixelSample {
     pub traced: Rgb,
-    pub merged: [Rgb; 2],
+    pub merged: Kind,
     pub work: Work,
 }
 
 impl PixelSample {
     pub fn total(&self) -> Rgb {
-        self.traced + self.merged[0] + self.merged[1]
+        self.traced + self.merged.iter().sum::<Rgb>()
     }
 }
 
@@ -84,6 +84,9 @@ struct Vertex<'a> {
     /// Merging here is a technique: the camera subpath has not bounced specularly
     /// after a diffuse bounce (`mis`).
     merges: bool,
+    /// The camera subpath has bounced only specularly before: light subpaths' caustics
+    /// merged here are seen as they are ([`Kind`]).
+    first_diffuse: bool,
 }
 
 /// Where a camera ray goes next ([`Cameras::next`]). Made and taken apart once per
@@ -155,7 +158,8 @@ impl Cameras<'_> {
             len += 1;
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
-            let v = Vertex { place, at: &at, wo, partial, len, merges: !past_diffuse_specular && !at.is_delta() };
+            let merges = !past_diffuse_specular && !at.is_delta();
+            let v = Vertex { place, at: &at, wo, partial, len, merges, first_diffuse: !diffuse };
             if let Some((hit, si)) = &surf
                 && pass.techniques.uses(Technique::EmitterHit)
             {
@@ -166,9 +170,11 @@ impl Cameras<'_> {
             }
             out.work.vertices += 1;
             if !at.is_delta() {
-                let (traced, [a, b]) = self.at_vertex(&v, light_path, s, &mut out.work);
+                let (traced, merged) = self.at_vertex(&v, light_path, s, &mut out.work);
                 out.traced += beta * traced;
-                out.merged = [out.merged[0] + beta * a, out.merged[1] + beta * b];
+                for (m, add) in out.merged.iter_mut().zip(merged) {
+                    *m += beta * add;
+                }
             }
             let Some((b, p, specular)) = scatter(pass, &v, beta, s) else { break };
             past_diffuse_specular |= specular && diffuse;
@@ -220,13 +226,7 @@ impl Cameras<'_> {
     /// What next-event estimation and connections give at a vertex, and what merging
     /// each half's light vertices gives; `work` counts the shadow rays and merge
     /// candidates.
-    fn at_vertex(
-        &self,
-        v: &Vertex,
-        light_path: &[LightVertex],
-        s: &mut impl Sampler,
-        work: &mut Work,
-    ) -> (Rgb, [Rgb; 2]) {
+    fn at_vertex(&self, v: &Vertex, light_path: &[LightVertex], s: &mut impl Sampler, work: &mut Work) -> (Rgb, Kind) {
         let t = self.pass.techniques;
         let mut c = Vec3::ZERO;
         if t.uses(Technique::Direct) {
@@ -252,7 +252,7 @@ impl Cameras<'_> {
         {
             return (c, self.merge(v, grid, &mut work.candidates));
         }
-        (c, [Vec3::ZERO; 2])
+        (c, [Vec3::ZERO; 4])
     }
 
     /// Light from an area light the path has found, weighted against the techniques
@@ -390,14 +390,14 @@ impl Cameras<'_> {
     /// Light vertices within the pass's radius merged at a camera vertex: their
     /// density estimate, over a disc on a surface and a ball in a medium (where only
     /// light vertices in media count, and on a surface only those on surfaces).
-    fn merge(&self, v: &Vertex, grid: &Grid, candidates: &mut u64) -> [Rgb; 2] {
+    fn merge(&self, v: &Vertex, grid: &Grid, candidates: &mut u64) -> Kind {
         let pass = self.pass;
         let (p, r2, in_medium) = (v.place.p, pass.radius * pass.radius, v.at.in_medium());
         let f = v.at.factors(&pass.factors);
         if f.vm == 0.0 {
-            return [Vec3::ZERO; 2];
+            return [Vec3::ZERO; 4];
         }
-        let mut sum = [DVec3::ZERO; 2];
+        let mut sum = [DVec3::ZERO; 4];
         grid.gather(p, |k| {
             *candidates += 1;
             let lv = &self.lights.vertices[k as usize];
@@ -412,7 +412,7 @@ impl Cameras<'_> {
                 return;
             }
             let w = pass.techniques.weight(mis::merge(lv.partial, v.partial, e.pdf as f64, e.pdf_rev as f64, f));
-            sum[lv.half as usize] += (e.f * lv.beta * w).as_dvec3();
+            sum[super::light::kind(lv.half, lv.after_specular && v.first_diffuse)] += (e.f * lv.beta * w).as_dvec3();
         });
         let disc = std::f64::consts::PI * (r2 as f64);
         let kernel = if in_medium { disc * pass.radius as f64 * (4.0 / 3.0) } else { disc };

@@ -25,6 +25,18 @@ pub fn half(k: u64) -> bool {
     k % 2 == 1
 }
 
+/// Where the pilot files a light-side contribution ([`super::balance`]): by the half of
+/// the pass's subpaths it came from, and whether it is a caustic (see [`Kind`]).
+pub fn kind(half: bool, caustic: bool) -> usize {
+    half as usize + 2 * caustic as usize
+}
+
+/// The pilot's classes of light-side contributions, indexed by [`kind`]: even, odd,
+/// even caustic, odd caustic. A caustic is light a light subpath brought through a
+/// specular bounce to a surface the camera sees directly or through specular bounces
+/// only: no camera technique finds it, so its noise grows as the subpaths fall.
+pub type Kind = [Rgb; 4];
+
 /// How many of a pass's `n` light subpaths are in each half.
 pub fn halves(n: u64) -> [u64; 2] {
     [n.div_ceil(2), n / 2]
@@ -44,6 +56,9 @@ pub struct LightVertex {
     pub len: u32,
     /// The half of the pass's subpaths its subpath is in ([`half`]).
     pub half: bool,
+    /// The light subpath's bounce before it was specular (a caustic where the camera
+    /// sees it directly, [`Kind`]).
+    pub after_specular: bool,
 }
 
 impl LightVertex {
@@ -97,8 +112,8 @@ impl std::ops::Add for Counts {
 }
 
 /// A pass's light subpaths: their vertices in subpath order, where each begins, and
-/// the lists of light-tracing splats (pixel, radiance), two per work item (list j
-/// holds half j mod 2's, [`half`]).
+/// the lists of light-tracing splats (pixel, radiance), four per work item (list j
+/// holds kind j mod 4's, [`kind`]).
 #[derive(Default)]
 pub struct LightPass {
     pub vertices: Vec<LightVertex>,
@@ -122,7 +137,7 @@ impl LightPass {
 struct Chunk {
     vertices: Vec<LightVertex>,
     lens: Vec<u32>,
-    splats: [Vec<(u32, Rgb)>; 2],
+    splats: [Vec<(u32, Rgb)>; 4],
     counts: Counts,
 }
 
@@ -145,13 +160,10 @@ pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrato
                 let to = Keep { half: half(k), first: k < pixels, vertices: &mut out.vertices };
                 out.counts = out.counts
                     + match pass.sampler {
-                        SamplerKind::Sobol => {
-                            let splats = &mut out.splats[half(k) as usize];
-                            trace(pass, &mut SobolSample::new(stream, k as u32), to, splats)
-                        }
+                        SamplerKind::Sobol => trace(pass, &mut SobolSample::new(stream, k as u32), to, &mut out.splats),
                         SamplerKind::Random => {
                             let mut rng = Rng::new(hash(&[seed, iteration as u64, k, 3]));
-                            trace(pass, &mut rng, to, &mut out.splats[half(k) as usize])
+                            trace(pass, &mut rng, to, &mut out.splats)
                         }
                     };
                 out.lens.push((out.vertices.len() - before) as u32);
@@ -237,11 +249,11 @@ struct Keep<'a> {
 
 /// One light subpath: appends its usable vertices and its splats; returns its counts
 /// (one path, the surfaces hit, the vertices).
-fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut Vec<(u32, Rgb)>) -> Counts {
+fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rgb)>; 4]) -> Counts {
     let scene = pass.scene;
     let mut n = Counts { paths: 1, ..Default::default() };
     let Some(Start { mut ray, mut beta, mut partial, light, pick, cos, mut medium }) = emit(pass, s) else { return n };
-    let (mut prev, mut len, mut passes) = (ray.o.0, 0u32, 0u32);
+    let (mut prev, mut len, mut passes, mut after_specular) = (ray.o.0, 0u32, 0u32, false);
     // The throughput as it left the last vertex, which Russian roulette compares with.
     let mut before = beta;
     let keep = pass.techniques.uses(Technique::Connect) || pass.techniques.uses(Technique::Merge);
@@ -275,12 +287,12 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut Vec<(u32, Rgb
         if !at.in_medium() && wo.dot(place.ng) == 0.0 {
             break;
         }
-        let v = LightVertex { place, wo, beta, at, partial, len, half: to.half };
+        let v = LightVertex { place, wo, beta, at, partial, len, half: to.half, after_specular };
         if !v.at.is_delta() {
             // Direct light is not light-traced (`mis`), unless light tracing is alone.
             let traced = len > 1 || pass.techniques == Techniques::Only(Technique::LightTrace);
             if pass.techniques.uses(Technique::LightTrace) && len < pass.max_len && traced {
-                to_camera(pass, &v, s, splats);
+                to_camera(pass, &v, s, &mut splats[kind(v.half, v.after_specular)]);
             }
             if keep && len < pass.max_len && (len > 1 || to.first) {
                 to.vertices.push(v.clone());
@@ -289,17 +301,18 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut Vec<(u32, Rgb
         if len + 2 > pass.max_len {
             break;
         }
-        let Some((next, b, p)) = scatter(pass, &v, before, s) else { break };
+        let Some((next, b, p, specular)) = scatter(pass, &v, before, s) else { break };
         medium = v.place.toward(next.d.0);
-        (ray, beta, before, partial, prev) = (next, b, b, p, v.place.p);
+        (ray, beta, before, partial, prev, after_specular) = (next, b, b, p, v.place.p, specular);
     }
     n
 }
 
 /// Samples the adjoint BSDF (or the phase function) at a light vertex: the ray on, the
 /// throughput and the partial sums after it (`None`: absorbed or ended by Russian
-/// roulette against `before`, the throughput as the subpath left the vertex before).
-fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> Option<(Ray, Rgb, Partial)> {
+/// roulette against `before`, the throughput as the subpath left the vertex before),
+/// and whether the bounce was specular.
+fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> Option<(Ray, Rgb, Partial, bool)> {
     let smp = v.at.sample(v.wo, s, TransportMode::Importance, |wi, specular| v.leaving_cos(wi, specular, pass))?;
     let bnew = v.beta * smp.f * smp.scale;
     // As SPPM's photons: continue with the probability the throughput kept.
@@ -317,7 +330,7 @@ fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> O
     if smp.specular {
         partial.forget_merges();
     }
-    Some((v.place.spawn(smp.wi), beta, partial))
+    Some((v.place.spawn(smp.wi), beta, partial, smp.specular))
 }
 
 /// Light tracing: connects a light vertex to a point on the lens and splats what it

@@ -330,7 +330,7 @@ impl<'a> Vcm<'a> {
             self.rehearse_pilot();
         }
         let measuring = matches!(self.balance, Some(Balance::Measuring(_)));
-        let mut parts = measuring.then(|| vec![[0f32; 2]; self.sums.len()]);
+        let mut parts = measuring.then(|| vec![[0f32; 3]; self.sums.len()]);
         let mut sums = std::mem::take(&mut self.sums);
         let done = self.render_pass(self.iteration, &mut sums, parts.as_deref_mut(), preview);
         self.sums = sums;
@@ -351,7 +351,7 @@ impl<'a> Vcm<'a> {
         let mut pilot = balance::Pilot::new(self.sums.len());
         let mut scratch = vec![DVec3::ZERO; self.sums.len()];
         for k in 0..balance::PILOT_PASSES {
-            let mut parts = vec![[0f32; 2]; self.sums.len()];
+            let mut parts = vec![[0f32; 3]; self.sums.len()];
             let done = self.render_pass(k, &mut scratch, Some(&mut parts), None);
             pilot.add(&parts, self.light_paths(k), done.counts, done.camera, done.stored as u64);
         }
@@ -365,7 +365,7 @@ impl<'a> Vcm<'a> {
         &self,
         iteration: u32,
         sums: &mut [DVec3],
-        mut parts: Option<&mut [[f32; 2]]>,
+        mut parts: Option<&mut [balance::Part]>,
         mut preview: Option<&mut super::preview::Preview>,
     ) -> Done {
         let t0 = Instant::now();

@@ -82,7 +82,7 @@ impl Cameras<'_> {
         let len = b.len + 1;
         let dist2 = (place.p - b.prev).length_squared() as f64;
         partial.arrive(Some(dist2), at.measure(wo, place.ng));
-        let v = Vertex { place, at: &at, wo, partial, len, merges: false };
+        let v = Vertex { place, at: &at, wo, partial, len, merges: false, first_diffuse: false };
         if let Some((hit, si)) = &surf {
             out.traced += beta * self.emitted(hit, si, &v, origin, dist2);
         }
@@ -162,7 +162,7 @@ impl Cameras<'_> {
         let dist2 = (place.p - v.place.p).length_squared() as f64;
         let mut p = partial;
         p.arrive(Some(dist2), at.measure(wo, place.ng));
-        let emitter = Vertex { place, at: &at, wo, partial: p, len: v.len + 1, merges: false };
+        let emitter = Vertex { place, at: &at, wo, partial: p, len: v.len + 1, merges: false, first_diffuse: false };
         found.traced + beta * self.emitted(&hit, &si, &emitter, origin, dist2)
     }
 }
