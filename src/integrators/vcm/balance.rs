@@ -162,7 +162,7 @@ impl Pilot {
 /// A pilot pass's values per pixel ([`Part`]): the whole, and the differences of the
 /// light-side estimates of the pass's two halves of light subpaths
 /// ([`super::light::half`]), each scaled to stand for the pass, caustics apart from
-/// the rest ([`super::light::Kind`]).
+/// the rest ([`super::light::ByKind`]).
 pub struct Halves {
     scale: [f32; 2],
 }
@@ -201,15 +201,24 @@ fn mean(c: Rgb) -> f32 {
 }
 
 /// How the light side's variance grows below the pilot's count, (n₀/n)^a, by what it
-/// carries. Caustics ([`super::light::Kind`]): nothing else samples them, and the
+/// carries. Caustics ([`super::light::ByKind`]): nothing else samples them, and the
 /// error grew faster than n₀/n (fitted a = 1.29 on `caustic-ring`, 1.32 on
 /// `v3-caustic`, from the error at two counts and the pilot's share; with a = 1 both
-/// chose about half the count best for them). The rest: its paths go to connections
-/// and next-event estimation as the light side's weights fall, and it grew as
-/// a ≤ 0 on `sppm-bench`, about 0.4 on `doorway` from its pilot's count to an eighth
-/// and not at all below (`docs/vcm.md`, "Caustics apart").
+/// chose about half the count best for them). The rest goes to connections and
+/// next-event estimation as the light side's weights fall, the more readily the less
+/// of the variance it holds: see [`rest_growth`].
 const CAUSTIC_GROWTH: f64 = 1.3;
-const REST_GROWTH: f64 = 0.2;
+
+/// The rest's exponent: its share of the variance but the caustics',
+/// V_rest/(V_rest + V_c). Measured: ≤ 0 on `sppm-bench` (share 0.29), about 0.4 on
+/// `doorway` (0.46), where 0.2 for both chose an eighth of the file's count and left
+/// `doorway` 1.2 times the error at equal time in the suite (`docs/vcm.md`, "Caustics
+/// apart"); where the light side holds nearly all of it (`keyhole`, `pool`) nothing
+/// takes its paths over, and the law tends to n₀/n.
+fn rest_growth(v: Variances) -> f64 {
+    let share = v.rest / (v.rest + v.traced);
+    if share.is_finite() { share.clamp(0.0, 1.0) } else { 0.0 }
+}
 
 /// The choice stays above the starting count over this: `sppm-bench` and `doorway`,
 /// whose light side carries no caustics, were best at an eighth of the file's count or
@@ -217,10 +226,12 @@ const REST_GROWTH: f64 = 0.2;
 pub const FEWEST_FACTOR: f64 = 8.0;
 
 /// The fraction x < 1 of the pilot's count that makes
-/// (V_caustic·x^-a_c + V_rest·x^-a_r + V_c)(c_l·x + C_c) least, x ≥ `lo`: the least
+/// (V_caustic·x^-a_c + V_rest·x^-a_r + V_c)(c_l·x + C_c) least (a_c =
+/// [`CAUSTIC_GROWTH`], a_r = [`rest_growth`]), x ≥ `lo`: the least
 /// over a fine grid in log x (the sum of two powers leaves no closed form).
 fn fewer(v: Variances, cl: f64, cc: f64, lo: f64) -> f64 {
-    let f = |x: f64| (v.caustic * x.powf(-CAUSTIC_GROWTH) + v.rest * x.powf(-REST_GROWTH) + v.traced) * (cl * x + cc);
+    let a = rest_growth(v);
+    let f = |x: f64| (v.caustic * x.powf(-CAUSTIC_GROWTH) + v.rest * x.powf(-a) + v.traced) * (cl * x + cc);
     const STEPS: u32 = 1024;
     (0..=STEPS).map(|i| lo.powf(1.0 - i as f64 / STEPS as f64)).min_by(|x, y| f(*x).total_cmp(&f(*y))).unwrap_or(1.0)
 }
@@ -277,7 +288,7 @@ mod tests {
             let r = 1000.0 / n;
             let light = match r <= 1.0 {
                 true => (v.caustic + v.rest) * r,
-                false => v.caustic * r.powf(CAUSTIC_GROWTH) + v.rest * r.powf(REST_GROWTH),
+                false => v.caustic * r.powf(CAUSTIC_GROWTH) + v.rest * r.powf(rest_growth(v)),
             };
             (light + v.traced) * (cl * n / 1000.0 + ct)
         };
@@ -310,11 +321,23 @@ mod tests {
     fn caustics_keep_more_light_subpaths_than_the_rest() {
         // The same light-side variance below balance: as caustics it grows faster than
         // n0/n (which would ask for 1000/√4.5 = 471; (n0/n)^1.3 asks for 618), as the
-        // rest more slowly, which asks for fewer.
+        // rest (a share of 1/5.5 of the variance but the caustics') as (n0/n)^0.18,
+        // which asks for fewer.
         let caustic = at(v(4.5, 1.0, 0.0), (1.0, 1.0));
         let rest = at(v(4.5, 0.0, 1.0), (1.0, 1.0));
         assert!((550..700).contains(&caustic), "{caustic}");
         assert!(rest < caustic * 2 / 3, "caustic {caustic}, rest {rest}");
+    }
+
+    #[test]
+    fn the_rest_grows_with_its_share() {
+        assert_eq!(rest_growth(v(3.0, 5.0, 1.0)), 0.25);
+        assert_eq!(rest_growth(v(0.0, 0.0, 0.0)), 0.0);
+        // Half the variance the light side's (no caustics), its work at n0 twice the
+        // camera's: the least of (x^-½ + 1)(2x + 1) is where x + 2x^1.5 = ½, x = ¼ (a
+        // constant a = 0.2 would give the lower bound, 125).
+        let half = at(v(1.0, 0.0, 1.0), (1.0, 2.0));
+        assert!((248..253).contains(&half), "{half}");
     }
 
     #[test]

@@ -6,7 +6,7 @@
 
 mod direct;
 
-use super::light::{Kind, LightPass, LightVertex};
+use super::light::{ByKind, LightPass, LightVertex};
 use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
 use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique, Techniques};
@@ -35,12 +35,12 @@ pub struct Cameras<'a> {
 
 /// What one camera subpath gives its pixel: the light of the techniques that trace
 /// from the camera (emitters found, next-event estimation, connections), apart from
-/// that of merging light vertices, by the pilot's kinds ([`super::light::Kind`]); and
+/// that of merging light vertices, by the pilot's kinds ([`super::light::ByKind`]); and
 /// the work it took ([`super::balance`] weighs both).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PixelSample {
     pub traced: Rgb,
-    pub merged: Kind,
+    pub merged: ByKind,
     pub work: Work,
 }
 
@@ -85,7 +85,7 @@ struct Vertex<'a> {
     /// after a diffuse bounce (`mis`).
     merges: bool,
     /// The camera subpath has bounced only specularly before: light subpaths' caustics
-    /// merged here are seen as they are ([`Kind`]).
+    /// merged here are seen as they are ([`ByKind`]).
     first_diffuse: bool,
 }
 
@@ -224,9 +224,15 @@ impl Cameras<'_> {
     }
 
     /// What next-event estimation and connections give at a vertex, and what merging
-    /// each half's light vertices gives; `work` counts the shadow rays and merge
+    /// gives, by the pilot's kinds ([`ByKind`]); `work` counts the shadow rays and merge
     /// candidates.
-    fn at_vertex(&self, v: &Vertex, light_path: &[LightVertex], s: &mut impl Sampler, work: &mut Work) -> (Rgb, Kind) {
+    fn at_vertex(
+        &self,
+        v: &Vertex,
+        light_path: &[LightVertex],
+        s: &mut impl Sampler,
+        work: &mut Work,
+    ) -> (Rgb, ByKind) {
         let t = self.pass.techniques;
         let mut c = Vec3::ZERO;
         if t.uses(Technique::Direct) {
@@ -390,7 +396,7 @@ impl Cameras<'_> {
     /// Light vertices within the pass's radius merged at a camera vertex: their
     /// density estimate, over a disc on a surface and a ball in a medium (where only
     /// light vertices in media count, and on a surface only those on surfaces).
-    fn merge(&self, v: &Vertex, grid: &Grid, candidates: &mut u64) -> Kind {
+    fn merge(&self, v: &Vertex, grid: &Grid, candidates: &mut u64) -> ByKind {
         let pass = self.pass;
         let (p, r2, in_medium) = (v.place.p, pass.radius * pass.radius, v.at.in_medium());
         let f = v.at.factors(&pass.factors);

@@ -26,7 +26,7 @@ pub fn half(k: u64) -> bool {
 }
 
 /// Where the pilot files a light-side contribution ([`super::balance`]): by the half of
-/// the pass's subpaths it came from, and whether it is a caustic (see [`Kind`]).
+/// the pass's subpaths it came from, and whether it is a caustic (see [`ByKind`]).
 pub fn kind(half: bool, caustic: bool) -> usize {
     half as usize + 2 * caustic as usize
 }
@@ -35,7 +35,7 @@ pub fn kind(half: bool, caustic: bool) -> usize {
 /// even caustic, odd caustic. A caustic is light a light subpath brought through a
 /// specular bounce to a surface the camera sees directly or through specular bounces
 /// only: no camera technique finds it, so its noise grows as the subpaths fall.
-pub type Kind = [Rgb; 4];
+pub type ByKind = [Rgb; 4];
 
 /// How many of a pass's `n` light subpaths are in each half.
 pub fn halves(n: u64) -> [u64; 2] {
@@ -57,7 +57,7 @@ pub struct LightVertex {
     /// The half of the pass's subpaths its subpath is in ([`half`]).
     pub half: bool,
     /// The light subpath's bounce before it was specular (a caustic where the camera
-    /// sees it directly, [`Kind`]).
+    /// sees it directly, [`ByKind`]).
     pub after_specular: bool,
 }
 
