@@ -11,19 +11,19 @@
 //! light subpaths, and its cost `c_l·n + C_c`, the error at equal time is least at
 //! `n = n₀·sqrt(V_l·C_c / (V_c·c_l·n₀))`. Below `n₀` the light side's variance grows
 //! by what it carries: caustics (light only light subpaths find) faster than `n₀/n`,
-//! the rest hardly at all, as its paths go to connections and next-event estimation
-//! as its weights fall; so the two are measured apart, see `fewer`.
+//! the rest more slowly, as its paths go to connections and next-event estimation as
+//! its weights fall; so the two are measured apart, see `fewer`.
 //!
 //! The first [`PILOT_PASSES`] passes trace the starting count (the file's
 //! `photonsperiteration`) and measure: each pixel's variance between passes (all of
 //! it), the part of it the light subpaths cause (each pass's two halves of subpaths,
 //! merged and light-traced apart, differ by it: for halves of n/2,
 //! E[(X₁ − X₂)²] = 4·Var(X | camera subpaths); caustics and the rest apart), the rest
-//! being the camera's; and both
-//! parts of the cost in work counted (rays, vertices, merge candidates: whole numbers,
-//! so the choice is the same for any thread count and on any machine). Every later
-//! pass traces the count chosen. A render that starts past the pilot (a shard, a
-//! resumed checkpoint) renders the pilot passes again to make the same choice.
+//! being the camera's; and both parts of the cost in work counted (rays, vertices,
+//! merge candidates: whole numbers, so the choice is the same for any thread count and
+//! on any machine). Every later pass traces the count chosen. A render that starts
+//! past the pilot (a shard, a resumed checkpoint) renders the pilot passes again to
+//! make the same choice.
 //!
 //! The same scene wants opposite things by what carries its light: a room lit
 //! through a keyhole (merging) wanted ten times the file's photons, a room lit
@@ -138,7 +138,7 @@ impl Pilot {
     /// relative to the pixel's squared mean (as relMSE weighs errors; dark pixels count
     /// against a tenth of the image's mean), summed over pixels in order (the same sum
     /// for any thread count).
-    pub fn variances(&self) -> Variances {
+    fn variances(&self) -> Variances {
         let k = self.passes as f64;
         if k < 2.0 {
             return Variances::default();
@@ -222,7 +222,7 @@ fn rest_growth(v: Variances) -> f64 {
 
 /// The choice stays above the starting count over this: `sppm-bench` and `doorway`,
 /// whose light side carries no caustics, were best at an eighth of the file's count or
-/// fewer (`docs/vcm.md`).
+/// fewer in the count sweep of `docs/vcm.md` (equal passes, the pilot left out).
 pub const FEWEST_FACTOR: f64 = 8.0;
 
 /// The fraction x < 1 of the pilot's count that makes
