@@ -26,7 +26,7 @@ use crate::interaction::SurfaceInteraction;
 use crate::materials::TransportMode;
 use crate::math::Ray;
 use crate::math::ray::RayDifferential;
-use crate::sampling::Sampler;
+use crate::sampling::{Distribution1D, Sampler};
 use crate::spectrum::{Rgb, luminance};
 use glam::Vec3;
 
@@ -168,23 +168,17 @@ impl Cameras<'_> {
 }
 
 /// One of several branches, by the luminance of its weight (uniformly if all are
-/// black): its index and probability.
+/// black, or the sum is not finite): its index and probability.
 fn choose(branches: &[(Vec3, Rgb)], u: f32) -> (usize, f32) {
-    let lum: Vec<f32> = branches.iter().map(|b| luminance(b.1).max(0.0)).collect();
-    let total: f32 = lum.iter().sum();
-    if total <= 0.0 || !total.is_finite() {
-        let n = branches.len();
-        return (((u * n as f32) as usize).min(n - 1), 1.0 / n as f32);
-    }
-    let mut acc = 0.0;
-    for (k, l) in lum.iter().enumerate() {
-        acc += l;
-        if u * total < acc {
-            return (k, l / total);
+    let lum: Vec<f64> = branches.iter().map(|b| luminance(b.1) as f64).collect();
+    let by_lum = Distribution1D::new(&lum);
+    match by_lum.sample(u) {
+        Some(pick) if lum.iter().sum::<f64>().is_finite() => pick,
+        _ => {
+            let n = branches.len();
+            (((u * n as f32) as usize).min(n - 1), 1.0 / n as f32)
         }
     }
-    let last = lum.iter().rposition(|&l| l > 0.0).unwrap_or(0);
-    (last, lum[last] / total)
 }
 
 #[cfg(test)]
