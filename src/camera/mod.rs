@@ -41,6 +41,8 @@ pub struct Camera {
     kind: CameraKind,
     /// At the start of the shutter; `motion` has it over time when the camera moves.
     world_from_camera: DMat4,
+    /// Its inverse, kept because light tracing asks for it at every light vertex.
+    camera_from_world: DMat4,
     motion: Option<AnimatedTransform>,
     shutter: [f32; 2],
     /// A realistic camera's lens system.
@@ -55,9 +57,11 @@ pub struct Camera {
 
 impl Camera {
     pub fn new(desc: &CameraDesc, film: &Film) -> Camera {
+        let world_from_camera = desc.camera_from_world.inverse();
         Camera {
             kind: desc.kind,
-            world_from_camera: desc.camera_from_world.inverse(),
+            world_from_camera,
+            camera_from_world: world_from_camera.inverse(),
             motion: desc.camera_from_world_end.map(|(end, times)| {
                 let frame = desc.world_from_render;
                 AnimatedTransform::framed(
@@ -94,6 +98,11 @@ impl Camera {
     /// World-from-camera at `time`.
     fn world_from_camera_at(&self, time: f32) -> DMat4 {
         self.motion.as_ref().map_or(self.world_from_camera, |m| m.at(time as f64))
+    }
+
+    /// Camera-from-world at `time`.
+    fn camera_from_world_at(&self, time: f32) -> DMat4 {
+        self.motion.as_ref().map_or(self.camera_from_world, |m| m.at(time as f64).inverse())
     }
 
     /// The screen-space point of a raster position.
@@ -191,7 +200,7 @@ impl Camera {
         if self.kind != CameraKind::Perspective {
             return None;
         }
-        let camera_from_world = self.world_from_camera_at(ray.time).inverse();
+        let camera_from_world = self.camera_from_world_at(ray.time);
         let d = camera_from_world.transform_vector3(ray.d.0.as_dvec3()).normalize();
         if d.z <= 0.0 {
             return None;

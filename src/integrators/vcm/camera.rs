@@ -406,13 +406,16 @@ impl Cameras<'_> {
         let mut sum = [DVec3::ZERO; 4];
         grid.gather(p, |k| {
             *candidates += 1;
-            let lv = &self.lights.vertices[k as usize];
+            let spot = &self.lights.spots[k as usize];
             // Direct light (one edge from the light) is never merged (see `mis`): first
             // light vertices are not in the grid.
-            if lv.len + v.len > pass.max_len || lv.at.in_medium() != in_medium || (lv.place.p - p).length_squared() > r2
+            if spot.edges() + v.len > pass.max_len
+                || spot.in_medium() != in_medium
+                || (spot.p - p).length_squared() > r2
             {
                 return;
             }
+            let lv = &self.lights.vertices[k as usize];
             let e = v.at.eval(v.wo, lv.wo, TransportMode::Radiance);
             if e.f == Vec3::ZERO {
                 return;
