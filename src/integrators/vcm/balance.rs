@@ -128,7 +128,8 @@ impl Pilot {
             + camera.candidates as f64 * CANDIDATE)
             / k;
         let per_path = self.stored as f64 / self.light.paths.max(1) as f64;
-        let size = std::mem::size_of::<super::light::LightVertex>() as f64;
+        let size =
+            (std::mem::size_of::<super::light::LightVertex>() + std::mem::size_of::<super::light::Spot>()) as f64;
         let cap = MEMORY_BUDGET / (per_path * size).max(1e-9);
         choose(start, self.variances(), Parts { traced: camera_work, light: light_work }, cap)
     }

@@ -140,8 +140,8 @@ impl LightPass {
 #[derive(Clone, Copy, Debug)]
 pub struct Spot {
     pub p: Vec3,
-    /// Edges from the light, with the top bit set in a medium (no subpath nears 2³¹
-    /// vertices: each is stored).
+    /// Edges from the light (saturating at 2³¹ − 1, far past any subpath that fits in
+    /// memory), with the top bit set in a medium.
     tag: u32,
 }
 
