@@ -379,10 +379,10 @@ impl<'a> Vcm<'a> {
         let grid = match self.settings.techniques.uses(Technique::Merge) {
             true => Grid::build(
                 &lights
-                    .vertices
+                    .spots
                     .par_iter()
                     // A first vertex is direct light, never merged (`mis`).
-                    .map(|v| (v.len >= 2).then_some(Site { p: v.place.p, radius: pass.radius }))
+                    .map(|s| (s.edges() >= 2).then_some(Site { p: s.p, radius: pass.radius }))
                     .collect::<Vec<_>>(),
             ),
             false => None,
