@@ -125,6 +125,21 @@ impl Bsdf {
         self.lobes().iter().any(|l| l.kind() == kind)
     }
 
+    /// pbrt's `etaScale` step: what refracting from ωo to ωi divided a radiance-carrying
+    /// throughput by (η² into the denser side, 1/η² out of it; 1 for a reflection or a
+    /// BSDF without a dielectric lobe). Russian roulette multiplies it back, so that a
+    /// path inside glass, whose throughput is η² too small there, is not cut for it
+    /// and then carried out η² too bright.
+    pub fn eta_scale(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let (o, i) = (self.local(wo), self.local(wi));
+        let Some(eta) = self.lobes().iter().find_map(Lobe::eta) else { return 1.0 };
+        match (o.z * i.z < 0.0, o.z > 0.0) {
+            (false, _) => 1.0,
+            (true, true) => eta * eta,
+            (true, false) => 1.0 / (eta * eta),
+        }
+    }
+
     /// Whether the BSDF has a diffuse lobe (SPPM stores visible points there).
     pub fn is_diffuse(&self) -> bool {
         match &self.lobes {
@@ -312,6 +327,30 @@ mod tests {
         assert!((total - 1.0).abs() < 1e-5, "{total}");
         let tr = b.sample_f(wo, [0.5, 0.5], 0.99, TransportMode::Radiance).unwrap();
         assert!((tr.f.x / t.f.x - 1.0 / 2.25).abs() < 1e-5, "radiance scales by (1/η)²");
+    }
+
+    #[test]
+    fn eta_scale_undoes_the_radiance_scaling_of_each_refraction() {
+        let glass = |lobe| Bsdf::new(frame(), Vec3::Z, &[lobe], Convention::PbrtV3);
+        let dist = TrowbridgeReitz::new([0.2, 0.2]);
+        for b in [
+            glass(Lobe::FresnelSpecular { r: Vec3::ONE, t: Vec3::ONE, eta: 1.5 }),
+            glass(Lobe::RoughDielectric { r: Vec3::ONE, t: Vec3::ONE, dist, eta: 1.5 }),
+        ] {
+            // Into the glass and out again: each refraction's factor is the inverse of
+            // what the radiance-carrying sample's f took, and the two cancel.
+            let wo = Vec3::new(0.3, 0.0, 0.95).normalize();
+            let t = b.sample_f(wo, [0.5, 0.5], 0.99, TransportMode::Radiance).unwrap();
+            let ti = b.sample_f(wo, [0.5, 0.5], 0.99, TransportMode::Importance).unwrap();
+            assert!(t.wi.z < 0.0, "refracted");
+            let into = b.eta_scale(wo, t.wi);
+            assert!((into - 2.25).abs() < 1e-5, "{into}");
+            assert!((t.f.x * into / ti.f.x - 1.0).abs() < 1e-4, "radiance f × η² = importance f");
+            assert!((b.eta_scale(t.wi, wo) * into - 1.0).abs() < 1e-5, "out again cancels");
+            assert_eq!(b.eta_scale(wo, Vec3::new(-0.3, 0.0, 0.95).normalize()), 1.0, "reflection");
+        }
+        let matte = Bsdf::new(frame(), Vec3::Z, &[Lobe::LambertTransmission(Vec3::ONE)], Convention::PbrtV3);
+        assert_eq!(matte.eta_scale(Vec3::Z, -Vec3::Z), 1.0, "no dielectric lobe, no scaling");
     }
 
     #[test]

@@ -102,6 +102,18 @@ impl Lobe {
         }
     }
 
+    /// The index of refraction of a dielectric lobe (the side its normal points to is
+    /// air); `None` for the others, which never scale radiance on the way through.
+    pub fn eta(&self) -> Option<f32> {
+        match *self {
+            Lobe::SpecularTransmission { eta, .. }
+            | Lobe::FresnelSpecular { eta, .. }
+            | Lobe::MicrofacetTransmission { eta, .. }
+            | Lobe::RoughDielectric { eta, .. } => Some(eta),
+            _ => None,
+        }
+    }
+
     /// Whether the lobe reflects, transmits (pbrt's flags; smooth glass does both).
     pub fn sides(&self) -> (bool, bool) {
         match self {

@@ -701,3 +701,44 @@ fn light_subpaths_cross_specular_bounces_as_the_files_integrator_does() {
         }
     }
 }
+
+/// A glass rod between the camera and a large light: camera subpaths enter its near
+/// end, bounce along it by total internal reflection and leave by the far end toward
+/// the light. Inside, radiance throughput is 1/η² of what it carries out, so Russian
+/// roulette must compare the throughput with refraction's scaling undone (pbrt's
+/// etaScale): compared as it was, a subpath that survived roulette inside came out
+/// about three times the light (90 of 576 pixels in each pass). The light reflects
+/// nothing, so no single pass may show a pixel brighter than it by more than roulette's
+/// last step (1/0.95).
+#[test]
+fn roulette_inside_glass_does_not_brighten_what_leaves_it() {
+    let text = "LookAt 0 0 -0.5  0 0 1  0 1 0 Camera \"perspective\" \"float fov\" 30 \
+             Film \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24 PixelFilter \"box\" \
+             Integrator \"bdpt\" \"integer maxdepth\" 30 \"integer iterations\" 1 \
+             \"integer photonsperiteration\" 100 \
+             WorldBegin AttributeBegin Material \"diffuse\" \"rgb reflectance\" [0 0 0] \
+             AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true \
+             Shape \"trianglemesh\" \"point3 P\" [-3 -3 6.05  3 -3 6.05  3 3 6.05  -3 3 6.05] \
+               \"integer indices\" [0 1 2 0 2 3] AttributeEnd \
+             Material \"dielectric\" \"float eta\" 1.5 \
+             Shape \"trianglemesh\" \"point3 P\" [-.1 -.1 0  .1 -.1 0  .1 .1 0  -.1 .1 0 \
+               -.1 -.1 6  .1 -.1 6  .1 .1 6  -.1 .1 6] \"integer indices\" \
+               [0 2 1 0 3 2  4 5 6 4 6 7  0 4 7 0 7 3  1 2 6 1 6 5  0 1 5 0 5 4  3 7 6 3 6 2]";
+    for algorithm in [Algorithm::Vcm(Techniques::Bdpt), Algorithm::Vcm(Techniques::All)] {
+        for seed in 1..=4 {
+            let settings = RenderSettings { algorithm: Some(algorithm), seed: Some(seed), ..Default::default() };
+            let px = pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), &settings)
+                .expect("renders")
+                .image
+                .pixels;
+            // Pixels looking into the rod's end, the middle sixth of the image.
+            let rod: Vec<f32> = (0..px.len())
+                .filter(|i| (10..14).contains(&(i % 24)) && (10..14).contains(&(i / 24)))
+                .map(|i| px[i][0])
+                .collect();
+            let brightest = px.iter().map(|p| p[0]).fold(0.0, f32::max);
+            assert!(rod.iter().any(|&v| v > 0.5), "the light is seen through the rod: {rod:?}");
+            assert!(brightest <= 1.0 / 0.95 + 1e-3, "{algorithm:?} seed {seed}: a pixel at {brightest} × the light");
+        }
+    }
+}

@@ -138,6 +138,8 @@ impl Cameras<'_> {
         // The last vertex, and where rays left it (past any interfaces since, light
         // densities are measured from there).
         let (mut beta, mut prev, mut origin) = (Vec3::splat(weight), ray.o.0, ray.o.0);
+        // What refraction has divided `beta` by so far (pbrt's etaScale), for roulette.
+        let mut eta_scale = 1.0f32;
         let (mut len, mut passes, mut medium) = (0u32, 0u32, scene.camera_medium);
         // Whether the subpath has scattered diffusely, and specularly after that (then
         // merging is no technique at its vertices beyond, see `mis`).
@@ -176,7 +178,7 @@ impl Cameras<'_> {
                     *m += beta * add;
                 }
             }
-            let Some((b, p, specular)) = scatter(pass, &v, beta, s) else { break };
+            let Some((b, p, specular)) = scatter(pass, &v, (beta, &mut eta_scale), s) else { break };
             past_diffuse_specular |= specular && diffuse;
             diffuse |= !specular;
             (beta, partial, prev) = (b.0, p, place.p);
@@ -454,13 +456,25 @@ fn light_densities(pass: &Pass, k: usize, ls: &crate::lights::LightSample, p: Ve
 
 /// Samples the BSDF (or phase function) at a camera vertex: ((throughput, direction),
 /// partial sums, whether it was specular) after it; `None` when absorbed or ended by
-/// Russian roulette.
-fn scatter(pass: &Pass, v: &Vertex, beta: Rgb, s: &mut impl Sampler) -> Option<((Rgb, Vec3), Partial, bool)> {
+/// Russian roulette. `eta_scale`: what refraction has divided the throughput by so far,
+/// updated here.
+fn scatter(
+    pass: &Pass,
+    v: &Vertex,
+    (beta, eta_scale): (Rgb, &mut f32),
+    s: &mut impl Sampler,
+) -> Option<((Rgb, Vec3), Partial, bool)> {
     let smp = v.at.sample(v.wo, s, TransportMode::Radiance, |wi, _| v.at.cos(wi))?;
     let mut beta = beta * smp.f * smp.scale;
-    // pbrt's path tracer's roulette, after three bounces.
-    if v.len > 3 {
-        let q = (1.0 - beta.max_element()).max(0.05);
+    *eta_scale *= v.at.eta_scale(v.wo, smp.wi);
+    // pbrt's path tracer's roulette, after three bounces and only below a throughput of
+    // one, with refraction's radiance scaling undone: inside glass the throughput is
+    // η² too small, and cutting paths for it made fireflies of those that got out (on
+    // `cornell-glass`, a path reflected inside the sphere reached the light 2.5 times
+    // as bright as it left the camera).
+    let rr = (beta * *eta_scale).max_element();
+    if v.len > 3 && rr < 1.0 {
+        let q = (1.0 - rr).max(0.05);
         if s.get1d() < q {
             return None;
         }

@@ -136,6 +136,15 @@ impl Scatterer {
         })
     }
 
+    /// What the throughput of radiance was divided by going from ωo to ωi
+    /// ([`crate::materials::bsdf::Bsdf::eta_scale`]; 1 in a medium).
+    pub fn eta_scale(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Scatterer::Surface(b) => b.eta_scale(wo, wi),
+            Scatterer::Medium(_) => 1.0,
+        }
+    }
+
     /// f and both densities for a pair of directions.
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> BsdfEval {
         match self {

@@ -151,7 +151,9 @@ impl Cameras<'_> {
     /// against next-event estimation); a specular sample counts nothing, its branches
     /// carry it.
     fn bsdf_emitter(&self, v: &Vertex, s: &mut impl Sampler, out: &mut PixelSample) -> Rgb {
-        let Some(((mut beta, wi), partial, false)) = scatter(self.pass, v, Vec3::ONE, s) else { return Vec3::ZERO };
+        let Some(((mut beta, wi), partial, false)) = scatter(self.pass, v, (Vec3::ONE, &mut 1.0), s) else {
+            return Vec3::ZERO;
+        };
         let ray = v.place.spawn(wi);
         let origin = ray.o.0;
         // Light at infinity it escapes to lands in `found`, already times `beta`.
