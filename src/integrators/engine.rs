@@ -34,6 +34,7 @@ impl<'a> Engine<'a> {
                     sampler: p.sampler,
                     techniques,
                     balance: p.balances(),
+                    prefix_rays: true,
                 };
                 Engine::Vcm(Box::new(Vcm::new(scene, p.iterations, p.range.start, settings)?))
             }

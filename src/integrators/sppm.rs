@@ -111,6 +111,10 @@ pub struct Stats {
     /// subpaths and light tracing's splats, and `photons` counts light subpaths.
     #[serde(default)]
     pub bidirectional: bool,
+    /// With VCM: pixels that trace more rays for what they see through perfect
+    /// specular chains (`vcm/camera/prefix.rs`).
+    #[serde(default)]
+    pub prefix_pixels: u64,
 }
 
 /// The progressive state of a render.

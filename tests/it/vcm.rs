@@ -742,3 +742,69 @@ fn roulette_inside_glass_does_not_brighten_what_leaves_it() {
         }
     }
 }
+
+/// A quad light seen straight and through a glass ball over a floor: the pixels on the
+/// light's edges and on its small image in the ball see it for a share of their area,
+/// and only camera subpaths find it there. The marked pixels' extra rays
+/// (`camera/prefix.rs`) must keep every tile's mean and cut those pixels' variance
+/// between seeds (eight rays a pass for their prefix light: about an eighth of it).
+#[test]
+fn extra_rays_for_light_seen_through_glass_keep_the_mean_and_cut_the_noise() {
+    use pbrt_sppm::integrators::vcm::{Vcm, VcmSettings};
+    let text = "LookAt 0 1 -3  0 1 0  0 1 0 Camera \"perspective\" \"float fov\" 40 \
+             Film \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24 PixelFilter \"box\" \
+             Integrator \"bdpt\" \"integer maxdepth\" 6 \
+             WorldBegin AttributeBegin Material \"diffuse\" \"rgb reflectance\" [0 0 0] \
+             AreaLightSource \"diffuse\" \"rgb L\" [4 4 4] \"bool twosided\" true \
+             Shape \"trianglemesh\" \"point3 P\" [-.5 1.2 2  .5 1.2 2  .5 2.2 2  -.5 2.2 2] \
+               \"integer indices\" [0 1 2 0 2 3] AttributeEnd \
+             AttributeBegin Material \"dielectric\" \"float eta\" 1.5 Translate 0 .6 0 \
+               Shape \"sphere\" \"float radius\" .4 AttributeEnd \
+             Material \"diffuse\" \"rgb reflectance\" [.5 .5 .5] \
+             Shape \"trianglemesh\" \"point3 P\" [-3 0 -4  3 0 -4  3 0 4  -3 0 4] \"integer indices\" [0 1 2 0 2 3]";
+    let scene = RenderScene::new(&scene(text));
+    let render = |prefix_rays: bool, seed: u64| {
+        let settings = VcmSettings {
+            light_paths: 576,
+            radius: 0.05,
+            alpha: 2.0 / 3.0,
+            seed,
+            sampler: SamplerKind::Sobol,
+            techniques: Techniques::Bdpt,
+            balance: false,
+            prefix_rays,
+        };
+        let mut vcm = Vcm::new(&scene, 4, 0, settings).expect("renders");
+        for _ in 0..4 {
+            vcm.iterate();
+        }
+        vcm.image()
+    };
+    let seeds: Vec<u64> = (1..=24).collect();
+    let runs = |prefix_rays| seeds.iter().map(|&s| render(prefix_rays, s)).collect::<Vec<_>>();
+    let (with, without) = (runs(true), runs(false));
+    let n = with[0].len();
+    let mean = |runs: &[Vec<[f32; 3]>], i: usize| runs.iter().map(|r| r[i][0] as f64).sum::<f64>() / runs.len() as f64;
+    let var = |runs: &[Vec<[f32; 3]>], i: usize| {
+        let m = mean(runs, i);
+        runs.iter().map(|r| (r[i][0] as f64 - m).powi(2)).sum::<f64>() / (runs.len() - 1) as f64
+    };
+    // Pixels whose variance without the extra rays is well above the floor's: the
+    // light's edges and its image in the ball.
+    let noisy: Vec<usize> = (0..n).filter(|&i| var(&without, i) > 0.05).collect();
+    assert!(noisy.len() >= 4, "some pixels see the light for part of their area: {}", noisy.len());
+    let noise = |runs: &[Vec<[f32; 3]>]| noisy.iter().map(|&i| var(runs, i)).sum::<f64>();
+    let ratio = noise(&with) / noise(&without);
+    eprintln!("{} noisy pixels, variance with the extra rays / without {ratio:.3}", noisy.len());
+    assert!(ratio < 0.4, "the extra rays cut the noise: {ratio}");
+    // The means of the whole image and of its quarters agree within a few of their
+    // standard errors (the image without extra rays is the noisier).
+    let region_means = |runs: &[Vec<[f32; 3]>]| {
+        let flat: Vec<[f32; 3]> = (0..n).map(|i| [mean(runs, i) as f32, 0.0, 0.0]).collect();
+        means(&flat, 24)
+    };
+    let (a, b) = (region_means(&with), region_means(&without));
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x / y - 1.0).abs() < 0.03, "means {a:?} against {b:?}");
+    }
+}

@@ -109,6 +109,13 @@ fn stats(out: &RenderOutput) {
             s.photons.traced,
             s.visible_points
         );
+        if s.prefix_pixels > 0 {
+            say!(
+                "stats: {} pixels trace {} rays a pass for light seen through perfect specular chains",
+                s.prefix_pixels,
+                pbrt_sppm::integrators::vcm::PREFIX_RAYS
+            );
+        }
         return;
     }
     let beams =

@@ -5,6 +5,9 @@
 //! Files asking for pbrt-v3's `whitted` or `directlighting` take their own path ([`direct`]).
 
 mod direct;
+mod prefix;
+
+pub use prefix::RAYS as PREFIX_RAYS;
 
 use super::light::{ByKind, LightPass, LightVertex};
 use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
@@ -31,6 +34,9 @@ pub struct Cameras<'a> {
     pub iteration: u32,
     pub sampler: SamplerKind,
     pub differential_scale: f32,
+    /// The pixels that trace more rays for the light they see through perfect
+    /// specular chains ([`prefix`]; `Cameras::prefix_marks`), if any.
+    pub prefix: Option<&'a [bool]>,
 }
 
 /// What one camera subpath gives its pixel: the light of the techniques that trace
@@ -110,7 +116,7 @@ impl Cameras<'_> {
         let (x, y) =
             ((self.pass.origin.0 as usize + i % width) as u64, (self.pass.origin.1 as usize + i / width) as u64);
         let pixel = [x as f32, y as f32];
-        match self.sampler {
+        let (mut out, prefix) = match self.sampler {
             SamplerKind::Sobol => {
                 let mut s = SobolSample::new(hash(&[self.seed, x, y, 2]), self.iteration);
                 self.path(i, pixel, &mut s)
@@ -119,20 +125,30 @@ impl Cameras<'_> {
                 let mut rng = Rng::new(hash(&[self.seed, x, y, self.iteration as u64, 2]));
                 self.path(i, pixel, &mut rng)
             }
+        };
+        let rays = self.prefix_rays(i);
+        let mut sum = prefix;
+        for stream in 1..rays {
+            sum += self.extra_prefix(pixel, stream as u64, &mut out.work);
         }
+        out.traced += sum / rays as f32;
+        out
     }
 
-    fn path(&self, i: usize, pixel: [f32; 2], s: &mut impl Sampler) -> PixelSample {
+    /// A camera subpath: what it gives its pixel, and apart from that its prefix light
+    /// ([`prefix`]: found before its first vertex that is not perfectly specular, in
+    /// vacuum), which the pixel may average with more rays'.
+    fn path(&self, i: usize, pixel: [f32; 2], s: &mut impl Sampler) -> (PixelSample, Rgb) {
         let (pass, scene) = (self.pass, self.pass.scene);
         let (mut ray, mut diff, weight) = camera_ray(scene, pixel, s, self.differential_scale, self.pass.time);
         let mut out = PixelSample::default();
         if weight == 0.0 {
-            return out;
+            return (out, Vec3::ZERO);
         }
         let camera_pdf = scene.camera.pdf_we(&ray).1 as f64 * pass.film_pixels;
         let mut partial = Partial::camera(camera_pdf, pass.lt_count());
         if pass.techniques == Techniques::Direct {
-            return self.direct_path(ray, diff, Vec3::splat(weight), partial, s);
+            return (self.direct_path(ray, diff, Vec3::splat(weight), partial, s), Vec3::ZERO);
         }
         let light_path = self.lights.path(i % pass.light_paths.max(1) as usize);
         // The last vertex, and where rays left it (past any interfaces since, light
@@ -144,14 +160,18 @@ impl Cameras<'_> {
         // Whether the subpath has scattered diffusely, and specularly after that (then
         // merging is no technique at its vertices beyond, see `mis`).
         let (mut diffuse, mut past_diffuse_specular) = (false, false);
+        // The prefix light, and whether the subpath is still in its prefix.
+        let (mut prefix, mut in_prefix) = (Vec3::ZERO, true);
         loop {
+            in_prefix &= medium.is_none();
             let (place, at, wo, surf) =
                 match self.next(&mut ray, &mut diff, (&mut passes, &mut medium), &mut beta, &mut out, s) {
                     Next::Vertex(place, at, wo, surf) => (place, at, wo, surf),
                     Next::Through => continue,
                     Next::Escaped => {
                         if pass.techniques.uses(Technique::EmitterHit) && len < pass.max_len {
-                            out.traced += beta * self.escaped(ray.d.0.normalize(), origin, len, partial);
+                            let found = beta * self.escaped(ray.d.0.normalize(), origin, len, partial);
+                            *if in_prefix { &mut prefix } else { &mut out.traced } += found;
                         }
                         break;
                     }
@@ -165,8 +185,10 @@ impl Cameras<'_> {
             if let Some((hit, si)) = &surf
                 && pass.techniques.uses(Technique::EmitterHit)
             {
-                out.traced += beta * self.emitted(hit, si, &v, origin, dist2);
+                let found = beta * self.emitted(hit, si, &v, origin, dist2);
+                *if in_prefix { &mut prefix } else { &mut out.traced } += found;
             }
+            in_prefix &= at.is_delta();
             if len >= pass.max_len || (surf.is_some() && wo.dot(place.ng) == 0.0) {
                 break;
             }
@@ -185,7 +207,7 @@ impl Cameras<'_> {
             ray = place.spawn(b.1);
             (medium, origin) = (place.toward(b.1), ray.o.0);
         }
-        out
+        (out, prefix)
     }
 
     /// Where the ray finds its next vertex, in a medium or on a surface; adds the light

@@ -24,6 +24,7 @@
 pub mod aim;
 pub mod balance;
 pub mod camera;
+pub use camera::PREFIX_RAYS;
 pub mod light;
 pub mod mis;
 pub mod vertex;
@@ -190,6 +191,9 @@ pub struct VcmSettings {
     /// Choose the light subpaths of the passes after the pilot ([`balance`]), starting
     /// from `light_paths`.
     pub balance: bool,
+    /// Let the pixels that need it trace more rays for their prefix light
+    /// (`camera/prefix.rs`).
+    pub prefix_rays: bool,
 }
 
 /// The choice of light subpaths per pass under way: the pilot's measurements while it
@@ -218,6 +222,9 @@ pub struct Vcm<'a> {
     pub live: std::sync::Arc<super::report::Live>,
     balance: Option<Balance>,
     cones: std::sync::Arc<[Option<aim::Cone>]>,
+    /// The pixels that trace more rays for what they see through perfect specular
+    /// chains (`camera/prefix.rs`), drawn once before the first pass.
+    prefix: Option<Vec<bool>>,
 }
 
 /// What a pass did besides adding to the sums.
@@ -251,7 +258,7 @@ impl<'a> Vcm<'a> {
             0 => Balance::Measuring(Box::new(balance::Pilot::new(w * h))),
             _ => Balance::Unknown,
         });
-        Ok(Vcm {
+        let mut vcm = Vcm {
             scene,
             sums,
             origin: (x0, y0),
@@ -264,7 +271,40 @@ impl<'a> Vcm<'a> {
             live: Default::default(),
             balance,
             cones: aim::cones(scene).into(),
-        })
+            prefix: None,
+        };
+        vcm.prefix = vcm.prefix_marks();
+        Ok(vcm)
+    }
+
+    /// Which pixels trace more rays for their prefix light (`camera/prefix.rs`): the
+    /// same for every pass, shard and resumed render of the scene and seed.
+    fn prefix_marks(&self) -> Option<Vec<bool>> {
+        if !self.settings.prefix_rays {
+            return None;
+        }
+        let pass = self.pass(0);
+        let lights = light::LightPass::default();
+        self.cameras(&pass, &lights, None, 0).prefix_marks(self.size.0, self.sums.len())
+    }
+
+    fn cameras<'p>(
+        &'p self,
+        pass: &'p Pass<'a>,
+        lights: &'p light::LightPass,
+        grid: Option<&'p Grid>,
+        iteration: u32,
+    ) -> camera::Cameras<'p> {
+        camera::Cameras {
+            pass,
+            lights,
+            grid,
+            seed: self.settings.seed,
+            iteration,
+            sampler: self.settings.sampler,
+            differential_scale: self.differential_scale,
+            prefix: self.prefix.as_deref(),
+        }
     }
 
     /// The light subpaths pass `iteration` traces: the pilot's count, then the one
@@ -388,15 +428,7 @@ impl<'a> Vcm<'a> {
             false => None,
         };
         let t2 = Instant::now();
-        let cams = camera::Cameras {
-            pass: &pass,
-            lights: &lights,
-            grid: grid.as_ref(),
-            seed: self.settings.seed,
-            iteration,
-            sampler: self.settings.sampler,
-            differential_scale: self.differential_scale,
-        };
+        let cams = self.cameras(&pass, &lights, grid.as_ref(), iteration);
         let (width, live) = (self.size.0, &self.live);
         let tasks = crate::integrators::PIXELS_PER_TASK;
         let mut work = camera::Work::default();
@@ -483,6 +515,7 @@ impl<'a> Vcm<'a> {
         s.visible_points += vertices as u64;
         s.iterations = self.iteration;
         s.bidirectional = true;
+        s.prefix_pixels = self.prefix.as_ref().map_or(0, |m| m.iter().filter(|&&p| p).count() as u64);
     }
 
     /// The current estimate: the mean of the passes, times the film's scale.
