@@ -131,13 +131,14 @@ impl Bsdf {
     /// path inside glass, whose throughput is η² too small there, is not cut for it
     /// and then carried out η² too bright.
     pub fn eta_scale(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let (o, i) = (self.local(wo), self.local(wi));
-        let Some(eta) = self.lobes().iter().find_map(Lobe::eta) else { return 1.0 };
-        match (o.z * i.z < 0.0, o.z > 0.0) {
-            (false, _) => 1.0,
-            (true, true) => eta * eta,
-            (true, false) => 1.0 / (eta * eta),
+        // Every camera bounce asks: the sides first (two dot products), the lobes only
+        // for a transmission.
+        let (o, i) = (wo.dot(self.ns), wi.dot(self.ns));
+        if o * i >= 0.0 {
+            return 1.0;
         }
+        let Some(eta) = self.lobes().iter().find_map(Lobe::eta) else { return 1.0 };
+        if o > 0.0 { eta * eta } else { 1.0 / (eta * eta) }
     }
 
     /// Whether the BSDF has a diffuse lobe (SPPM stores visible points there).
