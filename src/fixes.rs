@@ -29,6 +29,7 @@ pub enum Fix {
     CameraMedium,
     MediumEmission,
     MotionTime,
+    MapIlluminance,
 }
 
 /// Name, the pbrt versions that have the bug, and what fixing it changes.
@@ -40,7 +41,7 @@ pub struct FixInfo {
 }
 
 /// Every fix, in the order `--fix help` lists them.
-pub const FIXES: [FixInfo; 13] = [
+pub const FIXES: [FixInfo; 14] = [
     FixInfo {
         fix: Fix::PlasticFresnel,
         name: "plastic-fresnel",
@@ -138,6 +139,13 @@ pub const FIXES: [FixInfo; 13] = [
         effect: "each SPPM pass renders at one time within the shutter, as pbrt-v4's does; pbrt-v3 draws \
                  every photon's time apart from the camera paths', so a moving surface gathers the photons \
                  that landed where it is at other times and is lit too little by indirect light",
+    },
+    FixInfo {
+        fix: Fix::MapIlluminance,
+        name: "map-illuminance",
+        versions: "v4",
+        effect: "an environment map's `illuminance` gives an upward-facing surface that many lux; pbrt-v4 \
+                 counts each texel's solid angle as half what it is, so the sky comes out twice as bright",
     },
 ];
 

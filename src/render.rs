@@ -158,7 +158,7 @@ impl RenderScene {
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.alpha).collect()).collect();
         let has_alpha = world_shape_alpha.iter().chain(object_shape_alpha.iter().flatten()).any(|a| a.is_some());
         let world = world_sphere(scene);
-        let mut lights: Vec<Light> = scene.lights.iter().map(Light::from_desc).collect();
+        let mut lights: Vec<Light> = scene.lights.iter().map(|l| Light::from_desc(l, scene.fixes)).collect();
         let shape_area_lights: Vec<Option<u32>> = scene.shapes.iter().map(|s| s.area_light).collect();
         let area_params = scene.area_lights.clone();
         let film = scene.film.clone();

@@ -1,23 +1,33 @@
 //! `LightSource "infinite"`: light from every direction, constant or from an
-//! equirectangular environment map ([`super::envmap`]).
+//! environment map ([`super::envmap`]): latitude-longitude in v3 files, pbrt-v4's
+//! equal-area square in v4 ones.
 //!
 //! ```text
 //! LightSource "infinite" "rgb L" [.1 .1 .1]
-//! LightSource "infinite" "string mapname" "sky.exr"            # v3 (v4: "filename")
-//! LightSource "infinite" "string filename" "sky.exr" "float illuminance" 1000   # v4
+//! LightSource "infinite" "string mapname" "sky.exr"            # v3: latitude-longitude
+//! LightSource "infinite" "string filename" "sky.exr" "float illuminance" 1000   # v4: equal-area
 //! ```
+//! (`mapname` in a v4 file, which pbrt-v4 does not know, is read as pbrt-v3 reads it.)
 //! v4's `illuminance` scales the light so that an upward-facing surface (light-space
-//! +z) receives that many lux. A map that cannot be read leaves the constant `L`, with a
-//! located warning. Photons start on a disk of the scene's bounding sphere.
+//! +z) receives that many lux, computed as pbrt-v4 computes it (for a map, with half
+//! the solid angle its texels cover, so pbrt-v4 and we render twice the lux asked for;
+//! `--fix map-illuminance` gives the lux asked for).
+//! A v4 map must be square, as pbrt-v4 requires (a located error). A map that cannot be
+//! read leaves the constant `L`, with a located warning. Photons start on a disk of the
+//! scene's bounding sphere.
 
-use super::envmap::EnvMap;
+use super::envmap::{EnvMap, Mapping};
 use super::params::{LightContext, emission, illuminance};
 use super::{Emission, LightKind, LightSample, WorldSphere};
+use crate::fixes::{Fix, Fixes};
 use crate::imageio::RgbImage;
+use crate::math::equal_area;
 use crate::math::frame::coordinate_system;
 use crate::math::transform::row_major;
 use crate::math::{Point3, Ray, Vector3};
 use crate::mitsuba::{LightOut, Unsupported};
+use crate::parser::Syntax;
+use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::sampling::{concentric_disk, uniform_sphere};
@@ -29,13 +39,14 @@ use std::sync::Arc;
 
 pub const NAME: &str = "infinite";
 
-/// An equirectangular environment map and its orientation.
+/// An environment map, its mapping and its orientation.
 #[derive(Clone, Debug)]
 pub struct EnvMapDesc {
     /// The file name as the scene wrote it, and where it was read from.
     pub filename: String,
     pub path: std::path::PathBuf,
     pub image: Arc<RgbImage>,
+    pub mapping: Mapping,
     pub world_from_light: DMat3,
 }
 
@@ -44,20 +55,25 @@ pub struct EnvMapDesc {
 pub struct Infinite {
     pub l: Rgb,
     pub map: Option<EnvMapDesc>,
+    /// `l` was scaled to an `illuminance` by pbrt-v4's measure of an equal-area map,
+    /// which `--fix map-illuminance` corrects.
+    pub pbrt_map_illuminance: bool,
 }
 
 pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Res<LightKind> {
     values::ignored(p, &["portal"], "portals are not supported; the whole map is sampled", ctx.warnings);
     let mut l = emission(p, "L", &ctx.spectra)?;
     let map = map(p, m, ctx)?;
+    let mut pbrt_map_illuminance = false;
     if let Some(e) = illuminance(p)? {
+        pbrt_map_illuminance = map.as_ref().is_some_and(|env| env.mapping == Mapping::EqualArea);
         let up = match &map {
             None => PI * luminance(l),
-            Some(env) => upper_hemisphere_illuminance(&env.image) * luminance(l),
+            Some(env) => upper_hemisphere_illuminance(&env.image, env.mapping) * luminance(l),
         };
         l *= e / up.max(1e-9);
     }
-    Ok(LightKind::Infinite(Infinite { l, map }))
+    Ok(LightKind::Infinite(Infinite { l, map, pbrt_map_illuminance }))
 }
 
 /// The map `mapname` (v3) or `filename` (v4) names, if it can be read.
@@ -68,10 +84,23 @@ fn map(p: &ParamList, m: &DMat4, ctx: &mut LightContext) -> Res<Option<EnvMapDes
     };
     let Some((filename, param)) = name.filter(|(n, _)| !n.is_empty()) else { return Ok(None) };
     let at = p.named(param).map_or(Span::default(), |q| q.value_span);
+    // pbrt-v4 names its equal-area map `filename`; pbrt-v3's `mapname` keeps its own
+    // latitude-longitude meaning wherever it is written.
+    let mapping = match (ctx.syntax, param) {
+        (Syntax::V4, "filename") => Mapping::EqualArea,
+        _ => Mapping::Equirect,
+    };
     match (ctx.image)(&filename) {
+        Ok(image) if mapping == Mapping::EqualArea && image.width != image.height => {
+            let (w, h) = (image.width, image.height);
+            let msg = format!(
+                "infinite: \"{filename}\" is {w}x{h}; pbrt-v4 reads environment maps as equal-area squares and refuses others"
+            );
+            Err(Diagnostic::error(at, msg))
+        }
         Ok(image) => {
             let path = crate::parser::stmt::resolve_relative(ctx.spectra.base_dir, &filename);
-            Ok(Some(EnvMapDesc { filename, path, image, world_from_light: DMat3::from_mat4(*m) }))
+            Ok(Some(EnvMapDesc { filename, path, image, mapping, world_from_light: DMat3::from_mat4(*m) }))
         }
         Err(e) => {
             (ctx.missing)(at, format!("environment map ({e})"));
@@ -80,11 +109,25 @@ fn map(p: &ParamList, m: &DMat4, ctx: &mut LightContext) -> Res<Option<EnvMapDes
     }
 }
 
-/// ∫ over the map's upper hemisphere (θ < π/2) of luminance · cos θ dω, for the
-/// equirectangular mapping (row = θ).
-fn upper_hemisphere_illuminance(img: &RgbImage) -> f32 {
+/// ∫ over the map's upper hemisphere (θ < π/2) of luminance · cos θ dω, as the file's
+/// pbrt computes it.
+fn upper_hemisphere_illuminance(img: &RgbImage, mapping: Mapping) -> f32 {
     use std::f64::consts::PI;
     let (w, h) = (img.width, img.height);
+    if mapping == Mapping::EqualArea {
+        // pbrt-v4 weighs each texel by 2π/(w·h), half the solid angle it covers; we
+        // scale as it does, so that a file's `illuminance` gives pbrt-v4's image
+        // (`--fix map-illuminance` halves the light, [`InfiniteLight::new`]).
+        let mut sum = 0.0;
+        for (i, px) in img.pixels.iter().enumerate() {
+            let uv = [((i % w) as f64 + 0.5) / w as f64, ((i / w) as f64 + 0.5) / h as f64];
+            let z = equal_area::square_to_sphere(uv).z;
+            if z > 0.0 {
+                sum += luminance(Vec3::from(*px)) as f64 * z;
+            }
+        }
+        return (sum * 2.0 * PI / (w * h).max(1) as f64) as f32;
+    }
     let cell = (PI / h as f64) * (2.0 * PI / w as f64);
     let mut sum = 0.0;
     for y in 0..h {
@@ -105,6 +148,10 @@ impl Infinite {
     pub fn mitsuba(&self, world_from_light: &DMat4, notes: &mut Vec<Unsupported>) -> LightOut {
         let (l, Some(map)) = (self.l, &self.map) else { return LightOut::Constant { radiance: self.l.to_array() } };
         let path = std::path::absolute(&map.path).unwrap_or_else(|_| map.path.clone());
+        if map.mapping == Mapping::EqualArea {
+            let why = "Mitsuba's envmap is latitude-longitude: pbrt-v4's equal-area map is written as is and reads wrongly there";
+            notes.push(Unsupported::new("", "equal-area environment map", why));
+        }
         if l.max_element() - l.min_element() > 1e-6 * l.max_element() {
             let why = "a coloured scale has no Mitsuba equivalent; its mean is used";
             notes.push(Unsupported::new("", "environment map scale", why));
@@ -128,9 +175,12 @@ pub struct InfiniteLight {
 }
 
 impl InfiniteLight {
-    pub fn new(d: &Infinite) -> InfiniteLight {
-        let map = d.map.as_ref().map(|m| Arc::new(EnvMap::new(m.image.clone(), d.l, m.world_from_light)));
-        InfiniteLight { l: d.l, map }
+    pub fn new(d: &Infinite, fixes: Fixes) -> InfiniteLight {
+        // DEVIATION(pbrt): appearance, `--fix map-illuminance`: the texels' true solid
+        // angle, 4π/(w·h), where pbrt-v4 counts 2π/(w·h) and so doubles the light.
+        let l = if d.pbrt_map_illuminance && fixes.has(Fix::MapIlluminance) { d.l * 0.5 } else { d.l };
+        let map = d.map.as_ref().map(|m| Arc::new(EnvMap::new(m.image.clone(), l, m.world_from_light, m.mapping)));
+        InfiniteLight { l, map }
     }
 
     #[inline]

@@ -170,12 +170,12 @@ pub struct WorldSphere {
 }
 
 impl Light {
-    pub fn from_desc(d: &LightDesc) -> Light {
+    pub fn from_desc(d: &LightDesc, fixes: crate::fixes::Fixes) -> Light {
         match &d.kind {
             LightKind::Point(l) => Light::Point(point::PointLight::new(l)),
             LightKind::Spot(l) => Light::Spot(spot::SpotLight::new(l)),
             LightKind::Distant(l) => Light::Distant(distant::DistantLight::new(l)),
-            LightKind::Infinite(l) => Light::Infinite(infinite::InfiniteLight::new(l)),
+            LightKind::Infinite(l) => Light::Infinite(infinite::InfiniteLight::new(l, fixes)),
             LightKind::Goniometric(l) => Light::Goniometric(goniometric::GoniometricLight::new(l)),
             LightKind::Projection(l) => Light::Projection(projection::ProjectionLight::new(l)),
         }

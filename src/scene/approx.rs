@@ -18,12 +18,11 @@ pub enum Approx {
     Camera,
     FilmType,
     ColorSpace,
-    EqualAreaMap,
     NanoVdb,
 }
 
 impl Approx {
-    pub const ALL: [Approx; 11] = [
+    pub const ALL: [Approx; 10] = [
         Approx::CoatInBlend,
         Approx::HairInBlend,
         Approx::UnsupportedMaterial,
@@ -33,7 +32,6 @@ impl Approx {
         Approx::Camera,
         Approx::FilmType,
         Approx::ColorSpace,
-        Approx::EqualAreaMap,
         Approx::NanoVdb,
     ];
 
@@ -55,7 +53,6 @@ impl Approx {
             Approx::Camera => "this camera type is not supported; a perspective camera is used",
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",
             Approx::ColorSpace => "only sRGB is supported; RGB values are taken as sRGB",
-            Approx::EqualAreaMap => "pbrt-v4's equal-area environment maps are read as equirectangular ones",
             Approx::NanoVdb => {
                 "NanoVDB files cannot be read (no Rust reader of the format exists): what the medium fills is rendered as vacuum"
             }

@@ -315,3 +315,36 @@ fn motion_time_fix_lights_moving_surfaces_as_bdpt_does() {
     assert!(fixed < 0.035, "fixed: {:.2}% off bdpt", 100.0 * fixed);
     assert!(pbrt > 0.08, "as pbrt-v3: only {:.2}% off bdpt", 100.0 * pbrt);
 }
+
+/// pbrt-v4 measures an equal-area map's `illuminance` with half its texels' solid
+/// angle, so a floor under it gets twice the lux asked for; fixed, it gets what the
+/// file asks for. A grey floor (reflectance 0.5) under π lux seen from above has
+/// luminance 0.5·π/π = 0.5 (pbrt-v4: 1.0; measured with its SPPM 1.01 under a grey
+/// map, 0.97 under this blue sky, where its spectral colours shift; ours 1.00).
+#[test]
+fn an_equal_area_maps_illuminance_is_doubled_in_pbrt_v4_unless_fixed() {
+    let text = "LookAt 0 5 0  0 0 0  0 0 1 Camera \"orthographic\" \
+                Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8 \
+                Sampler \"halton\" \"integer pixelsamples\" 64 \
+                Integrator \"sppm\" \"integer maxdepth\" 1 \"integer photonsperiteration\" 2000 \"float radius\" 0.5 \
+                WorldBegin AttributeBegin Rotate -90 1 0 0 \
+                LightSource \"infinite\" \"string filename\" \"../../../pbrt-scenes/verify/textures/sky-equalarea.exr\" \
+                \"float illuminance\" 3.14159265 AttributeEnd \
+                Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5] \
+                Shape \"trianglemesh\" \"point3 P\" [-3 0 -3 3 0 -3 3 0 3 -3 0 3] \"integer indices\" [0 1 2 0 2 3]";
+    // Illuminance weighs colours by luminance: so does the check.
+    let luminance = |fixes: Fixes| {
+        let out =
+            pbrt_sppm::integrators::render(&RenderScene::new(&scene_with(text, fixes)), &RenderSettings::default());
+        let px = out.unwrap().image.pixels;
+        px.iter().map(|p| (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64).sum::<f64>() / px.len() as f64
+    };
+    let (pbrt, fixed) = (luminance(Fixes::NONE), luminance(Fixes::NONE.with(Fix::MapIlluminance)));
+    assert!((fixed - 0.5).abs() < 0.01, "fixed: {fixed}");
+    assert!((pbrt / fixed - 2.0).abs() < 1e-3, "as pbrt-v4: {pbrt} against {fixed}");
+    let names: Vec<String> = bugs(text).into_iter().map(|b| b.0).collect();
+    assert!(names.contains(&"map-illuminance".to_string()), "{names:?}");
+    // Without `illuminance`, or with a constant sky, nothing to fix.
+    let plain = text.replace("\"float illuminance\" 3.14159265", "");
+    assert!(!bugs(&plain).into_iter().any(|b| b.0 == "map-illuminance"));
+}

@@ -366,6 +366,15 @@ fn a_constant_environment_map_lights_like_a_constant_infinite_light() {
     let mapped = render_at(scene_for("LightSource \"infinite\" \"string mapname\" \"sky.exr\""));
     assert!(constant > 0.1, "{constant}");
     assert!((mapped - constant).abs() < 0.03 * constant, "map {mapped} vs constant {constant}");
+    // pbrt-v4's `filename`: a square equal-area map.
+    write_exr(&dir.join("square.exr"), 16, 16, |_, _| [0.5, 0.5, 0.5]);
+    let square = render_at(scene_for("LightSource \"infinite\" \"string filename\" \"square.exr\""));
+    assert!((square - constant).abs() < 0.03 * constant, "equal-area map {square} vs constant {constant}");
+    // pbrt-v4 refuses a map that is not square: a located error, as there.
+    let path = dir.join("env.pbrt");
+    std::fs::write(&path, scene_for("LightSource \"infinite\" \"string filename\" \"sky.exr\"")).unwrap();
+    let err = crate::common::load_file(&path).expect_err("a 32x16 equal-area map");
+    assert!(err.to_string().contains("env.pbrt:1:") && err.to_string().contains("32x16"), "{err}");
 }
 
 #[test]

@@ -58,6 +58,7 @@ impl Builder {
         }
         if syntax == Syntax::V4 {
             found.extend(self.unnormalized_emitters().map(|at| (at, Fix::MediumEmission)));
+            found.extend(self.illuminated_maps().map(|at| (at, Fix::MapIlluminance)));
         }
         if syntax == Syntax::V3
             && let Some(at) = self.first_motion
@@ -70,6 +71,17 @@ impl Builder {
         found.sort_by_key(|(span, fix)| (span.file.0, span.start, *fix));
         found.dedup();
         found
+    }
+
+    /// `map-illuminance`: v4 infinite lights that scale a map (`filename`) to an
+    /// `illuminance`, at the `illuminance` parameter.
+    fn illuminated_maps(&self) -> impl Iterator<Item = Span> + '_ {
+        let infinite = self.pending_lights.iter().map(|(e, _)| e).filter(|e| e.name == crate::lights::infinite::NAME);
+        infinite.filter_map(|e| {
+            let map = e.params.string("filename").ok().flatten().is_some_and(|f| !f.is_empty());
+            let lux = crate::lights::params::illuminance(&e.params).ok().flatten().is_some();
+            (map && lux).then(|| e.params.named("illuminance").map_or(e.name_span, |p| p.span))
+        })
     }
 
     /// `mesh-power` and `area-alpha` for one emitting world shape, at its

@@ -65,10 +65,6 @@ impl Builder {
         let media = std::mem::take(&mut self.pending_light_media);
         let mut out = Vec::new();
         for ((e, ctm), medium) in pending.into_iter().zip(media) {
-            if self.syntax() == Syntax::V4 && e.name == lights::infinite::NAME && e.params.named("filename").is_some() {
-                let at = e.params.named("filename").map_or(e.name_span, |p| p.span);
-                self.note(at, "environment map".into(), Approx::EqualAreaMap);
-            }
             let (files, base) = (self.reader.files.clone(), self.reader.base_dir().to_path_buf());
             let mut warnings = Vec::new();
             let mut missing = Vec::new();
