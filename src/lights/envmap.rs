@@ -124,8 +124,10 @@ impl EnvMap {
                 })
                 .collect(),
             // Every texel spans the same solid angle; pbrt-v4 weighs them by the mean
-            // of their channels.
-            Mapping::EqualArea => img.pixels.iter().map(|p| (p.iter().sum::<f32>() / 3.0).max(0.0) as f64).collect(),
+            // of their channels (here of what they emit, below).
+            Mapping::EqualArea => {
+                img.pixels.iter().map(|p| p.iter().map(|c| c.max(0.0)).sum::<f32>() as f64 / 3.0).collect()
+            }
         };
         let average_luminance =
             img.pixels.iter().map(|p| luminance(Vec3::from(*p))).sum::<f32>() / (w * h).max(1) as f32;
@@ -166,7 +168,8 @@ impl EnvMap {
                 let (wd, ht) = (self.img.width, self.img.height);
                 let x = ((st[0] * wd as f32) as usize).min(wd - 1);
                 let y = ((st[1] * ht as f32) as usize).min(ht - 1);
-                Vec3::from(self.img.pixels[y * wd + x])
+                // Negative channels emit nothing (pbrt-v4's `ClampZero`).
+                Vec3::from(self.img.pixels[y * wd + x]).max(Vec3::ZERO)
             }
         };
         texel * self.scale
@@ -240,6 +243,18 @@ mod tests {
         }
         // Light-space +z is the square's centre.
         assert_eq!(env.st_of((rotation * DVec3::Z).as_vec3()).0.map(|x| (x * 1e4).round() / 1e4), [0.5, 0.5]);
+    }
+
+    #[test]
+    fn negative_channels_of_an_equal_area_map_emit_nothing() {
+        // pbrt-v4 clamps each channel at zero; the texel's positive channel is still
+        // sampled (its density is not zero).
+        let mut img = RgbImage::new(2, 2);
+        img.pixels = vec![[-4.0, 1.0, 1.0], [0.0; 3], [0.0; 3], [0.0; 3]];
+        let env = EnvMap::new(Arc::new(img), Vec3::ONE, DMat3::IDENTITY, Mapping::EqualArea);
+        let (w, pdf) = env.sample([0.3, 0.6]).unwrap();
+        assert_eq!(env.le(w), Vec3::new(0.0, 1.0, 1.0));
+        assert!((pdf - 1.0 / PI).abs() < 1e-5, "one texel of four: {pdf}");
     }
 
     #[test]

@@ -12,7 +12,7 @@
 //! texel, and `power` scales I by the image's mean. Without an image (none named, or
 //! unreadable, which is noted) the light is the same every way, as pbrt-v3's.
 
-use super::params::{LightContext, emission, power};
+use super::params::{LightContext, emission, finite_image, power};
 use super::{Emission, LightKind, LightSample};
 use crate::imageio::RgbImage;
 use crate::imageio::lookup::{Wrap, lookup};
@@ -66,7 +66,10 @@ pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Re
                     );
                     return Err(Diagnostic::error(at, msg));
                 }
-                Ok(img) => Some(img),
+                Ok(img) => {
+                    finite_image(&img, &name, at)?;
+                    Some(img)
+                }
                 Err(e) => {
                     (ctx.missing)(at, format!("goniometric light ({e})"));
                     None

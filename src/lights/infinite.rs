@@ -17,7 +17,7 @@
 //! scene's bounding sphere.
 
 use super::envmap::{EnvMap, Mapping};
-use super::params::{LightContext, emission, illuminance};
+use super::params::{LightContext, emission, finite_image, illuminance};
 use super::{Emission, LightKind, LightSample, WorldSphere};
 use crate::fixes::{Fix, Fixes};
 use crate::imageio::RgbImage;
@@ -99,6 +99,7 @@ fn map(p: &ParamList, m: &DMat4, ctx: &mut LightContext) -> Res<Option<EnvMapDes
             Err(Diagnostic::error(at, msg))
         }
         Ok(image) => {
+            finite_image(&image, &filename, at)?;
             let path = crate::parser::stmt::resolve_relative(ctx.spectra.base_dir, &filename);
             Ok(Some(EnvMapDesc { filename, path, image, mapping, world_from_light: DMat3::from_mat4(*m) }))
         }

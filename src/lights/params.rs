@@ -43,6 +43,16 @@ pub fn point3(p: &ParamList, name: &str, default: [f32; 3]) -> Res<DVec3> {
     Ok(DVec3::from(v.map(f64::from)))
 }
 
+/// A light's image must be finite everywhere, as pbrt-v4 requires of every emitting
+/// image: a NaN or infinite texel would spread through every pixel it lights (pbrt-v3
+/// does not check). `at`: the file name's span.
+pub fn finite_image(img: &RgbImage, name: &str, at: Span) -> Res<()> {
+    let Some(i) = img.pixels.iter().position(|p| p.iter().any(|c| !c.is_finite())) else { return Ok(()) };
+    let (x, y, texel) = (i % img.width.max(1), i / img.width.max(1), img.pixels[i]);
+    let msg = format!("\"{name}\": texel ({x}, {y}) is {texel:?}; an image that emits light must be finite");
+    Err(Diagnostic::error(at, msg))
+}
+
 /// v4's `power` in watts, when given and positive (≤ 0 means "not given", as in pbrt).
 #[inline]
 pub fn power(p: &ParamList) -> Res<Option<f32>> {

@@ -12,7 +12,7 @@
 //! over the solid angle it covers. Without a readable image (v3) the light is a
 //! uniform rectangle of `I`; pbrt-v4 requires the image.
 
-use super::params::{LightContext, emission, power};
+use super::params::{LightContext, emission, finite_image, power};
 use super::{Emission, LightKind, LightSample};
 use crate::imageio::RgbImage;
 use crate::imageio::lookup::{Wrap, lookup};
@@ -62,7 +62,10 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
         None if v4 => return Err(Diagnostic::error(span, "projection needs \"string filename\" (as in pbrt-v4)")),
         None => None,
         Some(name) => match (ctx.image)(&name) {
-            Ok(img) => Some(img),
+            Ok(img) => {
+                finite_image(&img, &name, p.named(param).map_or(span, |q| q.value_span))?;
+                Some(img)
+            }
             Err(e) if v4 => return Err(Diagnostic::error(p.named(param).map_or(span, |q| q.value_span), e)),
             Err(e) => {
                 (ctx.missing)(p.named(param).map_or(span, |q| q.value_span), format!("projection light ({e})"));
