@@ -460,7 +460,7 @@ impl RenderScene {
             return Vec3::ZERO;
         }
         match &self.lights[light as usize] {
-            Light::Area(a) => a.l,
+            Light::Area(a) => a.radiance(si.uv),
             _ => Vec3::ZERO,
         }
     }
@@ -573,7 +573,8 @@ fn area_lights(
             // still keeps its slot (lights are found by primitive) but emits nothing.
             let area = area as f32;
             let l = if area > 0.0 { l } else { Vec3::ZERO };
-            lights.push(Light::Area(AreaLight { emitter, shape: i as u32, l, two_sided: desc.two_sided, area }));
+            let (two_sided, image) = (desc.two_sided, desc.image.clone());
+            lights.push(Light::Area(AreaLight { emitter, shape: i as u32, l, two_sided, area, image }));
         }
         emitters[i] = Some(EmitterInfo { two_sided: desc.two_sided, first_light });
     }

@@ -286,6 +286,9 @@ fn shape(scene: &SceneDescription, s: &ShapeDesc, world: bool, index: u32, notes
         if a.two_sided {
             notes.push(note("", &format!("shape {index}"), "two-sided area light: Mitsuba's emit on one side"));
         }
+        if a.image.is_some() {
+            notes.push(note("", &format!("shape {index}"), "image area light: exported as its scale, uniform"));
+        }
         let area = scene.placed_area(&PlacedShape { shape: s, object_to_world: s.object_to_world, instance: None });
         Emission { radiance: a.emission(area).to_array(), two_sided: a.two_sided }
     });

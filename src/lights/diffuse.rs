@@ -4,23 +4,33 @@
 //! ```text
 //! AreaLightSource "diffuse" "rgb L" [4 4 4] "bool twosided" true
 //! AreaLightSource "diffuse" "blackbody L" [6500] "float power" 100     # v4
+//! AreaLightSource "diffuse" "string filename" "screen.exr" "float scale" 2   # v4
 //! ```
 //! An emitting shape is one light per quadric, triangle or patch, as in pbrt. v4's
 //! `power` (watts) scales the emission as read so that the shape emits that much.
+//! v4's `filename` makes the emission an image over the surface's (u, v): bilinear,
+//! (0, 0) at the image's bottom left, clamped at its edges, negative channels emitting
+//! nothing, times `scale` (pbrt-v4's `DiffuseAreaLight::L`); points are still drawn by
+//! area, as pbrt-v4 draws them. An image with `L` as well, or one that cannot be read, is
+//! an error, as in pbrt-v4.
 
-use super::params::{emission, power};
+use super::params::{emission, finite_image, power};
 use super::{Emission, LightSample};
+use crate::imageio::RgbImage;
+use crate::imageio::lookup::{Wrap, lookup};
 use crate::interaction::offset_ray_origin;
 use crate::math::frame::coordinate_system;
 use crate::math::{Normal3, Point3, Ray, Vector3};
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
+use crate::parser::source::Span;
 use crate::scene::values::{self, Res, SpectrumContext};
 use crate::shapes::{Piece, ShapeSet};
 use crate::spectrum::{Rgb, luminance};
 use glam::Vec3;
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// The names this area light type is written as (`area` in v3 only).
 pub const NAMES: [&str; 2] = ["diffuse", "area"];
@@ -37,26 +47,57 @@ pub struct AreaLightDesc {
     pub two_sided: bool,
     /// v4 `power` (watts): the emission is scaled so the whole shape emits this much.
     pub power: Option<f32>,
+    /// v4 `filename`: the emission over (u, v), scaled by `l`.
+    pub image: Option<Arc<RgbImage>>,
 }
+
+/// Reads an image by the scene-relative name a file gives.
+pub type ImageReader<'a> = dyn FnMut(&str) -> Result<Arc<RgbImage>, String> + 'a;
 
 /// A `diffuse` (v3 also `area`) area light, or `None` for other types.
 pub fn read(
     ty: &str,
     p: &ParamList,
-    spectra: &SpectrumContext,
+    (syntax, spectra): (Syntax, &SpectrumContext),
+    images: &mut ImageReader,
     warnings: &mut Vec<Diagnostic>,
 ) -> Res<Option<AreaLightDesc>> {
     if !NAMES.contains(&ty) {
         return Ok(None);
     }
     values::no_effect(p, &["samples", "nsamples"]);
-    let why = "image area lights are not supported; the light emits L uniformly";
-    values::ignored(p, &["filename"], why, warnings);
+    let image = match syntax {
+        Syntax::V4 => image(p, images)?,
+        Syntax::V3 => {
+            values::ignored(p, &["filename"], "pbrt-v3's area lights take no image", warnings);
+            None
+        }
+    };
     Ok(Some(AreaLightDesc {
         l: emission(p, "L", spectra)?,
         two_sided: p.bool("twosided")?.unwrap_or(false),
         power: power(p)?,
+        image,
     }))
+}
+
+/// v4's emission image, `filename`.
+fn image(p: &ParamList, images: &mut ImageReader) -> Res<Option<Arc<RgbImage>>> {
+    let Some(name) = p.string("filename")?.filter(|n| !n.is_empty()) else { return Ok(None) };
+    let at = p.named("filename").map_or(Span::default(), |q| q.value_span);
+    if let Some(l) = p.named("L") {
+        return Err(Diagnostic::error(l.span, "an area light takes \"L\" or \"filename\", not both (as in pbrt-v4)"));
+    }
+    let img = images(&name).map_err(|e| Diagnostic::error(at, format!("area light image: {e}")))?;
+    finite_image(&img, &name, at)?;
+    Ok(Some(img))
+}
+
+/// The mean luminance of an image's texels, negative channels as 0 (1 for none).
+fn mean_luminance(image: Option<&RgbImage>) -> f64 {
+    let Some(img) = image else { return 1.0 };
+    let sum: f64 = img.pixels.iter().map(|p| luminance(Vec3::from(*p).max(Vec3::ZERO)) as f64).sum();
+    sum / img.pixels.len().max(1) as f64
 }
 
 impl AreaLightDesc {
@@ -67,8 +108,10 @@ impl AreaLightDesc {
     pub fn emission(&self, area: f64) -> Rgb {
         match self.power {
             Some(w) if area > 0.0 => {
+                // An image's own brightness counts toward the watts (its mean luminance).
                 let sides = if self.two_sided { 2.0 } else { 1.0 };
-                self.l * (w as f64 / (std::f64::consts::PI * sides * area)) as f32
+                let k = std::f64::consts::PI * sides * area * mean_luminance(self.image.as_deref());
+                self.l * (w as f64 / k) as f32
             }
             _ => self.l,
         }
@@ -85,13 +128,25 @@ pub struct AreaLight {
     pub l: Rgb,
     pub two_sided: bool,
     pub area: f32,
+    /// The emission over (u, v), times `l` (v4 `filename`).
+    pub image: Option<Arc<RgbImage>>,
 }
 
 impl AreaLight {
     #[inline]
     pub fn power(&self) -> f64 {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
-        luminance(self.l) as f64 * self.area as f64 * std::f64::consts::PI * sides
+        let mean = mean_luminance(self.image.as_deref());
+        luminance(self.l) as f64 * mean * self.area as f64 * std::f64::consts::PI * sides
+    }
+
+    /// The radiance the surface emits at (u, v).
+    #[inline]
+    pub fn radiance(&self, uv: [f32; 2]) -> Rgb {
+        match &self.image {
+            None => self.l,
+            Some(img) => self.l * lookup(img, uv[0], uv[1], Wrap::Clamp, false).max(Vec3::ZERO),
+        }
     }
 
     #[inline]
@@ -102,7 +157,7 @@ impl AreaLight {
         let facing = self.two_sided || s.n.0.dot(-wi) > 0.0;
         (s.pdf > 0.0 && facing && wi != Vec3::ZERO).then_some(LightSample {
             wi,
-            li: self.l,
+            li: self.radiance(s.uv),
             pdf: s.pdf,
             p_light: Some(s.p.0),
             delta: false,
@@ -140,7 +195,8 @@ impl AreaLight {
         }
         let p_error = crate::math::float::gamma(8) * s.p.0.abs() + Vec3::splat(1e-30);
         let o = offset_ray_origin(s.p, p_error, Normal3(n), Vector3(d));
-        Some(Emission { ray: Ray::new(o, Vector3(d)), n, pdf_pos: s.pdf, pdf_dir, le: self.l, surface: Some(s) })
+        let le = self.radiance(s.uv);
+        Some(Emission { ray: Ray::new(o, Vector3(d)), n, pdf_pos: s.pdf, pdf_dir, le, surface: Some(s) })
     }
 
     /// (position, direction) densities of an emission from the point `p` of this
@@ -153,5 +209,54 @@ impl AreaLight {
             false => cos.max(0.0) / PI,
         };
         (shapes.pdf_piece_area(&self.emitter, Point3(p), n), pdf_dir)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn piece() -> Piece {
+        Piece::Triangle { mesh: 0, tri: 0, flags: Default::default() }
+    }
+
+    fn screen() -> Arc<RgbImage> {
+        // 2 × 2: top row red, green; bottom row blue, white (row 0 is the top).
+        let mut img = RgbImage::new(2, 2);
+        img.pixels = vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]];
+        Arc::new(img)
+    }
+
+    #[test]
+    fn an_image_light_puts_the_images_bottom_left_at_uv_zero() {
+        let light = AreaLight {
+            emitter: piece(),
+            shape: 0,
+            l: Vec3::splat(2.0),
+            two_sided: false,
+            area: 1.0,
+            image: Some(screen()),
+        };
+        // pbrt-v4 flips v: (u, v) = (0, 1) is the image's top left.
+        assert_eq!(light.radiance([0.0, 1.0]), Vec3::new(2.0, 0.0, 0.0));
+        assert_eq!(light.radiance([1.0, 1.0]), Vec3::new(0.0, 2.0, 0.0));
+        assert_eq!(light.radiance([0.0, 0.0]), Vec3::new(0.0, 0.0, 2.0));
+        assert_eq!(light.radiance([1.0, 0.0]), Vec3::splat(2.0));
+        // Bilinear between texel centres.
+        assert_eq!(light.radiance([0.5, 1.0]), Vec3::new(1.0, 1.0, 0.0));
+    }
+
+    #[test]
+    fn power_counts_the_images_mean_luminance() {
+        let desc = AreaLightDesc { l: Vec3::ONE, two_sided: false, power: Some(10.0), image: Some(screen()) };
+        let light = AreaLight {
+            emitter: piece(),
+            shape: 0,
+            l: desc.emission(2.0),
+            two_sided: false,
+            area: 2.0,
+            image: desc.image.clone(),
+        };
+        assert!((light.power() - 10.0).abs() < 1e-4, "{}", light.power());
     }
 }

@@ -129,7 +129,11 @@ impl Builder {
         for i in used {
             let e = std::mem::replace(&mut self.area_light_entities[i as usize].0, Entity::default_named(""));
             let mut warnings = Vec::new();
-            let desc = lights::diffuse::read(&e.name, &e.params, &self.spectrum_context(true), &mut warnings);
+            let (files, base, syntax) =
+                (self.reader.files.clone(), self.reader.base_dir().to_path_buf(), self.syntax());
+            let spectra = SpectrumContext { base_dir: &base, normalize_blackbody: syntax == Syntax::V4, files: &files };
+            let mut images = |n: &str| self.image(n);
+            let desc = lights::diffuse::read(&e.name, &e.params, (syntax, &spectra), &mut images, &mut warnings);
             self.warnings.append(&mut warnings);
             let desc = desc?.ok_or_else(|| Diagnostic::error(e.name_span, "unsupported area light"))?;
             finish_params(&e.params, &mut self.warnings)?;
