@@ -48,7 +48,23 @@ pub struct AreaLightDesc {
     /// v4 `power` (watts): the emission is scaled so the whole shape emits this much.
     pub power: Option<f32>,
     /// v4 `filename`: the emission over (u, v), scaled by `l`.
-    pub image: Option<Arc<RgbImage>>,
+    pub image: Option<EmissionImage>,
+}
+
+/// An image an area light emits, with its mean luminance (negative channels as 0),
+/// which its power counts, found once.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmissionImage {
+    pub image: Arc<RgbImage>,
+    pub mean_luminance: f64,
+}
+
+impl EmissionImage {
+    pub fn new(image: Arc<RgbImage>) -> EmissionImage {
+        let sum: f64 = image.pixels.iter().map(|p| luminance(Vec3::from(*p).max(Vec3::ZERO)) as f64).sum();
+        let mean_luminance = sum / image.pixels.len().max(1) as f64;
+        EmissionImage { image, mean_luminance }
+    }
 }
 
 /// Reads an image by the scene-relative name a file gives.
@@ -82,7 +98,7 @@ pub fn read(
 }
 
 /// v4's emission image, `filename`.
-fn image(p: &ParamList, images: &mut ImageReader) -> Res<Option<Arc<RgbImage>>> {
+fn image(p: &ParamList, images: &mut ImageReader) -> Res<Option<EmissionImage>> {
     let Some(name) = p.string("filename")?.filter(|n| !n.is_empty()) else { return Ok(None) };
     let at = p.named("filename").map_or(Span::default(), |q| q.value_span);
     if let Some(l) = p.named("L") {
@@ -90,14 +106,12 @@ fn image(p: &ParamList, images: &mut ImageReader) -> Res<Option<Arc<RgbImage>>> 
     }
     let img = images(&name).map_err(|e| Diagnostic::error(at, format!("area light image: {e}")))?;
     finite_image(&img, &name, at)?;
-    Ok(Some(img))
+    Ok(Some(EmissionImage::new(img)))
 }
 
-/// The mean luminance of an image's texels, negative channels as 0 (1 for none).
-fn mean_luminance(image: Option<&RgbImage>) -> f64 {
-    let Some(img) = image else { return 1.0 };
-    let sum: f64 = img.pixels.iter().map(|p| luminance(Vec3::from(*p).max(Vec3::ZERO)) as f64).sum();
-    sum / img.pixels.len().max(1) as f64
+/// What an image adds to an area light's power: its mean luminance (1 for none).
+fn mean_luminance(image: Option<&EmissionImage>) -> f64 {
+    image.map_or(1.0, |i| i.mean_luminance)
 }
 
 impl AreaLightDesc {
@@ -110,7 +124,7 @@ impl AreaLightDesc {
             Some(w) if area > 0.0 => {
                 // An image's own brightness counts toward the watts (its mean luminance).
                 let sides = if self.two_sided { 2.0 } else { 1.0 };
-                let k = std::f64::consts::PI * sides * area * mean_luminance(self.image.as_deref());
+                let k = std::f64::consts::PI * sides * area * mean_luminance(self.image.as_ref());
                 self.l * (w as f64 / k) as f32
             }
             _ => self.l,
@@ -129,14 +143,14 @@ pub struct AreaLight {
     pub two_sided: bool,
     pub area: f32,
     /// The emission over (u, v), times `l` (v4 `filename`).
-    pub image: Option<Arc<RgbImage>>,
+    pub image: Option<EmissionImage>,
 }
 
 impl AreaLight {
     #[inline]
     pub fn power(&self) -> f64 {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
-        let mean = mean_luminance(self.image.as_deref());
+        let mean = mean_luminance(self.image.as_ref());
         luminance(self.l) as f64 * mean * self.area as f64 * std::f64::consts::PI * sides
     }
 
@@ -145,7 +159,7 @@ impl AreaLight {
     pub fn radiance(&self, uv: [f32; 2]) -> Rgb {
         match &self.image {
             None => self.l,
-            Some(img) => self.l * lookup(img, uv[0], uv[1], Wrap::Clamp, false).max(Vec3::ZERO),
+            Some(e) => self.l * lookup(&e.image, uv[0], uv[1], Wrap::Clamp, false).max(Vec3::ZERO),
         }
     }
 
@@ -235,7 +249,7 @@ mod tests {
             l: Vec3::splat(2.0),
             two_sided: false,
             area: 1.0,
-            image: Some(screen()),
+            image: Some(EmissionImage::new(screen())),
         };
         // pbrt-v4 flips v: (u, v) = (0, 1) is the image's top left.
         assert_eq!(light.radiance([0.0, 1.0]), Vec3::new(2.0, 0.0, 0.0));
@@ -248,7 +262,12 @@ mod tests {
 
     #[test]
     fn power_counts_the_images_mean_luminance() {
-        let desc = AreaLightDesc { l: Vec3::ONE, two_sided: false, power: Some(10.0), image: Some(screen()) };
+        let desc = AreaLightDesc {
+            l: Vec3::ONE,
+            two_sided: false,
+            power: Some(10.0),
+            image: Some(EmissionImage::new(screen())),
+        };
         let light = AreaLight {
             emitter: piece(),
             shape: 0,
