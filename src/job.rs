@@ -13,6 +13,7 @@
 
 use crate::imageio::{ImageError, check_writable, read_image, write_image, write_text};
 use crate::integrators::checkpoint::{Checkpoint, CheckpointError, Every, Fingerprint, Mismatch};
+use crate::integrators::completed::{Completed, Snapshot};
 use crate::integrators::part::{Part, PartError};
 use crate::integrators::run;
 use crate::integrators::{CheckpointTarget, Monitor, Plan, RenderError, RenderOutput, RenderSettings, errors_csv};
@@ -47,6 +48,8 @@ pub struct Request {
     pub quiet: bool,
     /// Raised to stop after the iteration under way.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// Keeps the completed iterations' image for an abort ([`Job::write_snapshot`]).
+    pub completed: Option<Arc<Completed>>,
     /// `--display-server HOST:PORT`: tev, shown the image as it converges.
     pub display_server: Option<String>,
 }
@@ -117,6 +120,15 @@ impl Job {
         let plan = Plan::new(&scene.integrator, || crate::render::world_sphere(scene).radius, &request.settings)
             .map_err(render_error)?;
         let fingerprint = fingerprint(scene, &request.scene, &plan);
+        let display = match request.display_server.as_deref() {
+            Some(a) => {
+                let title = request.scene.file_name().map_or("pbrt-sppm".into(), |n| n.to_string_lossy().into_owned());
+                let tev = crate::imageio::tev::Tev::new(a, &title, request.quiet)
+                    .map_err(|message| JobError::Option { flag: "--display-server", message })?;
+                Some(Arc::new(std::sync::Mutex::new(tev)))
+            }
+            None => None,
+        };
         let monitor = Monitor {
             reference,
             progress: request.progress,
@@ -124,10 +136,8 @@ impl Job {
             checkpoint: checkpoint_target(&request, &fingerprint),
             partial_images: request.partial_images.then(|| image.as_ref().map(|i| i.0.clone())).flatten(),
             interrupt: request.interrupt.clone(),
-            display: request.display_server.as_deref().map(|a| {
-                let title = request.scene.file_name().map_or("pbrt-sppm".into(), |n| n.to_string_lossy().into_owned());
-                Arc::new(std::sync::Mutex::new(crate::imageio::tev::Tev::new(a, &title)))
-            }),
+            completed: request.completed.clone(),
+            display,
             observer: None,
         };
         let scene = RenderScene::for_integrator(scene, plan.algorithm != crate::integrators::Algorithm::Sppm);
@@ -159,6 +169,20 @@ impl Job {
         }
         if let Some(csv) = &self.request.errors_csv {
             write_text(csv, &errors_csv(&out.errors)).map_err(|e| JobError::output(csv.display(), e))?;
+        }
+        Ok(())
+    }
+
+    /// Writes what an abort keeps of a render stopped mid-iteration: the image and
+    /// `ERRORS.csv` of the completed iterations. A part is not written (it needs the
+    /// passes' sums, which only a finished iteration hands over): the shard's passes
+    /// are rendered again.
+    pub fn write_snapshot(&self, snapshot: &Snapshot) -> Result<(), JobError> {
+        if let Some((path, blame)) = &self.image {
+            write_image(path, &snapshot.image).map_err(|e| JobError::output(blame, e))?;
+        }
+        if let Some(csv) = &self.request.errors_csv {
+            write_text(csv, &errors_csv(&snapshot.errors)).map_err(|e| JobError::output(csv.display(), e))?;
         }
         Ok(())
     }

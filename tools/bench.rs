@@ -44,6 +44,10 @@ use std::time::Instant;
 fn main() -> ExitCode {
     quiet_on_closed_pipe();
     let args: Vec<String> = std::env::args().collect();
+    if args.get(1).is_some_and(|a| a == "--version" || a == "-V") {
+        println!("pbrt-bench {}", env!("CARGO_PKG_VERSION"));
+        return ExitCode::SUCCESS;
+    }
     if let Some(text) = help(&args) {
         print!("{text}");
         return ExitCode::SUCCESS;

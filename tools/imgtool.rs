@@ -238,7 +238,7 @@ fn diff(
         serde_json::to_string(&d).unwrap_or_default()
     } else {
         format!(
-            "MSE {:.6e}  RMSE {:.6e}  relMSE {:.6e}  MAE {:.6e}  max |diff| {:.6e}  pixels above threshold {:.4}%",
+            "MSE {:.6e}  RMSE {:.6e}  relMSE {:.6e}  MAE {:.6e}  max |diff| {:.6e}  pixels off by more than {pixel_threshold} (--pixel-threshold): {:.4}%",
             d.mse,
             d.rmse,
             d.relmse,

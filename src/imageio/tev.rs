@@ -14,7 +14,7 @@
 //! second: the render never waits for it, and a restarted tev gets the image again.
 
 use std::io::Write;
-use std::net::{TcpStream, ToSocketAddrs};
+use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
 const CREATE_IMAGE: u8 = 4;
@@ -25,8 +25,13 @@ const CHANNELS: [&str; 3] = ["R", "G", "B"];
 /// A connection to a tev server that comes and goes.
 #[derive(Debug)]
 pub struct Tev {
+    /// As given (for messages), and resolved when the render was planned.
     address: String,
+    resolved: SocketAddr,
     title: String,
+    /// Print no warnings; `warned` once a failure was told (one warning a render).
+    quiet: bool,
+    warned: bool,
     stream: Option<TcpStream>,
     last_attempt: Option<Instant>,
     /// Per tile and channel, a hash of what tev shows (none: nothing sent yet).
@@ -37,17 +42,32 @@ pub struct Tev {
 }
 
 impl Tev {
-    /// For `address` (`host:port`); the image is named `title` in tev.
-    pub fn new(address: &str, title: &str) -> Tev {
-        Tev {
+    /// For `address` (`host:port`, the host resolved now); the image is named `title`
+    /// in tev. An address without a port, a bad port or a host that does not resolve
+    /// is an error, before any work.
+    pub fn new(address: &str, title: &str, quiet: bool) -> Result<Tev, String> {
+        Ok(Tev {
             address: address.into(),
+            resolved: resolve(address)?,
             title: title.into(),
+            quiet,
+            warned: false,
             stream: None,
             last_attempt: None,
             sent: Vec::new(),
             last_shown: None,
             cost: Duration::ZERO,
+        })
+    }
+
+    /// One warning a render, the first time tev cannot be reached or is lost; the
+    /// render goes on and keeps trying.
+    fn warn(&mut self, what: std::io::Error) {
+        if !self.quiet && !self.warned {
+            let at = &self.address;
+            eprintln!("\n--display-server {at}: warning: {what}; rendering goes on, trying again once a second");
         }
+        self.warned = true;
     }
 
     /// As [`Tev::show`] unless `now` (the last image): at most four times a second, and
@@ -68,11 +88,14 @@ impl Tev {
         if self.stream.is_none() && !self.connect(width, height) {
             return false;
         }
-        let ok = self.send_tiles(pixels, width, height).is_ok();
-        if !ok {
-            self.stream = None;
+        match self.send_tiles(pixels, width, height) {
+            Ok(()) => true,
+            Err(e) => {
+                self.stream = None;
+                self.warn(std::io::Error::new(e.kind(), format!("the connection to tev was lost ({e})")));
+                false
+            }
         }
-        ok
     }
 
     /// Connects (at most once a second) and creates the image there.
@@ -81,8 +104,13 @@ impl Tev {
             return false;
         }
         self.last_attempt = Some(Instant::now());
-        let Some(addr) = self.address.to_socket_addrs().ok().and_then(|mut a| a.next()) else { return false };
-        let Ok(stream) = TcpStream::connect_timeout(&addr, Duration::from_millis(200)) else { return false };
+        let stream = match TcpStream::connect_timeout(&self.resolved, Duration::from_millis(200)) {
+            Ok(s) => s,
+            Err(e) => {
+                self.warn(std::io::Error::new(e.kind(), format!("cannot connect to tev ({e})")));
+                return false;
+            }
+        };
         let _ = stream.set_write_timeout(Some(Duration::from_secs(2)));
         let _ = stream.set_nodelay(true);
         self.stream = Some(stream);
@@ -130,6 +158,25 @@ impl Tev {
             Some(s) => s.write_all(bytes),
             None => Err(std::io::ErrorKind::NotConnected.into()),
         }
+    }
+}
+
+/// `HOST:PORT` resolved to its first address; what is wrong with it otherwise.
+pub fn resolve(address: &str) -> Result<SocketAddr, String> {
+    let expected = "expected HOST:PORT (tev listens on localhost:14158 by default)";
+    let Some((host, port)) = address.rsplit_once(':') else {
+        return Err(format!("\"{address}\": no port; {expected}"));
+    };
+    if host.is_empty() {
+        return Err(format!("\"{address}\": no host; {expected}"));
+    }
+    if !matches!(port.parse::<u16>(), Ok(p) if p > 0) {
+        return Err(format!("\"{address}\": the port \"{port}\" is not a number from 1 to 65535"));
+    }
+    match address.to_socket_addrs().map(|mut a| a.next()) {
+        Ok(Some(a)) => Ok(a),
+        Ok(None) => Err(format!("\"{address}\": the host \"{host}\" has no address")),
+        Err(e) => Err(format!("\"{address}\": the host \"{host}\" cannot be found ({e})")),
     }
 }
 

@@ -41,4 +41,8 @@ pub enum RenderError {
         pixel.0, pixel.1
     )]
     NotFinite { pixel: (i32, i32), value: [f32; 3] },
+    /// A second interrupt took over: the image of the completed iterations is written
+    /// by whoever aborted, and the render writes nothing.
+    #[error("stopped by a second interrupt")]
+    Aborted,
 }

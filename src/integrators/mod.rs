@@ -2,13 +2,14 @@
 //! vertex connection and merging ([`vcm`]; bdpt is vcm without merging), both driven
 //! through [`engine`]. [`grid`] is the photon (and light vertex) lookup grid,
 //! [`adaptive`] adaptive photon chains, [`plan`] what a run is asked and runs with, [`run`] the render loop, [`error`] what stops
-//! it, [`checkpoint`] saved and resumed state, [`passes`] independent passes, [`part`]
+//! it, [`checkpoint`] saved and resumed state, [`completed`] the last completed image for an abort, [`passes`] independent passes, [`part`]
 //! shard files and their merge, [`report`] `ERRORS.csv` and progress, [`preview`] images inside a long iteration. Data flows one
 //! way: the render-ready scene (`render`) in, an image out.
 
 pub mod adaptive;
 pub mod beams;
 pub mod checkpoint;
+pub mod completed;
 pub mod engine;
 pub mod error;
 pub mod grid;

@@ -78,6 +78,11 @@ impl std::str::FromStr for Algorithm {
 /// The smallest initial radius: its square is a normal f32.
 pub use crate::scene::options::MIN_RADIUS;
 
+/// The iterations a render with a time limit and no iteration count plans: the
+/// `iterations` limit's default, more than any render reaches in its time. Ray
+/// differentials are then scaled as for any long render (their floor).
+pub const OPEN_ENDED: u32 = 1 << 24;
+
 /// How to render: overrides of the scene's SPPM parameters and the pass plan. Nothing
 /// here is about reporting or output (see [`super::Monitor`]).
 #[derive(Clone, Debug, Default)]
@@ -98,6 +103,8 @@ pub struct RenderSettings {
     /// Divide the iteration count by 16 (pbrt-v3's `--quick`).
     pub quick: bool,
     /// Stop once this many seconds have passed (the iteration under way is finished).
+    /// Without `iterations` (and a pass range), the render runs until then: up to
+    /// [`OPEN_ENDED`] iterations rather than the file's count.
     pub time_limit: Option<f64>,
     /// Classic SPPM or independent passes (`--passes`, `--alpha`).
     pub passes: PassMode,
@@ -177,8 +184,10 @@ impl Plan {
         settings: &RenderSettings,
     ) -> Result<Plan, RenderError> {
         let algorithm = settings.algorithm.unwrap_or_else(|| Algorithm::by_default(integrator));
-        let mut iterations = settings.iterations.unwrap_or(integrator.iterations);
-        if settings.quick {
+        let open_ended =
+            settings.time_limit.is_some() && settings.pass_range.is_none() && settings.iterations.is_none();
+        let mut iterations = if open_ended { OPEN_ENDED } else { settings.iterations.unwrap_or(integrator.iterations) };
+        if settings.quick && !open_ended {
             iterations = (iterations / 16).max(1);
         }
         let radius = settings.radius.unwrap_or_else(|| default_radius(integrator, world_radius, algorithm));

@@ -3,12 +3,13 @@
 //! checkpoints, and a clean stop when interrupted.
 
 use super::checkpoint::{Checkpoint, Every, Fingerprint};
+use super::completed::{Completed, Snapshot};
 use super::engine::Engine;
 use super::error::RenderError;
 use super::passes::PassSet;
 pub use super::plan::{Algorithm, MIN_RADIUS, Plan, RenderSettings};
 use super::preview::Preview;
-use super::report::{ErrorRow, progress_bar};
+use super::report::{ErrorRow, Pace, progress_bar, progress_inside};
 use crate::imageio::{ImageMeta, RgbImage, metrics, write_image};
 use crate::render::RenderScene;
 use std::path::PathBuf;
@@ -31,6 +32,9 @@ pub struct Monitor {
     pub partial_images: Option<PathBuf>,
     /// Raised (by a signal handler) to stop after the iteration under way.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// Keeps the image of the completed iterations for an abort that will not wait for
+    /// the one under way (a second Ctrl-C).
+    pub completed: Option<Arc<Completed>>,
     /// Show the image in tev as it converges (`--display-server`).
     pub display: Option<Arc<std::sync::Mutex<crate::imageio::tev::Tev>>>,
     /// Told after every iteration (the Python package's `progress` callback).
@@ -138,6 +142,9 @@ pub fn run(
     if monitor.progress {
         eprintln!();
     }
+    if monitor.completed.as_ref().is_some_and(|c| !c.finishing()) {
+        return Err(RenderError::Aborted);
+    }
     show(monitor, engine.size(), &|| engine.image(), true);
     if let Some(t) = &monitor.checkpoint
         && progress.saved.0 != engine.iteration()
@@ -170,7 +177,7 @@ fn iterate(engine: &mut Engine, monitor: &Monitor, plan: &Plan, progress: &Progr
     }
     let (live, done) = (engine.live(), std::sync::atomic::AtomicBool::new(false));
     let totals = (engine.pixel_count() as u64, plan.photons);
-    let (passes, total) = (engine.passes_done(), plan.range.len() as u32);
+    let passes = engine.passes_done();
     std::thread::scope(|s| {
         s.spawn(|| {
             let start = Instant::now();
@@ -178,13 +185,27 @@ fn iterate(engine: &mut Engine, monitor: &Monitor, plan: &Plan, progress: &Progr
                 std::thread::sleep(std::time::Duration::from_millis(100));
                 let t = start.elapsed().as_secs_f64();
                 if t >= 1.0 && (t * 2.0).fract() < 0.2 && !done.load(Ordering::Relaxed) {
-                    super::report::progress_inside(passes, total, progress.seconds(), &live, totals);
+                    progress_inside(pace(plan, passes, progress.seconds()), &live, totals);
                 }
             }
         });
         engine.iterate(preview);
         done.store(true, Ordering::Relaxed);
     });
+}
+
+/// Where the render stands, in the words its summary uses: iterations of classic
+/// SPPM, passes otherwise.
+fn pace(plan: &Plan, done: u32, seconds: f64) -> Pace {
+    let sppm = plan.algorithm == Algorithm::Sppm;
+    Pace {
+        done,
+        total: plan.range.len() as u32,
+        seconds,
+        limit: plan.time_limit,
+        word: if sppm && !plan.passes.is_independent() { "iterations" } else { "passes" },
+        light: if sppm { "photons" } else { "light subpaths" },
+    }
 }
 
 /// An image in tev (`--display-server`): at most four times a second, and `last` (the
@@ -214,7 +235,12 @@ fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &m
         });
     }
     if monitor.progress {
-        progress_bar(engine.passes_done(), plan.range.len() as u32, seconds);
+        progress_bar(pace(plan, engine.passes_done(), seconds));
+    }
+    if let Some(c) = &monitor.completed {
+        let errors = progress.errors.clone();
+        let image = image(engine, engine.photons(plan.photons), seconds);
+        c.keep(Snapshot { image, errors, iterations: engine.passes_done() });
     }
     if let Some(Observer(tell)) = &monitor.observer {
         tell(IterationDone { done: engine.passes_done(), planned: plan.range.len() as u32, seconds });

@@ -18,11 +18,13 @@
 //! only when something uses them.
 
 mod bugs;
+mod checks;
 mod media;
 mod typed;
 
 use super::approx::Approx;
 use super::entities;
+use super::names::Family;
 use super::options::RenderOptions;
 use super::shapes::{AlphaParams, alpha_params};
 use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped};
@@ -178,6 +180,8 @@ struct Builder {
     in_world: bool,
     /// The `WorldBegin` statement, if read.
     world_begin: Option<Span>,
+    /// Type names neither pbrt knows, read before the file's version was settled.
+    unknown_names: Vec<(Family, String, Span)>,
     render: RenderOptions,
     shapes: Vec<ShapeDesc>,
     /// Per world shape: its `Shape` statement's type name.
@@ -259,6 +263,7 @@ impl Builder {
             named_coords: HashMap::new(),
             in_world: false,
             world_begin: None,
+            unknown_names: Vec::new(),
             render: RenderOptions::default(),
             shapes: Vec::new(),
             shape_spans: Vec::new(),
@@ -382,6 +387,7 @@ impl Builder {
     fn apply(&mut self, stmt: Stmt) -> Res<()> {
         use StmtKind as K;
         let span = stmt.span;
+        self.check_type_name(&stmt.kind)?;
         match stmt.kind {
             K::Identity => self.transform(span, |_| DMat4::IDENTITY),
             K::Translate(d) => self.concat(span, DMat4::from_translation(DVec3::from(d))),
@@ -864,7 +870,7 @@ impl Builder {
         self.warnings.append(&mut warn);
         let Some(built) = built? else {
             let what = format!("Shape \"{}\"", s.entity.name);
-            self.skip(at, what, "this shape type is not supported".into());
+            self.skip(at, what, checks::why_left_out(Family::Shape, &s.entity.name));
             return Ok(Vec::new());
         };
         let alpha = alpha_params(p)?;
@@ -981,7 +987,7 @@ impl Builder {
         self.evidence("AreaLightSource", &e.name.clone(), e.name_span);
         if !crate::lights::diffuse::NAMES.contains(&e.name.as_str()) {
             let what = format!("AreaLightSource \"{}\"", e.name);
-            self.skip(e.name_span, what, "this area light type is not supported".into());
+            self.skip(e.name_span, what, checks::why_left_out(Family::AreaLight, &e.name));
             self.gs.area_light = None;
             return Ok(());
         }
@@ -1085,6 +1091,8 @@ impl Builder {
     fn finish(&mut self) -> Res<SceneDescription> {
         let syntax = self.opts.syntax.or(self.reader.evidence.as_ref().map(|e| e.0)).unwrap_or(Syntax::V4);
         self.syntax = Some(syntax);
+        self.check_world_begin()?;
+        self.settle_unknown_names(syntax)?;
         self.build_deferred_shapes()?;
         self.materials[0].ty =
             if syntax == Syntax::V3 { crate::materials::matte::NAME } else { crate::materials::diffuse::NAME }.into();

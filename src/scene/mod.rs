@@ -9,6 +9,7 @@
 pub mod approx;
 pub mod builder;
 pub mod entities;
+pub mod names;
 pub mod options;
 pub mod shapes;
 pub mod values;

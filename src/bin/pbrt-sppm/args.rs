@@ -115,17 +115,18 @@ pub struct RenderArgs {
     #[arg(long, allow_negative_numbers = true, value_parser = parse_count::<u64, 0>)]
     pub seed: Option<u64>,
     /// What drives camera paths and vcm's light subpaths: `sobol` (scrambled
-    /// low-discrepancy points, the default) or `random` (independent random numbers).
+    /// low-discrepancy points) or `random` (independent random numbers). Default: `sobol`.
     #[arg(long, value_parser = parse_sampler)]
     pub sampler: Option<SamplerKind>,
-    /// How photon paths are drawn: `uniform` (independent photons, as pbrt; the
-    /// default) or `adaptive` (Markov chains over paths that reach what the camera
-    /// sees, for scenes where most photons land out of view).
+    /// How photon paths are drawn: `uniform` (independent photons, as pbrt) or
+    /// `adaptive` (Markov chains over paths that reach what the camera sees, for scenes
+    /// where most photons land out of view). Default: `uniform`.
     #[arg(long, value_parser = parse_photon_sampling)]
     pub photon_sampling: Option<PhotonSampling>,
-    /// How SPPM gathers photons in participating media: `points` (a camera path
-    /// scatters at a point and gathers photons in a ball there; the default) or
-    /// `beams` (every medium segment of a camera path gathers the photons near it).
+    /// How SPPM gathers photons in participating media: `beams` (every medium segment
+    /// of a camera path gathers the photons near it) or `points` (a camera path
+    /// scatters at a point and gathers photons in a ball there). Default: `beams`
+    /// (`points` with adaptive photons).
     #[arg(long, value_parser = str::parse::<VolumeGather>)]
     pub volume_gather: Option<VolumeGather>,
     /// `sppm`, `vcm` (vertex connection and merging), `bdpt` (vcm without merging) or
@@ -151,7 +152,8 @@ pub struct RenderArgs {
     /// The initial photon radius (positive), overriding `radius`.
     #[arg(long, allow_negative_numbers = true, value_parser = parse_positive)]
     pub radius: Option<f32>,
-    /// Stop after the iteration that passes this many seconds (positive).
+    /// Render until this many seconds (positive) have passed, finishing the iteration
+    /// under way: as many iterations as fit, or at most --spp when it is given.
     #[arg(long, allow_negative_numbers = true, value_parser = parse_positive)]
     pub time_limit: Option<f32>,
     /// Compare every iteration with this image (needs --mse-reference-out).
@@ -179,9 +181,9 @@ pub struct RenderArgs {
     /// HOST:PORT, tev's default being localhost:14158).
     #[arg(long, value_name = "HOST:PORT")]
     pub display_server: Option<String>,
-    /// `classic` (pbrt's SPPM, the default) or `independent` (Knaus–Zwicker: each
-    /// pass's radius depends only on its index, so passes can be rendered apart and
-    /// merged).
+    /// `classic` (pbrt's SPPM) or `independent` (Knaus–Zwicker: each pass's radius
+    /// depends only on its index, so passes can be rendered apart and merged).
+    /// Default: `classic`.
     #[arg(long, value_parser = parse_passes)]
     pub passes: Option<bool>,
     /// How fast independent passes' radius shrinks: r²_{i+1} = r²_i (i+α)/(i+1), 0 < α < 1
@@ -306,6 +308,15 @@ pub fn with_default_subcommand(mut args: Vec<std::ffi::OsString>) -> Result<Vec<
     const KNOWN: [&str; 11] =
         ["render", "check", "trace", "export", "merge", "plan", "help", "--help", "-h", "--version", "-V"];
     let Some(first) = args.get(1) else { return Ok(args) };
+    // `help --help` (and `help check --help`) asks what `help` asks: clap's own `help`
+    // word takes no flags.
+    if first == "help" && args[2..].iter().any(|a| a == "--help" || a == "-h") {
+        let mut rest: Vec<_> = args.drain(2..).filter(|a| a != "--help" && a != "-h").collect();
+        args.truncate(1);
+        rest.push("--help".into());
+        args.extend(rest);
+        return Ok(args);
+    }
     if KNOWN.iter().any(|k| first == *k) {
         return Ok(args);
     }
@@ -335,8 +346,13 @@ pub fn asks_fix_help(args: impl Iterator<Item = std::ffi::OsString>) -> bool {
 }
 
 impl RenderArgs {
-    /// The job these flags ask for; `interrupt` is raised by a signal handler.
-    pub fn request(&self, interrupt: std::sync::Arc<std::sync::atomic::AtomicBool>) -> Result<Request, String> {
+    /// The job these flags ask for; `interrupt` is raised by a signal handler, and
+    /// `completed` keeps the last completed iteration for a second one.
+    pub fn request(
+        &self,
+        interrupt: std::sync::Arc<std::sync::atomic::AtomicBool>,
+        completed: std::sync::Arc<pbrt_sppm::integrators::completed::Completed>,
+    ) -> Result<Request, String> {
         let quiet = self.common.quiet;
         let settings = RenderSettings {
             algorithm: self.integrator,
@@ -366,6 +382,7 @@ impl RenderArgs {
             progress: std::io::IsTerminal::is_terminal(&std::io::stderr()) && !quiet,
             quiet,
             interrupt: Some(interrupt),
+            completed: Some(completed),
             display_server: self.display_server.clone(),
         })
     }

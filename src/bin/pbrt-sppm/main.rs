@@ -5,13 +5,15 @@
 
 mod args;
 mod print;
+mod rendering;
+mod signals;
 
-use args::{Cli, Command, Common, PlanArgs, RenderArgs};
+use args::{Cli, Command, Common, PlanArgs};
 use clap::Parser;
 use pbrt_sppm::cli::{check, export, farm, trace};
 use pbrt_sppm::fixes::Fixes;
 use pbrt_sppm::integrators::part;
-use pbrt_sppm::job::{Job, check_output, check_part_path};
+use pbrt_sppm::job::{check_output, check_part_path};
 use pbrt_sppm::limits::Limits;
 use pbrt_sppm::parser::error::LoadError;
 use pbrt_sppm::scene::{LoadOptions, SceneDescription, load_scene, load_scene_from_bytes};
@@ -19,8 +21,6 @@ use print::{fail, print, say};
 use std::io::{IsTerminal, Read};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 fn main() -> ExitCode {
     if args::asks_fix_help(std::env::args_os().skip(1)) {
@@ -47,32 +47,30 @@ fn main() -> ExitCode {
             Ok(merge(&parts, outfile.as_deref(), partial.as_deref(), allow_gaps, quiet))
         }
         Command::Plan(args) => Ok(plan(&args)),
-        Command::Render(args) => loading(&args.scene, &args.common).map(|s| render(s, &args)),
+        Command::Render(args) => Ok(rendering::command(&args)),
     };
     result.unwrap_or_else(|code| code)
 }
 
-/// [`load`] for a render: on a terminal (and without `--quiet`) a line says that loading
-/// started and, when it ends, how long it took and what the scene holds, so a large
-/// scene is not a silent wait.
-fn loading(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> {
-    let tell = !common.quiet && std::io::stderr().is_terminal();
-    if tell {
-        eprint!("loading {} ...", scene.display());
-    }
-    let start = std::time::Instant::now();
-    let loaded = load(scene, common);
-    if tell && let Ok(s) = &loaded {
-        let i = &s.integrator;
-        let method = pbrt_sppm::integrators::Algorithm::by_default(i).name();
-        eprintln!(" {:.2} s: {}; {method}", start.elapsed().as_secs_f64(), check::counts_line(s));
-    }
-    loaded
-}
-
 /// Loads a scene (`-`: standard input) under the command line's limits and fixes,
 /// printing its warnings unless quiet.
-fn load(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> {
+pub(crate) fn load(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> {
+    let s = read(scene, common, false)?;
+    if !common.quiet {
+        s.warnings.iter().for_each(|w| say!("{w}"));
+    }
+    Ok(s)
+}
+
+/// Loads a scene without printing its warnings; an error is printed on a line of its
+/// own (`line_open`: after ending the line a caller left open).
+pub(crate) fn read(scene: &Path, common: &Common, line_open: bool) -> Result<SceneDescription, ExitCode> {
+    let fail = |at: &Path, e: String| {
+        if line_open {
+            say!("");
+        }
+        fail(at, e)
+    };
     let mut limits = Limits::default();
     for spec in &common.limits {
         limits.set(spec).map_err(|e| fail(Path::new("--limit"), e))?;
@@ -94,70 +92,18 @@ fn load(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> {
     } else {
         load_scene(scene, &opts)
     };
-    let s = loaded.map_err(|e| report_error(&e))?;
-    if !common.quiet {
-        s.warnings.iter().for_each(|w| say!("{w}"));
-    }
-    Ok(s)
+    loaded.map_err(|e| {
+        if line_open {
+            say!("");
+        }
+        report_error(&e)
+    })
 }
 
 fn report_error(e: &LoadError) -> ExitCode {
     let text = if std::io::stderr().is_terminal() { e.with_source() } else { e.one_line() };
     say!("{text}");
     ExitCode::FAILURE
-}
-
-/// Renders a loaded scene and writes the image, the part and `ERRORS.csv`.
-fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
-    let quiet = args.common.quiet;
-    let request = match args.request(stop_on_signals(quiet)) {
-        Ok(r) => r,
-        Err(e) => return fail(Path::new("--passes"), e),
-    };
-    if !quiet {
-        print::before_render(&scene, args);
-    }
-    let pool = match rayon::ThreadPoolBuilder::new().num_threads(args.nthreads.unwrap_or(0)).build() {
-        Ok(p) => p,
-        Err(e) => return fail(Path::new("--nthreads"), e),
-    };
-    let job = pool.install(|| Job::plan(&scene, request));
-    // The render scene holds what it needs; the description's meshes go now.
-    drop(scene);
-    let done = job.and_then(|job| {
-        let out = pool.install(|| job.resume().and_then(|resume| job.run(resume)))?;
-        job.write(&out)?;
-        Ok((job, out))
-    });
-    match done {
-        Ok((job, out)) => print::rendered(&job, &out, args),
-        Err(e) => {
-            say!("{e}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-/// Ctrl-C, SIGTERM and SIGHUP raise the returned flag: the render stops after the
-/// iteration under way, saves its checkpoint and writes its image. A second signal
-/// ends the process at once.
-fn stop_on_signals(quiet: bool) -> Arc<AtomicBool> {
-    let flag = Arc::new(AtomicBool::new(false));
-    let raised = flag.clone();
-    let installed = ctrlc::set_handler(move || {
-        if raised.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-        if !quiet {
-            eprintln!("\ninterrupted: finishing this iteration, then saving (interrupt again to quit at once)");
-        }
-    });
-    if let Err(e) = installed
-        && !quiet
-    {
-        say!("warning: cannot catch interrupts ({e}); an interrupted render will be lost");
-    }
-    flag
 }
 
 /// Writes the Mitsuba export; what cannot go over is also warned about on stderr.

@@ -168,8 +168,10 @@ fn checked_type(e: &Entity, syntax: Syntax) -> Res<(String, Span)> {
     if ty.is_empty() {
         return Err(Diagnostic::error(e.name_span, "MakeNamedMedium needs a \"string type\""));
     }
+    // DEVIATION(pbrt): input leniency. pbrt-v3 warns and leaves the medium undefined
+    // (its uses then fall back to vacuum); an error names the typo instead.
     if !media::known(&ty) {
-        return Err(Diagnostic::error(at, format!("unknown medium type \"{ty}\"")));
+        return Err(Diagnostic::error(at, crate::scene::names::Family::Medium.unknown(&ty)));
     }
     if syntax == Syntax::V4 && ty == "heterogeneous" {
         return Err(Diagnostic::error(

@@ -14,6 +14,7 @@ use crate::parser::params::{FloatValue, ParamList};
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::scene::approx::Approx;
+use crate::scene::names::Family;
 use crate::scene::shapes::AlphaParams;
 use crate::scene::values::SpectrumContext;
 use crate::scene::{AlphaRule, ShapeAlpha};
@@ -97,7 +98,7 @@ impl Builder {
                 }
                 None => {
                     let what = format!("LightSource \"{}\"", e.name);
-                    self.skip(e.name_span, what, "this light type is not supported".into());
+                    self.skip(e.name_span, what, super::checks::why_left_out(Family::Light, &e.name));
                 }
             }
         }
@@ -160,7 +161,10 @@ impl Builder {
         let at = span.unwrap_or_default();
         let kind = {
             let mut r = Scoped { b: self, scope, depth: 0 };
-            let kind = materials::read(&ty, &params, at, &mut r)?;
+            // pbrt-v3 renders an unknown material as matte with its parameters (pbrt-v4
+            // stops at it: see `checks`).
+            let read_as = if Family::Material.knows(&ty) { ty.as_str() } else { crate::materials::matte::NAME };
+            let kind = materials::read(read_as, &params, at, &mut r)?;
             (kind, bump_map(&params, &mut r)?, normal_map(&ty, &params, &mut r)?)
         };
         let (kind, bump, normal_map) = kind;
@@ -196,6 +200,9 @@ impl Builder {
         let kind = kind.unwrap_or_else(|| {
             params.mark_all_used();
             let what = format!("texture \"{}\" of class \"{class}\"", self.textures[i as usize].name);
+            if !Family::Texture.knows(&class) {
+                self.warnings.push(Diagnostic::warning(span, Family::Texture.unknown(&class)));
+            }
             self.note(span, what, Approx::UnsupportedTexture);
             TextureKind::Constant(TexValue::Const(Vec3::splat(0.5)))
         });

@@ -1,0 +1,103 @@
+//! Checks of a whole file that need its version settled: type names neither pbrt knows
+//! ([`Family`]), and a file that never reaches `WorldBegin`.
+//!
+//! ```text
+//! Shape "sphre"      # v4: error, unknown shape type "sphre" (did you mean "sphere"?)
+//!                    # v3: warning, left out as pbrt-v3 leaves it out
+//! Camera "pinhole"   # an error for both: pbrt renders nothing without a camera
+//! ```
+
+use super::{Builder, Res};
+use crate::parser::Syntax;
+use crate::parser::error::Diagnostic;
+use crate::parser::source::{FileId, Span};
+use crate::parser::stmt::StmtKind;
+use crate::scene::names::Family;
+
+/// Why a statement of a type we do not render is left out: a name pbrt knows and we
+/// do not render, or an unknown one (with the nearest known name).
+pub(super) fn why_left_out(family: Family, name: &str) -> String {
+    if family.knows(name) {
+        format!("this {} is not supported", family.noun())
+    } else {
+        format!("{}; left out, as pbrt-v3 leaves it out", family.unknown(name))
+    }
+}
+
+impl Builder {
+    /// A type name neither pbrt knows is an error where the file's pbrt stops at it, as
+    /// soon as the version is known; until then it waits for [`Builder::settle_unknown_names`].
+    pub(super) fn check_type_name(&mut self, kind: &StmtKind) -> Res<()> {
+        let (family, name, at) = match kind {
+            StmtKind::Shape(e) => (Family::Shape, e.name.clone(), e.name_span),
+            StmtKind::Material(e) => (Family::Material, e.name.clone(), e.name_span),
+            StmtKind::MakeNamedMaterial(e) => match e.params.string("type") {
+                Ok(Some(ty)) => {
+                    (Family::Material, ty, crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span))
+                }
+                _ => return Ok(()),
+            },
+            StmtKind::Texture { class, .. } => (Family::Texture, class.name.clone(), class.name_span),
+            StmtKind::LightSource(e) => (Family::Light, e.name.clone(), e.name_span),
+            StmtKind::AreaLightSource(e) => (Family::AreaLight, e.name.clone(), e.name_span),
+            StmtKind::Camera(e) => (Family::Camera, e.name.clone(), e.name_span),
+            StmtKind::Sampler(e) => (Family::Sampler, e.name.clone(), e.name_span),
+            StmtKind::PixelFilter(e) => (Family::Filter, e.name.clone(), e.name_span),
+            StmtKind::Film(e) => (Family::Film, e.name.clone(), e.name_span),
+            StmtKind::Integrator(e) => (Family::Integrator, e.name.clone(), e.name_span),
+            _ => return Ok(()),
+        };
+        if family.knows(&name) {
+            return Ok(());
+        }
+        match self.known_syntax() {
+            Some(syntax) if family.stops(syntax) => Err(unknown_error(family, &name, at, syntax)),
+            None if !family.v3_goes_on() => Err(unknown_error(family, &name, at, Syntax::V3)),
+            _ => {
+                self.unknown_names.push((family, name, at));
+                Ok(())
+            }
+        }
+    }
+
+    /// With the version settled: the first unknown name where the file's pbrt stops is
+    /// an error; pbrt-v3's unknown materials are rendered as matte, with a warning (the
+    /// other families warn where the statement is left out).
+    pub(super) fn settle_unknown_names(&mut self, syntax: Syntax) -> Res<()> {
+        for (family, name, at) in std::mem::take(&mut self.unknown_names) {
+            if family.stops(syntax) {
+                return Err(unknown_error(family, &name, at, syntax));
+            }
+            if family == Family::Material {
+                let msg = format!("{}; rendered as matte with its parameters, as pbrt-v3 does", family.unknown(&name));
+                self.warnings.push(Diagnostic::warning(at, msg));
+            }
+        }
+        Ok(())
+    }
+
+    /// A file (with its includes) that ends before `WorldBegin` has nothing to render:
+    /// an error at its end, as pbrt-v4 says.
+    pub(super) fn check_world_begin(&self) -> Res<()> {
+        if self.world_begin.is_some() {
+            return Ok(());
+        }
+        let main = FileId(0);
+        let end = self.reader.sources.file(main).text.len();
+        let what = if end == 0 || self.reader.sources.file(main).text.iter().all(u8::is_ascii_whitespace) {
+            "the file is empty"
+        } else {
+            "the file ends before WorldBegin"
+        };
+        Err(Diagnostic::error(Span::new(main, end, end), format!("{what}: there is no scene to render")))
+    }
+}
+
+fn unknown_error(family: Family, name: &str, at: Span, syntax: Syntax) -> Diagnostic {
+    let why = match syntax {
+        _ if !family.v3_goes_on() => "pbrt renders nothing without a known one",
+        Syntax::V4 => "pbrt-v4 stops here too",
+        Syntax::V3 => "pbrt-v3 stops here too",
+    };
+    Diagnostic::error(at, format!("{}; {why}", family.unknown(name)))
+}
