@@ -279,8 +279,7 @@ fn the_script_rejects_what_is_not_an_export() {
         let json = dir.join("scene.json");
         std::fs::write(&json, text).unwrap();
         let Ok(out) = Command::new("python3").arg(&script).arg(&json).arg(dir.join("out.exr")).output() else {
-            eprintln!("SKIPPED: python3 is not installed");
-            return;
+            return crate::common::cannot_run("python", "the Mitsuba script's checks", "python3 is not installed");
         };
         assert_eq!(out.status.code(), Some(1));
         let err = String::from_utf8_lossy(&out.stderr);
@@ -319,7 +318,6 @@ fn mitsuba_python() -> Option<PathBuf> {
 /// Mitsuba's own 1024-spp noise is 5e-5), channel means within 0.15%. An 8% change of
 /// the floor's reflectance alone gives relMSE 2.2e-3.
 #[test]
-#[ignore = "opt-in: installs Mitsuba 3 (about 230 MB); run with --include-ignored (.ci/run does)"]
 fn mitsuba_and_sppm_agree_on_a_small_diffuse_scene() {
     let Some(python) = mitsuba_python() else { return };
     let dir = tempdir("render");
@@ -356,7 +354,6 @@ fn mitsuba_and_sppm_agree_on_a_small_diffuse_scene() {
 /// relMSE 1.2e-4 (pixel filtering at the map's sharp edges); a mapping with the
 /// reflection left out gives about 57.
 #[test]
-#[ignore = "opt-in: installs Mitsuba 3 (about 230 MB); run with --include-ignored (.ci/run does)"]
 fn mitsuba_reads_environment_maps_as_we_do() {
     let Some(python) = mitsuba_python() else { return };
     let dir = tempdir("envmap");

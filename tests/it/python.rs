@@ -33,8 +33,6 @@ fn install(venv: &Path, wheels: &Path) {
 }
 
 #[test]
-#[ignore = "opt-in: builds the Python package in a virtual environment (maturin, NumPy, pytest from PyPI); \
-            run with --include-ignored (.ci/run does)"]
 fn the_python_package_builds_and_its_tests_pass() {
     let packages = ["maturin>=1.5,<2", "numpy", "pytest"];
     let python = match python_venv("python-venv", &packages, "import maturin, numpy, pytest") {

@@ -1,6 +1,6 @@
-//! The third-party scenes in ../shared/scenes that use only our subset load. These
-//! tests are opt-in (`--include-ignored`, which .ci/run uses), since the folder sits
-//! beside the repository, not in it; without the folder they fail under CI.
+//! The third-party scenes in ../shared/scenes that use only our subset load. The
+//! folder sits beside the repository, not in it: without it these tests are skipped
+//! (and fail under CI).
 
 use crate::common::{load_file, root};
 use std::path::PathBuf;
@@ -36,7 +36,6 @@ fn walk(dir: &std::path::Path, out: &mut Vec<PathBuf>) {
 }
 
 #[test]
-#[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
 fn every_shared_scene_in_the_subset_loads() {
     let Some(dir) = shared() else { return };
     let mut files = Vec::new();
@@ -61,7 +60,6 @@ fn every_shared_scene_in_the_subset_loads() {
 }
 
 #[test]
-#[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
 fn all_shapes_loads_with_its_curves_and_nothing_skipped() {
     let Some(dir) = shared() else { return };
     let scene = load_file(&dir.join("pbrt-v3-rs/scenes/shapes/all-shapes.pbrt")).expect("loads");
@@ -71,7 +69,6 @@ fn all_shapes_loads_with_its_curves_and_nothing_skipped() {
 }
 
 #[test]
-#[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
 fn caustic_glass_is_read_as_pbrt_reads_it() {
     let Some(dir) = shared() else { return };
     let s = load_file(&dir.join("pbrt-v3-scenes/caustic-glass/f16-9a.pbrt")).expect("loads");
@@ -92,7 +89,6 @@ fn caustic_glass_is_read_as_pbrt_reads_it() {
 }
 
 #[test]
-#[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
 fn buddha_fractal_instances_one_mesh_25250_times() {
     let Some(dir) = shared() else { return };
     let s = load_file(&dir.join("pbrt-v3-scenes/buddha-fractal/buddha-fractal.pbrt")).expect("loads");
@@ -106,7 +102,6 @@ fn buddha_fractal_instances_one_mesh_25250_times() {
 /// `pbrt-scenes/verify/v4-killeroo.pbrt` reads the killeroo's `loopsubdiv` control mesh
 /// from ../shared/scenes.
 #[test]
-#[ignore = "needs ../shared/scenes; run with --include-ignored (.ci/run does)"]
 fn the_killeroo_renders_as_in_pbrt_v4() {
     if shared().is_none() {
         return;
