@@ -2,7 +2,10 @@
 //! wait for the iteration under way (a second Ctrl-C): the command line writes it and
 //! quits while the render's threads are still busy.
 //!
-//! The render loop [`Completed::keep`]s a snapshot after every iteration and claims
+//! The render loop [`Completed::keep`]s a snapshot after every iteration that took at
+//! least a hundred times the snapshot's own cost (so snapshots cost at most 1% of the
+//! render; after shorter ones it says [`Completed::passed`], and an abort then lets the
+//! short iteration under way finish), and claims
 //! the right to write when it ends ([`Completed::finishing`]); an abort claims it with
 //! [`Completed::abort`]. Whoever claims first writes, so the final save (image,
 //! checkpoint, ERRORS.csv) is never cut short by an abort, and an abort's image is
@@ -35,6 +38,8 @@ enum Phase {
 struct State {
     phase: Phase,
     snapshot: Option<Snapshot>,
+    /// The snapshot is of the last completed iteration (not an earlier one).
+    fresh: bool,
 }
 
 /// Shared between the render loop and whoever handles an abort.
@@ -49,6 +54,9 @@ pub enum Abort {
     Now(Option<Snapshot>),
     /// The render already finished its iterations and is saving: let it finish.
     Saving,
+    /// The iterations are too short to be worth a snapshot each: the one under way
+    /// ends soon, and the render then saves as after a first interrupt.
+    Soon,
 }
 
 impl Completed {
@@ -61,8 +69,13 @@ impl Completed {
     pub fn keep(&self, snapshot: Snapshot) {
         let mut s = self.state();
         if matches!(s.phase, Phase::Rendering) {
-            s.snapshot = Some(snapshot);
+            (s.snapshot, s.fresh) = (Some(snapshot), true);
         }
+    }
+
+    /// An iteration completed without a snapshot (it was short).
+    pub fn passed(&self) {
+        self.state().fresh = false;
     }
 
     /// The render loop has ended: true when it may save its results, false when an
@@ -84,6 +97,7 @@ impl Completed {
         let mut s = self.state();
         match s.phase {
             Phase::Finishing => Abort::Saving,
+            Phase::Rendering if !s.fresh && s.snapshot.is_some() => Abort::Soon,
             Phase::Aborted | Phase::Rendering => {
                 s.phase = Phase::Aborted;
                 Abort::Now(s.snapshot.take())
@@ -126,6 +140,15 @@ mod tests {
         assert!(c.finishing());
         assert!(matches!(c.abort(), Abort::Saving));
         assert!(!c.aborted());
+    }
+
+    #[test]
+    fn an_abort_after_short_iterations_without_snapshots_lets_the_render_save() {
+        let c = Completed::default();
+        c.keep(snap(1));
+        c.passed();
+        assert!(matches!(c.abort(), Abort::Soon));
+        assert!(c.finishing(), "the render saves its own, newer, state");
     }
 
     #[test]

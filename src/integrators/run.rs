@@ -15,7 +15,7 @@ use crate::render::RenderScene;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// What a render reports and saves while it runs, and what stops it early.
 #[derive(Clone, Debug, Default)]
@@ -92,6 +92,8 @@ struct Progress {
     saved: (u32, Instant),
     /// The last checkpoint write failed (warned about once until one succeeds).
     save_failed: bool,
+    /// What the last snapshot for an abort took.
+    snapshot_cost: Duration,
 }
 
 impl Progress {
@@ -117,7 +119,14 @@ pub fn run(
     check_reference(scene, monitor)?;
     let mut engine = Engine::new(scene, plan)?;
     let now = Instant::now();
-    let mut progress = Progress { start: now, prior: 0.0, errors: Vec::new(), saved: (0, now), save_failed: false };
+    let mut progress = Progress {
+        start: now,
+        prior: 0.0,
+        errors: Vec::new(),
+        saved: (0, now),
+        save_failed: false,
+        snapshot_cost: Duration::ZERO,
+    };
     if let Some(c) = resume {
         if !(plan.range.start..=plan.range.end).contains(&c.iteration) {
             return Err(RenderError::CheckpointOutside { at: c.iteration, range: plan.range.clone() });
@@ -136,8 +145,10 @@ pub fn run(
         }
         let start = Instant::now();
         iterate(&mut engine, monitor, plan, &progress, took.is_none_or(|t: f64| t >= LONG_ITERATION));
-        took = Some(start.elapsed().as_secs_f64());
+        let iteration = start.elapsed();
+        took = Some(iteration.as_secs_f64());
         after_iteration(&engine, monitor, plan, &mut progress);
+        keep_completed(&engine, monitor, plan, &mut progress, iteration);
     };
     if monitor.progress {
         eprintln!();
@@ -218,6 +229,20 @@ fn show(monitor: &Monitor, size: (usize, usize), image: &dyn Fn() -> Vec<[f32; 3
     }
 }
 
+/// Keeps the completed iterations' image for an abort ([`Completed`]) when the
+/// iteration took at least a hundred times what the last snapshot cost.
+fn keep_completed(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &mut Progress, took: Duration) {
+    let Some(c) = &monitor.completed else { return };
+    if took < progress.snapshot_cost * 100 {
+        return c.passed();
+    }
+    let start = Instant::now();
+    let image = image(engine, engine.photons(plan.photons), progress.seconds());
+    let errors = progress.errors.clone();
+    c.keep(Snapshot { image, errors, iterations: engine.passes_done() });
+    progress.snapshot_cost = start.elapsed();
+}
+
 /// The error row, progress bar, partial image and checkpoint due after an iteration.
 fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &mut Progress) {
     let seconds = progress.seconds();
@@ -236,11 +261,6 @@ fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &m
     }
     if monitor.progress {
         progress_bar(pace(plan, engine.passes_done(), seconds));
-    }
-    if let Some(c) = &monitor.completed {
-        let errors = progress.errors.clone();
-        let image = image(engine, engine.photons(plan.photons), seconds);
-        c.keep(Snapshot { image, errors, iterations: engine.passes_done() });
     }
     if let Some(Observer(tell)) = &monitor.observer {
         tell(IterationDone { done: engine.passes_done(), planned: plan.range.len() as u32, seconds });

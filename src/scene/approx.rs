@@ -15,21 +15,19 @@ pub enum Approx {
     UnsupportedTexture,
     MissingImage,
     Motion,
-    Camera,
     FilmType,
     ColorSpace,
     NanoVdb,
 }
 
 impl Approx {
-    pub const ALL: [Approx; 10] = [
+    pub const ALL: [Approx; 9] = [
         Approx::CoatInBlend,
         Approx::HairInBlend,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
         Approx::MissingImage,
         Approx::Motion,
-        Approx::Camera,
         Approx::FilmType,
         Approx::ColorSpace,
         Approx::NanoVdb,
@@ -50,7 +48,6 @@ impl Approx {
             Approx::Motion => {
                 "a moving shape inside an object definition keeps its start transform (motion nests there in pbrt)"
             }
-            Approx::Camera => "this camera type is not supported; a perspective camera is used",
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",
             Approx::ColorSpace => "only sRGB is supported; RGB values are taken as sRGB",
             Approx::NanoVdb => {

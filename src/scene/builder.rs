@@ -1091,7 +1091,6 @@ impl Builder {
     fn finish(&mut self) -> Res<SceneDescription> {
         let syntax = self.opts.syntax.or(self.reader.evidence.as_ref().map(|e| e.0)).unwrap_or(Syntax::V4);
         self.syntax = Some(syntax);
-        self.check_world_begin()?;
         self.settle_unknown_names(syntax)?;
         self.build_deferred_shapes()?;
         self.materials[0].ty =
@@ -1128,6 +1127,8 @@ impl Builder {
         self.skipped.sort_by_key(|(span, _, _)| span.map(|s| (s.file.0, s.start)));
         self.approximated.sort_by_key(|(span, _, _)| (span.file.0, span.start));
         let sources = &self.reader.sources;
+        // Last: every other error comes first, in file order, as the file is read.
+        self.check_world_begin()?;
         let mut film = r.film;
         let filename_param = self.render.film.as_ref().and_then(|e| e.params.named("filename"));
         film.filename_location = filename_param.map(|p| sources.location(p.value_span).to_string());

@@ -184,7 +184,7 @@ impl RenderOptions {
         notes: &mut Notes,
     ) -> Res<Resolved> {
         let (film, exposure_scale) = self.film(syntax, limits, warn, notes)?;
-        let camera = self.camera(&film, syntax, notes)?;
+        let camera = self.camera(&film, syntax)?;
         let mut film = film;
         if syntax == Syntax::V4 {
             self.check_shutter_opens()?;
@@ -311,7 +311,7 @@ impl RenderOptions {
         Ok(Some(std::sync::Arc::new(desc)))
     }
 
-    fn camera(&self, film: &Film, syntax: Syntax, notes: &mut Notes) -> Res<Camera> {
+    fn camera(&self, film: &Film, syntax: Syntax) -> Res<Camera> {
         let default = (Entity::default_named("perspective"), DMat4::IDENTITY);
         let (e, camera_from_world) = self.camera.as_ref().unwrap_or(&default);
         let p = &e.params;
@@ -331,11 +331,8 @@ impl RenderOptions {
                 }
             }),
             "realistic" => CameraKind::Realistic,
-            other => {
-                notes.push((e.name_span, format!("Camera \"{other}\""), Approx::Camera));
-                p.mark_all_used();
-                CameraKind::Perspective
-            }
+            // The builder stops at names neither pbrt knows (`scene::names`).
+            other => return Err(Diagnostic::error(e.name_span, super::names::Family::Camera.unknown(other))),
         };
         let frame = match values::float(p, "frameaspectratio", -1.0, Range::Any)? {
             f if f > 0.0 => f,

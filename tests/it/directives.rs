@@ -297,8 +297,10 @@ fn objects_share_geometry_and_compose_transforms() {
 
 #[test]
 fn lights_and_area_lights() {
+    // A v3 file (`Film "image"`): pbrt-v3 leaves unknown light types out with a
+    // warning, where pbrt-v4 stops (tests/it/messages.rs).
     let s = scene(
-        r#"WorldBegin
+        r#"Film "image" WorldBegin
         LightSource "point" "rgb I" [1 1 1] "float bogus" 1
         LightSource "laser" "string filename" "x.exr"
         AttributeBegin AreaLightSource "diffuse" "rgb L" [1 1 1] Shape "sphere" Shape "disk" AttributeEnd
@@ -313,6 +315,9 @@ fn lights_and_area_lights() {
         s.skipped.iter().map(|k| k.what.as_str()).collect::<Vec<_>>(),
         ["LightSource \"laser\"", "AreaLightSource \"projection\""]
     );
+    let why: Vec<&str> = s.skipped.iter().map(|k| k.why.as_str()).collect();
+    assert!(why[0].starts_with("unknown light type \"laser\""), "{why:?}");
+    assert!(why[1].starts_with("unknown area light type \"projection\""), "{why:?}");
     let unused = s.warnings.iter().find(|w| w.message.contains("bogus")).expect("unused-parameter warning");
     assert_eq!((unused.line, unused.column), (2, 45));
     assert_eq!(pbrt_sppm::cli::check::report(&s, false)["counts"]["lights"], 3);

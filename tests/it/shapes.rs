@@ -273,18 +273,19 @@ fn objmesh_extension() {
 }
 
 #[test]
-fn unsupported_shapes_are_skipped_with_one_warning() {
+fn unknown_shapes_in_v3_files_are_skipped_with_one_warning() {
+    // pbrt-v3 warns and goes on (pbrt-v4 stops: tests/it/messages.rs).
     let s = scene(
-        "WorldBegin\nShape \"blob\" \"point3 P\" [0 0 0 1 1 1 2 2 2 3 3 3]\nShape \"sphere\" \"float alpha\" 0.5\n",
+        "Film \"image\" WorldBegin\nShape \"blob\" \"point3 P\" [0 0 0 1 1 1 2 2 2 3 3 3]\nShape \"sphere\" \"float alpha\" 0.5\n",
     );
     assert_eq!(s.shapes.len(), 1);
     assert_eq!(s.skipped.len(), 1);
     assert_eq!((s.skipped[0].line, s.skipped[0].column, s.skipped[0].what.as_str()), (2, 7, "Shape \"blob\""));
     let msgs: Vec<&str> = s.warnings.iter().map(|w| w.message.as_str()).collect();
-    assert_eq!(msgs, ["Shape \"blob\": this shape type is not supported"]);
-    // The sphere's alpha is a mask now (v4 file: stochastic), nothing approximated.
+    assert_eq!(msgs, ["Shape \"blob\": unknown shape type \"blob\"; left out, as pbrt-v3 leaves it out"]);
+    // The sphere's alpha of 0.5 is opaque in pbrt-v3 (only 0 cuts), nothing approximated.
     assert!(s.approximated.is_empty());
-    assert_eq!(s.shapes[0].alpha.map(|a| a.alpha), Some(pbrt_sppm::scene::TexValue::Const(glam::Vec3::splat(0.5))));
+    assert_eq!(s.shapes[0].alpha.map(|a| a.alpha), None);
     assert!(root().exists());
 }
 

@@ -87,7 +87,8 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
             match signals.completed.abort() {
                 Abort::Now(snapshot) => std::process::exit(aborted(&job, snapshot, quiet)),
                 Abort::Saving if !quiet => say!("\ninterrupted again: the render is saving; letting it finish"),
-                Abort::Saving => {}
+                Abort::Soon if !quiet => say!("\ninterrupted again: the iteration under way ends soon, then saving"),
+                Abort::Saving | Abort::Soon => {}
             }
         }
         worker.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
