@@ -21,6 +21,7 @@ mod messages;
 mod mitsuba;
 mod pbrt_refs;
 mod python;
+mod readme;
 mod real_scenes;
 mod registries;
 mod render;
