@@ -51,7 +51,7 @@ pub struct Completed(Mutex<State>);
 pub enum Abort {
     /// The render was mid-iteration: this is the last completed state (none when no
     /// iteration had finished), and the render will write nothing more.
-    Now(Option<Snapshot>),
+    Now(Option<Box<Snapshot>>),
     /// The render already finished its iterations and is saving: let it finish.
     Saving,
     /// The iterations are too short to be worth a snapshot each: the one under way
@@ -100,7 +100,7 @@ impl Completed {
             Phase::Rendering if !s.fresh && s.snapshot.is_some() => Abort::Soon,
             Phase::Aborted | Phase::Rendering => {
                 s.phase = Phase::Aborted;
-                Abort::Now(s.snapshot.take())
+                Abort::Now(s.snapshot.take().map(Box::new))
             }
         }
     }

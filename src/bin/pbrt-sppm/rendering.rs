@@ -104,7 +104,7 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
 
 /// A second interrupt: writes the completed iterations' image and ERRORS.csv; the exit
 /// status for [`std::process::exit`] (130, or 1 when writing failed).
-fn aborted(job: &Job, snapshot: Option<Snapshot>, quiet: bool) -> i32 {
+fn aborted(job: &Job, snapshot: Option<Box<Snapshot>>, quiet: bool) -> i32 {
     let Some(snapshot) = snapshot else {
         say!("\ninterrupted again: stopped before any iteration finished; nothing written");
         return 130;
