@@ -1126,16 +1126,13 @@ impl Builder {
         // In file order, whatever the order they were found in.
         self.skipped.sort_by_key(|(span, _, _)| span.map(|s| (s.file.0, s.start)));
         self.approximated.sort_by_key(|(span, _, _)| (span.file.0, span.start));
-        let sources = &self.reader.sources;
         // Last: every other error comes first, in file order, as the file is read.
         self.check_world_begin()?;
+        let warnings = self.warnings_in_file_order();
+        let sources = &self.reader.sources;
         let mut film = r.film;
         let filename_param = self.render.film.as_ref().and_then(|e| e.params.named("filename"));
         film.filename_location = filename_param.map(|p| sources.location(p.value_span).to_string());
-        let mut warnings: Vec<Diagnostic> = std::mem::take(&mut self.reader.warnings);
-        warnings.append(&mut self.warnings);
-        // In file order (reader and builder warnings interleave); stable for equal spans.
-        warnings.sort_by_key(|d| d.span.map(|s| (s.file.0, s.start)));
         let evidence = self
             .reader
             .evidence
@@ -1172,6 +1169,15 @@ impl Builder {
 
     /// The world shapes' materials and alpha masks, resolved now that every name is
     /// known.
+    /// The reader's and the builder's warnings, interleaved in file order (stable for
+    /// equal spans).
+    fn warnings_in_file_order(&mut self) -> Vec<Diagnostic> {
+        let mut warnings: Vec<Diagnostic> = std::mem::take(&mut self.reader.warnings);
+        warnings.append(&mut self.warnings);
+        warnings.sort_by_key(|d| d.span.map(|s| (s.file.0, s.start)));
+        warnings
+    }
+
     fn resolve_world_shapes(&mut self) -> Res<()> {
         let world_materials = std::mem::take(&mut self.shape_materials);
         let resolved: Vec<u32> = world_materials.iter().map(|r| self.resolve_material(r)).collect::<Res<_>>()?;
