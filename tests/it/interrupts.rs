@@ -74,6 +74,16 @@ fn started(d: &Path, extra: &[&str]) -> Child {
     child
 }
 
+/// Two SIGINTs 10 ms apart; the render must end with status 130.
+fn interrupted_twice(child: Child) -> Output {
+    sigint(&child);
+    std::thread::sleep(Duration::from_millis(10));
+    sigint(&child);
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(130), "{}", stderr_of(&out));
+    out
+}
+
 /// The image an uninterrupted render of `n` iterations writes, in another folder.
 fn uninterrupted(name: &str, n: u32) -> Vec<[u32; 3]> {
     let d = dir(name);
@@ -102,12 +112,7 @@ fn iterations_written(d: &Path, out: &Output) -> u32 {
 #[test]
 fn two_interrupts_10_ms_apart_write_exactly_the_completed_iterations() {
     let d = dir("double");
-    let child = started(&d, &[]);
-    sigint(&child);
-    std::thread::sleep(Duration::from_millis(10));
-    sigint(&child);
-    let out = child.wait_with_output().unwrap();
-    assert_eq!(out.status.code(), Some(130), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = interrupted_twice(started(&d, &[]));
     let n = iterations_written(&d, &out);
     assert!(stderr_of(&out).contains("interrupted again: stopped the iteration under way"), "{}", stderr_of(&out));
     assert_eq!(pixels(&d.join("out.exr")), uninterrupted("double-ref", n), "not the image of {n} iterations");
@@ -133,12 +138,7 @@ fn timeout_with_sigint_leaves_the_image_of_the_iterations_done() {
 #[test]
 fn a_checkpoint_left_by_an_aborted_render_is_whole_and_resumes_to_the_uninterrupted_image() {
     let d = dir("ckpt");
-    let child = started(&d, &["--checkpoint", "r.ckpt", "--checkpoint-every", "1", "--spp", "8"]);
-    sigint(&child);
-    std::thread::sleep(Duration::from_millis(10));
-    sigint(&child);
-    let out = child.wait_with_output().unwrap();
-    assert_eq!(out.status.code(), Some(130), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = interrupted_twice(started(&d, &["--checkpoint", "r.ckpt", "--checkpoint-every", "1", "--spp", "8"]));
     let n = iterations_written(&d, &out);
     let saved = Checkpoint::read(&d.join("r.ckpt")).expect("a whole checkpoint");
     assert!(saved.iteration >= 1 && saved.iteration <= n, "checkpoint at {}, image at {n}", saved.iteration);
