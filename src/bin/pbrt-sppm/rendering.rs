@@ -78,10 +78,10 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
     };
     let done = std::thread::scope(|s| {
         let worker = s.spawn(|| {
+            // Said even if the render panics, so the loop below never waits forever.
+            let _done = signals::DoneOnDrop(&signals.done);
             let out = pool.install(|| job.resume().and_then(|resume| job.run(resume)));
-            let written = out.and_then(|out| job.write(&out).map(|()| out));
-            let _ = signals.done.send(signals::Event::Done);
-            written
+            out.and_then(|out| job.write(&out).map(|()| out))
         });
         while let Ok(signals::Event::Abort) = signals.events.recv() {
             match signals.completed.abort() {

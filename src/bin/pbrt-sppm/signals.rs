@@ -34,6 +34,16 @@ pub struct Signals {
     pub done: Sender<Event>,
 }
 
+/// Tells the main thread the render is over when dropped (at its end, or unwinding
+/// from a panic).
+pub struct DoneOnDrop<'a>(pub &'a Sender<Event>);
+
+impl Drop for DoneOnDrop<'_> {
+    fn drop(&mut self) {
+        let _ = self.0.send(Event::Done);
+    }
+}
+
 /// Installs the handler; a failure to install is a warning (an interrupt then kills the
 /// render as it would any program).
 pub fn install(quiet: bool) -> Signals {
