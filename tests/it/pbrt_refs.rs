@@ -490,16 +490,17 @@ fn vcm_renders_the_verification_scenes_as_pbrt_within_the_same_bounds() {
     // out for time (10–30 s each in a release build): `v3-plastic` (0.47% when
     // measured), `v3-rough-glass` and `v3-materials` (2.84% and 2.22% against bounds of
     // 2%: not settled whether noise or a real difference).
-    // A quarter of the passes where that was measured to leave at most 0.6 of the
-    // bound (vcm's error falls faster than SPPM's, for whose noise the budgets were set).
+    // A quarter (or half) of the passes where that was measured to leave at most 0.6
+    // of the bound (vcm's error falls faster than SPPM's, for whose noise the budgets
+    // were set); at half: v3-textures 0.68%, v4-bump 2.34%, v3-mix 1.57%.
     let settings = RenderSettings { algorithm: Some(Algorithm::Vcm(Techniques::All)), ..Default::default() };
     for (name, reference, bound, share) in [
         ("v3-caustic", "v3-caustic", 0.02, 4),
-        ("v3-textures", "v3-textures", 0.02, 1),
+        ("v3-textures", "v3-textures", 0.02, 2),
         ("v4-textures", "v4-textures", 0.04, 4),
         ("v3-alpha", "v3-alpha", 0.02, 4),
         ("v3-bump", "v3-bump", 0.02, 1),
-        ("v4-bump", "v4-bump", 0.04, 1),
+        ("v4-bump", "v4-bump", 0.04, 2),
         ("v4-mix", "v4-mix", 0.04, 4),
         ("v4-coated", "v4-coated", 0.04, 4),
         ("v3-mirror-box", "v3-mirror-box", 0.02, 1),
@@ -510,7 +511,7 @@ fn vcm_renders_the_verification_scenes_as_pbrt_within_the_same_bounds() {
         ("v3-translucent", "v3-translucent", 0.02, 4),
         ("v4-difftrans", "v4-difftrans", 0.04, 4),
         ("v3-sphere-light", "v3-sphere-light-unscaled", 0.02, 4),
-        ("v3-mix", "v3-mix-bdpt", 0.03, 1),
+        ("v3-mix", "v3-mix-bdpt", 0.03, 2),
         ("v4-alpha", "v4-alpha-bdpt", 0.03, 4),
     ] {
         Check { reference, settings: settings.clone(), ..Check::sppm(name, bound, share) }.assert();
@@ -535,7 +536,8 @@ fn smoke_in_a_density_grid_matches_pbrt_v3_volpath() {
     // 1024-sample image is within 2.2% of it). Ours at 64 × 100,000 photons: worst tile
     // 2.4–3.0% over three seeds along beams (with points 3.1–5.7%; 3.1% at 256 ×
     // 200,000).
-    assert_matches_reference("v3-smoke-grid", Fixes::NONE, "v3-smoke-grid-volpath", 0.10);
+    // Half the scene's iterations: 3.65% when measured.
+    Check { reference: "v3-smoke-grid-volpath", ..Check::sppm("v3-smoke-grid", 0.10, 2) }.assert();
 }
 
 #[test]
