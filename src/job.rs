@@ -11,12 +11,14 @@
 //! renders; [`Job::write`] writes the image, the part and `ERRORS.csv`, each through a
 //! temporary file renamed into place.
 
-use crate::imageio::{ImageError, check_writable, read_image, write_image, write_text};
+use crate::imageio::{ImageError, RgbImage, check_writable, read_image, write_image, write_text};
 use crate::integrators::checkpoint::{Checkpoint, CheckpointError, Every, Fingerprint, Mismatch};
 use crate::integrators::completed::{Completed, Snapshot};
 use crate::integrators::part::{Part, PartError};
 use crate::integrators::run;
-use crate::integrators::{CheckpointTarget, Monitor, Plan, RenderError, RenderOutput, RenderSettings, errors_csv};
+use crate::integrators::{
+    CheckpointTarget, ErrorRow, Monitor, Plan, RenderError, RenderOutput, RenderSettings, errors_csv,
+};
 use crate::limits::Limits;
 use crate::render::RenderScene;
 use crate::scene::SceneDescription;
@@ -161,14 +163,20 @@ impl Job {
 
     /// Writes the image, the part and `ERRORS.csv` that were asked for.
     pub fn write(&self, out: &RenderOutput) -> Result<(), JobError> {
-        if let Some((path, blame)) = &self.image {
-            write_image(path, &out.image).map_err(|e| JobError::output(blame, e))?;
-        }
+        self.write_image_and_errors(&out.image, &out.errors)?;
         if let Some(path) = &self.request.part {
             self.write_part(out, path).map_err(JobError::Part)?;
         }
+        Ok(())
+    }
+
+    /// The image (unless this run writes only a part) and `ERRORS.csv`, if asked for.
+    fn write_image_and_errors(&self, image: &RgbImage, errors: &[ErrorRow]) -> Result<(), JobError> {
+        if let Some((path, blame)) = &self.image {
+            write_image(path, image).map_err(|e| JobError::output(blame, e))?;
+        }
         if let Some(csv) = &self.request.errors_csv {
-            write_text(csv, &errors_csv(&out.errors)).map_err(|e| JobError::output(csv.display(), e))?;
+            write_text(csv, &errors_csv(errors)).map_err(|e| JobError::output(csv.display(), e))?;
         }
         Ok(())
     }
@@ -178,13 +186,7 @@ impl Job {
     /// passes' sums, which only a finished iteration hands over): the shard's passes
     /// are rendered again.
     pub fn write_snapshot(&self, snapshot: &Snapshot) -> Result<(), JobError> {
-        if let Some((path, blame)) = &self.image {
-            write_image(path, &snapshot.image).map_err(|e| JobError::output(blame, e))?;
-        }
-        if let Some(csv) = &self.request.errors_csv {
-            write_text(csv, &errors_csv(&snapshot.errors)).map_err(|e| JobError::output(csv.display(), e))?;
-        }
-        Ok(())
+        self.write_image_and_errors(&snapshot.image, &snapshot.errors)
     }
 
     /// The part a shard writes: its passes' sums and what they belong to.

@@ -62,7 +62,7 @@ impl Tev {
 
     /// One warning a render, the first time tev cannot be reached or is lost; the
     /// render goes on and keeps trying.
-    fn warn(&mut self, what: std::io::Error) {
+    fn warn(&mut self, what: String) {
         if !self.quiet && !self.warned {
             let at = &self.address;
             eprintln!("\n--display-server {at}: warning: {what}; rendering goes on, trying again once a second");
@@ -92,7 +92,7 @@ impl Tev {
             Ok(()) => true,
             Err(e) => {
                 self.stream = None;
-                self.warn(std::io::Error::new(e.kind(), format!("the connection to tev was lost ({e})")));
+                self.warn(format!("the connection to tev was lost ({e})"));
                 false
             }
         }
@@ -107,7 +107,7 @@ impl Tev {
         let stream = match TcpStream::connect_timeout(&self.resolved, Duration::from_millis(200)) {
             Ok(s) => s,
             Err(e) => {
-                self.warn(std::io::Error::new(e.kind(), format!("cannot connect to tev ({e})")));
+                self.warn(format!("cannot connect to tev ({e})"));
                 return false;
             }
         };

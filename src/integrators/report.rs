@@ -32,23 +32,8 @@ pub fn errors_csv(rows: &[ErrorRow]) -> String {
 
 /// The progress bar after an iteration, on one line of stderr.
 pub fn progress_bar(at: Pace) {
-    let (bar, eta) = toward(at.done, at.total, at.seconds, at.limit, at.word);
+    let (bar, eta) = at.bar();
     eprint!("\r{bar}, ETA {eta:.1} s   ");
-}
-
-/// The bar and what it counts, toward whichever ends the render first: `total`
-/// iterations (at the pace so far) or the time `limit`; and the seconds left.
-fn toward(done: u32, total: u32, seconds: f64, limit: Option<f64>, word: &str) -> (String, f64) {
-    let width = 30;
-    let left = seconds / done.max(1) as f64 * total.saturating_sub(done) as f64;
-    let (filled, text, eta) = match limit {
-        Some(l) if done == 0 || l - seconds < left => {
-            let filled = ((seconds / l).clamp(0.0, 1.0) * width as f64) as usize;
-            (filled, format!("{seconds:.1}/{l} s, {done} {word}"), (l - seconds).max(0.0))
-        }
-        _ => ((done as usize * width) / total.max(1) as usize, format!("{done}/{total} {word}, {seconds:.1} s"), left),
-    };
-    (format!("[{}{}] {text}", "#".repeat(filled), "-".repeat(width - filled)), eta)
 }
 
 /// Camera paths and photons (or light subpaths) of the iteration under way, counted a
@@ -82,7 +67,7 @@ impl Live {
 /// The progress bar while iteration `done + 1` runs: how far its camera paths and
 /// photons are (`photons` per iteration, `pixels` camera paths).
 pub fn progress_inside(at: Pace, live: &Live, (pixels, photons): (u64, u64)) {
-    let (bar, _) = toward(at.done, at.total, at.seconds, at.limit, at.word);
+    let (bar, _) = at.bar();
     let (c, p) = live.counts();
     let pct = |a: u64, b: u64| (100 * a / b.max(1)).min(100);
     let n = at.done + 1;
@@ -105,6 +90,26 @@ pub struct Pace {
 }
 
 impl Pace {
+    /// The bar and what it counts, toward whichever ends the render first: `total`
+    /// iterations (at the pace so far) or the time `limit`; and the seconds left.
+    fn bar(&self) -> (String, f64) {
+        let Pace { done, total, seconds, limit, word, .. } = *self;
+        let width = 30;
+        let left = seconds / done.max(1) as f64 * total.saturating_sub(done) as f64;
+        let (filled, text, eta) = match limit {
+            Some(l) if done == 0 || l - seconds < left => {
+                let filled = ((seconds / l).clamp(0.0, 1.0) * width as f64) as usize;
+                (filled, format!("{seconds:.1}/{l} s, {done} {word}"), (l - seconds).max(0.0))
+            }
+            _ => (
+                (done as usize * width) / total.max(1) as usize,
+                format!("{done}/{total} {word}, {seconds:.1} s"),
+                left,
+            ),
+        };
+        (format!("[{}{}] {text}", "#".repeat(filled), "-".repeat(width - filled)), eta)
+    }
+
     fn singular(&self) -> &'static str {
         self.word.strip_suffix('s').unwrap_or(self.word)
     }

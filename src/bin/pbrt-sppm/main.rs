@@ -65,10 +65,13 @@ pub(crate) fn load(scene: &Path, common: &Common) -> Result<SceneDescription, Ex
 /// Loads a scene without printing its warnings; an error is printed on a line of its
 /// own (`line_open`: after ending the line a caller left open).
 pub(crate) fn read(scene: &Path, common: &Common, line_open: bool) -> Result<SceneDescription, ExitCode> {
-    let fail = |at: &Path, e: String| {
+    let end_line = || {
         if line_open {
             say!("");
         }
+    };
+    let fail = |at: &Path, e: String| {
+        end_line();
         fail(at, e)
     };
     let mut limits = Limits::default();
@@ -93,9 +96,7 @@ pub(crate) fn read(scene: &Path, common: &Common, line_open: bool) -> Result<Sce
         load_scene(scene, &opts)
     };
     loaded.map_err(|e| {
-        if line_open {
-            say!("");
-        }
+        end_line();
         report_error(&e)
     })
 }

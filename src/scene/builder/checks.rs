@@ -28,33 +28,37 @@ impl Builder {
     /// A type name neither pbrt knows is an error where the file's pbrt stops at it, as
     /// soon as the version is known; until then it waits for [`Builder::settle_unknown_names`].
     pub(super) fn check_type_name(&mut self, kind: &StmtKind) -> Res<()> {
+        let named_type;
         let (family, name, at) = match kind {
-            StmtKind::Shape(e) => (Family::Shape, e.name.clone(), e.name_span),
-            StmtKind::Material(e) => (Family::Material, e.name.clone(), e.name_span),
+            StmtKind::Shape(e) => (Family::Shape, e.name.as_str(), e.name_span),
+            StmtKind::Material(e) => (Family::Material, e.name.as_str(), e.name_span),
             StmtKind::MakeNamedMaterial(e) => match e.params.string("type") {
                 Ok(Some(ty)) => {
-                    (Family::Material, ty, crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span))
+                    named_type = ty;
+                    let at = crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span);
+                    (Family::Material, named_type.as_str(), at)
                 }
                 _ => return Ok(()),
             },
-            StmtKind::Texture { class, .. } => (Family::Texture, class.name.clone(), class.name_span),
-            StmtKind::LightSource(e) => (Family::Light, e.name.clone(), e.name_span),
-            StmtKind::AreaLightSource(e) => (Family::AreaLight, e.name.clone(), e.name_span),
-            StmtKind::Camera(e) => (Family::Camera, e.name.clone(), e.name_span),
-            StmtKind::Sampler(e) => (Family::Sampler, e.name.clone(), e.name_span),
-            StmtKind::PixelFilter(e) => (Family::Filter, e.name.clone(), e.name_span),
-            StmtKind::Film(e) => (Family::Film, e.name.clone(), e.name_span),
-            StmtKind::Integrator(e) => (Family::Integrator, e.name.clone(), e.name_span),
+            StmtKind::Texture { class, .. } => (Family::Texture, class.name.as_str(), class.name_span),
+            StmtKind::LightSource(e) => (Family::Light, e.name.as_str(), e.name_span),
+            StmtKind::AreaLightSource(e) => (Family::AreaLight, e.name.as_str(), e.name_span),
+            StmtKind::Camera(e) => (Family::Camera, e.name.as_str(), e.name_span),
+            StmtKind::Sampler(e) => (Family::Sampler, e.name.as_str(), e.name_span),
+            StmtKind::PixelFilter(e) => (Family::Filter, e.name.as_str(), e.name_span),
+            StmtKind::Film(e) => (Family::Film, e.name.as_str(), e.name_span),
+            StmtKind::Integrator(e) => (Family::Integrator, e.name.as_str(), e.name_span),
             _ => return Ok(()),
         };
-        if family.knows(&name) {
+        // Names are compared borrowed: only an unknown one is copied.
+        if family.knows(name) {
             return Ok(());
         }
         match self.known_syntax() {
-            Some(syntax) if family.stops(syntax) => Err(unknown_error(family, &name, at, syntax)),
-            None if !family.v3_goes_on() => Err(unknown_error(family, &name, at, Syntax::V3)),
+            Some(syntax) if family.stops(syntax) => Err(unknown_error(family, name, at, syntax)),
+            None if !family.v3_goes_on() => Err(unknown_error(family, name, at, Syntax::V3)),
             _ => {
-                self.unknown_names.push((family, name, at));
+                self.unknown_names.push((family, name.to_string(), at));
                 Ok(())
             }
         }
