@@ -27,12 +27,7 @@ Shape "trianglemesh" "point P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ] "integer indic
 "#;
 
 fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pbrt-sppm-ckpt-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    std::fs::write(d.join("scene.pbrt"), SCENE).unwrap();
-    std::fs::write(d.join("geometry.pbrt"), GEOMETRY).unwrap();
-    d
+    crate::common::scratch("ckpt", name, &[("scene.pbrt", SCENE), ("geometry.pbrt", GEOMETRY)])
 }
 
 fn cli(d: &Path) -> Command {

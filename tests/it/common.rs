@@ -11,6 +11,18 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// An empty scratch folder `pbrt-sppm-{kind}-{name}-{pid}` in the system's temporary
+/// folder holding `files` (name, text).
+pub fn scratch(kind: &str, name: &str, files: &[(&str, &str)]) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pbrt-sppm-{kind}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    for (file, text) in files {
+        std::fs::write(d.join(file), text).unwrap();
+    }
+    d
+}
+
 /// Loads scene text as if it were the file `tests/data/good/inline.pbrt`.
 pub fn load(text: &str) -> Result<SceneDescription, LoadError> {
     let path = Path::new("tests/data/good/inline.pbrt");

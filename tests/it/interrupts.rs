@@ -31,11 +31,7 @@ Shape "trianglemesh" "point P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ] "integer indic
 "#;
 
 fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pbrt-sppm-int-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    std::fs::write(d.join("scene.pbrt"), SCENE).unwrap();
-    d
+    crate::common::scratch("int", name, &[("scene.pbrt", SCENE)])
 }
 
 fn cli(d: &Path, args: &[&str]) -> Command {

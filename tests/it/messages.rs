@@ -80,8 +80,7 @@ fn an_unknown_type_name_is_told_apart_from_an_unsupported_one_and_suggests_the_n
 
 #[test]
 fn a_file_without_world_begin_is_a_located_error() {
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-msg-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::scratch("msg", "worldbegin", &[]);
     for (name, text, said) in [
         ("empty.pbrt", "", "empty.pbrt:1:1: error: the file is empty"),
         ("options.pbrt", "Film \"rgb\"\n", "options.pbrt:2:1: error: the file ends before WorldBegin"),
@@ -133,12 +132,10 @@ fn every_binary_says_its_version_and_help_takes_help() {
 #[test]
 fn a_time_limit_alone_renders_until_the_limit() {
     // The file asks for 2 iterations; a second of rendering holds many more.
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-timelimit-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     let text = "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16\n\
                 Integrator \"sppm\" \"integer numiterations\" 2 \"integer photonsperiteration\" 2000\n\
                 WorldBegin\nLightSource \"point\" \"point from\" [0 0 -2]\nShape \"sphere\"\n";
-    std::fs::write(dir.join("s.pbrt"), text).unwrap();
+    let dir = crate::common::scratch("msg", "timelimit", &[("s.pbrt", text)]);
     let t = std::time::Instant::now();
     let out = cli(&[
         dir.join("s.pbrt").to_str().unwrap(),

@@ -26,11 +26,7 @@ Shape "trianglemesh" "point P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ] "integer indic
 "#;
 
 pub fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pbrt-sppm-shards-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    std::fs::write(d.join("scene.pbrt"), SCENE).unwrap();
-    d
+    crate::common::scratch("shards", name, &[("scene.pbrt", SCENE)])
 }
 
 fn run(d: &Path, args: &[&str]) -> Output {
