@@ -1,0 +1,142 @@
+//! pbrt-v4's RGB colour spaces: primaries, white and the matrices between RGB and XYZ.
+//!
+//! ```text
+//! ColorSpace "srgb"          # also "rec2020", "aces2065-1", "dci-p3"
+//! Film "rgb" "string colorspace" "rec2020"
+//! ```
+//! As in pbrt-v4, the white point is the chromaticity of the space's illuminant
+//! spectrum (D65, or ACES's white for aces2065-1), not its nominal xy, and the matrix
+//! maps RGB (1, 1, 1) to that white at luminance 1.
+
+use super::cie;
+use super::data::{ILLUM_ACES_D60, ILLUM_D65};
+
+/// A 3×3 matrix, rows first.
+pub type Matrix3 = [[f64; 3]; 3];
+
+/// The colour spaces pbrt-v4 names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ColorSpaceName {
+    Srgb,
+    Rec2020,
+    Aces2065_1,
+    DciP3,
+}
+
+impl ColorSpaceName {
+    pub const ALL: [ColorSpaceName; 4] = [Self::Srgb, Self::Rec2020, Self::Aces2065_1, Self::DciP3];
+
+    /// The name a scene file uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Srgb => "srgb",
+            Self::Rec2020 => "rec2020",
+            Self::Aces2065_1 => "aces2065-1",
+            Self::DciP3 => "dci-p3",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| c.name() == name)
+    }
+
+    /// The chromaticities (x, y) of the red, green and blue primaries.
+    fn primaries(self) -> [[f64; 2]; 3] {
+        match self {
+            Self::Srgb => [[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]],
+            Self::Rec2020 => [[0.708, 0.292], [0.170, 0.797], [0.131, 0.046]],
+            Self::Aces2065_1 => [[0.7347, 0.2653], [0.0, 1.0], [0.0001, -0.077]],
+            Self::DciP3 => [[0.680, 0.320], [0.265, 0.690], [0.150, 0.060]],
+        }
+    }
+
+    /// The illuminant whose spectrum is the space's white: 5 nm steps from 300 nm.
+    pub fn illuminant(self) -> &'static [f64] {
+        match self {
+            Self::Aces2065_1 => &ILLUM_ACES_D60,
+            _ => &ILLUM_D65,
+        }
+    }
+
+    /// The illuminant at `lambda` nm, scaled to luminance 1 (as pbrt-v4 normalises its
+    /// standard illuminants).
+    pub fn illuminant_at(self, lambda: f64) -> f64 {
+        let scale = match self {
+            Self::Aces2065_1 => *ACES_SCALE.get_or_init(|| 1.0 / cie::luminance_of(|l| five_nm(&ILLUM_ACES_D60, l))),
+            _ => *D65_SCALE.get_or_init(|| 1.0 / cie::luminance_of(|l| five_nm(&ILLUM_D65, l))),
+        };
+        scale * five_nm(self.illuminant(), lambda)
+    }
+
+    /// The matrix from this space's RGB to XYZ.
+    pub fn xyz_from_rgb(self) -> Matrix3 {
+        let white = cie::spectrum_to_xyz(|l| self.illuminant_at(l));
+        let w = [white[0] / white[1], 1.0, white[2] / white[1]];
+        let columns = self.primaries().map(|[x, y]| [x / y, 1.0, (1.0 - x - y) / y]);
+        let rgb: Matrix3 = std::array::from_fn(|r| std::array::from_fn(|c| columns[c][r]));
+        let c = mul_vec(&invert(&rgb), w);
+        std::array::from_fn(|r| std::array::from_fn(|k| rgb[r][k] * c[k]))
+    }
+
+    /// The matrix from XYZ to this space's RGB.
+    pub fn rgb_from_xyz(self) -> Matrix3 {
+        invert(&self.xyz_from_rgb())
+    }
+}
+
+static D65_SCALE: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+static ACES_SCALE: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+
+/// A 5 nm table from 300 nm, interpolated linearly; zero outside it.
+fn five_nm(table: &[f64], lambda: f64) -> f64 {
+    let x = (lambda - 300.0) / 5.0;
+    if x < 0.0 || x > (table.len() - 1) as f64 {
+        return 0.0;
+    }
+    let i = (x as usize).min(table.len() - 2);
+    let t = x - i as f64;
+    table[i] * (1.0 - t) + table[i + 1] * t
+}
+
+/// `m · v`.
+pub fn mul_vec(m: &Matrix3, v: [f64; 3]) -> [f64; 3] {
+    m.map(|row| row[0] * v[0] + row[1] * v[1] + row[2] * v[2])
+}
+
+/// The inverse of a non-singular 3×3 matrix (by cofactors).
+pub fn invert(m: &Matrix3) -> Matrix3 {
+    let cof = |r: usize, c: usize| {
+        let (r0, r1, c0, c1) = ((r + 1) % 3, (r + 2) % 3, (c + 1) % 3, (c + 2) % 3);
+        m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0]
+    };
+    let det = m[0][0] * cof(0, 0) + m[0][1] * cof(0, 1) + m[0][2] * cof(0, 2);
+    std::array::from_fn(|r| std::array::from_fn(|c| cof(c, r) / det))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_srgb_matrix_is_the_published_one() {
+        // IEC 61966-2-1's XYZ → sRGB matrix (D65): our white is D65's spectrum's own
+        // chromaticity, so the entries agree to about 1e-3.
+        let published = [[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]];
+        let m = ColorSpaceName::Srgb.rgb_from_xyz();
+        for (row, want) in m.iter().zip(published) {
+            for (got, want) in row.iter().zip(want) {
+                assert!((got - want).abs() < 2e-3, "{m:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn white_is_one_in_every_space() {
+        for space in ColorSpaceName::ALL {
+            let xyz = cie::spectrum_to_xyz(|l| space.illuminant_at(l));
+            assert!((xyz[1] - 1.0).abs() < 1e-9, "{space:?}: {xyz:?}");
+            let rgb = mul_vec(&space.rgb_from_xyz(), xyz);
+            assert!(rgb.iter().all(|c| (c - 1.0).abs() < 1e-9), "{space:?}: {rgb:?}");
+        }
+    }
+}
