@@ -3,7 +3,7 @@
 //! ```text
 //! Material "glass" "float index" 1.5 "rgb Kr" [1 1 1] "rgb Kt" [1 1 1] "float uroughness" .1
 //! Material "dielectric" "float eta" 1.5 "float roughness" .2
-//! Material "dielectric" "spectrum eta" "glass-BK7"        # one index: the spectrum's mean
+//! Material "dielectric" "spectrum eta" "glass-BK7"        # one index: its luminance-weighted mean
 //! ```
 //! Smooth glass is one Fresnel-weighted lobe; rough glass is pbrt-v3's pair of
 //! microfacet reflection and transmission lobes, or pbrt-v4's single lobe. pbrt-v3's

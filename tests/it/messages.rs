@@ -118,7 +118,13 @@ fn the_display_server_address_is_checked_before_loading_and_a_refused_one_warns_
 
 #[test]
 fn every_binary_says_its_version_and_help_takes_help() {
-    for bin in [env!("CARGO_BIN_EXE_pbrt-sppm"), env!("CARGO_BIN_EXE_pbrt-imgtool"), env!("CARGO_BIN_EXE_pbrt-bench")] {
+    let bins = [
+        env!("CARGO_BIN_EXE_pbrt-sppm"),
+        env!("CARGO_BIN_EXE_pbrt-imgtool"),
+        env!("CARGO_BIN_EXE_pbrt-bench"),
+        env!("CARGO_BIN_EXE_pbrt-rgb2spec"),
+    ];
+    for bin in bins {
         let out = Command::new(bin).arg("--version").output().unwrap();
         assert!(out.status.success(), "{bin} --version");
         let text = String::from_utf8_lossy(&out.stdout);
