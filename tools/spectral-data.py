@@ -11,6 +11,8 @@ Run once; the output is committed, so neither the build nor the tests need Pytho
 - CIE standard illuminant D65, 5 nm, 300-830 nm: the CIE table to 780 nm; beyond, the
   CIE daylight model at D65's chromaticity, scaled to meet the table at 780 nm (the
   colour-science table stops at 780 nm; the two agree there within 2e-5).
+- The CIE daylight basis S0, S1, S2, 5 nm, 300-830 nm (pbrt-v4's `whitebalance` makes
+  a daylight spectrum of them).
 - The 18 chromatic patches of the Macbeth ColorChecker as measured by N. Ohta
   (reflectance, 5 nm, 380-780 nm), for the tests of the upsampling's round trip.
 - ACES's white (about D60): the CIE daylight model at ACES's white point
@@ -53,6 +55,10 @@ def main():
     out.append(rust_array("CIE_Z", xyz[:, 2], "CIE 1931 z̄(λ), λ = 360, 361, …, 830 nm."))
     out.append(rust_array("ILLUM_D65", d65_values, "CIE illuminant D65, λ = 300, 305, …, 830 nm."))
     out.append(rust_array("ILLUM_ACES_D60", aces, "CIE daylight at ACES's white, λ = 300, 305, …, 830 nm."))
+    from colour.colorimetry import SDS_BASIS_FUNCTIONS_CIE_ILLUMINANT_D_SERIES as basis
+
+    for k in ["S0", "S1", "S2"]:
+        out.append(rust_array(f"CIE_{k}", basis[k][five], f"CIE daylight basis {k}, λ = 300, 305, …, 830 nm."))
     cc = colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"]
     patches = list(cc.items())[:18]
     def patch(name, sd):

@@ -478,7 +478,7 @@ impl<'a> Sppm<'a> {
         });
     }
 
-    /// The current estimate: L = Ld/k + τ/(k·P·π·r²), times the film's scale; with
+    /// The current estimate: L = Ld/k + τ/(k·P·π·r²), as the film records it; with
     /// independent passes, the sum of the passes' estimates over k.
     pub fn image(&self) -> Vec<[f32; 3]> {
         if self.passes.is_independent() {
@@ -487,12 +487,12 @@ impl<'a> Sppm<'a> {
         }
         let k = self.iteration.max(1) as f64;
         let np = self.photons_per_iteration.max(1) as f64;
-        let scale = self.scene.film.scale as f64;
+        let film = &self.scene.film;
         self.pixels
             .iter()
             .map(|p| {
                 let l = p.ld / k + p.tau / (k * np * std::f64::consts::PI * p.radius * p.radius);
-                (l * scale).as_vec3().to_array()
+                film.respond(l).as_vec3().to_array()
             })
             .collect()
     }
@@ -505,7 +505,7 @@ impl<'a> Sppm<'a> {
         let independent = self.passes.is_independent();
         let k = if independent { self.passes_done() } else { self.iteration } as f64;
         let np = self.photons_per_iteration.max(1) as f64;
-        let scale = self.scene.film.scale as f64;
+        let film = &self.scene.film;
         let area = |p: &Pixel| std::f64::consts::PI * p.radius * p.radius;
         let pixel = |(i, p): (usize, &Pixel)| {
             let old = match (k > 0.0, independent) {
@@ -521,17 +521,17 @@ impl<'a> Sppm<'a> {
                 None => old,
             };
             let ld = p.ld / if i < camera_done { k + 1.0 } else { k.max(1.0) };
-            ((ld + indirect) * scale).as_vec3().to_array()
+            film.respond(ld + indirect).as_vec3().to_array()
         };
         self.pixels.par_iter().enumerate().map(pixel).collect()
     }
 
     /// With independent passes, the sum of the passes' estimates Ld + τ/P per pixel,
-    /// times the film's scale: what a shard writes and a merge adds up.
+    /// as the film records it: what a shard writes and a merge adds up.
     pub fn pass_sums(&self) -> Vec<DVec3> {
         let np = self.photons_per_iteration.max(1) as f64;
-        let scale = self.scene.film.scale as f64;
-        self.pixels.iter().map(|p| (p.ld + p.tau / np) * scale).collect()
+        let film = &self.scene.film;
+        self.pixels.iter().map(|p| film.respond(p.ld + p.tau / np)).collect()
     }
 }
 

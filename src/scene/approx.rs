@@ -17,11 +17,12 @@ pub enum Approx {
     Motion,
     FilmType,
     ColorSpace,
+    Sensor,
     NanoVdb,
 }
 
 impl Approx {
-    pub const ALL: [Approx; 9] = [
+    pub const ALL: [Approx; 10] = [
         Approx::CoatInBlend,
         Approx::HairInBlend,
         Approx::UnsupportedMaterial,
@@ -30,6 +31,7 @@ impl Approx {
         Approx::Motion,
         Approx::FilmType,
         Approx::ColorSpace,
+        Approx::Sensor,
         Approx::NanoVdb,
     ];
 
@@ -50,6 +52,9 @@ impl Approx {
             }
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",
             Approx::ColorSpace => "only sRGB is supported; RGB values are taken as sRGB",
+            Approx::Sensor => {
+                "the camera's measured colour curves are not applied: seen as the CIE 1931 observer, white-balanced as pbrt-v4 balances that camera (6500 K unless `whitebalance` is given)"
+            }
             Approx::NanoVdb => {
                 "NanoVDB files cannot be read (no Rust reader of the format exists): what the medium fills is rendered as vacuum"
             }

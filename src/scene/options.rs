@@ -105,9 +105,20 @@ pub struct Film {
     pub scale: f32,
     /// The film's diagonal in millimetres (a realistic camera's film size).
     pub diagonal_mm: f32,
+    /// pbrt-v4's white balance, a matrix on linear sRGB (none: colours as rendered).
+    pub white_balance: Option<[[f64; 3]; 3]>,
 }
 
 impl Film {
+    /// What the film records of an estimate: times `scale`, then white-balanced.
+    pub fn respond(&self, rgb: glam::DVec3) -> glam::DVec3 {
+        let v = rgb * self.scale as f64;
+        match &self.white_balance {
+            None => v,
+            Some(m) => glam::DVec3::from(crate::spectrum::colorspace::mul_vec(m, v.to_array())),
+        }
+    }
+
     pub fn pixel_count(&self) -> u64 {
         let [x0, x1, y0, y1] = self.pixel_bounds;
         (x1 - x0) as u64 * (y1 - y0) as u64
@@ -251,8 +262,9 @@ impl RenderOptions {
         // Output format and spectral-film details: nothing in the pixel values changes.
         let diagonal_mm = values::float(p, "diagonal", 35.0, Range::Positive)?;
         values::no_effect(p, &["savefp16", "coordinatesystem", "buckets", "lambdamin", "lambdamax"]);
-        let why = "pixel values are not clamped, and colours are not white-balanced";
-        values::ignored(p, &["maxsampleluminance", "maxcomponentvalue", "whitebalance", "sensor"], why, warn);
+        let why = "pixel values are not clamped";
+        values::ignored(p, &["maxsampleluminance", "maxcomponentvalue"], why, warn);
+        let white_balance = if syntax == Syntax::V4 { Self::sensor(e, notes)? } else { None };
         match e.name.as_str() {
             "image" | "rgb" => {}
             "gbuffer" | "spectral" => notes.push((e.name_span, format!("Film \"{}\"", e.name), Approx::FilmType)),
@@ -268,8 +280,30 @@ impl RenderOptions {
             pixel_bounds: bounds,
             scale,
             diagonal_mm,
+            white_balance,
         };
         Ok((film, iso / 100.0))
+    }
+
+    /// pbrt-v4's `sensor` and `whitebalance`: the white balance as a matrix on linear
+    /// sRGB, if any. A named camera is seen as the CIE observer (noted).
+    fn sensor(e: &Entity, notes: &mut Notes) -> Res<Option<[[f64; 3]; 3]>> {
+        use crate::spectrum::sensor::{NAMED_SENSORS, balance_temperature, white_balance_rgb};
+        let p = &e.params;
+        let sensor = p.string("sensor")?.unwrap_or_else(|| "cie1931".into());
+        let at = p.named("sensor").map_or(e.name_span, |x| x.value_span);
+        if sensor != "cie1931" {
+            if !NAMED_SENSORS.contains(&sensor.as_str()) {
+                let known: Vec<&str> = std::iter::once("cie1931").chain(NAMED_SENSORS).collect();
+                let hint = super::names::nearest(&sensor, &known).map(|n| format!(" (did you mean \"{n}\"?)"));
+                return Err(Diagnostic::error(at, format!("unknown sensor \"{sensor}\"{}", hint.unwrap_or_default())));
+            }
+            notes.push((at, format!("sensor \"{sensor}\""), Approx::Sensor));
+        }
+        let kelvin = values::float(p, "whitebalance", 0.0, Range::NonNegative)?;
+        let kelvin = balance_temperature(&sensor, kelvin);
+        let space = crate::spectrum::colorspace::ColorSpaceName::Srgb;
+        Ok((kelvin > 0.0).then(|| white_balance_rgb(kelvin as f64, space)))
     }
 
     /// pbrt-v4 stops when `shutterclose` is not after `shutteropen` (the film's exposure

@@ -70,12 +70,17 @@ impl ColorSpaceName {
 
     /// The matrix from this space's RGB to XYZ.
     pub fn xyz_from_rgb(self) -> Matrix3 {
-        let white = cie::spectrum_to_xyz(|l| self.illuminant_at(l));
-        let w = [white[0] / white[1], 1.0, white[2] / white[1]];
+        let [x, y] = self.white();
+        let w = [x / y, 1.0, (1.0 - x - y) / y];
         let columns = self.primaries().map(|[x, y]| [x / y, 1.0, (1.0 - x - y) / y]);
         let rgb: Matrix3 = std::array::from_fn(|r| std::array::from_fn(|c| columns[c][r]));
         let c = mul_vec(&invert(&rgb), w);
         std::array::from_fn(|r| std::array::from_fn(|k| rgb[r][k] * c[k]))
+    }
+
+    /// The white's chromaticity: its illuminant's.
+    pub fn white(self) -> [f64; 2] {
+        chromaticity(cie::spectrum_to_xyz(|l| self.illuminant_at(l)))
     }
 
     /// The matrix from XYZ to this space's RGB.
@@ -84,11 +89,31 @@ impl ColorSpaceName {
     }
 }
 
+/// The chromaticity (x, y) of XYZ.
+pub fn chromaticity([x, y, z]: [f64; 3]) -> [f64; 2] {
+    [x / (x + y + z), y / (x + y + z)]
+}
+
+/// The von Kries adaptation in Bradford's cone space that takes white `from` (x, y)
+/// to white `to`, on XYZ (pbrt-v4's `WhiteBalance`).
+pub fn white_balance(from: [f64; 2], to: [f64; 2]) -> Matrix3 {
+    const LMS_FROM_XYZ: Matrix3 = [[0.8951, 0.2664, -0.1614], [-0.7502, 1.7135, 0.0367], [0.0389, -0.0685, 1.0296]];
+    let xyz = |[x, y]: [f64; 2]| [x / y, 1.0, (1.0 - x - y) / y];
+    let (src, dst) = (mul_vec(&LMS_FROM_XYZ, xyz(from)), mul_vec(&LMS_FROM_XYZ, xyz(to)));
+    let scaled: Matrix3 = std::array::from_fn(|r| LMS_FROM_XYZ[r].map(|v| v * dst[r] / src[r]));
+    mul(&invert(&LMS_FROM_XYZ), &scaled)
+}
+
+/// `a · b`.
+pub fn mul(a: &Matrix3, b: &Matrix3) -> Matrix3 {
+    std::array::from_fn(|r| std::array::from_fn(|c| (0..3).map(|k| a[r][k] * b[k][c]).sum()))
+}
+
 static D65_SCALE: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
 static ACES_SCALE: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
 
 /// A 5 nm table from 300 nm, interpolated linearly; zero outside it.
-fn five_nm(table: &[f64], lambda: f64) -> f64 {
+pub(crate) fn five_nm(table: &[f64], lambda: f64) -> f64 {
     let x = (lambda - 300.0) / 5.0;
     if x < 0.0 || x > (table.len() - 1) as f64 {
         return 0.0;
@@ -128,6 +153,30 @@ mod tests {
                 assert!((got - want).abs() < 2e-3, "{m:?}");
             }
         }
+    }
+
+    #[test]
+    fn white_balance_takes_one_white_to_the_other_and_keeps_luminance_near() {
+        let (from, to) = ([0.4369, 0.4041], ColorSpaceName::Srgb.white());
+        let m = white_balance(from, to);
+        let src = [from[0] / from[1], 1.0, (1.0 - from[0] - from[1]) / from[1]];
+        let got = chromaticity(mul_vec(&m, src));
+        assert!((got[0] - to[0]).abs() < 1e-9 && (got[1] - to[1]).abs() < 1e-9, "{got:?}");
+        // Bradford's published adaptation from illuminant A to D65 (Lindbloom), and the
+        // identity for a white onto itself.
+        let a_to_d65 = white_balance([0.44757, 0.40745], [0.31271, 0.32902]);
+        let published = [
+            [0.8446965, -0.1179225, 0.3948108],
+            [-0.1366303, 1.1041226, 0.1291718],
+            [0.0798489, -0.1348999, 3.1924009],
+        ];
+        for r in 0..3 {
+            for c in 0..3 {
+                assert!((a_to_d65[r][c] - published[r][c]).abs() < 1e-3, "{a_to_d65:?}");
+            }
+        }
+        let same = white_balance(to, to);
+        assert!((0..3).all(|r| (0..3).all(|c| (same[r][c] - if r == c { 1.0 } else { 0.0 }).abs() < 1e-12)));
     }
 
     #[test]

@@ -157,3 +157,44 @@ fn a_failed_write_leaves_no_file() {
     assert!(write_image(&path, &img).is_err());
     assert!(!path.exists());
 }
+
+/// A grey card under a white distant light, filmed with `film` (v4).
+fn grey_card(film: &str) -> [f64; 3] {
+    use pbrt_sppm::integrators::RenderSettings;
+    use pbrt_sppm::render::RenderScene;
+    let text = format!(
+        "LookAt 0 0 5  0 0 0  0 1 0 Camera \"orthographic\"\n\
+         Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8 {film}\n\
+         Sampler \"halton\" \"integer pixelsamples\" 2\n\
+         Integrator \"sppm\" \"integer maxdepth\" 1 \"integer photonsperiteration\" 10\n\
+         WorldBegin LightSource \"distant\" \"point3 from\" [0 0 5] \"point3 to\" [0 0 0] \"rgb L\" [1 1 1]\n\
+         Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n\
+         Shape \"bilinearmesh\" \"point3 P\" [-9 -9 0  9 -9 0  -9 9 0  9 9 0]"
+    );
+    let image = pbrt_sppm::integrators::render(&RenderScene::new(&scene(&text)), &RenderSettings::default()).unwrap();
+    let n = image.image.pixels.len() as f64;
+    let sum =
+        image.image.pixels.iter().fold([0.0; 3], |s, p| [s[0] + p[0] as f64, s[1] + p[1] as f64, s[2] + p[2] as f64]);
+    sum.map(|c| c / n)
+}
+
+#[test]
+fn whitebalance_adapts_the_lights_white_as_pbrt_v4s_film_does() {
+    use pbrt_sppm::spectrum::colorspace::{ColorSpaceName, mul_vec};
+    use pbrt_sppm::spectrum::sensor::white_balance_rgb;
+    // Unbalanced, the card is grey; balanced for 3000 K light it turns blue by the
+    // Bradford adaptation from 3000 K to D65 (pbrt-v4: `whitebalance`, sensor cie1931).
+    let plain = grey_card("");
+    assert!((plain[0] - plain[2]).abs() < 1e-4 * plain[1], "{plain:?}");
+    let balanced = grey_card("\"float whitebalance\" 3000");
+    let want = mul_vec(&white_balance_rgb(3000.0, ColorSpaceName::Srgb), plain);
+    assert!((0..3).all(|k| (balanced[k] - want[k]).abs() < 1e-5 * want[1]), "{balanced:?} vs {want:?}");
+    assert!(balanced[2] > 3.0 * balanced[0], "{balanced:?}");
+    // A camera balances to 6500 K unless told: D65 light then stays nearly grey, and
+    // its measured curves are noted as left out.
+    let s = scene("Film \"rgb\" \"string sensor\" \"nikon_d850\" WorldBegin");
+    assert!(s.film.white_balance.is_some());
+    assert!(s.approximated.iter().any(|a| a.what == "sensor \"nikon_d850\""), "{:?}", s.approximated);
+    let err = crate::common::load("Film \"rgb\" \"string sensor\" \"nikon_d805\" WorldBegin").unwrap_err().to_string();
+    assert!(err.contains("unknown sensor \"nikon_d805\" (did you mean \"nikon_d850\"?)"), "{err}");
+}

@@ -35,6 +35,7 @@ use super::passes;
 use super::sppm::{PixelState, Stats};
 use crate::render::RenderScene;
 use crate::sampling::SamplerKind;
+use crate::scene::Film;
 use crate::spectrum::Rgb;
 use glam::DVec3;
 use mis::PassFactors;
@@ -457,7 +458,7 @@ impl<'a> Vcm<'a> {
                     None => band_sums.map(|(i, s)| pixel(i, s).work).reduce(Default::default, |a, b| a + b),
                 };
             if let Some(show) = preview.as_mut() {
-                show(&|| provisional(sums, self.passes_done(), self.scene.film.scale, band.end));
+                show(&|| provisional(sums, self.passes_done(), &self.scene.film, band.end));
             }
         }
         let t3 = Instant::now();
@@ -518,28 +519,27 @@ impl<'a> Vcm<'a> {
         s.prefix_pixels = self.prefix.as_ref().map_or(0, |m| m.iter().filter(|&&p| p).count() as u64);
     }
 
-    /// The current estimate: the mean of the passes, times the film's scale.
+    /// The current estimate: the mean of the passes, as the film records it.
     pub fn image(&self) -> Vec<[f32; 3]> {
         let k = self.passes_done().max(1) as f64;
-        let scale = self.scene.film.scale as f64;
-        self.sums.iter().map(|s| (*s * scale / k).as_vec3().to_array()).collect()
+        let film = &self.scene.film;
+        self.sums.iter().map(|s| (film.respond(*s) / k).as_vec3().to_array()).collect()
     }
 
-    /// The sum of the passes' estimates per pixel, times the film's scale (what a shard
+    /// The sum of the passes' estimates per pixel, as the film records it (what a shard
     /// writes and a merge adds up).
     pub fn pass_sums(&self) -> Vec<DVec3> {
-        let scale = self.scene.film.scale as f64;
-        self.sums.iter().map(|s| *s * scale).collect()
+        let film = &self.scene.film;
+        self.sums.iter().map(|s| film.respond(*s)).collect()
     }
 }
 
 /// The image part way through a pass: the first `camera_done` pixels with this pass's
 /// camera subpaths (its light tracing is added when the pass ends), the rest as they
 /// were after `passes_done` passes.
-fn provisional(sums: &[DVec3], passes_done: u32, film_scale: f32, camera_done: usize) -> Vec<[f32; 3]> {
+fn provisional(sums: &[DVec3], passes_done: u32, film: &Film, camera_done: usize) -> Vec<[f32; 3]> {
     let k = passes_done as f64;
-    let scale = film_scale as f64;
-    let pixel = |(i, s): (usize, &DVec3)| *s * scale / if i < camera_done { k + 1.0 } else { k.max(1.0) };
+    let pixel = |(i, s): (usize, &DVec3)| film.respond(*s) / if i < camera_done { k + 1.0 } else { k.max(1.0) };
     sums.par_iter().enumerate().map(|p| pixel(p).as_vec3().to_array()).collect()
 }
 
