@@ -11,6 +11,9 @@ Run once; the output is committed, so neither the build nor the tests need Pytho
 - CIE standard illuminant D65, 5 nm, 300-830 nm: the CIE table to 780 nm; beyond, the
   CIE daylight model at D65's chromaticity, scaled to meet the table at 780 nm (the
   colour-science table stops at 780 nm; the two agree there within 2e-5).
+- pbrt-v4's named standard illuminants: A (Planck's law at 2856 K, as the CIE defines
+  it, 300-830 nm), D50 (the CIE table to 780 nm, then the daylight model as for D65) and
+  the fluorescent F1-F12 (CIE tables, 380-780 nm), each at 5 nm.
 - The CIE daylight basis S0, S1, S2, 5 nm, 300-830 nm (pbrt-v4's `whitebalance` makes
   a daylight spectrum of them).
 - The 18 chromatic patches of the Macbeth ColorChecker as measured by N. Ohta
@@ -56,6 +59,19 @@ def main():
     out.append(rust_array("ILLUM_D65", d65_values, "CIE illuminant D65, λ = 300, 305, …, 830 nm."))
     out.append(rust_array("ILLUM_ACES_D60", aces, "CIE daylight at ACES's white, λ = 300, 305, …, 830 nm."))
     from colour.colorimetry import SDS_BASIS_FUNCTIONS_CIE_ILLUMINANT_D_SERIES as basis
+
+    illum_a = colour.sd_CIE_standard_illuminant_A(colour.SpectralShape(300, 830, 5))[five]
+    out.append(rust_array("ILLUM_A", illum_a, "CIE illuminant A, λ = 300, 305, …, 830 nm."))
+    d50 = colour.SDS_ILLUMINANTS["D50"]
+    xy50 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D50"]
+    model50 = colour.sd_CIE_illuminant_D_series(xy50)
+    tail50 = model50[five] * (d50[780] / model50[780])
+    d50_values = np.where(five <= 780, d50[np.minimum(five, 780)], tail50)
+    out.append(rust_array("ILLUM_D50", d50_values, "CIE illuminant D50, λ = 300, 305, …, 830 nm."))
+    fl = np.arange(380, 781, 5)
+    for i in range(1, 13):
+        values = colour.SDS_ILLUMINANTS[f"FL{i}"][fl]
+        out.append(rust_array(f"ILLUM_F{i}", values, f"CIE illuminant F{i}, λ = 380, 385, …, 780 nm."))
 
     for k in ["S0", "S1", "S2"]:
         out.append(rust_array(f"CIE_{k}", basis[k][five], f"CIE daylight basis {k}, λ = 300, 305, …, 830 nm."))

@@ -187,7 +187,7 @@ pub struct MediumContext<'a> {
 /// pbrt-v4's `Le` (an illuminant: a blackbody is normalised to luminance 1, as for
 /// lights), `None` where not given.
 pub fn read_le(p: &ParamList, ctx: &MediumContext) -> Res<Option<Vec3>> {
-    let spectra = SpectrumContext { normalize_blackbody: true, ..ctx.spectra };
+    let spectra = SpectrumContext { normalize_emission: true, ..ctx.spectra };
     values::rgb(p, "Le", &spectra, Range::NonNegative)
 }
 

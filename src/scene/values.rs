@@ -84,8 +84,10 @@ pub enum SpectrumOrTexture {
 pub struct SpectrumContext<'a> {
     /// Directory that SPD file names are relative to.
     pub base_dir: &'a Path,
-    /// v4 blackbody spectra are normalised to luminance 1 where lights use them.
-    pub normalize_blackbody: bool,
+    /// pbrt-v4 divides a light's or medium's emission spectrum by its luminance
+    /// (`SpectrumToPhotometric`): blackbody, sampled, named and SPD spectra (not RGB,
+    /// whose white already has luminance 1).
+    pub normalize_emission: bool,
     pub files: &'a crate::limits::Files,
 }
 
@@ -109,8 +111,8 @@ pub fn spectrum(
             xyz_to_rgb(c.map(f64::from))
         }
         SpectrumValue::Blackbody { kelvin, scale } => blackbody_rgb(param, kelvin, scale, ctx)?,
-        SpectrumValue::Sampled(pairs) => sampled(param, &pairs)?,
-        SpectrumValue::Named(n) => named_or_file(param, &n, ctx)?,
+        SpectrumValue::Sampled(pairs) => photometric(sampled(param, &pairs)?, ctx),
+        SpectrumValue::Named(n) => photometric(named_or_file(param, &n, ctx)?, ctx),
         SpectrumValue::Texture(t) => return Ok(Some((SpectrumOrTexture::Texture(t), param.value_span))),
     };
     if let Some(what) = [rgb.x, rgb.y, rgb.z].into_iter().find_map(|c| range.check(c)) {
@@ -147,9 +149,16 @@ fn blackbody_rgb(p: &Param, kelvin: f32, scale: Option<f32>, ctx: &SpectrumConte
     let b = blackbody(kelvin);
     Ok(match scale {
         Some(s) => b * s,
-        None if ctx.normalize_blackbody => b / crate::spectrum::luminance(b).max(1e-6),
+        None if ctx.normalize_emission => b / crate::spectrum::luminance(b).max(1e-6),
         None => b,
     })
+}
+
+/// A spectrum's colour at luminance 1 where `ctx` asks for pbrt-v4's normalisation of
+/// emission (black stays black).
+fn photometric(c: Rgb, ctx: &SpectrumContext) -> Rgb {
+    let y = crate::spectrum::luminance(c);
+    if ctx.normalize_emission && y > 0.0 { c / y } else { c }
 }
 
 fn sampled(p: &Param, pairs: &[(f32, f32)]) -> Res<Rgb> {

@@ -82,8 +82,9 @@ pub fn luminance(c: Rgb) -> f32 {
     0.212_671 * c.x + 0.715_160 * c.y + 0.072_169 * c.z
 }
 
-/// RGB reductions of the named spectra pbrt-v4 knows: metals' η and k, and glasses'
-/// one index each (their luminance-weighted mean).
+/// RGB reductions of the named spectra pbrt-v4 knows: metals' η and k, standard
+/// illuminants at luminance 1, and glasses' one index each (their luminance-weighted
+/// mean).
 pub fn named_spectrum(name: &str) -> Option<Rgb> {
     Some(match name {
         "metal-Cu-eta" => Vec3::new(0.200, 0.924, 1.102),
@@ -94,7 +95,12 @@ pub fn named_spectrum(name: &str) -> Option<Rgb> {
         "metal-Ag-k" => Vec3::new(4.828, 3.122, 2.147),
         "metal-Al-eta" => Vec3::new(1.657, 0.880, 0.521),
         "metal-Al-k" => Vec3::new(9.224, 6.270, 4.837),
-        _ => return named::glass_named(name).map(|g| Vec3::splat(named::luminance_mean(&g) as f32)),
+        _ => {
+            if let Some(s) = named::illuminant_named(name) {
+                return Some(xyz_to_rgb(integrate(s)));
+            }
+            return named::glass_named(name).map(|g| Vec3::splat(named::luminance_mean(&g) as f32));
+        }
     })
 }
 

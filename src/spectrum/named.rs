@@ -1,8 +1,13 @@
-//! pbrt-v4's named glasses, by the Sellmeier formulas of their makers' catalogues.
+//! pbrt-v4's named glasses and standard illuminants.
 //!
 //! ```text
 //! Material "dielectric" "spectrum eta" "glass-BK7"
+//! LightSource "point" "spectrum I" "stdillum-F2"      # also A, D50, D65, F1–F12, illum-acesD60
 //! ```
+//! Illuminants are the CIE tables (`data.rs`), scaled to luminance 1 as pbrt-v4 scales
+//! them, and zero outside their tables.
+//!
+//! Glasses:
 //! n²(λ) = 1 + Σ Bᵢ λ² / (λ² − Cᵢ), λ in µm, with SCHOTT's coefficients (BK7, N-BAF10,
 //! N-FK51A, N-LASF9, SF5, N-SF10, N-SF11; as published by refractiveindex.info, CC0).
 //! pbrt-v4 tabulates the same formulas at about 22 nm steps: its values are these at
@@ -50,6 +55,42 @@ pub fn luminance_mean(s: &Sellmeier) -> f64 {
     super::cie::luminance_of(|l| s.eta(l))
 }
 
+/// The standard illuminant pbrt-v4 calls `name`: (its table, the table's first
+/// wavelength in nm; 5 nm steps).
+fn illuminant_table(name: &str) -> Option<(&'static [f64], f64)> {
+    use super::data::*;
+    let fluorescent: [&'static [f64]; 12] = [
+        &ILLUM_F1, &ILLUM_F2, &ILLUM_F3, &ILLUM_F4, &ILLUM_F5, &ILLUM_F6, &ILLUM_F7, &ILLUM_F8, &ILLUM_F9, &ILLUM_F10,
+        &ILLUM_F11, &ILLUM_F12,
+    ];
+    Some(match name {
+        "stdillum-A" => (&ILLUM_A, 300.0),
+        "stdillum-D50" => (&ILLUM_D50, 300.0),
+        "stdillum-D65" => (&ILLUM_D65, 300.0),
+        "illum-acesD60" => (&ILLUM_ACES_D60, 300.0),
+        _ => {
+            let i: usize = name.strip_prefix("stdillum-F")?.parse().ok()?;
+            (fluorescent.get(i.checked_sub(1)?)?, 380.0)
+        }
+    })
+}
+
+/// The standard illuminant pbrt-v4 calls `name`, as a function of λ (nm), at
+/// luminance 1.
+pub fn illuminant_named(name: &str) -> Option<impl Fn(f64) -> f64 + Copy> {
+    let (table, start) = illuminant_table(name)?;
+    let at = move |lambda: f64| {
+        let x = (lambda - start) / 5.0;
+        if x < 0.0 || x > (table.len() - 1) as f64 {
+            return 0.0;
+        }
+        let i = (x as usize).min(table.len() - 2);
+        table[i] + (x - i as f64) * (table[i + 1] - table[i])
+    };
+    let scale = 1.0 / super::cie::luminance_of(at);
+    Some(move |lambda: f64| scale * at(lambda))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -62,6 +103,26 @@ mod tests {
         for ((name, s), want) in GLASSES.iter().zip(nd) {
             assert!((s.eta(587.56) - want).abs() < 1e-4, "{name}: {}", s.eta(587.56));
         }
+    }
+
+    #[test]
+    fn standard_illuminants_have_their_published_whites() {
+        // CIE chromaticities (x, y) of A, D50, D65, F2 and F11, and luminance 1.
+        let whites = [
+            ("stdillum-A", [0.44757, 0.40745]),
+            ("stdillum-D50", [0.34567, 0.35850]),
+            ("stdillum-D65", [0.31271, 0.32902]),
+            ("stdillum-F2", [0.37208, 0.37529]),
+            ("stdillum-F11", [0.38052, 0.37713]),
+        ];
+        for (name, [x, y]) in whites {
+            let s = illuminant_named(name).unwrap();
+            let xyz = crate::spectrum::cie::spectrum_to_xyz(s);
+            let (gx, gy) = (xyz[0] / xyz.iter().sum::<f64>(), xyz[1] / xyz.iter().sum::<f64>());
+            assert!((gx - x).abs() < 1e-3 && (gy - y).abs() < 1e-3, "{name}: {gx} {gy}");
+            assert!((xyz[1] - 1.0).abs() < 1e-9);
+        }
+        assert!(illuminant_named("stdillum-F13").is_none() && illuminant_named("stdillum-F0").is_none());
     }
 
     #[test]

@@ -598,3 +598,26 @@ fn every_named_glass_of_pbrt_v4_is_read_with_its_index() {
         assert!((c.x - n).abs() < 1.5e-3, "glass-{name}: {}", c.x);
     }
 }
+
+/// The intensity of the file's one point light.
+fn point_intensity(text: &str) -> glam::Vec3 {
+    let s = scene(text);
+    let pbrt_sppm::lights::LightKind::Point(p) = &s.lights[0].kind else { panic!("not a point light") };
+    p.i
+}
+
+#[test]
+fn pbrt_v4_lights_emit_their_spectrum_at_luminance_one_and_v3_lights_as_given() {
+    use pbrt_sppm::spectrum::luminance;
+    // pbrt-v4 divides a light's spectrum by its luminance (SpectrumToPhotometric):
+    // a flat 5 and a flat 1 emit alike, as does a named illuminant; RGB is as given
+    // (its white has luminance 1 already). pbrt-v3 takes the spectrum as it is.
+    let v4 = |i: &str| point_intensity(&format!("WorldBegin LightSource \"point\" {i}"));
+    let flat5 = v4("\"spectrum I\" [300 5 800 5]");
+    assert!((luminance(flat5) - 1.0).abs() < 1e-5, "{flat5}");
+    assert!((flat5 - v4("\"spectrum I\" [300 1 800 1]")).abs().max_element() < 1e-5);
+    assert!((luminance(v4("\"spectrum I\" \"stdillum-F2\" \"float scale\" 3")) - 3.0).abs() < 1e-4);
+    assert_eq!(v4("\"rgb I\" [2 0 0]"), glam::Vec3::new(2.0, 0.0, 0.0));
+    let v3 = point_intensity("WorldBegin LightSource \"point\" \"spectrum I\" [300 5 800 5] WorldEnd");
+    assert!((luminance(v3) - 5.0).abs() < 0.05, "{v3}");
+}

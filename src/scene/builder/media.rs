@@ -132,7 +132,7 @@ impl Builder {
         let fixes = self.opts.fixes;
         let mut warnings = Vec::new();
         let built = {
-            let spectra = SpectrumContext { base_dir: &base, normalize_blackbody: false, files: &files };
+            let spectra = SpectrumContext { base_dir: &base, normalize_emission: false, files: &files };
             // DEVIATION(pbrt): appearance, `--fix medium-emission` (see Fix).
             let raw_emission = if fixes.has(Fix::MediumEmission) { 1.0 } else { crate::spectrum::CIE_Y_INTEGRAL };
             let mut ctx = MediumContext {

@@ -44,7 +44,7 @@ impl Builder {
     fn spectrum_context(&self, lights: bool) -> SpectrumContext<'_> {
         SpectrumContext {
             base_dir: self.reader.base_dir(),
-            normalize_blackbody: lights && self.syntax() == Syntax::V4,
+            normalize_emission: lights && self.syntax() == Syntax::V4,
             files: &self.reader.files,
         }
     }
@@ -77,7 +77,7 @@ impl Builder {
                     syntax,
                     spectra: SpectrumContext {
                         base_dir: &base,
-                        normalize_blackbody: syntax == Syntax::V4,
+                        normalize_emission: syntax == Syntax::V4,
                         files: &files,
                     },
                     image: &mut images,
@@ -132,7 +132,7 @@ impl Builder {
             let mut warnings = Vec::new();
             let (files, base, syntax) =
                 (self.reader.files.clone(), self.reader.base_dir().to_path_buf(), self.syntax());
-            let spectra = SpectrumContext { base_dir: &base, normalize_blackbody: syntax == Syntax::V4, files: &files };
+            let spectra = SpectrumContext { base_dir: &base, normalize_emission: syntax == Syntax::V4, files: &files };
             let mut images = |n: &str| self.image(n);
             let desc = lights::diffuse::read(&e.name, &e.params, (syntax, &spectra), &mut images, &mut warnings);
             self.warnings.append(&mut warnings);
