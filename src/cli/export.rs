@@ -147,6 +147,10 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         what: format!("MakeNamedMedium \"{}\"", m.name),
         why: "media are not exported: Mitsuba renders the scene in vacuum".into(),
     }));
+    if scene.film.white_balance.is_some() {
+        let why = "white balance is not exported: Mitsuba's image keeps the colours as rendered";
+        notes.push(note(source, "Film \"whitebalance\"", why));
+    }
     let moving = scene.instances.iter().filter(|i| i.motion.is_some()).count();
     if moving > 0 || scene.camera.camera_from_world_end.is_some() {
         let why = "motion is not exported: moving shapes, instances and the camera stand at their start";

@@ -216,6 +216,12 @@ fn instanced_shapes_keep_their_front_faces_under_mirrors() {
 }
 
 #[test]
+fn a_white_balanced_film_is_reported_as_not_exported() {
+    let (e, _) = export_of("Film \"rgb\" \"float whitebalance\" 4000\nWorldBegin\nShape \"sphere\"\n");
+    assert!(e.unsupported.iter().any(|u| u.what == "Film \"whitebalance\""), "{:?}", e.unsupported);
+}
+
+#[test]
 fn what_mitsuba_cannot_render_alike_is_reported() {
     let (e, _) = export_of(
         "WorldBegin\n\
