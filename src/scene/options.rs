@@ -300,10 +300,21 @@ impl RenderOptions {
             }
             notes.push((at, format!("sensor \"{sensor}\""), Approx::Sensor));
         }
-        let kelvin = values::float(p, "whitebalance", 0.0, Range::NonNegative)?;
-        let kelvin = balance_temperature(&sensor, kelvin);
-        let space = crate::spectrum::colorspace::ColorSpaceName::Srgb;
-        Ok((kelvin > 0.0).then(|| white_balance_rgb(kelvin as f64, space)))
+        let kelvin = balance_temperature(&sensor, values::float(p, "whitebalance", 0.0, Range::NonNegative)?);
+        if kelvin == 0.0 {
+            return Ok(None);
+        }
+        let m = white_balance_rgb(kelvin as f64, crate::spectrum::colorspace::ColorSpaceName::Srgb);
+        if m.iter().flatten().all(|v| v.is_finite()) {
+            return Ok(Some(m));
+        }
+        // DEVIATION(pbrt): robustness. Below about 30 K a blackbody's visible light
+        // underflows; pbrt-v4 then balances by a white of 0/0 and writes NaN pixels.
+        let at = p.named("whitebalance").map_or(e.name_span, |x| x.value_span);
+        Err(Diagnostic::error(
+            at,
+            format!("\"whitebalance\" {kelvin} K: light that cold has no visible colour to balance"),
+        ))
     }
 
     /// pbrt-v4 stops when `shutterclose` is not after `shutteropen` (the film's exposure

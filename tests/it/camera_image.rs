@@ -197,4 +197,8 @@ fn whitebalance_adapts_the_lights_white_as_pbrt_v4s_film_does() {
     assert!(s.approximated.iter().any(|a| a.what == "sensor \"nikon_d850\""), "{:?}", s.approximated);
     let err = crate::common::load("Film \"rgb\" \"string sensor\" \"nikon_d805\" WorldBegin").unwrap_err().to_string();
     assert!(err.contains("unknown sensor \"nikon_d805\" (did you mean \"nikon_d850\"?)"), "{err}");
+    // A temperature whose light underflows is refused where pbrt-v4 writes NaN.
+    let err = crate::common::load("Film \"rgb\" \"float whitebalance\" 10 WorldBegin").unwrap_err().to_string();
+    assert!(err.contains("inline.pbrt:1:") && err.contains("no visible colour"), "{err}");
+    assert!(scene("Film \"rgb\" \"float whitebalance\" 1000 WorldBegin").film.white_balance.is_some());
 }
