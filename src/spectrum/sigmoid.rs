@@ -57,7 +57,8 @@ pub struct RgbToSpectrumTable {
 impl RgbToSpectrumTable {
     /// The coefficients for an RGB within [0, 1].
     pub fn lookup(&self, rgb: [f32; 3]) -> RgbSigmoidPolynomial {
-        let [r, g, b] = rgb.map(|c| c.clamp(0.0, 1.0));
+        let rgb = rgb.map(|c| c.clamp(0.0, 1.0));
+        let [r, g, b] = rgb;
         if r == g && g == b {
             // A grey is a constant: S(c2) = r.
             return RgbSigmoidPolynomial { c0: 0.0, c1: 0.0, c2: (r - 0.5) / (r * (1.0 - r)).sqrt() };
@@ -253,6 +254,8 @@ mod tests {
         // A pure red reflects long wavelengths and little else.
         let red = table.lookup([1.0, 0.0, 0.0]);
         assert!(red.eval(700.0) > 0.9 && red.eval(450.0) < 0.1, "{red:?}");
+        // Values outside [0, 1] are clamped into the table, never read past it.
+        assert_eq!(table.lookup([1.5, -0.2, 0.0]), red);
     }
 
     #[test]
