@@ -1,4 +1,7 @@
-//! RGB spectra: scene spectrum parameters reduced to linear sRGB.
+//! The colour of light. This file: scene spectrum parameters reduced to linear sRGB,
+//! which every file renders in today. The submodules are pbrt-v4's spectral machinery
+//! (CIE tables, colour spaces, RGB upsampling, sampled wavelengths, named spectra,
+//! white balance); `docs/spectral.md` says what is in place and what is next.
 //!
 //! ```text
 //! "rgb L" [1 1 1]   "color Kd" [.5 .5 .5]   "xyz L" [...]
@@ -8,7 +11,9 @@
 //! ```
 //! Blackbody and sampled spectra are integrated against an analytic fit of the CIE 1931
 //! matching functions (Wyman, Sloan and Shirley 2013) and converted XYZ → linear sRGB.
-//! Named metal spectra use common RGB reductions.
+//! Named metal spectra use common RGB reductions. (The fit, not `cie`'s CIE tables,
+//! stays here because the RGB of every v3 file's blackbody and sampled spectra comes
+//! from it: changing it would change v3 images that match pbrt-v3's today.)
 
 use glam::Vec3;
 
