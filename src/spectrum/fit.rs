@@ -57,7 +57,8 @@ impl Fitter {
             }
         }
         // The white's luminance is 1 by the illuminant's scale, up to the quadrature;
-        // normalise by it, so that a spectrum of 1 is RGB (1, 1, 1) here exactly.
+        // normalise by it, so that a spectrum of 1 has luminance 1 here exactly (and an
+        // RGB of (1, 1, 1) up to the 5 nm quadrature's error in chromaticity).
         let y = white[1];
         rgb_weights.iter_mut().for_each(|w| w.iter_mut().for_each(|v| *v /= y));
         let white = white.map(|c| c / y);
