@@ -69,8 +69,8 @@ fn illuminant_table(name: &str) -> Option<(&'static [f64], f64)> {
         "stdillum-D65" => (&ILLUM_D65, 300.0),
         "illum-acesD60" => (&ILLUM_ACES_D60, 300.0),
         _ => {
-            let i: usize = name.strip_prefix("stdillum-F")?.parse().ok()?;
-            (fluorescent.get(i.checked_sub(1)?)?, 380.0)
+            let i = (1..=12).find(|i| name == format!("stdillum-F{i}"))?;
+            (fluorescent[i - 1], 380.0)
         }
     })
 }
@@ -122,7 +122,9 @@ mod tests {
             assert!((gx - x).abs() < 1e-3 && (gy - y).abs() < 1e-3, "{name}: {gx} {gy}");
             assert!((xyz[1] - 1.0).abs() < 1e-9);
         }
-        assert!(illuminant_named("stdillum-F13").is_none() && illuminant_named("stdillum-F0").is_none());
+        for other in ["stdillum-F13", "stdillum-F0", "stdillum-F01", "stdillum-F+1", "stdillum-F"] {
+            assert!(illuminant_named(other).is_none(), "{other}");
+        }
     }
 
     #[test]
