@@ -149,16 +149,14 @@ fn blackbody_rgb(p: &Param, kelvin: f32, scale: Option<f32>, ctx: &SpectrumConte
     let b = blackbody(kelvin);
     Ok(match scale {
         Some(s) => b * s,
-        None if ctx.normalize_emission => b / crate::spectrum::luminance(b).max(1e-6),
-        None => b,
+        None => photometric(b, ctx),
     })
 }
 
 /// A spectrum's colour at luminance 1 where `ctx` asks for pbrt-v4's normalisation of
-/// emission (black stays black).
+/// emission (a spectrum all but invisible is scaled by at most 10⁶; black stays black).
 fn photometric(c: Rgb, ctx: &SpectrumContext) -> Rgb {
-    let y = crate::spectrum::luminance(c);
-    if ctx.normalize_emission && y > 0.0 { c / y } else { c }
+    if ctx.normalize_emission { c / crate::spectrum::luminance(c).max(1e-6) } else { c }
 }
 
 fn sampled(p: &Param, pairs: &[(f32, f32)]) -> Res<Rgb> {

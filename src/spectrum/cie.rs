@@ -23,6 +23,18 @@ pub fn cmf_at(lambda: f64) -> [f64; 3] {
     [CIE_X[i], CIE_Y[i], CIE_Z[i]]
 }
 
+/// A table of 5 nm steps from `first` nm at `lambda`, interpolated linearly; zero
+/// outside it (as pbrt-v4's piecewise-linear spectra).
+pub fn five_nm(table: &[f64], first: f64, lambda: f64) -> f64 {
+    let x = (lambda - first) / 5.0;
+    if x < 0.0 || x > (table.len() - 1) as f64 {
+        return 0.0;
+    }
+    let i = (x as usize).min(table.len() - 2);
+    let t = x - i as f64;
+    table[i] * (1.0 - t) + table[i + 1] * t
+}
+
 /// XYZ of a spectrum given as a function of λ (nm).
 pub fn spectrum_to_xyz(s: impl Fn(f64) -> f64) -> [f64; 3] {
     let mut xyz = [0.0; 3];

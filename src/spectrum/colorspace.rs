@@ -8,7 +8,7 @@
 //! spectrum (D65, or ACES's white for aces2065-1), not its nominal xy, and the matrix
 //! maps RGB (1, 1, 1) to that white at luminance 1.
 
-use super::cie;
+use super::cie::{self, five_nm};
 use super::data::{ILLUM_ACES_D60, ILLUM_D65};
 
 /// A 3×3 matrix, rows first.
@@ -62,10 +62,12 @@ impl ColorSpaceName {
     /// standard illuminants).
     pub fn illuminant_at(self, lambda: f64) -> f64 {
         let scale = match self {
-            Self::Aces2065_1 => *ACES_SCALE.get_or_init(|| 1.0 / cie::luminance_of(|l| five_nm(&ILLUM_ACES_D60, l))),
-            _ => *D65_SCALE.get_or_init(|| 1.0 / cie::luminance_of(|l| five_nm(&ILLUM_D65, l))),
+            Self::Aces2065_1 => {
+                *ACES_SCALE.get_or_init(|| 1.0 / cie::luminance_of(|l| five_nm(&ILLUM_ACES_D60, 300.0, l)))
+            }
+            _ => *D65_SCALE.get_or_init(|| 1.0 / cie::luminance_of(|l| five_nm(&ILLUM_D65, 300.0, l))),
         };
-        scale * five_nm(self.illuminant(), lambda)
+        scale * five_nm(self.illuminant(), 300.0, lambda)
     }
 
     /// The matrix from this space's RGB to XYZ.
@@ -111,17 +113,6 @@ pub fn mul(a: &Matrix3, b: &Matrix3) -> Matrix3 {
 
 static D65_SCALE: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
 static ACES_SCALE: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
-
-/// A 5 nm table from 300 nm, interpolated linearly; zero outside it.
-pub(crate) fn five_nm(table: &[f64], lambda: f64) -> f64 {
-    let x = (lambda - 300.0) / 5.0;
-    if x < 0.0 || x > (table.len() - 1) as f64 {
-        return 0.0;
-    }
-    let i = (x as usize).min(table.len() - 2);
-    let t = x - i as f64;
-    table[i] * (1.0 - t) + table[i + 1] * t
-}
 
 /// `m · v`.
 pub fn mul_vec(m: &Matrix3, v: [f64; 3]) -> [f64; 3] {

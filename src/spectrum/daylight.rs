@@ -5,7 +5,7 @@
 //! Film "rgb" "float whitebalance" 5000      # the scene is lit by 5000 K daylight
 //! ```
 
-use super::colorspace::five_nm;
+use super::cie::five_nm;
 use super::data::{CIE_S0, CIE_S1, CIE_S2};
 
 /// Planck's law (W·sr⁻¹·m⁻³) at `lambda` nm; 0 for a temperature ≤ 0.
@@ -44,7 +44,7 @@ pub fn std_illuminant(kelvin: f64) -> impl Fn(f64) -> f64 {
         }
         // pbrt-v4 samples its illuminants at whole nanometres.
         let l = lambda.round();
-        (five_nm(&CIE_S0, l) + m1 * five_nm(&CIE_S1, l) + m2 * five_nm(&CIE_S2, l)) * 0.01
+        (five_nm(&CIE_S0, 300.0, l) + m1 * five_nm(&CIE_S1, 300.0, l) + m2 * five_nm(&CIE_S2, 300.0, l)) * 0.01
     }
 }
 
@@ -54,8 +54,7 @@ mod tests {
     use crate::spectrum::cie;
 
     fn xy(s: impl Fn(f64) -> f64) -> [f64; 2] {
-        let [x, y, z] = cie::spectrum_to_xyz(s);
-        [x / (x + y + z), y / (x + y + z)]
+        crate::spectrum::colorspace::chromaticity(cie::spectrum_to_xyz(s))
     }
 
     #[test]

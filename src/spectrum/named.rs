@@ -79,14 +79,7 @@ fn illuminant_table(name: &str) -> Option<(&'static [f64], f64)> {
 /// luminance 1.
 pub fn illuminant_named(name: &str) -> Option<impl Fn(f64) -> f64 + Copy> {
     let (table, start) = illuminant_table(name)?;
-    let at = move |lambda: f64| {
-        let x = (lambda - start) / 5.0;
-        if x < 0.0 || x > (table.len() - 1) as f64 {
-            return 0.0;
-        }
-        let i = (x as usize).min(table.len() - 2);
-        table[i] + (x - i as f64) * (table[i + 1] - table[i])
-    };
+    let at = move |lambda: f64| super::cie::five_nm(table, start, lambda);
     let scale = 1.0 / super::cie::luminance_of(at);
     Some(move |lambda: f64| scale * at(lambda))
 }
@@ -118,7 +111,7 @@ mod tests {
         for (name, [x, y]) in whites {
             let s = illuminant_named(name).unwrap();
             let xyz = crate::spectrum::cie::spectrum_to_xyz(s);
-            let (gx, gy) = (xyz[0] / xyz.iter().sum::<f64>(), xyz[1] / xyz.iter().sum::<f64>());
+            let [gx, gy] = crate::spectrum::colorspace::chromaticity(xyz);
             assert!((gx - x).abs() < 1e-3 && (gy - y).abs() < 1e-3, "{name}: {gx} {gy}");
             assert!((xyz[1] - 1.0).abs() < 1e-9);
         }

@@ -214,15 +214,6 @@ mod tests {
         mul_vec(&space.rgb_from_xyz(), xyz)
     }
 
-    fn table_value(table: &[f64; 81], l: f64) -> f64 {
-        let x = (l - 380.0) / 5.0;
-        if !(0.0..=80.0).contains(&x) {
-            return 0.0;
-        }
-        let i = (x as usize).min(79);
-        table[i] + (x - i as f64) * (table[i + 1] - table[i])
-    }
-
     #[test]
     fn colorchecker_patches_keep_their_rgb_through_the_upsampling() {
         // Each patch's measured reflectance → sRGB under D65 → sigmoid spectrum →
@@ -230,7 +221,7 @@ mod tests {
         // between fits; a table indexed the wrong way round is off by tenths).
         let mut worst = 0.0f64;
         for (name, table) in &COLORCHECKER_OHTA {
-            let rgb = srgb_of(|l| table_value(table, l));
+            let rgb = srgb_of(|l| cie::five_nm(table, 380.0, l));
             let clamped = rgb.map(|c| c.clamp(0.0, 1.0) as f32);
             let spectrum = RgbAlbedoSpectrum::new(ColorSpaceName::Srgb, clamped);
             let back = srgb_of(|l| spectrum.eval(l as f32) as f64);
