@@ -84,10 +84,15 @@ impl Family {
 
     /// `unknown shape type "sphre" (did you mean "sphere"?)`.
     pub fn unknown(self, name: &str) -> String {
-        match nearest(name, self.known()) {
-            Some(n) => format!("unknown {} \"{name}\" (did you mean \"{n}\"?)", self.noun()),
-            None => format!("unknown {} \"{name}\"", self.noun()),
-        }
+        unknown(self.noun(), name, self.known())
+    }
+}
+
+/// `unknown {noun} "name"`, with the nearest of `known` suggested when one is close.
+pub fn unknown(noun: &str, name: &str, known: &[&str]) -> String {
+    match nearest(name, known) {
+        Some(n) => format!("unknown {noun} \"{name}\" (did you mean \"{n}\"?)"),
+        None => format!("unknown {noun} \"{name}\""),
     }
 }
 

@@ -295,8 +295,7 @@ impl RenderOptions {
         if sensor != "cie1931" {
             if !NAMED_SENSORS.contains(&sensor.as_str()) {
                 let known: Vec<&str> = std::iter::once("cie1931").chain(NAMED_SENSORS).collect();
-                let hint = super::names::nearest(&sensor, &known).map(|n| format!(" (did you mean \"{n}\"?)"));
-                return Err(Diagnostic::error(at, format!("unknown sensor \"{sensor}\"{}", hint.unwrap_or_default())));
+                return Err(Diagnostic::error(at, super::names::unknown("sensor", &sensor, &known)));
             }
             notes.push((at, format!("sensor \"{sensor}\""), Approx::Sensor));
         }
