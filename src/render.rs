@@ -7,7 +7,7 @@ use crate::camera::Camera;
 use crate::fixes::{Fix, Fixes};
 use crate::interaction::{Footprint, SurfaceInteraction};
 use crate::lights::{AreaLight, Light, WorldSphere};
-use crate::materials::{Bsdf, LobeList, Material, TexCtx, Textures};
+use crate::materials::{Bsdf, LobeList, Material, Shading, TexCtx, Textures};
 use crate::math::Ray;
 use crate::math::frame::coordinate_system;
 use crate::media::MediumInterface;
@@ -18,7 +18,9 @@ use crate::scene::{
 };
 use crate::shapes::ShapeSample;
 use crate::spectrum::Rgb;
-use glam::Vec3;
+use crate::spectrum::colorspace::ColorSpaceName;
+use crate::spectrum::transport::{PassCell, PassSpectrum};
+use glam::{DVec3, Vec3};
 
 /// An emitting world shape: which side emits and where its lights start (each
 /// primitive's light holds its radiance).
@@ -110,6 +112,11 @@ pub struct RenderScene {
     object_shape_media: Vec<Vec<MediumInterface>>,
     /// Per light of the scene's `LightSource`s (the first of `lights`): its medium.
     light_media: Vec<Option<u32>>,
+    /// The pass's wavelengths when paths carry them (`spectrum::transport`); `None`
+    /// renders in RGB.
+    spectral: Option<PassCell>,
+    /// Spectral, with a material that disperses.
+    dispersive: bool,
 }
 
 impl RenderScene {
@@ -209,6 +216,12 @@ impl RenderScene {
             world_shape_media,
             object_shape_media,
             light_media,
+            spectral: scene.spectral.then(|| PassCell::new(ColorSpaceName::Srgb)),
+            dispersive: scene.spectral
+                && scene
+                    .materials
+                    .iter()
+                    .any(|m| matches!(m.kind, MaterialKind::Dielectric { dispersion: Some(_), .. })),
         }
     }
 
@@ -395,7 +408,7 @@ impl RenderScene {
             self.add_mixed(material, Vec3::ONE, &ctx, &mut lobes, 0);
             return Some(lobes.bsdf([ss, ts, ns], si.n.0));
         }
-        material.bsdf(&self.textures, ctx, [ss, ts, ns], si.n.0)
+        material.bsdf(Shading { textures: &self.textures, ctx, spectral: self.pass_spectrum() }, [ss, ts, ns], si.n.0)
     }
 
     /// `m`, or for a pbrt-v4 `mix`, the material it picks here (repeatedly, for mixes
@@ -419,12 +432,14 @@ impl RenderScene {
         match m.kind() {
             MaterialKind::Mix { materials, amount, .. } if depth < MAX_MIX_DEPTH => {
                 let s1 = self.textures.eval(*amount, &ctx()).max(Vec3::ZERO);
+                // A v3 file rendered spectrally (`--colour spectral`): the weight too.
+                let s1 = self.pass_spectrum().map_or(s1, |p| p.albedo(s1));
                 let s2 = (Vec3::ONE - s1).max(Vec3::ZERO);
                 for (k, s) in [(0, s1), (1, s2)] {
                     self.add_mixed(&self.materials[materials[k] as usize], w * s, ctx, out, depth + 1);
                 }
             }
-            _ => m.add_lobes(&self.textures, ctx, w, out),
+            _ => m.add_lobes(Shading { textures: &self.textures, ctx, spectral: self.pass_spectrum() }, w, out),
         }
     }
 
@@ -446,7 +461,7 @@ impl RenderScene {
                 Some((_, l)) if l as usize == idx => self.emitted(hit, &self.geometry.interaction(hit), -wi),
                 _ => Vec3::ZERO,
             },
-            None => self.lights[idx].le_escaped(wi),
+            None => self.emission(self.lights[idx].le_escaped(wi)),
         }
     }
 
@@ -460,9 +475,74 @@ impl RenderScene {
             return Vec3::ZERO;
         }
         match &self.lights[light as usize] {
-            Light::Area(a) => a.radiance(si.uv),
+            Light::Area(a) => self.emission(a.radiance(si.uv)),
             _ => Vec3::ZERO,
         }
+    }
+
+    /// Sets the wavelengths of pass `pass` (SPPM's iteration, vcm's pass) before its
+    /// work starts; nothing for a scene rendered in RGB.
+    pub fn begin_pass(&self, pass: u32) {
+        if let Some(cell) = &self.spectral {
+            cell.begin(pass);
+        }
+    }
+
+    /// The wavelengths of the pass under way, when the scene renders spectrally.
+    #[inline]
+    pub fn pass_spectrum(&self) -> Option<PassSpectrum> {
+        self.spectral.as_ref().map(PassCell::get)
+    }
+
+    /// A light's RGB emission as the path carries it: itself in RGB, its illuminant
+    /// spectrum at the pass's wavelengths when spectral.
+    #[inline]
+    pub fn emission(&self, rgb: Rgb) -> Rgb {
+        match &self.spectral {
+            Some(cell) if rgb != Vec3::ZERO => cell.get().illuminant(rgb),
+            _ => rgb,
+        }
+    }
+
+    /// What a path's value adds to a pixel, in output RGB.
+    #[inline]
+    pub fn film_rgb(&self, v: Rgb) -> DVec3 {
+        match &self.spectral {
+            Some(cell) => cell.get().to_rgb(v),
+            None => v.as_dvec3(),
+        }
+    }
+
+    /// [`Self::film_rgb`] of a value summed in f64.
+    #[inline]
+    pub fn film_rgb_f64(&self, v: DVec3) -> DVec3 {
+        match &self.spectral {
+            Some(cell) => crate::spectrum::colorspace::mul_vec(&cell.get().rgb_matrix(), v.to_array()).into(),
+            None => v,
+        }
+    }
+
+    /// Whether a spectral path that meets `hit` keeps only its first wavelength (the
+    /// material there disperses).
+    #[inline]
+    pub fn disperses(&self, hit: &Hit) -> bool {
+        self.dispersive && self.material(hit).disperses(&self.materials)
+    }
+
+    /// A spectral path that builds a dispersing BSDF keeps only its first wavelength
+    /// (pbrt-v4's `TerminateSecondary`): the others end and the first's weight grows
+    /// by the lanes' count, once per path (`terminated` says whether it has).
+    #[inline]
+    pub fn terminate_if_dispersed(&self, hit: &Hit, beta: &mut Rgb, terminated: &mut bool) {
+        if !*terminated && self.disperses(hit) {
+            *beta *= crate::spectrum::transport::TERMINATE;
+            *terminated = true;
+        }
+    }
+
+    /// Whether paths carry wavelengths (pbrt-v4's files without media) rather than RGB.
+    pub fn is_spectral(&self) -> bool {
+        self.spectral.is_some()
     }
 }
 

@@ -31,7 +31,7 @@ use crate::parser::Syntax;
 use crate::render::RenderScene;
 use crate::sampling::power_heuristic;
 use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash};
-use crate::spectrum::{Rgb, luminance};
+use crate::spectrum::{Rgb, luminance, transport};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
@@ -58,6 +58,8 @@ pub struct VisiblePoint {
     pub ng: Vec3,
     pub at: Scatterer,
     pub beta: Rgb,
+    /// The camera path kept only its first wavelength (dispersion).
+    pub terminated: bool,
 }
 
 /// What scatters light at a visible point.
@@ -271,6 +273,7 @@ impl<'a> Sppm<'a> {
     pub fn iterate_showing(&mut self, mut preview: Option<&mut Preview>) {
         let t = Instant::now();
         self.live.reset();
+        self.scene.begin_pass(self.iteration);
         if let PassMode::Independent { alpha } = self.passes {
             let r = passes::radius(self.r1, alpha, self.iteration);
             self.pixels.par_iter_mut().for_each(|p| p.radius = r);
@@ -330,7 +333,7 @@ impl<'a> Sppm<'a> {
                     camera_path(scene, pixel, &mut rng, max_depth, (diff_scale, time), beams)
                 }
             };
-            px.ld += ld.as_dvec3();
+            px.ld += scene.film_rgb(ld);
             px.vp = vp;
         };
         let pixels = self.pixels[band.clone()].par_iter_mut();
@@ -453,12 +456,14 @@ impl<'a> Sppm<'a> {
     /// until the next camera pass replaces them: clearing them touched every pixel's
     /// memory and took three times as long as the update itself (f16-9a).
     fn update(&mut self, phi: &[DVec3], m: &[u64]) {
+        let scene = self.scene;
         if self.passes.is_independent() {
             self.pixels.par_iter_mut().enumerate().for_each(|(i, p)| {
                 if m[i] > 0
                     && let Some(vp) = &p.vp
                 {
-                    p.tau += vp.beta.as_dvec3() * phi[i] / (std::f64::consts::PI * p.radius * p.radius);
+                    p.tau +=
+                        scene.film_rgb_f64(vp.beta.as_dvec3() * phi[i]) / (std::f64::consts::PI * p.radius * p.radius);
                     p.n += m[i] as f64;
                 }
             });
@@ -471,7 +476,8 @@ impl<'a> Sppm<'a> {
                 let mf = m[i] as f64;
                 let n_new = p.n + GAMMA * mf;
                 let r_new = p.radius * (n_new / (p.n + mf)).sqrt();
-                p.tau = (p.tau + vp.beta.as_dvec3() * phi[i]) * (r_new * r_new) / (p.radius * p.radius);
+                p.tau =
+                    (p.tau + scene.film_rgb_f64(vp.beta.as_dvec3() * phi[i])) * (r_new * r_new) / (p.radius * p.radius);
                 p.n = n_new;
                 p.radius = r_new;
             }
@@ -516,7 +522,7 @@ impl<'a> Sppm<'a> {
             let indirect = match photons {
                 Some((phi, share)) => {
                     let beta = p.vp.as_ref().map_or(DVec3::ZERO, |vp| vp.beta.as_dvec3());
-                    (old * k + beta * phi[i] / (share * np * area(p))) / (k + 1.0)
+                    (old * k + self.scene.film_rgb_f64(beta * phi[i]) / (share * np * area(p))) / (k + 1.0)
                 }
                 None => old,
             };
@@ -625,9 +631,8 @@ fn camera_path(
     if weight == 0.0 {
         return (Vec3::ZERO, None);
     }
-    let (mut beta, mut ld) = (Vec3::splat(weight), Vec3::ZERO);
-    let (mut specular_bounce, mut depth, mut passes) = (false, 0, 0);
-    let mut medium = scene.camera_medium;
+    let (mut beta, mut ld, mut terminated) = (Vec3::splat(weight), Vec3::ZERO, false);
+    let (mut specular_bounce, mut depth, mut passes, mut medium) = (false, 0, 0, scene.camera_medium);
     // DEVIATION(pbrt): appearance, `--fix sky-after-glossy`. pbrt-v3 adds infinite
     // lights to every camera ray that escapes; after a glossy bounce `direct_light` has
     // already counted them (its BSDF-sampled MIS half), so pbrt-v3 counts them twice.
@@ -645,7 +650,7 @@ fn camera_path(
         let Some(hit) = hit else {
             if depth == 0 || specular_bounce || sky_always {
                 for l in &scene.lights {
-                    ld += beta * l.le_escaped(ray.d.0);
+                    ld += beta * scene.emission(l.le_escaped(ray.d.0));
                 }
             }
             break;
@@ -662,6 +667,7 @@ fn camera_path(
         if depth == 0 || specular_bounce {
             ld += beta * scene.emitted(&hit, &si, wo);
         }
+        scene.terminate_if_dispersed(&hit, &mut beta, &mut terminated);
         // pbrt: a visible point at diffuse surfaces, or glossy ones at the last depth.
         let visible_point = bsdf.is_diffuse() || (bsdf.is_glossy() && depth + 1 == max_depth);
         // pbrt-v4 follows the path one bounce past its visible point, so a light seen
@@ -669,7 +675,10 @@ fn camera_path(
         let specular_too = visible_point && scene.syntax == Syntax::V4 && bsdf.is_specular();
         ld += beta * direct_light(scene, &si, &bsdf, wo, sampler, specular_too, here);
         if visible_point {
-            return (ld, Some(VisiblePoint { p: si.p.0, wo, ng: si.n.0, at: Scatterer::Surface(bsdf), beta }));
+            return (
+                ld,
+                Some(VisiblePoint { p: si.p.0, wo, ng: si.n.0, at: Scatterer::Surface(bsdf), beta, terminated }),
+            );
         }
         if depth + 1 >= max_depth {
             break;
@@ -677,14 +686,7 @@ fn camera_path(
         let Some(s) = bsdf.sample_f(wo, sampler.get2d(), sampler.get1d(), TransportMode::Radiance) else { break };
         beta *= s.f * s.wi.dot(bsdf.shading_normal()).abs() / s.pdf;
         specular_bounce = s.specular;
-        if luminance(beta) < 0.25 {
-            let q = (1.0 - luminance(beta)).max(0.0);
-            if sampler.get1d() < q {
-                break;
-            }
-            beta /= 1.0 - q;
-        }
-        if beta == Vec3::ZERO {
+        if !camera_roulette(&mut beta, sampler) {
             break;
         }
         ray = si.spawn_ray(Vector3(s.wi));
@@ -692,6 +694,19 @@ fn camera_path(
         depth += 1;
     }
     (ld, None)
+}
+
+/// pbrt's Russian roulette on a camera path (below luminance 0.25 of its weight):
+/// whether it goes on, its weight raised if so; a black path ends.
+fn camera_roulette(beta: &mut Rgb, sampler: &mut impl Sampler) -> bool {
+    if luminance(*beta) < 0.25 {
+        let q = (1.0 - luminance(*beta)).max(0.0);
+        if sampler.get1d() < q {
+            return false;
+        }
+        *beta /= 1.0 - q;
+    }
+    *beta != Vec3::ZERO
 }
 
 /// A camera path's segment in medium `m` up to `hit`: the light it adds there (the
@@ -735,7 +750,14 @@ fn scatter_on_camera_path(
         Err((mp, weight)) => {
             *beta *= weight * mp.sigma_s;
             let direct = *beta * volume::direct_light(scene, &mp, sampler);
-            let vp = VisiblePoint { p: mp.p, wo: mp.wo, ng: Vec3::ZERO, at: Scatterer::Medium(mp.phase), beta: *beta };
+            let vp = VisiblePoint {
+                p: mp.p,
+                wo: mp.wo,
+                ng: Vec3::ZERO,
+                at: Scatterer::Medium(mp.phase),
+                beta: *beta,
+                terminated: false,
+            };
             Some((direct, vp))
         }
     }
@@ -809,7 +831,7 @@ fn direct_light(
             if f != Vec3::ZERO && ls.li != Vec3::ZERO { shadow(scene, si, &ls, here, sampler) } else { Vec3::ZERO };
         if tr != Vec3::ZERO {
             let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi)) };
-            ld += tr * f * ls.li * w / ls.pdf;
+            ld += tr * f * scene.emission(ls.li) * w / ls.pdf;
         }
     }
     let mut specular = Vec3::ZERO;
@@ -865,7 +887,7 @@ fn emitted_along(
     let (hit, tr) = trace_lit(scene, &si.spawn_ray(Vector3(wi)), || here.medium_toward(scene, si, wi), sampler);
     tr * match hit {
         Some(hit) => scene.emitted(&hit, &scene.geometry.interaction(&hit), -wi),
-        None => scene.lights.iter().map(|l| l.le_escaped(wi)).sum(),
+        None => scene.lights.iter().map(|l| scene.emission(l.le_escaped(wi))).sum(),
     }
 }
 
@@ -929,7 +951,7 @@ fn trace_photon(
     let Some(Photon { mut beta, mut ray, mut medium, from_medium }) = emit_photon(scene, sampler, time) else {
         return PhotonPath::default();
     };
-    let (mut depth, mut passes, mut hits, mut near) = (0, 0, 0, false);
+    let (mut depth, mut passes, mut hits, mut near, mut terminated) = (0, 0, 0, false, false);
     // Light from lights is the camera side's where it arrives directly; light from
     // media is not (nothing samples media toward a visible point), so it deposits at once.
     let first_deposit = if from_medium { 0 } else { 1 };
@@ -973,13 +995,15 @@ fn trace_photon(
             && depth >= first_deposit
             && (scene.media.is_empty() || matches!(at, Surface::Bsdf(_)))
         {
-            near |= deposit_on_surface(grid, pixels, si.p.0, (wi, beta), skip_behind, out);
+            let photon = PhotonHere { p: si.p.0, wi, beta, terminated };
+            near |= deposit_on_surface(grid, pixels, photon, skip_behind, out);
         }
         let bsdf = match at {
             Surface::Bsdf(b) => b,
             Surface::PassedThrough => continue,
             Surface::Abandon => break,
         };
+        scene.terminate_if_dispersed(&hit, &mut beta, &mut terminated);
         let Some(s) = bsdf.sample_f(wi, sampler.get2d(), sampler.get1d(), TransportMode::Importance) else { break };
         let bnew = beta * s.f * s.wi.dot(bsdf.shading_normal()).abs() / s.pdf;
         let q = (1.0 - luminance(bnew) / luminance(beta).max(1e-30)).max(0.0);
@@ -1026,7 +1050,7 @@ fn emit_photon(scene: &RenderScene, sampler: &mut impl Sampler, time: Option<f32
     // power of two near the lights' total power. pbrt's f32 β overflows for emitters
     // past about 1e37 and silently drops those photons.
     let pdf = pick as f64 * e.pdf_pos as f64 * e.pdf_dir as f64;
-    let beta = (e.le.as_dvec3() * (e.n.dot(d).abs() as f64 / pdf / scene.photon_scale)).as_vec3();
+    let beta = (scene.emission(e.le).as_dvec3() * (e.n.dot(d).abs() as f64 / pdf / scene.photon_scale)).as_vec3();
     let medium = if scene.media.is_empty() { None } else { scene.light_medium(li, d, e.n) };
     Some(Photon { beta, ray: crate::math::Ray::new(e.ray.o, Vector3(d)).at_time(time), medium, from_medium: false })
 }
@@ -1050,15 +1074,24 @@ fn emit_from_medium(scene: &RenderScene, k: usize, pick: f32, sampler: &mut impl
 }
 
 /// Deposits a photon that arrived at surface point `p` from direction `wi` with weight
+/// A photon where it lands: arriving along `wi` with weight `beta`; `terminated`: it
+/// kept only its first wavelength.
+struct PhotonHere {
+    p: Vec3,
+    wi: Vec3,
+    beta: Rgb,
+    terminated: bool,
+}
+
 /// `beta` on the surface visible points whose ball holds it.
 fn deposit_on_surface(
     grid: &Grid,
     pixels: &[Pixel],
-    p: Vec3,
-    (wi, beta): (Vec3, Rgb),
+    photon: PhotonHere,
     skip_behind: bool,
     out: &mut Vec<Deposit>,
 ) -> bool {
+    let PhotonHere { p, wi, beta, terminated } = photon;
     grid.gather(p, |pixel| {
         let Some(vp) = &pixels[pixel as usize].vp else { return };
         let Scatterer::Surface(bsdf) = &vp.at else { return };
@@ -1071,7 +1104,10 @@ fn deposit_on_surface(
         if (vp.p - p).length_squared() > r * r || (behind && skip_behind && !bsdf.transmits()) {
             return;
         }
-        out.push((pixel, beta * bsdf.f(vp.wo, wi)));
+        // Both sides grew their first lane for ending the others: pbrt-v4 ends a
+        // wavelength set once.
+        let once = if terminated && vp.terminated { transport::ONCE } else { 1.0 };
+        out.push((pixel, beta * bsdf.f(vp.wo, wi) * once));
     })
 }
 

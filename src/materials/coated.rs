@@ -132,7 +132,7 @@ pub fn layers(c: &Coated, i: &Inputs<impl Fn() -> TexCtx>) -> Layered {
         top,
         bottom,
         thickness: i.float(c.thickness).max(f32::MIN_POSITIVE),
-        albedo: i.rgb(c.albedo).clamp(Vec3::ZERO, Vec3::ONE),
+        albedo: i.albedo(c.albedo),
         g: i.float(c.g).clamp(-1.0, 1.0),
         max_depth: c.max_depth,
         n_samples: c.n_samples,

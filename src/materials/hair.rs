@@ -92,9 +92,12 @@ pub fn bxdf(hair: &Hair, i: &Inputs<impl Fn() -> TexCtx>, v: f32) -> HairBxdf {
     let beta_m = i.float(hair.beta_m).clamp(0.0, 1.0);
     let beta_n = i.float(hair.beta_n).clamp(0.0, 1.0);
     let sigma_a = match hair.absorption {
-        Absorption::SigmaA(s) => i.rgb(s).max(Vec3::ZERO),
-        Absorption::Color(c) => sigma_a_of_color(i.rgb(c), beta_n),
-        Absorption::Melanin { eumelanin, pheomelanin } => sigma_a_of_melanin(i.float(eumelanin), i.float(pheomelanin)),
+        Absorption::SigmaA(s) => i.unbounded(s),
+        // pbrt-v4 takes σa per wavelength from the reflectance's spectrum.
+        Absorption::Color(c) => sigma_a_of_color(i.albedo(c), beta_n),
+        Absorption::Melanin { eumelanin, pheomelanin } => {
+            i.lanes_unbounded(sigma_a_of_melanin(i.float(eumelanin), i.float(pheomelanin)))
+        }
     };
     let h = (-1.0 + 2.0 * v).clamp(-1.0, 1.0);
     HairBxdf::new(h, i.float(hair.eta), sigma_a, [beta_m, beta_n], i.float(hair.alpha))

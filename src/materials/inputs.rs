@@ -6,6 +6,7 @@ use super::lobes::{Lobe, MAX_LOBES};
 use super::params::{Metal, RoughnessRemap, TexValue};
 use crate::fixes::Fixes;
 use crate::spectrum::Rgb;
+use crate::spectrum::transport::PassSpectrum;
 use crate::textures::TexCtx;
 use crate::textures::Textures;
 use glam::Vec3;
@@ -16,17 +17,47 @@ pub struct Inputs<'a, C: Fn() -> TexCtx> {
     pub ctx: C,
     pub max_reflectance: f32,
     pub fixes: Fixes,
+    /// The pass's wavelengths when paths carry them: colours are upsampled here.
+    pub spectral: Option<PassSpectrum>,
 }
 
 impl<C: Fn() -> TexCtx> Inputs<'_, C> {
     /// A reflectance (or transmittance), clamped as the material's version does.
     pub fn refl(&self, v: TexValue) -> Rgb {
-        self.rgb(v).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance))
+        match &self.spectral {
+            Some(s) => s.albedo(self.rgb(v)),
+            None => self.rgb(v).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance)),
+        }
     }
 
-    /// `v` times `s`, clamped as a reflectance.
+    /// `v` times `s`, clamped as a reflectance (pbrt-v4 scales the reflectance's
+    /// spectrum, then clamps).
     pub fn refl_scaled(&self, v: TexValue, s: f32) -> Rgb {
-        (s * self.rgb(v)).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance))
+        match &self.spectral {
+            Some(sp) => (s * sp.albedo(self.rgb(v))).clamp(Vec3::ZERO, Vec3::ONE),
+            None => (s * self.rgb(v)).clamp(Vec3::ZERO, Vec3::splat(self.max_reflectance)),
+        }
+    }
+
+    /// A colour within [0, 1] that is not a surface's reflectance (a layer's albedo).
+    pub fn albedo(&self, v: TexValue) -> Rgb {
+        match &self.spectral {
+            Some(s) => s.albedo(self.rgb(v)),
+            None => self.rgb(v).clamp(Vec3::ZERO, Vec3::ONE),
+        }
+    }
+
+    /// A non-negative value without bound (σa), upsampled as such when spectral.
+    pub fn unbounded(&self, v: TexValue) -> Rgb {
+        self.lanes_unbounded(self.rgb(v).max(Vec3::ZERO))
+    }
+
+    /// `rgb` in the path's lanes as an unbounded value.
+    pub fn lanes_unbounded(&self, rgb: Rgb) -> Rgb {
+        match &self.spectral {
+            Some(s) => s.unbounded(rgb),
+            None => rgb,
+        }
     }
 
     pub fn rgb(&self, v: TexValue) -> Rgb {
@@ -47,8 +78,11 @@ impl<C: Fn() -> TexCtx> Inputs<'_, C> {
     /// A conductor's η and k here.
     pub fn eta_k(&self, metal: &Metal) -> (Rgb, Rgb) {
         match metal {
-            Metal::EtaK { eta, k } => (*eta, *k),
-            Metal::Reflectance(r) => Metal::eta_k_of_reflectance(self.rgb(*r)),
+            Metal::EtaK { eta, k } => (self.lanes_unbounded(*eta), self.lanes_unbounded(*k)),
+            Metal::Reflectance(r) => Metal::eta_k_of_reflectance(match &self.spectral {
+                Some(s) => s.albedo(self.rgb(*r)),
+                None => self.rgb(*r),
+            }),
         }
     }
 }

@@ -23,7 +23,7 @@ pub fn read(_ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Ma
 
 #[inline]
 pub fn lobes<const N: usize>(reflectance: TexValue, i: &Inputs<impl Fn() -> TexCtx>, out: &mut Lobes<N>) {
-    out.push(Lobe::SpecularReflection { r: i.rgb(reflectance), fresnel: Fresnel::One })
+    out.push(Lobe::SpecularReflection { r: i.refl(reflectance), fresnel: Fresnel::One })
 }
 
 pub fn mitsuba(reflectance: TexValue, e: &mut dyn MaterialExport) -> MaterialOut {

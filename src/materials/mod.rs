@@ -59,6 +59,8 @@ use crate::parser::source::Span;
 use crate::scene::approx::Approx;
 use crate::scene::values::Res;
 use crate::spectrum::Rgb;
+use crate::spectrum::named::Sellmeier;
+use crate::spectrum::transport::PassSpectrum;
 use glam::Vec3;
 use inputs::{Inputs, Lobes, MATERIAL_LOBES, lambert};
 use std::sync::Arc;
@@ -192,6 +194,9 @@ pub enum MaterialKind {
     /// A dielectric; smooth when both roughnesses are 0.
     Dielectric {
         eta: TexValue,
+        /// A named glass's index by wavelength (pbrt-v4's `"spectrum eta"`): spectral
+        /// paths disperse through it; RGB ones take `eta`, its luminance-weighted mean.
+        dispersion: Option<Sellmeier>,
         kr: TexValue,
         kt: TexValue,
         roughness: [TexValue; 2],
@@ -256,6 +261,14 @@ impl MaterialDesc {
     }
 }
 
+/// Where a material is shaded: the scene's textures, the hit's texture context (made
+/// only when a textured input asks) and the pass's wavelengths when spectral.
+pub struct Shading<'a, C: Fn() -> TexCtx> {
+    pub textures: &'a Textures,
+    pub ctx: C,
+    pub spectral: Option<PassSpectrum>,
+}
+
 /// A material ready to shade: the scene's description, its inputs evaluated at each hit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -305,8 +318,8 @@ impl Material {
     /// The BSDF at a hit (`None` for interfaces); `ctx` says where textured inputs are
     /// looked up (made only when one is).
     #[inline]
-    pub fn bsdf(&self, textures: &Textures, ctx: impl Fn() -> TexCtx, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
-        let inputs = Inputs { textures, ctx, max_reflectance: self.max_reflectance, fixes: self.fixes };
+    pub fn bsdf(&self, at: Shading<'_, impl Fn() -> TexCtx>, frame: [Vec3; 3], ng: Vec3) -> Option<Bsdf> {
+        let inputs = self.inputs(at);
         if let MaterialKind::Diffuse { reflectance } = &self.kind {
             // The common case, without the lobe list's set-up.
             let lambert = lambert(inputs.refl(*reflectance));
@@ -332,12 +345,33 @@ impl Material {
 
     /// Appends this material's lobes at a hit, each scaled by `weight` (a v3 `mix`
     /// part); interfaces and mixes add none.
-    pub fn add_lobes(&self, textures: &Textures, ctx: impl Fn() -> TexCtx, weight: Rgb, out: &mut LobeList) {
-        let inputs = Inputs { textures, ctx, max_reflectance: self.max_reflectance, fixes: self.fixes };
+    pub fn add_lobes(&self, at: Shading<'_, impl Fn() -> TexCtx>, weight: Rgb, out: &mut LobeList) {
+        let inputs = self.inputs(at);
         let start = out.0.n;
         if self.lobes(&inputs, &mut out.0).is_some() {
             out.0.list[start..out.0.n].iter_mut().for_each(|l| *l = l.scaled(weight));
         }
+    }
+
+    fn inputs<'t, C: Fn() -> TexCtx>(&self, at: Shading<'t, C>) -> Inputs<'t, C> {
+        let (max_reflectance, fixes) = (self.max_reflectance, self.fixes);
+        Inputs { textures: at.textures, ctx: at.ctx, max_reflectance, fixes, spectral: at.spectral }
+    }
+
+    /// Whether the BSDF here bends each wavelength its own way, so that a spectral path
+    /// keeps only its first (a `mix` counts if either part does).
+    pub fn disperses(&self, all: &[Material]) -> bool {
+        match &self.kind {
+            MaterialKind::Dielectric { dispersion, .. } => dispersion.is_some(),
+            MaterialKind::Mix { materials, .. } => {
+                materials.iter().any(|&m| all.get(m as usize).is_some_and(|m| m.kind_disperses()))
+            }
+            _ => false,
+        }
+    }
+
+    fn kind_disperses(&self) -> bool {
+        matches!(&self.kind, MaterialKind::Dielectric { dispersion: Some(_), .. })
     }
 
     /// The lobes of this material at a hit, by its type's module.
@@ -350,8 +384,9 @@ impl Material {
             }
             MaterialKind::Coated(c) => coated::base_lobes(c, i, out),
             MaterialKind::Mirror { reflectance } => mirror::lobes(*reflectance, i, out),
-            MaterialKind::Dielectric { eta, kr, kt, roughness, remap } => {
-                dielectric::lobes([*eta, *kr, *kt], roughness, *remap, self.convention, i, out)
+            MaterialKind::Dielectric { eta, dispersion, kr, kt, roughness, remap } => {
+                let eta = dielectric::Eta { mean: *eta, dispersion: *dispersion };
+                dielectric::lobes(eta, [*kr, *kt], roughness, *remap, self.convention, i, out)
             }
             MaterialKind::Conductor { metal, roughness, remap } => conductor::lobes(metal, roughness, *remap, i, out),
             MaterialKind::Plastic { kd, ks, roughness, remap } => {

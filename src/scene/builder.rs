@@ -38,6 +38,7 @@ use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::parser::stmt::{ActiveTransform, Entity, StatementReader, Stmt, StmtKind, read_scene_bytes};
 use crate::shapes::{self, Built, ShapeContext, mesh_params as mesh, plymesh};
+use crate::spectrum::transport::Colour;
 use crate::textures::TextureDesc;
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
@@ -56,6 +57,9 @@ pub struct LoadOptions {
     pub in_memory: HashMap<String, Arc<[u8]>>,
     /// The pbrt bugs to fix (`--fix`); by default the file renders as its pbrt renders it.
     pub fixes: crate::fixes::Fixes,
+    /// What paths carry (`--colour`); by default as the file's pbrt: wavelengths for
+    /// pbrt-v4, RGB for pbrt-v3.
+    pub colour: Option<Colour>,
 }
 
 /// Reads, parses and builds a scene file.
@@ -1139,6 +1143,7 @@ impl Builder {
             .as_ref()
             .map(|(s, span, what)| format!("{}: {what} ({})", sources.location(*span), s.name()));
         Ok(SceneDescription {
+            spectral: Colour::chosen(self.opts.colour, syntax) == Colour::Spectral && media.is_empty(),
             syntax,
             syntax_evidence: if self.opts.syntax.is_some() { Some("--syntax".into()) } else { evidence },
             camera: r.camera,

@@ -148,6 +148,9 @@ pub struct Approximated {
 #[derive(Debug)]
 pub struct SceneDescription {
     pub syntax: Syntax,
+    /// Whether paths carry sampled wavelengths (`spectrum::transport`), as pbrt-v4's
+    /// do, rather than RGB, as pbrt-v3's do.
+    pub spectral: bool,
     /// Where the syntax was decided from (`file:line:col: what`), if not defaulted.
     pub syntax_evidence: Option<String>,
     pub camera: Camera,

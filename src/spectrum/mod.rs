@@ -1,7 +1,8 @@
 //! The colour of light. This file: scene spectrum parameters reduced to linear sRGB,
-//! which every file renders in today. The submodules are pbrt-v4's spectral machinery
+//! as scene descriptions hold them. The submodules are pbrt-v4's spectral machinery
 //! (CIE tables, colour spaces, RGB upsampling, sampled wavelengths, named spectra,
-//! white balance); `docs/spectral.md` says what is in place and what is next.
+//! white balance) and what paths carry (`transport`: RGB for pbrt-v3 files, sampled
+//! wavelengths for pbrt-v4's); `docs/spectral.md` says what is in place and what is next.
 //!
 //! ```text
 //! "rgb L" [1 1 1]   "color Kd" [.5 .5 .5]   "xyz L" [...]
@@ -28,6 +29,7 @@ pub mod named;
 pub mod sampled;
 pub mod sensor;
 pub mod sigmoid;
+pub mod transport;
 
 /// Linear sRGB.
 pub type Rgb = Vec3;

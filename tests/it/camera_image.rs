@@ -165,7 +165,7 @@ fn grey_card(film: &str) -> [f64; 3] {
     let text = format!(
         "LookAt 0 0 5  0 0 0  0 1 0 Camera \"orthographic\"\n\
          Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8 {film}\n\
-         Sampler \"halton\" \"integer pixelsamples\" 2\n\
+         Sampler \"halton\" \"integer pixelsamples\" 64\n\
          Integrator \"sppm\" \"integer maxdepth\" 1 \"integer photonsperiteration\" 10\n\
          WorldBegin LightSource \"distant\" \"point3 from\" [0 0 5] \"point3 to\" [0 0 0] \"rgb L\" [1 1 1]\n\
          Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n\
@@ -182,10 +182,11 @@ fn grey_card(film: &str) -> [f64; 3] {
 fn whitebalance_adapts_the_lights_white_as_pbrt_v4s_film_does() {
     use pbrt_sppm::spectrum::colorspace::{ColorSpaceName, mul_vec};
     use pbrt_sppm::spectrum::sensor::white_balance_rgb;
-    // Unbalanced, the card is grey; balanced for 3000 K light it turns blue by the
+    // Unbalanced, the card is grey (to the 0.25% its 64 passes' shared wavelengths
+    // leave, `spectrum::transport`); balanced for 3000 K light it turns blue by the
     // Bradford adaptation from 3000 K to D65 (pbrt-v4: `whitebalance`, sensor cie1931).
     let plain = grey_card("");
-    assert!((plain[0] - plain[2]).abs() < 1e-4 * plain[1], "{plain:?}");
+    assert!((plain[0] - plain[2]).abs() < 4e-3 * plain[1], "{plain:?}");
     let balanced = grey_card("\"float whitebalance\" 3000");
     let want = mul_vec(&white_balance_rgb(3000.0, ColorSpaceName::Srgb), plain);
     assert!((0..3).all(|k| (balanced[k] - want[k]).abs() < 1e-5 * want[1]), "{balanced:?} vs {want:?}");

@@ -29,6 +29,7 @@ mod sampling;
 mod shapes;
 mod shards;
 mod slurm;
+mod spectral;
 mod stability;
 mod tev;
 mod tokenizer;

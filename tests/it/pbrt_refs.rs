@@ -624,9 +624,12 @@ fn motion_blur_moves_shapes_instances_and_the_camera_as_pbrt_v3() {
 fn motion_blur_moves_shapes_instances_and_the_camera_as_pbrt_v4() {
     // pbrt-v4 interpolates in its rendering space (the turning box swings about the
     // camera) and renders each SPPM pass at one time. pbrt-v4's own 64-sample image:
-    // worst tile 3.3%; ours 2.2–3.7% over seeds 0–3. Times drawn per ray, as for v3
-    // files: 17% at the box; start transforms only: 79%.
-    assert_matches_pbrt("v4-motion", 0.045);
+    // worst tile 3.3%. Each pass also has one set of wavelengths, and at 64 passes the
+    // moving green sphere's colour is 4.0–5.5% off over seeds 0–3 (2.2–3.7% in RGB);
+    // at 128 passes 1.6%, at 256 1.0% (seed 0). Times drawn per ray, as for v3 files:
+    // 17% at the box; start transforms only: 79%.
+    let settings = RenderSettings { algorithm: Some(Algorithm::Sppm), iterations: Some(128), ..Default::default() };
+    Check { settings, ..Check::sppm("v4-motion", 0.045, 1) }.assert();
 }
 
 #[test]

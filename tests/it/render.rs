@@ -7,6 +7,7 @@ use pbrt_sppm::imageio::metrics::relmse;
 use pbrt_sppm::imageio::read_image;
 use pbrt_sppm::integrators::adaptive::PhotonSampling;
 use pbrt_sppm::integrators::{ERRORS_HEADER, RenderSettings};
+use pbrt_sppm::materials::Shading;
 use pbrt_sppm::render::RenderScene;
 use pbrt_sppm::sampling::SamplerKind;
 
@@ -391,7 +392,13 @@ fn metal_roughness_follows_each_versions_remapping() {
         .iter()
         .map(|m| {
             let frame = [glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z];
-            let bsdf = m.bsdf(&rs.textures, || at_uv([0.5, 0.5]), frame, glam::Vec3::Z).expect("a surface");
+            let bsdf = m
+                .bsdf(
+                    Shading { textures: &rs.textures, ctx: || at_uv([0.5, 0.5]), spectral: None },
+                    frame,
+                    glam::Vec3::Z,
+                )
+                .expect("a surface");
             match bsdf.lobes() {
                 [Lobe::MicrofacetReflection { dist, .. }] => Some(dist.ax),
                 [Lobe::SpecularReflection { .. }] => None,
@@ -460,7 +467,12 @@ fn glass_is_smooth_at_roughness_zero_in_both_versions() {
     let lobes: Vec<Vec<Lobe>> = rs
         .materials
         .iter()
-        .map(|m| m.bsdf(&rs.textures, || at_uv([0.5, 0.5]), frame, glam::Vec3::Z).expect("a surface").lobes().to_vec())
+        .map(|m| {
+            m.bsdf(Shading { textures: &rs.textures, ctx: || at_uv([0.5, 0.5]), spectral: None }, frame, glam::Vec3::Z)
+                .expect("a surface")
+                .lobes()
+                .to_vec()
+        })
         .collect();
     assert!(matches!(lobes[0][..], [Lobe::FresnelSpecular { .. }]), "{:?}", lobes[0]);
     assert!(matches!(lobes[1][..], [Lobe::FresnelSpecular { .. }]), "{:?}", lobes[1]);

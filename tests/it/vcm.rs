@@ -724,13 +724,14 @@ fn roulette_inside_glass_does_not_brighten_what_leaves_it() {
              Shape \"trianglemesh\" \"point3 P\" [-.1 -.1 0  .1 -.1 0  .1 .1 0  -.1 .1 0 \
                -.1 -.1 6  .1 -.1 6  .1 .1 6  -.1 .1 6] \"integer indices\" \
                [0 2 1 0 3 2  4 5 6 4 6 7  0 4 7 0 7 3  1 2 6 1 6 5  0 1 5 0 5 4  3 7 6 3 6 2]";
+    // In RGB: one pass's shared wavelengths tint the light itself (up to 20% in a
+    // channel), which would hide what this bound is for; roulette is the same code.
+    let mut rgb = scene(text);
+    rgb.spectral = false;
     for algorithm in [Algorithm::Vcm(Techniques::Bdpt), Algorithm::Vcm(Techniques::All)] {
         for seed in 1..=4 {
             let settings = RenderSettings { algorithm: Some(algorithm), seed: Some(seed), ..Default::default() };
-            let px = pbrt_sppm::integrators::render(&RenderScene::new(&scene(text)), &settings)
-                .expect("renders")
-                .image
-                .pixels;
+            let px = pbrt_sppm::integrators::render(&RenderScene::new(&rgb), &settings).expect("renders").image.pixels;
             // Pixels looking into the rod's end, the middle sixth of the image.
             let rod: Vec<f32> = (0..px.len())
                 .filter(|i| (10..14).contains(&(i % 24)) && (10..14).contains(&(i / 24)))
@@ -762,7 +763,11 @@ fn extra_rays_for_light_seen_through_glass_keep_the_mean_and_cut_the_noise() {
                Shape \"sphere\" \"float radius\" .4 AttributeEnd \
              Material \"diffuse\" \"rgb reflectance\" [.5 .5 .5] \
              Shape \"trianglemesh\" \"point3 P\" [-3 0 -4  3 0 -4  3 0 4  -3 0 4] \"integer indices\" [0 1 2 0 2 3]";
-    let scene = RenderScene::new(&scene(text));
+    // In RGB: four passes' shared wavelengths add colour noise to both sides, beyond
+    // this 3% bound on their means at 24 seeds; the extra rays are the same code.
+    let mut rgb = scene(text);
+    rgb.spectral = false;
+    let scene = RenderScene::new(&rgb);
     let render = |prefix_rays: bool, seed: u64| {
         let settings = VcmSettings {
             light_paths: 576,

@@ -11,6 +11,7 @@ use pbrt_sppm::integrators::{Algorithm, RenderSettings};
 use pbrt_sppm::job::Request;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::sampling::SamplerKind;
+use pbrt_sppm::spectrum::transport::Colour;
 use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
@@ -87,6 +88,10 @@ pub struct Common {
     /// Read the file as pbrt-v3 or pbrt-v4 syntax instead of detecting it.
     #[arg(long, value_parser = parse_syntax)]
     pub syntax: Option<Syntax>,
+    /// What paths carry: `spectral` (sampled wavelengths, as pbrt-v4) or `rgb` (as
+    /// pbrt-v3). Default: as the file's pbrt (scenes with media: rgb).
+    #[arg(long, value_parser = parse_colour)]
+    pub colour: Option<Colour>,
     /// Raise or lower a limit, NAME=N (pixels, photons, iterations, maxdepth, file-bytes,
     /// texture-pixels, include-depth, triangles); may be repeated.
     #[arg(long = "limit", value_name = "NAME=N")]
@@ -245,6 +250,10 @@ fn parse_syntax(s: &str) -> Result<Syntax, String> {
         "v4" => Ok(Syntax::V4),
         _ => Err(format!("expected v3 or v4, not \"{s}\"")),
     }
+}
+
+fn parse_colour(s: &str) -> Result<Colour, String> {
+    Colour::from_name(s).ok_or_else(|| format!("expected spectral or rgb, not \"{s}\""))
 }
 
 fn parse_photon_sampling(s: &str) -> Result<PhotonSampling, String> {

@@ -79,7 +79,7 @@ pub(crate) fn read(scene: &Path, common: &Common, line_open: bool) -> Result<Sce
         limits.set(spec).map_err(|e| fail(Path::new("--limit"), e))?;
     }
     let fixes = common.fixes.unwrap_or_default();
-    let opts = LoadOptions { syntax: common.syntax, limits, fixes, ..Default::default() };
+    let opts = LoadOptions { syntax: common.syntax, limits, fixes, colour: common.colour, ..Default::default() };
     let loaded = if scene.as_os_str() == "-" {
         let stdin = Path::new("<stdin>");
         let mut bytes = Vec::new();
@@ -175,7 +175,7 @@ fn plan(args: &PlanArgs) -> ExitCode {
         return fail(Path::new("plan"), e);
     }
     // A scene that does not load fails here, not on every node.
-    let common = Common { syntax: None, limits: Vec::new(), quiet: true, fixes: None };
+    let common = Common { syntax: None, limits: Vec::new(), quiet: true, fixes: None, colour: None };
     if let Err(code) = load(&args.scene, &common) {
         return code;
     }

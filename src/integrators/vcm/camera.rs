@@ -93,6 +93,14 @@ struct Vertex<'a> {
     /// The camera subpath has bounced only specularly before: light subpaths' caustics
     /// merged here are seen as they are ([`ByKind`]).
     first_diffuse: bool,
+    /// The subpath kept only its first wavelength (dispersion).
+    terminated: bool,
+}
+
+/// A connection's factor for the first lane's growth on both subpaths: it counts once
+/// (a subpath that ended its other wavelengths stands for all of them).
+fn once(v: &Vertex, lv: &LightVertex) -> f32 {
+    if v.terminated && lv.terminated { crate::spectrum::transport::ONCE } else { 1.0 }
 }
 
 /// Where a camera ray goes next ([`Cameras::next`]). Made and taken apart once per
@@ -161,7 +169,7 @@ impl Cameras<'_> {
         // merging is no technique at its vertices beyond, see `mis`).
         let (mut diffuse, mut past_diffuse_specular) = (false, false);
         // The prefix light, and whether the subpath is still in its prefix.
-        let (mut prefix, mut in_prefix) = (Vec3::ZERO, true);
+        let (mut prefix, mut in_prefix, mut terminated) = (Vec3::ZERO, true, false);
         loop {
             in_prefix &= medium.is_none();
             let (place, at, wo, surf) =
@@ -181,13 +189,17 @@ impl Cameras<'_> {
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
             let merges = !past_diffuse_specular && !at.is_delta();
-            let v = Vertex { place, at: &at, wo, partial, len, merges, first_diffuse: !diffuse };
             if let Some((hit, si)) = &surf
                 && pass.techniques.uses(Technique::EmitterHit)
             {
+                let v = Vertex { place, at: &at, wo, partial, len, merges, first_diffuse: !diffuse, terminated };
                 let found = beta * self.emitted(hit, si, &v, origin, dist2);
                 *if in_prefix { &mut prefix } else { &mut out.traced } += found;
             }
+            if let Some((hit, _)) = &surf {
+                scene.terminate_if_dispersed(hit, &mut beta, &mut terminated);
+            }
+            let v = Vertex { place, at: &at, wo, partial, len, merges, first_diffuse: !diffuse, terminated };
             in_prefix &= at.is_delta();
             if len >= pass.max_len || (surf.is_some() && wo.dot(place.ng) == 0.0) {
                 break;
@@ -311,7 +323,7 @@ impl Cameras<'_> {
         let scene = self.pass.scene;
         let mut sum = Vec3::ZERO;
         for (k, light) in scene.lights.iter().enumerate() {
-            let le = light.le_escaped(d);
+            let le = scene.emission(light.le_escaped(d));
             if le == Vec3::ZERO {
                 continue;
             }
@@ -372,7 +384,7 @@ impl Cameras<'_> {
         };
         let only_direct = self.pass.techniques == Techniques::Direct;
         let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs, v.len == 1 || only_direct));
-        let c = e.f * v.at.cos(ls.wi) * ls.li * (w / (pick * ls.pdf));
+        let c = e.f * v.at.cos(ls.wi) * scene.emission(ls.li) * (w / (pick * ls.pdf));
         if !c.is_finite() || c == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -409,7 +421,7 @@ impl Cameras<'_> {
         let f = (lv.factors(pass), v.at.factors(&pass.factors));
         let w = pass.techniques.weight(mis::connect(lv.partial, v.partial, pdfs, lv.len, f, v.merges));
         let g = v.at.cos(dir) * lv.adjoint_cos(-dir) / dist2;
-        let c = (lv.beta * el.f * ec.f * (g * w)).as_dvec3() * pass.scene.photon_scale;
+        let c = (lv.beta * el.f * ec.f * (g * w * once(v, lv))).as_dvec3() * pass.scene.photon_scale;
         let c = c.as_vec3();
         if c == Vec3::ZERO || !c.is_finite() {
             return Vec3::ZERO;
@@ -445,7 +457,8 @@ impl Cameras<'_> {
                 return;
             }
             let w = pass.techniques.weight(mis::merge(lv.partial, v.partial, e.pdf as f64, e.pdf_rev as f64, f));
-            sum[super::light::kind(lv.half, lv.after_specular && v.first_diffuse)] += (e.f * lv.beta * w).as_dvec3();
+            let c = e.f * lv.beta * (w * once(v, lv));
+            sum[super::light::kind(lv.half, lv.after_specular && v.first_diffuse)] += c.as_dvec3();
         });
         let disc = std::f64::consts::PI * (r2 as f64);
         let kernel = if in_medium { disc * pass.radius as f64 * (4.0 / 3.0) } else { disc };

@@ -59,6 +59,8 @@ pub struct LightVertex {
     /// The light subpath's bounce before it was specular (a caustic where the camera
     /// sees it directly, [`ByKind`]).
     pub after_specular: bool,
+    /// The subpath kept only its first wavelength (dispersion).
+    pub terminated: bool,
 }
 
 impl LightVertex {
@@ -261,7 +263,7 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let partial = Partial::light(emission, direct, cos_used, light.is_delta(), pass.factors.surface);
     // DEVIATION(pbrt): robustness. Formed in f64 and carried divided by the scene's
     // photon scale, as SPPM's photons, so emitters past f32's range keep their paths.
-    let beta = (e.le.as_dvec3() * (cos / emission / scene.photon_scale)).as_vec3();
+    let beta = (scene.emission(e.le).as_dvec3() * (cos / emission / scene.photon_scale)).as_vec3();
     let medium = scene.light_medium(li, d, e.n);
     let time = pass.time.unwrap_or_else(|| scene.camera.time(s.get1d()));
     let ray = Ray::new(e.ray.o, Vector3(d)).at_time(time);
@@ -288,6 +290,7 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
     let mut n = Counts { paths: 1, ..Default::default() };
     let Some(Start { mut ray, mut beta, mut partial, light, pick, cos, mut medium }) = emit(pass, s) else { return n };
     let (mut prev, mut len, mut passes, mut after_specular) = (ray.o.0, 0u32, 0u32, false);
+    let mut terminated = false;
     // The throughput as it left the last vertex, which Russian roulette compares with.
     let mut before = beta;
     let keep = pass.techniques.uses(Technique::Connect) || pass.techniques.uses(Technique::Merge);
@@ -305,6 +308,7 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
                     Surface::PassedThrough => continue,
                     Surface::Abandon => break,
                 };
+                scene.terminate_if_dispersed(&hit, &mut beta, &mut terminated);
                 (Place::on_surface(scene, &hit, &si, medium), Scatterer::Surface(bsdf), -ray.d.0.normalize())
             }
         };
@@ -321,7 +325,7 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
         if !at.in_medium() && wo.dot(place.ng) == 0.0 {
             break;
         }
-        let v = LightVertex { place, wo, beta, at, partial, len, half: to.half, after_specular };
+        let v = LightVertex { place, wo, beta, at, partial, len, half: to.half, after_specular, terminated };
         if !v.at.is_delta() {
             // Direct light is not light-traced (`mis`), unless light tracing is alone.
             let traced = len > 1 || pass.techniques == Techniques::Only(Technique::LightTrace);

@@ -411,6 +411,7 @@ impl<'a> Vcm<'a> {
     ) -> Done {
         let t0 = Instant::now();
         self.live.reset();
+        self.scene.begin_pass(iteration);
         let pass = self.pass(iteration);
         let lights = match pass.techniques.traces_lights() {
             true => light::trace_all(&pass, self.settings.seed, iteration, &self.live),
@@ -430,7 +431,7 @@ impl<'a> Vcm<'a> {
         };
         let t2 = Instant::now();
         let cams = self.cameras(&pass, &lights, grid.as_ref(), iteration);
-        let (width, live) = (self.size.0, &self.live);
+        let (width, live, scene) = (self.size.0, &self.live, self.scene);
         let tasks = crate::integrators::PIXELS_PER_TASK;
         let mut work = camera::Work::default();
         let halves = balance::Halves::new(pass.light_paths);
@@ -441,7 +442,7 @@ impl<'a> Vcm<'a> {
                     live.add_camera(256);
                 }
                 let p = cams.pixel(first + i, width);
-                *s += p.total().as_dvec3();
+                *s += scene.film_rgb(p.total());
                 p
             };
             let band_sums = sums[band.clone()].par_iter_mut().enumerate().with_max_len(tasks);
@@ -467,7 +468,7 @@ impl<'a> Vcm<'a> {
             halves.add_splats(parts, &lights.splats, scale);
         }
         let (counts, stored) = (lights.counts, lights.vertices.len());
-        add_splats(sums, lights.splats, scale);
+        add_splats(sums, lights.splats, scale, scene);
         Done { counts, stored, camera: work, times: [t0, t1, t2, t3, Instant::now()] }
     }
 
@@ -545,12 +546,12 @@ fn provisional(sums: &[DVec3], passes_done: u32, film: &Film, camera_done: usize
 
 /// Adds light tracing's splats to the pixels' sums, each pixel in a fixed order (list by
 /// list, splat by splat) whatever the thread count; pixel ranges in parallel.
-fn add_splats(sums: &mut [DVec3], lists: Vec<Vec<(u32, Rgb)>>, scale: f64) {
+fn add_splats(sums: &mut [DVec3], lists: Vec<Vec<(u32, Rgb)>>, scale: f64, scene: &RenderScene) {
     let (grouped, span) = Grouped::by_pixel_range(lists, sums.len(), SPLAT_RANGES);
     sums.par_chunks_mut(span).enumerate().for_each(|(r, sums)| {
         let lo = r * span;
         for &(pixel, c) in grouped.iter().flat_map(|g| g.group(r)) {
-            sums[pixel as usize - lo] += c.as_dvec3() * scale;
+            sums[pixel as usize - lo] += scene.film_rgb(c) * scale;
         }
     });
 }

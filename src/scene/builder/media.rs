@@ -19,6 +19,7 @@ use crate::parser::error::Diagnostic;
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::scene::values::SpectrumContext;
+use crate::spectrum::transport::Colour;
 use glam::DMat4;
 
 /// A medium name as the file uses it: its definition, if read, and its first use.
@@ -109,7 +110,16 @@ impl Builder {
                 remap.push(None);
                 continue;
             }
-            remap.push(self.build_medium(&e, ctm)?.map(|kind| {
+            let kind = self.build_medium(&e, ctm)?;
+            let spectral = Colour::chosen(self.opts.colour, syntax) == Colour::Spectral;
+            if kind.is_some() && built.is_empty() && spectral {
+                self.note(
+                    e.name_span,
+                    format!("MakeNamedMedium \"{}\"", e.name),
+                    crate::scene::approx::Approx::MediaInRgb,
+                );
+            }
+            remap.push(kind.map(|kind| {
                 built.push(MediumDesc { name: e.name.clone(), kind });
                 built.len() as u32 - 1
             }));

@@ -46,6 +46,8 @@ struct Branch {
     prev: Vec3,
     len: u32,
     splits: u32,
+    /// It kept only its first wavelength (dispersion).
+    terminated: bool,
 }
 
 /// What a ray found: its vertex (the place, what scatters there, the direction back,
@@ -64,7 +66,7 @@ impl Cameras<'_> {
         s: &mut impl Sampler,
     ) -> PixelSample {
         let mut out = PixelSample::default();
-        let mut todo = vec![Branch { ray, diff, beta, partial, prev: ray.o.0, len: 0, splits: 0 }];
+        let mut todo = vec![Branch { ray, diff, beta, partial, prev: ray.o.0, len: 0, splits: 0, terminated: false }];
         while let Some(b) = todo.pop() {
             self.direct_branch(b, &mut todo, s, &mut out);
         }
@@ -82,10 +84,13 @@ impl Cameras<'_> {
         let len = b.len + 1;
         let dist2 = (place.p - b.prev).length_squared() as f64;
         partial.arrive(Some(dist2), at.measure(wo, place.ng));
-        let v = Vertex { place, at: &at, wo, partial, len, merges: false, first_diffuse: false };
+        let mut terminated = b.terminated;
+        let v = Vertex { place, at: &at, wo, partial, len, merges: false, first_diffuse: false, terminated };
         if let Some((hit, si)) = &surf {
             out.traced += beta * self.emitted(hit, si, &v, origin, dist2);
+            pass.scene.terminate_if_dispersed(hit, &mut beta, &mut terminated);
         }
+        let v = Vertex { terminated, ..v };
         if len >= pass.max_len || (surf.is_some() && wo.dot(v.place.ng) == 0.0) {
             return;
         }
@@ -114,7 +119,8 @@ impl Cameras<'_> {
             p.scatter(at.measure(wi, v.place.ng), 1.0, 1.0, true, false, at.factors(&pass.factors));
             let ray = v.place.spawn(wi);
             let splits = b.splits + split as u32;
-            todo.push(Branch { ray, diff: None, beta: beta * w, partial: p, prev: v.place.p, len, splits });
+            let (prev, beta) = (v.place.p, beta * w);
+            todo.push(Branch { ray, diff: None, beta, partial: p, prev, len, splits, terminated });
         }
     }
 
@@ -164,7 +170,7 @@ impl Cameras<'_> {
         let dist2 = (place.p - v.place.p).length_squared() as f64;
         let mut p = partial;
         p.arrive(Some(dist2), at.measure(wo, place.ng));
-        let emitter = Vertex { place, at: &at, wo, partial: p, len: v.len + 1, merges: false, first_diffuse: false };
+        let emitter = Vertex { place, at: &at, wo, partial: p, len: v.len + 1, ..*v };
         found.traced + beta * self.emitted(&hit, &si, &emitter, origin, dist2)
     }
 }

@@ -133,7 +133,7 @@ impl Cameras<'_> {
         let mut partial = Partial::camera(camera_pdf, pass.lt_count());
         let (mut beta, mut prev, mut origin, mut eta_scale) = (Vec3::splat(weight), ray.o.0, ray.o.0, 1.0f32);
         let (mut len, mut passes, mut medium) = (0u32, 0u32, None);
-        let mut out = PixelSample::default();
+        let (mut out, mut terminated) = (PixelSample::default(), false);
         while medium.is_none() {
             let (place, at, wo, surf) =
                 match self.next(&mut ray, &mut diff, (&mut passes, &mut medium), &mut beta, &mut out, s) {
@@ -148,9 +148,10 @@ impl Cameras<'_> {
             len += 1;
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
-            let v = Vertex { place, at: &at, wo, partial, len, merges: false, first_diffuse: true };
+            let v = Vertex { place, at: &at, wo, partial, len, merges: false, first_diffuse: true, terminated };
             if let Some((hit, si)) = &surf {
                 found += beta * self.emitted(hit, si, &v, origin, dist2);
+                scene.terminate_if_dispersed(hit, &mut beta, &mut terminated);
             }
             if len >= pass.max_len || !at.is_delta() || (surf.is_some() && wo.dot(place.ng) == 0.0) {
                 break;

@@ -1,0 +1,148 @@
+//! pbrt-v4's files render spectrally (`spectrum::transport`): paths carry wavelengths,
+//! named glasses disperse, and pbrt-v3's files stay in RGB.
+
+use crate::common::{load_file, report, root, scene};
+use pbrt_sppm::integrators::vcm::Techniques;
+use pbrt_sppm::integrators::{Algorithm, RenderSettings, render};
+use pbrt_sppm::render::RenderScene;
+use pbrt_sppm::scene::SceneDescription;
+
+/// The image of `scene` at `iterations`, as (width, height, pixels).
+fn image(scene: &SceneDescription, iterations: u32) -> (usize, usize, Vec<[f32; 3]>) {
+    image_with(scene, iterations, Algorithm::Sppm)
+}
+
+fn image_with(scene: &SceneDescription, iterations: u32, algorithm: Algorithm) -> (usize, usize, Vec<[f32; 3]>) {
+    let settings = RenderSettings { iterations: Some(iterations), algorithm: Some(algorithm), ..Default::default() };
+    let bidirectional = algorithm != Algorithm::Sppm;
+    let out = render(&RenderScene::for_integrator(scene, bidirectional), &settings).expect("renders").image;
+    (out.width, out.height, out.pixels)
+}
+
+/// Each channel's centroid (x, y) over the pixels brighter than its median by more
+/// than a tenth of its maximum: where a spot of light lands, by colour.
+fn centroids(w: usize, pixels: &[[f32; 3]]) -> [[f64; 2]; 3] {
+    std::array::from_fn(|c| {
+        let mut v: Vec<f32> = pixels.iter().map(|p| p[c]).collect();
+        v.sort_by(f32::total_cmp);
+        let (median, max) = (v[v.len() / 2], v[v.len() - 1]);
+        let floor = median + 0.1 * (max - median);
+        let (mut sum, mut sx, mut sy) = (0.0, 0.0, 0.0);
+        for (i, p) in pixels.iter().enumerate() {
+            let e = (p[c] - floor).max(0.0) as f64;
+            (sum, sx, sy) = (sum + e, sx + e * (i % w) as f64, sy + e * (i / w) as f64);
+        }
+        [sx / sum, sy / sum]
+    })
+}
+
+#[test]
+fn a_glass_prism_throws_a_rainbow_with_blue_bent_most() {
+    let mut prism = load_file(&root().join("pbrt-scenes/v4/prism.pbrt")).expect("loads");
+    assert!(prism.spectral, "a pbrt-v4 file renders spectrally");
+    let mut spots = Vec::new();
+    for algorithm in [Algorithm::Sppm, Algorithm::Vcm(Techniques::All)] {
+        let (w, _, pixels) = image_with(&prism, 16, algorithm);
+        let [red, _, blue] = centroids(w, &pixels);
+        // The floor is seen from the prism's side with world +x to the left (pbrt's
+        // LookAt): red, bent least, lands farther from the prism, so more to the left.
+        let spread = blue[0] - red[0];
+        eprintln!("prism ({algorithm:?}): red centroid {red:?}, blue {blue:?}: {spread:.1} pixels apart");
+        assert!(spread > 8.0, "{algorithm:?}: the rainbow's blue lies {spread:.1} pixels right of its red");
+        assert!((blue[1] - red[1]).abs() < 3.0, "{algorithm:?}: along the rainbow, not across it");
+        spots.push(spot_power(&pixels));
+    }
+    // In RGB (one index for all colours) the spot is white: one centroid. Splitting
+    // the light moves it, and adds or takes away (almost) nothing: a path that ended
+    // its other wavelengths counts once, on either side of a merge.
+    prism.spectral = false;
+    let (w, _, pixels) = image_with(&prism, 16, Algorithm::Sppm);
+    let [red, _, blue] = centroids(w, &pixels);
+    assert!((blue[0] - red[0]).abs() < 1.5, "RGB: red {red:?} and blue {blue:?} together");
+    let white = spot_power(&pixels);
+    eprintln!("spot power: rainbow {spots:?}, white {white}");
+    for (algorithm, p) in ["sppm", "vcm"].iter().zip(&spots) {
+        assert!((p / white - 1.0).abs() < 0.03, "{algorithm}: the rainbow carries {p}, the white spot {white}");
+    }
+}
+
+/// The light in the window of the image around the floor's spot (160 × 120 pixels;
+/// the rainbow spans x 25–55 along y 75).
+fn spot_power(pixels: &[[f32; 3]]) -> f64 {
+    let inside = |i: &usize| (15..70).contains(&(i % 160)) && (60..90).contains(&(i / 160));
+    (0..pixels.len()).filter(inside).map(|i| pixels[i].iter().map(|&c| c as f64).sum::<f64>()).sum()
+}
+
+#[test]
+fn pbrt_v3_files_and_files_with_media_render_in_rgb() {
+    let v3 = scene("LookAt 0 0 5 0 0 0 0 1 0 Camera \"perspective\" WorldBegin Material \"matte\" Shape \"sphere\"");
+    assert!(!v3.spectral);
+    let base = "Camera \"perspective\" Film \"rgb\" WorldBegin";
+    assert!(scene(&format!("{base} Material \"diffuse\" Shape \"sphere\"")).spectral);
+    let fog = "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" MediumInterface \"fog\" \"\"";
+    let foggy = format!("{base} {fog} Material \"interface\" Shape \"sphere\"");
+    assert!(!scene(&foggy).spectral);
+    // `check` says which, and notes the media's scene as approximated.
+    assert_eq!(report(&format!("{base} Shape \"sphere\""))["colour"], "spectral");
+    let r = report(&foggy);
+    assert_eq!(r["colour"], "rgb");
+    assert!(r["approximated"].to_string().contains("MakeNamedMedium"), "{}", r["approximated"]);
+}
+
+#[test]
+fn a_saturated_reflectance_under_white_light_keeps_its_rgb_colour() {
+    // A red wall lit by a white quad light, seen spectrally and in RGB: the same colour
+    // on average (an upsampled reflectance reflects its own RGB under the space's white).
+    let text = "LookAt 0 0 3 0 0 0 0 1 0 Camera \"perspective\" \"float fov\" 30
+        Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16
+        Integrator \"sppm\" \"integer photonsperiteration\" 2000 WorldBegin
+        AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [1 1 1]
+          Shape \"bilinearmesh\" \"point3 P\" [-2 -2 4  -2 2 4  2 -2 4  2 2 4] AttributeEnd
+        Material \"diffuse\" \"rgb reflectance\" [0.8 0.2 0.05]
+        Shape \"bilinearmesh\" \"point3 P\" [-3 -3 0  3 -3 0  -3 3 0  3 3 0]";
+    let mut s = scene(text);
+    let mean = |s: &SceneDescription| {
+        let (_, _, px) = image(s, 64);
+        let n = px.len() as f64;
+        [0, 1, 2].map(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / n)
+    };
+    let spectral = mean(&s);
+    s.spectral = false;
+    let rgb = mean(&s);
+    for c in 0..3 {
+        assert!((spectral[c] / rgb[c] - 1.0).abs() < 0.02, "channel {c}: spectral {spectral:?}, RGB {rgb:?}");
+    }
+}
+
+#[test]
+fn colour_chooses_what_paths_carry_whatever_the_version() {
+    let dir = crate::common::scratch(
+        "spectral",
+        "colour",
+        &[
+            ("v3.pbrt", "Camera \"perspective\" WorldBegin Material \"matte\" Shape \"sphere\""),
+            ("v4.pbrt", "Camera \"perspective\" WorldBegin Material \"diffuse\" Shape \"sphere\""),
+        ],
+    );
+    let colour = |file: &str, args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
+            .args(["check", "--json", "--quiet"])
+            .args(args)
+            .arg(dir.join(file))
+            .output()
+            .expect("runs");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        v["colour"].as_str().expect("a colour").to_string()
+    };
+    assert_eq!(colour("v3.pbrt", &[]), "rgb");
+    assert_eq!(colour("v4.pbrt", &[]), "spectral");
+    assert_eq!(colour("v3.pbrt", &["--colour", "spectral"]), "spectral");
+    assert_eq!(colour("v4.pbrt", &["--colour", "rgb"]), "rgb");
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
+        .args(["check", "--colour", "grey"])
+        .arg(dir.join("v4.pbrt"))
+        .output()
+        .expect("runs");
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("expected spectral or rgb"));
+}
