@@ -217,11 +217,7 @@ impl RenderScene {
             object_shape_media,
             light_media,
             spectral: scene.spectral.then(|| PassCell::new(ColorSpaceName::Srgb)),
-            dispersive: scene.spectral
-                && scene
-                    .materials
-                    .iter()
-                    .any(|m| matches!(m.kind, MaterialKind::Dielectric { dispersion: Some(_), .. })),
+            dispersive: scene.spectral && scene.materials.iter().any(|m| m.kind.disperses()),
         }
     }
 

@@ -13,6 +13,7 @@
 //! `reflectance`, never both (pbrt-v4's error).
 
 use super::MaterialKind;
+use super::dielectric::Dispersion;
 use super::inputs::{Inputs, Lobes};
 use super::layered::{Base, Coat, Layered};
 use super::lobes::Lobe;
@@ -35,6 +36,9 @@ pub const NAMES: [&str; 2] = ["coateddiffuse", "coatedconductor"];
 #[derive(Clone, Debug, PartialEq)]
 pub struct Coated {
     pub coat_eta: f32,
+    /// The coat's index by wavelength where a spectrum gives it: spectral paths
+    /// disperse through the coat, as through a `dielectric`.
+    pub coat_dispersion: Option<Dispersion>,
     pub coat_roughness: [TexValue; 2],
     pub base: CoatBase,
     pub thickness: TexValue,
@@ -72,13 +76,15 @@ pub fn read(ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Mat
 /// live (`interface.` for `coatedconductor`).
 fn coated(p: &ParamList, prefix: &str, base: CoatBase, r: &mut dyn Resolver) -> Res<MaterialKind> {
     let coat_eta = coat_eta(p, &format!("{prefix}eta"), r)?;
+    let coat_dispersion = super::dielectric::dispersion(p, &format!("{prefix}eta"), r)?;
     let coat_roughness = prefixed_roughness(p, prefix, r)?;
     let thickness = float(p, "thickness", 0.01, Range::Any, r)?;
     let albedo = spectrum(p, "albedo", 0.0, r)?;
     let g = float(p, "g", 0.0, Range::Any, r)?;
     let (max_depth, n_samples) = (count(p, "maxdepth", 10)?, count(p, "nsamples", 1)?);
     let remap = remap_v4(p)?;
-    let c = Coated { coat_eta, coat_roughness, base, thickness, albedo, g, max_depth, n_samples, remap };
+    let c =
+        Coated { coat_eta, coat_dispersion, coat_roughness, base, thickness, albedo, g, max_depth, n_samples, remap };
     Ok(MaterialKind::Coated(Box::new(c)))
 }
 
@@ -116,10 +122,14 @@ pub fn layers(c: &Coated, i: &Inputs<impl Fn() -> TexCtx>) -> Layered {
     let alpha = |r: &[TexValue; 2]| i.alpha(r, c.remap);
     let smooth = |a: [f32; 2]| a[0].max(a[1]) < 1e-3;
     let a = alpha(&c.coat_roughness);
-    let top = Coat { eta: c.coat_eta, dist: TrowbridgeReitz::new(a), smooth: smooth(a) };
+    let coat_eta = match (&c.coat_dispersion, &i.spectral) {
+        (Some(d), Some(pass)) => d.eta(pass.lambda[0]),
+        _ => c.coat_eta,
+    };
+    let top = Coat { eta: coat_eta, dist: TrowbridgeReitz::new(a), smooth: smooth(a) };
     let conductor = |eta: Rgb, k: Rgb, r: &[TexValue; 2]| {
         let a = alpha(r);
-        Base::Conductor { eta: eta / c.coat_eta, k: k / c.coat_eta, dist: TrowbridgeReitz::new(a), smooth: smooth(a) }
+        Base::Conductor { eta: eta / coat_eta, k: k / coat_eta, dist: TrowbridgeReitz::new(a), smooth: smooth(a) }
     };
     let bottom = match &c.base {
         CoatBase::Diffuse { reflectance } => Base::Diffuse(i.refl(*reflectance)),

@@ -4,10 +4,12 @@
 //! Material "glass" "float index" 1.5 "rgb Kr" [1 1 1] "rgb Kt" [1 1 1] "float uroughness" .1
 //! Material "dielectric" "float eta" 1.5 "float roughness" .2
 //! Material "dielectric" "spectrum eta" "glass-BK7"        # disperses (spectral paths)
+//! Material "dielectric" "spectrum eta" [400 1.53  700 1.51] # so does a (λ, η) list
 //! ```
-//! A named glass's index depends on the wavelength. A spectral path (pbrt-v4's files)
-//! refracts by the index at its first wavelength and keeps only that one, as pbrt-v4's
-//! dielectric does; an RGB path takes one index, the luminance-weighted mean.
+//! An index given as a spectrum (a named glass, a (λ, η) list, an SPD file) depends on
+//! the wavelength. A spectral path (pbrt-v4's files) refracts by the index at its first
+//! wavelength and keeps only that one, as pbrt-v4's dielectric does; an RGB path takes
+//! one index, the luminance-weighted mean.
 //! Smooth glass is one Fresnel-weighted lobe; rough glass is pbrt-v3's pair of
 //! microfacet reflection and transmission lobes, or pbrt-v4's single lobe. pbrt-v3's
 //! glass reads only `uroughness`/`vroughness` (its `roughness` is unused).
@@ -26,6 +28,7 @@ use crate::spectrum::Rgb;
 use crate::spectrum::named::Sellmeier;
 use crate::textures::TexCtx;
 use glam::Vec3;
+use std::sync::Arc;
 
 pub const NAMES: [&str; 2] = ["glass", "dielectric"];
 
@@ -35,7 +38,7 @@ pub fn read(ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Mat
     let v3 = ty == NAMES[0];
     let eta_name = if v3 && p.named("eta").is_none() { "index" } else { "eta" };
     // v3 glass takes a float (texture); v4 dielectric also a spectrum.
-    let dispersion = if v3 { None } else { named_glass(p, eta_name) };
+    let dispersion = if v3 { None } else { dispersion(p, eta_name, r)? };
     let eta = if v3 || values::given(p, eta_name, &[ParamType::Float, ParamType::Texture]) {
         float(p, eta_name, 1.5, Range::Positive, r)?
     } else {
@@ -52,17 +55,50 @@ pub fn read(ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Mat
     Ok(MaterialKind::Dielectric { eta, dispersion, kr, kt, roughness, remap })
 }
 
-/// The glass a `"spectrum eta"` names, if it names one.
-fn named_glass(p: &ParamList, name: &str) -> Option<Sellmeier> {
-    let param = p.named(name).filter(|q| q.ty == ParamType::Spectrum)?;
-    crate::spectrum::named::glass_named(param.strings().first()?)
+/// How a `"spectrum eta"` varies with the wavelength, if it is given as a spectrum.
+pub fn dispersion(p: &ParamList, name: &str, r: &mut dyn Resolver) -> Res<Option<Dispersion>> {
+    let Some(param) = p.named(name).filter(|q| q.ty == ParamType::Spectrum) else { return Ok(None) };
+    if let Some(glass) = param.strings().first().and_then(|n| crate::spectrum::named::glass_named(n)) {
+        return Ok(Some(Dispersion::Glass(glass)));
+    }
+    Ok(values::sampled_pairs(p, name, &r.spectra())?.map(|pairs| Dispersion::Table(pairs.into())))
 }
 
-/// A dielectric's index: one value, and a glass's formula where it has one.
+/// A dielectric's index by wavelength (nm).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Dispersion {
+    /// A named glass's Sellmeier formula.
+    Glass(Sellmeier),
+    /// (λ, η) pairs, linear between them and 0 outside, as pbrt-v4's
+    /// `PiecewiseLinearSpectrum` (whose 0 its dielectric reads as 1).
+    Table(Arc<[(f32, f32)]>),
+}
+
+impl Dispersion {
+    pub fn eta(&self, lambda: f32) -> f32 {
+        let eta = match self {
+            Dispersion::Glass(g) => g.eta(lambda as f64) as f32,
+            Dispersion::Table(t) => piecewise_linear(t, lambda),
+        };
+        if eta == 0.0 { 1.0 } else { eta }
+    }
+}
+
+fn piecewise_linear(t: &[(f32, f32)], lambda: f32) -> f32 {
+    let (Some(first), Some(last)) = (t.first(), t.last()) else { return 0.0 };
+    if lambda < first.0 || lambda > last.0 {
+        return 0.0;
+    }
+    let i = t.partition_point(|p| p.0 <= lambda).clamp(1, t.len().max(2) - 1);
+    let (a, b) = (t[i - 1], t[i.min(t.len() - 1)]);
+    if b.0 == a.0 { a.1 } else { a.1 + (b.1 - a.1) * (lambda - a.0) / (b.0 - a.0) }
+}
+
+/// A dielectric's index: one value, and how it varies with the wavelength where it does.
 #[derive(Clone, Copy, Debug)]
-pub struct Eta {
+pub struct Eta<'a> {
     pub mean: TexValue,
-    pub dispersion: Option<Sellmeier>,
+    pub dispersion: Option<&'a Dispersion>,
 }
 
 /// The glass's lobes at a hit.
@@ -82,7 +118,7 @@ pub fn lobes<const N: usize>(
     let alpha = if raw == [0.0; 2] { raw } else { raw.map(|r| remap.alpha(r)) };
     let alpha = if alpha.iter().all(|a| *a < 1e-3) { [0.0; 2] } else { alpha };
     let eta = match (eta.dispersion, &i.spectral) {
-        (Some(glass), Some(pass)) => glass.eta(pass.lambda[0] as f64) as f32,
+        (Some(d), Some(pass)) => d.eta(pass.lambda[0]),
         _ => i.float(eta.mean),
     };
     glass(eta, i.refl(kr), i.refl(kt), alpha, convention, out)
@@ -112,4 +148,23 @@ pub fn mitsuba([eta, kr, kt]: [TexValue; 3], roughness: &[TexValue; 2], e: &mut 
         e.note("rough dielectric: exported smooth");
     }
     MaterialOut::Dielectric { eta: e.rgb(eta)[0], reflectance: e.rgb(kr), transmittance: e.rgb(kt) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_listed_index_is_linear_between_its_points_and_air_outside_them() {
+        let d = Dispersion::Table(vec![(400.0, 1.6), (500.0, 1.5), (700.0, 1.5)].into());
+        assert!((d.eta(450.0) - 1.55).abs() < 1e-6);
+        assert_eq!(d.eta(400.0), 1.6);
+        assert_eq!(d.eta(700.0), 1.5);
+        // pbrt-v4's spectrum is 0 outside its points, which its dielectric reads as 1.
+        assert_eq!(d.eta(390.0), 1.0);
+        assert_eq!(d.eta(701.0), 1.0);
+        assert_eq!(Dispersion::Table(vec![(500.0, 1.4)].into()).eta(500.0), 1.4);
+        let bk7 = Dispersion::Glass(crate::spectrum::named::glass_named("glass-BK7").unwrap());
+        assert!(bk7.eta(450.0) > bk7.eta(650.0), "blue bends more");
+    }
 }

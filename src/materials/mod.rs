@@ -59,7 +59,6 @@ use crate::parser::source::Span;
 use crate::scene::approx::Approx;
 use crate::scene::values::Res;
 use crate::spectrum::Rgb;
-use crate::spectrum::named::Sellmeier;
 use crate::spectrum::transport::PassSpectrum;
 use glam::Vec3;
 use inputs::{Inputs, Lobes, MATERIAL_LOBES, lambert};
@@ -194,9 +193,9 @@ pub enum MaterialKind {
     /// A dielectric; smooth when both roughnesses are 0.
     Dielectric {
         eta: TexValue,
-        /// A named glass's index by wavelength (pbrt-v4's `"spectrum eta"`): spectral
+        /// The index by wavelength where pbrt-v4's `"spectrum eta"` gives it: spectral
         /// paths disperse through it; RGB ones take `eta`, its luminance-weighted mean.
-        dispersion: Option<Sellmeier>,
+        dispersion: Option<dielectric::Dispersion>,
         kr: TexValue,
         kt: TexValue,
         roughness: [TexValue; 2],
@@ -235,6 +234,18 @@ pub struct MaterialDesc {
     /// A v4 `normalmap` image, which replaces the bump map when both are given (as in
     /// pbrt-v4).
     pub normal_map: Option<Arc<RgbImage>>,
+}
+
+impl MaterialKind {
+    /// Whether its index varies with the wavelength (a glass or coat whose `eta` is a
+    /// spectrum).
+    pub fn disperses(&self) -> bool {
+        match self {
+            MaterialKind::Dielectric { dispersion, .. } => dispersion.is_some(),
+            MaterialKind::Coated(c) => c.coat_dispersion.is_some(),
+            _ => false,
+        }
+    }
 }
 
 impl MaterialDesc {
@@ -362,16 +373,11 @@ impl Material {
     /// keeps only its first (a `mix` counts if either part does).
     pub fn disperses(&self, all: &[Material]) -> bool {
         match &self.kind {
-            MaterialKind::Dielectric { dispersion, .. } => dispersion.is_some(),
             MaterialKind::Mix { materials, .. } => {
-                materials.iter().any(|&m| all.get(m as usize).is_some_and(|m| m.kind_disperses()))
+                materials.iter().any(|&m| all.get(m as usize).is_some_and(|m| m.kind.disperses()))
             }
-            _ => false,
+            kind => kind.disperses(),
         }
-    }
-
-    fn kind_disperses(&self) -> bool {
-        matches!(&self.kind, MaterialKind::Dielectric { dispersion: Some(_), .. })
     }
 
     /// The lobes of this material at a hit, by its type's module.
@@ -385,7 +391,7 @@ impl Material {
             MaterialKind::Coated(c) => coated::base_lobes(c, i, out),
             MaterialKind::Mirror { reflectance } => mirror::lobes(*reflectance, i, out),
             MaterialKind::Dielectric { eta, dispersion, kr, kt, roughness, remap } => {
-                let eta = dielectric::Eta { mean: *eta, dispersion: *dispersion };
+                let eta = dielectric::Eta { mean: *eta, dispersion: dispersion.as_ref() };
                 dielectric::lobes(eta, [*kr, *kt], roughness, *remap, self.convention, i, out)
             }
             MaterialKind::Conductor { metal, roughness, remap } => conductor::lobes(metal, roughness, *remap, i, out),

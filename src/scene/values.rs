@@ -175,6 +175,26 @@ fn named_or_file(p: &Param, name: &str, ctx: &SpectrumContext) -> Res<Rgb> {
     if let Some(c) = named_spectrum(name) {
         return Ok(c);
     }
+    sampled(p, &spd_file(p, name, ctx)?)
+}
+
+/// The (λ, value) pairs of spectrum `name` when it is given by them, inline or as an
+/// SPD file (not a named spectrum, RGB or blackbody), checked as [`spectrum`] checks
+/// them.
+pub fn sampled_pairs(p: &ParamList, name: &str, ctx: &SpectrumContext) -> Res<Option<Vec<(f32, f32)>>> {
+    let Some(v) = p.spectrum(name)? else { return Ok(None) };
+    let param = last(p, name);
+    let pairs = match v {
+        SpectrumValue::Sampled(pairs) => pairs,
+        SpectrumValue::Named(n) if named_spectrum(&n).is_none() => spd_file(param, &n, ctx)?,
+        _ => return Ok(None),
+    };
+    sampled(param, &pairs)?;
+    Ok(Some(pairs))
+}
+
+/// The (λ, value) pairs of SPD file `name`.
+fn spd_file(p: &Param, name: &str, ctx: &SpectrumContext) -> Res<Vec<(f32, f32)>> {
     let path = crate::parser::stmt::resolve_relative(ctx.base_dir, name);
     let at = |m: String| Diagnostic::error(p.value_span, m);
     let bytes = ctx
@@ -192,8 +212,7 @@ fn named_or_file(p: &Param, name: &str, ctx: &SpectrumContext) -> Res<Rgb> {
     if values.is_empty() || values.len() % 2 != 0 {
         return Err(at(format!("{name}: an SPD file needs (wavelength, value) pairs, found {} numbers", values.len())));
     }
-    let pairs: Vec<(f32, f32)> = values.chunks_exact(2).map(|c| (c[0], c[1])).collect();
-    sampled(p, &pairs)
+    Ok(values.chunks_exact(2).map(|c| (c[0], c[1])).collect())
 }
 
 /// A string from a fixed set of choices.

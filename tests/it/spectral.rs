@@ -146,3 +146,19 @@ fn colour_chooses_what_paths_carry_whatever_the_version() {
         .expect("runs");
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("expected spectral or rgb"));
 }
+
+#[test]
+fn indices_given_as_spectra_disperse_and_floats_do_not() {
+    let with = |m: &str| scene(&format!("Camera \"perspective\" WorldBegin {m} Shape \"sphere\""));
+    for m in [
+        "Material \"dielectric\" \"spectrum eta\" \"glass-BK7\"",
+        "Material \"dielectric\" \"spectrum eta\" [400 1.53  700 1.51]",
+        "Material \"coateddiffuse\" \"spectrum eta\" \"glass-F11\"",
+        "Material \"coatedconductor\" \"spectrum interface.eta\" [400 1.6  700 1.5]",
+    ] {
+        assert!(with(m).materials.iter().any(|d| d.kind.disperses()), "{m}");
+    }
+    for m in ["Material \"dielectric\" \"float eta\" 1.5", "Material \"coateddiffuse\""] {
+        assert!(!with(m).materials.iter().any(|d| d.kind.disperses()), "{m}");
+    }
+}
