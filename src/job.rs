@@ -288,6 +288,8 @@ fn fingerprint(scene: &SceneDescription, path: &Path, plan: &Plan) -> Fingerprin
     let mut settings = plan.fingerprint_settings();
     settings.push(("syntax".into(), scene.syntax.name().into()));
     settings.push(("fix".into(), scene.fixes.names()));
+    // Passes in RGB and passes in wavelengths do not add up to either's image.
+    settings.push(("colour".into(), if scene.spectral { "spectral" } else { "rgb" }.into()));
     Fingerprint {
         scene: std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()).display().to_string(),
         inputs: scene.inputs.iter().map(|f| (f.path.display().to_string(), f.hash)).collect(),

@@ -162,3 +162,27 @@ fn indices_given_as_spectra_disperse_and_floats_do_not() {
         assert!(!with(m).materials.iter().any(|d| d.kind.disperses()), "{m}");
     }
 }
+
+#[test]
+fn a_checkpoint_resumes_only_in_the_colour_it_was_made_in() {
+    let scene = "Camera \"perspective\" Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8
+        Sampler \"halton\" \"integer pixelsamples\" 2 Integrator \"sppm\" \"integer photonsperiteration\" 100
+        WorldBegin LightSource \"point\" \"rgb I\" [1 1 1] Material \"diffuse\" Shape \"sphere\" \"float radius\" 0.5";
+    let dir = crate::common::scratch("spectral", "checkpoint", &[("s.pbrt", scene)]);
+    let run = |extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
+            .args(["render", "--quiet", "--outfile"])
+            .arg(dir.join("out.exr"))
+            .args(extra)
+            .arg(dir.join("s.pbrt"))
+            .output()
+            .expect("runs")
+    };
+    let ck = dir.join("ck.bin");
+    let ck = ck.to_str().unwrap();
+    assert!(run(&["--checkpoint", ck]).status.success());
+    let out = run(&["--resume", ck, "--colour", "rgb"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("colour spectral"), "{err}");
+    assert!(run(&["--resume", ck]).status.success());
+}
