@@ -8,10 +8,10 @@
 //! Material "diffuse" "rgb reflectance" [.8 .2 .1]   # lanes: the sigmoid spectrum at λ₁..λ₃
 //! LightSource "point" "rgb I" [1 1 1]               # lanes: the colour space's white at λ₁..λ₃
 //! ```
-//! pbrt-v4's SPPM draws one set of wavelengths per iteration (`passLambda`) from the
-//! radical inverse of the iteration in base 3; so do we, per SPPM iteration and per vcm
-//! pass, so that camera paths and photons of one iteration carry the same wavelengths
-//! and the pixels' sums, checkpoints, shards and merges stay RGB.
+//! pbrt-v4's SPPM draws one set of wavelengths per iteration (`passLambda`); so do we,
+//! per SPPM iteration and per vcm pass ([`PassSpectrum::for_pass`]), so that camera
+//! paths and photons of one iteration carry the same wavelengths and the pixels' sums,
+//! checkpoints, shards and merges stay RGB.
 
 use super::cie;
 use super::colorspace::{ColorSpaceName, Matrix3};
@@ -75,9 +75,10 @@ impl PassSpectrum {
     /// interleaved sets of 2ᵐ evenly spaced quantiles of the visible density, and the
     /// first lane, the one dispersion keeps, ranges over all of it.
     // DEVIATION(pbrt): noise only. pbrt-v4 takes u in base 3 with its four lanes at
-    // u + i/4; with three lanes, base 3 repeats one set for three passes (0, ⅓ and ⅔
-    // are each other's lanes), and its colour cast was 3% at 16 passes and 1.6% at 64
-    // for white light, against 0.25% at both by this sequence (unit test below).
+    // u + i/4. With three lanes at u + i/3, base 3 repeats one set for three passes
+    // (0, ⅓ and ⅔ are each other's lanes); base 3 scaled to [0, ⅓) left white light a
+    // colour cast of 3% at 16 passes and 1.6% at 64, against 0.25% at both by this
+    // sequence (unit test below).
     pub fn for_pass(space: ColorSpaceName, pass: u32) -> PassSpectrum {
         let u = radical_inverse_2(pass);
         PassSpectrum::of(space, SampledWavelengths::sample_visible(u))
