@@ -19,6 +19,7 @@ use pbrt_sppm::math::Ray;
 use pbrt_sppm::parser::Syntax;
 use pbrt_sppm::parser::error::LoadError;
 use pbrt_sppm::scene::{LoadOptions, SceneDescription, load_scene, load_scene_from_bytes};
+use pbrt_sppm::spectrum::transport::Colour;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -37,7 +38,7 @@ struct Scene {
 /// resolve against the current folder), with the command line's `--syntax`, `--fix`
 /// and `--limit`. A scene that does not load raises `pbrt_sppm.SceneError`.
 #[pyfunction]
-#[pyo3(signature = (source, text, syntax=None, fix=None, limits=Vec::new()))]
+#[pyo3(signature = (source, text, syntax=None, fix=None, limits=Vec::new(), colour=None))]
 fn load(
     py: Python<'_>,
     source: &str,
@@ -45,7 +46,15 @@ fn load(
     syntax: Option<&str>,
     fix: Option<&str>,
     limits: Vec<String>,
+    colour: Option<&str>,
 ) -> PyResult<Scene> {
+    let colour = match colour.map(|c| Colour::from_name(c).ok_or(c)) {
+        None => None,
+        Some(Ok(c)) => Some(c),
+        Some(Err(c)) => {
+            return Err(PyValueError::new_err(format!("colour: expected \"spectral\" or \"rgb\", not \"{c}\"")));
+        }
+    };
     let syntax = match syntax {
         None => None,
         Some("v3") => Some(Syntax::V3),
@@ -57,7 +66,7 @@ fn load(
         lim.set(spec).map_err(|e| PyValueError::new_err(format!("limits: {e}")))?;
     }
     let fixes = fix.map(Fixes::parse).transpose().map_err(|e| PyValueError::new_err(format!("fix: {e}")))?;
-    let opts = LoadOptions { syntax, limits: lim, fixes: fixes.unwrap_or_default(), ..Default::default() };
+    let opts = LoadOptions { syntax, limits: lim, fixes: fixes.unwrap_or_default(), colour, ..Default::default() };
     let loaded = py.detach(|| match text {
         true => load_scene_from_bytes(Path::new("<string>"), source.as_bytes().to_vec(), &opts),
         false => load_scene(Path::new(source), &opts),

@@ -84,6 +84,14 @@ def test_syntax_and_fix_options_are_the_command_lines():
         pbrt_sppm.load(SPHERE, limits={"pixels": 100})
 
 
+def test_colour_chooses_what_paths_carry():
+    # SPHERE is a pbrt-v3 file: RGB by default, spectral when asked; a bad name says so.
+    assert pbrt_sppm.load(SPHERE).check()["colour"] == "rgb"
+    assert pbrt_sppm.load(SPHERE, colour="spectral").check()["colour"] == "spectral"
+    with pytest.raises(ValueError, match="colour: expected"):
+        pbrt_sppm.load(SPHERE, colour="grey")
+
+
 @needs_bin
 def test_check_is_check_json(tmp_path):
     f = tmp_path / "sphere.pbrt"

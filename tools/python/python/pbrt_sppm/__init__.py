@@ -55,12 +55,14 @@ def load(
     *,
     fix: Union[None, str, Sequence[str]] = None,
     limits: Optional[dict] = None,
+    colour: Optional[str] = None,
 ) -> "Scene":
     """Loads a scene from a file path (a str naming an existing file, or any
     os.PathLike) or from the scene's text (a str that is not a file name).
 
     syntax: "v3" or "v4" to override detection. fix: pbrt bugs to fix (names, or
     "all"), as ``--fix``. limits: {"pixels": N, ...} as ``--limit NAME=N``.
+    colour: "spectral" or "rgb" for what paths carry, as ``--colour``.
     Raises SceneError with the file, line and column of the problem."""
     if isinstance(source, os.PathLike):
         path, text = os.fspath(source), False
@@ -73,7 +75,7 @@ def load(
         raise TypeError(f"load() takes a path or the scene's text, not {type(source).__name__}")
     fixes = fix if fix is None or isinstance(fix, str) else ",".join(fix)
     specs = [f"{k}={v}" for k, v in (limits or {}).items()]
-    return Scene(_native.load(path, text, syntax, fixes, specs))
+    return Scene(_native.load(path, text, syntax, fixes, specs, colour))
 
 
 class Scene:
