@@ -504,7 +504,7 @@ impl RenderScene {
     #[inline]
     pub fn film_rgb(&self, v: Rgb) -> DVec3 {
         match &self.spectral {
-            Some(cell) => cell.get().to_rgb(v),
+            Some(cell) => cell.get().to_rgb(v.as_dvec3()),
             None => v.as_dvec3(),
         }
     }
@@ -513,7 +513,7 @@ impl RenderScene {
     #[inline]
     pub fn film_rgb_f64(&self, v: DVec3) -> DVec3 {
         match &self.spectral {
-            Some(cell) => crate::spectrum::colorspace::mul_vec(&cell.get().rgb_matrix(), v.to_array()).into(),
+            Some(cell) => cell.get().to_rgb(v),
             None => v,
         }
     }
@@ -534,11 +534,6 @@ impl RenderScene {
             *beta *= crate::spectrum::transport::TERMINATE;
             *terminated = true;
         }
-    }
-
-    /// Whether paths carry wavelengths (pbrt-v4's files without media) rather than RGB.
-    pub fn is_spectral(&self) -> bool {
-        self.spectral.is_some()
     }
 }
 

@@ -14,7 +14,7 @@
 //! checkpoints, shards and merges stay RGB.
 
 use super::cie;
-use super::colorspace::{ColorSpaceName, Matrix3};
+use super::colorspace::ColorSpaceName;
 use super::sampled::{N_SAMPLES, SampledWavelengths};
 use super::sigmoid::{RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbUnboundedSpectrum};
 use glam::{DVec3, Vec3};
@@ -132,18 +132,12 @@ impl PassSpectrum {
     }
 
     /// Output RGB of lanes `v` (what pbrt-v4's `Film::ToOutputRGB` gives for the
-    /// `cie1931` sensor before white balance and exposure).
+    /// `cie1931` sensor before white balance and exposure), in f64 as pixels sum.
     #[inline]
-    pub fn to_rgb(&self, v: Vec3) -> DVec3 {
-        let c = self.to_rgb;
-        let v = v.to_array();
-        let ch = |k: usize| (0..N_SAMPLES).map(|i| c[i][k] as f64 * v[i] as f64).sum::<f64>();
+    pub fn to_rgb(&self, v: DVec3) -> DVec3 {
+        let (c, v) = (self.to_rgb, v.to_array());
+        let ch = |k: usize| (0..N_SAMPLES).map(|i| c[i][k] as f64 * v[i]).sum::<f64>();
         DVec3::new(ch(0), ch(1), ch(2))
-    }
-
-    /// A matrix that takes lanes to output RGB, for callers that convert in bulk.
-    pub fn rgb_matrix(&self) -> Matrix3 {
-        std::array::from_fn(|k| std::array::from_fn(|i| self.to_rgb[i][k] as f64))
     }
 }
 
@@ -205,7 +199,7 @@ mod tests {
         let mut sum = DVec3::ZERO;
         for k in 0..n {
             let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, k);
-            sum += p.to_rgb(p.illuminant(Vec3::ONE) * 0.5);
+            sum += p.to_rgb((p.illuminant(Vec3::ONE) * 0.5).as_dvec3());
         }
         let mean = sum / n as f64;
         assert!((mean - DVec3::splat(0.5)).abs().max_element() < 2e-3, "{mean}");
@@ -218,7 +212,7 @@ mod tests {
         let mut sum = DVec3::ZERO;
         for k in 0..n {
             let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, k);
-            sum += p.to_rgb(p.illuminant(Vec3::ONE) * p.albedo(rgb));
+            sum += p.to_rgb((p.illuminant(Vec3::ONE) * p.albedo(rgb)).as_dvec3());
         }
         let mean = sum / n as f64;
         assert!((mean - rgb.as_dvec3()).abs().max_element() < 5e-3, "{mean}");
@@ -242,8 +236,8 @@ mod tests {
             let rgb = Vec3::new(0.9, 0.15, 0.1);
             for i in 0..k {
                 let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, i);
-                white += p.to_rgb(p.illuminant(Vec3::ONE)) / k as f64;
-                red += p.to_rgb(p.illuminant(Vec3::ONE) * p.albedo(rgb)) / k as f64;
+                white += p.to_rgb(p.illuminant(Vec3::ONE).as_dvec3()) / k as f64;
+                red += p.to_rgb((p.illuminant(Vec3::ONE) * p.albedo(rgb)).as_dvec3()) / k as f64;
             }
             assert!((white - DVec3::ONE).abs().max_element() < 4e-3, "{k} passes: white {white}");
             let rel = (red - rgb.as_dvec3()).abs() / rgb.as_dvec3();
