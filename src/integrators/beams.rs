@@ -101,7 +101,7 @@ impl Beam {
         let dlen = ray.d.0.length();
         let (d, len) = (ray.d.0 / dlen, t_max * dlen);
         let medium = &scene.media[m as usize];
-        let tr = medium.profile(ray.o.0, d, len, sampler);
+        let tr = medium.profile(ray.o.0, d, len, sampler, scene.pass_spectrum().as_ref());
         let through = tr.at(len);
         (Beam { o: ray.o.0, d, len, beta, phase: medium.phase(), tr }, through)
     }
@@ -221,8 +221,7 @@ mod tests {
 
     /// The profile of a homogeneous medium that absorbs with σt = `sigma`.
     fn exact(sigma: Vec3) -> Profile {
-        let phase = HenyeyGreenstein::new(0.0);
-        Profile::Exact(crate::media::Homogeneous { sigma_a: sigma, sigma_s: Vec3::ZERO, phase, le: Vec3::ZERO })
+        Profile::Exact(crate::media::Coefficients { sigma_a: sigma, sigma_s: Vec3::ZERO, le: Vec3::ZERO })
     }
 
     fn beam(o: Vec3, d: Vec3, len: f32, tr: Profile) -> Beam {

@@ -293,8 +293,10 @@ impl<'a> Sppm<'a> {
         let t3 = Instant::now();
         self.update(&phi, &m);
         if let Some(sums) = beam_sums {
-            // Averaged over iterations as the direct light is.
-            self.pixels.par_iter_mut().zip(sums).for_each(|(p, s)| p.ld += s);
+            // Averaged over iterations as the direct light is; summed in the pass's
+            // lanes, turned into output RGB here.
+            let scene = &self.scene;
+            self.pixels.par_iter_mut().zip(sums).for_each(|(p, s)| p.ld += scene.film_rgb_f64(s));
         }
         let t4 = Instant::now();
         self.iteration += 1;
@@ -721,7 +723,8 @@ fn in_medium(
     sampler: &mut impl Sampler,
 ) -> (Rgb, Option<VisiblePoint>) {
     let t_max = hit.map_or(f32::INFINITY, |h| h.t);
-    let emitted = *beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, t_max, sampler);
+    let lanes = scene.pass_spectrum();
+    let emitted = *beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, t_max, sampler, lanes.as_ref());
     match beams {
         Some(list) => (emitted + beam_on_camera_path(scene, ray, (hit, m), beta, list, sampler), None),
         None => match scatter_on_camera_path(scene, ray, (hit, m), beta, sampler) {
@@ -1063,7 +1066,7 @@ fn emit_from_medium(scene: &RenderScene, k: usize, pick: f32, sampler: &mut impl
     let (m, points) = &scene.medium_emitters[k];
     let (u_voxel, u_pos, u_dir) = (sampler.get1d(), sampler.get2d(), sampler.get2d());
     let at = points.sample(u_voxel, Vec3::new(u_pos[0], u_pos[1], sampler.get1d()))?;
-    let le = scene.media[*m as usize].emitted_at(at.p);
+    let le = scene.media[*m as usize].emitted_at(at.p, scene.pass_spectrum().as_ref());
     if le == Vec3::ZERO || scene.medium_at(at.p) != Some(*m) {
         return None;
     }

@@ -50,7 +50,7 @@ pub fn fly(
 ) -> Result<Rgb, (MediumPoint, Rgb)> {
     let m = &scene.media[medium as usize];
     let t_max = hit.map_or(f32::INFINITY, |h| h.t);
-    match m.sample(ray.o.0, ray.d.0, t_max, sampler) {
+    match m.sample(ray.o.0, ray.d.0, t_max, sampler, scene.pass_spectrum().as_ref()) {
         Flight::Through { weight } => Ok(weight),
         Flight::Scatter { t, weight, sigma_s, sigma_t } => {
             let p = MediumPoint {
@@ -82,7 +82,7 @@ pub fn trace(
         let hit = scene.intersect(&r);
         if let Some(m) = medium {
             let t = hit.map_or(r.t_max, |h| h.t);
-            tr *= scene.media[m as usize].transmittance(r.o.0, r.d.0, t, sampler);
+            tr *= scene.media[m as usize].transmittance(r.o.0, r.d.0, t, sampler, scene.pass_spectrum().as_ref());
         }
         let Some(hit) = hit else { return (None, tr) };
         let si = scene.geometry.interaction(&hit);

@@ -13,6 +13,7 @@
 //! clamped to [0, 1]. It multiplies σa and σs (no `scale`); σt is their sum at most.
 
 use super::MediumContext;
+use super::lanes::{Lanes, Sigma, sigma_t_bound};
 use super::phase::HenyeyGreenstein;
 use super::tracking::{Field, Props, Tracked};
 use crate::parser::params::ParamList;
@@ -25,8 +26,8 @@ pub const NAME: &str = "cloud";
 
 #[derive(Debug)]
 pub struct Cloud {
-    sigma_a: Vec3,
-    sigma_s: Vec3,
+    sigma_a: Sigma,
+    sigma_s: Sigma,
     density: f32,
     wispiness: f32,
     frequency: f32,
@@ -67,14 +68,15 @@ fn gradient(p: Vec3) -> Vec3 {
 }
 
 impl Field for Cloud {
-    fn at(&self, u: Vec3, _emission: bool) -> Props {
+    fn at(&self, u: Vec3, _emission: bool, lanes: Lanes) -> Props {
         let p = self.unit_to_box.transform_point3(u.as_dvec3()).as_vec3();
         let d = self.density_at(p);
-        Props { sigma_t: (self.sigma_a + self.sigma_s) * d, sigma_s: self.sigma_s * d, emitted: Vec3::ZERO }
+        let (sigma_a, sigma_s) = (self.sigma_a.at(lanes), self.sigma_s.at(lanes));
+        Props { sigma_t: (sigma_a + sigma_s) * d, sigma_s: sigma_s * d, emitted: Vec3::ZERO }
     }
 
     fn majorant(&self, _lo: Vec3, _hi: Vec3) -> f32 {
-        (self.sigma_a + self.sigma_s).max_element()
+        sigma_t_bound(&self.sigma_a, &self.sigma_s)
     }
 
     fn emissive(&self) -> bool {
@@ -90,7 +92,10 @@ impl Field for Cloud {
 /// Reads a `cloud`, placed by the CTM at its statement.
 pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Tracked> {
     let unit_to_box = super::grid::unit_to_box(p, ctx.at)?;
-    let rgb = |name| values::rgb(p, name, &ctx.spectra, Range::NonNegative).map(|c| c.unwrap_or(Vec3::ONE));
+    let rgb = |name| {
+        let c = values::rgb(p, name, &ctx.spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE);
+        Ok(Sigma::new(c, ctx.spectral))
+    };
     let field = Cloud {
         sigma_a: rgb("sigma_a")?,
         sigma_s: rgb("sigma_s")?,

@@ -47,7 +47,7 @@ impl EmissionPoints {
             Medium::Homogeneous(h) => {
                 let box_to_world = DMat4::from_translation(bounds[0]) * DMat4::from_scale(bounds[1] - bounds[0]);
                 let volume = (bounds[1] - bounds[0]).element_product();
-                let power = luminance(h.sigma_a * h.le) as f64 * volume * 4.0 * std::f64::consts::PI;
+                let power = luminance(h.sigma_a.rgb * h.le.rgb) as f64 * volume * 4.0 * std::f64::consts::PI;
                 let voxels = Distribution1D::new(&[1.0]);
                 Some(EmissionPoints { box_to_world, res: 1, voxels, voxel_volume: volume, power })
             }
@@ -74,7 +74,7 @@ fn tracked(t: &Tracked) -> EmissionPoints {
         let mean = (0..8)
             .map(|k| {
                 let o = Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, (k >> 2) as f32) * 0.5 + 0.25;
-                luminance(t.emitted_at_unit((lo + o) / res as f32)).max(0.0) as f64
+                luminance(t.emitted_at_unit((lo + o) / res as f32, None)).max(0.0) as f64
             })
             .sum::<f64>()
             / 8.0;
@@ -102,7 +102,7 @@ mod tests {
     struct Ember(SampledGrid<f32>);
 
     impl Field for Ember {
-        fn at(&self, u: Vec3, _emission: bool) -> Props {
+        fn at(&self, u: Vec3, _emission: bool, _lanes: crate::media::Lanes) -> Props {
             let e = (0.25 - u.distance(Vec3::new(0.3, 0.5, 0.5))).max(0.0);
             Props { sigma_t: Vec3::ONE, sigma_s: Vec3::ZERO, emitted: Vec3::new(e, 2.0 * e, 0.5 * e) }
         }
@@ -129,7 +129,7 @@ mod tests {
         for _ in 0..n {
             let u = Vec3::new(rng.get1d(), rng.get1d(), rng.get1d());
             let at = points.sample(rng.get1d(), u).unwrap();
-            sum += t.emitted_at(at.p).y as f64 / at.pdf;
+            sum += t.emitted_at(at.p, None).y as f64 / at.pdf;
         }
         // ∫ 2·(0.25 − r) over the ball of radius 0.25 in the unit cube: 2·π·0.25⁴/3,
         // times the box's volume 6.

@@ -27,6 +27,7 @@
 //! of 1 records as 106.86 (∫ȳ), and so do we (`--fix medium-emission`: as 1).
 
 use super::MediumContext;
+use super::lanes::{Emitted, Lanes, Sigma, at_lanes, sigma_t_bound};
 use super::sampled::SampledGrid;
 use super::tracking::{Field, Props, Tracked};
 use crate::parser::Syntax;
@@ -42,10 +43,10 @@ pub const NAMES: [&str; 2] = ["heterogeneous", "uniformgrid"];
 /// The density grid and its coefficients.
 #[derive(Debug)]
 pub struct DensityGrid {
-    sigma_a: Vec3,
-    sigma_s: Vec3,
-    /// The σt tracked: σa + σs, or pbrt-v3's first channel of it in every channel.
-    sigma_t: Vec3,
+    sigma_a: Sigma,
+    sigma_s: Sigma,
+    /// pbrt-v3's σt: the first channel of σa + σs in every channel (`None`: σa + σs).
+    first_channel: Option<f32>,
     density: SampledGrid<f32>,
     emission: Option<Emission>,
 }
@@ -54,23 +55,26 @@ pub struct DensityGrid {
 #[derive(Debug)]
 enum Emission {
     /// `Le` (normalised), times the `Lescale` grid.
-    Le { le: Vec3, scale: SampledGrid<f32> },
+    Le { le: Emitted, scale: SampledGrid<f32> },
     /// A blackbody at the temperature grid's value, times the `Lescale` grid.
     Temperature { kelvin: SampledGrid<f32>, offset: f32, scale: f32, le_scale: SampledGrid<f32>, table: Blackbody },
 }
 
 impl Field for DensityGrid {
-    fn at(&self, u: Vec3, emission: bool) -> Props {
+    fn at(&self, u: Vec3, emission: bool, lanes: Lanes) -> Props {
         let d = self.density.lookup(u);
+        let (sigma_a, sigma_s) = (self.sigma_a.at(lanes), self.sigma_s.at(lanes));
         let emitted = match (&self.emission, emission) {
-            (Some(e), true) if d > 0.0 => self.sigma_a * d * e.le(u),
+            (Some(e), true) if d > 0.0 => sigma_a * d * e.le(u, lanes),
             _ => Vec3::ZERO,
         };
-        Props { sigma_t: self.sigma_t * d, sigma_s: self.sigma_s * d, emitted }
+        let sigma_t = self.first_channel.map_or(sigma_a + sigma_s, Vec3::splat);
+        Props { sigma_t: sigma_t * d, sigma_s: sigma_s * d, emitted }
     }
 
     fn majorant(&self, lo: Vec3, hi: Vec3) -> f32 {
-        self.density.max_over(lo, hi, |d| d) * self.sigma_t.max_element()
+        let st = self.first_channel.unwrap_or_else(|| sigma_t_bound(&self.sigma_a, &self.sigma_s));
+        self.density.max_over(lo, hi, |d| d) * st
     }
 
     fn emissive(&self) -> bool {
@@ -81,23 +85,27 @@ impl Field for DensityGrid {
         let Some(e) = &self.emission else { return 0.0 };
         let all = |g: &SampledGrid<f32>| g.max_over(Vec3::ZERO, Vec3::ONE, |v| v);
         let le = match e {
-            Emission::Le { le, scale } => le.max_element() * all(scale),
+            Emission::Le { le, scale } => le.rgb.max_element() * all(scale),
             Emission::Temperature { le_scale, table, .. } => table.max() * all(le_scale),
         };
-        self.sigma_a.max_element() * all(&self.density) * le
+        self.sigma_a.rgb.max_element() * all(&self.density) * le
     }
 }
 
 impl Emission {
-    fn le(&self, u: Vec3) -> Vec3 {
+    fn le(&self, u: Vec3, lanes: Lanes) -> Vec3 {
         match self {
-            Emission::Le { le, scale } => *le * scale.lookup(u).max(0.0),
+            Emission::Le { le, scale } => le.at(lanes) * scale.lookup(u).max(0.0),
             Emission::Temperature { kelvin, offset, scale, le_scale, table } => {
                 let s = le_scale.lookup(u);
                 if s <= 0.0 {
                     return Vec3::ZERO;
                 }
-                s * table.at((kelvin.lookup(u) - offset) * scale)
+                let kelvin = (kelvin.lookup(u) - offset) * scale;
+                match lanes {
+                    Some(p) => s * table.at_lanes(kelvin, p),
+                    None => s * table.at(kelvin),
+                }
             }
         }
     }
@@ -110,12 +118,12 @@ pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Tracked> {
         .ok_or_else(|| Diagnostic::error(ctx.at, "a grid medium needs \"float density\" values"))?;
     let n = resolution(p, values.len(), at)?;
     let box_to_world = ctx.medium_to_world * unit_to_box(p, at)?;
-    let st = homogeneous.sigma_a + homogeneous.sigma_s;
+    let st = homogeneous.sigma_a.rgb + homogeneous.sigma_s.rgb;
     let emission = if ctx.syntax == Syntax::V4 { emission(p, ctx, n)? } else { None };
     let grid = DensityGrid {
         sigma_a: homogeneous.sigma_a,
         sigma_s: homogeneous.sigma_s,
-        sigma_t: tracked_sigma_t(p, st, ctx, at),
+        first_channel: first_channel(p, st, ctx, at),
         density: SampledGrid::new(n, values),
         emission,
     };
@@ -146,16 +154,18 @@ pub fn unit_to_box(p: &ParamList, at: Span) -> Res<DMat4> {
     Ok(DMat4::from_translation(lo) * DMat4::from_scale(hi - lo))
 }
 
-/// The σt tracked. pbrt-v3 takes the first channel's (with an error message where the
-/// channels differ, and goes on); pbrt-v4 tracks each channel.
-fn tracked_sigma_t(p: &ParamList, st: Vec3, ctx: &mut MediumContext, fallback: Span) -> Vec3 {
-    if ctx.syntax == Syntax::V4 || st.max_element() - st.min_element() <= 1e-6 * st.max_element() {
-        return st;
+/// pbrt-v3's σt where its channels differ: the first channel's (with an error
+/// message, and it goes on). pbrt-v4 tracks each channel (`None`), and so does a
+/// scene rendered spectrally.
+fn first_channel(p: &ParamList, st: Vec3, ctx: &mut MediumContext, fallback: Span) -> Option<f32> {
+    let grey = st.max_element() - st.min_element() <= 1e-6 * st.max_element();
+    if ctx.syntax == Syntax::V4 || ctx.spectral.is_some() || grey {
+        return None;
     }
     let at = values::span_of(p, "sigma_a").or(values::span_of(p, "sigma_s")).unwrap_or(fallback);
     let msg = "a grid medium needs the same σa + σs in every channel; as pbrt-v3, the first channel's is used";
     ctx.warnings.push(Diagnostic::warning(at, msg));
-    Vec3::splat(st.x)
+    Some(st.x)
 }
 
 /// The values of array `name` of type `ty` (every number finite and at least 0) and
@@ -197,7 +207,9 @@ fn emission(p: &ParamList, ctx: &mut MediumContext, n: [usize; 3]) -> Res<Option
     let offset = values::float(p, "temperatureoffset", cutoff, Range::Any)?;
     let scale = values::float(p, "temperaturescale", 1.0, Range::Any)?;
     Ok(match (le, kelvin) {
-        (Some(le), _) if le.max_element() > 0.0 => Some(Emission::Le { le, scale: le_scale }),
+        (Some(le), _) if le.max_element() > 0.0 => {
+            Some(Emission::Le { le: Emitted::new(le, ctx.spectral), scale: le_scale })
+        }
         (_, Some(kelvin)) => {
             let hottest = kelvin.max_over(Vec3::ZERO, Vec3::ONE, |t| ((t - offset) * scale).abs());
             let table = Blackbody::up_to(hottest, ctx.raw_emission);
@@ -214,6 +226,8 @@ fn emission(p: &ParamList, ctx: &mut MediumContext, n: [usize; 3]) -> Res<Option
 struct Blackbody {
     top: f32,
     rgb: Vec<Vec3>,
+    /// What the film records for a spectrum of 1.
+    raw: f32,
 }
 
 impl Blackbody {
@@ -233,7 +247,17 @@ impl Blackbody {
                 crate::spectrum::blackbody(kelvin) * raw
             })
             .collect();
-        Blackbody { top, rgb }
+        Blackbody { top, rgb, raw }
+    }
+
+    /// The peak-normalised blackbody at the lanes' wavelengths, times the same `raw`
+    /// (pbrt-v4's `BlackbodySpectrum`, evaluated, as it does, at each lookup).
+    fn at_lanes(&self, kelvin: f32, p: &crate::spectrum::transport::PassSpectrum) -> Vec3 {
+        if kelvin.is_nan() || kelvin <= 100.0 {
+            return Vec3::ZERO;
+        }
+        let t = kelvin.min(self.top) as f64;
+        at_lanes(p, |l| (crate::spectrum::daylight::blackbody_normalized(l as f64, t) as f32) * self.raw)
     }
 
     /// The largest channel in the table.

@@ -14,6 +14,7 @@
 //! | `g` | Henyey–Greenstein asymmetry | the same (clamped to ±0.99) |
 //! | `Le`, `Lescale` | — | emission σa·`Le`·`Lescale` per unit length (`Le` an illuminant, as lights') |
 
+use super::lanes::{Emitted, Lanes, Sigma};
 use super::phase::HenyeyGreenstein;
 use super::{MediumContext, presets};
 use crate::parser::Syntax;
@@ -27,10 +28,19 @@ pub const NAME: &str = "homogeneous";
 /// σa and σs (per unit of world length), the phase function and the emission.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Homogeneous {
-    pub sigma_a: Vec3,
-    pub sigma_s: Vec3,
+    pub sigma_a: Sigma,
+    pub sigma_s: Sigma,
     pub phase: HenyeyGreenstein,
     /// Le times `Lescale` (pbrt-v4); the medium emits σa·Le per unit length.
+    pub le: Emitted,
+}
+
+/// A homogeneous medium's σa, σs and Le at the wavelengths (or in the channels) a
+/// path carries: what transmittance, emission and free flight are computed from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coefficients {
+    pub sigma_a: Vec3,
+    pub sigma_s: Vec3,
     pub le: Vec3,
 }
 
@@ -50,8 +60,14 @@ impl Homogeneous {
     /// Reads the parameters by the rules of the file's version.
     pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Homogeneous> {
         let m = Homogeneous::coefficients(p, ctx, true)?;
-        let le = if ctx.syntax == Syntax::V4 { emission(p, ctx, m.sigma_a)? } else { Vec3::ZERO };
-        Ok(Homogeneous { le, ..m })
+        let le = if ctx.syntax == Syntax::V4 { emission(p, ctx, m.sigma_a.rgb)? } else { Vec3::ZERO };
+        Ok(Homogeneous { le: Emitted::new(le, ctx.spectral), ..m })
+    }
+
+    /// The coefficients at the lanes' wavelengths.
+    #[inline]
+    pub fn at(&self, lanes: Lanes) -> Coefficients {
+        Coefficients { sigma_a: self.sigma_a.at(lanes), sigma_s: self.sigma_s.at(lanes), le: self.le.at(lanes) }
     }
 
     /// σa, σs (scaled) and g as every medium type reads them; `presets`: whether
@@ -79,9 +95,12 @@ impl Homogeneous {
             let at = values::span_of(p, "scale").or(values::span_of(p, "sigma_s")).unwrap_or_default();
             return Err(Diagnostic::error(at, "σa + σs times \"scale\" is beyond the range of 32-bit floats"));
         }
-        Ok(Homogeneous { sigma_a, sigma_s, phase: HenyeyGreenstein::new(g), le: Vec3::ZERO })
+        let (sigma_a, sigma_s) = (Sigma::new(sigma_a, ctx.spectral), Sigma::new(sigma_s, ctx.spectral));
+        Ok(Homogeneous { sigma_a, sigma_s, phase: HenyeyGreenstein::new(g), le: Emitted::NONE })
     }
+}
 
+impl Coefficients {
     pub fn sigma_t(&self) -> Vec3 {
         self.sigma_a + self.sigma_s
     }
@@ -154,23 +173,13 @@ fn emission(p: &ParamList, ctx: &mut MediumContext, sigma_a: Vec3) -> Res<Vec3> 
 mod tests {
     use super::*;
 
-    fn fog() -> Homogeneous {
-        Homogeneous {
-            sigma_a: Vec3::new(0.1, 0.2, 0.3),
-            sigma_s: Vec3::new(0.5, 0.4, 0.9),
-            phase: HenyeyGreenstein::new(0.0),
-            le: Vec3::ZERO,
-        }
+    fn fog() -> Coefficients {
+        Coefficients { sigma_a: Vec3::new(0.1, 0.2, 0.3), sigma_s: Vec3::new(0.5, 0.4, 0.9), le: Vec3::ZERO }
     }
 
     #[test]
     fn transmittance_to_infinity_is_one_where_a_channel_does_not_attenuate() {
-        let m = Homogeneous {
-            sigma_a: Vec3::new(0.0, 1.0, 0.0),
-            sigma_s: Vec3::ZERO,
-            phase: HenyeyGreenstein::new(0.0),
-            le: Vec3::ZERO,
-        };
+        let m = Coefficients { sigma_a: Vec3::new(0.0, 1.0, 0.0), sigma_s: Vec3::ZERO, le: Vec3::ZERO };
         assert_eq!(m.transmittance(f32::INFINITY), Vec3::new(1.0, 0.0, 1.0));
         assert_eq!(m.sample(f32::INFINITY, 1.0, 0.1, 0.5), Flight::Through { weight: Vec3::new(1.5, 0.0, 1.5) });
     }

@@ -22,6 +22,7 @@ pub mod cloud;
 pub mod emitters;
 pub mod grid;
 pub mod homogeneous;
+pub mod lanes;
 pub mod phase;
 pub mod presets;
 pub mod rgbgrid;
@@ -35,7 +36,8 @@ use crate::parser::source::Span;
 use crate::sampling::Sampler;
 use crate::scene::values::{self, Range, Res, SpectrumContext};
 use glam::{DMat4, Vec3};
-pub use homogeneous::{Flight, Homogeneous};
+pub use homogeneous::{Coefficients, Flight, Homogeneous};
+pub use lanes::Lanes;
 pub use phase::HenyeyGreenstein;
 use std::sync::Arc;
 pub use tracking::Tracked;
@@ -69,57 +71,60 @@ impl Medium {
     /// Whether it emits light (pbrt-v4's `Le` and `temperature`).
     pub fn emissive(&self) -> bool {
         match self {
-            Medium::Homogeneous(h) => h.le != Vec3::ZERO,
+            Medium::Homogeneous(h) => h.le.rgb != Vec3::ZERO,
             Medium::Tracked(g) => g.emissive(),
         }
     }
 
     /// σa·Le at a world point (where the medium is).
-    pub fn emitted_at(&self, p: Vec3) -> Vec3 {
+    pub fn emitted_at(&self, p: Vec3, lanes: Lanes) -> Vec3 {
         match self {
-            Medium::Homogeneous(h) => h.sigma_a * h.le,
-            Medium::Tracked(g) => g.emitted_at(p),
+            Medium::Homogeneous(h) => {
+                let c = h.at(lanes);
+                c.sigma_a * c.le
+            }
+            Medium::Tracked(g) => g.emitted_at(p, lanes),
         }
     }
 
     /// The light the medium emits toward `o` along the segment `o + t·d`, t in [0,
     /// `t_max`), attenuated on the way: ∫ Tr·σa·Le (exact for homogeneous media, an
     /// unbiased estimate for the others).
-    pub fn emission(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler) -> Vec3 {
+    pub fn emission(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler, lanes: Lanes) -> Vec3 {
         let dlen = d.length();
         match self {
-            Medium::Homogeneous(h) => h.emission(t_max * dlen),
-            Medium::Tracked(g) => g.emission(o, d / dlen, t_max * dlen, sampler),
+            Medium::Homogeneous(h) => h.at(lanes).emission(t_max * dlen),
+            Medium::Tracked(g) => g.emission(o, d / dlen, t_max * dlen, sampler, lanes),
         }
     }
 
     /// Free-flight sampling along the segment `o + t·d`, t in [0, `t_max`).
-    pub fn sample(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler) -> Flight {
+    pub fn sample(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler, lanes: Lanes) -> Flight {
         match self {
             Medium::Homogeneous(h) => {
                 let u = sampler.get2d();
-                h.sample(t_max, d.length(), u[0], u[1])
+                h.at(lanes).sample(t_max, d.length(), u[0], u[1])
             }
-            Medium::Tracked(g) => g.sample_flight(o, d, t_max, sampler),
+            Medium::Tracked(g) => g.sample_flight(o, d, t_max, sampler, lanes),
         }
     }
 
     /// The transmittance profile over `dist` world units from `o` along unit
     /// direction `d` (see [`Profile`]).
-    pub fn profile(&self, o: Vec3, d: Vec3, dist: f32, sampler: &mut impl Sampler) -> Profile {
+    pub fn profile(&self, o: Vec3, d: Vec3, dist: f32, sampler: &mut impl Sampler, lanes: Lanes) -> Profile {
         match self {
-            Medium::Homogeneous(h) => Profile::Exact(*h),
-            Medium::Tracked(g) => Profile::Steps(g.transmittance_steps(o, d, dist, sampler)),
+            Medium::Homogeneous(h) => Profile::Exact(h.at(lanes)),
+            Medium::Tracked(g) => Profile::Steps(g.transmittance_steps(o, d, dist, sampler, lanes)),
         }
     }
 
     /// Transmittance along the segment `o + t·d`, t in [0, `t_max`] (an unbiased
     /// estimate for grids, exact for homogeneous media).
-    pub fn transmittance(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler) -> Vec3 {
+    pub fn transmittance(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler, lanes: Lanes) -> Vec3 {
         let dlen = d.length();
         match self {
-            Medium::Homogeneous(h) => h.transmittance(t_max * dlen),
-            Medium::Tracked(g) => g.transmittance(o, d / dlen, t_max * dlen, sampler),
+            Medium::Homogeneous(h) => h.at(lanes).transmittance(t_max * dlen),
+            Medium::Tracked(g) => g.transmittance(o, d / dlen, t_max * dlen, sampler, lanes),
         }
     }
 }
@@ -130,7 +135,7 @@ impl Medium {
 #[derive(Clone, Debug)]
 pub enum Profile {
     /// A homogeneous medium.
-    Exact(Homogeneous),
+    Exact(Coefficients),
     /// (distance, transmittance from there on) in increasing distance.
     Steps(Vec<(f32, Vec3)>),
 }
@@ -182,6 +187,9 @@ pub struct MediumContext<'a> {
     /// unnormalised (a temperature grid's, an rgbgrid's): ∫ȳ dλ = 106.86 as pbrt-v4, 1
     /// under `--fix medium-emission`.
     pub raw_emission: f32,
+    /// The colour space of a scene rendered spectrally (its media's colours become
+    /// spectra), `None` in RGB.
+    pub spectral: Option<crate::spectrum::colorspace::ColorSpaceName>,
 }
 
 /// pbrt-v4's `Le` (an illuminant: a blackbody is normalised to luminance 1, as for

@@ -16,6 +16,7 @@
 //! (`--fix medium-emission`: as 1).
 
 use super::MediumContext;
+use super::lanes::{Lanes, at_lanes, spectrum_max};
 use super::phase::HenyeyGreenstein;
 use super::sampled::SampledGrid;
 use super::tracking::{Field, Props, Tracked};
@@ -23,6 +24,8 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::scene::values::{self, Range, Res};
+use crate::spectrum::colorspace::ColorSpaceName;
+use crate::spectrum::sigmoid::{RgbIlluminantSpectrum, RgbUnboundedSpectrum};
 use glam::Vec3;
 use std::sync::Arc;
 
@@ -36,21 +39,81 @@ pub struct RgbGrid {
     le: Option<SampledGrid<Vec3>>,
     /// `Lescale` times what the film records for an unnormalised spectrum of 1.
     le_scale: f32,
+    /// The samples' spectra, where the scene renders spectrally.
+    spectra: Option<Spectra>,
+}
+
+/// Each sample's colours as pbrt-v4's spectra, fitted once.
+#[derive(Debug)]
+struct Spectra {
+    sigma_a: Option<SampledGrid<RgbUnboundedSpectrum>>,
+    sigma_s: Option<SampledGrid<RgbUnboundedSpectrum>>,
+    le: Option<SampledGrid<RgbIlluminantSpectrum>>,
+}
+
+impl Spectra {
+    fn new(g: &RgbGrid, space: ColorSpaceName) -> Spectra {
+        let sigma = |g: &Option<SampledGrid<Vec3>>| {
+            g.as_ref().map(|g| g.map(|v| RgbUnboundedSpectrum::new(space, v.max(Vec3::ZERO).to_array())))
+        };
+        let le = g.le.as_ref().map(|g| g.map(|v| RgbIlluminantSpectrum::new(space, v.max(Vec3::ZERO).to_array())));
+        Spectra { sigma_a: sigma(&g.sigma_a), sigma_s: sigma(&g.sigma_s), le }
+    }
+}
+
+impl RgbGrid {
+    /// σa, σs and Le interpolated in RGB.
+    fn at_rgb(&self, u: Vec3, emission: bool) -> [Vec3; 3] {
+        let get = |g: &Option<SampledGrid<Vec3>>| g.as_ref().map_or(Vec3::ONE, |g| g.lookup(u));
+        let le = match (&self.le, emission) {
+            (Some(le), true) => le.lookup(u),
+            _ => Vec3::ZERO,
+        };
+        [get(&self.sigma_a), get(&self.sigma_s), le]
+    }
+}
+
+impl Spectra {
+    /// σa, σs and Le: each sample's spectrum at the lanes' wavelengths, interpolated
+    /// (pbrt-v4's `RGBGridMedium::SamplePoint`).
+    fn at(&self, u: Vec3, emission: bool, p: &crate::spectrum::transport::PassSpectrum) -> [Vec3; 3] {
+        let get = |g: &Option<SampledGrid<RgbUnboundedSpectrum>>| {
+            g.as_ref().map_or(Vec3::ONE, |g| g.lookup_by(u, |s| at_lanes(p, |l| s.eval(l))))
+        };
+        let le = match (&self.le, emission) {
+            (Some(le), true) => le.lookup_by(u, |s| at_lanes(p, |l| s.eval(l))),
+            _ => Vec3::ZERO,
+        };
+        [get(&self.sigma_a), get(&self.sigma_s), le]
+    }
+
+    /// The largest σa plus the largest σs at any wavelength over the samples that
+    /// reach the box.
+    fn majorant(&self, lo: Vec3, hi: Vec3) -> f32 {
+        let max = |g: &Option<SampledGrid<RgbUnboundedSpectrum>>| {
+            g.as_ref().map_or(1.0, |g| g.max_over(lo, hi, |s| spectrum_max(&s)))
+        };
+        max(&self.sigma_a) + max(&self.sigma_s)
+    }
 }
 
 impl Field for RgbGrid {
-    fn at(&self, u: Vec3, emission: bool) -> Props {
-        let get = |g: &Option<SampledGrid<Vec3>>| g.as_ref().map_or(Vec3::ONE, |g| g.lookup(u));
-        let (sigma_a, sigma_s) = (self.scale * get(&self.sigma_a), self.scale * get(&self.sigma_s));
-        let emitted = match (&self.le, emission) {
-            (Some(le), true) => sigma_a * self.le_scale * le.lookup(u),
-            _ => Vec3::ZERO,
+    fn at(&self, u: Vec3, emission: bool, lanes: Lanes) -> Props {
+        let [a, s, le] = match (lanes, &self.spectra) {
+            (Some(p), Some(spectra)) => spectra.at(u, emission, p),
+            _ => self.at_rgb(u, emission),
         };
+        let (sigma_a, sigma_s) = (self.scale * a, self.scale * s);
+        let emitted = if le == Vec3::ZERO { Vec3::ZERO } else { sigma_a * self.le_scale * le };
         Props { sigma_t: sigma_a + sigma_s, sigma_s, emitted }
     }
 
-    /// pbrt-v4's bound: the largest σa channel plus the largest σs channel.
+    /// pbrt-v4's bound: the largest σa channel plus the largest σs channel (of the
+    /// spectra, at any wavelength, when spectral).
     fn majorant(&self, lo: Vec3, hi: Vec3) -> f32 {
+        if let Some(spectra) = &self.spectra {
+            return self.scale * spectra.majorant(lo, hi);
+        }
         let max = |g: &Option<SampledGrid<Vec3>>| g.as_ref().map_or(1.0, |g| g.max_over(lo, hi, |v| v.max_element()));
         self.scale * (max(&self.sigma_a) + max(&self.sigma_s))
     }
@@ -92,13 +155,15 @@ pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Tracked> {
             None => Ok(None),
         }
     };
-    let field = RgbGrid {
+    let mut field = RgbGrid {
         sigma_a: grid(sigma_a)?,
         sigma_s: grid(sigma_s)?,
         scale: values::float(p, "scale", 1.0, Range::NonNegative)?,
         le: grid(le)?,
         le_scale: values::float(p, "Lescale", 1.0, Range::NonNegative)? * ctx.raw_emission,
+        spectra: None,
     };
+    field.spectra = ctx.spectral.map(|space| Spectra::new(&field, space));
     let box_to_world = ctx.medium_to_world * super::grid::unit_to_box(p, ctx.at)?;
     super::finite(Tracked::new(box_to_world, HenyeyGreenstein::new(super::asymmetry(p)?), Arc::new(field)), at)
 }

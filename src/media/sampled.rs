@@ -17,33 +17,51 @@ pub struct SampledGrid<T> {
 }
 
 impl<T: Copy + Default + Add<Output = T> + Mul<f32, Output = T>> SampledGrid<T> {
+    /// A grid of one value (pbrt's stand-in where a grid parameter is not given).
+    pub fn constant(v: T) -> SampledGrid<T> {
+        SampledGrid { n: [1, 1, 1], values: vec![v] }
+    }
+
+    /// The trilinear interpolation at a point of the unit cube.
+    pub fn lookup(&self, u: Vec3) -> T {
+        self.lookup_by(u, |v| *v)
+    }
+}
+
+impl<T: Copy> SampledGrid<T> {
     /// `values.len()` must be `n[0]·n[1]·n[2]` (the readers check it first).
     pub fn new(n: [usize; 3], values: Vec<T>) -> SampledGrid<T> {
         debug_assert_eq!(n.iter().product::<usize>(), values.len());
         SampledGrid { n, values }
     }
 
-    /// A grid of one value (pbrt's stand-in where a grid parameter is not given).
-    pub fn constant(v: T) -> SampledGrid<T> {
-        SampledGrid { n: [1, 1, 1], values: vec![v] }
-    }
-
-    fn sample(&self, x: i64, y: i64, z: i64) -> T {
+    fn sample(&self, x: i64, y: i64, z: i64) -> Option<&T> {
         let [nx, ny, nz] = self.n.map(|k| k as i64);
         if x < 0 || y < 0 || z < 0 || x >= nx || y >= ny || z >= nz {
-            return T::default();
+            return None;
         }
-        self.values[((z * ny + y) * nx + x) as usize]
+        Some(&self.values[((z * ny + y) * nx + x) as usize])
     }
 
-    /// The trilinear interpolation at a point of the unit cube.
-    pub fn lookup(&self, u: Vec3) -> T {
+    /// The grid of `f` of each sample.
+    pub fn map<U: Copy>(&self, f: impl Fn(T) -> U) -> SampledGrid<U> {
+        SampledGrid { n: self.n, values: self.values.iter().map(|&v| f(v)).collect() }
+    }
+
+    /// The trilinear interpolation at a point of the unit cube of the samples as
+    /// `convert` makes them (pbrt-v4 interpolates a grid of spectra at the sampled
+    /// wavelengths this way); 0 beyond the outer samples.
+    #[inline]
+    pub fn lookup_by<U>(&self, u: Vec3, convert: impl Fn(&T) -> U) -> U
+    where
+        U: Copy + Default + Add<Output = U> + Mul<f32, Output = U>,
+    {
         let s = Vec3::new(u.x * self.n[0] as f32 - 0.5, u.y * self.n[1] as f32 - 0.5, u.z * self.n[2] as f32 - 0.5);
         let i = s.floor();
         let d = s - i;
         let (x, y, z) = (i.x as i64, i.y as i64, i.z as i64);
-        let at = |dx: i64, dy: i64, dz: i64| self.sample(x + dx, y + dy, z + dz);
-        let lerp = |t: f32, a: T, b: T| a * (1.0 - t) + b * t;
+        let at = |dx: i64, dy: i64, dz: i64| self.sample(x + dx, y + dy, z + dz).map_or(U::default(), &convert);
+        let lerp = |t: f32, a: U, b: U| a * (1.0 - t) + b * t;
         let d00 = lerp(d.x, at(0, 0, 0), at(1, 0, 0));
         let d10 = lerp(d.x, at(0, 1, 0), at(1, 1, 0));
         let d01 = lerp(d.x, at(0, 0, 1), at(1, 0, 1));
@@ -65,7 +83,7 @@ impl<T: Copy + Default + Add<Output = T> + Mul<f32, Output = T>> SampledGrid<T> 
         for z in range(2) {
             for y in range(1) {
                 for x in range(0) {
-                    m = m.max(size(self.sample(x, y, z)));
+                    m = m.max(self.sample(x, y, z).map_or(0.0, |v| size(*v)));
                 }
             }
         }

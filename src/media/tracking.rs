@@ -19,6 +19,7 @@
 //! tentative collisions of a ratio-tracking walk.
 
 use super::Flight;
+use super::lanes::Lanes;
 use super::phase::HenyeyGreenstein;
 use crate::sampling::Sampler;
 use glam::{DMat4, Vec3};
@@ -42,10 +43,11 @@ pub struct Props {
 
 /// What varies over the box: coefficients at a point of the unit cube.
 pub trait Field: std::fmt::Debug + Send + Sync {
-    /// The coefficients at `u` (the unit cube spans the box); `emitted` only where
-    /// `emission` is asked.
-    fn at(&self, u: Vec3, emission: bool) -> Props;
-    /// An upper bound of every channel of σt over the box `lo`–`hi` of the unit cube.
+    /// The coefficients at `u` (the unit cube spans the box) at the lanes'
+    /// wavelengths; `emitted` only where `emission` is asked.
+    fn at(&self, u: Vec3, emission: bool, lanes: Lanes) -> Props;
+    /// An upper bound of every channel of σt over the box `lo`–`hi` of the unit cube
+    /// (of every wavelength, where the medium was read for a spectral scene).
     fn majorant(&self, lo: Vec3, hi: Vec3) -> f32;
     fn emissive(&self) -> bool;
     /// An upper bound of every channel of σa·Le anywhere (0 for media that do not emit).
@@ -123,26 +125,26 @@ impl Tracked {
     }
 
     /// σa·Le at a point of the unit cube of the box.
-    pub fn emitted_at_unit(&self, u: Vec3) -> Vec3 {
-        self.field.at(u, true).emitted
+    pub fn emitted_at_unit(&self, u: Vec3, lanes: Lanes) -> Vec3 {
+        self.field.at(u, true, lanes).emitted
     }
 
     /// σa·Le at a world point (0 outside the box).
-    pub fn emitted_at(&self, p: Vec3) -> Vec3 {
+    pub fn emitted_at(&self, p: Vec3, lanes: Lanes) -> Vec3 {
         let u = self.world_to_unit.transform_point3(p.as_dvec3()).as_vec3();
         if u.min_element() < 0.0 || u.max_element() > 1.0 {
             return Vec3::ZERO;
         }
-        self.emitted_at_unit(u)
+        self.emitted_at_unit(u, lanes)
     }
 
     pub fn emissive(&self) -> bool {
         self.field.emissive()
     }
 
-    /// The largest majorant (for the overflow check at reading).
+    /// The largest majorant (for the overflow check at reading; NaN where one is).
     pub fn max_majorant(&self) -> f32 {
-        self.majorants.iter().fold(0f32, |m, &v| m.max(v))
+        self.majorants.iter().fold(0f32, |m, &v| if m.is_nan() || v.is_nan() { f32::NAN } else { m.max(v) })
     }
 
     /// A bound of σa·Le (for the overflow check at reading).
@@ -245,12 +247,12 @@ impl Tracked {
 
     /// Spectral tracking along a segment of parameter length `t_max` of a ray
     /// `o + t·d`: where it scatters, the weight before σs and σs there.
-    pub fn sample_flight(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler) -> Flight {
+    pub fn sample_flight(&self, o: Vec3, d: Vec3, t_max: f32, sampler: &mut impl Sampler, lanes: Lanes) -> Flight {
         let dlen = d.length();
         let Some(span) = self.clip(o, d / dlen, t_max * dlen) else { return Flight::Through { weight: Vec3::ONE } };
         let (mut w, mut scatter) = (Vec3::ONE, None);
         let walk = self.walk(&span, sampler, |t, mu, sampler| {
-            let props = self.field.at(span.o + span.d * t, false);
+            let props = self.field.at(span.o + span.d * t, false, lanes);
             let p_real = ((w * props.sigma_t).element_sum() / (mu * w.element_sum())).min(1.0);
             if sampler.get1d() < p_real {
                 let weight = w / (mu * p_real);
@@ -269,11 +271,11 @@ impl Tracked {
 
     /// Ratio tracking: an unbiased estimate of the transmittance over `dist` world
     /// units from `o` along unit direction `d`, with pbrt-v3's Russian roulette below 0.1.
-    pub fn transmittance(&self, o: Vec3, d: Vec3, dist: f32, sampler: &mut impl Sampler) -> Vec3 {
+    pub fn transmittance(&self, o: Vec3, d: Vec3, dist: f32, sampler: &mut impl Sampler, lanes: Lanes) -> Vec3 {
         let Some(span) = self.clip(o, d, dist) else { return Vec3::ONE };
         let mut tr = Vec3::ONE;
         match self.walk(&span, sampler, |t, mu, sampler| {
-            ratio_step(&mut tr, self.field.at(span.o + span.d * t, false), mu, sampler)
+            ratio_step(&mut tr, self.field.at(span.o + span.d * t, false, lanes), mu, sampler)
         }) {
             Walk::Exhausted => Vec3::ZERO,
             _ => tr,
@@ -285,12 +287,19 @@ impl Tracked {
     /// transmittance to any distance t is the last record at or before t (1 before the
     /// first), an unbiased estimate for every t at once (the beam radiance estimate
     /// reads it at each photon it gathers).
-    pub fn transmittance_steps(&self, o: Vec3, d: Vec3, dist: f32, sampler: &mut impl Sampler) -> Vec<(f32, Vec3)> {
+    pub fn transmittance_steps(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        dist: f32,
+        sampler: &mut impl Sampler,
+        lanes: Lanes,
+    ) -> Vec<(f32, Vec3)> {
         let mut steps = Vec::new();
         let Some(span) = self.clip(o, d, dist) else { return steps };
         let mut tr = Vec3::ONE;
         let walk = self.walk(&span, sampler, |t, mu, sampler| {
-            let more = ratio_step(&mut tr, self.field.at(span.o + span.d * t, false), mu, sampler);
+            let more = ratio_step(&mut tr, self.field.at(span.o + span.d * t, false, lanes), mu, sampler);
             steps.push((t, tr));
             more
         });
@@ -303,14 +312,14 @@ impl Tracked {
     /// An unbiased estimate of the emission ∫ Tr·σa·Le dt over `dist` world units from
     /// `o` along unit direction `d`: σa·Le/μ at each tentative collision, weighted by
     /// the ratio-tracking transmittance up to it.
-    pub fn emission(&self, o: Vec3, d: Vec3, dist: f32, sampler: &mut impl Sampler) -> Vec3 {
+    pub fn emission(&self, o: Vec3, d: Vec3, dist: f32, sampler: &mut impl Sampler, lanes: Lanes) -> Vec3 {
         if !self.emissive() {
             return Vec3::ZERO;
         }
         let Some(span) = self.clip(o, d, dist) else { return Vec3::ZERO };
         let (mut tr, mut sum) = (Vec3::ONE, Vec3::ZERO);
         self.walk(&span, sampler, |t, mu, sampler| {
-            let props = self.field.at(span.o + span.d * t, true);
+            let props = self.field.at(span.o + span.d * t, true, lanes);
             sum += tr * props.emitted / mu;
             ratio_step(&mut tr, props, mu, sampler)
         });
@@ -345,7 +354,7 @@ mod tests {
     struct Ramp;
 
     impl Field for Ramp {
-        fn at(&self, u: Vec3, emission: bool) -> Props {
+        fn at(&self, u: Vec3, emission: bool, _lanes: Lanes) -> Props {
             let r = 2.0 * u.x;
             let emitted = if emission { Vec3::new(0.5, 0.0, 1.0) * r } else { Vec3::ZERO };
             Props { sigma_t: Vec3::new(1.0, 2.0, 4.0) * r, sigma_s: Vec3::new(0.5, 1.0, 2.0) * r, emitted }
@@ -379,15 +388,15 @@ mod tests {
         let n = 200_000;
         let (mut through, mut scattered, mut ratio, mut emitted) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
         for _ in 0..n {
-            match t.sample_flight(o, d * 2.0, 1.25, &mut rng) {
+            match t.sample_flight(o, d * 2.0, 1.25, &mut rng, None) {
                 Flight::Through { weight } => through += weight,
                 Flight::Scatter { t: s, weight, sigma_s, .. } => {
                     assert!((0.5..1.25).contains(&s), "scattered outside the box or the segment at t = {s}");
                     scattered += weight * sigma_s;
                 }
             }
-            ratio += t.transmittance(o, d, 2.5, &mut rng);
-            emitted += t.emission(o, d, 2.5, &mut rng);
+            ratio += t.transmittance(o, d, 2.5, &mut rng, None);
+            emitted += t.emission(o, d, 2.5, &mut rng, None);
         }
         let close = |got: Vec3, want: Vec3, what: &str| {
             let got = got / n as f32;

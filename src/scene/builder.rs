@@ -1143,7 +1143,7 @@ impl Builder {
             .as_ref()
             .map(|(s, span, what)| format!("{}: {what} ({})", sources.location(*span), s.name()));
         Ok(SceneDescription {
-            spectral: Colour::chosen(self.opts.colour, syntax) == Colour::Spectral && media.is_empty(),
+            spectral: Colour::chosen(self.opts.colour, syntax) == Colour::Spectral,
             syntax,
             syntax_evidence: if self.opts.syntax.is_some() { Some("--syntax".into()) } else { evidence },
             camera: r.camera,

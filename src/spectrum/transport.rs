@@ -31,8 +31,7 @@ pub enum Colour {
 }
 
 impl Colour {
-    /// `asked`, or what the file's pbrt does. (Scenes with media render in RGB
-    /// whatever is asked: media do not carry wavelengths yet.)
+    /// `asked`, or what the file's pbrt does.
     pub fn chosen(asked: Option<Colour>, syntax: crate::parser::Syntax) -> Colour {
         match (asked, syntax) {
             (Some(c), _) => c,

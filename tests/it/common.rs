@@ -137,3 +137,10 @@ pub fn python_venv(name: &str, packages: &[&str], probe: &str) -> Result<PathBuf
     assert!(ready(&python), "{} cannot run {probe:?}", python.display());
     Ok(python)
 }
+
+/// The linear sRGB of a spectrum (a function of λ in nm), with the film's
+/// normalisation: the colour space's white at luminance 1 is (1, 1, 1).
+pub fn srgb_of_spectrum(s: impl Fn(f64) -> f64) -> [f64; 3] {
+    use pbrt_sppm::spectrum::colorspace::{ColorSpaceName, mul_vec};
+    mul_vec(&ColorSpaceName::Srgb.rgb_from_xyz(), pbrt_sppm::spectrum::cie::spectrum_to_xyz(s))
+}

@@ -44,15 +44,15 @@ fn v4_grid(ty: &str, params: &str) -> String {
 #[test]
 fn homogeneous_defaults_presets_and_scale_follow_each_version() {
     let m = medium(&fog(V3, ""));
-    assert_eq!((m.sigma_a.x, m.sigma_s.z), (0.0011, 3.77), "pbrt-v3's defaults are whole milk's");
+    assert_eq!((m.sigma_a.rgb.x, m.sigma_s.rgb.z), (0.0011, 3.77), "pbrt-v3's defaults are whole milk's");
     let m = medium(&fog(V4, ""));
-    assert_eq!((m.sigma_a, m.sigma_s), (glam::Vec3::ONE, glam::Vec3::ONE), "pbrt-v4's default to 1");
+    assert_eq!((m.sigma_a.rgb, m.sigma_s.rgb), (glam::Vec3::ONE, glam::Vec3::ONE), "pbrt-v4's default to 1");
     // v3: given coefficients replace the preset's; v4: the preset wins.
     let p = "\"string preset\" \"Ketchup\" \"rgb sigma_a\" [1 2 3] \"float scale\" 2";
     let m = medium(&fog(V3, p));
-    assert_eq!((m.sigma_a.y, m.sigma_s.x), (4.0, 0.36));
+    assert_eq!((m.sigma_a.rgb.y, m.sigma_s.rgb.x), (4.0, 0.36));
     let m = medium(&fog(V4, p));
-    assert_eq!((m.sigma_a.y, m.sigma_s.x), (1.94, 0.36));
+    assert_eq!((m.sigma_a.rgb.y, m.sigma_s.rgb.x), (1.94, 0.36));
     assert_eq!(medium(&fog(V4, "\"float g\" 0.5")).phase.g, 0.5);
 }
 
@@ -117,8 +117,7 @@ fn what_is_not_rendered_says_so_where_it_is_written() {
     assert!(s.media.is_empty() && s.shapes[0].media == Default::default());
     assert!(s.approximated.iter().any(|a| a.what.contains("nanovdb") && a.line == 1), "{:?}", s.approximated);
     // The other types of both versions are rendered as written, colored grids and
-    // emission included: nothing skipped, and only the scene's colour approximated
-    // (pbrt-v4 media carry RGB, so their scenes render in RGB).
+    // emission included: nothing skipped or approximated, and pbrt-v4's spectrally.
     for text in [
         v4_grid("cloud", ""),
         v4_grid("uniformgrid", "\"float density\" [1] \"rgb sigma_a\" [1 2 3] \"float temperature\" [1500]"),
@@ -129,8 +128,8 @@ fn what_is_not_rendered_says_so_where_it_is_written() {
         assert_eq!(s.media.len(), 1, "{text}");
         let emits = text.contains("Le") || text.contains("temperature");
         assert_eq!(s.media[0].kind.emissive(), emits, "{text}");
-        let rgb_only = s.approximated.len() == 1 && s.approximated[0].what.starts_with("MakeNamedMedium");
-        assert!(rgb_only && s.skipped.is_empty(), "{text}: {:?} {:?}", s.approximated, s.skipped);
+        assert!(s.approximated.is_empty() && s.skipped.is_empty(), "{text}: {:?} {:?}", s.approximated, s.skipped);
+        assert!(s.spectral, "{text}");
     }
 }
 
@@ -201,9 +200,10 @@ fn an_absorbing_slab_dims_what_is_behind_it_by_beers_law() {
 }
 
 /// A slab that absorbs (σa) and emits (Le, pbrt-v4) before nothing: the camera sees
-/// ∫₀^d e^(−σa·t)·σa·Le dt = Le·(1 − e^(−σa·d)) per channel, exactly (homogeneous
-/// emission is integrated in closed form; its photons find no surface to land on; the
-/// narrow view keeps every ray's path within 1e-4 of d).
+/// ∫₀^d e^(−σa·t)·σa·Le dt = Le·(1 − e^(−σa·d)) per channel in RGB, exactly
+/// (homogeneous emission is integrated in closed form; its photons find no surface to
+/// land on; the narrow view keeps every ray's path within 1e-4 of d), and per
+/// wavelength of pbrt-v4's spectra of σa and Le when spectral.
 #[test]
 fn an_emitting_slab_glows_with_its_integrated_emission() {
     let text = "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16 \
@@ -215,10 +215,27 @@ fn an_emitting_slab_glows_with_its_integrated_emission() {
           Shape \"trianglemesh\" \"point3 P\" [-2 -2 -1  2 -2 -1  2 2 -1  -2 2 -1  -2 -2 1  2 -2 1  2 2 1  -2 2 1] \
           \"integer indices\" [0 2 1 0 3 2  4 5 6 4 6 7  0 4 7 0 7 3  1 2 6 1 6 5  0 1 5 0 5 4  3 7 6 3 6 2] \
         AttributeEnd";
-    let m = mean(&render(text));
+    let mut s = scene(text);
+    s.spectral = false;
+    let m =
+        mean(&pbrt_sppm::integrators::render(&RenderScene::new(&s), &RenderSettings::default()).unwrap().image.pixels);
     for (c, (sigma, le)) in [(0.25f64, 4.0f64), (0.5, 2.0), (1.0, 1.0)].into_iter().enumerate() {
         let want = le * (1.0 - (-sigma * 2.0).exp());
         assert!((m[c] - want).abs() < 1e-3 * want, "channel {c}: {} against {want}", m[c]);
+    }
+    // Spectrally, over passes whose wavelengths cover the visible range.
+    use pbrt_sppm::spectrum::colorspace::ColorSpaceName::Srgb;
+    use pbrt_sppm::spectrum::sigmoid::{RgbIlluminantSpectrum, RgbUnboundedSpectrum};
+    let (sigma, le) =
+        (RgbUnboundedSpectrum::new(Srgb, [0.25, 0.5, 1.0]), RgbIlluminantSpectrum::new(Srgb, [4.0, 2.0, 1.0]));
+    let want = crate::common::srgb_of_spectrum(|l| {
+        let l = l as f32;
+        (le.eval(l) * (1.0 - (-sigma.eval(l) * 2.0).exp())) as f64
+    });
+    let settings = RenderSettings { iterations: Some(128), ..Default::default() };
+    let m = mean(&render_with(text, &settings));
+    for c in 0..3 {
+        assert!((m[c] / want[c] - 1.0).abs() < 0.01, "spectral: {m:?} against {want:?}");
     }
 }
 

@@ -74,19 +74,75 @@ fn spot_power(pixels: &[[f32; 3]]) -> f64 {
 }
 
 #[test]
-fn pbrt_v3_files_and_files_with_media_render_in_rgb() {
+fn pbrt_v3_files_render_in_rgb_and_pbrt_v4_files_spectrally_media_included() {
     let v3 = scene("LookAt 0 0 5 0 0 0 0 1 0 Camera \"perspective\" WorldBegin Material \"matte\" Shape \"sphere\"");
     assert!(!v3.spectral);
     let base = "Camera \"perspective\" Film \"rgb\" WorldBegin";
     assert!(scene(&format!("{base} Material \"diffuse\" Shape \"sphere\"")).spectral);
     let fog = "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" MediumInterface \"fog\" \"\"";
     let foggy = format!("{base} {fog} Material \"interface\" Shape \"sphere\"");
-    assert!(!scene(&foggy).spectral);
-    // `check` says which, and notes the media's scene as approximated.
+    assert!(scene(&foggy).spectral);
+    // `check` says which, and approximates nothing for the media.
     assert_eq!(report(&format!("{base} Shape \"sphere\""))["colour"], "spectral");
     let r = report(&foggy);
-    assert_eq!(r["colour"], "rgb");
-    assert!(r["approximated"].to_string().contains("MakeNamedMedium"), "{}", r["approximated"]);
+    assert_eq!(r["colour"], "spectral");
+    assert!(!r["approximated"].to_string().contains("MakeNamedMedium"), "{}", r["approximated"]);
+}
+
+/// The RGB of the colour space's white (luminance 1) through `d` units of a medium
+/// whose σa is the spectrum pbrt-v4 makes of `sigma_a`: ∫ W(λ)·exp(−σa(λ)·d) x̄ȳz̄ dλ.
+fn white_through_dye(sigma_a: [f32; 3], d: f64) -> [f64; 3] {
+    use pbrt_sppm::spectrum::colorspace::ColorSpaceName;
+    use pbrt_sppm::spectrum::sigmoid::RgbUnboundedSpectrum;
+    let space = ColorSpaceName::Srgb;
+    let sigma = RgbUnboundedSpectrum::new(space, sigma_a);
+    crate::common::srgb_of_spectrum(|l| space.illuminant_at(l.round()) * (-(sigma.eval(l as f32) as f64) * d).exp())
+}
+
+#[test]
+fn a_dye_filters_light_by_the_transmittance_of_its_spectrum() {
+    // White light seen through a 1.5-unit slab of a coloured dye (σa only). Spectrally
+    // the transmittance is exp(−σa(λ)·d) per wavelength, which is not the exponential
+    // of the RGB σa: the two predictions differ by far more than the test's margin,
+    // and each mode must land on its own.
+    let (sigma_a, d) = ([0.3f32, 1.2, 2.4], 1.5);
+    let text = format!(
+        "LookAt 0 0 4 0 0 0 0 1 0 Camera \"perspective\" \"float fov\" 10
+        Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8
+        Integrator \"sppm\" \"integer photonsperiteration\" 1000
+        MakeNamedMedium \"dye\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [{} {} {}] \"rgb sigma_s\" [0 0 0]
+        WorldBegin
+        AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [1 1 1]
+          Shape \"bilinearmesh\" \"point3 P\" [-3 -3 -2  3 -3 -2  -3 3 -2  3 3 -2] AttributeEnd
+        AttributeBegin MediumInterface \"dye\" \"\" Material \"interface\" Translate 0 0 -0.25
+          Shape \"trianglemesh\" \"integer indices\" [0 2 1 0 3 2 4 5 6 4 6 7 0 4 7 0 7 3 1 2 6 1 6 5 0 1 5 0 5 4 3 7 6 3 6 2]
+          \"point3 P\" [-2 -2 -{h} 2 -2 -{h} 2 2 -{h} -2 2 -{h} -2 -2 {h} 2 -2 {h} 2 2 {h} -2 2 {h}]
+        AttributeEnd",
+        sigma_a[0],
+        sigma_a[1],
+        sigma_a[2],
+        h = d / 2.0
+    );
+    let mut s = scene(&text);
+    assert!(s.spectral);
+    let mean = |s: &SceneDescription| {
+        let (_, _, px) = image(s, 128);
+        let n = px.len() as f64;
+        [0, 1, 2].map(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / n)
+    };
+    let spectral = mean(&s);
+    s.spectral = false;
+    let rgb = mean(&s);
+    let want_spectral = white_through_dye(sigma_a, d);
+    let want_rgb = sigma_a.map(|k| (-(k as f64) * d).exp());
+    eprintln!("dye: spectral {spectral:?} (want {want_spectral:?}), RGB {rgb:?} (want {want_rgb:?})");
+    let apart = (0..3).map(|c| (want_spectral[c] / want_rgb[c] - 1.0).abs()).fold(0.0, f64::max);
+    assert!(apart > 0.1, "the predictions should differ: {want_spectral:?} against {want_rgb:?}");
+    for c in 0..3 {
+        let near = |got: f64, want: f64| (got / want - 1.0).abs() < 0.02;
+        assert!(near(spectral[c], want_spectral[c]), "spectral {spectral:?} against {want_spectral:?}");
+        assert!(near(rgb[c], want_rgb[c]), "RGB {rgb:?} against {want_rgb:?}");
+    }
 }
 
 #[test]

@@ -241,7 +241,8 @@ impl Cameras<'_> {
             && pass.techniques.uses(Technique::EmitterHit)
         {
             let t = hit.map_or(f32::INFINITY, |h| h.t);
-            out.traced += *beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, t, s);
+            let lanes = scene.pass_spectrum();
+            out.traced += *beta * scene.media[m as usize].emission(ray.o.0, ray.d.0, t, s, lanes.as_ref());
         }
         if let Some((place, at, wo)) = vertex::flight(scene, ray, (hit.as_ref(), *medium), beta, s) {
             return Next::Vertex(place, at, wo, None);

@@ -19,6 +19,7 @@ use crate::parser::error::Diagnostic;
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::scene::values::SpectrumContext;
+use crate::spectrum::colorspace::ColorSpaceName;
 use crate::spectrum::transport::Colour;
 use glam::DMat4;
 
@@ -111,14 +112,6 @@ impl Builder {
                 continue;
             }
             let kind = self.build_medium(&e, ctm)?;
-            let spectral = Colour::chosen(self.opts.colour, syntax) == Colour::Spectral;
-            if kind.is_some() && built.is_empty() && spectral {
-                self.note(
-                    e.name_span,
-                    format!("MakeNamedMedium \"{}\"", e.name),
-                    crate::scene::approx::Approx::MediaInRgb,
-                );
-            }
             remap.push(kind.map(|kind| {
                 built.push(MediumDesc { name: e.name.clone(), kind });
                 built.len() as u32 - 1
@@ -152,6 +145,8 @@ impl Builder {
                 medium_to_world,
                 at: e.name_span,
                 raw_emission,
+                spectral: (Colour::chosen(self.opts.colour, syntax) == Colour::Spectral)
+                    .then_some(ColorSpaceName::Srgb),
             };
             media::read(&ty, &e.params, &mut ctx)
         };
