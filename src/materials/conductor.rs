@@ -56,7 +56,7 @@ pub fn mitsuba(
     e: &mut dyn MaterialExport,
 ) -> MaterialOut {
     let (eta, k) = match metal {
-        Metal::EtaK { eta, k } => (*eta, *k),
+        Metal::EtaK { eta, k } => (eta.rgb, k.rgb),
         Metal::Reflectance(r) => Metal::eta_k_of_reflectance(Vec3::from(e.rgb(*r))),
     };
     let alpha = roughness.map(|r| remap.alpha(e.rgb(r)[0]));

@@ -78,20 +78,10 @@ impl Dispersion {
     pub fn eta(&self, lambda: f32) -> f32 {
         let eta = match self {
             Dispersion::Glass(g) => g.eta(lambda as f64) as f32,
-            Dispersion::Table(t) => piecewise_linear(t, lambda),
+            Dispersion::Table(t) => crate::spectrum::piecewise_linear(t, lambda),
         };
         if eta == 0.0 { 1.0 } else { eta }
     }
-}
-
-fn piecewise_linear(t: &[(f32, f32)], lambda: f32) -> f32 {
-    let (Some(first), Some(last)) = (t.first(), t.last()) else { return 0.0 };
-    if lambda < first.0 || lambda > last.0 {
-        return 0.0;
-    }
-    let i = t.partition_point(|p| p.0 <= lambda).clamp(1, t.len().max(2) - 1);
-    let (a, b) = (t[i - 1], t[i.min(t.len() - 1)]);
-    if b.0 == a.0 { a.1 } else { a.1 + (b.1 - a.1) * (lambda - a.0) / (b.0 - a.0) }
 }
 
 /// A dielectric's index: one value, and how it varies with the wavelength where it does.

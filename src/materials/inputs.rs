@@ -52,6 +52,15 @@ impl<C: Fn() -> TexCtx> Inputs<'_, C> {
         self.lanes_unbounded(self.rgb(v).max(Vec3::ZERO))
     }
 
+    /// A constant spectrum in the path's lanes: its samples (at least `floor`) where it
+    /// has them, else its RGB upsampled as an unbounded value.
+    pub fn sampled(&self, v: &crate::scene::values::Sampled, floor: f32) -> Rgb {
+        match (&self.spectral, &v.samples) {
+            (Some(s), Some(t)) => Vec3::from(s.lambda.map(|l| crate::spectrum::piecewise_linear(t, l).max(floor))),
+            _ => self.lanes_unbounded(v.rgb),
+        }
+    }
+
     /// `rgb` in the path's lanes as an unbounded value.
     pub fn lanes_unbounded(&self, rgb: Rgb) -> Rgb {
         match &self.spectral {
@@ -78,7 +87,8 @@ impl<C: Fn() -> TexCtx> Inputs<'_, C> {
     /// A conductor's η and k here.
     pub fn eta_k(&self, metal: &Metal) -> (Rgb, Rgb) {
         match metal {
-            Metal::EtaK { eta, k } => (self.lanes_unbounded(*eta), self.lanes_unbounded(*k)),
+            // DEVIATION(pbrt): robustness. A sampled η of 0 makes pbrt's Fresnel NaN.
+            Metal::EtaK { eta, k } => (self.sampled(eta, 1e-4), self.sampled(k, 0.0)),
             Metal::Reflectance(r) => Metal::eta_k_of_reflectance(match &self.spectral {
                 Some(s) => s.albedo(self.rgb(*r)),
                 None => self.rgb(*r),

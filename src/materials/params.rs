@@ -14,7 +14,7 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList};
 use crate::parser::source::Span;
 use crate::scene::approx::Approx;
-use crate::scene::values::{self, Range, Res};
+use crate::scene::values::{self, Range, Res, Sampled};
 pub use crate::scene::values::{Resolver, TexValue, float_input as float, spectrum_input as spectrum};
 use crate::spectrum::Rgb;
 use glam::Vec3;
@@ -45,8 +45,9 @@ impl RoughnessRemap {
 /// A conductor's optical constants.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Metal {
-    /// Index η + ik.
-    EtaK { eta: Rgb, k: Rgb },
+    /// Index η + ik (as RGB, and as samples where the file gives them: named metals,
+    /// SPD files).
+    EtaK { eta: Sampled, k: Sampled },
     /// pbrt-v4's `reflectance`: the reflectance at normal incidence, turned into η = 1,
     /// k = 2√r / √(1 − r) where it is evaluated.
     Reflectance(TexValue),
@@ -107,9 +108,13 @@ pub fn metal(p: &ParamList, prefix: &str, v4: Option<&str>, r: &mut dyn Resolver
         return Ok(Metal::Reflectance(spectrum(p, "reflectance", 0.0, r)?));
     }
     let spectra = r.spectra();
-    let named = |n: &str| crate::spectrum::named_spectrum(n).unwrap_or(Vec3::ONE);
-    let eta = values::rgb(p, &eta_name, &spectra, Range::Positive)?.unwrap_or_else(|| named("metal-Cu-eta"));
-    let k = values::rgb(p, &k_name, &spectra, Range::NonNegative)?.unwrap_or_else(|| named("metal-Cu-k"));
+    let copper = |n: &str| Sampled {
+        rgb: crate::spectrum::named_spectrum(n).unwrap_or(Vec3::ONE),
+        samples: crate::spectrum::named_samples(n).map(Into::into),
+    };
+    let eta =
+        values::rgb_and_samples(p, &eta_name, &spectra, Range::Positive)?.unwrap_or_else(|| copper("metal-Cu-eta"));
+    let k = values::rgb_and_samples(p, &k_name, &spectra, Range::NonNegative)?.unwrap_or_else(|| copper("metal-Cu-k"));
     Ok(Metal::EtaK { eta, k })
 }
 

@@ -132,6 +132,35 @@ pub fn rgb(p: &ParamList, name: &str, ctx: &SpectrumContext, range: Range) -> Re
     }
 }
 
+/// [`rgb`] with the spectrum's samples where it is given by them (a named metal, an SPD
+/// file, (λ, value) pairs), for paths that carry wavelengths to read exactly.
+pub fn rgb_and_samples(p: &ParamList, name: &str, ctx: &SpectrumContext, range: Range) -> Res<Option<Sampled>> {
+    let Some(rgb) = self::rgb(p, name, ctx, range)? else { return Ok(None) };
+    let metal = match p.spectrum(name)? {
+        Some(SpectrumValue::Named(n)) => crate::spectrum::named_samples(&n),
+        _ => None,
+    };
+    let samples = match metal {
+        Some(t) => Some(t),
+        None => sampled_pairs(p, name, ctx)?,
+    };
+    Ok(Some(Sampled { rgb, samples: samples.map(Into::into) }))
+}
+
+/// A constant spectrum: its RGB reduction, and its (λ, value) samples where it was
+/// given by them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sampled {
+    pub rgb: Rgb,
+    pub samples: Option<Arc<[(f32, f32)]>>,
+}
+
+impl Sampled {
+    pub fn rgb(rgb: Rgb) -> Sampled {
+        Sampled { rgb, samples: None }
+    }
+}
+
 fn check3(p: &Param, c: [f32; 3], range: Range) -> Res<()> {
     match c.iter().find_map(|&x| range.check(x)) {
         Some(what) => Err(bad_value(p, what, format!("[{} {} {}]", c[0], c[1], c[2]))),

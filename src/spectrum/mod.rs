@@ -12,7 +12,8 @@
 //! ```
 //! Blackbody and sampled spectra are integrated against an analytic fit of the CIE 1931
 //! matching functions (Wyman, Sloan and Shirley 2013) and converted XYZ → linear sRGB.
-//! Named metal spectra use common RGB reductions. (The fit, not `cie`'s CIE tables,
+//! Named metals reduce to RGB for paths that carry RGB; spectral paths read their
+//! measured samples ([`metals`], [`named_samples`]). (The fit, not `cie`'s CIE tables,
 //! stays here because the RGB of every v3 file's blackbody and sampled spectra comes
 //! from it: changing it would change v3 images that match pbrt-v3's today.)
 
@@ -25,6 +26,7 @@ pub mod daylight;
 #[rustfmt::skip]
 pub mod data;
 pub mod fit;
+pub mod metals;
 pub mod named;
 pub mod sampled;
 pub mod sensor;
@@ -102,6 +104,7 @@ pub fn named_spectrum(name: &str) -> Option<Rgb> {
         "metal-Ag-k" => Vec3::new(4.828, 3.122, 2.147),
         "metal-Al-eta" => Vec3::new(1.657, 0.880, 0.521),
         "metal-Al-k" => Vec3::new(9.224, 6.270, 4.837),
+        _ if name.starts_with("metal-") => return named_samples(name).map(|t| sampled_to_rgb(&t)),
         _ => {
             if let Some(s) = named::illuminant_named(name) {
                 return Some(xyz_to_rgb(integrate(s)));
@@ -109,6 +112,34 @@ pub fn named_spectrum(name: &str) -> Option<Rgb> {
             return named::glass_named(name).map(|g| Vec3::splat(named::luminance_mean(&g) as f32));
         }
     })
+}
+
+/// The measured samples of a named metal's η or k, extended to cover 360–830 nm by
+/// their end values (pbrt-v4's `PiecewiseLinearSpectrum::FromInterleaved`).
+pub fn named_samples(name: &str) -> Option<Vec<(f32, f32)>> {
+    let (_, table) = metals::NAMED.iter().find(|(n, _)| *n == name)?;
+    let (first, last) = (table[0], table[table.len() - 1]);
+    let mut v = Vec::with_capacity(table.len() + 2);
+    if first.0 > 360.0 {
+        v.push((359.0, first.1));
+    }
+    v.extend_from_slice(table);
+    if last.0 < 830.0 {
+        v.push((831.0, last.1));
+    }
+    Some(v)
+}
+
+/// (λ, value) pairs read as pbrt-v4's `PiecewiseLinearSpectrum` reads them: linear
+/// between samples, 0 outside them.
+pub fn piecewise_linear(t: &[(f32, f32)], lambda: f32) -> f32 {
+    let (Some(first), Some(last)) = (t.first(), t.last()) else { return 0.0 };
+    if lambda < first.0 || lambda > last.0 {
+        return 0.0;
+    }
+    let i = t.partition_point(|p| p.0 <= lambda).clamp(1, t.len().max(2) - 1);
+    let (a, b) = (t[i - 1], t[i.min(t.len() - 1)]);
+    if b.0 == a.0 { a.1 } else { a.1 + (b.1 - a.1) * (lambda - a.0) / (b.0 - a.0) }
 }
 
 /// A piecewise-linear spectrum of (λ nm, value) pairs (increasing λ) as RGB.
