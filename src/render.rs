@@ -17,9 +17,9 @@ use crate::scene::{
     AlphaRule, AreaLightDesc, Film, Integrator, MaterialKind, MixRule, SceneDescription, ShapeAlpha, TexValue,
 };
 use crate::shapes::ShapeSample;
-use crate::spectrum::Rgb;
 use crate::spectrum::colorspace::ColorSpaceName;
 use crate::spectrum::transport::{PassCell, PassSpectrum};
+use crate::spectrum::{EmissionSpectrum, Rgb};
 use glam::{DVec3, Vec3};
 
 /// An emitting world shape: which side emits and where its lights start (each
@@ -90,6 +90,9 @@ pub struct RenderScene {
     /// Per world shape (by `check --shapes` index): its emission, if it emits.
     pub emitters: Vec<Option<EmitterInfo>>,
     pub lights: Vec<Light>,
+    /// The emission spectra of `lights` that are not area lights (those hold their
+    /// own), where the file gives them as spectra.
+    light_spectra: Vec<Option<std::sync::Arc<EmissionSpectrum>>>,
     pub light_power: Distribution1D,
     /// Where SPPM's photons start: the lights (by `light_power`'s weights), then the
     /// emitting media of `medium_emitters`.
@@ -205,6 +208,7 @@ impl RenderScene {
             motion: scene.camera.camera_from_world_end.is_some() || scene.instances.iter().any(|i| i.motion.is_some()),
             emitters,
             lights,
+            light_spectra: scene.lights.iter().map(|l| l.spectrum.clone()).collect(),
             light_power,
             photon_sources: Distribution1D::new(&sources),
             medium_emitters,
@@ -457,7 +461,7 @@ impl RenderScene {
                 Some((_, l)) if l as usize == idx => self.emitted(hit, &self.geometry.interaction(hit), -wi),
                 _ => Vec3::ZERO,
             },
-            None => self.emission(self.lights[idx].le_escaped(wi)),
+            None => self.emission_of(idx, self.lights[idx].le_escaped(wi)),
         }
     }
 
@@ -471,7 +475,7 @@ impl RenderScene {
             return Vec3::ZERO;
         }
         match &self.lights[light as usize] {
-            Light::Area(a) => self.emission(a.radiance(si.uv)),
+            Light::Area(a) => self.emission_of(light as usize, a.radiance(si.uv)),
             _ => Vec3::ZERO,
         }
     }
@@ -497,6 +501,21 @@ impl RenderScene {
         match &self.spectral {
             Some(cell) if rgb != Vec3::ZERO => cell.get().illuminant(rgb),
             _ => rgb,
+        }
+    }
+
+    /// Light `light`'s RGB emission `rgb` as the path carries it: [`Self::emission`],
+    /// but exact where the light's emission is given as a spectrum (a blackbody, a
+    /// named illuminant, samples), as pbrt-v4 reads it.
+    #[inline]
+    pub fn emission_of(&self, light: usize, rgb: Rgb) -> Rgb {
+        let spectrum = match self.lights.get(light) {
+            Some(Light::Area(a)) => a.spectrum.as_deref(),
+            _ => self.light_spectra.get(light).and_then(Option::as_deref),
+        };
+        match (&self.spectral, spectrum) {
+            (Some(cell), Some(s)) if rgb != Vec3::ZERO => s.lanes(rgb, &cell.get().lambda),
+            _ => self.emission(rgb),
         }
     }
 
@@ -644,8 +663,8 @@ fn area_lights(
             // still keeps its slot (lights are found by primitive) but emits nothing.
             let area = area as f32;
             let l = if area > 0.0 { l } else { Vec3::ZERO };
-            let (two_sided, image) = (desc.two_sided, desc.image.clone());
-            lights.push(Light::Area(AreaLight { emitter, shape: i as u32, l, two_sided, area, image }));
+            let (two_sided, image, spectrum) = (desc.two_sided, desc.image.clone(), desc.spectrum.clone());
+            lights.push(Light::Area(AreaLight { emitter, shape: i as u32, l, two_sided, area, image, spectrum }));
         }
         emitters[i] = Some(EmitterInfo { two_sided: desc.two_sided, first_light });
     }

@@ -9,6 +9,7 @@ domain). pbrt-v4's images are made with exactly these samples, so we read them f
 its source file (Apache-2.0), which must be given:
 
     python3 tools/metal-spectra.py PBRT_V4/src/pbrt/util/spectrum.cpp > src/spectrum/metals.rs
+    cargo fmt
 
 The output is committed, so neither the build nor the tests need pbrt or Python.
 """

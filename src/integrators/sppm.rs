@@ -651,8 +651,8 @@ fn camera_path(
         }
         let Some(hit) = hit else {
             if depth == 0 || specular_bounce || sky_always {
-                for l in &scene.lights {
-                    ld += beta * scene.emission(l.le_escaped(ray.d.0));
+                for (k, l) in scene.lights.iter().enumerate() {
+                    ld += beta * scene.emission_of(k, l.le_escaped(ray.d.0));
                 }
             }
             break;
@@ -834,7 +834,7 @@ fn direct_light(
             if f != Vec3::ZERO && ls.li != Vec3::ZERO { shadow(scene, si, &ls, here, sampler) } else { Vec3::ZERO };
         if tr != Vec3::ZERO {
             let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi)) };
-            ld += tr * f * scene.emission(ls.li) * w / ls.pdf;
+            ld += tr * f * scene.emission_of(idx, ls.li) * w / ls.pdf;
         }
     }
     let mut specular = Vec3::ZERO;
@@ -890,7 +890,7 @@ fn emitted_along(
     let (hit, tr) = trace_lit(scene, &si.spawn_ray(Vector3(wi)), || here.medium_toward(scene, si, wi), sampler);
     tr * match hit {
         Some(hit) => scene.emitted(&hit, &scene.geometry.interaction(&hit), -wi),
-        None => scene.lights.iter().map(|l| scene.emission(l.le_escaped(wi))).sum(),
+        None => scene.lights.iter().enumerate().map(|(k, l)| scene.emission_of(k, l.le_escaped(wi))).sum(),
     }
 }
 
@@ -1053,7 +1053,8 @@ fn emit_photon(scene: &RenderScene, sampler: &mut impl Sampler, time: Option<f32
     // power of two near the lights' total power. pbrt's f32 β overflows for emitters
     // past about 1e37 and silently drops those photons.
     let pdf = pick as f64 * e.pdf_pos as f64 * e.pdf_dir as f64;
-    let beta = (scene.emission(e.le).as_dvec3() * (e.n.dot(d).abs() as f64 / pdf / scene.photon_scale)).as_vec3();
+    let beta =
+        (scene.emission_of(li, e.le).as_dvec3() * (e.n.dot(d).abs() as f64 / pdf / scene.photon_scale)).as_vec3();
     let medium = if scene.media.is_empty() { None } else { scene.light_medium(li, d, e.n) };
     Some(Photon { beta, ray: crate::math::Ray::new(e.ray.o, Vector3(d)).at_time(time), medium, from_medium: false })
 }

@@ -131,7 +131,7 @@ pub fn direct_light(scene: &RenderScene, mp: &MediumPoint, sampler: &mut impl Sa
         };
         let tr = transmittance(scene, &ray, Some(mp.medium), sampler);
         let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, f) };
-        ld += f * tr * scene.emission(ls.li) * w / ls.pdf;
+        ld += f * tr * scene.emission_of(idx, ls.li) * w / ls.pdf;
     }
     if !light.is_delta() {
         let s = mp.phase.sample(mp.wo, u_phase);

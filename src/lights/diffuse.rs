@@ -44,6 +44,9 @@ pub fn evidence(ty: &str) -> Option<Syntax> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct AreaLightDesc {
     pub l: Rgb,
+    /// `L` as a spectrum, where the file gives one (a blackbody, samples, a named
+    /// illuminant): what spectral paths read exactly.
+    pub spectrum: Option<Arc<crate::spectrum::EmissionSpectrum>>,
     pub two_sided: bool,
     /// v4 `power` (watts): the emission is scaled so the whole shape emits this much.
     pub power: Option<f32>,
@@ -91,6 +94,7 @@ pub fn read(
     };
     Ok(Some(AreaLightDesc {
         l: emission(p, "L", spectra)?,
+        spectrum: values::emission_spectrum(p, "L", spectra)?.map(Arc::new),
         two_sided: p.bool("twosided")?.unwrap_or(false),
         power: power(p)?,
         image,
@@ -144,6 +148,8 @@ pub struct AreaLight {
     pub area: f32,
     /// The emission over (u, v), times `l` (v4 `filename`).
     pub image: Option<EmissionImage>,
+    /// `L` as a spectrum, where the file gives one.
+    pub spectrum: Option<Arc<crate::spectrum::EmissionSpectrum>>,
 }
 
 impl AreaLight {
@@ -250,6 +256,7 @@ mod tests {
             two_sided: false,
             area: 1.0,
             image: Some(EmissionImage::new(screen())),
+            spectrum: None,
         };
         // pbrt-v4 flips v: (u, v) = (0, 1) is the image's top left.
         assert_eq!(light.radiance([0.0, 1.0]), Vec3::new(2.0, 0.0, 0.0));
@@ -264,6 +271,7 @@ mod tests {
     fn power_counts_the_images_mean_luminance() {
         let desc = AreaLightDesc {
             l: Vec3::ONE,
+            spectrum: None,
             two_sided: false,
             power: Some(10.0),
             image: Some(EmissionImage::new(screen())),
@@ -275,6 +283,7 @@ mod tests {
             two_sided: false,
             area: 2.0,
             image: desc.image.clone(),
+            spectrum: None,
         };
         assert!((light.power() - 10.0).abs() < 1e-4, "{}", light.power());
     }

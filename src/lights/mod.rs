@@ -44,24 +44,38 @@ use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::{self, Res};
 use crate::shapes::{ShapeSample, ShapeSet};
-use crate::spectrum::Rgb;
+use crate::spectrum::{EmissionSpectrum, Rgb};
 use glam::{DMat4, Vec3};
 
-/// A `LightSource` type: the name scenes use and its reader.
+/// A `LightSource` type: the name scenes use, its reader, and the parameter whose
+/// spectrum it emits (times a scalar: a scale, a profile), where there is one.
 pub struct LightType {
     pub name: &'static str,
     pub read: fn(&ParamList, &DMat4, Span, &mut LightContext) -> Res<LightKind>,
+    pub emits: Option<&'static str>,
 }
 
 /// Every `LightSource` type we render; any other is skipped with a warning.
 pub const REGISTRY: [LightType; 6] = [
-    LightType { name: point::NAME, read: point::read },
-    LightType { name: spot::NAME, read: spot::read },
-    LightType { name: distant::NAME, read: distant::read },
-    LightType { name: infinite::NAME, read: infinite::read },
-    LightType { name: goniometric::NAME, read: goniometric::read },
-    LightType { name: projection::NAME, read: projection::read },
+    LightType { name: point::NAME, read: point::read, emits: Some("I") },
+    LightType { name: spot::NAME, read: spot::read, emits: Some("I") },
+    LightType { name: distant::NAME, read: distant::read, emits: Some("L") },
+    LightType { name: infinite::NAME, read: infinite::read, emits: Some("L") },
+    LightType { name: goniometric::NAME, read: goniometric::read, emits: Some("I") },
+    // Its image's colours are the emission (pbrt-v4: RGB illuminant spectra).
+    LightType { name: projection::NAME, read: projection::read, emits: None },
 ];
+
+/// The spectrum a `LightSource` of type `ty` emits where the file gives it as one (a
+/// blackbody, a named illuminant, samples): what spectral paths read exactly.
+pub fn emission_spectrum(
+    ty: &str,
+    p: &ParamList,
+    ctx: &values::SpectrumContext,
+) -> Res<Option<std::sync::Arc<EmissionSpectrum>>> {
+    let Some(name) = REGISTRY.iter().find(|t| t.name == ty).and_then(|t| t.emits) else { return Ok(None) };
+    Ok(values::emission_spectrum(p, name, ctx)?.map(std::sync::Arc::new))
+}
 
 /// A `LightSource` of type `ty`, or `None` for a type we do not render.
 pub fn read(ty: &str, p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res<Option<LightKind>> {
@@ -85,6 +99,8 @@ pub enum LightKind {
 #[derive(Clone, Debug)]
 pub struct LightDesc {
     pub kind: LightKind,
+    /// Its emission as a spectrum, where the file gives one.
+    pub spectrum: Option<std::sync::Arc<EmissionSpectrum>>,
     /// The CTM at the statement.
     pub world_from_light: DMat4,
     /// The medium it sits in (the outside one current at the statement).

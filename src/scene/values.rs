@@ -16,7 +16,7 @@ use crate::imageio::RgbImage;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, Param, ParamList, ParamType, SpectrumValue};
 use crate::parser::source::Span;
-use crate::spectrum::{Rgb, blackbody, named_spectrum, sampled_to_rgb, xyz_to_rgb};
+use crate::spectrum::{EmissionSpectrum, Rgb, blackbody, named_spectrum, sampled_to_rgb, xyz_to_rgb};
 use glam::Vec3;
 use std::path::Path;
 use std::sync::Arc;
@@ -145,6 +145,29 @@ pub fn rgb_and_samples(p: &ParamList, name: &str, ctx: &SpectrumContext, range: 
         None => sampled_pairs(p, name, ctx)?,
     };
     Ok(Some(Sampled { rgb, samples: samples.map(Into::into) }))
+}
+
+/// The spectrum of emission parameter `name` where it is given as one (a blackbody, a
+/// named illuminant, (λ, value) pairs, an SPD file), for paths that carry wavelengths;
+/// `None` for RGB and XYZ (which pbrt-v4 makes `RGBIlluminantSpectrum`s) and where the
+/// parameter is absent. Call after [`rgb`] has checked the parameter.
+pub fn emission_spectrum(p: &ParamList, name: &str, ctx: &SpectrumContext) -> Res<Option<EmissionSpectrum>> {
+    use crate::spectrum::{daylight::blackbody_normalized, named::illuminant_named, piecewise_linear};
+    let Some(v) = p.spectrum(name)? else { return Ok(None) };
+    let param = last(p, name);
+    let samples = match v {
+        SpectrumValue::Blackbody { kelvin, .. } => {
+            return Ok(EmissionSpectrum::new(|l| blackbody_normalized(l, kelvin as f64)));
+        }
+        SpectrumValue::Named(n) => match illuminant_named(&n) {
+            Some(s) => return Ok(EmissionSpectrum::new(s)),
+            None if named_spectrum(&n).is_some() => return Ok(None),
+            None => spd_file(param, &n, ctx)?,
+        },
+        SpectrumValue::Sampled(pairs) => pairs,
+        _ => return Ok(None),
+    };
+    Ok(EmissionSpectrum::new(|l| piecewise_linear(&samples, l as f32) as f64))
 }
 
 /// A constant spectrum: its RGB reduction, and its (λ, value) samples where it was

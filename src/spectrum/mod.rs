@@ -114,6 +114,43 @@ pub fn named_spectrum(name: &str) -> Option<Rgb> {
     })
 }
 
+/// A light's emission given as a spectrum (a blackbody, a named illuminant, samples):
+/// its values at each whole nanometre of 360–830 (pbrt-v4 makes a light's spectrum a
+/// `DenselySampledSpectrum` and reads it at the nearest one), and its luminance, by
+/// which a light's RGB emission, always a multiple of the spectrum's colour, is turned
+/// back into the spectrum. (The luminance, not the RGB: pbrt-v4 normalises a light's
+/// spectrum by its luminance, which the RGB reduction, an analytic fit for pbrt-v3's
+/// sake, gets within a few tenths of a percent.)
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmissionSpectrum {
+    values: Box<[f32]>,
+    /// 1 / Y.
+    inv_y: f32,
+}
+
+impl EmissionSpectrum {
+    /// `None` for a spectrum without luminance (black, or not finite).
+    pub fn new(s: impl Fn(f64) -> f64) -> Option<EmissionSpectrum> {
+        let values: Box<[f32]> = (360..=830).map(|l| s(l as f64) as f32).collect();
+        let y = cie::luminance_of(|l| values[(l.round() as usize).clamp(360, 830) - 360] as f64);
+        let inv_y = (1.0 / y) as f32;
+        (inv_y.is_finite() && inv_y > 0.0).then_some(EmissionSpectrum { values, inv_y })
+    }
+
+    #[inline]
+    pub fn at(&self, lambda: f32) -> f32 {
+        self.values[(lambda.round() as i64).clamp(360, 830) as usize - 360]
+    }
+
+    /// The lanes at wavelengths `lambda` of a light whose RGB emission is `rgb` (this
+    /// spectrum's RGB times a factor: its scale, power, a goniometric profile's value).
+    #[inline]
+    pub fn lanes(&self, rgb: Vec3, lambda: &[f32; 3]) -> Vec3 {
+        let k = luminance(rgb) * self.inv_y;
+        Vec3::from(lambda.map(|l| k * self.at(l)))
+    }
+}
+
 /// The measured samples of a named metal's η or k, extended to cover 360–830 nm by
 /// their end values (pbrt-v4's `PiecewiseLinearSpectrum::FromInterleaved`).
 pub fn named_samples(name: &str) -> Option<Vec<(f32, f32)>> {
@@ -169,6 +206,17 @@ mod tests {
         let c = sampled_to_rgb(&[(300.0, 1.0), (900.0, 1.0)]);
         assert!((c - Vec3::new(1.205, 0.948, 0.909)).abs().max_element() < 0.02, "{c}");
         assert!((luminance(c) - 1.0).abs() < 0.01);
+    }
+
+    #[test]
+    fn an_emission_spectrum_keeps_the_lights_luminance_and_its_own_shape() {
+        assert!(EmissionSpectrum::new(|_| 0.0).is_none());
+        // A ramp in λ: the lanes follow it, scaled so that the light's luminance holds.
+        let s = EmissionSpectrum::new(|l| l / 500.0).unwrap();
+        let y = cie::luminance_of(|l| l.round() / 500.0);
+        let lanes = s.lanes(Vec3::new(2.0, 2.0, 2.0), &[400.0, 500.2, 700.0]);
+        let want = Vec3::new(400.0, 500.0, 700.0) / 500.0 * 2.0 / y as f32;
+        assert!((lanes - want).abs().max_element() < 1e-5 * want.max_element(), "{lanes} vs {want}");
     }
 
     #[test]

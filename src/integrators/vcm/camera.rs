@@ -324,7 +324,7 @@ impl Cameras<'_> {
         let scene = self.pass.scene;
         let mut sum = Vec3::ZERO;
         for (k, light) in scene.lights.iter().enumerate() {
-            let le = scene.emission(light.le_escaped(d));
+            let le = scene.emission_of(k, light.le_escaped(d));
             if le == Vec3::ZERO {
                 continue;
             }
@@ -385,7 +385,7 @@ impl Cameras<'_> {
         };
         let only_direct = self.pass.techniques == Techniques::Direct;
         let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs, v.len == 1 || only_direct));
-        let c = e.f * v.at.cos(ls.wi) * scene.emission(ls.li) * (w / (pick * ls.pdf));
+        let c = e.f * v.at.cos(ls.wi) * scene.emission_of(k, ls.li) * (w / (pick * ls.pdf));
         if !c.is_finite() || c == Vec3::ZERO {
             return Vec3::ZERO;
         }

@@ -263,7 +263,7 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let partial = Partial::light(emission, direct, cos_used, light.is_delta(), pass.factors.surface);
     // DEVIATION(pbrt): robustness. Formed in f64 and carried divided by the scene's
     // photon scale, as SPPM's photons, so emitters past f32's range keep their paths.
-    let beta = (scene.emission(e.le).as_dvec3() * (cos / emission / scene.photon_scale)).as_vec3();
+    let beta = (scene.emission_of(li, e.le).as_dvec3() * (cos / emission / scene.photon_scale)).as_vec3();
     let medium = scene.light_medium(li, d, e.n);
     let time = pass.time.unwrap_or_else(|| scene.camera.time(s.get1d()));
     let ray = Ray::new(e.ray.o, Vector3(d)).at_time(time);

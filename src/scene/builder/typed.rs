@@ -84,7 +84,10 @@ impl Builder {
                     warnings: &mut warnings,
                     missing: &mut note_missing,
                 };
-                lights::read(&e.name, &e.params, &ctm, e.name_span, &mut ctx)
+                lights::read(&e.name, &e.params, &ctm, e.name_span, &mut ctx).and_then(|k| {
+                    let spectrum = lights::emission_spectrum(&e.name, &e.params, &ctx.spectra)?;
+                    Ok(k.map(|kind| (kind, spectrum)))
+                })
             };
             self.warnings.append(&mut warnings);
             for (at, what) in missing {
@@ -92,9 +95,9 @@ impl Builder {
             }
             let kind = kind?;
             match kind {
-                Some(kind) => {
+                Some((kind, spectrum)) => {
                     finish_params(&e.params, &mut self.warnings)?;
-                    out.push(LightDesc { kind, world_from_light: ctm, medium });
+                    out.push(LightDesc { kind, spectrum, world_from_light: ctm, medium });
                 }
                 None => {
                     let what = format!("LightSource \"{}\"", e.name);
