@@ -17,7 +17,6 @@ use crate::scene::{
     AlphaRule, AreaLightDesc, Film, Integrator, MaterialKind, MixRule, SceneDescription, ShapeAlpha, TexValue,
 };
 use crate::shapes::ShapeSample;
-use crate::spectrum::colorspace::ColorSpaceName;
 use crate::spectrum::transport::{PassCell, PassSpectrum};
 use crate::spectrum::{EmissionSpectrum, Rgb};
 use glam::{DVec3, Vec3};
@@ -220,7 +219,7 @@ impl RenderScene {
             world_shape_media,
             object_shape_media,
             light_media,
-            spectral: scene.spectral.then(|| PassCell::new(ColorSpaceName::Srgb)),
+            spectral: scene.spectral.then(|| PassCell::new(scene.color_space)),
             dispersive: scene.spectral && scene.materials.iter().any(|m| m.kind.disperses()),
         }
     }
@@ -514,7 +513,7 @@ impl RenderScene {
             _ => self.light_spectra.get(light).and_then(Option::as_deref),
         };
         match (&self.spectral, spectrum) {
-            (Some(cell), Some(s)) if rgb != Vec3::ZERO => s.lanes(rgb, &cell.get().lambda),
+            (Some(cell), Some(s)) if rgb != Vec3::ZERO => s.lanes(rgb, &cell.get()),
             _ => self.emission(rgb),
         }
     }

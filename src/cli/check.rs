@@ -48,6 +48,7 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
         "syntax": scene.syntax.name(),
         "syntax_evidence": scene.syntax_evidence,
         "colour": if scene.spectral { "spectral" } else { "rgb" },
+        "colour_space": scene.color_space.name(),
         "camera": {
             "type": c.kind.name(),
             "fov": f32_json(c.fov),
@@ -242,7 +243,7 @@ pub fn summary(s: &SceneDescription) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "syntax      {}", s.syntax.name());
     let colour = if s.spectral { "spectral (3 wavelengths per path)" } else { "RGB" };
-    let _ = writeln!(out, "colour      {colour}");
+    let _ = writeln!(out, "colour      {colour}, colour space {}", s.color_space.name());
     let _ = writeln!(out, "film        {}x{} -> {}", s.film.x_resolution, s.film.y_resolution, s.film.filename);
     let i = &s.integrator;
     let method = crate::integrators::Algorithm::by_default(i).name();

@@ -109,7 +109,7 @@ pub fn metal(p: &ParamList, prefix: &str, v4: Option<&str>, r: &mut dyn Resolver
     }
     let spectra = r.spectra();
     let copper = |n: &str| Sampled {
-        rgb: crate::spectrum::named_spectrum(n).unwrap_or(Vec3::ONE),
+        rgb: Vec3::from(spectra.space.from_srgb(crate::spectrum::named_spectrum(n).unwrap_or(Vec3::ONE).to_array())),
         samples: crate::spectrum::named_samples(n).map(Into::into),
     };
     let eta =

@@ -51,7 +51,9 @@ impl Approx {
                 "a moving shape inside an object definition keeps its start transform (motion nests there in pbrt)"
             }
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",
-            Approx::ColorSpace => "only sRGB is supported; RGB values are taken as sRGB",
+            Approx::ColorSpace => {
+                "one colour space serves a scene: the first `ColorSpace` named, for every RGB value and the film"
+            }
             Approx::Sensor => {
                 "the camera's measured colour curves are not applied: seen as the CIE 1931 observer, white-balanced as pbrt-v4 balances that camera (6500 K unless `whitebalance` is given)"
             }

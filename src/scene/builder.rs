@@ -505,11 +505,30 @@ impl Builder {
         Ok(())
     }
 
+    /// pbrt-v4's `ColorSpace`. One space serves the whole scene: the first one named
+    /// (a later, different one is noted); an unknown name is pbrt-v4's error message,
+    /// and the space stays.
     fn color_space(&mut self, name: &str, span: Span) -> Res<()> {
-        if name != "srgb" {
-            self.note(span, format!("ColorSpace \"{name}\""), Approx::ColorSpace);
+        use crate::spectrum::colorspace::ColorSpaceName;
+        let Some(space) = ColorSpaceName::from_name(name) else {
+            let known: Vec<&str> = ColorSpaceName::ALL.iter().map(|c| c.name()).collect();
+            let msg = super::names::unknown("ColorSpace", name, &known);
+            self.warnings.push(Diagnostic::warning(span, format!("{msg}; the colour space stays")));
+            return Ok(());
+        };
+        match self.render.color_space {
+            None => self.render.color_space = Some(space),
+            Some(first) if first != space => {
+                self.note(span, format!("ColorSpace \"{name}\" after \"{}\"", first.name()), Approx::ColorSpace)
+            }
+            Some(_) => {}
         }
         Ok(())
+    }
+
+    /// The scene's colour space.
+    pub(super) fn space(&self) -> crate::spectrum::colorspace::ColorSpaceName {
+        self.render.color_space.unwrap_or(crate::spectrum::colorspace::ColorSpaceName::Srgb)
     }
 
     fn film(&mut self, e: Entity) -> Res<()> {
@@ -1144,6 +1163,7 @@ impl Builder {
             .map(|(s, span, what)| format!("{}: {what} ({})", sources.location(*span), s.name()));
         Ok(SceneDescription {
             spectral: Colour::chosen(self.opts.colour, syntax) == Colour::Spectral,
+            color_space: self.space(),
             syntax,
             syntax_evidence: if self.opts.syntax.is_some() { Some("--syntax".into()) } else { evidence },
             camera: r.camera,

@@ -151,6 +151,9 @@ pub struct SceneDescription {
     /// Whether paths carry sampled wavelengths (`spectrum::transport`), as pbrt-v4's
     /// do, rather than RGB, as pbrt-v3's do.
     pub spectral: bool,
+    /// pbrt-v4's `ColorSpace`: what RGB values mean, what spectra reduce to, what the
+    /// film writes (sRGB unless the file names another).
+    pub color_space: crate::spectrum::colorspace::ColorSpaceName,
     /// Where the syntax was decided from (`file:line:col: what`), if not defaulted.
     pub syntax_evidence: Option<String>,
     pub camera: Camera,

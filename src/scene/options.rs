@@ -168,6 +168,8 @@ pub struct RenderOptions {
     pub seed_option: Option<u64>,
     /// Whether the scene has media that emit light (known once the file is read).
     pub emitting_media: bool,
+    /// The first `ColorSpace` (pbrt-v4), which the whole scene and its film use.
+    pub color_space: Option<crate::spectrum::colorspace::ColorSpaceName>,
 }
 
 /// The smallest photon radius: its square is a normal f32 (the gather compares squared
@@ -264,7 +266,8 @@ impl RenderOptions {
         values::no_effect(p, &["savefp16", "coordinatesystem", "buckets", "lambdamin", "lambdamax"]);
         let why = "pixel values are not clamped";
         values::ignored(p, &["maxsampleluminance", "maxcomponentvalue"], why, warn);
-        let white_balance = if syntax == Syntax::V4 { Self::sensor(e, notes)? } else { None };
+        let space = self.color_space.unwrap_or(crate::spectrum::colorspace::ColorSpaceName::Srgb);
+        let white_balance = if syntax == Syntax::V4 { Self::sensor(e, space, notes)? } else { None };
         match e.name.as_str() {
             "image" | "rgb" => {}
             "gbuffer" | "spectral" => notes.push((e.name_span, format!("Film \"{}\"", e.name), Approx::FilmType)),
@@ -285,9 +288,14 @@ impl RenderOptions {
         Ok((film, iso / 100.0))
     }
 
-    /// pbrt-v4's `sensor` and `whitebalance`: the white balance as a matrix on linear
-    /// sRGB, if any. A named camera is seen as the CIE observer (noted).
-    fn sensor(e: &Entity, notes: &mut Notes) -> Res<Option<[[f64; 3]; 3]>> {
+    /// pbrt-v4's `sensor` and `whitebalance`: the white balance as a matrix on the
+    /// output space's linear RGB, if any. A named camera is seen as the CIE observer
+    /// (noted).
+    fn sensor(
+        e: &Entity,
+        space: crate::spectrum::colorspace::ColorSpaceName,
+        notes: &mut Notes,
+    ) -> Res<Option<[[f64; 3]; 3]>> {
         use crate::spectrum::sensor::{NAMED_SENSORS, balance_temperature, white_balance_rgb};
         let p = &e.params;
         let sensor = p.string("sensor")?.unwrap_or_else(|| "cie1931".into());
@@ -303,7 +311,7 @@ impl RenderOptions {
         if kelvin == 0.0 {
             return Ok(None);
         }
-        let m = white_balance_rgb(kelvin as f64, crate::spectrum::colorspace::ColorSpaceName::Srgb);
+        let m = white_balance_rgb(kelvin as f64, space);
         if m.iter().flatten().all(|v| v.is_finite()) {
             return Ok(Some(m));
         }

@@ -16,6 +16,7 @@ use crate::imageio::RgbImage;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, Param, ParamList, ParamType, SpectrumValue};
 use crate::parser::source::Span;
+use crate::spectrum::colorspace::ColorSpaceName;
 use crate::spectrum::{EmissionSpectrum, Rgb, blackbody, named_spectrum, sampled_to_rgb, xyz_to_rgb};
 use glam::Vec3;
 use std::path::Path;
@@ -89,6 +90,9 @@ pub struct SpectrumContext<'a> {
     /// whose white already has luminance 1).
     pub normalize_emission: bool,
     pub files: &'a crate::limits::Files,
+    /// The scene's colour space (pbrt-v4's `ColorSpace`): RGB given in the file is in
+    /// it, and spectra reduce to it.
+    pub space: ColorSpaceName,
 }
 
 /// A spectrum (`rgb`, `xyz`, `blackbody`, `spectrum`) or texture; every component must
@@ -108,11 +112,11 @@ pub fn spectrum(
         }
         SpectrumValue::Xyz(c) => {
             check3(param, c, Range::Any)?;
-            xyz_to_rgb(c.map(f64::from))
+            in_space(xyz_to_rgb(c.map(f64::from)), ctx)
         }
-        SpectrumValue::Blackbody { kelvin, scale } => blackbody_rgb(param, kelvin, scale, ctx)?,
-        SpectrumValue::Sampled(pairs) => photometric(sampled(param, &pairs)?, ctx),
-        SpectrumValue::Named(n) => photometric(named_or_file(param, &n, ctx)?, ctx),
+        SpectrumValue::Blackbody { kelvin, scale } => in_space(blackbody_rgb(param, kelvin, scale, ctx)?, ctx),
+        SpectrumValue::Sampled(pairs) => in_space(photometric(sampled(param, &pairs)?, ctx), ctx),
+        SpectrumValue::Named(n) => in_space(photometric(named_or_file(param, &n, ctx)?, ctx), ctx),
         SpectrumValue::Texture(t) => return Ok(Some((SpectrumOrTexture::Texture(t), param.value_span))),
     };
     if let Some(what) = [rgb.x, rgb.y, rgb.z].into_iter().find_map(|c| range.check(c)) {
@@ -203,6 +207,11 @@ fn blackbody_rgb(p: &Param, kelvin: f32, scale: Option<f32>, ctx: &SpectrumConte
         Some(s) => b * s,
         None => photometric(b, ctx),
     })
+}
+
+/// A spectrum's linear sRGB reduction in the scene's colour space.
+fn in_space(srgb: Rgb, ctx: &SpectrumContext) -> Rgb {
+    Vec3::from(ctx.space.from_srgb(srgb.to_array()))
 }
 
 /// A spectrum's colour at luminance 1 where `ctx` asks for pbrt-v4's normalisation of

@@ -40,6 +40,21 @@ impl ColorSpaceName {
         Self::ALL.into_iter().find(|c| c.name() == name)
     }
 
+    /// The luminance (Y) of an RGB of this space.
+    pub fn luminance(self, rgb: [f32; 3]) -> f32 {
+        let m = self.xyz_from_rgb();
+        (0..3).map(|i| m[1][i] * rgb[i] as f64).sum::<f64>() as f32
+    }
+
+    /// A linear sRGB colour in this space (the same XYZ).
+    pub fn from_srgb(self, rgb: [f32; 3]) -> [f32; 3] {
+        if self == Self::Srgb {
+            return rgb;
+        }
+        let xyz = mul_vec(&Self::Srgb.xyz_from_rgb(), rgb.map(f64::from));
+        mul_vec(&self.rgb_from_xyz(), xyz).map(|c| c as f32)
+    }
+
     /// The chromaticities (x, y) of the red, green and blue primaries.
     fn primaries(self) -> [[f64; 2]; 3] {
         match self {
@@ -132,6 +147,19 @@ pub fn invert(m: &Matrix3) -> Matrix3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_colour_moved_between_spaces_keeps_its_xyz() {
+        let c = [0.8f32, 0.3, 0.05];
+        for space in ColorSpaceName::ALL {
+            let moved = space.from_srgb(c);
+            assert!((space.luminance(moved) - ColorSpaceName::Srgb.luminance(c)).abs() < 1e-5, "{space:?}");
+            let back = mul_vec(&space.xyz_from_rgb(), moved.map(f64::from));
+            let xyz = mul_vec(&ColorSpaceName::Srgb.xyz_from_rgb(), c.map(f64::from));
+            assert!((0..3).all(|k| (back[k] - xyz[k]).abs() < 1e-5), "{space:?}: {back:?} vs {xyz:?}");
+        }
+        assert_eq!(ColorSpaceName::Srgb.from_srgb(c), c);
+    }
 
     #[test]
     fn the_srgb_matrix_is_the_published_one() {

@@ -142,12 +142,13 @@ impl EmissionSpectrum {
         self.values[(lambda.round() as i64).clamp(360, 830) as usize - 360]
     }
 
-    /// The lanes at wavelengths `lambda` of a light whose RGB emission is `rgb` (this
-    /// spectrum's RGB times a factor: its scale, power, a goniometric profile's value).
+    /// The lanes of pass `p` of a light whose RGB emission (in the pass's colour space)
+    /// is `rgb` (this spectrum's colour times a factor: its scale, power, a goniometric
+    /// profile's value).
     #[inline]
-    pub fn lanes(&self, rgb: Vec3, lambda: &[f32; 3]) -> Vec3 {
-        let k = luminance(rgb) * self.inv_y;
-        Vec3::from(lambda.map(|l| k * self.at(l)))
+    pub fn lanes(&self, rgb: Vec3, p: &transport::PassSpectrum) -> Vec3 {
+        let k = p.space.luminance(rgb.to_array()) * self.inv_y;
+        Vec3::from(p.lambda.map(|l| k * self.at(l)))
     }
 }
 
@@ -214,7 +215,9 @@ mod tests {
         // A ramp in λ: the lanes follow it, scaled so that the light's luminance holds.
         let s = EmissionSpectrum::new(|l| l / 500.0).unwrap();
         let y = cie::luminance_of(|l| l.round() / 500.0);
-        let lanes = s.lanes(Vec3::new(2.0, 2.0, 2.0), &[400.0, 500.2, 700.0]);
+        let mut p = transport::PassSpectrum::for_pass(colorspace::ColorSpaceName::Srgb, 0);
+        p.lambda = [400.0, 500.2, 700.0];
+        let lanes = s.lanes(Vec3::new(2.0, 2.0, 2.0), &p);
         let want = Vec3::new(400.0, 500.0, 700.0) / 500.0 * 2.0 / y as f32;
         assert!((lanes - want).abs().max_element() < 1e-5 * want.max_element(), "{lanes} vs {want}");
     }

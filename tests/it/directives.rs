@@ -111,7 +111,20 @@ fn option_and_color_space() {
         scene("Option \"seed\" 42\nOption \"bool disablepixeljitter\" true\nColorSpace \"aces2065-1\"\nWorldBegin\n");
     assert_eq!(s.integrator.seed, 42);
     assert!(s.options.contains(&("disablepixeljitter".into(), "true".into())));
-    assert!(warnings(&s).iter().any(|w| w.contains("aces2065-1")));
+    // The scene's colour space, used whole; a second, different one is noted, an
+    // unknown one is a warning and changes nothing.
+    assert_eq!(s.color_space.name(), "aces2065-1");
+    assert!(warnings(&s).is_empty(), "{:?}", warnings(&s));
+    let two = scene("ColorSpace \"rec2020\" Film \"rgb\" WorldBegin AttributeBegin ColorSpace \"srgb\" AttributeEnd");
+    assert_eq!(two.color_space.name(), "rec2020");
+    assert!(
+        two.approximated.iter().any(|a| a.what.contains("ColorSpace \"srgb\" after \"rec2020\"")),
+        "{:?}",
+        two.approximated
+    );
+    let bad = scene("ColorSpace \"adobergb\" Film \"rgb\" WorldBegin");
+    assert_eq!(bad.color_space.name(), "srgb");
+    assert!(warnings(&bad).iter().any(|w| w.contains("adobergb")), "{:?}", warnings(&bad));
     assert_eq!(s.syntax, Syntax::V4);
 }
 

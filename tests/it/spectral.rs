@@ -344,3 +344,36 @@ fn lights_given_as_spectra_emit_them_exactly() {
         assert!(off(upsampled) > 0.004, "{sky}: the test cannot tell the exact sky from its metamer");
     }
 }
+
+#[test]
+fn a_colour_space_sets_what_rgb_means_and_what_the_film_writes() {
+    // A grey plane under a 3000 K sky: the film records the sky's colour in the scene's
+    // colour space, so the same light gives other numbers in rec2020 than in sRGB.
+    use pbrt_sppm::spectrum::colorspace::{ColorSpaceName, mul_vec};
+    let render_in = |space: &str| {
+        let text = format!(
+            "ColorSpace \"{space}\" LookAt 0 0 2 0 0 0 0 1 0 Camera \"perspective\" \"float fov\" 20
+            Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8
+            Integrator \"sppm\" \"integer photonsperiteration\" 1000
+            WorldBegin LightSource \"infinite\" \"blackbody L\" [3000]
+            Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]
+            Shape \"bilinearmesh\" \"point3 P\" [-50 -50 0  50 -50 0  -50 50 0  50 50 0]"
+        );
+        let s = scene(&text);
+        assert_eq!(s.color_space.name(), space);
+        let (_, _, px) = image(&s, 128);
+        let got: [f64; 3] = std::array::from_fn(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / px.len() as f64);
+        got
+    };
+    let sky = |l: f64| pbrt_sppm::spectrum::daylight::blackbody_normalized(l.round(), 3000.0);
+    let xyz = pbrt_sppm::spectrum::cie::spectrum_to_xyz(sky);
+    for space in [ColorSpaceName::Srgb, ColorSpaceName::Rec2020] {
+        let want = mul_vec(&space.rgb_from_xyz(), xyz).map(|c| 0.5 * c / xyz[1]);
+        let got = render_in(space.name());
+        eprintln!("{}: {got:?} against {want:?}", space.name());
+        for c in 0..3 {
+            assert!((got[c] - want[c]).abs() < 0.005 * want[0], "{}: {got:?} against {want:?}", space.name());
+        }
+    }
+    assert_eq!(report("ColorSpace \"aces2065-1\" Film \"rgb\" WorldBegin")["colour_space"], "aces2065-1");
+}

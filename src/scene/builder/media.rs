@@ -19,7 +19,6 @@ use crate::parser::error::Diagnostic;
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::scene::values::SpectrumContext;
-use crate::spectrum::colorspace::ColorSpaceName;
 use crate::spectrum::transport::Colour;
 use glam::DMat4;
 
@@ -135,7 +134,8 @@ impl Builder {
         let fixes = self.opts.fixes;
         let mut warnings = Vec::new();
         let built = {
-            let spectra = SpectrumContext { base_dir: &base, normalize_emission: false, files: &files };
+            let space = self.space();
+            let spectra = SpectrumContext { base_dir: &base, normalize_emission: false, files: &files, space };
             // DEVIATION(pbrt): appearance, `--fix medium-emission` (see Fix).
             let raw_emission = if fixes.has(Fix::MediumEmission) { 1.0 } else { crate::spectrum::CIE_Y_INTEGRAL };
             let mut ctx = MediumContext {
@@ -145,8 +145,7 @@ impl Builder {
                 medium_to_world,
                 at: e.name_span,
                 raw_emission,
-                spectral: (Colour::chosen(self.opts.colour, syntax) == Colour::Spectral)
-                    .then_some(ColorSpaceName::Srgb),
+                spectral: (Colour::chosen(self.opts.colour, syntax) == Colour::Spectral).then_some(space),
             };
             media::read(&ty, &e.params, &mut ctx)
         };

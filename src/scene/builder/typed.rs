@@ -46,6 +46,7 @@ impl Builder {
             base_dir: self.reader.base_dir(),
             normalize_emission: lights && self.syntax() == Syntax::V4,
             files: &self.reader.files,
+            space: self.space(),
         }
     }
 
@@ -70,7 +71,7 @@ impl Builder {
             let mut warnings = Vec::new();
             let mut missing = Vec::new();
             let kind = {
-                let syntax = self.syntax();
+                let (syntax, space) = (self.syntax(), self.space());
                 let mut note_missing = |at: Span, what: String| missing.push((at, what));
                 let mut images = |n: &str| self.image(n);
                 let mut ctx = LightContext {
@@ -79,6 +80,7 @@ impl Builder {
                         base_dir: &base,
                         normalize_emission: syntax == Syntax::V4,
                         files: &files,
+                        space,
                     },
                     image: &mut images,
                     warnings: &mut warnings,
@@ -135,7 +137,9 @@ impl Builder {
             let mut warnings = Vec::new();
             let (files, base, syntax) =
                 (self.reader.files.clone(), self.reader.base_dir().to_path_buf(), self.syntax());
-            let spectra = SpectrumContext { base_dir: &base, normalize_emission: syntax == Syntax::V4, files: &files };
+            let space = self.space();
+            let spectra =
+                SpectrumContext { base_dir: &base, normalize_emission: syntax == Syntax::V4, files: &files, space };
             let mut images = |n: &str| self.image(n);
             let desc = lights::diffuse::read(&e.name, &e.params, (syntax, &spectra), &mut images, &mut warnings);
             self.warnings.append(&mut warnings);
