@@ -43,6 +43,18 @@ pub struct RgbGrid {
     spectra: Option<Spectra>,
 }
 
+impl RgbGrid {
+    /// σa, σs and Le interpolated in RGB.
+    fn at_rgb(&self, u: Vec3, emission: bool) -> [Vec3; 3] {
+        let get = |g: &Option<SampledGrid<Vec3>>| g.as_ref().map_or(Vec3::ONE, |g| g.lookup(u));
+        let le = match (&self.le, emission) {
+            (Some(le), true) => le.lookup(u),
+            _ => Vec3::ZERO,
+        };
+        [get(&self.sigma_a), get(&self.sigma_s), le]
+    }
+}
+
 /// Each sample's colours as pbrt-v4's spectra, fitted once.
 #[derive(Debug)]
 struct Spectra {
@@ -59,21 +71,7 @@ impl Spectra {
         let le = g.le.as_ref().map(|g| g.map(|v| RgbIlluminantSpectrum::new(space, v.max(Vec3::ZERO).to_array())));
         Spectra { sigma_a: sigma(&g.sigma_a), sigma_s: sigma(&g.sigma_s), le }
     }
-}
 
-impl RgbGrid {
-    /// σa, σs and Le interpolated in RGB.
-    fn at_rgb(&self, u: Vec3, emission: bool) -> [Vec3; 3] {
-        let get = |g: &Option<SampledGrid<Vec3>>| g.as_ref().map_or(Vec3::ONE, |g| g.lookup(u));
-        let le = match (&self.le, emission) {
-            (Some(le), true) => le.lookup(u),
-            _ => Vec3::ZERO,
-        };
-        [get(&self.sigma_a), get(&self.sigma_s), le]
-    }
-}
-
-impl Spectra {
     /// σa, σs and Le: each sample's spectrum at the lanes' wavelengths, interpolated
     /// (pbrt-v4's `RGBGridMedium::SamplePoint`).
     fn at(&self, u: Vec3, emission: bool, p: &crate::spectrum::transport::PassSpectrum) -> [Vec3; 3] {
