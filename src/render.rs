@@ -508,12 +508,13 @@ impl RenderScene {
     /// named illuminant, samples), as pbrt-v4 reads it.
     #[inline]
     pub fn emission_of(&self, light: usize, rgb: Rgb) -> Rgb {
+        let Some(cell) = &self.spectral else { return rgb };
         let spectrum = match self.lights.get(light) {
             Some(Light::Area(a)) => a.spectrum.as_deref(),
             _ => self.light_spectra.get(light).and_then(Option::as_deref),
         };
-        match (&self.spectral, spectrum) {
-            (Some(cell), Some(s)) if rgb != Vec3::ZERO => s.lanes(rgb, &cell.get()),
+        match spectrum {
+            Some(s) if rgb != Vec3::ZERO => s.lanes(rgb, &cell.get()),
             _ => self.emission(rgb),
         }
     }

@@ -56,7 +56,7 @@ impl<C: Fn() -> TexCtx> Inputs<'_, C> {
     /// has them, else its RGB upsampled as an unbounded value.
     pub fn sampled(&self, v: &crate::scene::values::Sampled, floor: f32) -> Rgb {
         match (&self.spectral, &v.samples) {
-            (Some(s), Some(t)) => Vec3::from(s.lambda.map(|l| crate::spectrum::piecewise_linear(t, l).max(floor))),
+            (Some(s), Some(t)) => s.values(|l| crate::spectrum::piecewise_linear(t, l).max(floor)),
             _ => self.lanes_unbounded(v.rgb),
         }
     }

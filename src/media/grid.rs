@@ -27,7 +27,7 @@
 //! of 1 records as 106.86 (∫ȳ), and so do we (`--fix medium-emission`: as 1).
 
 use super::MediumContext;
-use super::lanes::{Emitted, Lanes, Sigma, at_lanes, sigma_t_bound};
+use super::lanes::{Emitted, Lanes, Sigma, sigma_t_bound};
 use super::sampled::SampledGrid;
 use super::tracking::{Field, Props, Tracked};
 use crate::parser::Syntax;
@@ -257,7 +257,7 @@ impl Blackbody {
             return Vec3::ZERO;
         }
         let t = kelvin.min(self.top) as f64;
-        at_lanes(p, |l| (crate::spectrum::daylight::blackbody_normalized(l as f64, t) as f32) * self.raw)
+        p.values(|l| (crate::spectrum::daylight::blackbody_normalized(l as f64, t) as f32) * self.raw)
     }
 
     /// The largest channel in the table.

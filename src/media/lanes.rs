@@ -22,12 +22,6 @@ use glam::Vec3;
 /// The wavelengths of the pass under way, `None` for a scene rendered in RGB.
 pub type Lanes<'a> = Option<&'a PassSpectrum>;
 
-/// A spectrum's values at the lanes' wavelengths.
-#[inline]
-pub fn at_lanes(p: &PassSpectrum, eval: impl Fn(f32) -> f32) -> Vec3 {
-    Vec3::from(p.lambda.map(eval))
-}
-
 /// An attenuation coefficient (σa, σs): its RGB and, where the scene renders
 /// spectrally and the RGB is not grey (a grey's spectrum is flat), its spectrum.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -48,15 +42,10 @@ impl Sigma {
         Sigma { rgb, spectrum }
     }
 
-    /// The RGB itself, whatever the mode.
-    pub fn rgb(rgb: Vec3) -> Sigma {
-        Sigma { rgb, spectrum: None }
-    }
-
     #[inline]
     pub fn at(&self, lanes: Lanes) -> Vec3 {
         match (lanes, &self.spectrum) {
-            (Some(p), Some(s)) => at_lanes(p, |l| s.eval(l)),
+            (Some(p), Some(s)) => p.values(|l| s.eval(l)),
             _ => self.rgb,
         }
     }
@@ -67,10 +56,6 @@ impl Sigma {
             Some(s) => spectrum_max(s),
             None => self.rgb.max_element(),
         }
-    }
-
-    pub fn times(&self, k: f32) -> Sigma {
-        Sigma { rgb: self.rgb * k, spectrum: self.spectrum.map(|s| RgbUnboundedSpectrum { scale: s.scale * k, ..s }) }
     }
 }
 
@@ -115,7 +100,7 @@ impl Emitted {
     #[inline]
     pub fn at(&self, lanes: Lanes) -> Vec3 {
         match (lanes, &self.spectrum) {
-            (Some(p), Some(s)) => at_lanes(p, |l| s.eval(l)),
+            (Some(p), Some(s)) => p.values(|l| s.eval(l)),
             _ => self.rgb,
         }
     }
@@ -140,7 +125,7 @@ mod tests {
     }
 
     /// The bound holds at every wavelength, and at 2·max(RGB) at most (the unbounded
-    /// spectrum's scale); scaling scales the values.
+    /// spectrum's scale).
     #[test]
     fn the_bound_holds_over_the_visible_range() {
         for rgb in [Vec3::new(0.9, 0.1, 0.02), Vec3::new(0.0, 3.0, 1.0), Vec3::new(0.2, 0.25, 0.3)] {
@@ -154,7 +139,6 @@ mod tests {
                 );
                 let v = s.at(Some(&p));
                 assert!(v.max_element() <= b * (1.0 + 1e-5), "{rgb}: {v} above {b}");
-                assert!((s.times(3.0).at(Some(&p)) - 3.0 * v).abs().max_element() <= 1e-5 * b.max(1.0));
             }
         }
     }

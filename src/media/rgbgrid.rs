@@ -16,7 +16,7 @@
 //! (`--fix medium-emission`: as 1).
 
 use super::MediumContext;
-use super::lanes::{Lanes, at_lanes, spectrum_max};
+use super::lanes::{Lanes, spectrum_max};
 use super::phase::HenyeyGreenstein;
 use super::sampled::SampledGrid;
 use super::tracking::{Field, Props, Tracked};
@@ -76,10 +76,10 @@ impl Spectra {
     /// (pbrt-v4's `RGBGridMedium::SamplePoint`).
     fn at(&self, u: Vec3, emission: bool, p: &crate::spectrum::transport::PassSpectrum) -> [Vec3; 3] {
         let get = |g: &Option<SampledGrid<RgbUnboundedSpectrum>>| {
-            g.as_ref().map_or(Vec3::ONE, |g| g.lookup_by(u, |s| at_lanes(p, |l| s.eval(l))))
+            g.as_ref().map_or(Vec3::ONE, |g| g.lookup_by(u, |s| p.values(|l| s.eval(l))))
         };
         let le = match (&self.le, emission) {
-            (Some(le), true) => le.lookup_by(u, |s| at_lanes(p, |l| s.eval(l))),
+            (Some(le), true) => le.lookup_by(u, |s| p.values(|l| s.eval(l))),
             _ => Vec3::ZERO,
         };
         [get(&self.sigma_a), get(&self.sigma_s), le]

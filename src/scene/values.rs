@@ -182,12 +182,6 @@ pub struct Sampled {
     pub samples: Option<Arc<[(f32, f32)]>>,
 }
 
-impl Sampled {
-    pub fn rgb(rgb: Rgb) -> Sampled {
-        Sampled { rgb, samples: None }
-    }
-}
-
 fn check3(p: &Param, c: [f32; 3], range: Range) -> Res<()> {
     match c.iter().find_map(|&x| range.check(x)) {
         Some(what) => Err(bad_value(p, what, format!("[{} {} {}]", c[0], c[1], c[2]))),

@@ -148,7 +148,7 @@ impl EmissionSpectrum {
     #[inline]
     pub fn lanes(&self, rgb: Vec3, p: &transport::PassSpectrum) -> Vec3 {
         let k = p.space.luminance(rgb.to_array()) * self.inv_y;
-        Vec3::from(p.lambda.map(|l| k * self.at(l)))
+        p.values(|l| k * self.at(l))
     }
 }
 

@@ -96,6 +96,12 @@ impl PassSpectrum {
         PassSpectrum { space, lambda: w.lambda, to_rgb }
     }
 
+    /// A spectrum's values at the pass's wavelengths, in the lanes.
+    #[inline]
+    pub fn values(&self, spectrum: impl Fn(f32) -> f32) -> Vec3 {
+        Vec3::from(self.lambda.map(spectrum))
+    }
+
     /// A reflectance: `rgb` clamped to [0, 1], upsampled as pbrt-v4's
     /// `RGBAlbedoSpectrum`.
     #[inline]
@@ -105,7 +111,7 @@ impl PassSpectrum {
             return rgb; // a grey is flat
         }
         let s = RgbAlbedoSpectrum::new(self.space, rgb.to_array());
-        Vec3::from(self.lambda.map(|l| s.eval(l)))
+        self.values(|l| s.eval(l))
     }
 
     /// A value without bound (η, k, σ), as pbrt-v4's `RGBUnboundedSpectrum`.
@@ -116,7 +122,7 @@ impl PassSpectrum {
             return rgb;
         }
         let s = RgbUnboundedSpectrum::new(self.space, rgb.to_array());
-        Vec3::from(self.lambda.map(|l| s.eval(l)))
+        self.values(|l| s.eval(l))
     }
 
     /// An emitted colour, as pbrt-v4's `RGBIlluminantSpectrum` normalised by its
@@ -127,7 +133,7 @@ impl PassSpectrum {
             return rgb;
         }
         let s = RgbIlluminantSpectrum::new(self.space, rgb.max(Vec3::ZERO).to_array());
-        Vec3::from(self.lambda.map(|l| s.eval(l)))
+        self.values(|l| s.eval(l))
     }
 
     /// Output RGB of lanes `v` (what pbrt-v4's `Film::ToOutputRGB` gives for the

@@ -19,6 +19,12 @@ fn image_with(scene: &SceneDescription, iterations: u32, algorithm: Algorithm) -
     (out.width, out.height, out.pixels)
 }
 
+/// The image's mean RGB at `iterations` SPPM passes.
+fn mean_rgb(scene: &SceneDescription, iterations: u32) -> [f64; 3] {
+    let (_, _, px) = image(scene, iterations);
+    std::array::from_fn(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / px.len() as f64)
+}
+
 /// Each channel's centroid (x, y) over the pixels brighter than its median by more
 /// than a tenth of its maximum: where a spot of light lands, by colour.
 fn centroids(w: usize, pixels: &[[f32; 3]]) -> [[f64; 2]; 3] {
@@ -125,14 +131,9 @@ fn a_dye_filters_light_by_the_transmittance_of_its_spectrum() {
     );
     let mut s = scene(&text);
     assert!(s.spectral);
-    let mean = |s: &SceneDescription| {
-        let (_, _, px) = image(s, 128);
-        let n = px.len() as f64;
-        [0, 1, 2].map(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / n)
-    };
-    let spectral = mean(&s);
+    let spectral = mean_rgb(&s, 128);
     s.spectral = false;
-    let rgb = mean(&s);
+    let rgb = mean_rgb(&s, 128);
     let want_spectral = white_through_dye(sigma_a, d);
     let want_rgb = sigma_a.map(|k| (-(k as f64) * d).exp());
     eprintln!("dye: spectral {spectral:?} (want {want_spectral:?}), RGB {rgb:?} (want {want_rgb:?})");
@@ -157,14 +158,9 @@ fn a_saturated_reflectance_under_white_light_keeps_its_rgb_colour() {
         Material \"diffuse\" \"rgb reflectance\" [0.8 0.2 0.05]
         Shape \"bilinearmesh\" \"point3 P\" [-3 -3 0  3 -3 0  -3 3 0  3 3 0]";
     let mut s = scene(text);
-    let mean = |s: &SceneDescription| {
-        let (_, _, px) = image(s, 64);
-        let n = px.len() as f64;
-        [0, 1, 2].map(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / n)
-    };
-    let spectral = mean(&s);
+    let spectral = mean_rgb(&s, 64);
     s.spectral = false;
-    let rgb = mean(&s);
+    let rgb = mean_rgb(&s, 64);
     for c in 0..3 {
         assert!((spectral[c] / rgb[c] - 1.0).abs() < 0.02, "channel {c}: spectral {spectral:?}, RGB {rgb:?}");
     }
@@ -274,8 +270,7 @@ fn named_metals_reflect_their_measured_spectra() {
         Material \"conductor\"
         Shape \"bilinearmesh\" \"point3 P\" [-5 -5 0  5 -5 0  -5 5 0  5 5 0]";
     let s = scene(text);
-    let (_, _, px) = image(&s, 128);
-    let got: [f64; 3] = std::array::from_fn(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / px.len() as f64);
+    let got = mean_rgb(&s, 128);
     let (eta, k) = (named_samples("metal-Cu-eta").unwrap(), named_samples("metal-Cu-k").unwrap());
     let want = white_off_metal(|l| piecewise_linear(&eta, l), |l| piecewise_linear(&k, l));
     let up = |n: &str| RgbUnboundedSpectrum::new(Srgb, named_spectrum(n).unwrap().to_array());
@@ -329,8 +324,7 @@ fn lights_given_as_spectra_emit_them_exactly() {
             Shape \"bilinearmesh\" \"point3 P\" [-50 -50 0  50 -50 0  -50 50 0  50 50 0]",
             rho[0], rho[1], rho[2]
         );
-        let (_, _, px) = image(&scene(&text), 256);
-        let got: [f64; 3] = std::array::from_fn(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / px.len() as f64);
+        let got = mean_rgb(&scene(&text), 256);
         let y = pbrt_sppm::spectrum::cie::luminance_of(&spectrum);
         let want = crate::common::srgb_of_spectrum(|l| albedo.eval(l as f32) as f64 * spectrum(l.round()) / y);
         let sky_rgb = crate::common::srgb_of_spectrum(|l| spectrum(l.round()) / y);
@@ -361,9 +355,7 @@ fn a_colour_space_sets_what_rgb_means_and_what_the_film_writes() {
         );
         let s = scene(&text);
         assert_eq!(s.color_space.name(), space);
-        let (_, _, px) = image(&s, 128);
-        let got: [f64; 3] = std::array::from_fn(|c| px.iter().map(|p| p[c] as f64).sum::<f64>() / px.len() as f64);
-        got
+        mean_rgb(&s, 128)
     };
     let sky = |l: f64| pbrt_sppm::spectrum::daylight::blackbody_normalized(l.round(), 3000.0);
     let xyz = pbrt_sppm::spectrum::cie::spectrum_to_xyz(sky);
