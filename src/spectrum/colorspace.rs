@@ -10,6 +10,7 @@
 
 use super::cie::{self, five_nm};
 use super::data::{ILLUM_ACES_D60, ILLUM_D65};
+use std::sync::OnceLock;
 
 /// A 3×3 matrix, rows first.
 pub type Matrix3 = [[f64; 3]; 3];
@@ -85,24 +86,30 @@ impl ColorSpaceName {
         scale * five_nm(self.illuminant(), 300.0, lambda)
     }
 
-    /// The matrix from this space's RGB to XYZ.
+    /// The matrix from this space's RGB to XYZ (made once per space: the luminance
+    /// of every emitted colour needs it, and the white takes a 471-term integral).
     pub fn xyz_from_rgb(self) -> Matrix3 {
-        let [x, y] = self.white();
-        let w = [x / y, 1.0, (1.0 - x - y) / y];
-        let columns = self.primaries().map(|[x, y]| [x / y, 1.0, (1.0 - x - y) / y]);
-        let rgb: Matrix3 = std::array::from_fn(|r| std::array::from_fn(|c| columns[c][r]));
-        let c = mul_vec(&invert(&rgb), w);
-        std::array::from_fn(|r| std::array::from_fn(|k| rgb[r][k] * c[k]))
+        static MATRICES: [OnceLock<Matrix3>; 4] = [const { OnceLock::new() }; 4];
+        *MATRICES[self as usize].get_or_init(|| {
+            let [x, y] = self.white();
+            let w = [x / y, 1.0, (1.0 - x - y) / y];
+            let columns = self.primaries().map(|[x, y]| [x / y, 1.0, (1.0 - x - y) / y]);
+            let rgb: Matrix3 = std::array::from_fn(|r| std::array::from_fn(|c| columns[c][r]));
+            let c = mul_vec(&invert(&rgb), w);
+            std::array::from_fn(|r| std::array::from_fn(|k| rgb[r][k] * c[k]))
+        })
     }
 
     /// The white's chromaticity: its illuminant's.
     pub fn white(self) -> [f64; 2] {
-        chromaticity(cie::spectrum_to_xyz(|l| self.illuminant_at(l)))
+        static WHITES: [OnceLock<[f64; 2]>; 4] = [const { OnceLock::new() }; 4];
+        *WHITES[self as usize].get_or_init(|| chromaticity(cie::spectrum_to_xyz(|l| self.illuminant_at(l))))
     }
 
     /// The matrix from XYZ to this space's RGB.
     pub fn rgb_from_xyz(self) -> Matrix3 {
-        invert(&self.xyz_from_rgb())
+        static MATRICES: [OnceLock<Matrix3>; 4] = [const { OnceLock::new() }; 4];
+        *MATRICES[self as usize].get_or_init(|| invert(&self.xyz_from_rgb()))
     }
 }
 
@@ -126,8 +133,8 @@ pub fn mul(a: &Matrix3, b: &Matrix3) -> Matrix3 {
     std::array::from_fn(|r| std::array::from_fn(|c| (0..3).map(|k| a[r][k] * b[k][c]).sum()))
 }
 
-static D65_SCALE: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
-static ACES_SCALE: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+static D65_SCALE: OnceLock<f64> = OnceLock::new();
+static ACES_SCALE: OnceLock<f64> = OnceLock::new();
 
 /// `m · v`.
 pub fn mul_vec(m: &Matrix3, v: [f64; 3]) -> [f64; 3] {
