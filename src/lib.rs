@@ -7,6 +7,7 @@
 pub mod accel;
 pub mod camera;
 pub mod cli;
+pub mod filters;
 pub mod fixes;
 pub mod imageio;
 pub mod integrators;

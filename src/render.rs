@@ -219,7 +219,7 @@ impl RenderScene {
             world_shape_media,
             object_shape_media,
             light_media,
-            spectral: scene.spectral.then(|| PassCell::new(scene.color_space)),
+            spectral: scene.spectral.then(|| PassCell::new(scene.color_space, scene.film.sensor.clone())),
             dispersive: scene.spectral && scene.materials.iter().any(|m| m.kind.disperses()),
         }
     }

@@ -114,7 +114,7 @@ mod tests {
     #[test]
     fn rgb_scenes_read_the_rgb_and_greys_stay_flat() {
         let space = Some(ColorSpaceName::Srgb);
-        let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, 5);
+        let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, None, 5);
         let red = Vec3::new(0.9, 0.1, 0.02);
         assert_eq!(Sigma::new(red, None).at(Some(&p)), red);
         assert_eq!(Sigma::new(red, space).at(None), red);
@@ -135,6 +135,7 @@ mod tests {
             for k in 0..=470 {
                 let p = PassSpectrum::of(
                     ColorSpaceName::Srgb,
+                    None,
                     crate::spectrum::sampled::SampledWavelengths::sample_uniform(k as f32 / 471.0),
                 );
                 let v = s.at(Some(&p));

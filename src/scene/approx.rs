@@ -55,7 +55,7 @@ impl Approx {
                 "one colour space serves a scene: the first `ColorSpace` named, for every RGB value and the film"
             }
             Approx::Sensor => {
-                "the camera's measured colour curves are not applied: seen as the CIE 1931 observer, white-balanced as pbrt-v4 balances that camera (6500 K unless `whitebalance` is given)"
+                "rendered in RGB (`--colour rgb`), the camera's measured curves cannot apply: seen as the CIE 1931 observer, white-balanced as pbrt-v4 balances that camera (6500 K unless `whitebalance` is given)"
             }
             Approx::NanoVdb => {
                 "NanoVDB files cannot be read (no Rust reader of the format exists): what the medium fills is rendered as vacuum"

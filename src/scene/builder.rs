@@ -1162,7 +1162,7 @@ impl Builder {
             .as_ref()
             .map(|(s, span, what)| format!("{}: {what} ({})", sources.location(*span), s.name()));
         Ok(SceneDescription {
-            spectral: Colour::chosen(self.opts.colour, syntax) == Colour::Spectral,
+            spectral: self.render.spectral,
             color_space: self.space(),
             syntax,
             syntax_evidence: if self.opts.syntax.is_some() { Some("--syntax".into()) } else { evidence },
@@ -1221,6 +1221,7 @@ impl Builder {
     /// parameters warned.
     fn resolve_options(&mut self, syntax: Syntax) -> Res<super::options::Resolved> {
         let mut approx = Vec::new();
+        self.render.spectral = Colour::chosen(self.opts.colour, syntax) == Colour::Spectral;
         let r = self.render.resolve(syntax, &self.opts.limits, &mut self.warnings, &mut approx)?;
         for (at, what, how) in approx {
             self.note(at, what, how);

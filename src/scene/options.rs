@@ -15,12 +15,15 @@
 use super::approx::Approx;
 use super::values::{self, Range};
 use crate::camera::realistic::{LensDesc, Weighting};
+use crate::filters::PixelFilter;
 use crate::limits::Limits;
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamType;
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
+use crate::spectrum::colorspace::{ColorSpaceName, Matrix3};
+use crate::spectrum::sensor::CameraSensor;
 use glam::DMat4;
 
 /// The camera models we render.
@@ -107,6 +110,12 @@ pub struct Film {
     pub diagonal_mm: f32,
     /// pbrt-v4's white balance, a matrix on linear sRGB (none: colours as rendered).
     pub white_balance: Option<[[f64; 3]; 3]>,
+    /// A named camera's curves, which spectral paths are recorded through (its white
+    /// balance is in its matrix).
+    pub sensor: Option<CameraSensor>,
+    /// pbrt-v4's pixel filter, which blurs its SPPM image (none: rays start uniformly
+    /// in the pixel, as pbrt-v3's SPPM starts them).
+    pub filter: Option<PixelFilter>,
 }
 
 impl Film {
@@ -170,6 +179,8 @@ pub struct RenderOptions {
     pub emitting_media: bool,
     /// The first `ColorSpace` (pbrt-v4), which the whole scene and its film use.
     pub color_space: Option<crate::spectrum::colorspace::ColorSpaceName>,
+    /// Whether paths carry wavelengths (a named camera's curves need them).
+    pub spectral: bool,
 }
 
 /// The smallest photon radius: its square is a normal f32 (the gather compares squared
@@ -207,6 +218,7 @@ impl RenderOptions {
         for e in [&self.sampler, &self.filter, &self.accelerator].into_iter().flatten() {
             e.params.mark_all_used(); // irrelevant to SPPM except pixelsamples (read below)
         }
+        // (a v4 filter's parameters have been read by then, with their errors)
         Ok(Resolved { camera, film, integrator })
     }
 
@@ -266,8 +278,8 @@ impl RenderOptions {
         values::no_effect(p, &["savefp16", "coordinatesystem", "buckets", "lambdamin", "lambdamax"]);
         let why = "pixel values are not clamped";
         values::ignored(p, &["maxsampleluminance", "maxcomponentvalue"], why, warn);
-        let space = self.color_space.unwrap_or(crate::spectrum::colorspace::ColorSpaceName::Srgb);
-        let white_balance = if syntax == Syntax::V4 { Self::sensor(e, space, notes)? } else { None };
+        let space = self.color_space.unwrap_or(ColorSpaceName::Srgb);
+        let (white_balance, sensor) = if syntax == Syntax::V4 { self.sensor(e, space, notes)? } else { (None, None) };
         match e.name.as_str() {
             "image" | "rgb" => {}
             "gbuffer" | "spectral" => notes.push((e.name_span, format!("Film \"{}\"", e.name), Approx::FilmType)),
@@ -284,44 +296,57 @@ impl RenderOptions {
             scale,
             diagonal_mm,
             white_balance,
+            sensor,
+            filter: if syntax == Syntax::V4 { self.pixel_filter()? } else { None },
         };
         Ok((film, iso / 100.0))
     }
 
+    /// pbrt-v4's pixel filter: the file's, or its default Gaussian.
+    fn pixel_filter(&self) -> Res<Option<PixelFilter>> {
+        match &self.filter {
+            Some(e) => PixelFilter::new(&e.name, &e.params),
+            None => PixelFilter::new("gaussian", &crate::parser::params::ParamList::default()),
+        }
+    }
+
     /// pbrt-v4's `sensor` and `whitebalance`: the white balance as a matrix on the
-    /// output space's linear RGB, if any. A named camera is seen as the CIE observer
-    /// (noted).
+    /// output space's linear RGB, or a named camera, whose fitted matrix balances.
+    /// Paths that carry RGB see a named camera as the CIE observer (noted).
     fn sensor(
+        &self,
         e: &Entity,
-        space: crate::spectrum::colorspace::ColorSpaceName,
+        space: ColorSpaceName,
         notes: &mut Notes,
-    ) -> Res<Option<[[f64; 3]; 3]>> {
-        use crate::spectrum::sensor::{NAMED_SENSORS, balance_temperature, white_balance_rgb};
+    ) -> Res<(Option<Matrix3>, Option<CameraSensor>)> {
+        use crate::spectrum::sensor::{balance_temperature, named_sensors, white_balance_rgb};
         let p = &e.params;
         let sensor = p.string("sensor")?.unwrap_or_else(|| "cie1931".into());
         let at = p.named("sensor").map_or(e.name_span, |x| x.value_span);
-        if sensor != "cie1931" {
-            if !NAMED_SENSORS.contains(&sensor.as_str()) {
-                let known: Vec<&str> = std::iter::once("cie1931").chain(NAMED_SENSORS).collect();
-                return Err(Diagnostic::error(at, super::names::unknown("sensor", &sensor, &known)));
-            }
-            notes.push((at, format!("sensor \"{sensor}\""), Approx::Sensor));
+        if sensor != "cie1931" && !named_sensors().any(|n| n == sensor) {
+            let known: Vec<&str> = std::iter::once("cie1931").chain(named_sensors()).collect();
+            return Err(Diagnostic::error(at, super::names::unknown("sensor", &sensor, &known)));
         }
         let kelvin = balance_temperature(&sensor, values::float(p, "whitebalance", 0.0, Range::NonNegative)?);
         if kelvin == 0.0 {
-            return Ok(None);
+            return Ok((None, None));
         }
         let m = white_balance_rgb(kelvin as f64, space);
-        if m.iter().flatten().all(|v| v.is_finite()) {
-            return Ok(Some(m));
+        if !m.iter().flatten().all(|v| v.is_finite()) {
+            // DEVIATION(pbrt): robustness. Below about 30 K a blackbody's visible light
+            // underflows; pbrt-v4 then balances by a white of 0/0 and writes NaN pixels.
+            let at = p.named("whitebalance").map_or(e.name_span, |x| x.value_span);
+            let why = format!("\"whitebalance\" {kelvin} K: light that cold has no visible colour to balance");
+            return Err(Diagnostic::error(at, why));
         }
-        // DEVIATION(pbrt): robustness. Below about 30 K a blackbody's visible light
-        // underflows; pbrt-v4 then balances by a white of 0/0 and writes NaN pixels.
-        let at = p.named("whitebalance").map_or(e.name_span, |x| x.value_span);
-        Err(Diagnostic::error(
-            at,
-            format!("\"whitebalance\" {kelvin} K: light that cold has no visible colour to balance"),
-        ))
+        if sensor == "cie1931" {
+            return Ok((Some(m), None));
+        }
+        if !self.spectral {
+            notes.push((at, format!("sensor \"{sensor}\""), Approx::Sensor));
+            return Ok((Some(m), None));
+        }
+        Ok((None, CameraSensor::named(&sensor, kelvin as f64, space)))
     }
 
     /// pbrt-v4 stops when `shutterclose` is not after `shutteropen` (the film's exposure

@@ -14,8 +14,9 @@
 //! checkpoints, shards and merges stay RGB.
 
 use super::cie;
-use super::colorspace::ColorSpaceName;
+use super::colorspace::{ColorSpaceName, mul, mul_vec};
 use super::sampled::{N_SAMPLES, SampledWavelengths};
+use super::sensor::CameraSensor;
 use super::sigmoid::{RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbUnboundedSpectrum};
 use glam::{DVec3, Vec3};
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -78,20 +79,27 @@ impl PassSpectrum {
     // (0, ⅓ and ⅔ are each other's lanes); base 3 scaled to [0, ⅓) left white light a
     // colour cast of 3% at 16 passes and 1.6% at 64, against 0.25% at both by this
     // sequence (unit test below).
-    pub fn for_pass(space: ColorSpaceName, pass: u32) -> PassSpectrum {
+    pub fn for_pass(space: ColorSpaceName, sensor: Option<&CameraSensor>, pass: u32) -> PassSpectrum {
         let u = radical_inverse_2(pass);
-        PassSpectrum::of(space, SampledWavelengths::sample_visible(u))
+        PassSpectrum::of(space, sensor, SampledWavelengths::sample_visible(u))
     }
 
-    pub fn of(space: ColorSpaceName, w: SampledWavelengths) -> PassSpectrum {
-        let m = space.rgb_from_xyz();
+    /// The lanes at wavelengths `w`, recorded by the CIE observer or by a camera's
+    /// curves and matrix (pbrt-v4's `PixelSensor::ToSensorRGB`, then its
+    /// `XYZFromSensorRGB`).
+    pub fn of(space: ColorSpaceName, sensor: Option<&CameraSensor>, w: SampledWavelengths) -> PassSpectrum {
+        let m = match sensor {
+            None => space.rgb_from_xyz(),
+            Some(s) => mul(&space.rgb_from_xyz(), &s.xyz_from_sensor),
+        };
         let norm = N_SAMPLES as f64 * cie::y_integral();
         let to_rgb = std::array::from_fn(|i| {
             if w.pdf[i] <= 0.0 {
                 return [0.0; 3];
             }
-            let xyz = cie::cmf_at(w.lambda[i] as f64).map(|c| c / (w.pdf[i] as f64 * norm));
-            super::colorspace::mul_vec(&m, xyz).map(|c| c as f32)
+            let lambda = w.lambda[i] as f64;
+            let seen = sensor.map_or_else(|| cie::cmf_at(lambda), |s| s.response(lambda));
+            mul_vec(&m, seen.map(|c| c / (w.pdf[i] as f64 * norm))).map(|c| c as f32)
         });
         PassSpectrum { space, lambda: w.lambda, to_rgb }
     }
@@ -158,19 +166,20 @@ pub fn radical_inverse_2(i: u32) -> f32 {
 #[derive(Debug)]
 pub struct PassCell {
     space: ColorSpaceName,
+    sensor: Option<CameraSensor>,
     bits: [AtomicU32; 2 * N_SAMPLES + 3 * N_SAMPLES],
 }
 
 impl PassCell {
-    pub fn new(space: ColorSpaceName) -> PassCell {
-        let cell = PassCell { space, bits: std::array::from_fn(|_| AtomicU32::new(0)) };
+    pub fn new(space: ColorSpaceName, sensor: Option<CameraSensor>) -> PassCell {
+        let cell = PassCell { space, sensor, bits: std::array::from_fn(|_| AtomicU32::new(0)) };
         cell.begin(0);
         cell
     }
 
     /// Sets pass `pass`'s wavelengths.
     pub fn begin(&self, pass: u32) {
-        let p = PassSpectrum::for_pass(self.space, pass);
+        let p = PassSpectrum::for_pass(self.space, self.sensor.as_ref(), pass);
         let values = p.lambda.iter().chain(p.to_rgb.iter().flatten());
         for (slot, v) in self.bits.iter().zip(values) {
             slot.store(v.to_bits(), Ordering::Relaxed);
@@ -203,7 +212,7 @@ mod tests {
         let n = 3000;
         let mut sum = DVec3::ZERO;
         for k in 0..n {
-            let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, k);
+            let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, None, k);
             sum += p.to_rgb((p.illuminant(Vec3::ONE) * 0.5).as_dvec3());
         }
         let mean = sum / n as f64;
@@ -216,7 +225,7 @@ mod tests {
         let rgb = Vec3::new(0.7, 0.3, 0.1);
         let mut sum = DVec3::ZERO;
         for k in 0..n {
-            let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, k);
+            let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, None, k);
             sum += p.to_rgb((p.illuminant(Vec3::ONE) * p.albedo(rgb)).as_dvec3());
         }
         let mean = sum / n as f64;
@@ -225,9 +234,9 @@ mod tests {
 
     #[test]
     fn the_cell_returns_what_was_set() {
-        let cell = PassCell::new(ColorSpaceName::Srgb);
+        let cell = PassCell::new(ColorSpaceName::Srgb, None);
         cell.begin(7);
-        assert_eq!(cell.get(), PassSpectrum::for_pass(ColorSpaceName::Srgb, 7));
+        assert_eq!(cell.get(), PassSpectrum::for_pass(ColorSpaceName::Srgb, None, 7));
         assert_eq!(radical_inverse_2(1), 0.5);
         assert_eq!(radical_inverse_2(6), 0.375);
     }
@@ -240,7 +249,7 @@ mod tests {
             let (mut white, mut red) = (DVec3::ZERO, DVec3::ZERO);
             let rgb = Vec3::new(0.9, 0.15, 0.1);
             for i in 0..k {
-                let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, i);
+                let p = PassSpectrum::for_pass(ColorSpaceName::Srgb, None, i);
                 white += p.to_rgb(p.illuminant(Vec3::ONE).as_dvec3()) / k as f64;
                 red += p.to_rgb((p.illuminant(Vec3::ONE) * p.albedo(rgb)).as_dvec3()) / k as f64;
             }
