@@ -2,6 +2,7 @@
 //! named glasses disperse, and pbrt-v3's files stay in RGB.
 
 use crate::common::{load_file, report, root, scene};
+use pbrt_sppm::imageio::read_image;
 use pbrt_sppm::integrators::vcm::Techniques;
 use pbrt_sppm::integrators::{Algorithm, RenderSettings, render};
 use pbrt_sppm::render::RenderScene;
@@ -46,6 +47,10 @@ fn centroids(w: usize, pixels: &[[f32; 3]]) -> [[f64; 2]; 3] {
 fn a_glass_prism_throws_a_rainbow_with_blue_bent_most() {
     let mut prism = load_file(&root().join("pbrt-scenes/v4/prism.pbrt")).expect("loads");
     assert!(prism.spectral, "a pbrt-v4 file renders spectrally");
+    // pbrt-v4's own image (1024 passes): where its rainbow's red and blue land.
+    let reference = read_image(&root().join("tests/data/pbrt-ref/v4-prism.exr")).expect("the reference");
+    let [ref_red, _, ref_blue] = centroids(reference.width, &reference.pixels);
+    eprintln!("prism (pbrt-v4): red centroid {ref_red:?}, blue {ref_blue:?}");
     let mut spots = Vec::new();
     for algorithm in [Algorithm::Sppm, Algorithm::Vcm(Techniques::All)] {
         let (w, _, pixels) = image_with(&prism, 16, algorithm);
@@ -56,6 +61,16 @@ fn a_glass_prism_throws_a_rainbow_with_blue_bent_most() {
         eprintln!("prism ({algorithm:?}): red centroid {red:?}, blue {blue:?}: {spread:.1} pixels apart");
         assert!(spread > 8.0, "{algorithm:?}: the rainbow's blue lies {spread:.1} pixels right of its red");
         assert!((blue[1] - red[1]).abs() < 3.0, "{algorithm:?}: along the rainbow, not across it");
+        for (ours, theirs, colour) in [(red, ref_red, "red"), (blue, ref_blue, "blue")] {
+            let off = ((ours[0] - theirs[0]).powi(2) + (ours[1] - theirs[1]).powi(2)).sqrt();
+            assert!(off < 1.0, "{algorithm:?}: {colour} at {ours:?}, pbrt-v4's at {theirs:?}");
+        }
+        // The rainbow's colours: each channel's light in the spot's window.
+        let (ours, theirs) = (spot_rgb(&pixels), spot_rgb(&reference.pixels));
+        eprintln!("prism ({algorithm:?}): spot RGB {ours:?}, pbrt-v4's {theirs:?}");
+        for c in 0..3 {
+            assert!((ours[c] / theirs[c] - 1.0).abs() < 0.05, "{algorithm:?}: spot {ours:?}, pbrt-v4's {theirs:?}");
+        }
         spots.push(spot_power(&pixels));
     }
     // In RGB (one index for all colours) the spot is white: one centroid. Splitting
@@ -75,8 +90,13 @@ fn a_glass_prism_throws_a_rainbow_with_blue_bent_most() {
 /// The light in the window of the image around the floor's spot (160 × 120 pixels;
 /// the rainbow spans x 25–55 along y 75).
 fn spot_power(pixels: &[[f32; 3]]) -> f64 {
+    spot_rgb(pixels).iter().sum()
+}
+
+/// Each channel's light in that window.
+fn spot_rgb(pixels: &[[f32; 3]]) -> [f64; 3] {
     let inside = |i: &usize| (15..70).contains(&(i % 160)) && (60..90).contains(&(i / 160));
-    (0..pixels.len()).filter(inside).map(|i| pixels[i].iter().map(|&c| c as f64).sum::<f64>()).sum()
+    std::array::from_fn(|c| (0..pixels.len()).filter(inside).map(|i| pixels[i][c] as f64).sum())
 }
 
 #[test]
