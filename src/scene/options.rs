@@ -282,7 +282,12 @@ impl RenderOptions {
         let (white_balance, sensor) = if syntax == Syntax::V4 { self.sensor(e, space, notes)? } else { (None, None) };
         match e.name.as_str() {
             "image" | "rgb" => {}
-            "gbuffer" | "spectral" => notes.push((e.name_span, format!("Film \"{}\"", e.name), Approx::FilmType)),
+            // pbrt-v4's SPPM writes its own image of R, G and B whatever the film, as
+            // we do: only the other integrators' files lose the extra channels.
+            "gbuffer" | "spectral" if !self.asks_for_sppm() => {
+                notes.push((e.name_span, format!("Film \"{}\"", e.name), Approx::FilmType))
+            }
+            "gbuffer" | "spectral" => {}
             other => return Err(Diagnostic::error(e.name_span, format!("unknown film type \"{other}\""))),
         }
         let film = Film {
@@ -300,6 +305,11 @@ impl RenderOptions {
             filter: if syntax == Syntax::V4 { self.pixel_filter()? } else { None },
         };
         Ok((film, iso / 100.0))
+    }
+
+    /// Whether the file asks for SPPM (pbrt-v4's default is `volpath`).
+    fn asks_for_sppm(&self) -> bool {
+        self.integrator.as_ref().is_some_and(|e| e.name == "sppm")
     }
 
     /// pbrt-v4's pixel filter: the file's, or its default Gaussian.
