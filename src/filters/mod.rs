@@ -83,8 +83,10 @@ impl PixelFilter {
 
 /// The cumulative table of `f` over [−r, r] in ⌊32 r⌋ cells (at least one), each
 /// valued at its centre.
+// DEVIATION(pbrt): robustness. At most 4096 cells: pbrt-v4 allocates 32 r of them,
+// and a radius of 10⁹ exhausts memory.
 fn table(f: impl Fn(f32) -> f32, r: f32) -> Vec<f32> {
-    let n = ((32.0 * r) as usize).max(1);
+    let n = ((32.0 * r) as usize).clamp(1, 4096);
     let mut cdf = Vec::with_capacity(n + 1);
     let mut sum = 0.0f64;
     cdf.push(0.0);

@@ -841,7 +841,9 @@ fn direct_light(
     if scene.lights.is_empty() {
         return Vec3::ZERO;
     }
-    let Some((idx, weight)) = scene.direct_light_choice(sampler.get1d()) else { return Vec3::ZERO };
+    let Some((idx, weight)) = scene.direct_light_choice(sampler.get1d(), Some((si.p.0, si.n.0))) else {
+        return Vec3::ZERO;
+    };
     let light = &scene.lights[idx];
     let (u_light, u_bsdf, u_lobe) = (sampler.get2d(), sampler.get2d(), sampler.get1d());
     let ns = bsdf.shading_normal();

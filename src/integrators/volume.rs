@@ -111,7 +111,7 @@ pub fn direct_light(scene: &RenderScene, mp: &MediumPoint, sampler: &mut impl Sa
     if scene.lights.is_empty() {
         return Vec3::ZERO;
     }
-    let Some((idx, weight)) = scene.direct_light_choice(sampler.get1d()) else { return Vec3::ZERO };
+    let Some((idx, weight)) = scene.direct_light_choice(sampler.get1d(), None) else { return Vec3::ZERO };
     let light = &scene.lights[idx];
     let (u_light, u_phase) = (sampler.get2d(), sampler.get2d());
     let mut ld = Vec3::ZERO;

@@ -14,6 +14,7 @@
 //! area, as pbrt-v4 draws them. An image with `L` as well, or one that cannot be read, is
 //! an error, as in pbrt-v4.
 
+use super::bounds::LightBounds;
 use super::params::{emission, finite_image, power};
 use super::{Emission, LightSample};
 use crate::imageio::RgbImage;
@@ -158,6 +159,14 @@ impl AreaLight {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         let mean = mean_luminance(self.image.as_ref());
         luminance(self.l) as f64 * mean * self.area as f64 * std::f64::consts::PI * sides
+    }
+
+    /// Bounds for choosing lights: the emitter's box, shining every way.
+    // DEVIATION(pbrt): noise only. pbrt-v4 bounds the emitter's normals (a triangle's
+    // one normal); every direction is a looser bound, never a wrong one.
+    pub fn bounds(&self, shapes: &ShapeSet) -> LightBounds {
+        let b = shapes.piece_bounds(&self.emitter);
+        LightBounds { bounds: b, two_sided: self.two_sided, ..LightBounds::isotropic(b.min, self.power() as f32) }
     }
 
     /// The radiance the surface emits at (u, v).

@@ -12,6 +12,7 @@
 //! texel, and `power` scales I by the image's mean. Without an image (none named, or
 //! unreadable, which is noted) the light is the same every way, as pbrt-v3's.
 
+use super::bounds::LightBounds;
 use super::params::{LightContext, emission, finite_image, power};
 use super::{Emission, LightKind, LightSample};
 use crate::imageio::RgbImage;
@@ -163,6 +164,11 @@ impl GoniometricLight {
     #[inline]
     pub fn power(&self) -> f64 {
         4.0 * std::f64::consts::PI * (luminance(self.i) * self.mean) as f64
+    }
+
+    /// Bounds for choosing lights: an isotropic point light, as pbrt-v4 bounds it.
+    pub fn bounds(&self) -> LightBounds {
+        LightBounds::isotropic(self.p, self.power() as f32)
     }
 
     #[inline]

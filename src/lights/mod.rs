@@ -24,6 +24,8 @@
 //! `mitsuba`) and a light ready to sample; a variant in [`LightKind`] and [`Light`]; a
 //! line in [`REGISTRY`].
 
+pub mod bounds;
+pub mod choice;
 pub mod diffuse;
 pub mod distant;
 pub mod envmap;
@@ -202,6 +204,19 @@ impl Light {
             self,
             Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Projection(_) | Light::Distant(_)
         )
+    }
+
+    /// Bounds for choosing a light to light a point (pbrt-v4's `Light::Bounds`); `None`
+    /// for lights at infinity, which have none.
+    pub fn bounds(&self, shapes: &ShapeSet) -> Option<bounds::LightBounds> {
+        match self {
+            Light::Point(l) => Some(l.bounds()),
+            Light::Spot(l) => Some(l.bounds()),
+            Light::Goniometric(l) => Some(l.bounds()),
+            Light::Projection(l) => Some(l.bounds()),
+            Light::Area(l) => Some(l.bounds(shapes)),
+            Light::Distant(_) | Light::Infinite(_) => None,
+        }
     }
 
     /// Total emitted power, for choosing photon sources (luminance; in f64, so that a

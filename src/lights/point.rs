@@ -7,6 +7,7 @@
 //! pbrt-v3 adds `from` in world space after the CTM; pbrt-v4 transforms it by the CTM.
 //! v4's `power` (watts) sets I = power / 4π times the emission as read.
 
+use super::bounds::LightBounds;
 use super::params::{LightContext, emission, point3, power};
 use super::{Emission, LightKind, LightSample};
 use crate::math::{Point3, Ray, Vector3};
@@ -69,6 +70,11 @@ impl PointLight {
     #[inline]
     pub fn power(&self) -> f64 {
         4.0 * std::f64::consts::PI * luminance(self.i) as f64
+    }
+
+    /// Bounds for choosing lights (pbrt-v4's `PointLight::Bounds`).
+    pub fn bounds(&self) -> LightBounds {
+        LightBounds::isotropic(self.p, self.power() as f32)
     }
 
     #[inline]

@@ -12,6 +12,7 @@
 //! over the solid angle it covers. Without a readable image (v3) the light is a
 //! uniform rectangle of `I`; pbrt-v4 requires the image.
 
+use super::bounds::LightBounds;
 use super::params::{LightContext, emission, finite_image, power};
 use super::{Emission, LightKind, LightSample};
 use crate::imageio::RgbImage;
@@ -190,6 +191,12 @@ impl ProjectionLight {
             img.pixels.iter().map(|p| luminance(Vec3::from(*p))).sum::<f32>() / img.pixels.len().max(1) as f32
         });
         (luminance(self.d.i) * mean) as f64 * 2.0 * std::f64::consts::PI * (1.0 - self.cos_total) as f64
+    }
+
+    /// Bounds for choosing lights: its axis, with light out to the image's corners.
+    pub fn bounds(&self) -> LightBounds {
+        let point = LightBounds::isotropic(self.p, self.power() as f32);
+        LightBounds { w: self.frame[2], cos_theta_o: 1.0, cos_theta_e: self.cos_total, ..point }
     }
 
     #[inline]

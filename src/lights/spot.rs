@@ -8,6 +8,7 @@
 //! between pbrt-v3's quartic falloff in cos θ or pbrt-v4's smoothstep. v4's `power`
 //! divides by the cone's effective solid angle.
 
+use super::bounds::LightBounds;
 use super::params::{LightContext, direction, emission, power};
 use super::{Emission, LightKind, LightSample};
 use crate::math::frame::coordinate_system;
@@ -122,6 +123,20 @@ impl SpotLight {
     #[inline]
     pub fn power(&self) -> f64 {
         luminance(self.i) as f64 * 2.0 * std::f64::consts::PI * (1.0 - 0.5 * (self.cos_start + self.cos_total)) as f64
+    }
+
+    /// Bounds for choosing lights (pbrt-v4's `SpotLight::Bounds`): its intensity over
+    /// the sphere, the full cone about its axis, the falloff band past it.
+    pub fn bounds(&self) -> LightBounds {
+        let band = self.cos_total.clamp(-1.0, 1.0).acos() - self.cos_start.clamp(-1.0, 1.0).acos();
+        let mut cos_theta_e = band.cos();
+        // pbrt-v4's slop: round-off in the importance must not shut a thin band.
+        if cos_theta_e == 1.0 && self.cos_total != self.cos_start {
+            cos_theta_e = 0.999;
+        }
+        let phi = 4.0 * std::f32::consts::PI * luminance(self.i);
+        let point = LightBounds::isotropic(self.p, phi);
+        LightBounds { w: self.frame[2], cos_theta_o: self.cos_start, cos_theta_e, ..point }
     }
 
     #[inline]

@@ -102,6 +102,15 @@ impl ShapeSet {
         }
     }
 
+    /// An emitting primitive's bounds.
+    pub fn piece_bounds(&self, piece: &Piece) -> Bounds3 {
+        match *piece {
+            Piece::Quadric { index, .. } => self.quadrics[index as usize].bounds(),
+            Piece::Triangle { mesh, tri, .. } => self.meshes[mesh as usize].triangle_bounds(tri as usize),
+            Piece::Patch { mesh, patch, .. } => self.patches[mesh as usize].patch_bounds(patch as usize),
+        }
+    }
+
     /// A primitive's intersection cost in triangle tests, for SAH.
     pub fn prim_cost(s: ShapeRef) -> f32 {
         match s {

@@ -304,8 +304,10 @@ fn smooth_and_rough_coats_and_mesh_power_match_pbrt_v4() {
     // pbrt-v4's SPPM reflects the disk light in the smooth coats (it follows the path
     // one bounce past the visible point), weighs the rough coat's layers its own way,
     // and gives each triangle of the emitting strip the whole `power`.
-    // A quarter of the scene's iterations: 2.02% when measured.
-    Check::sppm("v4-coat", 0.04, 4).assert();
+    // Half the scene's iterations: 1.8–3.2% over four seeds. (A quarter gave 2.1–4.5%
+    // whether lights were picked uniformly or, as now, by their bounds: too near the
+    // bound; the bounds lower relMSE there by 5%.)
+    Check::sppm("v4-coat", 0.04, 2).assert();
 }
 
 #[test]
