@@ -13,28 +13,11 @@ its source file (Apache-2.0), which must be given:
 
 The output is committed, so neither the build nor the tests need pbrt or Python.
 """
-import re
 import sys
 
+from pbrt_source import literal, table
+
 METALS = ["Ag", "Al", "Au", "Cu", "CuZn", "MgO", "TiO2"]
-
-
-def table(text, name):
-    m = re.search(r"const Float %s\[\] = \{(.*?)\};" % re.escape(name), text, re.S)
-    if not m:
-        sys.exit(f"{name}: not found")
-    values = [float(v) for v in re.findall(r"[-+]?\d+\.?\d*(?:[eE][-+]?\d+)?", m.group(1))]
-    if len(values) % 2:
-        sys.exit(f"{name}: an odd number of values")
-    pairs = list(zip(values[0::2], values[1::2]))
-    if any(b[0] <= a[0] for a, b in zip(pairs, pairs[1:])):
-        sys.exit(f"{name}: wavelengths do not increase")
-    return pairs
-
-
-def literal(v):
-    text = "%.9g" % v
-    return text if any(c in text for c in ".e") else text + ".0"
 
 
 def main():

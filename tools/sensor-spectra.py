@@ -19,9 +19,10 @@ The output is laid out by this tool (rustfmt skips it), six values to a line.
 
 The output is committed, so neither the build nor the tests need pbrt or Python.
 """
-import re
 import sys
 import warnings
+
+from pbrt_source import literal, table
 
 warnings.filterwarnings("ignore")
 import colour  # noqa: E402
@@ -47,22 +48,12 @@ CAMERAS = [
 ]
 
 
-def table(text, name):
-    m = re.search(r"const Float %s\[\] = \{(.*?)\};" % re.escape(name), text, re.S)
-    if not m:
-        sys.exit(f"{name}: not found")
-    values = [float(v) for v in re.findall(r"[-+]?\d+\.?\d*(?:[eE][-+]?\d+)?", m.group(1))]
-    if len(values) % 2:
-        sys.exit(f"{name}: an odd number of values")
-    pairs = list(zip(values[0::2], values[1::2]))
+def curve(text, name):
+    """A camera curve's values, checked to be sampled every 10 nm from 380 to 720 nm."""
+    pairs = table(text, name)
     if [l for l, _ in pairs] != [380.0 + 10.0 * i for i in range(35)]:
         sys.exit(f"{name}: not sampled every 10 nm from 380 to 720 nm")
     return [v for _, v in pairs]
-
-
-def literal(v):
-    text = "%.9g" % v
-    return text if any(c in text for c in ".e") else text + ".0"
 
 
 def rows(values, indent="        "):
@@ -80,7 +71,7 @@ def cameras(text):
     for camera in CAMERAS:
         out.append(f'    ("{camera}", [')
         for channel in "rgb":
-            out.append(f"        [\n{rows(table(text, f'{camera}_{channel}'), '            ')}\n        ],")
+            out.append(f"        [\n{rows(curve(text, f'{camera}_{channel}'), '            ')}\n        ],")
         out.append("    ]),")
     out.append("];\n")
     return out
