@@ -280,16 +280,7 @@ impl RenderOptions {
         values::ignored(p, &["maxsampleluminance", "maxcomponentvalue"], why, warn);
         let space = self.color_space.unwrap_or(ColorSpaceName::Srgb);
         let (white_balance, sensor) = if syntax == Syntax::V4 { self.sensor(e, space, notes)? } else { (None, None) };
-        match e.name.as_str() {
-            "image" | "rgb" => {}
-            // pbrt-v4's SPPM writes its own image of R, G and B whatever the film, as
-            // we do: only the other integrators' files lose the extra channels.
-            "gbuffer" | "spectral" if !self.asks_for_sppm() => {
-                notes.push((e.name_span, format!("Film \"{}\"", e.name), Approx::FilmType))
-            }
-            "gbuffer" | "spectral" => {}
-            other => return Err(Diagnostic::error(e.name_span, format!("unknown film type \"{other}\""))),
-        }
+        self.film_type(e, notes)?;
         let film = Film {
             ty: e.name.clone(),
             x_resolution: xres,
@@ -305,6 +296,21 @@ impl RenderOptions {
             filter: if syntax == Syntax::V4 { self.pixel_filter()? } else { None },
         };
         Ok((film, iso / 100.0))
+    }
+
+    /// Checks the film's type; `gbuffer` and `spectral` are written as `rgb`.
+    fn film_type(&self, e: &Entity, notes: &mut Notes) -> Res<()> {
+        match e.name.as_str() {
+            "image" | "rgb" => {}
+            // pbrt-v4's SPPM writes its own image of R, G and B whatever the film, as
+            // we do: only the other integrators' files lose the extra channels.
+            "gbuffer" | "spectral" if !self.asks_for_sppm() => {
+                notes.push((e.name_span, format!("Film \"{}\"", e.name), Approx::FilmType))
+            }
+            "gbuffer" | "spectral" => {}
+            other => return Err(Diagnostic::error(e.name_span, format!("unknown film type \"{other}\""))),
+        }
+        Ok(())
     }
 
     /// Whether the file asks for SPPM (pbrt-v4's default is `volpath`).

@@ -191,10 +191,21 @@ fn whitebalance_adapts_the_lights_white_as_pbrt_v4s_film_does() {
     let want = mul_vec(&white_balance_rgb(3000.0, ColorSpaceName::Srgb), plain);
     assert!((0..3).all(|k| (balanced[k] - want[k]).abs() < 1e-5 * want[1]), "{balanced:?} vs {want:?}");
     assert!(balanced[2] > 3.0 * balanced[0], "{balanced:?}");
-    // A camera balances to 6500 K unless told: D65 light then stays nearly grey, and
-    // its measured curves are noted as left out.
-    let s = scene("Film \"rgb\" \"string sensor\" \"nikon_d850\" WorldBegin");
-    assert!(s.film.white_balance.is_some());
+    // A named camera films the wavelengths through its curves and its fitted matrix,
+    // which holds its balance (6500 K unless told; `spectrum::sensor` tests it against
+    // pbrt-v4). Rendered in RGB it cannot: there it is the CIE observer, balanced the
+    // same, and noted.
+    let camera = "Film \"rgb\" \"string sensor\" \"nikon_d850\" WorldBegin";
+    let s = scene(camera);
+    assert!(s.film.sensor.is_some() && s.film.white_balance.is_none());
+    assert!(s.approximated.is_empty(), "{:?}", s.approximated);
+    let rgb = pbrt_sppm::scene::LoadOptions {
+        colour: Some(pbrt_sppm::spectrum::transport::Colour::Rgb),
+        ..Default::default()
+    };
+    let path = std::path::Path::new("tests/data/good/inline.pbrt");
+    let s = pbrt_sppm::scene::load_scene_from_bytes(path, camera.as_bytes().to_vec(), &rgb).unwrap();
+    assert!(s.film.sensor.is_none() && s.film.white_balance.is_some());
     assert!(s.approximated.iter().any(|a| a.what == "sensor \"nikon_d850\""), "{:?}", s.approximated);
     let err = crate::common::load("Film \"rgb\" \"string sensor\" \"nikon_d805\" WorldBegin").unwrap_err().to_string();
     assert!(err.contains("unknown sensor \"nikon_d805\" (did you mean \"nikon_d850\"?)"), "{err}");
