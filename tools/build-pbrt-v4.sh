@@ -3,7 +3,8 @@
 # whose CPU the ready-made ../shared/peers/pbrt-v4 does not run on (it was built with
 # AVX-512). An oracle for comparisons only: nothing in our build or tests needs it.
 #
-#   tools/build-pbrt-v4.sh OUT_DIR        # then OUT_DIR/build/pbrt
+#   tools/build-pbrt-v4.sh OUT_DIR        # then OUT_DIR/build/pbrt (about 10 minutes
+#                                         # on 2 cores)
 #
 # MIRROR (default /work/.mirror) holds bare snapshots named owner+repo/repo, as the
 # library's `fetch` makes them: mmp/pbrt-v4 and the submodules listed below. Needs
