@@ -70,6 +70,10 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
             "cropwindow": f.crop_window.map(f32_json),
             "pixelbounds": f.pixel_bounds,
             "scale": f32_json(f.scale),
+            // Extensions: the named camera whose curves film the wavelengths, and the
+            // pixel filter SPPM's camera rays follow (pbrt-v4; null: none).
+            "sensor": f.sensor.as_ref().map(|s| s.name),
+            "filter": f.filter.as_ref().map(|p| p.name.clone()),
         },
         "integrator": {
             "type": "sppm",
@@ -244,7 +248,10 @@ pub fn summary(s: &SceneDescription) -> String {
     let _ = writeln!(out, "syntax      {}", s.syntax.name());
     let colour = if s.spectral { "spectral (3 wavelengths per path)" } else { "RGB" };
     let _ = writeln!(out, "colour      {colour}, colour space {}", s.color_space.name());
-    let _ = writeln!(out, "film        {}x{} -> {}", s.film.x_resolution, s.film.y_resolution, s.film.filename);
+    let f = &s.film;
+    let sensor = f.sensor.as_ref().map(|c| format!(", sensor {}", c.name)).unwrap_or_default();
+    let filter = f.filter.as_ref().map(|p| format!(", filter {}", p.name)).unwrap_or_default();
+    let _ = writeln!(out, "film        {}x{} -> {}{sensor}{filter}", f.x_resolution, f.y_resolution, f.filename);
     let i = &s.integrator;
     let method = crate::integrators::Algorithm::by_default(i).name();
     let implied =

@@ -37,6 +37,8 @@ enum Axis {
 /// A filter's radius and how offsets are drawn within it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PixelFilter {
+    /// pbrt-v4's name for it.
+    pub name: String,
     radius: [f32; 2],
     axes: [Axis; 2],
 }
@@ -57,15 +59,15 @@ impl PixelFilter {
         ];
         let profile: Box<dyn Fn(f32, f32) -> f32> = match name {
             "box" if radius == [0.5, 0.5] => return Ok(None),
-            "box" => return Ok(Some(PixelFilter { radius, axes: [Axis::Uniform, Axis::Uniform] })),
-            "triangle" => return Ok(Some(PixelFilter { radius, axes: [Axis::Tent, Axis::Tent] })),
+            "box" => return Ok(Some(PixelFilter { name: name.into(), radius, axes: [Axis::Uniform, Axis::Uniform] })),
+            "triangle" => return Ok(Some(PixelFilter { name: name.into(), radius, axes: [Axis::Tent, Axis::Tent] })),
             "gaussian" => Box::new(gaussian::profile(p)?),
             "mitchell" => Box::new(mitchell::profile(p)?),
             "sinc" => Box::new(sinc::profile(p)?),
             _ => return Ok(None), // unknown names are refused where the file is read
         };
         let axes = radius.map(|r| Axis::Table(table(|x| profile(x, r).abs(), r)));
-        Ok(Some(PixelFilter { radius, axes }))
+        Ok(Some(PixelFilter { name: name.into(), radius, axes }))
     }
 
     /// An offset from the pixel's centre for the uniform numbers `u`.
@@ -164,7 +166,7 @@ mod tests {
         assert_eq!(filter("gaussian").radius, [1.5, 1.5]);
         assert_eq!(filter("sinc").radius, [4.0, 4.0]);
         assert_eq!(filter("mitchell").radius, [2.0, 2.0]);
-        let wide = PixelFilter { radius: [1.0, 2.0], axes: [Axis::Uniform, Axis::Uniform] };
+        let wide = PixelFilter { name: "box".into(), radius: [1.0, 2.0], axes: [Axis::Uniform, Axis::Uniform] };
         assert_eq!(wide.sample([0.0, 1.0]), [-1.0, 2.0]);
         assert_eq!(wide.sample([0.75, 0.5]), [0.5, 0.0]);
     }

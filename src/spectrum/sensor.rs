@@ -40,6 +40,8 @@ pub fn white_balance_rgb(kelvin: f64, space: ColorSpaceName) -> Matrix3 {
 /// pixels record of each wavelength, and the matrix that takes those to XYZ.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraSensor {
+    /// pbrt-v4's name for the camera.
+    pub name: &'static str,
     /// r̄, ḡ, b̄ at 360, 361, …, 830 nm (pbrt-v4 samples the curves densely and reads
     /// them at the nearest whole nanometre).
     curves: Arc<[[f64; 3]]>,
@@ -53,11 +55,11 @@ impl CameraSensor {
     /// Camera `name` balanced for light of `kelvin`, writing `space`; `None` for a name
     /// pbrt-v4 does not know.
     pub fn named(name: &str, kelvin: f64, space: ColorSpaceName) -> Option<CameraSensor> {
-        let (_, rgb) = CAMERAS.iter().find(|(n, _)| *n == name)?;
+        let (name, rgb) = CAMERAS.iter().find(|(n, _)| *n == name)?;
         let curves: Arc<[[f64; 3]]> =
             (0..DENSE).map(|i| rgb.map(|c| ten_nm(&c, 380.0, cie::LAMBDA_MIN + i as f64))).collect();
         let xyz_from_sensor = fit_to_chart(&curves, &daylight::std_illuminant(kelvin), space);
-        Some(CameraSensor { curves, xyz_from_sensor })
+        Some(CameraSensor { name, curves, xyz_from_sensor })
     }
 
     /// (r̄, ḡ, b̄) at `lambda` nm: the nearest whole nanometre's, zero outside 360–830.

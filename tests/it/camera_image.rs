@@ -199,6 +199,13 @@ fn whitebalance_adapts_the_lights_white_as_pbrt_v4s_film_does() {
     let s = scene(camera);
     assert!(s.film.sensor.is_some() && s.film.white_balance.is_none());
     assert!(s.approximated.is_empty(), "{:?}", s.approximated);
+    let r = crate::common::report(camera);
+    assert_eq!(
+        (&r["film"]["sensor"], &r["film"]["filter"]),
+        (&serde_json::json!("nikon_d850"), &serde_json::json!("gaussian"))
+    );
+    let summary = pbrt_sppm::cli::check::summary(&s);
+    assert!(summary.contains("sensor nikon_d850, filter gaussian"), "{summary}");
     let rgb = pbrt_sppm::scene::LoadOptions {
         colour: Some(pbrt_sppm::spectrum::transport::Colour::Rgb),
         ..Default::default()
