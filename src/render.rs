@@ -499,6 +499,12 @@ impl RenderScene {
         }
     }
 
+    /// Whether paths carry wavelengths (cheaper than reading the pass's, per bounce).
+    #[inline]
+    pub fn spectral(&self) -> bool {
+        self.spectral.is_some()
+    }
+
     /// The wavelengths of the pass under way, when the scene renders spectrally.
     #[inline]
     pub fn pass_spectrum(&self) -> Option<PassSpectrum> {

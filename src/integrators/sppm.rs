@@ -696,7 +696,7 @@ fn camera_path(
         let Some(s) = bsdf.sample_f(wo, sampler.get2d(), sampler.get1d(), TransportMode::Radiance) else { break };
         beta *= s.f * s.wi.dot(bsdf.shading_normal()).abs() / s.pdf;
         specular_bounce = s.specular;
-        let weight = if scene.pass_spectrum().is_some() { lanes_weight(beta, terminated) } else { luminance(beta) };
+        let weight = if scene.spectral() { lanes_weight(beta, terminated) } else { luminance(beta) };
         if !camera_roulette(&mut beta, weight, sampler) {
             break;
         }

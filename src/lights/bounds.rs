@@ -4,6 +4,7 @@
 //! sampler), so that a spot light aimed elsewhere, or a far light, is rarely tried.
 
 use crate::math::bounds::Bounds3;
+use crate::math::float::safe_sqrt;
 use glam::Vec3;
 
 /// A light's bounds (pbrt-v4's `LightBounds`).
@@ -24,7 +25,7 @@ pub struct LightBounds {
 impl LightBounds {
     /// A light at a point shining every way (a point or goniometric light).
     pub fn isotropic(p: Vec3, phi: f32) -> LightBounds {
-        let bounds = Bounds3 { min: p, max: p };
+        let bounds = Bounds3::new(p, p);
         LightBounds { bounds, w: Vec3::Z, phi, cos_theta_o: -1.0, cos_theta_e: 0.0, two_sided: false }
     }
 
@@ -33,9 +34,8 @@ impl LightBounds {
     /// left once every direction the bounds allow has been taken in the light's and the
     /// surface's favour; zero where no direction within them can light `p`.
     pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
-        let pc = 0.5 * (self.bounds.min + self.bounds.max);
-        let diagonal = (self.bounds.max - self.bounds.min).length();
-        let d2 = p.distance_squared(pc).max(0.5 * diagonal);
+        let pc = self.bounds.centroid();
+        let d2 = p.distance_squared(pc).max(0.5 * self.bounds.diagonal().length());
         let wi = (p - pc).normalize_or_zero();
         let mut cos_w = self.w.dot(wi);
         if self.two_sided {
@@ -70,14 +70,10 @@ fn sin_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
     if cos_a > cos_b { 0.0 } else { sin_a * cos_b - cos_a * sin_b }
 }
 
-fn safe_sqrt(x: f32) -> f32 {
-    x.max(0.0).sqrt()
-}
-
 /// The cosine of the half angle of the cone from `p` that holds the bounds' bounding
 /// sphere; −1 (every direction) from inside it.
 fn subtended_cos(b: &Bounds3, p: Vec3) -> f32 {
-    let centre = 0.5 * (b.min + b.max);
+    let centre = b.centroid();
     let r2 = centre.distance_squared(b.max);
     let d2 = p.distance_squared(centre);
     if d2 < r2 {

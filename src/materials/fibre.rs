@@ -6,6 +6,7 @@
 
 use super::microfacet::fr_dielectric;
 use super::transport::TransportMode;
+use crate::math::float::safe_sqrt;
 use crate::spectrum::Rgb;
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -31,10 +32,6 @@ pub struct HairBxdf {
 
 fn sqr(x: f32) -> f32 {
     x * x
-}
-
-fn safe_sqrt(x: f32) -> f32 {
-    x.max(0.0).sqrt()
 }
 
 fn safe_asin(x: f32) -> f32 {

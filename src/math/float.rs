@@ -14,6 +14,12 @@ pub const fn gamma(n: i32) -> f32 {
     (n as f32 * MACHINE_EPSILON) / (1.0 - n as f32 * MACHINE_EPSILON)
 }
 
+/// √x, with x below 0 (round-off under a difference of squares) taken as 0.
+#[inline]
+pub fn safe_sqrt(x: f32) -> f32 {
+    x.max(0.0).sqrt()
+}
+
 /// γ(n) for f64 arithmetic.
 pub const fn gamma64(n: i32) -> f64 {
     let e = f64::EPSILON * 0.5;

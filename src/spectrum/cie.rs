@@ -15,12 +15,14 @@ pub fn y_integral() -> f64 {
 /// (x̄, ȳ, z̄) at `lambda`, as pbrt-v4's densely sampled spectra answer: the value at
 /// the nearest whole nanometre, zero outside 360–830 nm.
 pub fn cmf_at(lambda: f64) -> [f64; 3] {
+    nearest_nm(lambda).map_or([0.0; 3], |i| [CIE_X[i], CIE_Y[i], CIE_Z[i]])
+}
+
+/// The index of the whole nanometre nearest `lambda` in a 1 nm table from 360 to
+/// 830 nm; `None` outside it.
+pub fn nearest_nm(lambda: f64) -> Option<usize> {
     let i = lambda.round() - LAMBDA_MIN;
-    if !(0.0..=(LAMBDA_MAX - LAMBDA_MIN)).contains(&i) {
-        return [0.0; 3];
-    }
-    let i = i as usize;
-    [CIE_X[i], CIE_Y[i], CIE_Z[i]]
+    (0.0..=(LAMBDA_MAX - LAMBDA_MIN)).contains(&i).then_some(i as usize)
 }
 
 /// A table of 5 nm steps from `first` nm at `lambda`, interpolated linearly; zero

@@ -64,11 +64,7 @@ impl CameraSensor {
 
     /// (r̄, ḡ, b̄) at `lambda` nm: the nearest whole nanometre's, zero outside 360–830.
     pub fn response(&self, lambda: f64) -> [f64; 3] {
-        let i = lambda.round() - cie::LAMBDA_MIN;
-        if !(0.0..DENSE as f64).contains(&i) {
-            return [0.0; 3];
-        }
-        self.curves[i as usize]
+        cie::nearest_nm(lambda).map_or([0.0; 3], |i| self.curves[i])
     }
 }
 
