@@ -50,6 +50,9 @@ pub struct Camera {
     /// Screen window [x0, x1, y0, y1] and the full film resolution.
     window: [f32; 4],
     resolution: [f32; 2],
+    /// How far past the film's edge a ray may start (a pixel filter's radius less half
+    /// a pixel), so that light tracing reaches what the edge pixels' rays see.
+    margin: [f64; 2],
     tan_half_fov: f32,
     lens_radius: f32,
     focal_distance: f32,
@@ -79,6 +82,7 @@ impl Camera {
             }),
             window: desc.screen_window,
             resolution: [film.x_resolution as f32, film.y_resolution as f32],
+            margin: film.filter.as_ref().map_or([0.0; 2], |f| f.radius().map(|r| (r as f64 - 0.5).max(0.0))),
             tan_half_fov: (desc.fov.to_radians() / 2.0).tan(),
             lens_radius: desc.lens_radius,
             focal_distance: desc.focal_distance,
@@ -248,15 +252,15 @@ impl Camera {
         Some(CameraSample { wi, we, pdf, p_lens, raster })
     }
 
-    /// The raster position of a camera-space point in front of the lens, if on the film.
+    /// The raster position of a camera-space point in front of the lens, if on the film
+    /// or within the filter's margin of it (pbrt-v4's `SampleBounds`).
     fn raster(&self, p: DVec3) -> Option<[f32; 2]> {
         let [x0, x1, y0, y1] = self.window.map(f64::from);
         let t = self.tan_half_fov as f64;
         let (sx, sy) = (p.x / p.z / t, p.y / p.z / t);
         let r = [(sx - x0) / (x1 - x0) * self.resolution[0] as f64, (y1 - sy) / (y1 - y0) * self.resolution[1] as f64];
-        let inside =
-            (0.0..=self.resolution[0] as f64).contains(&r[0]) && (0.0..=self.resolution[1] as f64).contains(&r[1]);
-        inside.then(|| r.map(|x| x as f32))
+        let within = |k: usize| (-self.margin[k]..=self.resolution[k] as f64 + self.margin[k]).contains(&r[k]);
+        (within(0) && within(1)).then(|| r.map(|x| x as f32))
     }
 }
 

@@ -14,8 +14,12 @@
 //! Box and triangle are sampled exactly, the others as pbrt-v4's `FilterSampler`
 //! does: |f| tabulated at 32 cells per unit of radius, constant within a cell. Every
 //! filter pbrt-v4 has is separable, so the two axes are drawn apart. pbrt-v3's SPPM
-//! starts its rays uniformly in the pixel whatever the filter, and so do vcm and bdpt
-//! here (their light-tracing splats would need the same blur).
+//! starts its rays uniformly in the pixel whatever the filter.
+//!
+//! vcm and bdpt draw their camera rays the same way for pbrt-v4's files and spread
+//! each light-tracing splat over the pixels within the radius, weighted by the density
+//! those pixels' rays are drawn with ([`PixelFilter::density`]); so both estimate the
+//! image blurred by |f|, as pbrt-v4's path tracers blur it by f.
 
 mod gaussian;
 mod mitchell;
@@ -68,6 +72,34 @@ impl PixelFilter {
         };
         let axes = radius.map(|r| Axis::Table(table(|x| profile(x, r).abs(), r)));
         Ok(Some(PixelFilter { name: name.into(), radius, axes }))
+    }
+
+    /// How far the filter reaches from a pixel's centre, in pixels.
+    pub fn radius(&self) -> [f32; 2] {
+        self.radius
+    }
+
+    /// The density [`Self::sample`] draws offset `d` with: |f(d)| / ∫|f| as tabulated
+    /// (0 beyond the radius). Light tracing weighs its splats by it, so that what it
+    /// adds to a pixel is what the pixel's own rays would have found.
+    pub fn density(&self, d: [f32; 2]) -> f32 {
+        (0..2)
+            .map(|k| {
+                let (r, x) = (self.radius[k], d[k]);
+                if x.abs() >= r {
+                    return 0.0;
+                }
+                match &self.axes[k] {
+                    Axis::Uniform => 0.5 / r,
+                    Axis::Tent => (r - x.abs()) / (r * r),
+                    Axis::Table(cdf) => {
+                        let n = cdf.len() - 1;
+                        let i = (((x + r) / (2.0 * r) * n as f32) as usize).min(n - 1);
+                        (cdf[i + 1] - cdf[i]) * n as f32 / (2.0 * r)
+                    }
+                }
+            })
+            .product()
     }
 
     /// An offset from the pixel's centre for the uniform numbers `u`.
@@ -156,6 +188,33 @@ mod tests {
             for (b, got) in h.iter().enumerate() {
                 let want: f64 = w[b * fine / bins..(b + 1) * fine / bins].iter().sum::<f64>() / total;
                 assert!((got - want).abs() < 0.002 + 0.01 * want, "{name} bin {b}: {got} vs {want}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_density_is_what_offsets_are_drawn_with() {
+        // It integrates to 1 over the filter's square, and its x marginal gives each
+        // bin of a histogram of the offsets its share.
+        let wide_box = PixelFilter { name: "box".into(), radius: [1.0, 2.0], axes: [Axis::Uniform, Axis::Uniform] };
+        for f in ["gaussian", "mitchell", "sinc", "triangle"].map(filter).into_iter().chain([wide_box]) {
+            let [rx, ry] = f.radius;
+            let n = 256;
+            let at = |k: usize, r: f32, n: usize| -r + 2.0 * r * (k as f32 + 0.5) / n as f32;
+            // ∫ density(x, y) dy by the midpoint rule.
+            let marginal = |x: f32| {
+                (0..n).map(|j| f.density([x, at(j, ry, n)]) as f64).sum::<f64>() * (2.0 * ry) as f64 / n as f64
+            };
+            let total = (0..n).map(|i| marginal(at(i, rx, n))).sum::<f64>() * (2.0 * rx) as f64 / n as f64;
+            assert!((total - 1.0).abs() < 2e-3, "{}: {total}", f.name);
+            let bins = 16;
+            for (b, got) in histogram(&f, bins).iter().enumerate() {
+                let sub = 32;
+                let lo = -rx + 2.0 * rx * b as f32 / bins as f32;
+                let width = 2.0 * rx / bins as f32;
+                let want = (0..sub).map(|k| marginal(lo + width * (k as f32 + 0.5) / sub as f32)).sum::<f64>()
+                    * (width / sub as f32) as f64;
+                assert!((got - want).abs() < 0.002 + 0.01 * want, "{} bin {b}: {got} vs {want}", f.name);
             }
         }
     }

@@ -597,19 +597,19 @@ pub(super) fn surface(
     Surface::PassedThrough
 }
 
-/// The camera ray through a point drawn in `pixel` (two 2D samples: film, lens), or
-/// `filtered`, about it by the film's pixel filter (pbrt-v4's SPPM), with its
-/// differentials scaled by `diff_scale` when the scene's shading reads them.
+/// The camera ray through a point drawn in `pixel` (two 2D samples: film, lens), about
+/// it by the film's pixel filter when it has one (pbrt-v4's), with its differentials
+/// scaled by `diff_scale` when the scene's shading reads them.
 pub(super) fn camera_ray(
     scene: &RenderScene,
-    (pixel, filtered): ([f32; 2], bool),
+    pixel: [f32; 2],
     sampler: &mut impl Sampler,
     diff_scale: f32,
     time: Option<f32>,
 ) -> (crate::math::Ray, Option<crate::math::ray::RayDifferential>, f32) {
     let u = sampler.get2d();
-    let p_film = match (filtered, &scene.film.filter) {
-        (true, Some(f)) => {
+    let p_film = match &scene.film.filter {
+        Some(f) => {
             let d = f.sample(u);
             [pixel[0] + 0.5 + d[0], pixel[1] + 0.5 + d[1]]
         }
@@ -637,7 +637,7 @@ fn camera_path(
     (diff_scale, time): (f32, Option<f32>),
     mut beams: Option<&mut Vec<Beam>>,
 ) -> (Rgb, Option<VisiblePoint>) {
-    let (mut ray, mut diff, weight) = camera_ray(scene, (pixel, true), sampler, diff_scale, time);
+    let (mut ray, mut diff, weight) = camera_ray(scene, pixel, sampler, diff_scale, time);
     if weight == 0.0 {
         return (Vec3::ZERO, None);
     }

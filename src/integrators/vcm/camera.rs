@@ -148,7 +148,7 @@ impl Cameras<'_> {
     /// vacuum), which the pixel may average with more rays'.
     fn path(&self, i: usize, pixel: [f32; 2], s: &mut impl Sampler) -> (PixelSample, Rgb) {
         let (pass, scene) = (self.pass, self.pass.scene);
-        let (mut ray, mut diff, weight) = camera_ray(scene, (pixel, false), s, self.differential_scale, self.pass.time);
+        let (mut ray, mut diff, weight) = camera_ray(scene, pixel, s, self.differential_scale, self.pass.time);
         let mut out = PixelSample::default();
         if weight == 0.0 {
             return (out, Vec3::ZERO);

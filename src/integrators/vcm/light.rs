@@ -376,7 +376,10 @@ fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> O
 fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Vec<(u32, Rgb)>) {
     let scene = pass.scene;
     let Some(cs) = scene.camera.sample_wi(v.place.p, s.get2d(), v.place.time) else { return };
-    let Some(pixel) = pass.pixel_index(cs.raster) else { return };
+    let pixel = pass.pixel_index(cs.raster);
+    if pixel.is_none() && scene.film.filter.is_none() {
+        return;
+    }
     let e = v.at.eval(v.wo, cs.wi, TransportMode::Importance);
     if e.f == Vec3::ZERO || cs.pdf <= 0.0 {
         return;
@@ -393,8 +396,13 @@ fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Ve
         return;
     }
     let c = c * vertex::visible(scene, &v.place, cs.p_lens, s);
-    if c != Vec3::ZERO {
-        splats.push((pixel, c));
+    if c == Vec3::ZERO {
+        return;
+    }
+    match (&scene.film.filter, pixel) {
+        (Some(f), _) => splats.extend(pass.footprint(cs.raster, f).map(|(pixel, w)| (pixel, c * w))),
+        (None, Some(pixel)) => splats.push((pixel, c)),
+        (None, None) => {}
     }
 }
 

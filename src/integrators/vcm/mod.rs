@@ -33,6 +33,7 @@ use super::error::RenderError;
 use super::grid::{Grid, Grouped, Site};
 use super::passes;
 use super::sppm::{PixelState, Stats};
+use crate::filters::PixelFilter;
 use crate::render::RenderScene;
 use crate::sampling::SamplerKind;
 use crate::scene::Film;
@@ -170,6 +171,27 @@ impl Pass<'_> {
     }
 
     /// The index in the rendered window of the pixel holding a raster point, if any.
+    /// The pixels of the window whose filtered rays reach `raster`, each with the
+    /// density its rays are drawn there with (see [`crate::filters`]).
+    pub fn footprint<'f>(&self, raster: [f32; 2], f: &'f PixelFilter) -> impl Iterator<Item = (u32, f32)> + 'f {
+        let [rx, ry] = f.radius();
+        let span = |c: f32, r: f32, lo: u32, n: usize| {
+            let first = ((c - 0.5 - r).floor() as i64).max(lo as i64);
+            let last = ((c - 0.5 + r).ceil() as i64).min(lo as i64 + n as i64 - 1);
+            first..=last
+        };
+        let (xs, ys) =
+            (span(raster[0], rx, self.origin.0, self.size.0), span(raster[1], ry, self.origin.1, self.size.1));
+        let (origin, width) = (self.origin, self.size.0);
+        ys.flat_map(move |y| xs.clone().map(move |x| (x, y)))
+            .map(move |(x, y)| {
+                let w = f.density([raster[0] - (x as f32 + 0.5), raster[1] - (y as f32 + 0.5)]);
+                let i = (y - origin.1 as i64) as usize * width + (x - origin.0 as i64) as usize;
+                (i as u32, w)
+            })
+            .filter(|&(_, w)| w > 0.0)
+    }
+
     pub fn pixel_index(&self, raster: [f32; 2]) -> Option<u32> {
         let (x, y) = (raster[0].floor(), raster[1].floor());
         let (x, y) = (x as i64 - self.origin.0 as i64, y as i64 - self.origin.1 as i64);

@@ -124,7 +124,7 @@ impl Cameras<'_> {
     /// Without `escapes`, only emitters hit count (the probes').
     fn prefix_light(&self, pixel: [f32; 2], s: &mut impl Sampler, work: &mut Work, escapes: bool) -> (Rgb, bool) {
         let (pass, scene) = (self.pass, self.pass.scene);
-        let (mut ray, mut diff, weight) = camera_ray(scene, (pixel, false), s, self.differential_scale, pass.time);
+        let (mut ray, mut diff, weight) = camera_ray(scene, pixel, s, self.differential_scale, pass.time);
         let (mut found, mut specular) = (Vec3::ZERO, false);
         if weight == 0.0 || scene.camera_medium.is_some() {
             return (found, specular);
