@@ -206,6 +206,7 @@ impl Job {
             full: img.full,
             world_to_camera: img.meta.world_to_camera,
             sums,
+            buckets: out.buckets.clone(),
         };
         part.write(path)
     }

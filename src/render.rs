@@ -18,6 +18,7 @@ use crate::scene::{
     AlphaRule, AreaLightDesc, Film, Integrator, MaterialKind, MixRule, SceneDescription, ShapeAlpha, TexValue,
 };
 use crate::shapes::ShapeSample;
+use crate::spectrum::sampled::Draw;
 use crate::spectrum::transport::{PassCell, PassSpectrum};
 use crate::spectrum::{EmissionSpectrum, Rgb};
 use glam::{DVec3, Vec3};
@@ -227,7 +228,10 @@ impl RenderScene {
             world_shape_media,
             object_shape_media,
             light_media,
-            spectral: scene.spectral.then(|| PassCell::new(scene.color_space, scene.film.sensor.clone())),
+            spectral: scene.spectral.then(|| {
+                let draw = scene.film.buckets.map_or(Draw::Visible, |b| b.draw());
+                PassCell::new(scene.color_space, scene.film.sensor.clone(), draw)
+            }),
             dispersive: scene.spectral && scene.materials.iter().any(|m| m.kind.disperses()),
         }
     }

@@ -67,12 +67,23 @@ pub struct ImageMeta {
     pub software: Option<String>,
 }
 
+/// Channels written after R, G and B: a spectral film's buckets.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bands {
+    /// Channel names (`S0.374,688nm`), in wavelength order.
+    pub names: Vec<String>,
+    /// Per pixel, one value per name.
+    pub values: Vec<f32>,
+}
+
 /// An RGB image: the data window of a larger display window.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RgbImage {
     pub width: usize,
     pub height: usize,
     pub pixels: Vec<[f32; 3]>,
+    /// A spectral film's buckets (EXR only; pbrt-v4's spectral layout).
+    pub bands: Option<Bands>,
     /// Top-left corner of the data window in the display window.
     pub origin: (i32, i32),
     /// Size of the display window (the full resolution).
@@ -87,6 +98,7 @@ impl RgbImage {
             width,
             height,
             pixels: vec![[0.0; 3]; width * height],
+            bands: None,
             origin: (0, 0),
             full: (width, height),
             meta: ImageMeta::default(),
@@ -168,6 +180,14 @@ fn write_exr_as(path: &Path, img: &RgbImage, half: bool) -> Res<()> {
     }
     let (w, pixels, size, full) = (img.width, &img.pixels, (img.width, img.height), img.full);
     let fail = |e: exr::error::Error| ImageError::write(path, e);
+    if let Some(bands) = &img.bands {
+        put("spectralLayoutVersion", AttributeValue::Text(Text::from("1.0")));
+        put("emissiveUnits", AttributeValue::Text(Text::from("W.m^-2.sr^-1")));
+        let layer = Layer::new(size, attrs, Encoding::SMALL_LOSSLESS, spectral_channels(pixels, bands));
+        let mut image = Image::from_layer(layer);
+        image.attributes.display_window = IntegerBounds::new((0, 0), full);
+        return atomically(path, |tmp| image.write().to_file(tmp).map_err(fail));
+    }
     if half {
         let h = |v: f32| exr::prelude::f16::from_f32(v);
         let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| pixels[y * w + x].map(h).into());
@@ -179,6 +199,52 @@ fn write_exr_as(path: &Path, img: &RgbImage, half: bool) -> Res<()> {
     let mut image = Image::from_layer(Layer::new(size, attrs, Encoding::SMALL_LOSSLESS, channels));
     image.attributes.display_window = IntegerBounds::new((0, 0), full);
     atomically(path, |tmp| image.write().to_file(tmp).map_err(fail))
+}
+
+/// R, G, B and a spectral film's buckets, as 32-bit floats.
+fn spectral_channels(pixels: &[[f32; 3]], bands: &Bands) -> AnyChannels<FlatSamples> {
+    let n = bands.names.len();
+    let rgb = ["R", "G", "B"].into_iter().enumerate().map(|(c, name)| (name, pixels.iter().map(|p| p[c]).collect()));
+    let buckets =
+        bands.names.iter().enumerate().map(|(b, name)| {
+            (name.as_str(), bands.values.iter().skip(b).step_by(n.max(1)).copied().collect::<Vec<f32>>())
+        });
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> =
+        rgb.chain(buckets).map(|(name, v)| AnyChannel::new(name, FlatSamples::F32(v))).collect();
+    AnyChannels::sort(list)
+}
+
+/// A spectral film's buckets in an EXR (channels `S0.<λ>nm`, in wavelength order), or
+/// `None` when it has none.
+pub fn read_bands(path: &Path) -> Res<Option<Bands>> {
+    let bytes = std::fs::read(path).map_err(|e| ImageError::read(path, e))?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| ImageError::read(path, e))?;
+    let list = &image.layer_data.channel_data.list;
+    let nm = |c: &AnyChannel<FlatSamples>| -> Option<f64> {
+        let name = c.name.to_string();
+        name.strip_prefix("S0.")?.strip_suffix("nm")?.replace(',', ".").parse().ok()
+    };
+    let mut found: Vec<(f64, &AnyChannel<FlatSamples>)> = list.iter().filter_map(|c| Some((nm(c)?, c))).collect();
+    if found.is_empty() {
+        return Ok(None);
+    }
+    found.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let n = found.len();
+    let pixels = found[0].1.sample_data.len();
+    let mut values = vec![0f32; pixels * n];
+    for (b, (_, c)) in found.iter().enumerate() {
+        for (i, v) in c.sample_data.values_as_f32().enumerate() {
+            values[i * n + b] = v;
+        }
+    }
+    Ok(Some(Bands { names: found.iter().map(|(_, c)| c.name.to_string()).collect(), values }))
 }
 
 /// The sRGB transfer curve.
@@ -272,6 +338,7 @@ fn decode_exr(bytes: &[u8]) -> Res<RgbImage> {
         width: layer.size.width(),
         height: layer.size.height(),
         pixels: layer.channel_data.pixels.1.clone(),
+        bands: None,
         origin: (a.layer_position.x() - display.position.x(), a.layer_position.y() - display.position.y()),
         full: (display.size.width(), display.size.height()),
         meta: ImageMeta {
@@ -294,7 +361,7 @@ fn decode_png(bytes: &[u8]) -> Res<RgbImage> {
         image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(ImageError::decode)?.to_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     let pixels = img.pixels().map(|p| p.0.map(from_srgb)).collect();
-    Ok(RgbImage { width: w, height: h, pixels, origin: (0, 0), full: (w, h), meta: ImageMeta::default() })
+    Ok(RgbImage { width: w, height: h, pixels, bands: None, origin: (0, 0), full: (w, h), meta: ImageMeta::default() })
 }
 
 /// `image` with the values its file stores: PNGs are read sRGB-decoded, so they are

@@ -5,7 +5,8 @@
 //! pbrt-sppm render scene.pbrt --checkpoint scene.ckpt --checkpoint-every 5m
 //! pbrt-sppm render scene.pbrt --resume scene.ckpt      # after a crash or Ctrl-C
 //! ```
-//! What is saved: per pixel the radius, N, τ and the summed direct light (f64, as held);
+//! What is saved: per pixel the radius, N, τ and the summed direct light (f64, as held)
+//! and a spectral film's bucket sums;
 //! the iterations done, the seconds spent, the statistics and `ERRORS.csv` rows so far;
 //! the adaptive photon chains. Camera and photon numbers are functions of (seed, pixel
 //! or photon, iteration), so no sampler state is needed beyond the chains'.
@@ -16,7 +17,8 @@
 //!
 //! The file: a text line `pbrt-sppm checkpoint 1`, a little-endian u64 length and a
 //! JSON header of that length, the pixels (8 little-endian f64 each: radius, N, Ld,
-//! τ), and the 64-bit XXH3 of everything before it, so that a torn or damaged file is
+//! τ), a spectral film's bucket sums (f64, as many as the header's `bucket_sums`), and
+//! the 64-bit XXH3 of everything before it, so that a torn or damaged file is
 //! refused rather than resumed.
 
 use super::adaptive::Chain;
@@ -166,11 +168,17 @@ pub struct Checkpoint {
     #[serde(skip)]
     pub pixels: Vec<PixelState>,
     pub chains: Option<Vec<Chain>>,
+    /// A spectral film's bucket sums (vcm and bdpt), after the pixels in the file; the
+    /// header's `bucket_sums` says how many (none in files written before them).
+    #[serde(skip)]
+    pub buckets: Vec<f64>,
 }
 
 impl Checkpoint {
     fn to_bytes(&self) -> Result<Vec<u8>, CheckpointError> {
-        let json = serde_json::to_vec(self).map_err(CheckpointError::Encode)?;
+        let mut header = serde_json::to_value(self).map_err(CheckpointError::Encode)?;
+        header["bucket_sums"] = self.buckets.len().into();
+        let json = serde_json::to_vec(&header).map_err(CheckpointError::Encode)?;
         let mut out = Vec::with_capacity(MAGIC.len() + 16 + json.len() + self.pixels.len() * PIXEL_BYTES);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&(json.len() as u64).to_le_bytes());
@@ -179,6 +187,9 @@ impl Checkpoint {
             for v in [p.radius, p.n, p.ld[0], p.ld[1], p.ld[2], p.tau[0], p.tau[1], p.tau[2]] {
                 out.extend_from_slice(&v.to_le_bytes());
             }
+        }
+        for v in &self.buckets {
+            out.extend_from_slice(&v.to_le_bytes());
         }
         let sum = xxhash_rust::xxh3::xxh3_64(&out);
         out.extend_from_slice(&sum.to_le_bytes());
@@ -196,11 +207,20 @@ impl Checkpoint {
         let (len, rest) = body.split_at_checked(8).ok_or(Damaged)?;
         let len = usize::try_from(u64::from_le_bytes(len.try_into().map_err(|_| Damaged)?)).map_err(|_| Damaged)?;
         let (json, pixels) = rest.split_at_checked(len).ok_or(Damaged)?;
-        let mut c: Checkpoint = serde_json::from_slice(json).map_err(CheckpointError::Header)?;
+        let header: serde_json::Value = serde_json::from_slice(json).map_err(CheckpointError::Header)?;
+        let bucket_sums = header.get("bucket_sums").and_then(|v| v.as_u64()).unwrap_or(0);
+        let mut c: Checkpoint = serde_json::from_value(header).map_err(CheckpointError::Header)?;
+        let cut = usize::try_from(bucket_sums)
+            .ok()
+            .and_then(|n| n.checked_mul(8))
+            .and_then(|n| pixels.len().checked_sub(n))
+            .ok_or(Damaged)?;
+        let (pixels, buckets) = pixels.split_at(cut);
         if !pixels.len().is_multiple_of(PIXEL_BYTES) {
             return Err(Damaged);
         }
         let f = |c: &[u8], k: usize| f64::from_le_bytes(c[8 * k..8 * k + 8].try_into().unwrap_or([0; 8]));
+        c.buckets = buckets.chunks_exact(8).map(|b| f(b, 0)).collect();
         c.pixels = pixels
             .chunks_exact(PIXEL_BYTES)
             .map(|c| {
@@ -264,6 +284,7 @@ mod tests {
             }],
             pixels: (0..5).map(px).collect(),
             chains: Some(Chain::new_set(3)),
+            buckets: vec![0.5, -1e-300, 7.0],
         }
     }
 
@@ -272,6 +293,7 @@ mod tests {
         let c = sample();
         let back = Checkpoint::from_bytes(&c.to_bytes().unwrap()).unwrap();
         assert_eq!(back.pixels, c.pixels);
+        assert_eq!(back.buckets, c.buckets);
         assert_eq!(back.errors, c.errors);
         assert_eq!((back.iteration, back.seconds, back.stats.camera_rays), (7, 1.25, 99));
         assert_eq!(back.fingerprint, c.fingerprint);

@@ -123,6 +123,14 @@ impl<'a> Engine<'a> {
         }
     }
 
+    /// A spectral film's buckets (vcm and bdpt; pbrt-v4's SPPM writes R, G, B only).
+    pub fn bands(&self) -> Option<crate::imageio::Bands> {
+        match self {
+            Engine::Sppm(_) => None,
+            Engine::Vcm(v) => v.bands(),
+        }
+    }
+
     /// The sum of the passes' estimates (independent passes and every VCM render).
     pub fn pass_sums(&self) -> Vec<DVec3> {
         match self {
@@ -135,6 +143,27 @@ impl<'a> Engine<'a> {
         match self {
             Engine::Sppm(s) => s.save(),
             Engine::Vcm(v) => (v.save(), None),
+        }
+    }
+
+    /// A spectral film's bucket sums, as a checkpoint saves them.
+    pub fn save_buckets(&self) -> Vec<f64> {
+        self.bucket_totals().map_or_else(Vec::new, |t| t.sums)
+    }
+
+    /// A spectral film's bucket sums and layout (vcm and bdpt).
+    pub fn bucket_totals(&self) -> Option<super::buckets::BucketTotals> {
+        match self {
+            Engine::Sppm(_) => None,
+            Engine::Vcm(v) => v.bucket_totals(),
+        }
+    }
+
+    pub fn restore_buckets(&mut self, saved: &[f64]) -> Result<(), RenderError> {
+        match self {
+            Engine::Sppm(_) if saved.is_empty() => Ok(()),
+            Engine::Sppm(_) => Err(RenderError::CheckpointBuckets { saved: saved.len(), film: 0 }),
+            Engine::Vcm(v) => v.restore_buckets(saved),
         }
     }
 

@@ -35,6 +35,8 @@ pub enum RenderError {
     CheckpointPixels { saved: usize, film: usize },
     #[error("the checkpoint's photon sampling differs from this run's")]
     CheckpointSampling,
+    #[error("the checkpoint holds {saved} spectral bucket sums, the film {film}")]
+    CheckpointBuckets { saved: usize, film: usize },
     // DEVIATION(pbrt): robustness. pbrt writes such pixels as Inf.
     #[error(
         "pixel ({}, {}) is {value:?}, beyond the range of 32-bit floats: lower the lights or the Film's \"scale\"",

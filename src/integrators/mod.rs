@@ -8,6 +8,7 @@
 
 pub mod adaptive;
 pub mod beams;
+pub mod buckets;
 pub mod checkpoint;
 pub mod completed;
 pub mod engine;

@@ -22,9 +22,11 @@
 //! `0..N` (an error unless gaps are allowed) and passes given twice (always an error,
 //! except the same passes in identical files, which count once), and averages.
 
+use super::buckets::BucketTotals;
 use super::checkpoint::Fingerprint;
 use super::passes::PassSet;
 use crate::imageio::{ImageError, ImageMeta, RgbImage, atomically};
+use crate::spectrum::buckets::Buckets;
 use exr::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -55,6 +57,8 @@ pub enum PartError {
 }
 
 const VERSION: &str = "1";
+/// The header's text naming a spectral film's buckets: `count lambdamin lambdamax`.
+const BUCKETS: &str = "spectralBuckets";
 /// Channel names, in the order EXR stores them (sorted).
 const CHANNELS: [&str; 6] = ["B", "G", "R", "lo.B", "lo.G", "lo.R"];
 
@@ -76,6 +80,8 @@ pub struct Part {
     pub world_to_camera: Option<[f32; 16]>,
     /// Per pixel, the sum of the passes' estimates.
     pub sums: Vec<[f64; 3]>,
+    /// A spectral film's bucket sums.
+    pub buckets: Option<BucketTotals>,
 }
 
 impl Part {
@@ -92,6 +98,7 @@ impl Part {
             width: self.width,
             height: self.height,
             pixels: self.sums.iter().map(|s| s.map(|c| (c / k) as f32)).collect(),
+            bands: self.buckets.as_ref().map(|b| b.bands(self.passes.ranges().iter().flat_map(|r| r.clone()))),
             origin: self.origin,
             full: self.full,
             meta: ImageMeta {
@@ -141,8 +148,15 @@ impl Part {
         for (k, v) in entries {
             attrs.other.insert(Text::from(k), v);
         }
-        let channels: SmallVec<[AnyChannel<FlatSamples>; 4]> =
+        if let Some(b) = &self.buckets {
+            let l = b.layout;
+            attrs
+                .other
+                .insert(Text::from(BUCKETS), text(&format!("{} {:?} {:?}", l.count, l.lambda_min, l.lambda_max)));
+        }
+        let mut channels: SmallVec<[AnyChannel<FlatSamples>; 4]> =
             CHANNELS.iter().map(|name| AnyChannel::new(*name, FlatSamples::F32(self.channel(name)))).collect();
+        channels.extend(self.bucket_channels());
         let layer = Layer::new((self.width, self.height), attrs, Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels));
         let mut image = Image::from_layer(layer);
         image.attributes.display_window = IntegerBounds::new((0, 0), self.full);
@@ -158,6 +172,24 @@ impl Part {
         };
         let lo = name.starts_with("lo.");
         self.sums.iter().map(|s| if lo { (s[c] - s[c] as f32 as f64) as f32 } else { s[c] as f32 }).collect()
+    }
+
+    /// Each bucket's channel (its sums' nearest f32) and `lo.` channel (what is left).
+    fn bucket_channels(&self) -> Vec<AnyChannel<FlatSamples>> {
+        let Some(b) = &self.buckets else { return Vec::new() };
+        let n = b.layout.count;
+        let column = |k: usize| b.sums.iter().skip(k).step_by(n);
+        (0..n)
+            .flat_map(|k| {
+                let name = b.layout.channel(k);
+                let hi = column(k).map(|&s| s as f32).collect();
+                let lo = column(k).map(|&s| (s - s as f32 as f64) as f32).collect();
+                [
+                    AnyChannel::new(name.as_str(), FlatSamples::F32(hi)),
+                    AnyChannel::new(format!("lo.{name}").as_str(), FlatSamples::F32(lo)),
+                ]
+            })
+            .collect()
     }
 
     pub fn read(path: &Path) -> Res<Part> {
@@ -219,6 +251,10 @@ fn decode(bytes: &[u8]) -> std::result::Result<Part, String> {
         full: (display.size.width(), display.size.height()),
         world_to_camera: a.world_to_camera,
         sums: sums(&layer.channel_data.list, w * h)?,
+        buckets: match text(BUCKETS) {
+            Ok(layout) => Some(bucket_sums(&layer.channel_data.list, &layout, w * h)?),
+            Err(_) => None,
+        },
     };
     match text("sceneFingerprint")? {
         f if f == part.scene_fingerprint() => Ok(part),
@@ -226,15 +262,41 @@ fn decode(bytes: &[u8]) -> std::result::Result<Part, String> {
     }
 }
 
+/// A spectral film's bucket sums from the header's layout and their channels.
+fn bucket_sums(list: &[AnyChannel<FlatSamples>], layout: &str, n: usize) -> std::result::Result<BucketTotals, String> {
+    let bad = || format!("bad \"{BUCKETS}\": {layout}");
+    let words: Vec<&str> = layout.split_whitespace().collect();
+    let (count, lambda_min, lambda_max) = match words.as_slice() {
+        [c, lo, hi] => (c.parse().map_err(|_| bad())?, lo.parse().map_err(|_| bad())?, hi.parse().map_err(|_| bad())?),
+        _ => return Err(bad()),
+    };
+    let layout = Buckets { count, lambda_min, lambda_max };
+    if count == 0 || count > list.len() {
+        return Err(bad());
+    }
+    let mut sums = vec![0.0; n * count];
+    for k in 0..count {
+        let name = layout.channel(k);
+        let (hi, lo) = (channel(list, &name, n)?, channel(list, &format!("lo.{name}"), n)?);
+        for i in 0..n {
+            sums[i * count + k] = hi[i] as f64 + lo[i] as f64;
+        }
+    }
+    Ok(BucketTotals { layout, sums })
+}
+
+/// A channel of `n` 32-bit floats.
+fn channel<'a>(list: &'a [AnyChannel<FlatSamples>], name: &str, n: usize) -> std::result::Result<&'a Vec<f32>, String> {
+    match list.iter().find(|c| c.name == *name).map(|c| &c.sample_data) {
+        Some(FlatSamples::F32(v)) if v.len() == n => Ok(v),
+        Some(_) => Err(format!("channel \"{name}\" is not 32-bit float")),
+        None => Err(format!("channel \"{name}\" is missing")),
+    }
+}
+
 /// The f64 sums from the six channels.
 fn sums(list: &[AnyChannel<FlatSamples>], n: usize) -> std::result::Result<Vec<[f64; 3]>, String> {
-    let get = |name: &str| -> std::result::Result<&Vec<f32>, String> {
-        match list.iter().find(|c| c.name == *name).map(|c| &c.sample_data) {
-            Some(FlatSamples::F32(v)) if v.len() == n => Ok(v),
-            Some(_) => Err(format!("channel \"{name}\" is not 32-bit float")),
-            None => Err(format!("channel \"{name}\" is missing")),
-        }
-    };
+    let get = |name: &str| channel(list, name, n);
     let [b, g, r, lb, lg, lr] = [
         get(CHANNELS[0])?,
         get(CHANNELS[1])?,
@@ -306,6 +368,9 @@ impl Merger {
             None => {
                 let total = &mut self.base.1;
                 total.sums.iter_mut().zip(&part.sums).for_each(|(s, v)| (0..3).for_each(|c| s[c] += v[c]));
+                if let (Some(t), Some(b)) = (&mut total.buckets, &part.buckets) {
+                    t.sums.iter_mut().zip(&b.sums).for_each(|(s, v)| *s += v);
+                }
                 total.passes = total.passes.union(&part.passes);
                 total.photons += part.photons;
                 total.seconds += part.seconds;
@@ -331,6 +396,9 @@ impl Merger {
 fn belongs(a: &Part, b: &Part) -> std::result::Result<(), String> {
     a.fingerprint.check(&b.fingerprint).map_err(|e| e.to_string())?;
     b.fingerprint.check(&a.fingerprint).map_err(|e| e.to_string())?;
+    if a.buckets.as_ref().map(|t| t.layout) != b.buckets.as_ref().map(|t| t.layout) {
+        return Err("its spectral buckets differ".into());
+    }
     if (a.width, a.height, a.origin, a.full) != (b.width, b.height, b.origin, b.full) {
         return Err(format!(
             "its image is {}x{} at {:?}, not {}x{} at {:?}",

@@ -81,6 +81,8 @@ pub struct RenderOutput {
     /// With independent passes, the sum of the passes' estimates per pixel (see
     /// [`super::sppm::Sppm::pass_sums`]).
     pub pass_sums: Option<Vec<[f64; 3]>>,
+    /// A spectral film's bucket sums over the passes.
+    pub buckets: Option<super::buckets::BucketTotals>,
 }
 
 /// The loop's bookkeeping beside the SPPM state.
@@ -132,6 +134,7 @@ pub fn run(
             return Err(RenderError::CheckpointOutside { at: c.iteration, range: plan.range.clone() });
         }
         engine.restore(c.iteration, &c.pixels, c.chains, c.stats)?;
+        engine.restore_buckets(&c.buckets)?;
         (progress.prior, progress.errors, progress.saved.0) = (c.seconds, c.errors, c.iteration);
     }
     let mut took = None;
@@ -169,7 +172,8 @@ pub fn run(
     let independent = plan.passes.is_independent() || plan.algorithm != Algorithm::Sppm;
     let pass_sums = independent.then(|| engine.pass_sums().iter().map(|s| s.to_array()).collect());
     let stats = engine.stats().clone();
-    Ok(RenderOutput { image, stats, errors: progress.errors, seconds, interrupted, passes, pass_sums })
+    let buckets = engine.bucket_totals();
+    Ok(RenderOutput { image, stats, errors: progress.errors, seconds, interrupted, passes, pass_sums, buckets })
 }
 
 /// An iteration at least this long (seconds) is shown in tev while it runs.
@@ -311,6 +315,7 @@ fn image(engine: &Engine, photons: u64, seconds: f64) -> RgbImage {
         width: (x1 - x0) as usize,
         height: (y1 - y0) as usize,
         pixels: engine.image(),
+        bands: engine.bands(),
         origin: (x0 as i32, y0 as i32),
         full: (scene.film.x_resolution as usize, scene.film.y_resolution as usize),
         meta: ImageMeta {
@@ -335,6 +340,7 @@ fn save(engine: &Engine, target: &CheckpointTarget, progress: &mut Progress, qui
         errors: progress.errors.clone(),
         pixels,
         chains,
+        buckets: engine.save_buckets(),
     };
     match c.write(&target.path) {
         Ok(()) => (progress.saved, progress.save_failed) = ((engine.iteration(), Instant::now()), false),

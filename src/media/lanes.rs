@@ -136,7 +136,7 @@ mod tests {
                 let p = PassSpectrum::of(
                     ColorSpaceName::Srgb,
                     None,
-                    crate::spectrum::sampled::SampledWavelengths::sample_uniform(k as f32 / 471.0),
+                    crate::spectrum::sampled::SampledWavelengths::sample_uniform(k as f32 / 471.0, 360.0, 830.0),
                 );
                 let v = s.at(Some(&p));
                 assert!(v.max_element() <= b * (1.0 + 1e-5), "{rgb}: {v} above {b}");

@@ -22,6 +22,7 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamType;
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
+use crate::spectrum::buckets::Buckets;
 use crate::spectrum::colorspace::{ColorSpaceName, Matrix3};
 use crate::spectrum::sensor::CameraSensor;
 use glam::DMat4;
@@ -116,6 +117,9 @@ pub struct Film {
     /// pbrt-v4's pixel filter, which blurs its SPPM image (none: rays start uniformly
     /// in the pixel, as pbrt-v3's SPPM starts them).
     pub filter: Option<PixelFilter>,
+    /// A `spectral` film's wavelength buckets, written beside R, G, B (paths that
+    /// carry wavelengths, rendered by vcm or bdpt).
+    pub buckets: Option<Buckets>,
 }
 
 impl Film {
@@ -275,12 +279,12 @@ impl RenderOptions {
         let iso = values::float(p, "iso", 100.0, Range::Positive)?;
         // Output format and spectral-film details: nothing in the pixel values changes.
         let diagonal_mm = values::float(p, "diagonal", 35.0, Range::Positive)?;
-        values::no_effect(p, &["savefp16", "coordinatesystem", "buckets", "lambdamin", "lambdamax"]);
+        values::no_effect(p, &["savefp16", "coordinatesystem"]);
         let why = "pixel values are not clamped";
         values::ignored(p, &["maxsampleluminance", "maxcomponentvalue"], why, warn);
         let space = self.color_space.unwrap_or(ColorSpaceName::Srgb);
         let (white_balance, sensor) = if syntax == Syntax::V4 { self.sensor(e, space, notes)? } else { (None, None) };
-        self.film_type(e, notes)?;
+        let buckets = self.film_type(e, notes)?;
         let film = Film {
             ty: e.name.clone(),
             x_resolution: xres,
@@ -294,23 +298,30 @@ impl RenderOptions {
             white_balance,
             sensor,
             filter: if syntax == Syntax::V4 { self.pixel_filter()? } else { None },
+            buckets,
         };
         Ok((film, iso / 100.0))
     }
 
-    /// Checks the film's type; `gbuffer` and `spectral` are written as `rgb`.
-    fn film_type(&self, e: &Entity, notes: &mut Notes) -> Res<()> {
-        match e.name.as_str() {
-            "image" | "rgb" => {}
-            // pbrt-v4's SPPM writes its own image of R, G and B whatever the film, as
-            // we do: only the other integrators' files lose the extra channels.
-            "gbuffer" | "spectral" if !self.asks_for_sppm() => {
-                notes.push((e.name_span, format!("Film \"{}\"", e.name), Approx::FilmType))
-            }
-            "gbuffer" | "spectral" => {}
+    /// Checks the film's type; a `spectral` film's buckets when they are written.
+    /// `gbuffer` is written as `rgb`.
+    fn film_type(&self, e: &Entity, notes: &mut Notes) -> Res<Option<Buckets>> {
+        let layout = match e.name.as_str() {
+            "image" | "rgb" => return Ok(None),
+            "spectral" => spectral_buckets(e)?,
+            // pbrt-v4's SPPM writes its own image of R, G and B for this film, as we
+            // do: only the other integrators' files lose the extra channels.
+            "gbuffer" if self.asks_for_sppm() => return Ok(None),
+            "gbuffer" => Buckets::DEFAULT,
             other => return Err(Diagnostic::error(e.name_span, format!("unknown film type \"{other}\""))),
+        };
+        // DEVIATION(pbrt): robustness. pbrt-v4's SPPM stops on a spectral film
+        // ("ToOutputRGB() is unimplemented"); we write its R, G and B.
+        if e.name == "gbuffer" || self.asks_for_sppm() || !self.spectral {
+            notes.push((e.name_span, format!("Film \"{}\"", e.name), Approx::FilmType));
+            return Ok(None);
         }
-        Ok(())
+        Ok(Some(layout))
     }
 
     /// Whether the file asks for SPPM (pbrt-v4's default is `volpath`).
@@ -619,4 +630,27 @@ fn name_of_limit(param: &str) -> &'static str {
 
 fn err_at(p: Option<&crate::parser::params::Param>, e: &Entity, msg: String) -> Diagnostic {
     Diagnostic::error(p.map_or(e.name_span, |p| p.value_span), msg)
+}
+
+/// A `spectral` film's `nbuckets`, `lambdamin` and `lambdamax`, checked as pbrt-v4
+/// checks them (its wavelengths lie within 360–830 nm).
+fn spectral_buckets(e: &Entity) -> Res<Buckets> {
+    let (p, d) = (&e.params, Buckets::DEFAULT);
+    let param_error =
+        |name: &str, why: String| Diagnostic::error(p.named(name).map_or(e.name_span, |x| x.value_span), why);
+    let count = match p.int("nbuckets")? {
+        None => d.count,
+        Some(n) if n >= 1 => n as usize,
+        Some(n) => return Err(param_error("nbuckets", format!("\"nbuckets\" must be at least 1, not {n}"))),
+    };
+    let lo = values::float(p, "lambdamin", d.lambda_min, Range::Any)?;
+    let hi = values::float(p, "lambdamax", d.lambda_max, Range::Any)?;
+    if lo < d.lambda_min || hi > d.lambda_max {
+        let why = format!("wavelengths {lo}–{hi} nm reach beyond the 360–830 nm that pbrt-v4 renders");
+        return Err(param_error(if lo < d.lambda_min { "lambdamin" } else { "lambdamax" }, why));
+    }
+    if lo >= hi {
+        return Err(param_error("lambdamax", format!("\"lambdamax\" {hi} is not above \"lambdamin\" {lo}")));
+    }
+    Ok(Buckets { count, lambda_min: lo, lambda_max: hi })
 }

@@ -19,6 +19,7 @@
 
 use glam::Vec3;
 
+pub mod buckets;
 pub mod cie;
 pub mod colorspace;
 pub mod daylight;

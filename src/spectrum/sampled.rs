@@ -95,9 +95,9 @@ impl SampledWavelengths {
         Self { lambda, pdf: lambda.map(visible_wavelength_pdf) }
     }
 
-    /// [`N_SAMPLES`] wavelengths spread evenly from one uniform number, each of density 1/470.
-    pub fn sample_uniform(u: f32) -> Self {
-        let (lo, hi) = (cie::LAMBDA_MIN as f32, cie::LAMBDA_MAX as f32);
+    /// [`N_SAMPLES`] wavelengths spread evenly over `lo`..`hi` nm from one uniform
+    /// number, each of density 1/(hi − lo) (pbrt-v4's `SampleUniform`).
+    pub fn sample_uniform(u: f32, lo: f32, hi: f32) -> Self {
         let delta = (hi - lo) / N_SAMPLES as f32;
         let mut lambda = [lo + u * (hi - lo); N_SAMPLES];
         for i in 1..N_SAMPLES {
@@ -145,6 +145,24 @@ impl SampledWavelengths {
             }
         }
         xyz.map(|c| c / N_SAMPLES as f32)
+    }
+}
+
+/// How passes draw their wavelengths: by visible importance over 360–830 nm (pbrt-v4's
+/// `rgb` and `gbuffer` films), or evenly over a `spectral` film's range (so that each
+/// of its buckets holds a plain mean).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Draw {
+    Visible,
+    Uniform { lo: f32, hi: f32 },
+}
+
+impl Draw {
+    pub fn sample(self, u: f32) -> SampledWavelengths {
+        match self {
+            Draw::Visible => SampledWavelengths::sample_visible(u),
+            Draw::Uniform { lo, hi } => SampledWavelengths::sample_uniform(u, lo, hi),
+        }
     }
 }
 

@@ -15,7 +15,7 @@
 
 use super::cie;
 use super::colorspace::{ColorSpaceName, mul, mul_vec};
-use super::sampled::{N_SAMPLES, SampledWavelengths};
+use super::sampled::{Draw, N_SAMPLES, SampledWavelengths};
 use super::sensor::CameraSensor;
 use super::sigmoid::{RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbUnboundedSpectrum};
 use glam::{DVec3, Vec3};
@@ -80,8 +80,7 @@ impl PassSpectrum {
     // colour cast of 3% at 16 passes and 1.6% at 64, against 0.25% at both by this
     // sequence (unit test below).
     pub fn for_pass(space: ColorSpaceName, sensor: Option<&CameraSensor>, pass: u32) -> PassSpectrum {
-        let u = radical_inverse_2(pass);
-        PassSpectrum::of(space, sensor, SampledWavelengths::sample_visible(u))
+        PassSpectrum::of(space, sensor, pass_wavelengths(Draw::Visible, pass))
     }
 
     /// The lanes at wavelengths `w`, recorded by the CIE observer or by a camera's
@@ -154,6 +153,11 @@ impl PassSpectrum {
     }
 }
 
+/// The wavelengths of pass `pass` drawn as `draw` says (see [`PassSpectrum::for_pass`]).
+pub fn pass_wavelengths(draw: Draw, pass: u32) -> SampledWavelengths {
+    draw.sample(radical_inverse_2(pass))
+}
+
 /// The van der Corput sequence: `i`'s bits mirrored about the binary point.
 pub fn radical_inverse_2(i: u32) -> f32 {
     (i.reverse_bits() as f64 / 4_294_967_296.0) as f32
@@ -167,19 +171,20 @@ pub fn radical_inverse_2(i: u32) -> f32 {
 pub struct PassCell {
     space: ColorSpaceName,
     sensor: Option<CameraSensor>,
+    draw: Draw,
     bits: [AtomicU32; 2 * N_SAMPLES + 3 * N_SAMPLES],
 }
 
 impl PassCell {
-    pub fn new(space: ColorSpaceName, sensor: Option<CameraSensor>) -> PassCell {
-        let cell = PassCell { space, sensor, bits: std::array::from_fn(|_| AtomicU32::new(0)) };
+    pub fn new(space: ColorSpaceName, sensor: Option<CameraSensor>, draw: Draw) -> PassCell {
+        let cell = PassCell { space, sensor, draw, bits: std::array::from_fn(|_| AtomicU32::new(0)) };
         cell.begin(0);
         cell
     }
 
     /// Sets pass `pass`'s wavelengths.
     pub fn begin(&self, pass: u32) {
-        let p = PassSpectrum::for_pass(self.space, self.sensor.as_ref(), pass);
+        let p = PassSpectrum::of(self.space, self.sensor.as_ref(), pass_wavelengths(self.draw, pass));
         let values = p.lambda.iter().chain(p.to_rgb.iter().flatten());
         for (slot, v) in self.bits.iter().zip(values) {
             slot.store(v.to_bits(), Ordering::Relaxed);
@@ -234,7 +239,7 @@ mod tests {
 
     #[test]
     fn the_cell_returns_what_was_set() {
-        let cell = PassCell::new(ColorSpaceName::Srgb, None);
+        let cell = PassCell::new(ColorSpaceName::Srgb, None, Draw::Visible);
         cell.begin(7);
         assert_eq!(cell.get(), PassSpectrum::for_pass(ColorSpaceName::Srgb, None, 7));
         assert_eq!(radical_inverse_2(1), 0.5);

@@ -30,6 +30,7 @@ mod shapes;
 mod shards;
 mod slurm;
 mod spectral;
+mod spectral_film;
 mod stability;
 mod tev;
 mod tokenizer;

@@ -115,18 +115,6 @@ fn pbrt_v3_files_render_in_rgb_and_pbrt_v4_files_spectrally_media_included() {
     assert!(!r["approximated"].to_string().contains("MakeNamedMedium"), "{}", r["approximated"]);
 }
 
-#[test]
-fn a_spectral_film_is_approximated_only_where_pbrt_v4_would_write_its_buckets() {
-    // pbrt-v4's SPPM writes R, G and B whatever the film; its other integrators write
-    // a spectral film's wavelength buckets, which we do not.
-    let film = "Camera \"perspective\" Film \"spectral\" \"integer xresolution\" 8 \"integer yresolution\" 8";
-    for (integrator, noted) in [("Integrator \"sppm\"", false), ("Integrator \"bdpt\"", true), ("", true)] {
-        let r = report(&format!("{film} {integrator} WorldBegin Shape \"sphere\""));
-        let approximated = r["approximated"].to_string();
-        assert_eq!(approximated.contains("spectral"), noted, "{integrator:?}: {approximated}");
-    }
-}
-
 /// The RGB of the colour space's white (luminance 1) through `d` units of a medium
 /// whose σa is the spectrum pbrt-v4 makes of `sigma_a`: ∫ W(λ)·exp(−σa(λ)·d) x̄ȳz̄ dλ.
 fn white_through_dye(sigma_a: [f32; 3], d: f64) -> [f64; 3] {

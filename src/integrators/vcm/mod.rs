@@ -29,6 +29,7 @@ pub mod light;
 pub mod mis;
 pub mod vertex;
 
+use super::buckets::{BucketSums, PassLanes};
 use super::error::RenderError;
 use super::grid::{Grid, Grouped, Site};
 use super::passes;
@@ -248,6 +249,8 @@ pub struct Vcm<'a> {
     /// The pixels that trace more rays for what they see through perfect specular
     /// chains (`camera/prefix.rs`), drawn once before the first pass.
     prefix: Option<Vec<bool>>,
+    /// A spectral film's bucket sums.
+    buckets: Option<BucketSums>,
 }
 
 /// What a pass did besides adding to the sums.
@@ -295,6 +298,7 @@ impl<'a> Vcm<'a> {
             balance,
             cones: aim::cones(scene).into(),
             prefix: None,
+            buckets: bucket_sums(scene, w * h, (w, h))?,
         };
         vcm.prefix = vcm.prefix_marks();
         Ok(vcm)
@@ -381,6 +385,24 @@ impl<'a> Vcm<'a> {
         Ok(())
     }
 
+    /// A spectral film's bucket sums and layout.
+    pub fn bucket_totals(&self) -> Option<super::buckets::BucketTotals> {
+        self.buckets.as_ref().map(BucketSums::totals)
+    }
+
+    /// Sets the bucket sums from [`Self::save_buckets`]'s.
+    pub fn restore_buckets(&mut self, saved: &[f64]) -> Result<(), RenderError> {
+        let film = self.buckets.as_ref().map_or(0, |b| b.save().len());
+        let restored = match &mut self.buckets {
+            None => saved.is_empty(),
+            Some(b) => b.restore(saved),
+        };
+        match restored {
+            true => Ok(()),
+            false => Err(RenderError::CheckpointBuckets { saved: saved.len(), film }),
+        }
+    }
+
     /// One pass: light subpaths, the grid of their vertices, camera subpaths, splats.
     pub fn iterate(&mut self) {
         self.iterate_showing(None)
@@ -395,7 +417,8 @@ impl<'a> Vcm<'a> {
         let measuring = matches!(self.balance, Some(Balance::Measuring(_)));
         let mut parts = measuring.then(|| vec![[0f32; 3]; self.sums.len()]);
         let mut sums = std::mem::take(&mut self.sums);
-        let done = self.render_pass(self.iteration, &mut sums, parts.as_deref_mut(), preview);
+        let buckets = self.buckets.as_ref();
+        let done = self.render_pass(self.iteration, (&mut sums, buckets), parts.as_deref_mut(), preview);
         self.sums = sums;
         let n = self.light_paths(self.iteration);
         if let (Some(parts), Some(Balance::Measuring(pilot))) = (&parts, &mut self.balance) {
@@ -415,19 +438,19 @@ impl<'a> Vcm<'a> {
         let mut scratch = vec![DVec3::ZERO; self.sums.len()];
         for k in 0..balance::PILOT_PASSES {
             let mut parts = vec![[0f32; 3]; self.sums.len()];
-            let done = self.render_pass(k, &mut scratch, Some(&mut parts), None);
+            let done = self.render_pass(k, (&mut scratch, None), Some(&mut parts), None);
             pilot.add(&parts, self.light_paths(k), done.counts, done.camera, done.stored as u64);
         }
         self.balance = Some(Balance::Chosen(pilot.choose(self.settings.light_paths.max(1))));
     }
 
-    /// Pass `iteration` added to `sums`: light subpaths, the grid of their vertices,
-    /// camera subpaths, splats; with `parts`, each pixel's camera-traced and light-side
-    /// values of the pass (channel means, for the pilot).
+    /// Pass `iteration` added to `sums` (and a spectral film's buckets): light subpaths,
+    /// the grid of their vertices, camera subpaths, splats; with `parts`, each pixel's
+    /// camera-traced and light-side values of the pass (channel means, for the pilot).
     fn render_pass(
         &self,
         iteration: u32,
-        sums: &mut [DVec3],
+        (sums, buckets): (&mut [DVec3], Option<&BucketSums>),
         mut parts: Option<&mut [balance::Part]>,
         mut preview: Option<&mut super::preview::Preview>,
     ) -> Done {
@@ -457,6 +480,7 @@ impl<'a> Vcm<'a> {
         let tasks = crate::integrators::PIXELS_PER_TASK;
         let mut work = camera::Work::default();
         let halves = balance::Halves::new(pass.light_paths);
+        let lanes = buckets.map(|b| (b, b.lanes(iteration)));
         for band in super::preview::bands(sums.len(), 4 * tasks, usize::MAX, preview.is_some()) {
             let first = band.start;
             let pixel = |i: usize, s: &mut DVec3| {
@@ -464,7 +488,11 @@ impl<'a> Vcm<'a> {
                     live.add_camera(256);
                 }
                 let p = cams.pixel(first + i, width);
-                *s += scene.film_rgb(p.total());
+                let total = p.total();
+                *s += scene.film_rgb(total);
+                if let Some((b, lanes)) = &lanes {
+                    b.add(first + i, lanes, total);
+                }
                 p
             };
             let band_sums = sums[band.clone()].par_iter_mut().enumerate().with_max_len(tasks);
@@ -490,7 +518,7 @@ impl<'a> Vcm<'a> {
             halves.add_splats(parts, &lights.splats, scale);
         }
         let (counts, stored) = (lights.counts, lights.vertices.len());
-        add_splats(sums, lights.splats, scale, scene);
+        add_splats((sums, lanes.as_ref()), lights.splats, scale, scene);
         Done { counts, stored, camera: work, times: [t0, t1, t2, t3, Instant::now()] }
     }
 
@@ -542,6 +570,11 @@ impl<'a> Vcm<'a> {
         s.prefix_pixels = self.prefix.as_ref().map_or(0, |m| m.iter().filter(|&&p| p).count() as u64);
     }
 
+    /// A spectral film's buckets after the passes so far.
+    pub fn bands(&self) -> Option<crate::imageio::Bands> {
+        self.buckets.as_ref().map(|b| b.bands(self.first..self.iteration))
+    }
+
     /// The current estimate: the mean of the passes, as the film records it.
     pub fn image(&self) -> Vec<[f32; 3]> {
         let k = self.passes_done().max(1) as f64;
@@ -568,12 +601,27 @@ fn provisional(sums: &[DVec3], passes_done: u32, film: &Film, camera_done: usize
 
 /// Adds light tracing's splats to the pixels' sums, each pixel in a fixed order (list by
 /// list, splat by splat) whatever the thread count; pixel ranges in parallel.
-fn add_splats(sums: &mut [DVec3], lists: Vec<Vec<(u32, Rgb)>>, scale: f64, scene: &RenderScene) {
+fn add_splats(
+    (sums, buckets): (&mut [DVec3], Option<&(&BucketSums, PassLanes)>),
+    lists: Vec<Vec<(u32, Rgb)>>,
+    scale: f64,
+    scene: &RenderScene,
+) {
     let (grouped, span) = Grouped::by_pixel_range(lists, sums.len(), SPLAT_RANGES);
     sums.par_chunks_mut(span).enumerate().for_each(|(r, sums)| {
         let lo = r * span;
         for &(pixel, c) in grouped.iter().flat_map(|g| g.group(r)) {
             sums[pixel as usize - lo] += scene.film_rgb(c) * scale;
+            if let Some((b, lanes)) = buckets {
+                b.add_splat(pixel as usize, lanes, c, scale);
+            }
         }
     });
+}
+
+/// A spectral film's bucket sums, when paths carry wavelengths.
+fn bucket_sums(scene: &RenderScene, pixels: usize, size: (usize, usize)) -> Result<Option<BucketSums>, RenderError> {
+    let Some(layout) = scene.film.buckets.filter(|_| scene.spectral()) else { return Ok(None) };
+    let oom = RenderError::OutOfMemory { width: size.0, height: size.1, bytes: BucketSums::bytes(layout, pixels) };
+    BucketSums::new(layout, pixels).map(Some).ok_or(oom)
 }
