@@ -287,8 +287,11 @@ fn heatmap(a: &RgbImage, b: &RgbImage, max: f64, out: &Path) -> Result<(), Strin
 fn info(path: &str) -> Result<ExitCode, String> {
     use std::fmt::Write as _;
     let img = read(path)?;
+    let is_exr = !path.to_ascii_lowercase().ends_with(".png");
+    let bands = if is_exr { pbrt_sppm::imageio::read_bands(Path::new(path)).map_err(|e| e.to_string())? } else { None };
     let mut out = String::new();
-    let _ = writeln!(out, "{path}: {}x{} pixels, channels R G B", img.width, img.height);
+    let extra = bands.as_ref().map(|b| format!(" and {} spectral buckets", b.names.len())).unwrap_or_default();
+    let _ = writeln!(out, "{path}: {}x{} pixels, channels R G B{extra}", img.width, img.height);
     let _ = writeln!(
         out,
         "data window: origin ({}, {}), size {}x{}; display window {}x{}",
@@ -310,11 +313,17 @@ fn info(path: &str) -> Result<ExitCode, String> {
     if let Some(w) = m.world_to_camera {
         let _ = writeln!(out, "worldToCamera: {w:?}");
     }
-    for (c, name) in ["R", "G", "B"].iter().enumerate() {
-        let v: Vec<f32> = img.pixels.iter().map(|p| p[c]).collect();
+    let mut channel = |name: &str, v: Vec<f32>| {
         let (lo, hi) = v.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &x| (l.min(x), h.max(x)));
         let mean = v.iter().map(|&x| x as f64).sum::<f64>() / v.len().max(1) as f64;
         let _ = writeln!(out, "{name}: min {lo} max {hi} mean {mean}");
+    };
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        channel(name, img.pixels.iter().map(|p| p[c]).collect());
+    }
+    for (k, name) in bands.iter().flat_map(|b| b.names.iter().enumerate()) {
+        let b = bands.as_ref().expect("named");
+        channel(name, b.values.iter().skip(k).step_by(b.names.len()).copied().collect());
     }
     say(&out)
 }

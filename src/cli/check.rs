@@ -70,10 +70,16 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
             "cropwindow": f.crop_window.map(f32_json),
             "pixelbounds": f.pixel_bounds,
             "scale": f32_json(f.scale),
-            // Extensions: the named camera whose curves film the wavelengths, and the
-            // pixel filter SPPM's camera rays follow (pbrt-v4; null: none).
+            // Extensions: the named camera whose curves film the wavelengths, the
+            // pixel filter camera rays follow, and a spectral film's buckets when they
+            // are written (pbrt-v4; null: none).
             "sensor": f.sensor.as_ref().map(|s| s.name),
             "filter": f.filter.as_ref().map(|p| p.name.clone()),
+            "buckets": f.buckets.map(|b| serde_json::json!({
+                "nbuckets": b.count,
+                "lambdamin": f32_json(b.lambda_min),
+                "lambdamax": f32_json(b.lambda_max),
+            })),
         },
         "integrator": {
             "type": "sppm",
@@ -251,6 +257,8 @@ pub fn summary(s: &SceneDescription) -> String {
     let f = &s.film;
     let sensor = f.sensor.as_ref().map(|c| format!(", sensor {}", c.name)).unwrap_or_default();
     let filter = f.filter.as_ref().map(|p| format!(", filter {}", p.name)).unwrap_or_default();
+    let buckets = f.buckets.map(|b| format!(", {} buckets {}–{} nm", b.count, b.lambda_min, b.lambda_max));
+    let filter = filter + &buckets.unwrap_or_default();
     let _ = writeln!(out, "film        {}x{} -> {}{sensor}{filter}", f.x_resolution, f.y_resolution, f.filename);
     let i = &s.integrator;
     let method = crate::integrators::Algorithm::by_default(i).name();

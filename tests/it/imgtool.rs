@@ -98,6 +98,17 @@ fn info_and_convert() {
     assert!((read_image(&exr2).unwrap().pixels[0][1] - 1.0).abs() < 0.01);
     let (code, _, err) = tool(&["info", "no-such.exr"]);
     assert_eq!(code, Some(1));
+    // A spectral film's buckets are listed after R, G, B.
+    img.bands = Some(pbrt_sppm::imageio::Bands {
+        names: vec!["S0.400,000nm".into(), "S0.600,000nm".into()],
+        values: vec![1.0, 2.0, 3.0, 4.0],
+    });
+    let spectral = d.join("spectral.exr");
+    write_image(&spectral, &img).unwrap();
+    let (code, out, _) = tool(&["info", spectral.to_str().unwrap()]);
+    assert_eq!(code, Some(0));
+    assert!(out.contains("channels R G B and 2 spectral buckets"), "{out}");
+    assert!(out.contains("S0.600,000nm: min 2 max 4 mean 3"), "{out}");
     assert!(err.contains("no-such.exr"));
 }
 

@@ -91,6 +91,12 @@ fn a_spectral_film_is_noted_where_its_buckets_are_not_written() {
         let r = report(&format!("{film} {integrator} WorldBegin Shape \"sphere\""));
         let approximated = r["approximated"].to_string();
         assert_eq!(approximated.contains("spectral"), noted, "{integrator:?}: {approximated}");
+        // `check --json` says which buckets are written.
+        let buckets = &r["film"]["buckets"];
+        match noted {
+            true => assert!(buckets.is_null(), "{integrator:?}: {buckets}"),
+            false => assert_eq!(buckets.to_string(), r#"{"nbuckets":16,"lambdamin":360.0,"lambdamax":830.0}"#),
+        }
     }
     let d = scratch("spectral-film", "rgb", &[("f.pbrt", &format!("{film} WorldBegin Shape \"sphere\""))]);
     let out = pbrt_sppm(&d, &["check", "f.pbrt", "--colour", "rgb"]);
