@@ -62,25 +62,7 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
             "camera_from_world_end": c.camera_from_world_end.map(|(m, _)| row_major(&m)),
             "transformtimes": c.camera_from_world_end.map(|(_, t)| t),
         },
-        "film": {
-            "type": f.ty,
-            "xresolution": f.x_resolution,
-            "yresolution": f.y_resolution,
-            "filename": f.filename,
-            "cropwindow": f.crop_window.map(f32_json),
-            "pixelbounds": f.pixel_bounds,
-            "scale": f32_json(f.scale),
-            // Extensions: the named camera whose curves film the wavelengths, the
-            // pixel filter camera rays follow, and a spectral film's buckets when they
-            // are written (pbrt-v4; null: none).
-            "sensor": f.sensor.as_ref().map(|s| s.name),
-            "filter": f.filter.as_ref().map(|p| p.name.clone()),
-            "buckets": f.buckets.map(|b| serde_json::json!({
-                "nbuckets": b.count,
-                "lambdamin": f32_json(b.lambda_min),
-                "lambdamax": f32_json(b.lambda_max),
-            })),
-        },
+        "film": film(f),
         "integrator": {
             "type": "sppm",
             "requested": i.requested,
@@ -121,6 +103,29 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
         out["shapes"] = Value::Array(shapes);
     }
     out
+}
+
+/// The film's part of the report.
+fn film(f: &crate::scene::Film) -> Value {
+    json!({
+        "type": f.ty,
+        "xresolution": f.x_resolution,
+        "yresolution": f.y_resolution,
+        "filename": f.filename,
+        "cropwindow": f.crop_window.map(f32_json),
+        "pixelbounds": f.pixel_bounds,
+        "scale": f32_json(f.scale),
+        // Extensions: the named camera whose curves film the wavelengths, the
+        // pixel filter camera rays follow, and a spectral film's buckets when they
+        // are written (pbrt-v4; null: none).
+        "sensor": f.sensor.as_ref().map(|s| s.name),
+        "filter": f.filter.as_ref().map(|p| p.name.clone()),
+        "buckets": f.buckets.map(|b| json!({
+            "nbuckets": b.count,
+            "lambdamin": f32_json(b.lambda_min),
+            "lambdamax": f32_json(b.lambda_max),
+        })),
+    })
 }
 
 fn counts(scene: &SceneDescription) -> Value {

@@ -218,14 +218,8 @@ fn spectral_channels(pixels: &[[f32; 3]], bands: &Bands) -> AnyChannels<FlatSamp
 /// `None` when it has none.
 pub fn read_bands(path: &Path) -> Res<Option<Bands>> {
     let bytes = std::fs::read(path).map_err(|e| ImageError::read(path, e))?;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(std::io::Cursor::new(bytes))
-        .map_err(|e| ImageError::read(path, e))?;
+    let max = crate::limits::Limits::default().pixels;
+    let image = decode_all_channels(&bytes, "image", max).map_err(|e| ImageError::read(path, e))?;
     let list = &image.layer_data.channel_data.list;
     let nm = |c: &AnyChannel<FlatSamples>| -> Option<f64> {
         let name = c.name.to_string();
@@ -245,6 +239,30 @@ pub fn read_bands(path: &Path) -> Res<Option<Bands>> {
         }
     }
     Ok(Some(Bands { names: found.iter().map(|(_, c)| c.name.to_string()).collect(), values }))
+}
+
+/// Every channel of an EXR's first layer; refused from the header alone when it has
+/// more than `max_pixels` pixels (`what` names the file in that message).
+pub fn decode_all_channels(
+    bytes: &[u8],
+    what: &str,
+    max_pixels: u64,
+) -> std::result::Result<Image<Layer<AnyChannels<FlatSamples>>>, String> {
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| format!("not a readable EXR ({e})"))?;
+    let size = meta.headers.first().map_or(Vec2(0, 0), |h| h.layer_size);
+    if (size.width() as u64).saturating_mul(size.height() as u64) > max_pixels {
+        let pixels = format!("the {what}'s {}x{} pixels", size.width(), size.height());
+        return Err(crate::limits::Limits::over(pixels, "pixels", max_pixels));
+    }
+    read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| format!("not a readable EXR ({e})"))
 }
 
 /// The sRGB transfer curve.

@@ -202,25 +202,7 @@ impl Part {
 /// A part from its file's bytes, or what is wrong with them.
 fn decode(bytes: &[u8]) -> std::result::Result<Part, String> {
     // From the header alone: a part is never larger than a render may be.
-    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
-        .map_err(|e| format!("not a readable EXR ({e})"))?;
-    let size = meta.headers.first().map_or(Vec2(0, 0), |h| h.layer_size);
-    let max = crate::limits::Limits::default().pixels;
-    if (size.width() as u64).saturating_mul(size.height() as u64) > max {
-        return Err(crate::limits::Limits::over(
-            format!("the part's {}x{} pixels", size.width(), size.height()),
-            "pixels",
-            max,
-        ));
-    }
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(std::io::Cursor::new(bytes))
-        .map_err(|e| format!("not a readable EXR ({e})"))?;
+    let image = crate::imageio::decode_all_channels(bytes, "part", crate::limits::Limits::default().pixels)?;
     let layer = &image.layer_data;
     let a = &layer.attributes;
     let text = |k: &str| match a.other.get(&Text::from(k)) {

@@ -10,6 +10,7 @@ use std::path::Path;
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_image, m)?)?;
     m.add_function(wrap_pyfunction!(write_image, m)?)?;
+    m.add_function(wrap_pyfunction!(read_buckets, m)?)?;
     m.add_function(wrap_pyfunction!(diff, m)?)?;
     m.add_function(wrap_pyfunction!(tiles, m)?)?;
     Ok(())
@@ -47,6 +48,19 @@ fn read_image<'py>(py: Python<'py>, path: &str) -> PyResult<(Bound<'py, PyBytes>
     let img = read_file(Path::new(path)).map_err(|e| PyOSError::new_err(e.to_string()))?;
     let values: Vec<f32> = img.pixels.iter().flatten().copied().collect();
     Ok((PyBytes::new(py, &float_bytes(&values)), img.width, img.height))
+}
+
+/// A spectral film's buckets: channel names, bytes of height × width × buckets
+/// float32, width, height.
+type BucketBytes<'py> = (Vec<String>, Bound<'py, PyBytes>, usize, usize);
+
+/// A spectral film's buckets in an EXR, or `None` when it has none.
+#[pyfunction]
+fn read_buckets<'py>(py: Python<'py>, path: &str) -> PyResult<Option<BucketBytes<'py>>> {
+    let os = |e: pbrt_sppm::imageio::ImageError| PyOSError::new_err(e.to_string());
+    let Some(bands) = pbrt_sppm::imageio::read_bands(Path::new(path)).map_err(os)? else { return Ok(None) };
+    let img = read_file(Path::new(path)).map_err(os)?;
+    Ok(Some((bands.names, PyBytes::new(py, &float_bytes(&bands.values)), img.width, img.height)))
 }
 
 /// Writes an EXR (float32) or PNG (sRGB, 8 bits), through a temporary file renamed

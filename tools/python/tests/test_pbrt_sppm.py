@@ -159,6 +159,26 @@ def test_render_is_the_command_lines_image(tmp_path):
 
 
 @needs_bin
+def test_read_buckets_reads_a_spectral_films_buckets(tmp_path):
+    # The command line renders a pbrt-v4 spectral film: R, G, B and 4 buckets over
+    # 400-700 nm; an RGB image has none.
+    scene = tmp_path / "s.pbrt"
+    scene.write_text(
+        'LookAt 0 0 -5 0 0 0 0 1 0 Camera "perspective" Film "spectral" "integer xresolution" 6 "integer yresolution" 4 '
+        '"integer nbuckets" 4 "float lambdamin" 400 "float lambdamax" 700 Integrator "path" '
+        'WorldBegin LightSource "infinite" "blackbody L" 5000 Material "diffuse" Shape "sphere"'
+    )
+    out = tmp_path / "s.exr"
+    r = cli("render", scene, "--spp", 8, "--quiet", "--outfile", out)
+    assert r.returncode == 0, r.stderr
+    b = pbrt_sppm.read_buckets(out)
+    np.testing.assert_allclose(b["wavelengths"], [437.5, 512.5, 587.5, 662.5])
+    assert b["names"][0] == "S0.437,500nm" and b["values"].shape == (4, 6, 4)
+    assert b["values"].min() >= 0 and b["values"].max() > 0
+    assert pbrt_sppm.read_buckets(ROOT / "tests/data/pbrt-ref/v4-sensor.exr") is None
+
+
+@needs_bin
 def test_volume_gather_is_the_command_lines(tmp_path):
     fog = ROOT / "pbrt-scenes/verify/v4-fog-box.pbrt"
     out_exr = tmp_path / "beams.exr"

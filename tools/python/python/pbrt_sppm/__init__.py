@@ -26,6 +26,7 @@ __all__ = [
     "Scene",
     "load",
     "read_image",
+    "read_buckets",
     "write_image",
     "diff",
     "relmse",
@@ -186,6 +187,20 @@ def read_image(path: PathOrText) -> np.ndarray:
     """An EXR (or PNG, decoded from sRGB) as float32 (height, width, 3)."""
     data, w, h = _native.read_image(os.fspath(path))
     return np.frombuffer(data, dtype="<f4").reshape(h, w, 3).copy()
+
+
+def read_buckets(path: PathOrText) -> Optional[dict]:
+    """A spectral film's wavelength buckets (pbrt-v4's ``Film "spectral"``, written by
+    pbrt-v4 or by us): ``{"wavelengths": float64 (n,) bucket centres in nm, "names":
+    the n channel names, "values": float32 (height, width, n)}``; None when the EXR
+    holds only R, G and B."""
+    found = _native.read_buckets(os.fspath(path))
+    if found is None:
+        return None
+    names, data, w, h = found
+    centres = [float(n[len("S0.") : -len("nm")].replace(",", ".")) for n in names]
+    values = np.frombuffer(data, dtype="<f4").reshape(h, w, len(names)).copy()
+    return {"wavelengths": np.array(centres), "names": list(names), "values": values}
 
 
 def write_image(path: PathOrText, image) -> None:
