@@ -79,6 +79,11 @@ impl BucketSums {
         bands(self.layout, &self.save(), passes)
     }
 
+    /// How many sums there are (pixels × buckets).
+    pub fn sum_count(&self) -> usize {
+        self.sums.len()
+    }
+
     pub fn totals(&self) -> BucketTotals {
         BucketTotals { layout: self.layout, sums: self.save() }
     }

@@ -16,7 +16,9 @@
 //! - `sceneFingerprint`: a hash of the input files' contents and those settings;
 //! - `seed`, `passes` (such as `0..16` or `0..4,8..12`), `photons` (paths traced);
 //! - the usual `samplesPerPixel` (passes), `photonsPerIteration`,
-//!   `renderTimeSeconds`, `worldToCamera`, `software`.
+//!   `renderTimeSeconds`, `worldToCamera`, `software`;
+//! - for a spectral film, `spectralBuckets` (`count lambdamin lambdamax`), its bucket
+//!   sums in channels `S0.<λ>nm` and `lo.S0.<λ>nm` as R, G, B hold theirs.
 //!
 //! [`merge`] refuses parts of other scenes or settings, reports passes missing from
 //! `0..N` (an error unless gaps are allowed) and passes given twice (always an error,

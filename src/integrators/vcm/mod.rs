@@ -171,7 +171,6 @@ impl Pass<'_> {
         self.light_paths as f64
     }
 
-    /// The index in the rendered window of the pixel holding a raster point, if any.
     /// The pixels of the window whose filtered rays reach `raster`, each with the
     /// density its rays are drawn there with (see [`crate::filters`]).
     pub fn footprint<'f>(&self, raster: [f32; 2], f: &'f PixelFilter) -> impl Iterator<Item = (u32, f32)> + 'f {
@@ -193,6 +192,7 @@ impl Pass<'_> {
             .filter(|&(_, w)| w > 0.0)
     }
 
+    /// The index in the rendered window of the pixel holding a raster point, if any.
     pub fn pixel_index(&self, raster: [f32; 2]) -> Option<u32> {
         let (x, y) = (raster[0].floor(), raster[1].floor());
         let (x, y) = (x as i64 - self.origin.0 as i64, y as i64 - self.origin.1 as i64);
@@ -390,9 +390,9 @@ impl<'a> Vcm<'a> {
         self.buckets.as_ref().map(BucketSums::totals)
     }
 
-    /// Sets the bucket sums from [`Self::save_buckets`]'s.
+    /// Sets the bucket sums from a checkpoint's (those of [`Self::bucket_totals`]).
     pub fn restore_buckets(&mut self, saved: &[f64]) -> Result<(), RenderError> {
-        let film = self.buckets.as_ref().map_or(0, |b| b.save().len());
+        let film = self.buckets.as_ref().map_or(0, BucketSums::sum_count);
         let restored = match &mut self.buckets {
             None => saved.is_empty(),
             Some(b) => b.restore(saved),
