@@ -284,7 +284,7 @@ impl RenderOptions {
         values::ignored(p, &["maxsampleluminance", "maxcomponentvalue"], why, warn);
         let space = self.color_space.unwrap_or(ColorSpaceName::Srgb);
         let (white_balance, sensor) = if syntax == Syntax::V4 { self.sensor(e, space, notes)? } else { (None, None) };
-        let buckets = self.film_type(e, notes)?;
+        let buckets = self.film_type(e, notes, (pixels, limits.pixels))?;
         let film = Film {
             ty: e.name.clone(),
             x_resolution: xres,
@@ -305,10 +305,11 @@ impl RenderOptions {
 
     /// Checks the film's type; a `spectral` film's buckets when they are written.
     /// `gbuffer` is written as `rgb`.
-    fn film_type(&self, e: &Entity, notes: &mut Notes) -> Res<Option<Buckets>> {
+    /// A spectral film's sums (`pixels` × buckets) count against the pixel limit.
+    fn film_type(&self, e: &Entity, notes: &mut Notes, (pixels, limit): (u64, u64)) -> Res<Option<Buckets>> {
         let layout = match e.name.as_str() {
             "image" | "rgb" => return Ok(None),
-            "spectral" => spectral_buckets(e)?,
+            "spectral" => spectral_buckets(e, (pixels, limit))?,
             // pbrt-v4's SPPM writes its own image of R, G and B for this film, as we
             // do: only the other integrators' files lose the extra channels.
             "gbuffer" if self.asks_for_sppm() => return Ok(None),
@@ -634,14 +635,20 @@ fn err_at(p: Option<&crate::parser::params::Param>, e: &Entity, msg: String) -> 
 
 /// A `spectral` film's `nbuckets`, `lambdamin` and `lambdamax`, checked as pbrt-v4
 /// checks them (its wavelengths lie within 360–830 nm).
-fn spectral_buckets(e: &Entity) -> Res<Buckets> {
+fn spectral_buckets(e: &Entity, (pixels, limit): (u64, u64)) -> Res<Buckets> {
     let (p, d) = (&e.params, Buckets::DEFAULT);
     let param_error =
         |name: &str, why: String| Diagnostic::error(p.named(name).map_or(e.name_span, |x| x.value_span), why);
     let count = match p.int("nbuckets")? {
         None => d.count,
-        Some(n) if n >= 1 => n as usize,
-        Some(n) => return Err(param_error("nbuckets", format!("\"nbuckets\" must be at least 1, not {n}"))),
+        Some(n) if n < 1 => return Err(param_error("nbuckets", format!("\"nbuckets\" must be at least 1, not {n}"))),
+        // DEVIATION(pbrt): robustness. Its sums are film state like pixels: pbrt-v4
+        // allocates them all and runs out of memory.
+        Some(n) if pixels.saturating_mul(n as u64) > limit => {
+            let what = format!("the spectral film's {pixels} pixels × {n} buckets");
+            return Err(param_error("nbuckets", Limits::over(what, "pixels", limit)));
+        }
+        Some(n) => n as usize,
     };
     let lo = values::float(p, "lambdamin", d.lambda_min, Range::Any)?;
     let hi = values::float(p, "lambdamax", d.lambda_max, Range::Any)?;
@@ -649,7 +656,7 @@ fn spectral_buckets(e: &Entity) -> Res<Buckets> {
         let why = format!("wavelengths {lo}–{hi} nm reach beyond the 360–830 nm that pbrt-v4 renders");
         return Err(param_error(if lo < d.lambda_min { "lambdamin" } else { "lambdamax" }, why));
     }
-    if lo >= hi {
+    if lo.is_nan() || hi.is_nan() || lo >= hi {
         return Err(param_error("lambdamax", format!("\"lambdamax\" {hi} is not above \"lambdamin\" {lo}")));
     }
     Ok(Buckets { count, lambda_min: lo, lambda_max: hi })

@@ -110,6 +110,7 @@ fn a_spectral_films_range_and_buckets_are_checked_as_pbrt_v4_checks_them() {
         ("\"float lambdamax\" 900", "beyond the 360–830 nm"),
         ("\"float lambdamin\" 600 \"float lambdamax\" 500", "is not above"),
         ("\"integer nbuckets\" 0", "at least 1"),
+        ("\"integer nbuckets\" 1000000000", "--limit pixels"),
     ] {
         let text = format!("Film \"spectral\" {params}\nWorldBegin Shape \"sphere\"");
         let Err(err) = crate::common::load(&text) else { panic!("{params}: accepted") };
