@@ -24,11 +24,8 @@ pub struct BucketSums {
     sums: Vec<AtomicU64>,
 }
 
-/// One pass's lanes: the bucket each falls in.
-#[derive(Clone, Copy, Debug)]
-pub struct PassLanes {
-    bucket: [usize; N_SAMPLES],
-}
+/// One pass's lanes: the bucket each falls in ([`Buckets::of_pass`]).
+pub type PassLanes = [usize; N_SAMPLES];
 
 impl BucketSums {
     /// `None` when the sums do not fit in memory.
@@ -47,15 +44,14 @@ impl BucketSums {
 
     /// Pass `pass`'s lanes.
     pub fn lanes(&self, pass: u32) -> PassLanes {
-        let w = crate::spectrum::transport::pass_wavelengths(self.layout.draw(), pass);
-        PassLanes { bucket: w.lambda.map(|l| self.layout.index(l)) }
+        self.layout.of_pass(pass)
     }
 
     /// Adds a camera path's estimate `v` (its lanes) at `pixel`.
     #[inline]
     pub fn add(&self, pixel: usize, lanes: &PassLanes, v: Rgb) {
         let at = pixel * self.layout.count;
-        for (k, b) in lanes.bucket.iter().enumerate() {
+        for (k, b) in lanes.iter().enumerate() {
             bump(&self.sums[at + b], v[k] as f64);
         }
     }
@@ -72,11 +68,6 @@ impl BucketSums {
     #[inline]
     pub fn add_splat(&self, pixel: usize, lanes: &PassLanes, v: Rgb, scale: f64) {
         self.add(pixel, lanes, v * scale as f32);
-    }
-
-    /// The buckets' channels after `passes`.
-    pub fn bands(&self, passes: std::ops::Range<u32>) -> Bands {
-        bands(self.layout, &self.save(), passes)
     }
 
     /// How many sums there are (pixels × buckets).
@@ -155,7 +146,7 @@ mod tests {
             let lanes = b.lanes(pass);
             (0..3).for_each(|px| b.add(px, &lanes, Rgb::splat(2.0)));
         }
-        let bands = b.bands(0..64);
+        let bands = b.totals().bands(0..64);
         assert_eq!(bands.names.len(), 16);
         assert!(bands.values.iter().all(|&v| (v - 2.0).abs() < 1e-6), "{:?}", bands.values);
     }

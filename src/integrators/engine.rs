@@ -123,12 +123,10 @@ impl<'a> Engine<'a> {
         }
     }
 
-    /// A spectral film's buckets (vcm and bdpt; pbrt-v4's SPPM writes R, G, B only).
+    /// A spectral film's buckets after the passes so far (vcm and bdpt; pbrt-v4's
+    /// SPPM writes R, G, B only).
     pub fn bands(&self) -> Option<crate::imageio::Bands> {
-        match self {
-            Engine::Sppm(_) => None,
-            Engine::Vcm(v) => v.bands(),
-        }
+        self.bucket_totals().map(|t| t.bands(self.first_pass()..self.iteration()))
     }
 
     /// The sum of the passes' estimates (independent passes and every VCM render).

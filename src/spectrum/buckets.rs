@@ -10,7 +10,7 @@
 //! spectral film has its paths draw them, so that a bucket's value is a plain mean of
 //! the radiance that fell in it (and the RGB image sees only light in that range).
 
-use super::sampled::Draw;
+use super::sampled::{Draw, N_SAMPLES};
 
 /// The buckets' layout, as the film gives it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,17 +45,18 @@ impl Buckets {
         Draw::Uniform { lo: self.lambda_min, hi: self.lambda_max }
     }
 
+    /// The bucket each lane of pass `pass` falls in (drawn evenly, every lane has a
+    /// density).
+    pub fn of_pass(&self, pass: u32) -> [usize; N_SAMPLES] {
+        super::transport::pass_wavelengths(self.draw(), pass).lambda.map(|l| self.index(l))
+    }
+
     /// How many of the lanes of `passes` fell in each bucket: the passes share their
     /// wavelengths over the image, so every pixel has the same counts.
     pub fn counts(&self, passes: impl IntoIterator<Item = u32>) -> Vec<f64> {
         let mut counts = vec![0.0; self.count];
-        for pass in passes {
-            let w = super::transport::pass_wavelengths(self.draw(), pass);
-            for (lambda, pdf) in w.lambda.iter().zip(w.pdf) {
-                if pdf > 0.0 {
-                    counts[self.index(*lambda)] += 1.0;
-                }
-            }
+        for b in passes.into_iter().flat_map(|pass| self.of_pass(pass)) {
+            counts[b] += 1.0;
         }
         counts
     }

@@ -570,11 +570,6 @@ impl<'a> Vcm<'a> {
         s.prefix_pixels = self.prefix.as_ref().map_or(0, |m| m.iter().filter(|&&p| p).count() as u64);
     }
 
-    /// A spectral film's buckets after the passes so far.
-    pub fn bands(&self) -> Option<crate::imageio::Bands> {
-        self.buckets.as_ref().map(|b| b.bands(self.first..self.iteration))
-    }
-
     /// The current estimate: the mean of the passes, as the film records it.
     pub fn image(&self) -> Vec<[f32; 3]> {
         let k = self.passes_done().max(1) as f64;
