@@ -32,7 +32,7 @@ pub fn assert_renders_as(name: &str, fixes: Fixes, algorithm: Algorithm, referen
 
 /// As [`assert_renders_as`], with these settings.
 pub fn assert_renders_with(name: &str, fixes: Fixes, settings: &RenderSettings, reference: &str, bound: f64) {
-    Check { name, fixes, settings: settings.clone(), reference, bound, share: 1 }.assert();
+    Check { name, fixes, settings: settings.clone(), reference, bound, share: 1, fine: None }.assert();
 }
 
 /// The bound of a pbrt-v4 image test (issue 57): 2% on the worst 4×4 tile, or 1.5 ×
@@ -40,6 +40,14 @@ pub fn assert_renders_with(name: &str, fixes: Fixes, settings: &RenderSettings, 
 /// `tests/data/pbrt-ref/README.md`) where its own noise does not allow 2%.
 pub fn v4_bound(own: f64) -> f64 {
     (1.5 * own).max(0.02)
+}
+
+/// The bound of a pbrt-v4 image test on an 8×8 grid (issue 57): 3%, or 1.5 × pbrt-v4's
+/// own 8×8 deviation at the scene's budget (`own`: the mean of seeds 1 and 2, whose
+/// samples are not the reference's; `docs/tests.md`) where its noise does not allow 3%.
+/// Held where ours is within 0.8 of it.
+pub fn v4_fine(own: f64) -> f64 {
+    (1.5 * own).max(0.03)
 }
 
 /// One comparison with a pbrt reference, in full.
@@ -55,13 +63,28 @@ pub struct Check<'a> {
     /// pbrt's own noise; where ours is well inside the bound with less (measured, and
     /// deterministic for a seed), the test renders less, at the same bound.
     pub share: u32,
+    /// The worst tile of an 8×8 grid may be this far off, where it is checked.
+    pub fine: Option<f64>,
 }
 
 impl<'a> Check<'a> {
     /// The scene `name` with SPPM against its own reference at 1/`share` of its budget.
     pub fn sppm(name: &'a str, bound: f64, share: u32) -> Check<'a> {
         let settings = RenderSettings { algorithm: Some(Algorithm::Sppm), ..Default::default() };
-        Check { name, reference: name, fixes: Fixes::NONE, settings, bound, share }
+        Check { name, reference: name, fixes: Fixes::NONE, settings, bound, share, fine: None }
+    }
+
+    /// The scene `name` with SPPM against its own reference at `iterations`, more than
+    /// the scene's budget where ours needs more than pbrt's to meet a v4 bound.
+    pub fn sppm_iterations(name: &'a str, bound: f64, iterations: u32) -> Check<'a> {
+        let settings =
+            RenderSettings { algorithm: Some(Algorithm::Sppm), iterations: Some(iterations), ..Default::default() };
+        Check { name, reference: name, fixes: Fixes::NONE, settings, bound, share: 1, fine: None }
+    }
+
+    /// Also holds the worst tile of an 8×8 grid to `bound`.
+    pub fn fine(self, bound: f64) -> Check<'a> {
+        Check { fine: Some(bound), ..self }
     }
 
     pub fn assert(&self) {
@@ -76,14 +99,23 @@ impl<'a> Check<'a> {
         let render_scene = RenderScene::for_integrator(&scene, algorithm != Algorithm::Sppm);
         let ours = pbrt_sppm::integrators::render(&render_scene, &settings).expect("renders").image;
         let gather = settings.volume_gather.map(|g| format!(", {}", g.name())).unwrap_or_default();
-        let name = format!("{name} ({}{gather}, {}, 1/{} budget)", algorithm.name(), self.fixes.names(), self.share);
+        let budget = match self.settings.iterations {
+            Some(n) => format!("{n} iterations"),
+            None => format!("1/{} budget", self.share),
+        };
+        let name = format!("{name} ({}{gather}, {}, {budget})", algorithm.name(), self.fixes.names());
         let path = root().join(format!("tests/data/pbrt-ref/{}.exr", self.reference));
         let reference = read_image(&path).expect("the reference");
         assert_eq!((ours.width, ours.height), (reference.width, reference.height));
         let (w, h) = (ours.width, ours.height);
         let (worst, at, _) = metrics::worst_mean_deviation(&ours.pixels, &reference.pixels, w, h, 4, 0.05);
+        let (fine, fine_at, _) = metrics::worst_mean_deviation(&ours.pixels, &reference.pixels, w, h, 8, 0.05);
         let relmse = metrics::relmse(&ours.pixels, &reference.pixels);
-        eprintln!("{name}: worst tile deviation {:.2}% at {at}; relMSE {relmse:.2e}", 100.0 * worst);
+        eprintln!(
+            "{name}: worst tile deviation {:.2}% at {at} (8×8: {:.2}% at {fine_at}); relMSE {relmse:.2e}",
+            100.0 * worst,
+            100.0 * fine
+        );
         let bound = self.bound;
         assert!(
             worst <= bound,
@@ -91,6 +123,14 @@ impl<'a> Check<'a> {
             100.0 * worst,
             100.0 * bound
         );
+        if let Some(bound) = self.fine {
+            assert!(
+                fine <= bound,
+                "{name}: worst 8×8 tile {:.2}% at {fine_at} (bound {}%)",
+                100.0 * fine,
+                100.0 * bound
+            );
+        }
     }
 }
 
@@ -112,7 +152,7 @@ fn procedural_textures_and_mappings_match_pbrt_v3() {
 fn procedural_textures_and_mappings_match_pbrt_v4() {
     // pbrt-v4's own 64-iteration image: worst tile 1.49%, relMSE 5.4e-3.
     // A quarter of the scene's iterations: 1.08% when measured (spectral).
-    Check::sppm("v4-textures", v4_bound(0.0149), 4).assert();
+    Check::sppm("v4-textures", v4_bound(0.0149), 4).fine(v4_fine(0.0279)).assert();
 }
 
 #[test]
@@ -136,7 +176,7 @@ fn bump_maps_shade_as_in_pbrt_v3() {
 #[test]
 fn displacement_shades_as_in_pbrt_v4() {
     // pbrt-v4's own 64-iteration image: worst tile 1.83%, relMSE 2.7e-3. Ours: 2.05%.
-    assert_matches_pbrt("v4-bump", v4_bound(0.0183));
+    Check::sppm("v4-bump", v4_bound(0.0183), 1).fine(v4_fine(0.0594)).assert();
 }
 
 #[test]
@@ -215,9 +255,9 @@ fn mix_chooses_a_material_as_in_pbrt_v4() {
 #[test]
 fn coated_materials_and_diffuse_transmission_match_pbrt_v4() {
     // pbrt-v4's own 128-iteration image: worst tile 0.80%, relMSE 2.4e-3.
-    // A quarter of the scene's iterations: 1.97% when measured (spectral), too close
-    // to its 2% bound to hold it there; 4%.
-    Check::sppm("v4-coated", 0.04, 4).assert();
+    // Twice the scene's iterations: 0.54%, 0.67%, 1.42% (the default seed, seeds 1
+    // and 2); at its own 128, 0.73–2.17% (one seed's bright path).
+    Check::sppm_iterations("v4-coated", v4_bound(0.0080), 256).fine(v4_fine(0.0656)).assert();
 }
 
 #[test]
@@ -230,17 +270,17 @@ fn a_mirror_box_reflects_light_and_caustics_as_in_pbrt_v3() {
 #[test]
 fn normal_maps_shade_as_in_pbrt_v4() {
     // pbrt-v4's own 64-iteration image: worst tile 1.58%, relMSE 5.8e-4.
-    // A quarter of the scene's iterations: 3.58% when measured (spectral), above its
-    // 2.37% bound; 4%.
-    Check::sppm("v4-normalmap", 0.04, 4).assert();
+    // Four times the scene's iterations: 1.34%, 0.71%, 1.31% (the default seed, seeds
+    // 1 and 2); twice: 2.46%, 0.90%, 2.23%.
+    Check::sppm_iterations("v4-normalmap", v4_bound(0.0158), 256).assert();
 }
 
 #[test]
 fn bilinear_patches_render_as_in_pbrt_v4() {
     // pbrt-v4's own 64-iteration image: worst tile 1.44%, relMSE 2.6e-3.
-    // Half the scene's iterations: 3.07% when measured (spectral), above its 2.16%
-    // bound; 4%.
-    Check::sppm("v4-bilinear", 0.04, 2).assert();
+    // Four times the scene's iterations: 0.78%, 0.58%, 1.66% (the default seed, seeds
+    // 1 and 2); twice: 0.94%, 1.25%, 3.03%.
+    Check::sppm_iterations("v4-bilinear", v4_bound(0.0144), 256).fine(v4_fine(0.0645)).assert();
 }
 
 #[test]
@@ -314,16 +354,18 @@ fn smooth_and_rough_coats_and_mesh_power_match_pbrt_v4() {
     // pbrt-v4's SPPM reflects the disk light in the smooth coats (it follows the path
     // one bounce past the visible point), weighs the rough coat's layers its own way,
     // and gives each triangle of the emitting strip the whole `power`.
-    // Half the scene's iterations: 1.8–3.2% over four seeds. (A quarter gave 2.1–4.5%
-    // whether lights were picked uniformly or, as now, by their bounds: too near the
-    // bound; the bounds lower relMSE there by 5%.)
-    Check::sppm("v4-coat", 0.04, 2).assert();
+    // pbrt-v4's own 128-iteration image: worst tile 0.91%. The scene's iterations:
+    // 1.11%, 1.62%, 1.44%, 1.67% (the default seed, seeds 1–3); half: 1.8–3.2% over
+    // four seeds.
+    Check::sppm("v4-coat", v4_bound(0.0091), 1).fine(v4_fine(0.0281)).assert();
 }
 
 #[test]
 fn rough_glass_refracts_and_reflects_as_in_pbrt_v4() {
-    // A quarter of the scene's iterations: 2.08% when measured.
-    Check::sppm("v4-rough-glass", 0.04, 4).assert();
+    // pbrt-v4's own 64-iteration image: worst tile 1.48%, relMSE 3.1e-3.
+    // Three times the scene's iterations: 1.11%, 1.07%, 0.82% (the default seed,
+    // seeds 1 and 2); twice: 1.09%, 1.93%, 1.05%; once: 1.86–3.79%.
+    Check::sppm_iterations("v4-rough-glass", v4_bound(0.0148), 192).fine(v4_fine(0.0444)).assert();
 }
 
 #[test]
@@ -337,9 +379,10 @@ fn translucent_reflects_and_transmits_as_in_pbrt_v3() {
 fn a_named_camera_sensor_with_white_balance_films_as_in_pbrt_v4() {
     // A Canon balanced for 3200 K under 3200 K light: its curves and fitted matrix
     // decide the colours. pbrt-v4's own 64-iteration image: worst tile 1.22%. Ours at
-    // the full budget: 2.32% (1.12% at 256). Seen as the CIE observer (`--colour
-    // rgb`, balanced the same) it is 11.5% off, and without the balance 84%.
-    Check::sppm("v4-sensor", 0.04, 1).assert();
+    // three times the budget: 1.34%, 1.09%, 1.22% (the default seed, seeds 1 and 2);
+    // at the budget 1.19–2.32%. Seen as the CIE observer (`--colour rgb`, balanced the
+    // same) it is 11.5% off, and without the balance 84%.
+    Check::sppm_iterations("v4-sensor", v4_bound(0.0122), 192).fine(v4_fine(0.0479)).assert();
 }
 
 #[test]
@@ -411,8 +454,11 @@ fn curves_of_every_type_and_basis_render_as_in_pbrt_v3() {
 #[test]
 fn curves_render_as_in_pbrt_v4_which_samples_lights_from_their_error_bound() {
     // The same curves in a v4 file. pbrt-v4's own 128-sample image: worst tile 1.5%;
-    // ours 1.7–2.3% over three seeds. Sampling lights from the curve itself (as for
-    // v3 files): 8.2% off, at the wide ribbon.
+    // ours 2.09%, 2.43%, 2.38% (the default seed, seeds 1 and 2), at twice that 2.48%,
+    // 2.44%, 5.16%, at four times 1.20%, 1.67%, 3.19%. Not held to its 2.25%
+    // (`v4_bound`): seed 2's outlier is one camera path (in iterations 161–192) that
+    // puts 594 into one pixel, 4.5% of its tile's mean. Sampling lights from the curve
+    // itself (as for v3 files): 8.2% off, at the wide ribbon.
     assert_matches_pbrt("v4-curves", 0.04);
 }
 
@@ -479,8 +525,9 @@ fn v4_image_area_lights_emit_their_image_over_the_surfaces_uv_as_pbrt_v4() {
     // 64-sample image: worst tile 1.76%, relMSE 3.5e-4; ours with SPPM 2.3–3.0% over
     // three seeds, with vcm 0.5–0.9%. Emitting L uniformly, as before image area lights
     // were read: 969%.
-    // Spectrally: SPPM 3.22% (above its 2.64% bound; 4%), vcm 1.41%.
-    assert_matches_pbrt("v4-image-light", 0.04);
+    // Spectrally, SPPM at four times the budget: 0.96%, 1.40%, 0.84% (the default
+    // seed, seeds 1 and 2); three times: 1.43–2.54%; once: 1.85–3.22%. vcm: 1.41%.
+    Check::sppm_iterations("v4-image-light", v4_bound(0.0176), 256).assert();
     let vcm = Algorithm::Vcm(Techniques::All);
     assert_renders_as("v4-image-light", Fixes::NONE, vcm, "v4-image-light", v4_bound(0.0176));
 }
@@ -489,10 +536,10 @@ fn v4_image_area_lights_emit_their_image_over_the_surfaces_uv_as_pbrt_v4() {
 fn projection_lights_cast_their_slides_as_pbrt_v3_and_v4() {
     // pbrt-v3 projects the slide upside down, bilinearly; its own 64-iteration image:
     // worst tile 1.14%, ours 1.3–1.7% over three seeds. pbrt-v4 the right way up,
-    // nearest texel: its own image 2.03%, ours 4.5–4.6%, at the slide's saturated green
-    // quarter (pbrt-v4 is spectral: with the slide in grey, 2.7%). Hence 6% there.
+    // nearest texel: its own image 2.03%; ours, spectral, at three times the budget
+    // 1.54%, 1.89%, 1.37% (the default seed, seeds 1 and 2), at the budget 2.2–3.2%.
     assert_matches_pbrt("v3-projection", 0.02);
-    assert_matches_pbrt("v4-projection", 0.06);
+    Check::sppm_iterations("v4-projection", v4_bound(0.0203), 192).fine(v4_fine(0.0395)).assert();
 }
 
 #[test]
@@ -520,7 +567,9 @@ fn vcm_renders_the_verification_scenes_as_pbrt_within_the_same_bounds() {
     // of the bound (vcm's error falls faster than SPPM's, for whose noise the budgets
     // were set); at half: v3-textures 0.68%, v4-bump 2.34%, v3-mix 1.57%. pbrt-v4's
     // scenes at `v4_bound`, spectrally: v4-textures 1.05%, v4-bump 2.49%, v4-mix 2.43%,
-    // v4-coated 1.84%, v4-normalmap 1.77%, v4-ply-quads 0.86%, v4-difftrans 1.15%.
+    // v4-coated 1.84%, v4-normalmap 1.77%, v4-ply-quads 0.86%, v4-difftrans 1.15%;
+    // v4-alpha at its whole budget 0.77%, 1.50%, 0.66% (the default seed, seeds 1 and
+    // 2; at half 1.29–1.89%), pbrt-v4's own bdpt at 64 samples 0.36–0.55% (seeds 1–3).
     let settings = RenderSettings { algorithm: Some(Algorithm::Vcm(Techniques::All)), ..Default::default() };
     for (name, reference, bound, share) in [
         ("v3-caustic", "v3-caustic", 0.02, 4),
@@ -540,7 +589,7 @@ fn vcm_renders_the_verification_scenes_as_pbrt_within_the_same_bounds() {
         ("v4-difftrans", "v4-difftrans", v4_bound(0.0125), 4),
         ("v3-sphere-light", "v3-sphere-light-unscaled", 0.02, 4),
         ("v3-mix", "v3-mix-bdpt", 0.03, 2),
-        ("v4-alpha", "v4-alpha-bdpt", 0.03, 4),
+        ("v4-alpha", "v4-alpha-bdpt", v4_bound(0.0055), 1),
     ] {
         Check { reference, settings: settings.clone(), ..Check::sppm(name, bound, share) }.assert();
     }
@@ -641,7 +690,8 @@ fn bdpt_and_vcm_render_media_as_pbrt() {
     // seeds: fog box with bdpt 0.8–1.9% in RGB, 2.5–4.5% spectrally (seeds 1–3, with
     // or without the pixel filter: the passes' shared wavelengths, `docs/spectral.md`;
     // 3.08% at the test's seed), the v3 smoke grid with vcm 0.9–1.6% (SPPM's are
-    // 4.0–4.2% and 2.4–3.0% along beams, above).
+    // 4.0–4.2% and 2.4–3.0% along beams, above). pbrt-v4's own bdpt image of the fog
+    // box at 64 samples: 2.26%, 3.79%, 3.15% (seeds 1–3), so `v4_bound` would be 4.7%.
     assert_renders_as("v4-fog-box", Fixes::NONE, Algorithm::Vcm(Techniques::Bdpt), "v4-fog-box-bdpt", 0.04);
     assert_renders_as("v3-smoke-grid", Fixes::NONE, Algorithm::Vcm(Techniques::All), "v3-smoke-grid-volpath", 0.04);
 }
@@ -664,7 +714,7 @@ fn motion_blur_moves_shapes_instances_and_the_camera_as_pbrt_v4() {
     // at 128 passes 1.6%, at 256 1.0% (seed 0). Times drawn per ray, as for v3 files:
     // 17% at the box; start transforms only: 79%.
     let settings = RenderSettings { algorithm: Some(Algorithm::Sppm), iterations: Some(128), ..Default::default() };
-    Check { settings, ..Check::sppm("v4-motion", 0.045, 1) }.assert();
+    Check { settings, ..Check::sppm("v4-motion", 0.045, 1) }.fine(v4_fine(0.0684)).assert();
 }
 
 #[test]

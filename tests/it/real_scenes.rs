@@ -106,6 +106,8 @@ fn the_killeroo_renders_as_in_pbrt_v4() {
     if shared().is_none() {
         return;
     }
-    // pbrt-v4's own 128-iteration image: worst tile 0.70%, relMSE 2.7e-4.
-    crate::pbrt_refs::assert_matches_pbrt("v4-killeroo", 0.04);
+    // pbrt-v4's own 128-iteration image: worst tile 0.70%, relMSE 2.7e-4. Ours: 0.74%,
+    // 1.25%, 0.69% (the default seed, seeds 1 and 2).
+    use crate::pbrt_refs::{Check, v4_bound, v4_fine};
+    Check::sppm("v4-killeroo", v4_bound(0.0070), 1).fine(v4_fine(0.0247)).assert();
 }

@@ -2,7 +2,7 @@
 //! named glasses disperse, and pbrt-v3's files stay in RGB.
 
 use crate::common::{load_file, report, root, scene};
-use pbrt_sppm::imageio::read_image;
+use pbrt_sppm::imageio::{metrics, read_image};
 use pbrt_sppm::integrators::vcm::Techniques;
 use pbrt_sppm::integrators::{Algorithm, RenderSettings, render};
 use pbrt_sppm::render::RenderScene;
@@ -52,8 +52,11 @@ fn a_glass_prism_throws_a_rainbow_with_blue_bent_most() {
     let [ref_red, _, ref_blue] = centroids(reference.width, &reference.pixels);
     eprintln!("prism (pbrt-v4): red centroid {ref_red:?}, blue {ref_blue:?}");
     let mut spots = Vec::new();
-    for algorithm in [Algorithm::Sppm, Algorithm::Vcm(Techniques::All)] {
-        let (w, _, pixels) = image_with(&prism, 16, algorithm);
+    for (algorithm, passes) in [(Algorithm::Sppm, 128), (Algorithm::Vcm(Techniques::All), 16)] {
+        let (w, h, pixels) = image_with(&prism, passes, algorithm);
+        if algorithm == Algorithm::Sppm {
+            prism_tiles_match(&pixels, &reference.pixels, (w, h));
+        }
         let [red, _, blue] = centroids(w, &pixels);
         // The floor is seen from the prism's side with world +x to the left (pbrt's
         // LookAt): red, bent least, lands farther from the prism, so more to the left.
@@ -85,6 +88,18 @@ fn a_glass_prism_throws_a_rainbow_with_blue_bent_most() {
     for (algorithm, p) in ["sppm", "vcm"].iter().zip(&spots) {
         assert!((p / white - 1.0).abs() < 0.03, "{algorithm}: the rainbow carries {p}, the white spot {white}");
     }
+}
+
+/// The worst 4×4 tile of SPPM's prism at twice the scene's 64 iterations, held to
+/// `v4_bound` of pbrt-v4's own 64-iteration image: 2.88%, 3.51%, 1.58% (seeds 1–3,
+/// whose samples are not the reference's; 2.28% at its seed 0, which are). Ours: 1.92%,
+/// 1.53%, 1.25% (the default seed, seeds 1 and 2); at 64 iterations 2.28–4.74%. The
+/// worst tiles are the dim top row's and the rainbow's.
+fn prism_tiles_match(ours: &[[f32; 3]], theirs: &[[f32; 3]], (w, h): (usize, usize)) {
+    let (worst, at, _) = metrics::worst_mean_deviation(ours, theirs, w, h, 4, 0.05);
+    let bound = crate::pbrt_refs::v4_bound(0.0288);
+    eprintln!("prism (Sppm): worst tile deviation {:.2}% at {at}", 100.0 * worst);
+    assert!(worst <= bound, "prism: worst tile {:.2}% at {at} (bound {:.2}%)", 100.0 * worst, 100.0 * bound);
 }
 
 /// The light in the window of the image around the floor's spot (160 × 120 pixels;
