@@ -60,3 +60,15 @@ pub fn image(data: &[u8]) {
     let Some((&first, rest)) = data.split_first() else { return };
     let _ = crate::imageio::decode_image(rest, first % 2 == 1, limits().texture_pixels);
 }
+
+/// The NanoVDB reader: the grids named `density` and `temperature`, and every lookup
+/// the medium makes of them.
+pub fn nanovdb(data: &[u8]) {
+    use crate::media::nanovdb::file::read_grid;
+    for name in ["density", "temperature"] {
+        if let Ok(Some(grid)) = read_grid(data, name, limits().file_bytes) {
+            let _ = (grid.max_value(), grid.max_over(grid.index_min, grid.index_max));
+            let _ = grid.sample(grid.to_index(((grid.world_min + grid.world_max) * 0.5).as_vec3()));
+        }
+    }
+}

@@ -6,7 +6,7 @@
 //! MakeNamedMedium "haze" "string type" "homogeneous" "rgb sigma_a" [1 1 1] "rgb Le" [2 1 .5]
 //! ```
 //!
-//! A tracked medium (a grid) draws a voxel of its 16³ majorant grid in proportion to an
+//! A tracked medium (a grid) draws a voxel of its majorant grid in proportion to an
 //! estimate of the emission in it (eight lookups; every voxel that may hold medium
 //! keeps a small share, so no emitting point is left out), then a uniform point in the
 //! voxel. A homogeneous medium fills no box of its own: its points are uniform in a box

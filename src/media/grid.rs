@@ -223,7 +223,7 @@ fn emission(p: &ParamList, ctx: &mut MediumContext, n: [usize; 3]) -> Res<Option
 /// pbrt-v4's film records them, linearly interpolated (evaluating Planck's law at
 /// every lookup would dominate tracking).
 #[derive(Debug)]
-struct Blackbody {
+pub(super) struct Blackbody {
     top: f32,
     rgb: Vec<Vec3>,
     /// What the film records for a spectrum of 1.
@@ -236,7 +236,7 @@ impl Blackbody {
 
     /// The table to the hottest temperature, each colour times `raw` (what the film
     /// records for a spectrum of 1).
-    fn up_to(hottest: f32, raw: f32) -> Blackbody {
+    pub(super) fn up_to(hottest: f32, raw: f32) -> Blackbody {
         // DEVIATION(pbrt): robustness. Planck's law underflows past ~1e30 K (NaN pixels
         // in pbrt); above 1e6 K the peak-normalised visible part is below 1e-9 of the
         // peak, so hotter is drawn as 1e6 K.
@@ -252,7 +252,7 @@ impl Blackbody {
 
     /// The peak-normalised blackbody at the lanes' wavelengths, times the same `raw`
     /// (pbrt-v4's `BlackbodySpectrum`, evaluated, as it does, at each lookup).
-    fn at_lanes(&self, kelvin: f32, p: &crate::spectrum::transport::PassSpectrum) -> Vec3 {
+    pub(super) fn at_lanes(&self, kelvin: f32, p: &crate::spectrum::transport::PassSpectrum) -> Vec3 {
         if kelvin.is_nan() || kelvin <= 100.0 {
             return Vec3::ZERO;
         }
@@ -261,12 +261,12 @@ impl Blackbody {
     }
 
     /// The largest channel in the table.
-    fn max(&self) -> f32 {
+    pub(super) fn max(&self) -> f32 {
         self.rgb.iter().fold(0f32, |m, c| m.max(c.max_element()))
     }
 
     /// pbrt-v4: no emission at or below 100 K.
-    fn at(&self, kelvin: f32) -> Vec3 {
+    pub(super) fn at(&self, kelvin: f32) -> Vec3 {
         if kelvin.is_nan() || kelvin <= 100.0 {
             return Vec3::ZERO;
         }

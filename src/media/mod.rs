@@ -12,17 +12,17 @@
 //! AttributeEnd
 //! ```
 //!
-//! One module per medium type ([`homogeneous`], [`grid`], [`rgbgrid`], [`cloud`]);
-//! the ones that vary in space share [`tracking`] and [`sampled`]; the phase function
-//! is in [`phase`], the measured presets in [`presets`]. The types registered are
-//! [`TYPES`]; pbrt-v4's `nanovdb` (OpenVDB files, for which no maintained Rust reader
-//! exists) is skipped with a located warning, and what it fills is vacuum.
+//! One module per medium type ([`homogeneous`], [`grid`], [`rgbgrid`], [`cloud`],
+//! [`nanovdb`], which reads NanoVDB files with its own reader); the ones that vary in
+//! space share [`tracking`] and [`sampled`]; the phase function is in [`phase`], the
+//! measured presets in [`presets`]. The types registered are [`TYPES`].
 
 pub mod cloud;
 pub mod emitters;
 pub mod grid;
 pub mod homogeneous;
 pub mod lanes;
+pub mod nanovdb;
 pub mod phase;
 pub mod presets;
 pub mod rgbgrid;
@@ -43,7 +43,8 @@ use std::sync::Arc;
 pub use tracking::Tracked;
 
 /// The medium types rendered.
-pub const TYPES: &[&str] = &[homogeneous::NAME, grid::NAMES[0], grid::NAMES[1], rgbgrid::NAME, cloud::NAME];
+pub const TYPES: &[&str] =
+    &[homogeneous::NAME, grid::NAMES[0], grid::NAMES[1], rgbgrid::NAME, cloud::NAME, nanovdb::NAME];
 
 /// A named medium as the scene built it.
 #[derive(Clone, Debug, PartialEq)]
@@ -224,15 +225,16 @@ fn finite(t: Tracked, at: Span) -> Res<Tracked> {
     Ok(t)
 }
 
-/// Builds a medium of type `ty`; `Ok(None)` for a type that is not rendered.
-pub fn read(ty: &str, p: &ParamList, ctx: &mut MediumContext) -> Res<Option<Medium>> {
-    Ok(Some(match ty {
+/// Builds a medium of type `ty` (one that [`known`] names).
+pub fn read(ty: &str, p: &ParamList, ctx: &mut MediumContext) -> Res<Medium> {
+    Ok(match ty {
         homogeneous::NAME => Medium::Homogeneous(Homogeneous::read(p, ctx)?),
         "heterogeneous" | "uniformgrid" => Medium::Tracked(Arc::new(grid::read(p, ctx)?)),
         rgbgrid::NAME => Medium::Tracked(Arc::new(rgbgrid::read(p, ctx)?)),
         cloud::NAME => Medium::Tracked(Arc::new(cloud::read(p, ctx)?)),
-        _ => return Ok(None),
-    }))
+        nanovdb::NAME => Medium::Tracked(Arc::new(nanovdb::read(p, ctx)?)),
+        _ => return Err(Diagnostic::error(ctx.at, format!("medium type \"{ty}\" is not rendered"))),
+    })
 }
 
 /// Whether pbrt knows the type (in some version): unknown names are errors.

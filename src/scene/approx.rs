@@ -18,11 +18,10 @@ pub enum Approx {
     FilmType,
     ColorSpace,
     Sensor,
-    NanoVdb,
 }
 
 impl Approx {
-    pub const ALL: [Approx; 10] = [
+    pub const ALL: [Approx; 9] = [
         Approx::CoatInBlend,
         Approx::HairInBlend,
         Approx::UnsupportedMaterial,
@@ -32,7 +31,6 @@ impl Approx {
         Approx::FilmType,
         Approx::ColorSpace,
         Approx::Sensor,
-        Approx::NanoVdb,
     ];
 
     /// How it is rendered instead (the README lists these texts).
@@ -56,9 +54,6 @@ impl Approx {
             }
             Approx::Sensor => {
                 "rendered in RGB (`--colour rgb`), the camera's measured curves cannot apply: seen as the CIE 1931 observer, white-balanced as pbrt-v4 balances that camera (6500 K unless `whitebalance` is given)"
-            }
-            Approx::NanoVdb => {
-                "NanoVDB files cannot be read (no Rust reader of the format exists): what the medium fills is rendered as vacuum"
             }
         }
     }

@@ -229,17 +229,6 @@ fn sampler_filter_and_accelerator_are_accepted_quietly() {
 }
 
 #[test]
-fn media_not_rendered_are_approximated_with_one_warning_each() {
-    let s = scene(
-        "MakeNamedMedium \"grid\" \"string type\" \"nanovdb\" \"string filename\" \"f.nvdb\"\nWorldBegin\nMediumInterface \"grid\" \"\"\nMediumInterface \"\"\nShape \"sphere\"\n",
-    );
-    assert_eq!(s.approximated.len(), 1);
-    assert_eq!(s.approximated[0].line, 1);
-    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
-    assert!(s.media.is_empty() && s.shapes[0].media == Default::default(), "what it fills is vacuum");
-}
-
-#[test]
 fn world_begin_resets_and_world_end_ends() {
     assert_eq!(m(r#"Shape "sphere""#), I);
     let s = scene("Translate 1 0 0\nWorldBegin\nShape \"sphere\"\nWorldEnd\nWorldBegin\nShape \"disk\"\n");

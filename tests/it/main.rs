@@ -19,6 +19,7 @@ mod layout;
 mod media;
 mod messages;
 mod mitsuba;
+mod nanovdb;
 mod pbrt_refs;
 mod python;
 mod readme;

@@ -150,14 +150,7 @@ impl Builder {
             media::read(&ty, &e.params, &mut ctx)
         };
         self.warnings.append(&mut warnings);
-        let Some(m) = built? else {
-            // `nanovdb`, the one type pbrt knows that is not read: its parameters are
-            // taken as given and its file left unread.
-            e.params.params.iter().for_each(crate::parser::params::Param::mark_used);
-            let what = format!("MakeNamedMedium \"{}\" (\"{ty}\")", e.name);
-            self.note(at, what, crate::scene::approx::Approx::NanoVdb);
-            return Ok(None);
-        };
+        let m = built?;
         super::typed::finish_params(&e.params, &mut self.warnings)?;
         Ok(Some(m))
     }
