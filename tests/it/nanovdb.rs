@@ -61,8 +61,9 @@ fn bad_nanovdb_files_and_names_are_located_errors() {
 fn a_nanovdb_puff_renders_as_pbrt_v4_volpath() {
     // The reference is pbrt-v4's volpath at 8,192 samples (pbrt-v4's SPPM ignores
     // media); its own 64-sample images are 6.35% and 4.15% off it (seeds 1, 2), in the
-    // dim top row, held to 5% of the image's mean. Ours by SPPM at the scene's budget:
-    // 4.00%, 4.87%, 3.96% (the default seed, seeds 1 and 2); by vcm 3.22–6.97%.
+    // dim top row, held to 5% of the image's mean. Ours by SPPM at the scene's budget
+    // (64 × 50,000): 3.64%, 4.90%, 4.46% (the default seed, seeds 1 and 2); with
+    // 100,000 photons 4.00%, 4.87%, 3.96% in 1.6 times the time; by vcm 3.22–6.97%.
     // Whole-image means within 0.7% of the reference's.
     Check { reference: "v4-nanovdb-volpath", ..Check::sppm("v4-nanovdb", v4_bound(0.0525), 1) }.assert();
 }

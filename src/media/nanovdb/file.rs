@@ -130,28 +130,19 @@ impl<'a> Bytes<'a> {
         let end = at.checked_add(N).filter(|&e| e <= self.b.len());
         end.map(|e| self.b[at..e].try_into().unwrap()).ok_or(NvdbError::Truncated { at: self.b.len(), what })
     }
-    fn u16(&self, at: usize, what: &'static str) -> Result<u16, NvdbError> {
-        self.get(at, what).map(u16::from_le_bytes)
-    }
-    fn u32(&self, at: usize, what: &'static str) -> Result<u32, NvdbError> {
-        self.get(at, what).map(u32::from_le_bytes)
-    }
-    fn i32(&self, at: usize, what: &'static str) -> Result<i32, NvdbError> {
-        self.get(at, what).map(i32::from_le_bytes)
-    }
-    fn u64(&self, at: usize, what: &'static str) -> Result<u64, NvdbError> {
-        self.get(at, what).map(u64::from_le_bytes)
-    }
-    fn i64(&self, at: usize, what: &'static str) -> Result<i64, NvdbError> {
-        self.get(at, what).map(i64::from_le_bytes)
-    }
-    fn f32(&self, at: usize, what: &'static str) -> Result<f32, NvdbError> {
-        self.get(at, what).map(f32::from_le_bytes)
-    }
-    fn f64(&self, at: usize, what: &'static str) -> Result<f64, NvdbError> {
-        self.get(at, what).map(f64::from_le_bytes)
-    }
 }
+
+/// `Bytes::u16` and the like: the little-endian number at a byte offset.
+macro_rules! readers {
+    ($($t:ident),*) => {
+        impl Bytes<'_> {
+            $(fn $t(&self, at: usize, what: &'static str) -> Result<$t, NvdbError> {
+                self.get(at, what).map($t::from_le_bytes)
+            })*
+        }
+    };
+}
+readers!(u16, u32, i32, u64, i64, f32, f64);
 
 /// One grid's record in a segment.
 struct Meta {
@@ -629,11 +620,8 @@ mod tests {
     #[test]
     fn range_maxima_agree_with_every_voxel_in_the_range() {
         let g = read_grid(PUFF, "density", u64::MAX).unwrap().unwrap();
-        let mut s = 7u64;
-        let mut next = |n: u64| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((s >> 33) % n) as i32
-        };
+        let mut rng = crate::sampling::Rng::new(7);
+        let mut next = |n: u32| (rng.next_u32() % n) as i32;
         for _ in 0..300 {
             let lo = [next(70) - 35, next(70) - 35, next(70) - 35];
             let hi = [lo[0] + next(24), lo[1] + next(24), lo[2] + next(24)];
@@ -699,13 +687,8 @@ mod tests {
             }
         }
         // Flips in the headers and the first nodes, where the structure lives.
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = crate::sampling::Rng::new(11);
+        let mut next = || rng.next_u32();
         for _ in 0..48 {
             let mut b = raw.clone();
             let at = (next() % 12_000) as usize;
