@@ -67,3 +67,45 @@ fn a_nanovdb_puff_renders_as_pbrt_v4_volpath() {
     // Whole-image means within 0.7% of the reference's.
     Check { reference: "v4-nanovdb-volpath", ..Check::sppm("v4-nanovdb", v4_bound(0.0525), 1) }.assert();
 }
+
+/// `puff.nvdb` with its density grid stored uncompressed and `edit` applied to that
+/// grid's bytes (NanoVDB's tool writes one grid per segment: density's comes first).
+fn puff_with(edit: impl FnOnce(&mut Vec<u8>)) -> Vec<u8> {
+    use std::io::Read;
+    let zip = std::fs::read(root().join("tests/data/nanovdb/puff.nvdb")).unwrap();
+    let word = |at: usize| u64::from_le_bytes(zip[at..at + 8].try_into().unwrap()) as usize;
+    let (record, data) = (16, 16 + 176 + 8);
+    let stored = word(data);
+    let mut grid = Vec::new();
+    flate2::read::ZlibDecoder::new(&zip[data + 8..data + 8 + stored]).read_to_end(&mut grid).unwrap();
+    edit(&mut grid);
+    let mut out = zip[..data].to_vec();
+    out[14..16].copy_from_slice(&0u16.to_le_bytes()); // the segment's codec: none
+    out[record + 8..record + 16].copy_from_slice(&(grid.len() as u64).to_le_bytes());
+    out.extend(&grid);
+    out.extend(&zip[data + 8 + stored..]);
+    out
+}
+
+#[test]
+fn a_density_that_is_not_a_number_is_refused_and_an_uncompressed_copy_reads_the_same() {
+    let dir = crate::common::scratch("nanovdb", "edited", &[]);
+    let write = |name: &str, bytes: Vec<u8>| {
+        std::fs::write(dir.join(name), bytes).unwrap();
+        format!("\"string filename\" \"{}\"", dir.join(name).display())
+    };
+    let plain = write("plain.nvdb", puff_with(|_| ()));
+    let (a, b) = (scene(&inside(PUFF)), scene(&inside(&plain)));
+    let (Medium::Tracked(a), Medium::Tracked(b)) = (&a.media[0].kind, &b.media[0].kind) else { panic!() };
+    assert!((0..64usize.pow(3)).all(|i| a.majorant_at(i) == b.majorant_at(i)), "the same grid, zipped or not");
+    // The first leaf's first voxel (leaves follow the tree header's first offset).
+    let nan = write(
+        "nan.nvdb",
+        puff_with(|g| {
+            let leaf = 672 + u64::from_le_bytes(g[672..680].try_into().unwrap()) as usize;
+            g[leaf + 96..leaf + 100].copy_from_slice(&f32::NAN.to_le_bytes());
+        }),
+    );
+    let e = load(&inside(&nan)).unwrap_err().to_string();
+    assert!(e.contains("inline.pbrt:1:") && e.contains("negative or not finite"), "{e}");
+}

@@ -472,11 +472,16 @@ impl FloatGrid {
 
     /// The largest value anywhere.
     pub fn max_value(&self) -> f32 {
+        self.values().fold(f32::NEG_INFINITY, f32::max)
+    }
+
+    /// Every value the grid holds: the background, tiles and voxels.
+    pub fn values(&self) -> impl Iterator<Item = f32> + '_ {
         let tiles = self.roots.iter().map(|r| r.1);
         let internal = self.uppers.iter().chain(&self.lowers).flat_map(|t| t.iter().copied());
         let values = tiles.chain(internal).filter_map(|s| if let Slot::Value(v) = s { Some(v) } else { None });
         let leaves = self.leaves.iter().flat_map(|l| l.iter().copied());
-        values.chain(leaves).fold(self.background, f32::max)
+        std::iter::once(self.background).chain(values).chain(leaves)
     }
 }
 

@@ -128,13 +128,21 @@ impl Field for NanoVdb {
 /// Reads a `nanovdb` medium, placed by the CTM at its statement.
 pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Tracked> {
     let coefficients = super::Homogeneous::coefficients(p, ctx, false)?;
-    let (bytes, at) = load(p, ctx)?;
+    let (bytes, at, shown) = load(p, ctx)?;
     let limit = ctx.spectra.files.limits.file_bytes;
     let grid_name = p.string("gridname")?.unwrap_or_else(|| "density".into());
-    let grid = |name: &str| file::read_grid(&bytes, name, limit).map_err(|e| Diagnostic::error(at, e.to_string()));
+    let grid = |name: &str| {
+        file::read_grid(&bytes, name, limit).map_err(|e| Diagnostic::error(at, format!("\"{shown}\": {e}")))
+    };
     let density = grid(&grid_name)?.ok_or_else(|| {
-        Diagnostic::error(at, format!("the file has no grid named \"{grid_name}\" (\"string gridname\")"))
+        Diagnostic::error(at, format!("\"{shown}\" has no grid named \"{grid_name}\" (\"string gridname\")"))
     })?;
+    // DEVIATION(pbrt): robustness. pbrt-v4 tracks whatever the grid holds: a NaN
+    // density makes NaN pixels and a negative one a negative majorant.
+    if density.values().any(|v| !(v >= 0.0 && v.is_finite())) {
+        let msg = format!("\"{shown}\": grid \"{grid_name}\" holds a density that is negative or not finite");
+        return Err(Diagnostic::error(at, msg));
+    }
     let temperature_name = p.string("temperaturename")?.unwrap_or_else(|| "temperature".into());
     let emission = match grid(&temperature_name)? {
         Some(kelvin) => temperature(p, ctx, kelvin)?,
@@ -159,8 +167,8 @@ pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Tracked> {
     super::finite(Tracked::new(box_to_world, coefficients.phase, Arc::new(medium)), at)
 }
 
-/// The file's bytes and where its name is written.
-fn load(p: &ParamList, ctx: &MediumContext) -> Res<(Vec<u8>, crate::parser::source::Span)> {
+/// The file's bytes, where its name is written, and the name.
+fn load(p: &ParamList, ctx: &MediumContext) -> Res<(Vec<u8>, crate::parser::source::Span, String)> {
     let name = p.string("filename")?.unwrap_or_default();
     let at = values::span_of(p, "filename").unwrap_or(ctx.at);
     if name.is_empty() {
@@ -168,12 +176,16 @@ fn load(p: &ParamList, ctx: &MediumContext) -> Res<(Vec<u8>, crate::parser::sour
     }
     let path = ctx.spectra.base_dir.join(&name);
     let bytes = ctx.spectra.files.read(&path).map_err(|why| Diagnostic::error(at, why))?;
-    Ok((bytes, at))
+    Ok((bytes, at, name))
 }
 
 /// The emission of a temperature grid, with pbrt-v4's parameters (none where
 /// `Lescale` is not positive, as pbrt-v4's `IsEmissive`).
 fn temperature(p: &ParamList, ctx: &MediumContext, grid: FloatGrid) -> Res<Option<Temperature>> {
+    if grid.values().any(|v| !v.is_finite()) {
+        let at = values::span_of(p, "filename").unwrap_or(ctx.at);
+        return Err(Diagnostic::error(at, "the temperature grid holds a value that is not finite"));
+    }
     let le_scale = values::float(p, "Lescale", 1.0, Range::Any)?;
     // pbrt-v4 reads `temperaturecutoff` as the default of `temperatureoffset`.
     let cutoff = values::float(p, "temperaturecutoff", 0.0, Range::Any)?;
