@@ -202,10 +202,7 @@ fn emission(p: &ParamList, ctx: &mut MediumContext, n: [usize; 3]) -> Res<Option
         return Err(Diagnostic::error(at, "give \"Le\" or \"temperature\", not both"));
     }
     let le_scale = optional_grid(p, "Lescale", n)?.unwrap_or(SampledGrid::constant(1.0));
-    // pbrt-v4 reads `temperaturecutoff` as the default of `temperatureoffset`.
-    let cutoff = values::float(p, "temperaturecutoff", 0.0, Range::Any)?;
-    let offset = values::float(p, "temperatureoffset", cutoff, Range::Any)?;
-    let scale = values::float(p, "temperaturescale", 1.0, Range::Any)?;
+    let (offset, scale) = temperature_mapping(p)?;
     Ok(match (le, kelvin) {
         (Some(le), _) if le.max_element() > 0.0 => {
             Some(Emission::Le { le: Emitted::new(le, ctx.spectral), scale: le_scale })
@@ -217,6 +214,14 @@ fn emission(p: &ParamList, ctx: &mut MediumContext, n: [usize; 3]) -> Res<Option
         }
         _ => None,
     })
+}
+
+/// pbrt-v4's `temperatureoffset` and `temperaturescale` (T = (value − offset) · scale);
+/// it reads `temperaturecutoff` as the default of the offset.
+pub(super) fn temperature_mapping(p: &ParamList) -> Res<(f32, f32)> {
+    let cutoff = values::float(p, "temperaturecutoff", 0.0, Range::Any)?;
+    let offset = values::float(p, "temperatureoffset", cutoff, Range::Any)?;
+    Ok((offset, values::float(p, "temperaturescale", 1.0, Range::Any)?))
 }
 
 /// Peak-normalised blackbody colours from 100 K to the hottest temperature, as

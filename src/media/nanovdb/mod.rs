@@ -187,10 +187,7 @@ fn temperature(p: &ParamList, ctx: &MediumContext, grid: FloatGrid) -> Res<Optio
         return Err(Diagnostic::error(at, "the temperature grid holds a value that is not finite"));
     }
     let le_scale = values::float(p, "Lescale", 1.0, Range::Any)?;
-    // pbrt-v4 reads `temperaturecutoff` as the default of `temperatureoffset`.
-    let cutoff = values::float(p, "temperaturecutoff", 0.0, Range::Any)?;
-    let offset = values::float(p, "temperatureoffset", cutoff, Range::Any)?;
-    let scale = values::float(p, "temperaturescale", 1.0, Range::Any)?;
+    let (offset, scale) = super::grid::temperature_mapping(p)?;
     let hottest = ((grid.max_value() - offset) * scale).abs();
     let table = Blackbody::up_to(hottest, ctx.raw_emission);
     Ok((le_scale > 0.0).then_some(Temperature { grid, offset, scale, le_scale, table }))
