@@ -40,6 +40,8 @@ pub struct SurfaceInteraction {
     pub shading: Shading,
     /// The time of the ray that found it (motion blur); rays spawned here carry it.
     pub time: f32,
+    /// The mesh face's index from `faceIndices` (0 without them, as in pbrt).
+    pub face: i32,
 }
 
 /// The origin for a ray leaving `p` in direction `w`.
@@ -127,6 +129,7 @@ impl SurfaceInteraction {
                 dndv: nrm(self.shading.dndv),
             },
             time: self.time,
+            face: self.face,
         }
     }
 }

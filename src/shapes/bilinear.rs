@@ -263,6 +263,7 @@ impl PatchMesh {
                 dndv: Normal3(dndv),
             },
             time: 0.0,
+            face: self.face_indices.as_ref().map_or(0, |f| f[patch]),
         };
         if let Some(ns) = self.normal_at(patch, hit.uv) {
             self.shading_geometry(patch, hit.uv, ns, [duds, dudt, dvds, dvdt], &mut si);

@@ -327,6 +327,7 @@ impl CurveShape {
             dndv: shading.dndv,
             shading,
             time: 0.0,
+            face: 0,
         }
     }
 }

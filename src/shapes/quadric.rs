@@ -219,6 +219,7 @@ impl QuadricShape {
             dndv: shading.dndv,
             shading,
             time: 0.0,
+            face: 0,
         }
     }
 }

@@ -430,6 +430,7 @@ impl TriangleMesh {
             dndv: Normal3::default(),
             shading: Shading { n: Normal3(n), dpdu: Vector3(dpdu), dpdv: Vector3(dpdv), ..Default::default() },
             time: 0.0,
+            face: self.face_indices.as_ref().map_or(0, |f| f[tri]),
         };
         if self.n.is_some() || self.s.is_some() {
             self.shading_geometry(tri, hit, flags, &mut si);
