@@ -85,6 +85,8 @@ pub struct RenderScene {
     /// Whether shading uses a pixel's footprint (bump maps, noise textures): camera
     /// rays then carry differentials.
     pub needs_differentials: bool,
+    /// Whether a texture reads the footprint in (u, v) (`ptex`).
+    pub needs_duv: bool,
     /// Whether anything moves while the shutter is open (a shape, an instance or the
     /// camera): camera rays, photons and light subpaths then draw a time.
     pub motion: bool,
@@ -175,8 +177,6 @@ impl RenderScene {
         let mut lights: Vec<Light> = scene.lights.iter().map(|l| Light::from_desc(l, scene.fixes)).collect();
         let shape_area_lights: Vec<Option<u32>> = scene.shapes.iter().map(|s| s.area_light).collect();
         let area_params = scene.area_lights.clone();
-        let film = scene.film.clone();
-        let integrator = scene.integrator.clone();
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
         let geometry = Geometry::new(scene);
         let rules = EmitterRules {
@@ -199,9 +199,10 @@ impl RenderScene {
         RenderScene {
             geometry,
             camera,
-            film,
-            integrator,
+            film: scene.film.clone(),
+            integrator: scene.integrator.clone(),
             materials,
+            needs_duv: textures.use_duv(),
             textures,
             world_shape_material,
             object_shape_material,
@@ -389,7 +390,7 @@ impl RenderScene {
 
     /// Whether `alpha` cuts the surface away where ray `r` meets it.
     fn cuts(&self, alpha: &ShapeAlpha, si: &SurfaceInteraction, r: &Ray, shadow: bool) -> bool {
-        let ctx = TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, ..TexCtx::default() };
+        let ctx = TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, face: si.face, ..TexCtx::default() };
         let test = |v: &TexValue| self.alpha_cuts(v, alpha.rule, &ctx, || ray_hash(r));
         test(&alpha.alpha) || (shadow && alpha.shadow.as_ref().is_some_and(test))
     }
@@ -398,7 +399,8 @@ impl RenderScene {
     /// `fp`: how the point moves across a pixel, where the camera ray's differentials
     /// say (bump maps and noise textures use it).
     pub fn bsdf(&self, hit: &Hit, si: &SurfaceInteraction, fp: &Footprint) -> Option<Bsdf> {
-        let ctx = || TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, dpdx: fp.dpdx, dpdy: fp.dpdy };
+        let duv = if self.needs_duv && *fp != Footprint::default() { fp.duv_dxy(si) } else { [0.0; 4] };
+        let ctx = || TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, dpdx: fp.dpdx, dpdy: fp.dpdy, duv, face: si.face };
         let material = match self.material(hit) {
             m if matches!(m.kind(), MaterialKind::Mix { rule: MixRule::Choose, .. }) => self.chosen(m, &ctx),
             m => m,
@@ -410,7 +412,7 @@ impl RenderScene {
         }
         let (ns, dpdu) = match (&material.normal_map, material.bump) {
             (Some(img), _) => normal_map(img, si),
-            (None, Some(d)) => bump(&self.textures, d, si, fp),
+            (None, Some(d)) => bump(&self.textures, d, si, fp, duv),
             (None, None) => (si.shading.n.0, si.shading.dpdu.0),
         };
         let mut ss = (dpdu - ns * ns.dot(dpdu)).normalize_or_zero();
@@ -582,7 +584,7 @@ impl RenderScene {
 /// along its shading normal (pbrt's `Bump`). d is differenced over half the pixel
 /// footprint in u and in v where the camera ray's differentials give one, else over
 /// .0005 (pbrt's steps). The normal stays on the side of the geometric one.
-fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction, fp: &Footprint) -> (Vec3, Vec3) {
+fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction, fp: &Footprint, duv: [f32; 4]) -> (Vec3, Vec3) {
     let [dudx, dvdx, dudy, dvdy] = fp.duv_dxy(si);
     let step = |a: f32, b: f32| match 0.5 * (a.abs() + b.abs()) {
         0.0 => 0.0005,
@@ -593,7 +595,7 @@ fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction, fp: &Footprin
     let (p, [u, v]) = (si.p.0, si.uv);
     let n = sh.dpdu.0.cross(sh.dpdv.0);
     let at = |p: Vec3, uv: [f32; 2], n: Vec3| {
-        textures.float(d, &TexCtx { p, n: n.normalize_or_zero(), uv, dpdx: fp.dpdx, dpdy: fp.dpdy })
+        textures.float(d, &TexCtx { p, n: n.normalize_or_zero(), uv, dpdx: fp.dpdx, dpdy: fp.dpdy, duv, face: si.face })
     };
     let d_u = at(p + du * sh.dpdu.0, [u + du, v], n + du * si.dndu.0);
     let d_v = at(p + dv * sh.dpdv.0, [u, v + dv], n + dv * si.dndv.0);

@@ -61,6 +61,19 @@ pub fn image(data: &[u8]) {
     let _ = crate::imageio::decode_image(rest, first % 2 == 1, limits().texture_pixels);
 }
 
+/// The Ptex reader and both of its filters, at each face's corners and centre, with
+/// and without a footprint.
+pub fn ptex(data: &[u8]) {
+    use crate::textures::ptex::file::PtexFile;
+    let Ok(tx) = PtexFile::read(data, limits().file_bytes) else { return };
+    for face in 0..tx.faces.len().min(64) as i32 {
+        for (u, v) in [(0.0, 0.0), (1.0, 1.0), (0.5, 0.5), (0.0, 1.0)] {
+            let _ = tx.eval(face, u, v, [0.0; 4]);
+            let _ = tx.eval(face, u, v, [0.3, 0.01, -0.02, 0.6]);
+        }
+    }
+}
+
 /// The NanoVDB reader: the grids named `density` and `temperature`, and every lookup
 /// the medium makes of them.
 pub fn nanovdb(data: &[u8]) {

@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! Material "mix" "string namedmaterial1" "coated" ...     # approximated: the coat's base only
-//! Texture "t" "float" "ptex"                             # approximated: a constant 0.5
+//! Texture "t" "float" "ptex" "string filename" "gone.ptx"   # approximated: black
 //! ```
 
 /// One way of rendering something other than as written.
@@ -14,6 +14,7 @@ pub enum Approx {
     UnsupportedMaterial,
     UnsupportedTexture,
     MissingImage,
+    UnreadablePtex,
     Motion,
     FilmType,
     ColorSpace,
@@ -21,12 +22,13 @@ pub enum Approx {
 }
 
 impl Approx {
-    pub const ALL: [Approx; 9] = [
+    pub const ALL: [Approx; 10] = [
         Approx::CoatInBlend,
         Approx::HairInBlend,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
         Approx::MissingImage,
+        Approx::UnreadablePtex,
         Approx::Motion,
         Approx::FilmType,
         Approx::ColorSpace,
@@ -44,6 +46,9 @@ impl Approx {
             Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
             Approx::MissingImage => {
                 "the image cannot be read; as in pbrt-v3, an image texture is a grey texel of 0.5 (sRGB-decoded where `gamma` is on, as it is for PNG and TGA) times `scale`, an environment map a constant sky, a normal map a smooth surface"
+            }
+            Approx::UnreadablePtex => {
+                "the Ptex file cannot be read, or has other than 1 or 3 channels; black, as pbrt renders it"
             }
             Approx::Motion => {
                 "a moving shape inside an object definition keeps its start transform (motion nests there in pbrt)"

@@ -12,8 +12,8 @@
 //! 2D textures map the hit through `"string mapping"` ([`mapping`]); 3D textures
 //! (`fbm`, `wrinkled`, `windy`, `marble`, 3D `checkerboard`) work in texture space, as
 //! each version defines it. Textures are point-sampled: SPPM's many samples per pixel
-//! do the filtering that pbrt's ray differentials do for the first hit. `ptex` is left
-//! out (noted; a constant 0.5 stands in).
+//! do the filtering that pbrt's ray differentials do for the first hit; `ptex` filters
+//! as the Ptex library does, over the first hit's footprint.
 //!
 //! Adding a texture class: a module here with `NAME`, `read` and `eval`; a variant in
 //! [`TextureKind`]; a line in [`REGISTRY`]; then the `match` in [`Textures`]' evaluation.
@@ -29,6 +29,7 @@ pub mod mapping;
 pub mod marble;
 pub mod mix;
 pub mod noise;
+pub mod ptex;
 pub mod scale;
 pub mod uv;
 pub mod windy;
@@ -94,7 +95,7 @@ const fn class(
 }
 
 /// Every `Texture` class we render.
-pub const REGISTRY: [TextureClass; 13] = [
+pub const REGISTRY: [TextureClass; 14] = [
     class(constant::NAME, constant::read),
     class(checkerboard::NAME, checkerboard::read),
     class(scale::NAME, scale::read),
@@ -108,6 +109,7 @@ pub const REGISTRY: [TextureClass; 13] = [
     class(windy::NAME, windy::read),
     class(marble::NAME, marble::read),
     class(uv::NAME, uv::read),
+    class(ptex::NAME, ptex::read),
 ];
 
 /// A texture of class `class`, or `None` for classes (or kinds) we do not support.
@@ -192,6 +194,7 @@ pub enum TextureKind {
     Uv {
         map: Mapping2D,
     },
+    Ptex(Arc<ptex::PtexTexture>),
 }
 
 /// A texture some used material (or texture) refers to.
@@ -213,13 +216,14 @@ impl TextureKind {
             K::Mix { tex1, tex2, amount } => vec![*tex1, *tex2, *amount],
             K::Dots { dot, background, .. } => vec![*dot, *background],
             K::Bilerp { .. } | K::Image { .. } | K::Fbm { .. } | K::Wrinkled { .. } => vec![],
-            K::Windy { .. } | K::Marble { .. } | K::Uv { .. } => vec![],
+            K::Windy { .. } | K::Marble { .. } | K::Uv { .. } | K::Ptex(_) => vec![],
         }
     }
 }
 
 /// Where a texture is looked up: the world-space point, the geometric normal, (u, v),
-/// and the point's change across a pixel (zero without ray differentials).
+/// the point's change across a pixel (zero without ray differentials), the same in
+/// (u, v) as (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y), and the mesh face's index (`faceIndices`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TexCtx {
     pub p: Vec3,
@@ -227,6 +231,8 @@ pub struct TexCtx {
     pub uv: [f32; 2],
     pub dpdx: Vec3,
     pub dpdy: Vec3,
+    pub duv: [f32; 4],
+    pub face: i32,
 }
 
 /// Every texture of a scene, by the indices [`TexValue::Texture`] names.
@@ -246,10 +252,18 @@ impl Textures {
         Textures(descs.iter().map(fixed).collect())
     }
 
-    /// Whether some texture reads the footprint (`dpdx`, `dpdy`): the noise textures.
+    /// Whether some texture reads the footprint (`dpdx`, `dpdy`, `duv`): the noise
+    /// textures and `ptex`.
     pub fn use_footprint(&self) -> bool {
         use TextureKind as K;
-        self.0.iter().any(|t| matches!(t, K::Fbm { .. } | K::Wrinkled { .. } | K::Windy { .. } | K::Marble { .. }))
+        self.0
+            .iter()
+            .any(|t| matches!(t, K::Fbm { .. } | K::Wrinkled { .. } | K::Windy { .. } | K::Marble { .. } | K::Ptex(_)))
+    }
+
+    /// Whether some texture reads `duv` (then the caller fills it in).
+    pub fn use_duv(&self) -> bool {
+        self.0.iter().any(|t| matches!(t, TextureKind::Ptex(_)))
     }
 
     #[inline]
@@ -286,6 +300,7 @@ impl Textures {
                 marble::eval(map, octaves, [*scale, *variation], *v3_segments, ctx)
             }
             K::Uv { map } => uv::eval(map, ctx),
+            K::Ptex(t) => ptex::eval(t, ctx),
         }
     }
 }

@@ -411,7 +411,7 @@ fn approximations_are_listed_and_the_readme_names_every_kind() {
          Material \"mix\" \"string namedmaterial1\" \"c\" \"string namedmaterial2\" \"m\" Shape \"disk\" \
          MakeNamedMaterial \"h\" \"string type\" \"hair\" \
          Material \"mix\" \"string namedmaterial1\" \"h\" \"string namedmaterial2\" \"m\" Shape \"disk\" \
-         Texture \"f\" \"float\" \"ptex\" \
+         Texture \"f\" \"float\" \"marble\" \
          Material \"matte\" \"texture sigma\" \"f\" Shape \"disk\" Material \"measured\" Shape \"disk\"",
     );
     let how: Vec<&str> = s.approximated.iter().map(|a| a.how.as_str()).collect();

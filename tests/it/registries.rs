@@ -100,7 +100,11 @@ fn every_registered_texture_class_reads_as_itself() {
     let names: Vec<&str> = pbrt_sppm::textures::REGISTRY.iter().map(|c| c.name).collect();
     unique("textures", &names);
     for name in names {
-        let params = if name == "imagemap" { "\"string filename\" \"textures/domes-normal.png\"" } else { "" };
+        let params = match name {
+            "imagemap" => "\"string filename\" \"textures/domes-normal.png\"",
+            "ptex" => "\"string filename\" \"textures/ptex-grid.ptx\"",
+            _ => "",
+        };
         let world = format!(
             "Texture \"t\" \"spectrum\" \"{name}\" {params}\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"sphere\""
         );
