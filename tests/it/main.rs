@@ -21,6 +21,7 @@ mod messages;
 mod mitsuba;
 mod nanovdb;
 mod pbrt_refs;
+mod ptex;
 mod python;
 mod readme;
 mod real_scenes;
