@@ -74,6 +74,18 @@ pub fn ptex(data: &[u8]) {
     }
 }
 
+/// The Fourier BSDF reader, and the BSDF evaluated and sampled both ways.
+pub fn fourier(data: &[u8]) {
+    use crate::materials::TransportMode;
+    use crate::materials::fourierbsdf::FourierTable;
+    let Ok(t) = FourierTable::read(data) else { return };
+    for o in [glam::Vec3::Z, glam::Vec3::new(0.6, 0.0, 0.8), glam::Vec3::new(0.0, -0.6, -0.8)] {
+        for mode in [TransportMode::Radiance, TransportMode::Importance] {
+            let _ = (t.f(o, -o, mode), t.pdf(o, -o), t.sample(o, [0.37, 0.71], mode));
+        }
+    }
+}
+
 /// The NanoVDB reader: the grids named `density` and `temperature`, and every lookup
 /// the medium makes of them.
 pub fn nanovdb(data: &[u8]) {

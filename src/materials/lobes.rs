@@ -39,6 +39,9 @@ pub enum Lobe {
     /// Ashikhmin–Shirley diffuse + glossy (pbrt `FresnelBlend`, `substrate`).
     /// `scale` multiplies the whole lobe (a `mix` weight: f is not linear in rd, rs).
     FresnelBlend { rd: Rgb, rs: Rgb, dist: TrowbridgeReitz, scale: Rgb },
+    /// A tabulated BSDF in pbrt-v3's Fourier basis, reflecting and transmitting, times
+    /// `scale` (a `mix` weight).
+    Fourier { table: super::fourierbsdf::Table, scale: Rgb },
 }
 
 /// What kind of scattering a lobe does (pbrt's `BxDFType`).
@@ -95,7 +98,8 @@ impl Lobe {
             Lobe::MicrofacetReflection { .. }
             | Lobe::MicrofacetTransmission { .. }
             | Lobe::RoughDielectric { .. }
-            | Lobe::FresnelBlend { .. } => Kind::Glossy,
+            | Lobe::FresnelBlend { .. }
+            | Lobe::Fourier { .. } => Kind::Glossy,
             Lobe::SpecularReflection { .. } | Lobe::SpecularTransmission { .. } | Lobe::FresnelSpecular { .. } => {
                 Kind::Specular
             }
@@ -120,7 +124,7 @@ impl Lobe {
             Lobe::LambertTransmission(_) | Lobe::SpecularTransmission { .. } | Lobe::MicrofacetTransmission { .. } => {
                 (false, true)
             }
-            Lobe::FresnelSpecular { .. } | Lobe::RoughDielectric { .. } => (true, true),
+            Lobe::FresnelSpecular { .. } | Lobe::RoughDielectric { .. } | Lobe::Fourier { .. } => (true, true),
             _ => (true, false),
         }
     }
@@ -138,6 +142,7 @@ impl Lobe {
             Lobe::MicrofacetTransmission { t, dist, eta } => Lobe::MicrofacetTransmission { t: w * t, dist, eta },
             Lobe::RoughDielectric { r, t, dist, eta } => Lobe::RoughDielectric { r: w * r, t: w * t, dist, eta },
             Lobe::FresnelBlend { rd, rs, dist, scale } => Lobe::FresnelBlend { rd, rs, dist, scale: w * scale },
+            Lobe::Fourier { table, scale } => Lobe::Fourier { table, scale: w * scale },
         }
     }
 
@@ -161,6 +166,7 @@ impl Lobe {
                 Some(_) => microfacet_transmission(o, i, t, dist, eta, mode),
             },
             Lobe::FresnelBlend { rd, rs, dist, scale } if same() => scale * fresnel_blend(o, i, rd, rs, dist),
+            Lobe::Fourier { table, scale } => scale * table.0.f(o, i, mode),
             _ => Vec3::ZERO,
         }
     }
@@ -182,6 +188,7 @@ impl Lobe {
                 let glossy = if d == 0.0 { 0.0 } else { dist.pdf_wh(o, wh) / (4.0 * d.abs()) };
                 0.5 * (i.z.abs() * FRAC_1_PI + glossy)
             }
+            Lobe::Fourier { table, .. } => table.0.pdf(o, i),
             _ => 0.0,
         }
     }
@@ -274,6 +281,10 @@ impl Lobe {
                     return None;
                 }
                 i
+            }
+            Lobe::Fourier { table, scale } => {
+                let s = table.0.sample(o, u, mode)?;
+                return Some(LobeSample { wi: s.wi, f: scale * s.f, pdf: s.pdf });
             }
             Lobe::FresnelBlend { dist, .. } => {
                 if u_choice < 0.5 {

@@ -26,6 +26,8 @@ pub mod dielectric;
 pub mod diffuse;
 pub mod diffusetransmission;
 pub mod fibre;
+pub mod fourier;
+pub mod fourierbsdf;
 pub mod hair;
 pub mod inputs;
 pub mod interface;
@@ -84,7 +86,7 @@ const V3: Option<Syntax> = Some(Syntax::V3);
 const V4: Option<Syntax> = Some(Syntax::V4);
 
 /// Every `Material` type we render.
-pub const REGISTRY: [MaterialType; 19] = [
+pub const REGISTRY: [MaterialType; 20] = [
     ty(matte::NAME, V3, matte::read),
     ty(diffuse::NAME, V4, diffuse::read),
     ty(mirror::NAME, V3, mirror::read),
@@ -104,16 +106,12 @@ pub const REGISTRY: [MaterialType; 19] = [
     ty(interface::NAMES[2], V3, interface::read),
     ty(mix::NAME, None, mix::read),
     ty(hair::NAME, None, hair::read),
+    ty(fourier::NAME, V3, fourier::read),
 ];
 
 /// Types we do not render that still say which pbrt a file is for.
-const UNRENDERED: [(&str, Syntax); 5] = [
-    ("kdsubsurface", Syntax::V3),
-    ("fourier", Syntax::V3),
-    ("disney", Syntax::V3),
-    ("thindielectric", Syntax::V4),
-    ("measured", Syntax::V4),
-];
+const UNRENDERED: [(&str, Syntax); 4] =
+    [("kdsubsurface", Syntax::V3), ("disney", Syntax::V3), ("thindielectric", Syntax::V4), ("measured", Syntax::V4)];
 
 /// The pbrt version a material type name proves, for syntax detection.
 pub fn evidence(ty: &str) -> Option<Syntax> {
@@ -185,6 +183,10 @@ pub enum MaterialKind {
         reflectance: TexValue,
         transmittance: TexValue,
         scale: TexValue,
+    },
+    /// v3 `fourier`: a tabulated BSDF file.
+    Fourier {
+        table: fourierbsdf::Table,
     },
     /// A perfect mirror tinted by `reflectance` (`mirror`).
     Mirror {
@@ -266,6 +268,7 @@ impl MaterialDesc {
             MaterialKind::DiffuseTransmission { reflectance, .. } => diffusetransmission::mitsuba(*reflectance, e),
             MaterialKind::Coated(c) => coated::mitsuba(c, e),
             MaterialKind::Hair(_) => hair::mitsuba(e),
+            MaterialKind::Fourier { .. } => fourier::mitsuba(e),
             MaterialKind::Interface => interface::mitsuba(),
             MaterialKind::Mix { .. } => mix::mitsuba(e),
         }
@@ -389,6 +392,7 @@ impl Material {
                 diffusetransmission::lobes([*reflectance, *transmittance, *scale], i, out)
             }
             MaterialKind::Coated(c) => coated::base_lobes(c, i, out),
+            MaterialKind::Fourier { table } => out.push(fourier::lobe(*table)),
             MaterialKind::Mirror { reflectance } => mirror::lobes(*reflectance, i, out),
             MaterialKind::Dielectric { eta, dispersion, kr, kt, roughness, remap } => {
                 let eta = dielectric::Eta { mean: *eta, dispersion: dispersion.as_ref() };

@@ -15,6 +15,7 @@ pub enum Approx {
     UnsupportedTexture,
     MissingImage,
     UnreadablePtex,
+    UnreadableBsdfFile,
     Motion,
     FilmType,
     ColorSpace,
@@ -22,13 +23,14 @@ pub enum Approx {
 }
 
 impl Approx {
-    pub const ALL: [Approx; 10] = [
+    pub const ALL: [Approx; 11] = [
         Approx::CoatInBlend,
         Approx::HairInBlend,
         Approx::UnsupportedMaterial,
         Approx::UnsupportedTexture,
         Approx::MissingImage,
         Approx::UnreadablePtex,
+        Approx::UnreadableBsdfFile,
         Approx::Motion,
         Approx::FilmType,
         Approx::ColorSpace,
@@ -50,6 +52,7 @@ impl Approx {
             Approx::UnreadablePtex => {
                 "the Ptex file cannot be read, or has other than 1 or 3 channels; black, as pbrt renders it"
             }
+            Approx::UnreadableBsdfFile => "the BSDF file cannot be read; black, as pbrt-v3 renders it",
             Approx::Motion => {
                 "a moving shape inside an object definition keeps its start transform (motion nests there in pbrt)"
             }

@@ -39,4 +39,5 @@ fn every_input_that_crashed_a_fuzz_target_is_answered() {
     assert!(run("image", &["tools/fuzz/seeds/image"], fuzzing::image) >= 2);
     assert!(run("nanovdb", &["tests/data/nanovdb"], fuzzing::nanovdb) >= 1);
     assert!(run("ptex", &["pbrt-scenes/verify/textures"], fuzzing::ptex) >= 4);
+    assert!(run("fourier", &["pbrt-scenes/verify/bsdfs"], fuzzing::fourier) >= 1);
 }

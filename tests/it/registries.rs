@@ -50,6 +50,7 @@ fn material_variant(name: &str) -> &'static str {
         "interface" | "none" | "" => "Interface",
         "mix" => "Mix",
         "hair" => "Hair",
+        "fourier" => "Fourier",
         other => panic!("material {other:?} is registered but this test does not know it"),
     }
 }
@@ -78,6 +79,7 @@ fn every_registered_material_type_reads_as_itself() {
     for name in names {
         let (named, params) = match name {
             "mix" => (named, "\"string namedmaterial1\" \"a\" \"string namedmaterial2\" \"b\""),
+            "fourier" => ("", "\"string bsdffile\" \"bsdfs/glazed.bsdf\""),
             _ => ("", ""),
         };
         let world = format!("{named}\nMaterial \"{name}\" {params}\nShape \"sphere\"");
