@@ -43,6 +43,36 @@ impl Axis {
         Axis { at, w, k }
     }
 
+    /// Splits off the texels below 0, placed at the far end of a neighbour of `size`
+    /// texels; all of it where none is inside.
+    fn split_low(&mut self, size: i32) -> Axis {
+        let w = -self.at;
+        if w < self.w {
+            let part = self.part(size - w, 0, w);
+            self.drop_front(w);
+            self.at = 0;
+            part
+        } else {
+            let part = Axis { at: self.at + size, ..*self };
+            (self.at, self.w) = (0, 0);
+            part
+        }
+    }
+
+    /// Splits off the texels past `size`, placed at the start of the neighbour.
+    fn split_high(&mut self, size: i32) -> Axis {
+        let w = self.at + self.w - size;
+        if w < self.w {
+            let part = self.part(0, self.w - w, w);
+            self.w -= w;
+            part
+        } else {
+            let part = Axis { at: self.at - size, ..*self };
+            (self.at, self.w) = (0, 0);
+            part
+        }
+    }
+
     fn flip(&mut self, size: i32) {
         self.at = size - self.at - self.w;
         self.k[..self.w as usize].reverse();
@@ -137,64 +167,33 @@ impl Kernel {
         }
     }
 
-    /// Splits off the part left of u = 0 (Ptex's `splitL`), placed in the neighbour's
-    /// frame before rotation.
+    /// Splits off the part past one edge (Ptex's `splitL`, `splitR`, `splitB`,
+    /// `splitT`): along u or v, below texel 0 (`low`) or past the last, placed in the
+    /// neighbour's frame before rotation.
+    fn split(&mut self, along_u: bool, low: bool) -> Kernel {
+        let size = if along_u { self.res.su() } else { self.res.sv() };
+        let a = if along_u { &mut self.u } else { &mut self.v };
+        let whole = if low { -a.at >= a.w } else { a.at + a.w - size >= a.w };
+        let part = if low { a.split_low(size) } else { a.split_high(size) };
+        // A piece keeps the kernel's turns only where it is the whole kernel.
+        let rot = if whole { self.rot } else { 0 };
+        if along_u { Kernel { u: part, rot, ..*self } } else { Kernel { v: part, rot, ..*self } }
+    }
+
     fn split_left(&mut self) -> Kernel {
-        let w = -self.u.at;
-        if w < self.u.w {
-            let part = Kernel { u: self.u.part(self.res.su() - w, 0, w), rot: 0, ..*self };
-            self.u.drop_front(w);
-            self.u.at = 0;
-            part
-        } else {
-            let mut part = *self;
-            part.u.at += self.res.su();
-            (self.u.at, self.u.w) = (0, 0);
-            part
-        }
+        self.split(true, true)
     }
 
     fn split_right(&mut self) -> Kernel {
-        let w = self.u.at + self.u.w - self.res.su();
-        if w < self.u.w {
-            let part = Kernel { u: self.u.part(0, self.u.w - w, w), rot: 0, ..*self };
-            self.u.w -= w;
-            part
-        } else {
-            let mut part = *self;
-            part.u.at -= self.res.su();
-            (self.u.at, self.u.w) = (0, 0);
-            part
-        }
+        self.split(true, false)
     }
 
     fn split_bottom(&mut self) -> Kernel {
-        let w = -self.v.at;
-        if w < self.v.w {
-            let part = Kernel { v: self.v.part(self.res.sv() - w, 0, w), rot: 0, ..*self };
-            self.v.drop_front(w);
-            self.v.at = 0;
-            part
-        } else {
-            let mut part = *self;
-            part.v.at += self.res.sv();
-            (self.v.at, self.v.w) = (0, 0);
-            part
-        }
+        self.split(false, true)
     }
 
     fn split_top(&mut self) -> Kernel {
-        let w = self.v.at + self.v.w - self.res.sv();
-        if w < self.v.w {
-            let part = Kernel { v: self.v.part(0, self.v.w - w, w), rot: 0, ..*self };
-            self.v.w -= w;
-            part
-        } else {
-            let mut part = *self;
-            part.v.at -= self.res.sv();
-            (self.v.at, self.v.w) = (0, 0);
-            part
-        }
+        self.split(false, false)
     }
 
     fn swap_uv(&mut self) {
