@@ -104,6 +104,8 @@ impl FourierTable {
             offset.push(o);
             m.push(len);
         }
+        // The longest series stored, not the header's claim: each lookup allocates it.
+        let m_max = m.iter().copied().max().unwrap_or(0).max(1) as usize;
         let a0 = (0..pairs).map(|i| if m[i] > 0 { a[offset[i] as usize] } else { 0.0 }).collect();
         let ordered = mu.windows(2).all(|w| w[0] < w[1]) && mu.iter().all(|x| x.is_finite());
         if !ordered || a.iter().chain(&cdf).any(|x| !x.is_finite()) {
@@ -278,15 +280,13 @@ fn fourier(a: &[f32], m: usize, cos_phi: f64) -> f32 {
 fn sample_fourier(ak: &[f32], m: usize, u: f32) -> (f32, f32, f32) {
     let flip = u >= 0.5;
     let u = if flip { 1.0 - 2.0 * (u - 0.5) } else { u * 2.0 } as f64;
-    let (mut a, mut b, mut phi) = (0.0f64, PI, 0.5 * PI);
     let a0 = ak[0] as f64;
-    let (mut big_f, mut f);
-    loop {
+    // F(φ) - u·a0·π and its derivative f(φ), by the sines' and cosines' recurrences.
+    let series = |phi: f64| {
         let cos_phi = phi.cos();
         let sin_phi = (1.0 - cos_phi * cos_phi).max(0.0).sqrt();
         let (mut cos_prev, mut cos_cur, mut sin_prev, mut sin_cur) = (cos_phi, 1.0, -sin_phi, 0.0);
-        big_f = a0 * phi;
-        f = a0;
+        let (mut big_f, mut f) = (a0 * phi, a0);
         for (k, &a_k) in ak.iter().enumerate().take(m).skip(1) {
             let sin_next = 2.0 * cos_phi * sin_cur - sin_prev;
             let cos_next = 2.0 * cos_phi * cos_cur - cos_prev;
@@ -294,7 +294,14 @@ fn sample_fourier(ak: &[f32], m: usize, u: f32) -> (f32, f32, f32) {
             big_f += a_k as f64 * (1.0 / k as f32) as f64 * sin_next;
             f += a_k as f64 * cos_next;
         }
-        big_f -= u * a0 * PI;
+        (big_f - u * a0 * PI, f)
+    };
+    let (mut a, mut b, mut phi) = (0.0f64, PI, 0.5 * PI);
+    let (mut big_f, mut f) = series(phi);
+    // DEVIATION(pbrt): robustness. pbrt-v3 iterates until |F| < 1e-6; with large
+    // coefficients (a damaged table) rounding keeps |F| above that while Newton stalls
+    // inside the bracket, so pbrt-v3 never returns. 100 steps, then φ as it stands.
+    for _ in 0..100 {
         if big_f > 0.0 {
             b = phi;
         } else {
@@ -307,6 +314,7 @@ fn sample_fourier(ak: &[f32], m: usize, u: f32) -> (f32, f32, f32) {
         if !(phi > a && phi < b) {
             phi = 0.5 * (a + b);
         }
+        (big_f, f) = series(phi);
     }
     if flip {
         phi = 2.0 * PI - phi;
