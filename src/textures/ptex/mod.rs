@@ -1,6 +1,7 @@
 //! `Texture "name" "float|spectrum" "ptex"`: per-face textures from a Ptex file, looked
 //! up by the hit's face index (`faceIndices` of a mesh, `face_indices` of a PLY) and
-//! its (u, v), through the Ptex library's B-spline filter.
+//! its (u, v), through the Ptex library's filters: B-spline on quad meshes
+//! ([`filter`]), Gaussian on triangle meshes ([`triangle`]).
 //!
 //! ```text
 //! Texture "skin" "spectrum" "ptex" "string filename" "head.ptx" "float gamma" 2.2        # v3
