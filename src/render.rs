@@ -82,8 +82,8 @@ pub struct RenderScene {
     pub fixes: Fixes,
     /// The file's pbrt version, whose integrator's rules the render follows.
     pub syntax: Syntax,
-    /// Whether shading uses a pixel's footprint (bump maps, noise textures): camera
-    /// rays then carry differentials.
+    /// Whether shading uses a pixel's footprint (bump maps, noise textures, `ptex`):
+    /// camera rays then carry differentials.
     pub needs_differentials: bool,
     /// Whether a texture reads the footprint in (u, v) (`ptex`).
     pub needs_duv: bool,
@@ -397,7 +397,7 @@ impl RenderScene {
 
     /// The BSDF at a hit (`None` for interfaces), in the shading frame.
     /// `fp`: how the point moves across a pixel, where the camera ray's differentials
-    /// say (bump maps and noise textures use it).
+    /// say (bump maps, noise textures and `ptex` use it).
     pub fn bsdf(&self, hit: &Hit, si: &SurfaceInteraction, fp: &Footprint) -> Option<Bsdf> {
         let duv = if self.needs_duv && *fp != Footprint::default() { fp.duv_dxy(si) } else { [0.0; 4] };
         let ctx = || TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, dpdx: fp.dpdx, dpdy: fp.dpdy, duv, face: si.face };
