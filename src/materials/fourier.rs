@@ -44,7 +44,12 @@ fn table(bytes: &[u8]) -> Result<&'static FourierTable, String> {
 }
 
 pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
-    let name = p.string("bsdffile")?.unwrap_or_default();
+    // A missing parameter is a mistake in the file, as for `imagemap` and `ptex`; a
+    // file named but unreadable is what pbrt-v3 renders black.
+    let name = p.string("bsdffile")?.ok_or_else(|| {
+        p.wrong_type()
+            .unwrap_or_else(|| crate::parser::error::Diagnostic::error(at, "fourier needs \"string bsdffile\""))
+    })?;
     let name_at = crate::scene::values::span_of(p, "bsdffile").unwrap_or(at);
     let table = {
         let spectra = r.spectra();
@@ -53,7 +58,6 @@ pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mat
     match table {
         Ok(table) => Ok(MaterialKind::Fourier { table: Table(table) }),
         Err(why) => {
-            let why = if name.is_empty() { "no \"string bsdffile\"".to_string() } else { why };
             r.approximate(name_at, format!("fourier \"{name}\" ({why})"), Approx::UnreadableBsdfFile);
             Ok(MaterialKind::Diffuse { reflectance: TexValue::Const(Vec3::ZERO) })
         }

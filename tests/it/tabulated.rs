@@ -35,6 +35,9 @@ fn an_unreadable_bsdf_file_is_black_and_noted() {
         assert!(noted[0].how.contains("black") && noted[0].line == 2, "{:?}", noted[0]);
         assert!(matches!(s.materials[0].kind, MaterialKind::Diffuse { .. }));
     }
+    let e =
+        crate::common::load("WorldBegin\nMaterial \"fourier\"\nShape \"sphere\"\nWorldEnd\n").unwrap_err().to_string();
+    assert!(e.contains("inline.pbrt:2:") && e.contains("needs \"string bsdffile\""), "{e}");
     let s = scene(&format!(
         "WorldBegin\nMaterial \"fourier\" \"string bsdffile\" \"{dir}/glazed.bsdf\"\nShape \"sphere\"\nWorldEnd\n"
     ));
