@@ -10,6 +10,7 @@
 //! `eta`).
 
 use super::transport::TransportMode;
+use crate::math::catmull_rom;
 use crate::spectrum::Rgb;
 use glam::Vec3;
 use std::f64::consts::PI;
@@ -117,8 +118,8 @@ impl FourierTable {
     /// The summed coefficients at (μi, μo), per channel `m_max` apart, and the longest
     /// series among them; `None` outside the nodes.
     fn coefficients(&self, mu_i: f32, mu_o: f32, channels: usize) -> Option<(Vec<f32>, usize)> {
-        let (oi, wi) = catmull_rom_weights(&self.mu, mu_i)?;
-        let (oo, wo) = catmull_rom_weights(&self.mu, mu_o)?;
+        let (oi, wi) = catmull_rom::weights(&self.mu, mu_i)?;
+        let (oo, wo) = catmull_rom::weights(&self.mu, mu_o)?;
         let n = self.mu.len();
         let mut ak = vec![0.0f32; self.m_max * channels];
         let mut m_max = 0;
@@ -175,7 +176,7 @@ impl FourierTable {
     pub fn pdf(&self, o: Vec3, i: Vec3) -> f32 {
         let (mu_i, mu_o) = (-i.z, o.z);
         let Some((ak, m)) = self.coefficients(mu_i, mu_o, 1) else { return 0.0 };
-        let Some((oo, wo)) = catmull_rom_weights(&self.mu, mu_o) else { return 0.0 };
+        let Some((oo, wo)) = catmull_rom::weights(&self.mu, mu_o) else { return 0.0 };
         let n = self.mu.len();
         let rho: f32 = (0..4)
             .filter(|&k| wo[k] != 0.0)
@@ -189,7 +190,7 @@ impl FourierTable {
     /// the luminance series.
     pub fn sample(&self, o: Vec3, u: [f32; 2], mode: TransportMode) -> Option<Sampled> {
         let mu_o = o.z;
-        let (mu_i, pdf_mu) = sample_catmull_rom_2d(&self.mu, &self.a0, &self.cdf, mu_o, u[1])?;
+        let (mu_i, pdf_mu) = catmull_rom::sample_2d(&self.mu, &self.mu, &self.a0, &self.cdf, mu_o, u[1])?;
         let (ak, m) = self.coefficients(mu_i, mu_o, self.channels)?;
         let (y, pdf_phi, phi) = sample_fourier(&ak, m, u[0]);
         let pdf = (pdf_phi * pdf_mu).max(0.0);
@@ -213,54 +214,6 @@ fn cos_d_phi(a: Vec3, b: Vec3) -> f32 {
         return 1.0;
     }
     ((a.x * b.x + a.y * b.y) / ab.sqrt()).clamp(-1.0, 1.0)
-}
-
-/// pbrt's `FindInterval`: the last i in [0, n - 2] with `pred(i)`, by bisection.
-fn find_interval(size: usize, pred: impl Fn(usize) -> bool) -> usize {
-    let (mut first, mut len) = (0usize, size);
-    while len > 0 {
-        let half = len >> 1;
-        let middle = first + half;
-        if pred(middle) {
-            first = middle + 1;
-            len -= half + 1;
-        } else {
-            len = half;
-        }
-    }
-    (first as i64 - 1).clamp(0, size as i64 - 2) as usize
-}
-
-/// pbrt's `CatmullRomWeights`: the first of four nodes and their weights at `x`.
-fn catmull_rom_weights(nodes: &[f32], x: f32) -> Option<(i32, [f32; 4])> {
-    let n = nodes.len();
-    if !(x >= nodes[0] && x <= nodes[n - 1]) {
-        return None;
-    }
-    let idx = find_interval(n, |i| nodes[i] <= x);
-    let (x0, x1) = (nodes[idx], nodes[idx + 1]);
-    let t = (x - x0) / (x1 - x0);
-    let (t2, t3) = (t * t, t * t * t);
-    let mut w = [0.0, 2.0 * t3 - 3.0 * t2 + 1.0, -2.0 * t3 + 3.0 * t2, 0.0];
-    if idx > 0 {
-        let w0 = (t3 - 2.0 * t2 + t) * (x1 - x0) / (x1 - nodes[idx - 1]);
-        w[0] = -w0;
-        w[2] += w0;
-    } else {
-        let w0 = t3 - 2.0 * t2 + t;
-        w[1] -= w0;
-        w[2] += w0;
-    }
-    if idx + 2 < n {
-        let w3 = (t3 - t2) * (x1 - x0) / (nodes[idx + 2] - x0);
-        w[1] -= w3;
-        w[3] = w3;
-    } else {
-        let w3 = t3 - t2;
-        w[1] -= w3;
-        w[2] += w3;
-    }
-    Some((idx as i32 - 1, w))
 }
 
 /// pbrt's `Fourier`: Σ a_k cos(kφ), by the cosines' recurrence, in f64.
@@ -320,50 +273,6 @@ fn sample_fourier(ak: &[f32], m: usize, u: f32) -> (f32, f32, f32) {
         phi = 2.0 * PI - phi;
     }
     (f as f32, (f / a0 / (2.0 * PI)) as f32, phi as f32)
-}
-
-/// pbrt's `SampleCatmullRom2D` over the table's (μo, μi) grid: μi drawn with density
-/// ∝ the first coefficient at `alpha` = μo; returns (μi, its density).
-fn sample_catmull_rom_2d(nodes: &[f32], values: &[f32], cdf: &[f32], alpha: f32, u: f32) -> Option<(f32, f32)> {
-    let n = nodes.len();
-    let (offset, w) = catmull_rom_weights(nodes, alpha)?;
-    let at = |array: &[f32], idx: usize| -> f32 {
-        (0..4).filter(|&i| w[i] != 0.0).map(|i| array[(offset + i as i32) as usize * n + idx] * w[i]).sum()
-    };
-    let maximum = at(cdf, n - 1);
-    let u = u * maximum;
-    let idx = find_interval(n, |i| at(cdf, i) <= u);
-    let (f0, f1) = (at(values, idx), at(values, idx + 1));
-    let (x0, x1) = (nodes[idx], nodes[idx + 1]);
-    let width = x1 - x0;
-    let u = (u - at(cdf, idx)) / width;
-    let d0 = if idx > 0 { width * (f1 - at(values, idx - 1)) / (x1 - nodes[idx - 1]) } else { f1 - f0 };
-    let d1 = if idx + 2 < n { width * (at(values, idx + 2) - f0) / (nodes[idx + 2] - x0) } else { f1 - f0 };
-    let mut t = if f0 != f1 { (f0 - (f0 * f0 + 2.0 * u * (f1 - f0)).max(0.0).sqrt()) / (f0 - f1) } else { u / f0 };
-    let (mut a, mut b) = (0.0f32, 1.0f32);
-    let mut fhat;
-    for _ in 0..100 {
-        if !(t >= a && t <= b) {
-            t = 0.5 * (a + b);
-        }
-        let big = t
-            * (f0
-                + t * (0.5 * d0
-                    + t * ((1.0 / 3.0) * (-2.0 * d0 - d1) + f1 - f0 + t * (0.25 * (d0 + d1) + 0.5 * (f0 - f1)))));
-        fhat = f0 + t * (d0 + t * (-2.0 * d0 - d1 + 3.0 * (f1 - f0) + t * (d0 + d1 + 2.0 * (f0 - f1))));
-        if (big - u).abs() < 1e-6 || b - a < 1e-6 {
-            return Some((x0 + width * t, fhat / maximum));
-        }
-        if big - u < 0.0 {
-            a = t;
-        } else {
-            b = t;
-        }
-        t -= (big - u) / fhat;
-    }
-    // DEVIATION(pbrt): robustness. pbrt-v3 iterates without a bound; a damaged table
-    // (a negative coefficient) can keep Newton from converging.
-    None
 }
 
 /// A shared table, compared by address.

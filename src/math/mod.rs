@@ -3,6 +3,7 @@
 
 pub mod animated;
 pub mod bounds;
+pub mod catmull_rom;
 pub mod equal_area;
 pub mod float;
 pub mod frame;
