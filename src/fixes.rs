@@ -30,6 +30,7 @@ pub enum Fix {
     MediumEmission,
     MotionTime,
     MapIlluminance,
+    SubsurfaceWalk,
 }
 
 /// Name, the pbrt versions that have the bug, and what fixing it changes.
@@ -41,7 +42,7 @@ pub struct FixInfo {
 }
 
 /// Every fix, in the order `--fix help` lists them.
-pub const FIXES: [FixInfo; 14] = [
+pub const FIXES: [FixInfo; 15] = [
     FixInfo {
         fix: Fix::PlasticFresnel,
         name: "plastic-fresnel",
@@ -146,6 +147,15 @@ pub const FIXES: [FixInfo; 14] = [
         versions: "v4",
         effect: "an environment map's `illuminance` gives an upward-facing surface that many lux; pbrt-v4 \
                  counts each texel's solid angle as half what it is, so the sky comes out twice as bright",
+    },
+    FixInfo {
+        fix: Fix::SubsurfaceWalk,
+        name: "subsurface-walk",
+        versions: "v3, v4",
+        effect: "light under a subsurface material's boundary walks through a homogeneous medium of its \
+                 coefficients (vcm and bdpt, for the files whose pbrt takes the BSSRDF): the exact answer \
+                 where pbrt's photon beam diffusion approximates it, which assumes a flat, semi-infinite \
+                 slab and so brightens thin parts and blurs edges",
     },
 ];
 

@@ -126,6 +126,56 @@ pub struct RenderScene {
     spectral: Option<PassCell>,
     /// Spectral, with a material that disperses.
     dispersive: bool,
+    /// Light crosses `subsurface` boundaries through their BSSRDF (vcm and bdpt, for
+    /// files whose pbrt integrator takes it: [`crate::materials::subsurface::follows_bssrdf`]);
+    /// otherwise they are the glass pbrt's other integrators see.
+    pub subsurface: bool,
+    /// Per material: whether light crossing it goes into its BSSRDF.
+    bssrdf_materials: Vec<bool>,
+}
+
+/// The rendered media, each shape's media on either side, and per material whether its
+/// BSSRDF is followed ([`RenderScene::subsurface`]).
+struct Interiors {
+    media: Vec<crate::media::Medium>,
+    world_shape_media: Vec<MediumInterface>,
+    object_shape_media: Vec<Vec<MediumInterface>>,
+    bssrdf: Vec<bool>,
+}
+
+/// The scene's media, and what becomes of `subsurface` materials: for vcm and bdpt, in
+/// files whose pbrt integrator takes the BSSRDF, it is followed, or with `--fix
+/// subsurface-walk` the interior is a homogeneous medium inside every shape of the
+/// material (where its coefficients are constants); otherwise the boundary is all.
+fn interiors(scene: &SceneDescription, bidirectional: bool) -> Interiors {
+    let mut media: Vec<crate::media::Medium> = scene.media.iter().map(|m| m.kind.clone()).collect();
+    let mut world_shape_media: Vec<MediumInterface> = scene.shapes.iter().map(|s| s.media).collect();
+    let mut object_shape_media: Vec<Vec<MediumInterface>> =
+        scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.media).collect()).collect();
+    let follows =
+        bidirectional && crate::materials::subsurface::follows_bssrdf(scene.syntax, &scene.integrator.requested);
+    let walk = follows && scene.fixes.has(Fix::SubsurfaceWalk);
+    let space = scene.spectral.then_some(scene.color_space);
+    let mut bssrdf = vec![false; scene.materials.len()];
+    for (k, m) in scene.materials.iter().enumerate() {
+        let MaterialKind::Subsurface(s) = &m.kind else { continue };
+        let Some(medium) = walk.then(|| crate::materials::subsurface::walk_medium(s, space)).flatten() else {
+            bssrdf[k] = follows;
+            continue;
+        };
+        media.push(medium);
+        let inside = Some(media.len() as u32 - 1);
+        let shapes = scene.shapes.iter().zip(world_shape_media.iter_mut());
+        let objects = scene
+            .objects
+            .iter()
+            .zip(object_shape_media.iter_mut())
+            .flat_map(|(o, mi)| o.shapes.iter().zip(mi.iter_mut()));
+        for (_, mi) in shapes.chain(objects).filter(|(shape, _)| shape.material as usize == k) {
+            mi.inside = inside;
+        }
+    }
+    Interiors { media, world_shape_media, object_shape_media, bssrdf }
 }
 
 impl RenderScene {
@@ -184,9 +234,7 @@ impl RenderScene {
             pbrt_sampling: !scene.fixes.has(Fix::ShapeSampling) && !bidirectional,
         };
         let emitters = area_lights(&geometry, &shape_area_lights, &area_params, rules, &mut lights);
-        let media: Vec<crate::media::Medium> = scene.media.iter().map(|m| m.kind.clone()).collect();
-        let world_shape_media = scene.shapes.iter().map(|s| s.media).collect();
-        let object_shape_media = scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.media).collect()).collect();
+        let Interiors { media, world_shape_media, object_shape_media, bssrdf } = interiors(scene, bidirectional);
         let light_media = scene.lights.iter().map(|l| l.medium).collect();
         let powers: Vec<f64> = lights.iter().map(|l| l.power(world)).collect();
         let medium_emitters = medium_emitters(&media, scene);
@@ -234,6 +282,8 @@ impl RenderScene {
                 PassCell::new(scene.color_space, scene.film.sensor.clone(), draw)
             }),
             dispersive: scene.spectral && scene.materials.iter().any(|m| m.kind.disperses()),
+            subsurface: bssrdf.contains(&true),
+            bssrdf_materials: bssrdf,
         }
     }
 
@@ -307,11 +357,36 @@ impl RenderScene {
 
     /// The material of a hit shape.
     pub fn material(&self, hit: &Hit) -> &Material {
-        let idx = match self.geometry.shape_of(hit) {
+        &self.materials[self.material_index(hit) as usize]
+    }
+
+    /// The index of the material at a hit (in `materials`).
+    pub fn material_index(&self, hit: &Hit) -> u32 {
+        match self.geometry.shape_of(hit) {
             (None, s) => self.world_shape_material[s as usize],
             (Some(o), s) => self.object_shape_material[o as usize][s as usize],
-        };
-        &self.materials[idx as usize]
+        }
+    }
+
+    /// Whether light crossing the surface at a hit goes into a BSSRDF
+    /// ([`RenderScene::subsurface`]).
+    #[inline]
+    pub fn has_bssrdf(&self, hit: &Hit) -> bool {
+        self.subsurface && self.bssrdf_materials[self.material_index(hit) as usize]
+    }
+
+    /// Where light crosses a `subsurface` boundary at a hit into its BSSRDF: the profile
+    /// there, the boundary's index and the material (probe rays look for it); `None`
+    /// unless the render follows BSSRDFs ([`RenderScene::subsurface`]).
+    pub fn bssrdf(&self, hit: &Hit, si: &SurfaceInteraction) -> Option<(crate::materials::bssrdf::Profile, f32, u32)> {
+        if !self.has_bssrdf(hit) {
+            return None;
+        }
+        let idx = self.material_index(hit);
+        let ctx = || TexCtx { p: si.p.0, n: si.n.0, uv: si.uv, face: si.face, ..TexCtx::default() };
+        let shading = Shading { textures: &self.textures, ctx, spectral: self.pass_spectrum() };
+        let (profile, eta) = self.materials[idx as usize].bssrdf(shading)?;
+        Some((profile, eta, idx))
     }
 
     /// The closest hit along the ray that no alpha mask cuts away.

@@ -21,6 +21,7 @@ pub mod preview;
 pub mod report;
 pub mod run;
 pub mod sppm;
+pub mod subsurface;
 pub mod vcm;
 pub mod volume;
 

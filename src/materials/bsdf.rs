@@ -105,6 +105,11 @@ impl Bsdf {
         }
     }
 
+    /// The shading frame: (s, t, n).
+    pub fn frame(&self) -> [Vec3; 3] {
+        [self.ss, self.ts, self.ns]
+    }
+
     pub fn convention(&self) -> Convention {
         if self.ng == Vec3::ZERO { Convention::PbrtV4 } else { Convention::PbrtV3 }
     }

@@ -39,6 +39,10 @@ pub enum Lobe {
     /// Ashikhmin–Shirley diffuse + glossy (pbrt `FresnelBlend`, `substrate`).
     /// `scale` multiplies the whole lobe (a `mix` weight: f is not linear in rd, rs).
     FresnelBlend { rd: Rgb, rs: Rgb, dist: TrowbridgeReitz, scale: Rgb },
+    /// Where light enters a BSSRDF's material (pbrt-v3's `SeparableBSSRDFAdapter`,
+    /// pbrt-v4's `NormalizedFresnelBxDF`): the Fresnel transmittance into index `eta`,
+    /// normalised to reflect all it receives, times `scale`.
+    NormalizedFresnel { eta: f32, scale: Rgb },
     /// A tabulated BSDF in pbrt-v3's Fourier basis, reflecting and transmitting, times
     /// `scale` (a `mix` weight).
     Fourier { table: super::fourierbsdf::Table, scale: Rgb },
@@ -94,7 +98,10 @@ fn pow5(x: f32) -> f32 {
 impl Lobe {
     pub fn kind(&self) -> Kind {
         match self {
-            Lobe::Lambert(_) | Lobe::LambertTransmission(_) | Lobe::OrenNayar { .. } => Kind::Diffuse,
+            Lobe::Lambert(_)
+            | Lobe::LambertTransmission(_)
+            | Lobe::OrenNayar { .. }
+            | Lobe::NormalizedFresnel { .. } => Kind::Diffuse,
             Lobe::MicrofacetReflection { .. }
             | Lobe::MicrofacetTransmission { .. }
             | Lobe::RoughDielectric { .. }
@@ -143,6 +150,7 @@ impl Lobe {
             Lobe::RoughDielectric { r, t, dist, eta } => Lobe::RoughDielectric { r: w * r, t: w * t, dist, eta },
             Lobe::FresnelBlend { rd, rs, dist, scale } => Lobe::FresnelBlend { rd, rs, dist, scale: w * scale },
             Lobe::Fourier { table, scale } => Lobe::Fourier { table, scale: w * scale },
+            Lobe::NormalizedFresnel { eta, scale } => Lobe::NormalizedFresnel { eta, scale: w * scale },
         }
     }
 
@@ -167,13 +175,16 @@ impl Lobe {
             },
             Lobe::FresnelBlend { rd, rs, dist, scale } if same() => scale * fresnel_blend(o, i, rd, rs, dist),
             Lobe::Fourier { table, scale } => scale * table.0.f(o, i, mode),
+            Lobe::NormalizedFresnel { eta, scale } if same() => scale * normalized_fresnel(i, eta, mode),
             _ => Vec3::ZERO,
         }
     }
 
     pub fn pdf(&self, o: Vec3, i: Vec3) -> f32 {
         match *self {
-            Lobe::Lambert(_) | Lobe::OrenNayar { .. } if same_hemisphere(o, i) => i.z.abs() * FRAC_1_PI,
+            Lobe::Lambert(_) | Lobe::OrenNayar { .. } | Lobe::NormalizedFresnel { .. } if same_hemisphere(o, i) => {
+                i.z.abs() * FRAC_1_PI
+            }
             Lobe::LambertTransmission(_) if !same_hemisphere(o, i) => i.z.abs() * FRAC_1_PI,
             Lobe::MicrofacetReflection { dist, .. } if same_hemisphere(o, i) => {
                 let wh = (o + i).normalize_or_zero();
@@ -231,7 +242,7 @@ impl Lobe {
         };
         let mirror = Vec3::new(-o.x, -o.y, o.z);
         let i = match *self {
-            Lobe::Lambert(_) | Lobe::OrenNayar { .. } => cosine_on(o, u, true),
+            Lobe::Lambert(_) | Lobe::OrenNayar { .. } | Lobe::NormalizedFresnel { .. } => cosine_on(o, u, true),
             Lobe::LambertTransmission(_) => cosine_on(o, u, false),
             Lobe::SpecularReflection { r, fresnel } => return specular(mirror, fresnel.eval(mirror.z) * r, 1.0),
             Lobe::SpecularTransmission { t, eta } => {
@@ -298,6 +309,15 @@ impl Lobe {
         let pdf = self.pdf(o, i);
         (pdf > 0.0).then(|| LobeSample { wi: i, f: self.f(o, i, mode, true), pdf })
     }
+}
+
+/// The BSSRDF's directional term Sw = (1 − Fr(cos θi)) / (c π), c = 1 − 2 F̄₁(1/η)
+/// normalising it; radiance takes η² more (pbrt's adjoint factor: the η⁻² the path
+/// took refracting in is paid back on the way out).
+fn normalized_fresnel(i: Vec3, eta: f32, mode: TransportMode) -> f32 {
+    let c = 1.0 - 2.0 * super::bssrdf::fresnel_moment1(1.0 / eta);
+    let f = (1.0 - fr_dielectric(i.z, 1.0, eta)) / (c * std::f32::consts::PI);
+    if mode == TransportMode::Radiance { f * eta * eta } else { f }
 }
 
 /// The refracted direction through a smooth interface into index `eta` and the

@@ -20,6 +20,7 @@
 //! lists the `match`es to extend ([`Material`]'s lobes, [`MaterialDesc::mitsuba`]).
 
 mod bsdf;
+pub mod bssrdf;
 pub mod coated;
 pub mod conductor;
 pub mod dielectric;
@@ -40,6 +41,7 @@ pub mod mix;
 pub mod params;
 pub mod plastic;
 pub mod substrate;
+pub mod subsurface;
 pub mod translucent;
 mod transport;
 pub mod uber;
@@ -86,7 +88,7 @@ const V3: Option<Syntax> = Some(Syntax::V3);
 const V4: Option<Syntax> = Some(Syntax::V4);
 
 /// Every `Material` type we render.
-pub const REGISTRY: [MaterialType; 20] = [
+pub const REGISTRY: [MaterialType; 22] = [
     ty(matte::NAME, V3, matte::read),
     ty(diffuse::NAME, V4, diffuse::read),
     ty(mirror::NAME, V3, mirror::read),
@@ -107,11 +109,13 @@ pub const REGISTRY: [MaterialType; 20] = [
     ty(mix::NAME, None, mix::read),
     ty(hair::NAME, None, hair::read),
     ty(fourier::NAME, V3, fourier::read),
+    ty(subsurface::NAMES[0], None, subsurface::read),
+    ty(subsurface::NAMES[1], V3, subsurface::read),
 ];
 
 /// Types we do not render that still say which pbrt a file is for.
-const UNRENDERED: [(&str, Syntax); 4] =
-    [("kdsubsurface", Syntax::V3), ("disney", Syntax::V3), ("thindielectric", Syntax::V4), ("measured", Syntax::V4)];
+const UNRENDERED: [(&str, Syntax); 3] =
+    [("disney", Syntax::V3), ("thindielectric", Syntax::V4), ("measured", Syntax::V4)];
 
 /// The pbrt version a material type name proves, for syntax detection.
 pub fn evidence(ty: &str) -> Option<Syntax> {
@@ -184,6 +188,8 @@ pub enum MaterialKind {
         transmittance: TexValue,
         scale: TexValue,
     },
+    /// `subsurface`, v3 `kdsubsurface`: a dielectric boundary over a BSSRDF.
+    Subsurface(Box<subsurface::Subsurface>),
     /// v3 `fourier`: a tabulated BSDF file.
     Fourier {
         table: fourierbsdf::Table,
@@ -269,6 +275,7 @@ impl MaterialDesc {
             MaterialKind::Coated(c) => coated::mitsuba(c, e),
             MaterialKind::Hair(_) => hair::mitsuba(e),
             MaterialKind::Fourier { .. } => fourier::mitsuba(e),
+            MaterialKind::Subsurface(s) => subsurface::mitsuba(s, e),
             MaterialKind::Interface => interface::mitsuba(),
             MaterialKind::Mix { .. } => mix::mitsuba(e),
         }
@@ -305,7 +312,8 @@ pub struct Material {
 
 impl Material {
     pub fn from_desc(m: &MaterialDesc, fixes: Fixes) -> Material {
-        let v3 = REGISTRY.iter().any(|t| t.name == m.ty && t.syntax == V3);
+        let v3 = REGISTRY.iter().any(|t| t.name == m.ty && t.syntax == V3)
+            || matches!(&m.kind, MaterialKind::Subsurface(s) if !s.v4);
         let (max_reflectance, convention) =
             if v3 { (f32::INFINITY, Convention::PbrtV3) } else { (1.0, Convention::PbrtV4) };
         let normal_map = m.normal_map.clone();
@@ -367,6 +375,13 @@ impl Material {
         }
     }
 
+    /// A subsurface material's BSSRDF profile at a hit and the boundary's index (`None`
+    /// for other materials).
+    pub fn bssrdf(&self, at: Shading<'_, impl Fn() -> TexCtx>) -> Option<(bssrdf::Profile, f32)> {
+        let MaterialKind::Subsurface(s) = &self.kind else { return None };
+        Some((subsurface::profile(s, &self.inputs(at)), s.eta))
+    }
+
     fn inputs<'t, C: Fn() -> TexCtx>(&self, at: Shading<'t, C>) -> Inputs<'t, C> {
         let (max_reflectance, fixes) = (self.max_reflectance, self.fixes);
         Inputs { textures: at.textures, ctx: at.ctx, max_reflectance, fixes, spectral: at.spectral }
@@ -393,6 +408,7 @@ impl Material {
             }
             MaterialKind::Coated(c) => coated::base_lobes(c, i, out),
             MaterialKind::Fourier { table } => out.push(fourier::lobe(*table)),
+            MaterialKind::Subsurface(s) => subsurface::lobes(s, self.convention, i, out),
             MaterialKind::Mirror { reflectance } => mirror::lobes(*reflectance, i, out),
             MaterialKind::Dielectric { eta, dispersion, kr, kt, roughness, remap } => {
                 let eta = dielectric::Eta { mean: *eta, dispersion: dispersion.as_ref() };

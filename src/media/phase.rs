@@ -57,7 +57,7 @@ impl HenyeyGreenstein {
 }
 
 /// HG as a function of cos θ between `wo` and `wi` (pbrt's `HenyeyGreenstein`).
-fn hg(cos_theta: f32, g: f32) -> f32 {
+pub fn hg(cos_theta: f32, g: f32) -> f32 {
     let denom = 1.0 + g * g + 2.0 * g * cos_theta;
     (1.0 - g * g) / (4.0 * PI * denom * denom.max(1e-12).sqrt())
 }

@@ -316,6 +316,10 @@ pub trait Resolver {
     /// the parameter naming it.
     fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<u32>;
     fn approximate(&mut self, at: Span, what: String, how: super::approx::Approx);
+    /// A located warning (what pbrt warns about and renders anyway).
+    fn warn(&mut self, at: Span, message: String);
+    /// The pbrt version the file is read as (for types both versions have).
+    fn syntax(&self) -> crate::parser::Syntax;
     /// The named material `name`, built on first use (for `mix`); its built index.
     fn named_material(&mut self, name: &str, at: Span) -> Res<u32>;
     /// The type (as written) of a built material (a [`Resolver::named_material`] index).

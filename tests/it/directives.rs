@@ -338,16 +338,16 @@ fn named_materials_are_scoped_like_v3_and_resolve_forward_like_v4() {
         NamedMaterial "fwd" Shape "sphere"
         MakeNamedMaterial "fwd" "string type" "glass"
         MakeNamedMaterial "unused" "string type" "metal"
-        Material "kdsubsurface" Shape "disk""#,
+        Material "disney" Shape "disk""#,
     );
     let tys: Vec<&str> = s.shapes.iter().map(|x| s.materials[x.material as usize].ty.as_str()).collect();
-    assert_eq!(tys, ["mirror", "matte", "glass", "kdsubsurface"]);
+    assert_eq!(tys, ["mirror", "matte", "glass", "disney"]);
     let what: Vec<&str> = s.skipped.iter().map(|k| k.what.as_str()).collect();
     assert!(what.contains(&"MakeNamedMaterial \"unused\""), "{what:?}");
     let grey =
         pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: pbrt_sppm::scene::TexValue::Const([0.5; 3].into()) };
     assert_eq!(s.materials[3].kind, grey, "an unsupported material is drawn grey diffuse");
-    assert_eq!(s.approximated.iter().map(|a| a.what.as_str()).collect::<Vec<_>>(), ["material \"kdsubsurface\""]);
+    assert_eq!(s.approximated.iter().map(|a| a.what.as_str()).collect::<Vec<_>>(), ["material \"disney\""]);
     assert_eq!(s.materials.len(), 4, "only used materials are built");
 }
 

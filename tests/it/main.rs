@@ -34,6 +34,7 @@ mod slurm;
 mod spectral;
 mod spectral_film;
 mod stability;
+mod subsurface;
 mod tabulated;
 mod tev;
 mod tokenizer;

@@ -16,6 +16,7 @@ use super::{Pass, Technique, Techniques};
 use crate::accel::Hit;
 use crate::integrators::grid::Grid;
 use crate::integrators::sppm::{Surface, camera_ray, surface};
+use crate::integrators::subsurface;
 use crate::interaction::{Footprint, SurfaceInteraction, light_sample_point};
 use crate::lights::Light;
 use crate::materials::TransportMode;
@@ -95,12 +96,28 @@ struct Vertex<'a> {
     first_diffuse: bool,
     /// The subpath kept only its first wavelength (dispersion).
     terminated: bool,
+    /// Where light left a BSSRDF's interior toward the subpath (`subsurface`): no light
+    /// subpath reaches the vertices before it, so no technique that ends there is one,
+    /// and merging here is none.
+    exit: bool,
 }
 
 /// A connection's factor for the first lane's growth on both subpaths: it counts once
 /// (a subpath that ended its other wavelengths stands for all of them).
 fn once(v: &Vertex, lv: &LightVertex) -> f32 {
     if v.terminated && lv.terminated { crate::spectrum::transport::ONCE } else { 1.0 }
+}
+
+/// How a camera subpath leaves a vertex ([`Cameras::leave`]): its throughput,
+/// direction and partial sums after it, and the vertex it leaves from (a BSSRDF's exit,
+/// when it went through one).
+struct Leave {
+    beta: Rgb,
+    wi: Vec3,
+    partial: Partial,
+    from: Place,
+    specular: bool,
+    through_bssrdf: bool,
 }
 
 /// Where a camera ray goes next ([`Cameras::next`]). Made and taken apart once per
@@ -189,37 +206,105 @@ impl Cameras<'_> {
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
             let merges = !past_diffuse_specular && !at.is_delta();
+            let v =
+                Vertex { place, at: &at, wo, partial, len, merges, first_diffuse: !diffuse, terminated, exit: false };
             if let Some((hit, si)) = &surf
                 && pass.techniques.uses(Technique::EmitterHit)
             {
-                let v = Vertex { place, at: &at, wo, partial, len, merges, first_diffuse: !diffuse, terminated };
                 let found = beta * self.emitted(hit, si, &v, origin, dist2);
                 *if in_prefix { &mut prefix } else { &mut out.traced } += found;
             }
             if let Some((hit, _)) = &surf {
                 scene.terminate_if_dispersed(hit, &mut beta, &mut terminated);
             }
-            let v = Vertex { place, at: &at, wo, partial, len, merges, first_diffuse: !diffuse, terminated };
+            let v = Vertex { terminated, ..v };
             in_prefix &= at.is_delta();
             if len >= pass.max_len || (surf.is_some() && wo.dot(place.ng) == 0.0) {
                 break;
             }
             out.work.vertices += 1;
             if !at.is_delta() {
-                let (traced, merged) = self.at_vertex(&v, light_path, s, &mut out.work);
-                out.traced += beta * traced;
-                for (m, add) in out.merged.iter_mut().zip(merged) {
-                    *m += beta * add;
-                }
+                self.add_at_vertex(&v, beta, light_path, s, &mut out);
             }
-            let Some((b, p, specular)) = scatter(pass, &v, (beta, &mut eta_scale), s) else { break };
-            past_diffuse_specular |= specular && diffuse;
-            diffuse |= !specular;
-            (beta, partial, prev) = (b.0, p, place.p);
-            ray = place.spawn(b.1);
-            (medium, origin) = (place.toward(b.1), ray.o.0);
+            let Some(l) = self.leave(&v, surf.as_ref(), (beta, &mut eta_scale), (light_path, &mut out), s) else {
+                break;
+            };
+            if l.through_bssrdf {
+                (diffuse, past_diffuse_specular, in_prefix) = (true, false, false);
+            } else {
+                past_diffuse_specular |= l.specular && diffuse;
+                diffuse |= !l.specular;
+            }
+            (beta, partial, prev) = (l.beta, l.partial, l.from.p);
+            ray = l.from.spawn(l.wi);
+            (medium, origin) = (l.from.toward(l.wi), ray.o.0);
         }
         (out, prefix)
+    }
+
+    /// Samples how the subpath leaves `v` (`beta`: its throughput there), through a
+    /// BSSRDF where the sampled direction crosses into one (adding what the exit
+    /// vertex gives to `out`); `None` where the subpath ends.
+    fn leave(
+        &self,
+        v: &Vertex,
+        surf: Option<&(Hit, SurfaceInteraction)>,
+        (beta, eta_scale): (Rgb, &mut f32),
+        (light_path, out): (&[LightVertex], &mut PixelSample),
+        s: &mut impl Sampler,
+    ) -> Option<Leave> {
+        let eta_before = *eta_scale;
+        let ((b, wi), partial, specular) = scatter(self.pass, v, (beta, eta_scale), s)?;
+        if !self.crosses_into_bssrdf(v, surf, wi) {
+            return Some(Leave { beta: b, wi, partial, from: v.place, specular, through_bssrdf: false });
+        }
+        // Refraction's η⁻² is paid back where the light leaves (`Lobe::NormalizedFresnel`).
+        *eta_scale = eta_before;
+        let (hit, si) = surf?;
+        let ((b, wi), partial, from) = self.through_bssrdf(v, (hit, si), (b, eta_scale), light_path, out, s)?;
+        Some(Leave { beta: b, wi, partial, from, specular: false, through_bssrdf: true })
+    }
+
+    /// Whether the direction `wi` sampled at `v` crosses into a BSSRDF
+    /// ([`crate::render::RenderScene::subsurface`]).
+    fn crosses_into_bssrdf(&self, v: &Vertex, surf: Option<&(Hit, SurfaceInteraction)>, wi: Vec3) -> bool {
+        let scene = self.pass.scene;
+        scene.subsurface
+            && surf.is_some_and(|(hit, _)| scene.has_bssrdf(hit))
+            && v.wo.dot(v.place.ng) * wi.dot(v.place.ng) < 0.0
+    }
+
+    /// A camera subpath that refracted into a subsurface material at `v` (throughput
+    /// `beta` after it): the point where the light it sees left the interior, what
+    /// next-event estimation and connections give there, and the subpath sampled on
+    /// from it (throughput and direction, partial sums, the vertex); `None` where it
+    /// ends. Its partial sums start afresh there: no technique's light subpath crosses
+    /// a BSSRDF (they end where they would), so none reaches the vertices before.
+    fn through_bssrdf(
+        &self,
+        v: &Vertex,
+        (hit, si): (&Hit, &SurfaceInteraction),
+        (beta, eta_scale): (Rgb, &mut f32),
+        light_path: &[LightVertex],
+        out: &mut PixelSample,
+        s: &mut impl Sampler,
+    ) -> Option<((Rgb, Vec3), Partial, Place)> {
+        let scene = self.pass.scene;
+        let (profile, eta, material) = scene.bssrdf(hit, si)?;
+        let Scatterer::Surface(bsdf) = v.at else { return None };
+        let (po, time) = (v.place.p, v.place.time);
+        let entry = subsurface::Entry { profile, eta, material, po, frame: bsdf.frame(), time };
+        let exit = subsurface::exit(scene, &entry, s)?;
+        let beta = beta * exit.weight;
+        out.work.rays += 1;
+        let place = Place::on_surface(scene, &exit.hit, &exit.si, v.place.toward(v.wo));
+        let at = Scatterer::Surface(exit.bsdf);
+        let wo = exit.si.shading.n.0;
+        let ve = Vertex { place, at: &at, wo, partial: Partial::default(), exit: true, first_diffuse: false, ..*v };
+        out.work.vertices += 1;
+        self.add_at_vertex(&ve, beta, light_path, s, out);
+        let (b, p, _) = scatter(self.pass, &ve, (beta, eta_scale), s)?;
+        Some((b, p, place))
     }
 
     /// Where the ray finds its next vertex, in a medium or on a surface; adds the light
@@ -260,6 +345,22 @@ impl Cameras<'_> {
         }
     }
 
+    /// Adds to `out` what the techniques give at vertex `v` (throughput `beta`).
+    fn add_at_vertex(
+        &self,
+        v: &Vertex,
+        beta: Rgb,
+        light_path: &[LightVertex],
+        s: &mut impl Sampler,
+        out: &mut PixelSample,
+    ) {
+        let (traced, merged) = self.at_vertex(v, light_path, s, &mut out.work);
+        out.traced += beta * traced;
+        for (m, add) in out.merged.iter_mut().zip(merged) {
+            *m += beta * add;
+        }
+    }
+
     /// What next-event estimation and connections give at a vertex, and what merging
     /// gives, by the pilot's kinds ([`ByKind`]); `work` counts the shadow rays and merge
     /// candidates.
@@ -290,6 +391,7 @@ impl Cameras<'_> {
         }
         if t.uses(Technique::Merge)
             && v.merges
+            && !v.exit
             && (t != Techniques::Only(Technique::Merge) || v.len == 1)
             && let Some(grid) = self.grid
         {
@@ -419,7 +521,10 @@ impl Cameras<'_> {
             camera_rev: ec.pdf_rev as f64,
             light_rev: el.pdf_rev as f64,
         };
-        let f = (lv.factors(pass), v.at.factors(&pass.factors));
+        let mut f = (lv.factors(pass), v.at.factors(&pass.factors));
+        if v.exit {
+            f.1.vm = 0.0; // no merging at the exit of a BSSRDF
+        }
         let w = pass.techniques.weight(mis::connect(lv.partial, v.partial, pdfs, lv.len, f, v.merges));
         let g = v.at.cos(dir) * lv.adjoint_cos(-dir) / dist2;
         let c = (lv.beta * el.f * ec.f * (g * w * once(v, lv))).as_dvec3() * pass.scene.photon_scale;
@@ -521,6 +626,7 @@ fn scatter(
     }
     let mut partial = v.partial;
     let m = v.at.measure(smp.wi, v.place.ng);
-    partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, v.merges, v.at.factors(&pass.factors));
+    let merges_here = v.merges && !v.exit;
+    partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, merges_here, v.at.factors(&pass.factors));
     Some(((beta, smp.wi), partial, smp.specular))
 }

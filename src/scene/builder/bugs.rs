@@ -25,6 +25,7 @@ impl Builder {
                 MaterialKind::Coated(c) if syntax == Syntax::V4 && rough(&c.coat_roughness) && rough_base(&c.base) => {
                     found.push((at, Fix::LayeredWeights))
                 }
+                MaterialKind::Subsurface(_) if self.takes_bssrdf(syntax) => found.push((at, Fix::SubsurfaceWalk)),
                 _ => {}
             }
         }
@@ -114,6 +115,13 @@ impl Builder {
 
     /// Where SPPM is asked for: the `Integrator "sppm"` statement (`None` for another
     /// integrator, or a scene with nothing to render).
+    /// `subsurface-walk`: whether the file's integrator takes light through BSSRDFs.
+    fn takes_bssrdf(&self, syntax: Syntax) -> bool {
+        let default = if syntax == Syntax::V3 { "path" } else { "volpath" };
+        let name = self.render.integrator.as_ref().map_or(default, |e| e.name.as_str());
+        crate::materials::subsurface::follows_bssrdf(syntax, name)
+    }
+
     fn photon_statement(&self) -> Option<Span> {
         if self.shapes.is_empty() && self.objects.is_empty() {
             return None;

@@ -290,6 +290,14 @@ impl Resolver for Scoped<'_> {
         self.b.note(at, what, how);
     }
 
+    fn warn(&mut self, at: Span, message: String) {
+        self.b.warnings.push(Diagnostic::warning(at, message));
+    }
+
+    fn syntax(&self) -> Syntax {
+        self.b.syntax()
+    }
+
     fn named_material(&mut self, name: &str, at: Span) -> Res<u32> {
         let found = self.scope.materials.get(name).or_else(|| self.b.global_materials.get(name)).copied();
         let i = found.ok_or_else(|| Diagnostic::error(at, format!("named material \"{name}\" is not defined")))?;

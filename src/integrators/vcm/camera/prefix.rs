@@ -148,7 +148,17 @@ impl Cameras<'_> {
             len += 1;
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
-            let v = Vertex { place, at: &at, wo, partial, len, merges: false, first_diffuse: true, terminated };
+            let v = Vertex {
+                place,
+                at: &at,
+                wo,
+                partial,
+                len,
+                merges: false,
+                first_diffuse: true,
+                terminated,
+                exit: false,
+            };
             if let Some((hit, si)) = &surf {
                 found += beta * self.emitted(hit, si, &v, origin, dist2);
                 scene.terminate_if_dispersed(hit, &mut beta, &mut terminated);
@@ -158,6 +168,10 @@ impl Cameras<'_> {
             }
             specular = true;
             let Some(((b, dir), p, _)) = scatter(pass, &v, (beta, &mut eta_scale), s) else { break };
+            // Light through a BSSRDF leaves at a diffuse vertex: the prefix ends.
+            if self.crosses_into_bssrdf(&v, surf.as_ref(), dir) {
+                break;
+            }
             (beta, partial, prev) = (b, p, place.p);
             ray = place.spawn(dir);
             (medium, origin) = (place.toward(dir), ray.o.0);
