@@ -300,7 +300,18 @@ impl Cameras<'_> {
         let place = Place::on_surface(scene, &exit.hit, &exit.si, v.place.toward(v.wo));
         let at = Scatterer::Surface(exit.bsdf);
         let wo = exit.si.shading.n.0;
-        let ve = Vertex { place, at: &at, wo, partial: Partial::default(), exit: true, first_diffuse: false, ..*v };
+        // Merging is a technique at the vertices beyond (not at this one: `exit`), whatever
+        // the subpath did before.
+        let ve = Vertex {
+            place,
+            at: &at,
+            wo,
+            partial: Partial::default(),
+            merges: true,
+            exit: true,
+            first_diffuse: false,
+            ..*v
+        };
         out.work.vertices += 1;
         self.add_at_vertex(&ve, beta, light_path, s, out);
         let (b, p, _) = scatter(self.pass, &ve, (beta, eta_scale), s)?;
