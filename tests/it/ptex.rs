@@ -15,17 +15,16 @@ const GRID: &str = "../../../pbrt-scenes/verify/textures/ptex-grid.ptx";
 
 #[test]
 fn ptex_textures_render_as_in_pbrt_v3() {
-    // pbrt-v3's own 64-iteration image: worst tile 1.23%, relMSE 3.4e-4. Ours at 64:
-    // 1.02% (seeds 1, 2: 1.96%, 1.70%).
+    // pbrt-v3's own 64-iteration image: worst tile 1.03%. Ours at 64: 1.86% (seeds 1,
+    // 2: 0.95%, 1.68%).
     Check::sppm("v3-ptex", 0.02, 1).assert();
 }
 
 #[test]
 fn ptex_textures_render_as_in_pbrt_v4() {
-    // pbrt-v4's own 64-iteration image: worst tile 2.19%, relMSE 1.1e-4 (seeds 1, 2:
-    // 3.13%, 1.89%). Ours is noisier at equal iterations: at 384, 2.08% (seeds 1, 2:
-    // 1.80%, 2.25%); at 1024, 0.82%.
-    Check::sppm_iterations("v4-ptex", v4_bound(0.0219), 384).assert();
+    // pbrt-v4's own 64-iteration images (seeds 1, 2): worst tile 4.09%, 2.50%. Ours is
+    // noisier at equal iterations: at 384, 1.40% (seeds 1, 2: 1.20%, 1.31%).
+    Check::sppm_iterations("v4-ptex", v4_bound(0.025), 384).assert();
 }
 
 /// The scene's textures, and texture `name`'s value on face `face` at (u, v).

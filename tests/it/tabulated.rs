@@ -3,24 +3,27 @@
 //! that cannot be read.
 
 use crate::common::scene;
-use crate::pbrt_refs::{Check, assert_renders_as};
-use pbrt_sppm::fixes::Fixes;
-use pbrt_sppm::integrators::Algorithm;
+use crate::pbrt_refs::Check;
 use pbrt_sppm::integrators::vcm::Techniques;
+use pbrt_sppm::integrators::{Algorithm, RenderSettings};
 use pbrt_sppm::materials::MaterialKind;
 
 #[test]
 fn a_fourier_bsdf_renders_as_in_pbrt_v3() {
-    // pbrt-v3's own 64-iteration image: worst tile 0.97%, relMSE 9.0e-4. Ours at 64:
-    // 0.84% (seeds 1, 2: 1.32%, 1.01%).
-    Check::sppm("v3-fourier", 0.02, 1).assert();
+    // pbrt-v3's own 64-iteration image: worst tile 1.08%. Ours at 64: 0.66% (seeds 1,
+    // 2: 2.60%, 1.17%: the sphere's rim lit by the area light); at 128: 0.69% (1.09%,
+    // 0.49%).
+    Check::sppm_iterations("v3-fourier", 0.02, 128).assert();
 }
 
 #[test]
 fn vcm_renders_a_fourier_bsdf_both_ways() {
-    // Light subpaths scatter off it with the adjoint's scale (eta² across). At 64
-    // passes: 0.74%; pbrt-v3's own bdpt at 256 samples is 0.84% off the reference.
-    assert_renders_as("v3-fourier", Fixes::NONE, Algorithm::Vcm(Techniques::All), "v3-fourier", 0.02);
+    // Light subpaths scatter off it with the adjoint's scale (eta² across). At 128
+    // passes: 1.61% (seeds 1, 2: 1.67%, 2.53%), in the blue of tile (1, 2), where
+    // pbrt-v3's own bdpt (4096 samples) and SPPM differ by 2.4%: held to 3%.
+    let algorithm = Some(Algorithm::Vcm(Techniques::All));
+    let settings = RenderSettings { algorithm, iterations: Some(128), ..Default::default() };
+    Check { settings, ..Check::sppm("v3-fourier", 0.03, 1) }.assert();
 }
 
 #[test]
