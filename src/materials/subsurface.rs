@@ -34,7 +34,7 @@ use crate::scene::values::{Res, span_of};
 use crate::spectrum::colorspace::ColorSpaceName;
 use crate::textures::TexCtx;
 use glam::Vec3;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 pub const NAMES: [&str; 2] = ["subsurface", "kdsubsurface"];
 
@@ -64,8 +64,10 @@ pub struct Subsurface {
     pub remap: RoughnessRemap,
     /// The phase function's asymmetry (0 for a measured medium).
     pub g: f32,
-    /// The profile table of (g, η), shared with every material of the same pair.
-    pub table: Arc<BssrdfTable>,
+    /// The profile table of (g, η), shared with every material of the same pair and
+    /// made on first use ([`Subsurface::table`]): integrators that see only the
+    /// boundary never need it.
+    table: OnceLock<Arc<BssrdfTable>>,
     /// Read as pbrt-v4 reads it (its BSDF follows pbrt-v4's conventions).
     pub v4: bool,
 }
@@ -77,6 +79,13 @@ pub fn follows_bssrdf(syntax: crate::parser::Syntax, name: &str) -> bool {
     match syntax {
         crate::parser::Syntax::V3 => matches!(name, "path" | "volpath"),
         crate::parser::Syntax::V4 => name == "volpath",
+    }
+}
+
+impl Subsurface {
+    /// The profile table of (g, η).
+    pub fn table(&self) -> &Arc<BssrdfTable> {
+        self.table.get_or_init(|| table(self.g, self.eta))
     }
 }
 
@@ -99,7 +108,7 @@ pub fn read(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mate
     let (kr, kt) = if v4 { (one, one) } else { (spectrum(p, "Kr", 1.0, r)?, spectrum(p, "Kt", 1.0, r)?) };
     let roughness = if v4 { roughness(p, 0.0, r)? } else { uv_roughness(p, r)? };
     let remap = if v4 { remap_v4(p)? } else { remap_v3(p)? };
-    let table = table(g, eta);
+    let table = OnceLock::new();
     Ok(MaterialKind::Subsurface(Box::new(Subsurface {
         coefficients,
         scale,
@@ -175,10 +184,10 @@ pub fn profile(s: &Subsurface, i: &Inputs<impl Fn() -> TexCtx>) -> Profile {
         }
         Coefficients::Diffuse { reflectance, mfp } => {
             let mfree = (s.scale * i.unbounded(mfp)).max(Vec3::ZERO);
-            s.table.from_diffuse(i.albedo(reflectance), mfree)
+            s.table().from_diffuse(i.albedo(reflectance), mfree)
         }
     };
-    Profile::new(s.table.clone(), sigma_a, sigma_s)
+    Profile::new(s.table().clone(), sigma_a, sigma_s)
 }
 
 /// The interior as a homogeneous medium (`--fix subsurface-walk`), where the
@@ -188,7 +197,7 @@ pub fn walk_medium(s: &Subsurface, space: Option<ColorSpaceName>) -> Option<Medi
     let (sigma_a, sigma_s) = match s.coefficients {
         Coefficients::Sigma { sigma_a: TexValue::Const(a), sigma_s: TexValue::Const(sc) } => (a, sc),
         Coefficients::Diffuse { reflectance: TexValue::Const(r), mfp: TexValue::Const(m) } => {
-            s.table.from_diffuse(r.clamp(Vec3::ZERO, Vec3::ONE), m.max(Vec3::ZERO))
+            s.table().from_diffuse(r.clamp(Vec3::ZERO, Vec3::ONE), m.max(Vec3::ZERO))
         }
         _ => return None,
     };

@@ -173,7 +173,7 @@ fn parameters_are_read_as_each_pbrt_reads_them() {
         .materials
         .iter()
         .map(|m| match &m.kind {
-            MaterialKind::Subsurface(x) => x.table.clone(),
+            MaterialKind::Subsurface(x) => x.table().clone(),
             _ => panic!(),
         })
         .collect();
