@@ -94,10 +94,13 @@ pub fn read(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mate
     let mut g = p.float("g")?.unwrap_or(0.0);
     let coefficients = if ty == NAMES[1] {
         Coefficients::Diffuse { reflectance: spectrum(p, "Kd", 0.5, r)?, mfp: spectrum(p, "mfp", 1.0, r)? }
-    } else if let Some(c) = named(p, v4, &mut g, r)? {
-        c
     } else {
-        given(p, v4, at, r)?
+        match named(p, v4, &mut g, r)? {
+            // pbrt-v4 takes the named medium alone.
+            Some((a, s)) if v4 => Coefficients::Sigma { sigma_a: TexValue::Const(a), sigma_s: TexValue::Const(s) },
+            // pbrt-v3 takes it as the defaults `sigma_a` and `sigma_s` override.
+            found => given(p, v4, at, found.unwrap_or((SIGMA_A, SIGMA_S)), r)?,
+        }
     };
     let eta = p.float("eta")?.unwrap_or(1.33);
     if !(eta > 0.0 && eta.is_finite()) {
@@ -123,9 +126,9 @@ pub fn read(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mate
     })))
 }
 
-/// A measured medium named by `name`: its coefficients, with g = 0. An unknown name
-/// is pbrt-v4's error and pbrt-v3's warning (which then keeps the defaults and g).
-fn named(p: &ParamList, v4: bool, g: &mut f32, r: &mut dyn Resolver) -> Res<Option<Coefficients>> {
+/// A measured medium named by `name`: its (σa, σs), with g = 0. An unknown name is
+/// pbrt-v4's error and pbrt-v3's warning (which then keeps the defaults and g).
+fn named(p: &ParamList, v4: bool, g: &mut f32, r: &mut dyn Resolver) -> Res<Option<(Vec3, Vec3)>> {
     let Some(name) = p.string("name")?.filter(|n| !n.is_empty()) else { return Ok(None) };
     let at = span_of(p, "name").unwrap_or_default();
     let Some((a, s)) = crate::media::presets::lookup(&name) else {
@@ -140,11 +143,11 @@ fn named(p: &ParamList, v4: bool, g: &mut f32, r: &mut dyn Resolver) -> Res<Opti
         r.warn(at, "a non-zero \"g\" is ignored with a named medium".into());
     }
     *g = 0.0;
-    Ok(Some(Coefficients::Sigma { sigma_a: TexValue::Const(a), sigma_s: TexValue::Const(s) }))
+    Ok(Some((a, s)))
 }
 
-/// `sigma_a` and `sigma_s`, or (pbrt-v4) `reflectance` and `mfp`, or pbrt's defaults.
-fn given(p: &ParamList, v4: bool, at: Span, r: &mut dyn Resolver) -> Res<Coefficients> {
+/// `sigma_a` and `sigma_s`, or (pbrt-v4) `reflectance` and `mfp`, or `defaults`.
+fn given(p: &ParamList, v4: bool, at: Span, defaults: (Vec3, Vec3), r: &mut dyn Resolver) -> Res<Coefficients> {
     let (has_a, has_s) = (p.named("sigma_a").is_some(), p.named("sigma_s").is_some());
     if v4 && has_a != has_s {
         let (have, lack) = if has_a { ("sigma_a", "sigma_s") } else { ("sigma_s", "sigma_a") };
@@ -161,7 +164,7 @@ fn given(p: &ParamList, v4: bool, at: Span, r: &mut dyn Resolver) -> Res<Coeffic
             _ => TexValue::Const(default),
         })
     };
-    Ok(Coefficients::Sigma { sigma_a: sigma("sigma_a", SIGMA_A, r)?, sigma_s: sigma("sigma_s", SIGMA_S, r)? })
+    Ok(Coefficients::Sigma { sigma_a: sigma("sigma_a", defaults.0, r)?, sigma_s: sigma("sigma_s", defaults.1, r)? })
 }
 
 /// The boundary's lobes at a hit: pbrt's glass of index η.
