@@ -149,6 +149,8 @@ fn beam_diffusion_ss(sigma_s: f32, sigma_a: f32, g: f32, eta: f32, r: f32) -> f3
     const N: usize = 100;
     let sigma_t = sigma_a + sigma_s;
     let rho = sigma_s / sigma_t;
+    // DEVIATION(pbrt): robustness. pbrt-v3 takes √(η² − 1) unguarded, NaN for η < 1
+    // (the whole table then NaN); pbrt-v4's SafeSqrt gives 0, as here.
     let t_crit = r * (eta * eta - 1.0).max(0.0).sqrt();
     let mut ess = 0.0;
     for i in 0..N {
@@ -260,6 +262,19 @@ mod tests {
             let (o, w) = catmull_rom::weights(&t.rho_samples, rho[ch]).unwrap();
             let got: f32 = (0..4).filter(|&i| w[i] != 0.0).map(|i| t.rho_eff[o as usize + i] * w[i]).sum();
             assert!((got - want).abs() < 1e-3, "{ch}: {got}");
+        }
+    }
+
+    #[test]
+    fn extreme_parameters_keep_the_table_finite() {
+        for (g, eta) in [(0.99, 1.33), (-0.99, 1.33), (0.0, 0.7), (0.5, 3.0), (0.0, 1.0)] {
+            let t = BssrdfTable::beam_diffusion(g, eta);
+            assert!(t.profile.iter().chain(&t.rho_eff).chain(&t.profile_cdf).all(|v| v.is_finite()), "g {g}, η {eta}");
+            let p = Profile::new(Arc::new(t), Vec3::new(0.0, 1e-6, 10.0), Vec3::new(0.0, 5.0, 1e-8));
+            assert_eq!(p.sample_sr(0, 0.5), None, "a channel without extinction draws nothing");
+            for r in [0.0, 1e-4, 0.1, 1.0, 1e6] {
+                assert!(p.sr(r).is_finite() && (0..3).all(|c| p.pdf_sr(c, r).is_finite()), "g {g}, η {eta}, r {r}");
+            }
         }
     }
 

@@ -91,7 +91,10 @@ impl Subsurface {
 
 pub fn read(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
     let v4 = r.syntax() == crate::parser::Syntax::V4;
-    let mut g = p.float("g")?.unwrap_or(0.0);
+    // DEVIATION(pbrt): robustness. pbrt takes g as given; at |g| ≥ 1 the table's
+    // reduced coefficients vanish or turn negative and every pixel of the material is
+    // NaN. Kept within ±0.99, as pbrt-v4 keeps a medium's.
+    let mut g = p.float("g")?.unwrap_or(0.0).clamp(-0.99, 0.99);
     let coefficients = if ty == NAMES[1] {
         Coefficients::Diffuse { reflectance: spectrum(p, "Kd", 0.5, r)?, mfp: spectrum(p, "mfp", 1.0, r)? }
     } else {
