@@ -6,12 +6,14 @@
 //! Material "subsurface" "string name" "Skin1" "float scale" 10          # measured media
 //! Material "subsurface" "rgb sigma_a" [.0011 .0024 .014] "rgb sigma_s" [2.55 3.21 3.77]
 //! Material "subsurface" "rgb reflectance" [.8 .5 .4] "rgb mfp" [.5 .3 .2]   # pbrt-v4
-//! Material "kdsubsurface" "rgb Kd" [.8 .5 .4] "float mfp" .5                 # pbrt-v3
+//! Material "kdsubsurface" "rgb Kd" [.8 .5 .4] "rgb mfp" [.5 .5 .5]          # pbrt-v3
 //! ```
 //! The coefficients come from a measured medium's name (then g = 0: the table holds
-//! reduced scattering), from `sigma_a` and `sigma_s`, or from a diffuse reflectance and
-//! a mean free path, as pbrt's `SubsurfaceFromDiffuse` inverts the profile's albedo.
-//! `scale` multiplies them (the scene's unit against the table's mm⁻¹).
+//! reduced scattering; in pbrt-v3 `sigma_a` and `sigma_s` override it), from `sigma_a`
+//! and `sigma_s`, or from a diffuse reflectance and a mean free path, as pbrt's
+//! `SubsurfaceFromDiffuse` inverts the profile's albedo. `scale` multiplies them (the
+//! scene's unit against the table's mm⁻¹). `--fix subsurface-walk` walks the interior
+//! as a homogeneous medium of them instead ([`walk_medium`]).
 //!
 //! The boundary is pbrt's glass of index `eta` (pbrt-v3: `Kr`, `Kt`, `uroughness`,
 //! `vroughness`; pbrt-v4: `roughness` or its two parts). What lies under it depends on
