@@ -232,3 +232,32 @@ fn the_walk_is_glass_over_the_materials_medium() {
         !bugs(&text.replace("Integrator \"path\"", "Integrator \"sppm\"")).contains(&"subsurface-walk".to_string())
     );
 }
+
+/// The techniques' weights sum to one on paths through a BSSRDF: camera paths that find
+/// the lights by themselves (weight 1) render the ball as all of vcm's techniques do.
+#[test]
+fn camera_paths_alone_render_the_ball_as_all_techniques_do() {
+    let text = std::fs::read_to_string(root().join("pbrt-scenes/verify/v3-subsurface.pbrt")).unwrap();
+    let block = text.find("AttributeBegin\n  Material \"kdsubsurface\"").unwrap();
+    let end = text[block..].find("AttributeEnd").unwrap() + block + "AttributeEnd".len();
+    let ball = format!("{}{}", &text[..block], &text[end..]);
+    let dir = root().join("pbrt-scenes/verify");
+    let s = load_scene_from_bytes(&dir.join("inline.pbrt"), ball.into_bytes(), &LoadOptions::default()).unwrap();
+    let rs = RenderScene::for_integrator(&s, true);
+    let mean = |techniques: Techniques, passes: u32| {
+        let settings = RenderSettings { algorithm: Some(Algorithm::Vcm(techniques)), ..vcm(passes, 7) };
+        let image = pbrt_sppm::integrators::render(&rs, &settings).expect("renders").image;
+        let w = image.width;
+        let (sum, n) = image
+            .pixels
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| (32..66).contains(&(i / w)) && (24..66).contains(&(i % w)))
+            .fold((0.0f64, 0u32), |(s, n), (_, p)| (s + (p[0] + p[1] + p[2]) as f64, n + 1));
+        sum / n as f64
+    };
+    let hits = Techniques::Only(pbrt_sppm::integrators::vcm::Technique::EmitterHit);
+    let (all, alone) = (mean(Techniques::All, 64), mean(hits, 256));
+    eprintln!("the ball: all techniques {all}, emitters found alone {alone}");
+    assert!((all / alone - 1.0).abs() < 0.02, "all {all}, emitters found alone {alone}");
+}
