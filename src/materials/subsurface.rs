@@ -100,7 +100,7 @@ pub fn read(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mate
     let coefficients = if ty == NAMES[1] {
         Coefficients::Diffuse { reflectance: spectrum(p, "Kd", 0.5, r)?, mfp: spectrum(p, "mfp", 1.0, r)? }
     } else {
-        match named(p, v4, &mut g, r)? {
+        match named(p, v4, at, &mut g, r)? {
             // pbrt-v4 takes the named medium alone.
             Some((a, s)) if v4 => Coefficients::Sigma { sigma_a: TexValue::Const(a), sigma_s: TexValue::Const(s) },
             // pbrt-v3 takes it as the defaults `sigma_a` and `sigma_s` override.
@@ -133,9 +133,9 @@ pub fn read(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mate
 
 /// A measured medium named by `name`: its (σa, σs), with g = 0. An unknown name is
 /// pbrt-v4's error and pbrt-v3's warning (which then keeps the defaults and g).
-fn named(p: &ParamList, v4: bool, g: &mut f32, r: &mut dyn Resolver) -> Res<Option<(Vec3, Vec3)>> {
+fn named(p: &ParamList, v4: bool, at: Span, g: &mut f32, r: &mut dyn Resolver) -> Res<Option<(Vec3, Vec3)>> {
     let Some(name) = p.string("name")?.filter(|n| !n.is_empty()) else { return Ok(None) };
-    let at = span_of(p, "name").unwrap_or_default();
+    let at = span_of(p, "name").unwrap_or(at);
     let Some((a, s)) = crate::media::presets::lookup(&name) else {
         let msg = format!("named medium \"{name}\" not found");
         if v4 {

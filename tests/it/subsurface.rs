@@ -196,9 +196,7 @@ fn parameters_are_read_as_each_pbrt_reads_them() {
 #[test]
 fn the_walk_is_glass_over_the_materials_medium() {
     let text = std::fs::read_to_string(root().join("pbrt-scenes/verify/v3-subsurface.pbrt")).unwrap();
-    let block = text.find("AttributeBegin\n  Material \"kdsubsurface\"").unwrap();
-    let end = text[block..].find("AttributeEnd").unwrap() + block + "AttributeEnd".len();
-    let sphere_only = format!("{}{}", &text[..block], &text[end..]);
+    let sphere_only = ball_only(&text);
     let by_hand = sphere_only
         .replace(
             "WorldBegin\n",
@@ -238,9 +236,7 @@ fn the_walk_is_glass_over_the_materials_medium() {
 #[test]
 fn camera_paths_alone_render_the_ball_as_all_techniques_do() {
     let text = std::fs::read_to_string(root().join("pbrt-scenes/verify/v3-subsurface.pbrt")).unwrap();
-    let block = text.find("AttributeBegin\n  Material \"kdsubsurface\"").unwrap();
-    let end = text[block..].find("AttributeEnd").unwrap() + block + "AttributeEnd".len();
-    let ball = format!("{}{}", &text[..block], &text[end..]);
+    let ball = ball_only(&text);
     let dir = root().join("pbrt-scenes/verify");
     let s = load_scene_from_bytes(&dir.join("inline.pbrt"), ball.into_bytes(), &LoadOptions::default()).unwrap();
     let rs = RenderScene::for_integrator(&s, true);
@@ -260,4 +256,11 @@ fn camera_paths_alone_render_the_ball_as_all_techniques_do() {
     let (all, alone) = (mean(Techniques::All, 64), mean(hits, 256));
     eprintln!("the ball: all techniques {all}, emitters found alone {alone}");
     assert!((all / alone - 1.0).abs() < 0.02, "all {all}, emitters found alone {alone}");
+}
+
+/// `v3-subsurface.pbrt`'s text without its `kdsubsurface` block: the ball alone.
+fn ball_only(text: &str) -> String {
+    let block = text.find("AttributeBegin\n  Material \"kdsubsurface\"").unwrap();
+    let end = text[block..].find("AttributeEnd").unwrap() + block + "AttributeEnd".len();
+    format!("{}{}", &text[..block], &text[end..])
 }
