@@ -6,7 +6,9 @@
 
 use glam::{Vec2, Vec3};
 
+mod piecewise2d;
 mod sobol;
+pub use piecewise2d::{PiecewiseLinear2D, PlSample};
 pub use sobol::SobolSample;
 
 /// Which numbers drive camera paths (`--sampler`).
