@@ -46,6 +46,9 @@ pub enum Lobe {
     /// A tabulated BSDF in pbrt-v3's Fourier basis, reflecting and transmitting, times
     /// `scale` (a `mix` weight).
     Fourier { table: super::fourierbsdf::Table, scale: Rgb },
+    /// pbrt-v4's measured BRDF (reflection only, either side), in the path's lanes,
+    /// times `scale` (a `mix` weight).
+    Measured { table: super::measuredbsdf::Table, lanes: super::measuredbsdf::Lanes, scale: Rgb },
 }
 
 /// What kind of scattering a lobe does (pbrt's `BxDFType`).
@@ -106,7 +109,8 @@ impl Lobe {
             | Lobe::MicrofacetTransmission { .. }
             | Lobe::RoughDielectric { .. }
             | Lobe::FresnelBlend { .. }
-            | Lobe::Fourier { .. } => Kind::Glossy,
+            | Lobe::Fourier { .. }
+            | Lobe::Measured { .. } => Kind::Glossy,
             Lobe::SpecularReflection { .. } | Lobe::SpecularTransmission { .. } | Lobe::FresnelSpecular { .. } => {
                 Kind::Specular
             }
@@ -150,6 +154,7 @@ impl Lobe {
             Lobe::RoughDielectric { r, t, dist, eta } => Lobe::RoughDielectric { r: w * r, t: w * t, dist, eta },
             Lobe::FresnelBlend { rd, rs, dist, scale } => Lobe::FresnelBlend { rd, rs, dist, scale: w * scale },
             Lobe::Fourier { table, scale } => Lobe::Fourier { table, scale: w * scale },
+            Lobe::Measured { table, lanes, scale } => Lobe::Measured { table, lanes, scale: w * scale },
             Lobe::NormalizedFresnel { eta, scale } => Lobe::NormalizedFresnel { eta, scale: w * scale },
         }
     }
@@ -175,6 +180,7 @@ impl Lobe {
             },
             Lobe::FresnelBlend { rd, rs, dist, scale } if same() => scale * fresnel_blend(o, i, rd, rs, dist),
             Lobe::Fourier { table, scale } => scale * table.0.f(o, i, mode),
+            Lobe::Measured { table, lanes, scale } => scale * table.0.f(o, i, lanes),
             Lobe::NormalizedFresnel { eta, scale } if same() => scale * normalized_fresnel(i, eta, mode),
             _ => Vec3::ZERO,
         }
@@ -200,6 +206,7 @@ impl Lobe {
                 0.5 * (i.z.abs() * FRAC_1_PI + glossy)
             }
             Lobe::Fourier { table, .. } => table.0.pdf(o, i),
+            Lobe::Measured { table, .. } => table.0.pdf(o, i),
             _ => 0.0,
         }
     }
@@ -295,6 +302,10 @@ impl Lobe {
             }
             Lobe::Fourier { table, scale } => {
                 let s = table.0.sample(o, u, mode)?;
+                return Some(LobeSample { wi: s.wi, f: scale * s.f, pdf: s.pdf });
+            }
+            Lobe::Measured { table, lanes, scale } => {
+                let s = table.0.sample(o, u, lanes)?;
                 return Some(LobeSample { wi: s.wi, f: scale * s.f, pdf: s.pdf });
             }
             Lobe::FresnelBlend { dist, .. } => {

@@ -35,6 +35,8 @@ pub mod interface;
 pub mod layered;
 pub mod lobes;
 pub mod matte;
+pub mod measured;
+pub mod measuredbsdf;
 pub mod microfacet;
 pub mod mirror;
 pub mod mix;
@@ -88,7 +90,7 @@ const V3: Option<Syntax> = Some(Syntax::V3);
 const V4: Option<Syntax> = Some(Syntax::V4);
 
 /// Every `Material` type we render.
-pub const REGISTRY: [MaterialType; 22] = [
+pub const REGISTRY: [MaterialType; 23] = [
     ty(matte::NAME, V3, matte::read),
     ty(diffuse::NAME, V4, diffuse::read),
     ty(mirror::NAME, V3, mirror::read),
@@ -109,13 +111,13 @@ pub const REGISTRY: [MaterialType; 22] = [
     ty(mix::NAME, None, mix::read),
     ty(hair::NAME, None, hair::read),
     ty(fourier::NAME, V3, fourier::read),
+    ty(measured::NAME, V4, measured::read),
     ty(subsurface::NAMES[0], None, subsurface::read),
     ty(subsurface::NAMES[1], V3, subsurface::read),
 ];
 
 /// Types we do not render that still say which pbrt a file is for.
-const UNRENDERED: [(&str, Syntax); 3] =
-    [("disney", Syntax::V3), ("thindielectric", Syntax::V4), ("measured", Syntax::V4)];
+const UNRENDERED: [(&str, Syntax); 2] = [("disney", Syntax::V3), ("thindielectric", Syntax::V4)];
 
 /// The pbrt version a material type name proves, for syntax detection.
 pub fn evidence(ty: &str) -> Option<Syntax> {
@@ -193,6 +195,10 @@ pub enum MaterialKind {
     /// v3 `fourier`: a tabulated BSDF file.
     Fourier {
         table: fourierbsdf::Table,
+    },
+    /// pbrt-v4 `measured`: an RGL tensor file's BRDF.
+    Measured {
+        table: measuredbsdf::Table,
     },
     /// A perfect mirror tinted by `reflectance` (`mirror`).
     Mirror {
@@ -275,6 +281,7 @@ impl MaterialDesc {
             MaterialKind::Coated(c) => coated::mitsuba(c, e),
             MaterialKind::Hair(_) => hair::mitsuba(e),
             MaterialKind::Fourier { .. } => fourier::mitsuba(e),
+            MaterialKind::Measured { .. } => measured::mitsuba(e),
             MaterialKind::Subsurface(s) => subsurface::mitsuba(s, e),
             MaterialKind::Interface => interface::mitsuba(),
             MaterialKind::Mix { .. } => mix::mitsuba(e),
@@ -408,6 +415,7 @@ impl Material {
             }
             MaterialKind::Coated(c) => coated::base_lobes(c, i, out),
             MaterialKind::Fourier { table } => out.push(fourier::lobe(*table)),
+            MaterialKind::Measured { table } => out.push(measured::lobe(*table, i)),
             MaterialKind::Subsurface(s) => subsurface::lobes(s, self.convention, i, out),
             MaterialKind::Mirror { reflectance } => mirror::lobes(*reflectance, i, out),
             MaterialKind::Dielectric { eta, dispersion, kr, kt, roughness, remap } => {

@@ -51,6 +51,7 @@ fn material_variant(name: &str) -> &'static str {
         "mix" => "Mix",
         "hair" => "Hair",
         "fourier" => "Fourier",
+        "measured" => "Measured",
         "subsurface" | "kdsubsurface" => "Subsurface",
         other => panic!("material {other:?} is registered but this test does not know it"),
     }
@@ -81,6 +82,7 @@ fn every_registered_material_type_reads_as_itself() {
         let (named, params) = match name {
             "mix" => (named, "\"string namedmaterial1\" \"a\" \"string namedmaterial2\" \"b\""),
             "fourier" => ("", "\"string bsdffile\" \"bsdfs/glazed.bsdf\""),
+            "measured" => ("", "\"string filename\" \"bsdfs/rosegold.bsdf\""),
             _ => ("", ""),
         };
         let world = format!("{named}\nMaterial \"{name}\" {params}\nShape \"sphere\"");
