@@ -86,6 +86,19 @@ pub fn fourier(data: &[u8]) {
     }
 }
 
+/// The measured BSDF (tensor file) reader, and the BRDF evaluated and sampled in
+/// spectral and RGB lanes.
+pub fn measured(data: &[u8]) {
+    use crate::materials::measuredbsdf::{Lanes, MeasuredTable};
+    let Ok(t) = MeasuredTable::read(data) else { return };
+    for o in [glam::Vec3::Z, glam::Vec3::new(0.6, 0.0, 0.8), glam::Vec3::new(0.0, -0.6, -0.8)] {
+        for lanes in [Lanes::Wavelengths([380.0, 550.0, 900.0]), Lanes::Rgb] {
+            let i = glam::Vec3::new(-o.x, 0.1, o.z).normalize();
+            let _ = (t.f(o, i, lanes), t.pdf(o, i), t.sample(o, [0.37, 0.71], lanes));
+        }
+    }
+}
+
 /// The NanoVDB reader: the grids named `density` and `temperature`, and every lookup
 /// the medium makes of them.
 pub fn nanovdb(data: &[u8]) {

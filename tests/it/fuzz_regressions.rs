@@ -40,4 +40,5 @@ fn every_input_that_crashed_a_fuzz_target_is_answered() {
     assert!(run("nanovdb", &["tests/data/nanovdb"], fuzzing::nanovdb) >= 1);
     assert!(run("ptex", &["pbrt-scenes/verify/textures"], fuzzing::ptex) >= 4);
     assert!(run("fourier", &["pbrt-scenes/verify/bsdfs"], fuzzing::fourier) >= 1);
+    assert!(run("measured", &["pbrt-scenes/verify/bsdfs"], fuzzing::measured) >= 2);
 }

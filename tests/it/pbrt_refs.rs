@@ -32,7 +32,7 @@ pub fn assert_renders_as(name: &str, fixes: Fixes, algorithm: Algorithm, referen
 
 /// As [`assert_renders_as`], with these settings.
 pub fn assert_renders_with(name: &str, fixes: Fixes, settings: &RenderSettings, reference: &str, bound: f64) {
-    Check { name, fixes, settings: settings.clone(), reference, bound, share: 1, fine: None }.assert();
+    Check { name, fixes, settings: settings.clone(), reference, bound, share: 1, fine: None, colour: None }.assert();
 }
 
 /// The bound of a pbrt-v4 image test (issue 57): 2% on the worst 4×4 tile, or 1.5 ×
@@ -65,13 +65,15 @@ pub struct Check<'a> {
     pub share: u32,
     /// The worst tile of an 8×8 grid may be this far off, where it is checked.
     pub fine: Option<f64>,
+    /// What paths carry (`--colour`), where not the file's pbrt's.
+    pub colour: Option<pbrt_sppm::spectrum::transport::Colour>,
 }
 
 impl<'a> Check<'a> {
     /// The scene `name` with SPPM against its own reference at 1/`share` of its budget.
     pub fn sppm(name: &'a str, bound: f64, share: u32) -> Check<'a> {
         let settings = RenderSettings { algorithm: Some(Algorithm::Sppm), ..Default::default() };
-        Check { name, reference: name, fixes: Fixes::NONE, settings, bound, share, fine: None }
+        Check { name, reference: name, fixes: Fixes::NONE, settings, bound, share, fine: None, colour: None }
     }
 
     /// The scene `name` with SPPM against its own reference at `iterations`, more than
@@ -79,7 +81,7 @@ impl<'a> Check<'a> {
     pub fn sppm_iterations(name: &'a str, bound: f64, iterations: u32) -> Check<'a> {
         let settings =
             RenderSettings { algorithm: Some(Algorithm::Sppm), iterations: Some(iterations), ..Default::default() };
-        Check { name, reference: name, fixes: Fixes::NONE, settings, bound, share: 1, fine: None }
+        Check { name, reference: name, fixes: Fixes::NONE, settings, bound, share: 1, fine: None, colour: None }
     }
 
     /// Also holds the worst tile of an 8×8 grid to `bound`.
@@ -89,7 +91,9 @@ impl<'a> Check<'a> {
 
     pub fn assert(&self) {
         let name = self.name;
-        let mut scene = load_file(&root().join(format!("pbrt-scenes/verify/{name}.pbrt"))).expect("the scene loads");
+        let options = pbrt_sppm::scene::LoadOptions { colour: self.colour, ..Default::default() };
+        let path = root().join(format!("pbrt-scenes/verify/{name}.pbrt"));
+        let mut scene = pbrt_sppm::scene::load_scene(&path, &options).expect("the scene loads");
         scene.fixes = self.fixes;
         let mut settings = self.settings.clone();
         if self.share > 1 && settings.iterations.is_none() {

@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 root=../..
-mkdir -p corpus/statements corpus/builder corpus/ply corpus/image corpus/nanovdb corpus/ptex corpus/fourier
+mkdir -p corpus/statements corpus/builder corpus/ply corpus/image corpus/nanovdb corpus/ptex corpus/fourier corpus/measured
 for f in "$root"/pbrt-scenes/v3/*.pbrt "$root"/pbrt-scenes/v4/*.pbrt "$root"/tests/data/good/*.pbrt "$root"/tests/data/bad/*.pbrt; do
     name=$(basename "$(dirname "$f")")-$(basename "$f")
     cp "$f" corpus/statements/"$name"
@@ -17,6 +17,7 @@ done
 cp seeds/image/* corpus/image/
 cp "$root"/tests/data/nanovdb/*.nvdb corpus/nanovdb/
 cp "$root"/pbrt-scenes/verify/textures/*.ptx corpus/ptex/
-cp "$root"/pbrt-scenes/verify/bsdfs/*.bsdf corpus/fourier/
+cp "$root"/pbrt-scenes/verify/bsdfs/glazed.bsdf corpus/fourier/
+cp "$root"/pbrt-scenes/verify/bsdfs/rosegold.bsdf "$root"/pbrt-scenes/verify/bsdfs/anodized.bsdf corpus/measured/
 cp regressions/*/* corpus/ 2>/dev/null || true
 echo "corpus ready: $(find corpus -type f | wc -l) files"
