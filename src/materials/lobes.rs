@@ -300,14 +300,7 @@ impl Lobe {
                 }
                 i
             }
-            Lobe::Fourier { table, scale } => {
-                let s = table.0.sample(o, u, mode)?;
-                return Some(LobeSample { wi: s.wi, f: scale * s.f, pdf: s.pdf });
-            }
-            Lobe::Measured { table, lanes, scale } => {
-                let s = table.0.sample(o, u, lanes)?;
-                return Some(LobeSample { wi: s.wi, f: scale * s.f, pdf: s.pdf });
-            }
+            Lobe::Fourier { .. } | Lobe::Measured { .. } => return self.sample_table(o, u, mode),
             Lobe::FresnelBlend { dist, .. } => {
                 if u_choice < 0.5 {
                     cosine_on(o, u, true)
@@ -319,6 +312,18 @@ impl Lobe {
         };
         let pdf = self.pdf(o, i);
         (pdf > 0.0).then(|| LobeSample { wi: i, f: self.f(o, i, mode, true), pdf })
+    }
+
+    /// A tabulated lobe's sample, by its table's own sampling.
+    fn sample_table(&self, o: Vec3, u: [f32; 2], mode: TransportMode) -> Option<LobeSample> {
+        let (wi, f, pdf) = match *self {
+            Lobe::Fourier { table, scale } => table.0.sample(o, u, mode).map(|s| (s.wi, scale * s.f, s.pdf))?,
+            Lobe::Measured { table, lanes, scale } => {
+                table.0.sample(o, u, lanes).map(|s| (s.wi, scale * s.f, s.pdf))?
+            }
+            _ => return None,
+        };
+        Some(LobeSample { wi, f, pdf })
     }
 }
 
