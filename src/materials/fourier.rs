@@ -11,37 +11,18 @@ use super::MaterialKind;
 use super::fourierbsdf::{FourierTable, Table};
 use super::lobes::Lobe;
 use super::params::{Resolver, TexValue};
+use super::shared::Loaded;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::approx::Approx;
 use crate::scene::values::Res;
 use glam::Vec3;
-use std::collections::HashMap;
-use std::sync::{Mutex, OnceLock};
 
 pub const NAME: &str = "fourier";
 
-/// Tables already read, by their bytes' hash: materials naming one file share its
-/// table for the process's life (lobes are `Copy` and refer to it), and a file that
-/// changes on disk is read again.
-fn loaded() -> &'static Mutex<HashMap<u64, &'static FourierTable>> {
-    static TABLES: OnceLock<Mutex<HashMap<u64, &'static FourierTable>>> = OnceLock::new();
-    TABLES.get_or_init(Mutex::default)
-}
-
-/// The table in `bytes`, shared with every other material that read the same bytes.
-fn table(bytes: &[u8]) -> Result<&'static FourierTable, String> {
-    let key = xxhash_rust::xxh3::xxh3_64(bytes);
-    if let Some(t) = loaded().lock().ok().and_then(|m| m.get(&key).copied()) {
-        return Ok(t);
-    }
-    let t: &'static FourierTable = Box::leak(Box::new(FourierTable::read(bytes).map_err(|e| e.to_string())?));
-    if let Ok(mut m) = loaded().lock() {
-        m.insert(key, t);
-    }
-    Ok(t)
-}
+/// Tables already read (lobes are `Copy` and refer to them).
+static TABLES: Loaded<FourierTable> = Loaded::new();
 
 pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
     // A missing parameter is a mistake in the file, as for `imagemap` and `ptex`; a
@@ -53,10 +34,11 @@ pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mat
     let name_at = crate::scene::values::span_of(p, "bsdffile").unwrap_or(at);
     let table = {
         let spectra = r.spectra();
-        spectra.files.read(&spectra.base_dir.join(&name)).and_then(|b| table(&b))
+        let read = |b: &[u8]| FourierTable::read(b).map_err(|e| e.to_string());
+        spectra.files.read(&spectra.base_dir.join(&name)).and_then(|b| TABLES.get(&b, read))
     };
     match table {
-        Ok(table) => Ok(MaterialKind::Fourier { table: Table(table) }),
+        Ok(table) => Ok(MaterialKind::Fourier { table }),
         Err(why) => {
             r.approximate(name_at, format!("fourier \"{name}\" ({why})"), Approx::UnreadableBsdfFile);
             Ok(MaterialKind::Diffuse { reflectance: TexValue::Const(Vec3::ZERO) })

@@ -276,14 +276,7 @@ fn sample_fourier(ak: &[f32], m: usize, u: f32) -> (f32, f32, f32) {
 }
 
 /// A shared table, compared by address.
-#[derive(Clone, Copy, Debug)]
-pub struct Table(pub &'static FourierTable);
-
-impl PartialEq for Table {
-    fn eq(&self, o: &Self) -> bool {
-        std::ptr::eq(self.0, o.0)
-    }
-}
+pub type Table = super::shared::Shared<FourierTable>;
 
 #[cfg(test)]
 mod tests {

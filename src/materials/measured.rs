@@ -14,6 +14,7 @@ use super::inputs::Inputs;
 use super::lobes::Lobe;
 use super::measuredbsdf::{Lanes, MeasuredTable, Table};
 use super::params::Resolver;
+use super::shared::Loaded;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
@@ -21,29 +22,11 @@ use crate::parser::source::Span;
 use crate::scene::values::Res;
 use crate::textures::TexCtx;
 use glam::Vec3;
-use std::collections::HashMap;
-use std::sync::{Mutex, OnceLock};
 
 pub const NAME: &str = "measured";
 
-/// Tables already read, by their bytes' hash (lobes are `Copy` and refer to them).
-fn loaded() -> &'static Mutex<HashMap<u64, &'static MeasuredTable>> {
-    static TABLES: OnceLock<Mutex<HashMap<u64, &'static MeasuredTable>>> = OnceLock::new();
-    TABLES.get_or_init(Mutex::default)
-}
-
-/// The table in `bytes`, shared with every other material that read the same bytes.
-fn table(bytes: &[u8]) -> Result<&'static MeasuredTable, String> {
-    let key = xxhash_rust::xxh3::xxh3_64(bytes);
-    if let Some(t) = loaded().lock().ok().and_then(|m| m.get(&key).copied()) {
-        return Ok(t);
-    }
-    let t: &'static MeasuredTable = Box::leak(Box::new(MeasuredTable::read(bytes).map_err(|e| e.to_string())?));
-    if let Ok(mut m) = loaded().lock() {
-        m.insert(key, t);
-    }
-    Ok(t)
-}
+/// Tables already read (lobes are `Copy` and refer to them).
+static TABLES: Loaded<MeasuredTable> = Loaded::new();
 
 pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
     let name = p
@@ -52,8 +35,9 @@ pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mat
     let name_at = crate::scene::values::span_of(p, "filename").unwrap_or(at);
     let spectra = r.spectra();
     let path = spectra.base_dir.join(&name);
-    match spectra.files.read(&path).and_then(|b| table(&b)) {
-        Ok(t) => Ok(MaterialKind::Measured { table: Table(t) }),
+    let read = |b: &[u8]| MeasuredTable::read(b).map_err(|e| e.to_string());
+    match spectra.files.read(&path).and_then(|b| TABLES.get(&b, read)) {
+        Ok(table) => Ok(MaterialKind::Measured { table }),
         Err(why) => Err(Diagnostic::error(name_at, format!("measured BSDF \"{name}\": {why}"))),
     }
 }

@@ -391,15 +391,8 @@ fn u2phi(u: f32) -> f32 {
     (2.0 * u - 1.0) * PI
 }
 
-/// A table shared by every material that read the same file, compared by identity.
-#[derive(Clone, Copy, Debug)]
-pub struct Table(pub &'static MeasuredTable);
-
-impl PartialEq for Table {
-    fn eq(&self, o: &Self) -> bool {
-        std::ptr::eq(self.0, o.0)
-    }
-}
+/// A table shared by every material that read the same file, compared by address.
+pub type Table = super::shared::Shared<MeasuredTable>;
 
 #[cfg(test)]
 mod tests {

@@ -42,6 +42,7 @@ pub mod mirror;
 pub mod mix;
 pub mod params;
 pub mod plastic;
+pub mod shared;
 pub mod substrate;
 pub mod subsurface;
 pub mod translucent;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Gathers the seed corpus of each fuzz target from files committed in the repository
-# (bundled scenes, good and bad test scenes, PLYs, the image seeds, the NanoVDB test grid, the Ptex textures, the Fourier BSDF) into
+# (bundled scenes, good and bad test scenes, PLYs, the image seeds, the NanoVDB test grid, the Ptex textures, the Fourier and measured BSDFs) into
 # tools/fuzz/corpus/<target>/, the working corpus cargo fuzz grows (not committed).
 set -euo pipefail
 cd "$(dirname "$0")"
