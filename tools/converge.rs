@@ -263,7 +263,7 @@ fn default_suite() -> Vec<SceneSpec> {
         v.push(SceneSpec { path: f16.clone(), half: true });
         v.push(SceneSpec { path: f16, half: false });
     }
-    for n in ["keyhole", "doorway", "pool"] {
+    for n in ["keyhole", "doorway", "pool", "window"] {
         v.push(SceneSpec { path: PathBuf::from(format!("pbrt-scenes/v3/{n}.pbrt")), half: false });
     }
     v
