@@ -9,6 +9,7 @@ pub mod camera;
 pub mod cli;
 pub mod filters;
 pub mod fixes;
+pub mod guiding;
 pub mod imageio;
 pub mod integrators;
 pub mod interaction;
