@@ -61,6 +61,16 @@ fn quadrant(p: [f32; 2]) -> (usize, [f32; 2]) {
     (q, [local(p[0], qx), local(p[1], qy)])
 }
 
+/// 0 or 1 by the weights `a` and `b` from `u`, which is then stretched over the part of
+/// [0, 1) that picked it.
+fn pick(u: &mut f64, a: f64, b: f64) -> usize {
+    let total = a + b;
+    let split = if total > 0.0 { a / total } else { 0.5 };
+    let (k, lo, width) = if *u < split { (0, 0.0, split) } else { (1, split, 1.0 - split) };
+    *u = ((*u - lo) / width.max(f64::MIN_POSITIVE)).clamp(0.0, 1.0 - f64::EPSILON);
+    k
+}
+
 impl DTree {
     /// Energy recorded in all.
     pub fn total(&self) -> f64 {
@@ -118,36 +128,33 @@ impl DTree {
         }
     }
 
-    /// A direction drawn by the recorded energy (uniform while nothing is recorded),
-    /// from two uniform numbers; the second picks the quadrant at every level, reused.
+    /// A direction drawn by the recorded energy (uniform while nothing is recorded).
+    /// At each level the first number picks the quadrant's x half by the halves'
+    /// energies and the second its y half given x, each then stretched over the half
+    /// it picked, so both carry one bit per level and the leaf's point is uniform.
     pub fn sample(&self, u: [f32; 2]) -> Vec3 {
         if self.total() <= 0.0 {
             return from_square(u);
         }
-        let (mut node, mut pick) = (0usize, u[1] as f64);
-        // The point's corner and size in the square, refined level by level.
+        let (mut node, mut u) = (0usize, [u[0] as f64, u[1] as f64]);
+        // The leaf's corner and size in the square, refined level by level.
         let (mut origin, mut size) = ([0.0f64; 2], 1.0f64);
         loop {
-            let n = &self.nodes[node];
-            let sum: f64 = n.sum.iter().sum();
-            let mut q = 0;
-            let mut below = 0.0;
-            while q < 3 && below + n.sum[q] <= pick * sum {
-                below += n.sum[q];
-                q += 1;
-            }
-            // The part of `pick` within the chosen quadrant, stretched to [0, 1).
-            pick = ((pick * sum - below) / n.sum[q].max(f64::MIN_POSITIVE)).clamp(0.0, 1.0 - f64::EPSILON);
+            let e = &self.nodes[node].sum;
+            // The x half, by the halves' energies (quadrants 0, 2 low; 1, 3 high).
+            let (low, high) = (e[0] + e[2], e[1] + e[3]);
+            let qx = pick(&mut u[0], low, high);
+            let qy = pick(&mut u[1], e[qx], e[2 + qx]);
+            let q = 2 * qy + qx;
             size *= 0.5;
-            origin[0] += size * (q & 1) as f64;
-            origin[1] += size * (q >> 1) as f64;
-            match n.child[q] {
+            origin[0] += size * qx as f64;
+            origin[1] += size * qy as f64;
+            match self.nodes[node].child[q] {
                 0 => break,
                 c => node = c as usize,
             }
         }
-        // Uniform within the leaf: the first number for x, the rest of `pick` for y.
-        from_square([(origin[0] + size * u[0] as f64) as f32, (origin[1] + size * pick) as f32])
+        from_square([(origin[0] + size * u[0]) as f32, (origin[1] + size * u[1]) as f32])
     }
 
     /// The next round's tree: each quadrant whose share of this tree's energy is above
