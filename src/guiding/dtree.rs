@@ -188,11 +188,7 @@ impl DTree {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn lcg(s: &mut u64) -> f32 {
-        *s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*s >> 40) as f32) / (1u64 << 24) as f32
-    }
+    use crate::sampling::testing::{cell_mean, histogram, lcg};
 
     /// A tree trained on light from around +x+z (a cone of half-angle ~25°) plus a
     /// little from everywhere, over three rounds.
@@ -249,25 +245,12 @@ mod tests {
         // density's integral over it.
         let t = trained();
         let (n, bins) = (400_000usize, 16usize);
-        let mut hist = vec![0usize; bins * bins];
         let mut s = 9;
-        for _ in 0..n {
-            let p = to_square(t.sample([lcg(&mut s), lcg(&mut s)]));
-            let (bx, by) =
-                (((p[0] * bins as f32) as usize).min(bins - 1), ((p[1] * bins as f32) as usize).min(bins - 1));
-            hist[by * bins + bx] += 1;
-        }
-        let m = 16;
+        let hist = histogram(n, bins, || to_square(t.sample([lcg(&mut s), lcg(&mut s)])));
         let mut chi2 = 0.0;
         for (k, &count) in hist.iter().enumerate() {
-            let (bx, by) = (k % bins, k / bins);
-            let mut p = 0.0;
-            for j in 0..m * m {
-                let x = (bx as f32 + ((j % m) as f32 + 0.5) / m as f32) / bins as f32;
-                let y = (by as f32 + ((j / m) as f32 + 0.5) / m as f32) / bins as f32;
-                p += t.pdf(from_square([x, y])) as f64;
-            }
-            let expected = p * 4.0 * std::f64::consts::PI / (m * m * bins * bins) as f64 * n as f64;
+            let mean = cell_mean(bins, k, 16, |p| t.pdf(from_square(p)) as f64);
+            let expected = mean * 4.0 * std::f64::consts::PI / (bins * bins) as f64 * n as f64;
             assert!((count as f64 - expected).abs() < 5.0 * expected.sqrt() + 2.0, "cell {k}: {count} vs {expected}");
             chi2 += (count as f64 - expected).powi(2) / expected.max(1.0);
         }

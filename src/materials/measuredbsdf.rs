@@ -465,10 +465,7 @@ mod tests {
                 // Mass lost only where reflected directions fall below the horizon.
                 assert!(pdf_total > 0.85 && pdf_total < 1.01, "{name} {o}: ∫pdf {pdf_total}");
                 let (mut sum, n, mut s) = (0.0, 40_000, 5u64);
-                let mut u = || {
-                    s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                    ((s >> 40) as f32) / (1u64 << 24) as f32
-                };
+                let mut u = || crate::sampling::testing::lcg(&mut s);
                 for _ in 0..n {
                     let Some(x) = t.sample(o, [u(), u()], lanes) else { continue };
                     let (pdf, f) = (t.pdf(o, x.wi), t.f(o, x.wi, lanes));

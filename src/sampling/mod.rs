@@ -8,6 +8,8 @@ use glam::{Vec2, Vec3};
 
 mod piecewise2d;
 mod sobol;
+#[cfg(test)]
+pub(crate) mod testing;
 pub use piecewise2d::{PiecewiseLinear2D, PlSample};
 pub use sobol::SobolSample;
 

@@ -259,11 +259,7 @@ fn finite(p: [f32; 2], pdf: f32) -> PlSample {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn lcg(s: &mut u64) -> f32 {
-        *s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*s >> 40) as f32) / (1u64 << 24) as f32
-    }
+    use crate::sampling::testing::{cell_mean, histogram, lcg};
 
     /// A 5 × 4 slice pair over one parameter with two nodes.
     fn table() -> PiecewiseLinear2D<1> {
@@ -306,25 +302,11 @@ mod tests {
         // χ²-style check on a 4 × 4 histogram: counts within 5σ of their expectation.
         let t = table();
         let (n, bins) = (200_000, 4usize);
-        let mut hist = vec![0usize; bins * bins];
         let mut s = 11;
-        for _ in 0..n {
-            let x = t.sample([lcg(&mut s), lcg(&mut s)], [0.3]);
-            let (bx, by) =
-                (((x.p[0] * bins as f32) as usize).min(bins - 1), ((x.p[1] * bins as f32) as usize).min(bins - 1));
-            hist[by * bins + bx] += 1;
-        }
-        let m = 200;
+        let hist = histogram(n, bins, || t.sample([lcg(&mut s), lcg(&mut s)], [0.3]).p);
         for (k, &count) in hist.iter().enumerate() {
-            let (bx, by) = (k % bins, k / bins);
-            let mut p = 0.0;
-            for j in 0..m * m {
-                let x = (bx as f32 + ((j % m) as f32 + 0.5) / m as f32) / bins as f32;
-                let y = (by as f32 + ((j / m) as f32 + 0.5) / m as f32) / bins as f32;
-                p += t.evaluate([x, y], [0.3]);
-            }
-            let expected = p / (m * m) as f32 / (bins * bins) as f32 * n as f32;
-            assert!((count as f32 - expected).abs() < 5.0 * expected.sqrt() + 1.0, "bin {k}: {count} vs {expected}");
+            let expected = cell_mean(bins, k, 200, |p| t.evaluate(p, [0.3]) as f64) / (bins * bins) as f64 * n as f64;
+            assert!((count as f64 - expected).abs() < 5.0 * expected.sqrt() + 1.0, "bin {k}: {count} vs {expected}");
         }
     }
 
