@@ -9,6 +9,7 @@
 //! μi and the series in φ. One lobe covers reflection and transmission (relative index
 //! `eta`).
 
+use super::shared::Sampled;
 use super::transport::TransportMode;
 use crate::math::catmull_rom;
 use crate::spectrum::Rgb;
@@ -17,13 +18,6 @@ use std::f64::consts::PI;
 
 const MAGIC: &[u8; 8] = b"SCATFUN\x01";
 const HEADER: usize = 64;
-
-/// A direction sampled from a table: (ωi, f, density).
-pub struct Sampled {
-    pub wi: Vec3,
-    pub f: Rgb,
-    pub pdf: f32,
-}
 
 /// A Fourier BSDF table (pbrt-v3's `FourierBSDFTable`).
 #[derive(Debug, PartialEq)]

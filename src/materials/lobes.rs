@@ -314,16 +314,14 @@ impl Lobe {
         (pdf > 0.0).then(|| LobeSample { wi: i, f: self.f(o, i, mode, true), pdf })
     }
 
-    /// A tabulated lobe's sample, by its table's own sampling.
+    /// A tabulated lobe's sample, by its table's own sampling, times its scale.
     fn sample_table(&self, o: Vec3, u: [f32; 2], mode: TransportMode) -> Option<LobeSample> {
-        let (wi, f, pdf) = match *self {
-            Lobe::Fourier { table, scale } => table.0.sample(o, u, mode).map(|s| (s.wi, scale * s.f, s.pdf))?,
-            Lobe::Measured { table, lanes, scale } => {
-                table.0.sample(o, u, lanes).map(|s| (s.wi, scale * s.f, s.pdf))?
-            }
+        let (s, scale) = match *self {
+            Lobe::Fourier { table, scale } => (table.0.sample(o, u, mode)?, scale),
+            Lobe::Measured { table, lanes, scale } => (table.0.sample(o, u, lanes)?, scale),
             _ => return None,
         };
-        Some(LobeSample { wi, f, pdf })
+        Some(LobeSample { wi: s.wi, f: scale * s.f, pdf: s.pdf })
     }
 }
 

@@ -11,19 +11,13 @@
 //! linearly in every coordinate ([`PiecewiseLinear2D`]). The file's `jacobian` flag is
 //! read and ignored, as pbrt-v4 ignores it.
 
+use super::shared::Sampled;
 use crate::math::catmull_rom::find_interval;
 use crate::sampling::{PiecewiseLinear2D, PlSample};
 use crate::spectrum::Rgb;
 use glam::Vec3;
 use std::f32::consts::PI;
 use std::sync::OnceLock;
-
-/// A direction sampled from a table: (ωi, f, density).
-pub struct Sampled {
-    pub wi: Vec3,
-    pub f: Rgb,
-    pub pdf: f32,
-}
 
 /// What a lookup's three lanes stand for: three wavelengths (nm) of a spectral path,
 /// or red, green and blue.
@@ -133,14 +127,15 @@ fn fields(b: &[u8]) -> Result<Vec<(String, Field<'_>)>, MeasuredError> {
         let mut shape = Vec::with_capacity(ndim.min(16));
         let mut bytes = Some(size);
         for _ in 0..ndim {
-            let s = r.u64(&what)?;
-            shape.push(usize::try_from(s).unwrap_or(usize::MAX));
-            bytes = bytes.and_then(|t| t.checked_mul(usize::try_from(s).ok()?));
+            let s = usize::try_from(r.u64(&what)?).ok();
+            shape.push(s.unwrap_or(usize::MAX));
+            bytes = bytes.zip(s).and_then(|(t, s)| t.checked_mul(s));
         }
+        let bytes =
+            bytes.ok_or_else(|| MeasuredError::Structure(format!("field \"{name}\"'s shape {shape:?} overflows")))?;
         let data = usize::try_from(offset)
             .ok()
-            .zip(bytes)
-            .and_then(|(o, n)| b.get(o..o.checked_add(n)?))
+            .and_then(|o| b.get(o..o.checked_add(bytes)?))
             .ok_or_else(|| MeasuredError::Truncated(format!("field \"{name}\"'s data")))?;
         out.retain(|(n, _)| *n != name);
         out.push((name, Field { dtype, shape, bytes: data }));
@@ -325,10 +320,10 @@ impl MeasuredTable {
 
 /// The linear sRGB of a reflectance spectrum seen under D65, white for 1.
 fn reflectance_rgb(s: impl Fn(f32) -> f32) -> Rgb {
-    use crate::spectrum::{cie, daylight};
-    let d65 = daylight::std_illuminant(6504.0);
-    let white = cie::luminance_of(&d65);
-    crate::spectrum::xyz_to_rgb(cie::spectrum_to_xyz(|l| s(l as f32) as f64 * d65(l)).map(|c| c / white))
+    use crate::spectrum::colorspace::ColorSpaceName;
+    // sRGB's illuminant is D65, scaled to luminance 1.
+    let d65 = |l: f64| ColorSpaceName::Srgb.illuminant_at(l);
+    crate::spectrum::xyz_to_rgb(crate::spectrum::cie::spectrum_to_xyz(|l| s(l as f32) as f64 * d65(l)))
 }
 
 /// Node `k`'s hat function over `nodes` at `l`, flat past the first and last node.

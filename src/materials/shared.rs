@@ -3,6 +3,8 @@
 //! again), referred to by `Copy` lobes and compared by address. The `fourier` and
 //! `measured` materials keep theirs here.
 
+use crate::spectrum::Rgb;
+use glam::Vec3;
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
@@ -55,4 +57,12 @@ impl<T: Sync> Loaded<T> {
         }
         Ok(Shared(t))
     }
+}
+
+/// A direction sampled from a table: (ωi, f, density). (Not the lobes' `LobeSample`:
+/// the lobes refer to the tables, so the tables do not refer to the lobes.)
+pub struct Sampled {
+    pub wi: Vec3,
+    pub f: Rgb,
+    pub pdf: f32,
 }
