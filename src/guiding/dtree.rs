@@ -158,27 +158,35 @@ impl DTree {
     }
 
     /// The next round's tree: each quadrant whose share of this tree's energy is above
-    /// `rho` is split (down to [`MAX_DEPTH`]), the others are leaves; all sums zero.
+    /// `rho` is split (down to [`MAX_DEPTH`]), the others are leaves; all sums zero. A
+    /// quadrant that is a leaf here is taken to spread its energy evenly below it, so
+    /// it splits again while its quarters are above `rho` too (Müller et al.'s rule:
+    /// a bright quadrant reaches its depth in one round, not one level per round).
     pub fn refined(&self, rho: f64) -> DTree {
         let total = self.total();
         let mut out = DTree { nodes: vec![Node::default()], samples: 0 };
         if total <= 0.0 {
             return out;
         }
-        // (node in self, its copy in out, depth). A quadrant that is a leaf of `self`
-        // splits once: how its energy spreads below it is not known yet.
-        let mut stack = vec![(0usize, 0usize, 1u32)];
-        while let Some((old, new, depth)) = stack.pop() {
+        // (the node of `self` whose quadrants are copied, or none below a leaf, where
+        // each quadrant holds `even`; the copy in `out`; its depth).
+        let mut stack = vec![(Some(0usize), 0.0f64, 0usize, 1u32)];
+        while let Some((old, even, new, depth)) = stack.pop() {
             for q in 0..4 {
-                if depth >= MAX_DEPTH || self.nodes[old].sum[q] / total <= rho {
+                let (sum, below) = match old {
+                    Some(o) => (self.nodes[o].sum[q], self.nodes[o].child[q] as usize),
+                    None => (even, 0),
+                };
+                if depth >= MAX_DEPTH || sum / total <= rho {
                     continue;
                 }
                 let c = out.nodes.len();
                 out.nodes.push(Node::default());
                 out.nodes[new].child[q] = c as u32;
-                if self.nodes[old].child[q] != 0 {
-                    stack.push((self.nodes[old].child[q] as usize, c, depth + 1));
-                }
+                stack.push(match below {
+                    0 => (None, sum / 4.0, c, depth + 1),
+                    b => (Some(b), 0.0, c, depth + 1),
+                });
             }
         }
         out
@@ -227,7 +235,7 @@ mod tests {
     fn the_density_integrates_to_one_and_favours_the_light() {
         let t = trained();
         assert!(t.node_count() > 20, "{} nodes", t.node_count());
-        let (n, mut sum) = (400usize, 0.0f64);
+        let (n, mut sum) = (2048usize, 0.0f64);
         for k in 0..n * n {
             let p = [((k % n) as f32 + 0.5) / n as f32, ((k / n) as f32 + 0.5) / n as f32];
             sum += t.pdf(from_square(p)) as f64;

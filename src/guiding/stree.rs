@@ -7,6 +7,9 @@
 use super::dtree::DTree;
 use glam::Vec3;
 
+/// The deepest a leaf may be (cells of 2⁻³² of the cube's volume).
+pub const MAX_DEPTH: u32 = 32;
+
 #[derive(Clone, Debug, PartialEq)]
 enum SNode {
     /// Halved along `axis` at the cell's middle: children below and above.
@@ -73,27 +76,34 @@ impl STree {
     }
 
     /// Ends a round: each leaf's filled tree becomes its sampling tree and a refined
-    /// copy (`rho`, see [`DTree::refined`]) its next building tree; a leaf given more
-    /// than `split_after` records splits first (along the axis after its parent's), both
-    /// halves starting from its trees.
+    /// copy (`rho`, see [`DTree::refined`]) its next building tree. A leaf given more
+    /// than `split_after` records splits first (along the axis after its parent's),
+    /// both halves starting from its trees and taken to hold half its records each, so
+    /// a busy leaf splits again until its parts are under the threshold (Müller et
+    /// al.'s subdivision), down to [`MAX_DEPTH`].
     pub fn end_round(&mut self, split_after: u64, rho: f64) {
-        let mut stack = vec![(0usize, 0u8)];
-        while let Some((i, axis)) = stack.pop() {
+        // (node, its axis, its depth, the records a new half is taken to hold).
+        let mut stack = vec![(0usize, 0u8, 0u32, None::<u64>)];
+        while let Some((i, axis, depth, count)) = stack.pop() {
+            let next = (axis + 1) % 3;
             match &self.nodes[i] {
                 SNode::Inner { axis, children } => {
                     let next = (*axis + 1) % 3;
-                    stack.extend(children.iter().map(|&c| (c as usize, next)));
+                    stack.extend(children.iter().map(|&c| (c as usize, next, depth + 1, None)));
                 }
                 SNode::Leaf { building, .. } => {
-                    let filled = building.clone();
-                    let leaf = || SNode::Leaf { sampling: filled.clone(), building: filled.refined(rho) };
-                    if filled.samples() > split_after {
+                    let n = count.unwrap_or_else(|| building.samples());
+                    if n > split_after.max(1) && depth < MAX_DEPTH {
                         let c = self.nodes.len() as u32;
-                        self.nodes.push(leaf());
-                        self.nodes.push(leaf());
+                        let half = self.nodes[i].clone();
+                        self.nodes.push(half.clone());
+                        self.nodes.push(half);
                         self.nodes[i] = SNode::Inner { axis, children: [c, c + 1] };
+                        stack.extend([c, c + 1].map(|c| (c as usize, next, depth + 1, Some(n / 2))));
                     } else {
-                        self.nodes[i] = leaf();
+                        let filled = building.clone();
+                        let building = filled.refined(rho);
+                        self.nodes[i] = SNode::Leaf { sampling: filled, building };
                     }
                 }
             }
@@ -133,5 +143,19 @@ mod tests {
         // Outside the cube: the nearest cell.
         assert_eq!(t.sampling(Vec3::new(-5.0, 0.5, 0.5)), left);
         assert_eq!(t.sampling(Vec3::new(9.0, f32::NAN, 0.5)), right);
+    }
+
+    #[test]
+    fn a_busy_leaf_splits_until_its_parts_are_under_the_threshold() {
+        let mut t = STree::new(Vec3::ZERO, Vec3::ONE);
+        for _ in 0..4000 {
+            t.record(Vec3::splat(0.3), Vec3::Z, 1.0);
+        }
+        // 4000 → 2000 → 1000 → 500 records a part: three levels, eight leaves.
+        t.end_round(500, 0.01);
+        assert_eq!(t.leaf_count(), 8);
+        // Each part starts from the whole tree's light.
+        let far = t.sampling(Vec3::splat(0.9));
+        assert!(far.pdf(Vec3::Z) > 0.3 && far.pdf(-Vec3::Z) == 0.0);
     }
 }

@@ -21,6 +21,10 @@ pub enum RenderError {
     AdaptiveIndependent,
     #[error("adaptive photon sampling is for SPPM; vcm and bdpt trace uniform light paths (--photon-sampling uniform)")]
     AdaptiveVcm,
+    #[error(
+        "path guiding is for vcm and bdpt; SPPM's camera paths stop at their first diffuse surface (--guiding off)"
+    )]
+    GuidingSppm,
     #[error("--volume-gather is SPPM's; vcm and bdpt connect and merge in media as they do on surfaces")]
     VolumeGatherVcm,
     #[error("--volume-gather beams needs uniform photons (--photon-sampling uniform)")]

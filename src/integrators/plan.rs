@@ -111,6 +111,8 @@ pub struct RenderSettings {
     /// Render only these passes of the planned ones (`--pass-range A..B`; independent
     /// passes only).
     pub pass_range: Option<Range<u32>>,
+    /// vcm's and bdpt's camera subpaths draw from a path guide (`--guiding on`).
+    pub guiding: bool,
 }
 
 /// The settings a render runs with, the scene's defaults and the overrides combined.
@@ -132,6 +134,8 @@ pub struct Plan {
     pub range: Range<u32>,
     /// Stop after the iteration that passes this many seconds.
     pub time_limit: Option<f64>,
+    /// Camera subpaths draw from a path guide ([`crate::guiding`]).
+    pub guiding: bool,
 }
 
 impl Plan {
@@ -152,6 +156,7 @@ impl Plan {
         // SPPM's fingerprint stays as it was before other integrators existed.
         .chain((self.algorithm != Algorithm::Sppm).then(|| ("integrator", self.algorithm.name())))
         .chain(self.balances().then(|| ("light-subpaths", "balanced".to_string())))
+        .chain(self.guiding.then(|| ("guiding", "on".to_string())))
         // Checkpoints made before it existed (without it) still resume.
         .chain((self.algorithm == Algorithm::Sppm).then(|| ("volume-gather", self.volume_gather.name().into())))
         .map(|(k, v)| (k.to_string(), v))
@@ -207,6 +212,9 @@ impl Plan {
         if !sppm && settings.photon_sampling == PhotonSampling::Adaptive {
             return Err(RenderError::AdaptiveVcm);
         }
+        if sppm && settings.guiding {
+            return Err(RenderError::GuidingSppm);
+        }
         if !sppm && settings.volume_gather.is_some() {
             return Err(RenderError::VolumeGatherVcm);
         }
@@ -230,6 +238,7 @@ impl Plan {
             photon_sampling: settings.photon_sampling,
             volume_gather,
             time_limit: settings.time_limit,
+            guiding: settings.guiding,
         })
     }
 }

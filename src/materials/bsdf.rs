@@ -162,6 +162,24 @@ impl Bsdf {
         }
     }
 
+    /// Whether a path guide may draw directions here beside the BSDF: every sample
+    /// has a density `eval` gives (no specular lobe), and f is a value, not a random
+    /// walk's estimate (not a layered BSDF).
+    pub fn guidable(&self) -> bool {
+        !matches!(self.lobes, Lobes::None | Lobes::Layered(_)) && !self.has(Kind::Specular)
+    }
+
+    /// The normal whose side decides where the BSDF is not zero, when it only reflects
+    /// (to the side of ωo): the geometric normal under pbrt-v3's convention, the
+    /// shading normal under pbrt-v4's. None for hair, which scatters all round.
+    pub fn reflecting_normal(&self) -> Option<Vec3> {
+        match (&self.lobes, self.sides()) {
+            (Lobes::Hair(_), _) | (_, (_, true)) => None,
+            _ if self.convention() == Convention::PbrtV3 => Some(self.ng),
+            _ => Some(self.ns),
+        }
+    }
+
     /// Whether it has a glossy lobe (SPPM stores a visible point there at the last depth).
     pub fn is_glossy(&self) -> bool {
         match &self.lobes {

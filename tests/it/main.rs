@@ -9,6 +9,7 @@ mod converge;
 mod directives;
 mod fixes;
 mod fuzz_regressions;
+mod guiding;
 mod hostile;
 mod imgtool;
 mod instancing;

@@ -291,7 +291,7 @@ fn render_with(text: &str, algorithm: Algorithm) -> Vec<[f32; 3]> {
 }
 
 /// Channel means over the whole image and over each quarter.
-fn means(px: &[[f32; 3]], w: usize) -> Vec<f64> {
+pub fn means(px: &[[f32; 3]], w: usize) -> Vec<f64> {
     let h = px.len() / w;
     let mut out = vec![px.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / px.len() as f64];
     for (qx, qy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
@@ -423,7 +423,7 @@ fn vcm_stats_name_its_own_phases_and_counts() {
 
 /// A closed sphere (normals inward) around the camera with reflectance ρ = 0.5: light
 /// emitted inside reaches the eye after any number of bounces up to maxdepth.
-fn furnace(inside: &str) -> String {
+pub fn furnace(inside: &str) -> String {
     format!(
         "Film \"rgb\" \"integer xresolution\" 10 \"integer yresolution\" 10 Camera \"perspective\" \"float fov\" 45 \
          Integrator \"bdpt\" \"integer iterations\" 16 \"integer maxdepth\" 5 \"integer photonsperiteration\" 2000 \
@@ -780,6 +780,7 @@ fn extra_rays_for_light_seen_through_glass_keep_the_mean_and_cut_the_noise() {
             techniques: Techniques::Bdpt,
             balance: false,
             prefix_rays,
+            guiding: false,
         };
         let mut vcm = Vcm::new(&scene, 4, 0, settings).expect("renders");
         for _ in 0..4 {

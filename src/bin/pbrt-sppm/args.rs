@@ -128,6 +128,10 @@ pub struct RenderArgs {
     /// where most photons land out of view). Default: `uniform`.
     #[arg(long, value_parser = parse_photon_sampling)]
     pub photon_sampling: Option<PhotonSampling>,
+    /// Path guiding for vcm and bdpt: `on` (camera subpaths also draw directions from
+    /// a map of incident light learnt over the first 31 passes) or `off`. Default: `off`.
+    #[arg(long, value_parser = parse_on_off)]
+    pub guiding: Option<bool>,
     /// How SPPM gathers photons in participating media: `beams` (every medium segment
     /// of a camera path gathers the photons near it) or `points` (a camera path
     /// scatters at a point and gathers photons in a ball there). Default: `beams`
@@ -264,6 +268,14 @@ fn parse_photon_sampling(s: &str) -> Result<PhotonSampling, String> {
     }
 }
 
+fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("expected on or off, not \"{s}\"")),
+    }
+}
+
 fn parse_integrator(s: &str) -> Result<Algorithm, String> {
     s.parse()
 }
@@ -376,6 +388,7 @@ impl RenderArgs {
             time_limit: self.time_limit.map(f64::from),
             passes: self.pass_mode()?,
             pass_range: self.pass_range.clone(),
+            guiding: self.guiding.unwrap_or(false),
         };
         Ok(Request {
             scene: self.scene.clone(),

@@ -14,6 +14,7 @@ use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
 use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique, Techniques};
 use crate::accel::Hit;
+use crate::guiding::{Mix, Record};
 use crate::integrators::grid::Grid;
 use crate::integrators::sppm::{Surface, camera_ray, surface};
 use crate::integrators::subsurface;
@@ -44,11 +45,14 @@ pub struct Cameras<'a> {
 /// from the camera (emitters found, next-event estimation, connections), apart from
 /// that of merging light vertices, by the pilot's kinds ([`super::light::ByKind`]); and
 /// the work it took ([`super::balance`] weighs both).
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct PixelSample {
     pub traced: Rgb,
     pub merged: ByKind,
     pub work: Work,
+    /// What the subpath found past its guidable vertices, for the guide's training
+    /// (only when the pass trains, [`Pass::training`]).
+    pub records: Vec<Record>,
 }
 
 impl PixelSample {
@@ -100,6 +104,20 @@ struct Vertex<'a> {
     /// subpath reaches the vertices before it, so no technique that ends there is one,
     /// and merging here is none.
     exit: bool,
+    /// The guided mixture the subpath samples from here, if any ([`Pass::guide_at`]).
+    guide: Option<Mix<'a>>,
+}
+
+impl Vertex<'_> {
+    /// f and both densities toward `wi`, the forward one the camera walk's (its guided
+    /// mixture's, where it has one).
+    fn eval(&self, wi: Vec3) -> crate::materials::BsdfEval {
+        let mut e = self.at.eval(self.wo, wi, TransportMode::Radiance);
+        if let Some(m) = &self.guide {
+            e.pdf = m.pdf(e.pdf, wi);
+        }
+        e
+    }
 }
 
 /// A connection's factor for the first lane's growth on both subpaths: it counts once
@@ -108,12 +126,58 @@ fn once(v: &Vertex, lv: &LightVertex) -> f32 {
     if v.terminated && lv.terminated { crate::spectrum::transport::ONCE } else { 1.0 }
 }
 
+/// A direction a camera subpath left a guidable vertex along, waiting for the light
+/// found past it: `before`, what the subpath had found when it left, and `beta`, its
+/// throughput after, turn what it found in the end into the light arriving along `d`.
+struct Pending {
+    p: Vec3,
+    d: Vec3,
+    pdf: f32,
+    beta: Rgb,
+    before: Rgb,
+}
+
+impl Pending {
+    /// The record, once the subpath has found `total` in all: the light past the vertex
+    /// over the throughput that carried it (channel by channel), its mean over the
+    /// sampling density.
+    fn record(&self, total: Rgb) -> Record {
+        let found = total - self.before;
+        let li = Vec3::select(self.beta.cmpgt(Vec3::ZERO), found / self.beta, Vec3::ZERO);
+        let energy = (li.element_sum() / 3.0 / self.pdf).max(0.0);
+        Record { p: self.p, d: self.d, energy: if energy.is_finite() { energy } else { 0.0 } }
+    }
+}
+
+/// Whether a camera subpath has scattered diffusely, and specularly after that (then
+/// merging is no technique at its vertices beyond, see `mis`).
+#[derive(Clone, Copy, Debug, Default)]
+struct History {
+    diffuse: bool,
+    past_diffuse_specular: bool,
+}
+
+impl History {
+    /// The subpath left a vertex as `l` says (a BSSRDF's exit ends its prefix and
+    /// starts afresh, as a diffuse bounce).
+    fn left(&mut self, l: &Leave, in_prefix: &mut bool) {
+        if l.through_bssrdf {
+            (self.diffuse, self.past_diffuse_specular, *in_prefix) = (true, false, false);
+        } else {
+            self.past_diffuse_specular |= l.specular && self.diffuse;
+            self.diffuse |= !l.specular;
+        }
+    }
+}
+
 /// How a camera subpath leaves a vertex ([`Cameras::leave`]): its throughput,
 /// direction and partial sums after it, and the vertex it leaves from (a BSSRDF's exit,
 /// when it went through one).
 struct Leave {
     beta: Rgb,
     wi: Vec3,
+    /// The density `wi` was drawn with (the guided mixture's, where there is one).
+    pdf: f32,
     partial: Partial,
     from: Place,
     specular: bool,
@@ -182,11 +246,11 @@ impl Cameras<'_> {
         // What refraction has divided `beta` by so far (pbrt's etaScale), for roulette.
         let mut eta_scale = 1.0f32;
         let (mut len, mut passes, mut medium) = (0u32, 0u32, scene.camera_medium);
-        // Whether the subpath has scattered diffusely, and specularly after that (then
-        // merging is no technique at its vertices beyond, see `mis`).
-        let (mut diffuse, mut past_diffuse_specular) = (false, false);
+        let mut history = History::default();
         // The prefix light, and whether the subpath is still in its prefix.
         let (mut prefix, mut in_prefix, mut terminated) = (Vec3::ZERO, true, false);
+        // Directions left along, whose light is known when the subpath ends (training).
+        let mut pending = Vec::new();
         loop {
             in_prefix &= medium.is_none();
             let (place, at, wo, surf) =
@@ -205,16 +269,15 @@ impl Cameras<'_> {
             len += 1;
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
-            let merges = !past_diffuse_specular && !at.is_delta();
-            let v =
-                Vertex { place, at: &at, wo, partial, len, merges, first_diffuse: !diffuse, terminated, exit: false };
-            if let Some((hit, si)) = &surf
-                && pass.techniques.uses(Technique::EmitterHit)
-            {
-                let found = beta * self.emitted(hit, si, &v, origin, dist2);
-                *if in_prefix { &mut prefix } else { &mut out.traced } += found;
-            }
-            if let Some((hit, _)) = &surf {
+            let merges = !history.past_diffuse_specular && !at.is_delta();
+            let guide = pass.guide_at(place.p, wo, &at);
+            let (first_diffuse, exit) = (!history.diffuse, false);
+            let v = Vertex { place, at: &at, wo, partial, len, merges, first_diffuse, terminated, exit, guide };
+            if let Some((hit, si)) = &surf {
+                if pass.techniques.uses(Technique::EmitterHit) {
+                    let found = beta * self.emitted(hit, si, &v, origin, dist2);
+                    *if in_prefix { &mut prefix } else { &mut out.traced } += found;
+                }
                 scene.terminate_if_dispersed(hit, &mut beta, &mut terminated);
             }
             let v = Vertex { terminated, ..v };
@@ -229,16 +292,16 @@ impl Cameras<'_> {
             let Some(l) = self.leave(&v, surf.as_ref(), (beta, &mut eta_scale), (light_path, &mut out), s) else {
                 break;
             };
-            if l.through_bssrdf {
-                (diffuse, past_diffuse_specular, in_prefix) = (true, false, false);
-            } else {
-                past_diffuse_specular |= l.specular && diffuse;
-                diffuse |= !l.specular;
+            if pass.records_at(&at) && !l.through_bssrdf {
+                pending.push(Pending { p: place.p, d: l.wi, pdf: l.pdf, beta: l.beta, before: out.total() });
             }
+            history.left(&l, &mut in_prefix);
             (beta, partial, prev) = (l.beta, l.partial, l.from.p);
             ray = l.from.spawn(l.wi);
             (medium, origin) = (l.from.toward(l.wi), ray.o.0);
         }
+        let total = out.total();
+        out.records = pending.iter().map(|q: &Pending| q.record(total)).collect();
         (out, prefix)
     }
 
@@ -254,15 +317,17 @@ impl Cameras<'_> {
         s: &mut impl Sampler,
     ) -> Option<Leave> {
         let eta_before = *eta_scale;
-        let ((b, wi), partial, specular) = scatter(self.pass, v, (beta, eta_scale), s)?;
+        let sc = scatter(self.pass, v, (beta, eta_scale), s)?;
+        let (wi, pdf, partial, specular) = (sc.wi, sc.pdf, sc.partial, sc.specular);
         if !self.crosses_into_bssrdf(v, surf, wi) {
-            return Some(Leave { beta: b, wi, partial, from: v.place, specular, through_bssrdf: false });
+            return Some(Leave { beta: sc.beta, wi, pdf, partial, from: v.place, specular, through_bssrdf: false });
         }
         // Refraction's η⁻² is paid back where the light leaves (`Lobe::NormalizedFresnel`).
         *eta_scale = eta_before;
         let (hit, si) = surf?;
-        let ((b, wi), partial, from) = self.through_bssrdf(v, (hit, si), (b, eta_scale), light_path, out, s)?;
-        Some(Leave { beta: b, wi, partial, from, specular: false, through_bssrdf: true })
+        let (sc, from) = self.through_bssrdf(v, (hit, si), (sc.beta, eta_scale), light_path, out, s)?;
+        let (beta, wi, pdf, partial) = (sc.beta, sc.wi, sc.pdf, sc.partial);
+        Some(Leave { beta, wi, pdf, partial, from, specular: false, through_bssrdf: true })
     }
 
     /// Whether the direction `wi` sampled at `v` crosses into a BSSRDF
@@ -288,7 +353,7 @@ impl Cameras<'_> {
         light_path: &[LightVertex],
         out: &mut PixelSample,
         s: &mut impl Sampler,
-    ) -> Option<((Rgb, Vec3), Partial, Place)> {
+    ) -> Option<(Scattered, Place)> {
         let scene = self.pass.scene;
         let (profile, eta, material) = scene.bssrdf(hit, si)?;
         let Scatterer::Surface(bsdf) = v.at else { return None };
@@ -310,12 +375,12 @@ impl Cameras<'_> {
             merges: true,
             exit: true,
             first_diffuse: false,
+            guide: None,
             ..*v
         };
         out.work.vertices += 1;
         self.add_at_vertex(&ve, beta, light_path, s, out);
-        let (b, p, _) = scatter(self.pass, &ve, (beta, eta_scale), s)?;
-        Some((b, p, place))
+        Some((scatter(self.pass, &ve, (beta, eta_scale), s)?, place))
     }
 
     /// Where the ray finds its next vertex, in a medium or on a surface; adds the light
@@ -483,7 +548,7 @@ impl Cameras<'_> {
         if ls.pdf <= 0.0 || ls.li == Vec3::ZERO || scene.emission_masked(light, ls.surface.as_ref()) {
             return Vec3::ZERO;
         }
-        let e = v.at.eval(v.wo, ls.wi, TransportMode::Radiance);
+        let e = v.eval(ls.wi);
         if e.f == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -520,8 +585,7 @@ impl Cameras<'_> {
             return Vec3::ZERO;
         }
         let dir = d / dist2.sqrt();
-        let ec = v.at.eval(v.wo, dir, TransportMode::Radiance);
-        let el = lv.at.eval(lv.wo, -dir, TransportMode::Importance);
+        let (ec, el) = (v.eval(dir), lv.eval(-dir));
         if ec.f == Vec3::ZERO || el.f == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -569,7 +633,7 @@ impl Cameras<'_> {
                 return;
             }
             let lv = &self.lights.vertices[k as usize];
-            let e = v.at.eval(v.wo, lv.wo, TransportMode::Radiance);
+            let e = v.eval(lv.wo);
             if e.f == Vec3::ZERO {
                 return;
             }
@@ -606,17 +670,26 @@ fn light_densities(pass: &Pass, k: usize, ls: &crate::lights::LightSample, p: Ve
     }
 }
 
-/// Samples the BSDF (or phase function) at a camera vertex: ((throughput, direction),
-/// partial sums, whether it was specular) after it; `None` when absorbed or ended by
-/// Russian roulette. `eta_scale`: what refraction has divided the throughput by so far,
-/// updated here.
-fn scatter(
-    pass: &Pass,
-    v: &Vertex,
-    (beta, eta_scale): (Rgb, &mut f32),
-    s: &mut impl Sampler,
-) -> Option<((Rgb, Vec3), Partial, bool)> {
-    let smp = v.at.sample(v.wo, s, TransportMode::Radiance, |wi, _| v.at.cos(wi))?;
+/// How a camera subpath left a vertex ([`scatter`]).
+struct Scattered {
+    beta: Rgb,
+    wi: Vec3,
+    /// The density `wi` was drawn with.
+    pdf: f32,
+    partial: Partial,
+    specular: bool,
+}
+
+/// Samples the BSDF (or phase function, or the guided mixture where the vertex has
+/// one) at a camera vertex: the throughput, direction and partial sums after it;
+/// `None` when absorbed or ended by Russian roulette. `eta_scale`: what refraction has
+/// divided the throughput by so far, updated here.
+fn scatter(pass: &Pass, v: &Vertex, (beta, eta_scale): (Rgb, &mut f32), s: &mut impl Sampler) -> Option<Scattered> {
+    let cos = |wi: Vec3| v.at.cos(wi);
+    let smp = match &v.guide {
+        Some(mix) => v.at.sample_guided(v.wo, s, mix, cos)?,
+        None => v.at.sample(v.wo, s, TransportMode::Radiance, |wi, _| cos(wi))?,
+    };
     let mut beta = beta * smp.f * smp.scale;
     *eta_scale *= v.at.eta_scale(v.wo, smp.wi);
     // pbrt's path tracer's roulette, after three bounces and only below a throughput of
@@ -639,5 +712,5 @@ fn scatter(
     let m = v.at.measure(smp.wi, v.place.ng);
     let merges_here = v.merges && !v.exit;
     partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, merges_here, v.at.factors(&pass.factors));
-    Some(((beta, smp.wi), partial, smp.specular))
+    Some(Scattered { beta, wi: smp.wi, pdf: smp.pdf, partial, specular: smp.specular })
 }

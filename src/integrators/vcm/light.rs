@@ -6,6 +6,7 @@
 use super::mis::{self, Factors, Partial};
 use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique, Techniques};
+use crate::guiding::Toward;
 use crate::integrators::sppm::{Surface, surface};
 use crate::interaction::Footprint;
 use crate::lights::Light;
@@ -61,9 +62,22 @@ pub struct LightVertex {
     pub after_specular: bool,
     /// The subpath kept only its first wavelength (dispersion).
     pub terminated: bool,
+    /// The guided mixture a camera subpath reaching here would draw `wo` from, if the
+    /// vertex is guided ([`Pass::guide_at`]).
+    pub guide: Option<Toward>,
 }
 
 impl LightVertex {
+    /// f and both densities toward `wi`, carrying importance; the reverse density is
+    /// a camera walk's (its guided mixture's, where it has one).
+    pub fn eval(&self, wi: Vec3) -> crate::materials::BsdfEval {
+        let mut e = self.at.eval(self.wo, wi, TransportMode::Importance);
+        if let Some(g) = &self.guide {
+            e.pdf_rev = g.pdf(e.pdf_rev);
+        }
+        e
+    }
+
     /// The cosine factor of leaving along `wi` for the adjoint BSDF: |ωi·ns| with
     /// pbrt's correction for shading normals, |ωo·ns| |ωi·ng| / |ωo·ng| (Veach §5.3),
     /// so light subpaths carry what camera subpaths would; none in a medium.
@@ -329,7 +343,11 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
         if !at.in_medium() && wo.dot(place.ng) == 0.0 {
             break;
         }
-        let v = LightVertex { place, wo, beta, at, partial, len, half: to.half, after_specular, terminated };
+        // A camera subpath reaching here on a reflecting BSDF arrives on `wo`'s side
+        // (else f is 0 and the density does not count).
+        let guide = pass.guide_at(place.p, wo, &at).map(|m| m.toward(wo));
+        let (half, after) = (to.half, after_specular);
+        let v = LightVertex { place, wo, beta, at, partial, len, half, after_specular: after, terminated, guide };
         if !v.at.is_delta() {
             // Direct light is not light-traced (`mis`), unless light tracing is alone.
             let traced = len > 1 || pass.techniques == Techniques::Only(Technique::LightTrace);
@@ -372,7 +390,9 @@ fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> O
     }
     let mut partial = v.partial;
     let m = v.at.measure(smp.wi, v.place.ng);
-    partial.scatter(m, smp.pdf as f64, smp.pdf_rev as f64, smp.specular, v.len > 1, v.factors(pass));
+    // A camera subpath would draw the way back from the guided mixture, if any.
+    let pdf_rev = v.guide.map_or(smp.pdf_rev, |g| g.pdf(smp.pdf_rev));
+    partial.scatter(m, smp.pdf as f64, pdf_rev as f64, smp.specular, v.len > 1, v.factors(pass));
     if smp.specular {
         partial.forget_merges();
     }
@@ -388,7 +408,7 @@ fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Ve
     if pixel.is_none() && scene.film.filter.is_none() {
         return;
     }
-    let e = v.at.eval(v.wo, cs.wi, TransportMode::Importance);
+    let e = v.eval(cs.wi);
     if e.f == Vec3::ZERO || cs.pdf <= 0.0 {
         return;
     }

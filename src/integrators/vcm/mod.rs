@@ -35,6 +35,7 @@ use super::grid::{Grid, Grouped, Site};
 use super::passes;
 use super::sppm::{PixelState, Stats};
 use crate::filters::PixelFilter;
+use crate::guiding::Guide;
 use crate::render::RenderScene;
 use crate::sampling::SamplerKind;
 use crate::scene::Film;
@@ -53,6 +54,16 @@ use std::time::Instant;
 /// lights the shadow rays cost more than the choice: a mesh emitter has a light per
 /// triangle.
 pub const NEE_ALL_LIGHTS_MAX: usize = 8;
+
+/// What a band of camera subpaths gives besides the image: work, guide records.
+type Out = (camera::Work, Vec<crate::guiding::Record>);
+
+/// Two neighbouring bands' [`Out`]: work sums in any order; records join in pixel
+/// order (the guide's sums then do not depend on the thread count).
+fn join((wa, mut ra): Out, (wb, rb): Out) -> Out {
+    ra.extend(rb);
+    (wa + wb, ra)
+}
 
 /// Pixel ranges splats are grouped into for the parallel reduction.
 const SPLAT_RANGES: usize = 64;
@@ -153,9 +164,35 @@ pub struct Pass<'a> {
     /// pbrt's bdpt; not for files asking for SPPM, whose photons cross them without it:
     /// [`light::LightVertex::leaving_cos`]).
     pub correct_specular: bool,
+    /// The path guide camera subpaths draw from ([`crate::guiding`]), if any.
+    pub guide: Option<std::sync::Arc<crate::guiding::STree>>,
+    /// Camera subpaths record what they find for the guide's training.
+    pub training: bool,
 }
 
 impl Pass<'_> {
+    /// The guided mixture camera subpaths sample from at a vertex, where there is one:
+    /// on a surface whose BSDF can be guided ([`crate::materials::Bsdf::guidable`]),
+    /// in a leaf of the guide that has learnt something. Light subpaths ask it too, for
+    /// the density a camera subpath would have drawn their way back with.
+    /// `wo`: the direction the camera subpath arrives from (the side a reflecting
+    /// BSDF's guide folds to).
+    pub fn guide_at(&self, p: glam::Vec3, wo: glam::Vec3, at: &vertex::Scatterer) -> Option<crate::guiding::Mix<'_>> {
+        let tree = self.guide.as_deref()?;
+        let vertex::Scatterer::Surface(b) = at else { return None };
+        let t = tree.sampling(p);
+        if !b.guidable() || t.total() <= 0.0 {
+            return None;
+        }
+        let fold = b.reflecting_normal().map(|n| if wo.dot(n) < 0.0 { -n } else { n });
+        Some(crate::guiding::Mix { tree: t, bsdf_share: crate::guiding::BSDF_SHARE, fold })
+    }
+
+    /// Whether a camera subpath records what it finds past a vertex for the guide.
+    pub fn records_at(&self, at: &vertex::Scatterer) -> bool {
+        self.training && matches!(at, vertex::Scatterer::Surface(b) if b.guidable())
+    }
+
     /// Next-event estimation's probability of choosing light `k`.
     pub fn nee_pick(&self, k: usize) -> f64 {
         match self.nee_all {
@@ -218,6 +255,9 @@ pub struct VcmSettings {
     /// Let the pixels that need it trace more rays for their prefix light
     /// (`camera/prefix.rs`).
     pub prefix_rays: bool,
+    /// Camera subpaths draw directions from a path guide too (`--guiding`,
+    /// [`crate::guiding`]).
+    pub guiding: bool,
 }
 
 /// The choice of light subpaths per pass under way: the pilot's measurements while it
@@ -251,6 +291,8 @@ pub struct Vcm<'a> {
     prefix: Option<Vec<bool>>,
     /// A spectral film's bucket sums.
     buckets: Option<BucketSums>,
+    /// The path guide, trained over the first passes ([`crate::guiding::training`]).
+    guide: Option<Guide>,
 }
 
 /// What a pass did besides adding to the sums.
@@ -258,6 +300,8 @@ struct Done {
     counts: light::Counts,
     stored: usize,
     camera: camera::Work,
+    /// The camera subpaths' records for the guide, in pixel order (a training pass's).
+    records: Vec<crate::guiding::Record>,
     times: [Instant; 5],
 }
 
@@ -299,6 +343,7 @@ impl<'a> Vcm<'a> {
             cones: aim::cones(scene).into(),
             prefix: None,
             buckets: bucket_sums(scene, w * h, (w, h))?,
+            guide: guide(scene, &settings),
         };
         vcm.prefix = vcm.prefix_marks();
         Ok(vcm)
@@ -382,6 +427,9 @@ impl<'a> Vcm<'a> {
         if self.balance.is_some() && iteration > 0 {
             self.balance = Some(Balance::Unknown);
         }
+        if let Some(g) = &mut self.guide {
+            g.reset();
+        }
         Ok(())
     }
 
@@ -411,37 +459,62 @@ impl<'a> Vcm<'a> {
     /// One pass, offering `preview` provisional images between bands of camera
     /// subpaths (see [`super::preview`]); the image it ends with is the same either way.
     pub fn iterate_showing(&mut self, preview: Option<&mut super::preview::Preview>) {
-        if matches!(self.balance, Some(Balance::Unknown)) && self.iteration >= balance::PILOT_PASSES {
-            self.rehearse_pilot();
-        }
-        let measuring = matches!(self.balance, Some(Balance::Measuring(_)));
-        let mut parts = measuring.then(|| vec![[0f32; 3]; self.sums.len()]);
+        self.rehearse();
+        let mut parts = self.measuring().then(|| vec![[0f32; 3]; self.sums.len()]);
         let mut sums = std::mem::take(&mut self.sums);
         let buckets = self.buckets.as_ref();
         let done = self.render_pass(self.iteration, (&mut sums, buckets), parts.as_deref_mut(), preview);
         self.sums = sums;
-        let n = self.light_paths(self.iteration);
-        if let (Some(parts), Some(Balance::Measuring(pilot))) = (&parts, &mut self.balance) {
+        self.learn(self.iteration, parts.as_deref(), &done);
+        self.iteration += 1;
+        self.note(&done.counts, done.stored, done.times);
+    }
+
+    /// Whether the pilot is measuring the passes ([`balance`]).
+    fn measuring(&self) -> bool {
+        matches!(self.balance, Some(Balance::Measuring(_)))
+    }
+
+    /// What pass `k` teaches: the pilot its parts (when it measures), the guide its
+    /// records (when it trains on the pass).
+    fn learn(&mut self, k: u32, parts: Option<&[balance::Part]>, done: &Done) {
+        if let Some(g) = self.guide.as_mut().filter(|g| g.trains_on(k)) {
+            g.add_pass(&done.records);
+        }
+        let n = self.light_paths(k);
+        if let (Some(parts), Some(Balance::Measuring(pilot))) = (parts, &mut self.balance) {
             pilot.add(parts, n, done.counts, done.camera, done.stored as u64);
             if pilot.complete() {
                 self.balance = Some(Balance::Chosen(pilot.choose(self.settings.light_paths.max(1))));
             }
         }
-        self.iteration += 1;
-        self.note(&done.counts, done.stored, done.times);
     }
 
-    /// Renders the pilot passes again, apart from the image, to choose the count as a
-    /// render from pass 0 did.
-    fn rehearse_pilot(&mut self) {
-        let mut pilot = balance::Pilot::new(self.sums.len());
-        let mut scratch = vec![DVec3::ZERO; self.sums.len()];
-        for k in 0..balance::PILOT_PASSES {
-            let mut parts = vec![[0f32; 3]; self.sums.len()];
-            let done = self.render_pass(k, (&mut scratch, None), Some(&mut parts), None);
-            pilot.add(&parts, self.light_paths(k), done.counts, done.camera, done.stored as u64);
+    /// Before a pass of a render that did not start at pass 0 (a shard, a resumed
+    /// render): renders the passes before it again, apart from the image, as far as
+    /// the pilot's choice of light subpaths and the guide's training need them, so
+    /// that the pass is the one a render from pass 0 renders.
+    fn rehearse(&mut self) {
+        let it = self.iteration;
+        let unknown = matches!(self.balance, Some(Balance::Unknown));
+        let pilot = unknown && it >= balance::PILOT_PASSES;
+        if !pilot && !self.guide.as_ref().is_some_and(|g| g.behind(it)) {
+            return;
         }
-        self.balance = Some(Balance::Chosen(pilot.choose(self.settings.light_paths.max(1))));
+        if unknown {
+            self.balance = Some(Balance::Measuring(Box::new(balance::Pilot::new(self.sums.len()))));
+        }
+        let mut end = if pilot { balance::PILOT_PASSES } else { 0 };
+        if let Some(g) = &mut self.guide {
+            g.reset();
+            end = end.max(it.min(crate::guiding::training::TRAINING_PASSES));
+        }
+        let mut scratch = vec![DVec3::ZERO; self.sums.len()];
+        for k in 0..end {
+            let mut parts = self.measuring().then(|| vec![[0f32; 3]; self.sums.len()]);
+            let done = self.render_pass(k, (&mut scratch, None), parts.as_deref_mut(), None);
+            self.learn(k, parts.as_deref(), &done);
+        }
     }
 
     /// Pass `iteration` added to `sums` (and a spectral film's buckets): light subpaths,
@@ -478,7 +551,7 @@ impl<'a> Vcm<'a> {
         let cams = self.cameras(&pass, &lights, grid.as_ref(), iteration);
         let (width, live, scene) = (self.size.0, &self.live, self.scene);
         let tasks = crate::integrators::PIXELS_PER_TASK;
-        let mut work = camera::Work::default();
+        let (mut work, mut records) = (camera::Work::default(), Vec::new());
         let halves = balance::Halves::new(pass.light_paths);
         let lanes = buckets.map(|b| (b, b.lanes(iteration)));
         for band in super::preview::bands(sums.len(), 4 * tasks, usize::MAX, preview.is_some()) {
@@ -496,18 +569,19 @@ impl<'a> Vcm<'a> {
                 p
             };
             let band_sums = sums[band.clone()].par_iter_mut().enumerate().with_max_len(tasks);
-            work = work
-                + match parts.as_deref_mut() {
-                    Some(parts) => band_sums
-                        .zip(parts[band.clone()].par_iter_mut())
-                        .map(|((i, s), part)| {
-                            let p = pixel(i, s);
-                            *part = halves.part(&p);
-                            p.work
-                        })
-                        .reduce(Default::default, |a, b| a + b),
-                    None => band_sums.map(|(i, s)| pixel(i, s).work).reduce(Default::default, |a, b| a + b),
-                };
+            let (w, r) = match parts.as_deref_mut() {
+                Some(parts) => band_sums
+                    .zip(parts[band.clone()].par_iter_mut())
+                    .map(|((i, s), part)| {
+                        let p = pixel(i, s);
+                        *part = halves.part(&p);
+                        (p.work, p.records)
+                    })
+                    .reduce(Default::default, join),
+                None => band_sums.map(|(i, s)| pixel(i, s)).map(|p| (p.work, p.records)).reduce(Default::default, join),
+            };
+            work = work + w;
+            records.extend(r);
             if let Some(show) = preview.as_mut() {
                 show(&|| provisional(sums, self.passes_done(), &self.scene.film, band.end));
             }
@@ -519,7 +593,7 @@ impl<'a> Vcm<'a> {
         }
         let (counts, stored) = (lights.counts, lights.vertices.len());
         add_splats((sums, lanes.as_ref()), lights.splats, scale, scene);
-        Done { counts, stored, camera: work, times: [t0, t1, t2, t3, Instant::now()] }
+        Done { counts, stored, camera: work, records, times: [t0, t1, t2, t3, Instant::now()] }
     }
 
     fn pass(&self, iteration: u32) -> Pass<'a> {
@@ -541,6 +615,8 @@ impl<'a> Vcm<'a> {
             nee_all: scene.lights.len() <= NEE_ALL_LIGHTS_MAX,
             cones: self.cones.clone(),
             correct_specular: scene.integrator.requested != "sppm",
+            guide: self.guide.as_ref().map(|g| g.tree()),
+            training: self.guide.as_ref().is_some_and(|g| g.trains_on(iteration)),
         }
     }
 
@@ -583,6 +659,13 @@ impl<'a> Vcm<'a> {
         let film = &self.scene.film;
         self.sums.iter().map(|s| film.respond(*s)).collect()
     }
+}
+
+/// The guide a render trains, if it asks for one: over the box around what rays can
+/// hit (none for pbrt-v3's whitted and directlighting, which trace no light subpaths).
+fn guide(scene: &RenderScene, settings: &VcmSettings) -> Option<Guide> {
+    let b = scene.geometry.bounds()?;
+    (settings.guiding && settings.techniques.traces_lights()).then(|| Guide::new(b.min, b.max))
 }
 
 /// The image part way through a pass: the first `camera_done` pixels with this pass's

@@ -16,6 +16,7 @@
 
 use super::mis::{Factors, PassFactors};
 use crate::accel::Hit;
+use crate::guiding::Mix;
 use crate::integrators::volume;
 use crate::interaction::{SHADOW_EPSILON, SurfaceInteraction, offset_ray_origin};
 use crate::materials::{Bsdf, BsdfEval, TransportMode};
@@ -209,6 +210,33 @@ impl Scatterer {
         let scale = cos(smp.wi, smp.specular) / smp.pdf;
         Some(Sampled { wi: smp.wi, f: smp.f, scale, pdf, pdf_rev, specular: smp.specular })
     }
+
+    /// Samples a camera walk's direction from the guided mixture `mix`: the BSDF with
+    /// its share, the guide otherwise (three numbers either way, so that the sampler's
+    /// dimensions stay in step). f and the densities are the BSDF's for the pair, the
+    /// forward one the mixture's; `cos` as [`Self::sample`]'s. A medium is not guided.
+    pub fn sample_guided(
+        &self,
+        wo: Vec3,
+        s: &mut impl Sampler,
+        mix: &Mix,
+        cos: impl Fn(Vec3) -> f32,
+    ) -> Option<Sampled> {
+        let Scatterer::Surface(b) = self else {
+            return self.sample(wo, s, TransportMode::Radiance, |wi, _| cos(wi));
+        };
+        let (choice, u, u_lobe) = (s.get1d(), s.get2d(), s.get1d());
+        let wi = match choice < mix.bsdf_share {
+            true => b.sample_f(wo, u, u_lobe, TransportMode::Radiance)?.wi,
+            false => mix.sample_guide(u),
+        };
+        let e = b.eval(wo, wi, TransportMode::Radiance);
+        let pdf = mix.pdf(e.pdf, wi);
+        if pdf.is_nan() || pdf <= 0.0 || e.f == Vec3::ZERO {
+            return None;
+        }
+        Some(Sampled { wi, f: e.f, scale: cos(wi) / pdf, pdf, pdf_rev: e.pdf_rev, specular: false })
+    }
 }
 
 /// Free flight along `ray` through `medium` (if any) up to `hit`: the medium point
@@ -269,4 +297,83 @@ pub fn unoccluded(scene: &RenderScene, ray: &Ray) -> Rgb {
 /// What reaches one place from another (each end offset off its surface).
 pub fn visible_between(scene: &RenderScene, a: &Place, b: &Place, s: &mut impl Sampler) -> Rgb {
     visible(scene, a, b.origin_toward(a.p - b.p).0, s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::guiding::DTree;
+    use crate::guiding::dtree::{from_square, to_square};
+    use crate::materials::Convention;
+    use crate::materials::lobes::Lobe;
+    use crate::sampling::Rng;
+    use crate::sampling::testing::{cell_mean, histogram, lcg};
+
+    /// A Lambertian surface facing +z and a guide trained on light from a window at
+    /// the side (-x, a little up): the mixture of the two.
+    fn guided() -> (Scatterer, DTree) {
+        let frame = [Vec3::X, Vec3::Y, Vec3::Z];
+        let bsdf = Bsdf::new(frame, Vec3::Z, &[Lobe::Lambert(Vec3::splat(0.7))], Convention::PbrtV4);
+        let window = Vec3::new(-1.0, 0.0, 0.4).normalize();
+        let (mut tree, mut s) = (DTree::default(), 5);
+        for _ in 0..3 {
+            let mut next = tree.refined(0.01);
+            for _ in 0..20_000 {
+                let d = from_square([lcg(&mut s), lcg(&mut s)]);
+                next.record(d, if d.dot(window) > 0.95 { 40.0 } else { 0.5 });
+            }
+            tree = next;
+        }
+        (Scatterer::Surface(bsdf), tree)
+    }
+
+    #[test]
+    fn the_guided_mixture_integrates_to_one_and_its_samples_follow_it() {
+        let (at, tree) = guided();
+        // Unfolded (guide samples behind the surface end the path) and folded about +z.
+        for fold in [None, Some(Vec3::Z)] {
+            let mix = Mix { tree: &tree, bsdf_share: 0.5, fold };
+            check_mixture(&at, &mix);
+        }
+    }
+
+    fn check_mixture(at: &Scatterer, mix: &Mix) {
+        let wo = Vec3::new(0.3, 0.2, 0.9).normalize();
+        let pdf = |p: [f32; 2]| {
+            let wi = from_square(p);
+            mix.pdf(at.eval(wo, wi, TransportMode::Radiance).pdf, wi) as f64
+        };
+        let n = 2048;
+        let sum: f64 =
+            (0..n * n).map(|k| pdf([((k % n) as f32 + 0.5) / n as f32, ((k / n) as f32 + 0.5) / n as f32])).sum();
+        let integral = sum * 4.0 * std::f64::consts::PI / (n * n) as f64;
+        assert!((integral - 1.0).abs() < 2e-3, "{:?}: ∫pdf = {integral}", mix.fold);
+        // χ² on a 16 × 16 grid of the square: each cell within 5σ of its integral.
+        let (samples, bins, mut rng) = (400_000usize, 16usize, Rng::new(11));
+        let (mut drawn, cos) = (0usize, |wi: Vec3| wi.z.abs());
+        let hist = histogram(samples, bins, || match at.sample_guided(wo, &mut rng, mix, cos) {
+            Some(smp) => {
+                drawn += 1;
+                let expect = mix.pdf(at.eval(wo, smp.wi, TransportMode::Radiance).pdf, smp.wi);
+                assert!((smp.pdf - expect).abs() <= 1e-4 * expect, "{} vs {expect}", smp.pdf);
+                assert!((smp.scale - cos(smp.wi) / smp.pdf).abs() <= 1e-5 * smp.scale);
+                to_square(smp.wi)
+            }
+            // A guide sample behind the surface: f = 0, the path ends (filed in the
+            // last cell, which is not checked).
+            None => [2.0, 2.0],
+        });
+        let mut chi2 = 0.0;
+        let area = 4.0 * std::f64::consts::PI / (bins * bins) as f64;
+        for (k, &count) in hist.iter().enumerate().filter(|&(k, _)| k % bins >= bins / 2 && k != bins * bins - 1) {
+            let expected = samples as f64 * cell_mean(bins, k, 8, pdf) * area;
+            let sigma = expected.max(1.0).sqrt();
+            assert!((count as f64 - expected).abs() < 5.0 * sigma, "{:?}: cell {k}: {count} vs {expected}", mix.fold);
+            chi2 += (count as f64 - expected).powi(2) / expected.max(1.0);
+        }
+        let lost = samples - drawn;
+        assert!(chi2 < 300.0, "{:?}: χ² {chi2}", mix.fold);
+        // Folded, none is lost behind the surface (a few graze it: f = 0 at z = 0).
+        assert!(if mix.fold.is_some() { lost < 10 } else { lost > samples / 20 }, "{:?}: {lost} lost", mix.fold);
+    }
 }

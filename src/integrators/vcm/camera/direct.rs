@@ -85,8 +85,18 @@ impl Cameras<'_> {
         let dist2 = (place.p - b.prev).length_squared() as f64;
         partial.arrive(Some(dist2), at.measure(wo, place.ng));
         let mut terminated = b.terminated;
-        let v =
-            Vertex { place, at: &at, wo, partial, len, merges: false, first_diffuse: false, terminated, exit: false };
+        let v = Vertex {
+            place,
+            at: &at,
+            wo,
+            partial,
+            len,
+            merges: false,
+            first_diffuse: false,
+            terminated,
+            exit: false,
+            guide: None,
+        };
         if let Some((hit, si)) = &surf {
             out.traced += beta * self.emitted(hit, si, &v, origin, dist2);
             pass.scene.terminate_if_dispersed(hit, &mut beta, &mut terminated);
@@ -158,9 +168,10 @@ impl Cameras<'_> {
     /// against next-event estimation); a specular sample counts nothing, its branches
     /// carry it.
     fn bsdf_emitter(&self, v: &Vertex, s: &mut impl Sampler, out: &mut PixelSample) -> Rgb {
-        let Some(((mut beta, wi), partial, false)) = scatter(self.pass, v, (Vec3::ONE, &mut 1.0), s) else {
+        let Some(sc) = scatter(self.pass, v, (Vec3::ONE, &mut 1.0), s).filter(|sc| !sc.specular) else {
             return Vec3::ZERO;
         };
+        let (mut beta, wi, partial) = (sc.beta, sc.wi, sc.partial);
         let ray = v.place.spawn(wi);
         let origin = ray.o.0;
         // Light at infinity it escapes to lands in `found`, already times `beta`.

@@ -158,6 +158,7 @@ impl Cameras<'_> {
                 first_diffuse: true,
                 terminated,
                 exit: false,
+                guide: None,
             };
             if let Some((hit, si)) = &surf {
                 found += beta * self.emitted(hit, si, &v, origin, dist2);
@@ -167,7 +168,8 @@ impl Cameras<'_> {
                 break;
             }
             specular = true;
-            let Some(((b, dir), p, _)) = scatter(pass, &v, (beta, &mut eta_scale), s) else { break };
+            let Some(sc) = scatter(pass, &v, (beta, &mut eta_scale), s) else { break };
+            let (b, dir, p) = (sc.beta, sc.wi, sc.partial);
             // Light through a BSSRDF leaves at a diffuse vertex: the prefix ends.
             if self.crosses_into_bssrdf(&v, surf.as_ref(), dir) {
                 break;
