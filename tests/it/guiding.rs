@@ -51,22 +51,8 @@ fn a_guided_render_is_the_same_for_any_thread_count() {
 
 #[test]
 fn any_split_of_a_guided_render_merges_to_the_single_machine_render() {
-    let d = crate::shards::dir("guided");
-    let run = |args: &[&str]| {
-        let o =
-            std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm")).current_dir(&d).args(args).output().unwrap();
-        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
-    };
-    let vcm = ["render", "scene.pbrt", "--integrator", "vcm", "--guiding", "on", "-q"];
-    run(&[&vcm[..], &["--outfile", "single.exr"]].concat());
     // The second shard starts mid-round: it replays passes 0..3 to train its guide.
-    for (range, threads) in [("0..3", "1"), ("3..6", "2")] {
-        let part = format!("p{}.part.exr", &range[..1]);
-        run(&[&vcm[..], &["--pass-range", range, "--partial", &part, "--nthreads", threads]].concat());
-    }
-    run(&["merge", "--outfile", "merged.exr", "p0.part.exr", "p3.part.exr"]);
-    crate::shards::assert_same_image(&d.join("merged.exr"), &d.join("single.exr"), 1e-6);
-    let _ = std::fs::remove_dir_all(&d);
+    crate::vcm::assert_split_merges("guided", &["--integrator", "vcm", "--guiding", "on"], ["0..3", "3..6"]);
 }
 
 #[test]

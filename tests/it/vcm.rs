@@ -386,19 +386,25 @@ fn the_same_seed_gives_identical_pixels_for_any_thread_count() {
 
 #[test]
 fn any_split_of_a_vcm_render_merges_to_the_single_machine_render() {
-    let d = crate::shards::dir("vcm");
+    assert_split_merges("vcm", &["--integrator", "vcm"], ["0..2", "2..6"]);
+}
+
+/// The shards' scene rendered with `args` whole, and as two shards (the first on one
+/// thread, the second on two) merged: the same image.
+pub fn assert_split_merges(name: &str, args: &[&str], ranges: [&str; 2]) {
+    let d = crate::shards::dir(name);
     let run = |args: &[&str]| {
         let o =
             std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm")).current_dir(&d).args(args).output().unwrap();
         assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
     };
-    let vcm = ["render", "scene.pbrt", "--integrator", "vcm", "-q"];
-    run(&[&vcm[..], &["--outfile", "single.exr"]].concat());
-    for (range, threads) in [("0..2", "1"), ("2..6", "2")] {
-        let part = format!("p{}.part.exr", &range[..1]);
-        run(&[&vcm[..], &["--pass-range", range, "--partial", &part, "--nthreads", threads]].concat());
+    let render = [&["render", "scene.pbrt", "-q"], args].concat();
+    run(&[&render[..], &["--outfile", "single.exr"]].concat());
+    let parts = ranges.map(|r| format!("p{}.part.exr", r.split("..").next().unwrap_or_default()));
+    for ((range, threads), part) in ranges.into_iter().zip(["1", "2"]).zip(&parts) {
+        run(&[&render[..], &["--pass-range", range, "--partial", part, "--nthreads", threads]].concat());
     }
-    run(&["merge", "--outfile", "merged.exr", "p0.part.exr", "p2.part.exr"]);
+    run(&["merge", "--outfile", "merged.exr", &parts[0], &parts[1]]);
     crate::shards::assert_same_image(&d.join("merged.exr"), &d.join("single.exr"), 1e-6);
     let _ = std::fs::remove_dir_all(&d);
 }

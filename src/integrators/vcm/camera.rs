@@ -108,7 +108,14 @@ struct Vertex<'a> {
     guide: Option<Mix<'a>>,
 }
 
-impl Vertex<'_> {
+impl<'a> Vertex<'a> {
+    /// A vertex that merges nothing, past a diffuse bounce, unguided: those of paths
+    /// that count only some techniques (`direct`, `prefix`), which set the rest.
+    fn plain(place: Place, at: &'a Scatterer, wo: Vec3, partial: Partial, len: u32) -> Vertex<'a> {
+        let (merges, first_diffuse, terminated, exit) = (false, false, false, false);
+        Vertex { place, at, wo, partial, len, merges, first_diffuse, terminated, exit, guide: None }
+    }
+
     /// f and both densities toward `wi`, the forward one the camera walk's (its guided
     /// mixture's, where it has one).
     fn eval(&self, wi: Vec3) -> crate::materials::BsdfEval {

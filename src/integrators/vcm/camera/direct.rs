@@ -85,18 +85,7 @@ impl Cameras<'_> {
         let dist2 = (place.p - b.prev).length_squared() as f64;
         partial.arrive(Some(dist2), at.measure(wo, place.ng));
         let mut terminated = b.terminated;
-        let v = Vertex {
-            place,
-            at: &at,
-            wo,
-            partial,
-            len,
-            merges: false,
-            first_diffuse: false,
-            terminated,
-            exit: false,
-            guide: None,
-        };
+        let v = Vertex { terminated, ..Vertex::plain(place, &at, wo, partial, len) };
         if let Some((hit, si)) = &surf {
             out.traced += beta * self.emitted(hit, si, &v, origin, dist2);
             pass.scene.terminate_if_dispersed(hit, &mut beta, &mut terminated);

@@ -148,18 +148,7 @@ impl Cameras<'_> {
             len += 1;
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
-            let v = Vertex {
-                place,
-                at: &at,
-                wo,
-                partial,
-                len,
-                merges: false,
-                first_diffuse: true,
-                terminated,
-                exit: false,
-                guide: None,
-            };
+            let v = Vertex { first_diffuse: true, terminated, ..Vertex::plain(place, &at, wo, partial, len) };
             if let Some((hit, si)) = &surf {
                 found += beta * self.emitted(hit, si, &v, origin, dist2);
                 scene.terminate_if_dispersed(hit, &mut beta, &mut terminated);
