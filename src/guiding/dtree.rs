@@ -15,7 +15,7 @@ use std::f32::consts::PI;
 /// Deepest level a quadrant may reach (cells of 4⁻²⁰ of the sphere).
 pub const MAX_DEPTH: u32 = 20;
 
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 struct Node {
     /// Energy recorded in each quadrant (x < ½ or not, then y < ½ or not: index
     /// `2·(y ≥ ½) + (x ≥ ½)`).
@@ -25,7 +25,7 @@ struct Node {
 }
 
 /// A directional quadtree.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DTree {
     nodes: Vec<Node>,
     /// Records made (their count, whatever their energy).

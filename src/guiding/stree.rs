@@ -10,7 +10,7 @@ use glam::Vec3;
 /// The deepest a leaf may be (cells of 2⁻³² of the cube's volume).
 pub const MAX_DEPTH: u32 = 32;
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 enum SNode {
     /// Halved along `axis` at the cell's middle: children below and above.
     Inner {
@@ -24,7 +24,7 @@ enum SNode {
 }
 
 /// A spatial-directional tree.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct STree {
     min: Vec3,
     size: f32,

@@ -36,8 +36,9 @@ pub struct Record {
     pub energy: f32,
 }
 
-/// A guide being trained, or trained.
-#[derive(Clone, Debug)]
+/// A guide being trained, or trained (a checkpoint saves it, so that `--resume` need
+/// not replay the training).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Guide {
     tree: Arc<STree>,
     lo: Vec3,

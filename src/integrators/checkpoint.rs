@@ -172,6 +172,13 @@ pub struct Checkpoint {
     /// header's `bucket_sums` says how many (none in files written before them).
     #[serde(skip)]
     pub buckets: Vec<f64>,
+    /// vcm's state that the passes so far decided and a resumed render would
+    /// otherwise replay them for: the pilot's light subpaths per pass and the path
+    /// guide (none in files written before them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub light_paths: Option<u64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub guide: Option<crate::guiding::Guide>,
 }
 
 impl Checkpoint {
@@ -285,7 +292,25 @@ mod tests {
             pixels: (0..5).map(px).collect(),
             chains: Some(Chain::new_set(3)),
             buckets: vec![0.5, -1e-300, 7.0],
+            light_paths: Some(12_345),
+            guide: Some(trained_guide()),
         }
+    }
+
+    /// A guide after one round, its sums not short decimals.
+    fn trained_guide() -> crate::guiding::Guide {
+        use glam::Vec3;
+        let mut g = crate::guiding::Guide::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0 / 7.0));
+        let d = |k: u32| Vec3::new((k as f32).sin(), (k as f32).cos(), 0.3).normalize();
+        let records: Vec<_> = (0..5000)
+            .map(|k| crate::guiding::Record {
+                p: Vec3::splat(k as f32 / 5000.0),
+                d: d(k),
+                energy: 1.0 / (1 + k) as f32,
+            })
+            .collect();
+        g.add_pass(&records);
+        g
     }
 
     #[test]
@@ -298,6 +323,8 @@ mod tests {
         assert_eq!((back.iteration, back.seconds, back.stats.camera_rays), (7, 1.25, 99));
         assert_eq!(back.fingerprint, c.fingerprint);
         assert_eq!(format!("{:?}", back.chains), format!("{:?}", c.chains));
+        assert_eq!((back.light_paths, &back.guide), (Some(12_345), &c.guide));
+        assert!(c.guide.as_ref().is_some_and(|g| g.recorded() == 1));
     }
 
     #[test]

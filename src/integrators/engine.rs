@@ -158,6 +158,29 @@ impl<'a> Engine<'a> {
         }
     }
 
+    /// vcm's pilot choice of light subpaths per pass, once made (a checkpoint saves it).
+    pub fn chosen_light_paths(&self) -> Option<u64> {
+        match self {
+            Engine::Sppm(_) => None,
+            Engine::Vcm(v) => v.chosen_light_paths(),
+        }
+    }
+
+    /// vcm's path guide, if it renders with one (a checkpoint saves it).
+    pub fn guide(&self) -> Option<crate::guiding::Guide> {
+        match self {
+            Engine::Sppm(_) => None,
+            Engine::Vcm(v) => v.guide().cloned(),
+        }
+    }
+
+    /// What a checkpoint saved of the passes' decisions (after [`Self::restore`]).
+    pub fn restore_decided(&mut self, light_paths: Option<u64>, guide: Option<crate::guiding::Guide>) {
+        if let Engine::Vcm(v) = self {
+            v.restore_decided(light_paths, guide);
+        }
+    }
+
     pub fn restore_buckets(&mut self, saved: &[f64]) -> Result<(), RenderError> {
         match self {
             Engine::Sppm(_) if saved.is_empty() => Ok(()),

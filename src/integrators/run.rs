@@ -135,6 +135,7 @@ pub fn run(
         }
         engine.restore(c.iteration, &c.pixels, c.chains, c.stats)?;
         engine.restore_buckets(&c.buckets)?;
+        engine.restore_decided(c.light_paths, c.guide);
         (progress.prior, progress.errors, progress.saved.0) = (c.seconds, c.errors, c.iteration);
     }
     let mut took = None;
@@ -341,6 +342,8 @@ fn save(engine: &Engine, target: &CheckpointTarget, progress: &mut Progress, qui
         pixels,
         chains,
         buckets: engine.save_buckets(),
+        light_paths: engine.chosen_light_paths(),
+        guide: engine.guide(),
     };
     match c.write(&target.path) {
         Ok(()) => (progress.saved, progress.save_failed) = ((engine.iteration(), Instant::now()), false),

@@ -433,6 +433,38 @@ impl<'a> Vcm<'a> {
         Ok(())
     }
 
+    /// The pilot's choice of light subpaths per pass, once made.
+    pub fn chosen_light_paths(&self) -> Option<u64> {
+        match self.balance {
+            Some(Balance::Chosen(n)) => Some(n),
+            _ => None,
+        }
+    }
+
+    /// The path guide, if the render has one.
+    pub fn guide(&self) -> Option<&Guide> {
+        self.guide.as_ref()
+    }
+
+    /// Takes what a checkpoint saved after [`Self::restore`]: the pilot's choice, where
+    /// the pilot was done, and then the guide, where it is the one the passes so far
+    /// trained (else the passes are replayed before the next, [`Self::rehearse`]).
+    pub fn restore_decided(&mut self, light_paths: Option<u64>, guide: Option<Guide>) {
+        if let (Some(n), Some(Balance::Unknown)) = (light_paths, &self.balance)
+            && self.iteration >= balance::PILOT_PASSES
+        {
+            self.balance = Some(Balance::Chosen(n));
+        }
+        let settled = !matches!(self.balance, Some(Balance::Unknown));
+        let trained = self.iteration.min(crate::guiding::training::TRAINING_PASSES);
+        if let (Some(g), Some(mine)) = (guide, &mut self.guide)
+            && settled
+            && g.recorded() == trained
+        {
+            *mine = g;
+        }
+    }
+
     /// A spectral film's bucket sums and layout.
     pub fn bucket_totals(&self) -> Option<super::buckets::BucketTotals> {
         self.buckets.as_ref().map(BucketSums::totals)
