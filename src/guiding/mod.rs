@@ -64,6 +64,11 @@ impl Mix<'_> {
         }
     }
 
+    /// The mixture toward direction `d`, fixed once (see [`Toward`]).
+    pub fn toward(&self, d: Vec3) -> Toward {
+        Toward { bsdf_share: self.bsdf_share, guide_pdf: self.guide_pdf(d) }
+    }
+
     /// A direction from the guide (folded to the front where it folds).
     pub fn sample_guide(&self, u: [f32; 2]) -> Vec3 {
         let d = self.tree.sample(u);
@@ -89,12 +94,5 @@ impl Toward {
     #[inline]
     pub fn pdf(&self, bsdf_pdf: f32) -> f32 {
         mixture_pdf(self.bsdf_share, bsdf_pdf, self.guide_pdf)
-    }
-}
-
-impl Mix<'_> {
-    /// The mixture toward direction `d`.
-    pub fn toward(&self, d: Vec3) -> Toward {
-        Toward { bsdf_share: self.bsdf_share, guide_pdf: self.guide_pdf(d) }
     }
 }

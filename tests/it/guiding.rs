@@ -36,11 +36,8 @@ fn a_guided_render_is_the_same_for_any_thread_count() {
     // Pass 0 trains the first round, passes 1 and 2 the second while the first guides
     // them, pass 3 is guided by both.
     let s = RenderSettings { iterations: Some(4), photons: Some(3000), ..guided(Techniques::All) };
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| pbrt_sppm::integrators::render(&sc, &s).unwrap().image.pixels)
-    };
-    let (one, two) = (run(1), run(2));
+    let pixels = |threads| crate::vcm::pixels_on_threads(&sc, &s, threads);
+    let (one, two) = (pixels(1), pixels(2));
     assert!(one.iter().any(|p| p[0] > 0.0), "the image is black");
     let same = one.iter().zip(&two).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits));
     assert!(same, "guided images differ between 1 and 2 threads");

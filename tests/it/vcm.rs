@@ -373,15 +373,17 @@ fn the_same_seed_gives_identical_pixels_for_any_thread_count() {
             photons: Some(3000),
             ..Default::default()
         };
-        let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| pbrt_sppm::integrators::render(&sc, &s).unwrap().image.pixels)
-        };
-        let (one, two) = (run(1), run(2));
+        let (one, two) = (pixels_on_threads(&sc, &s, 1), pixels_on_threads(&sc, &s, 2));
         assert!(one.iter().any(|p| p[0] > 0.0), "{algorithm:?}: the image is black");
         let same = one.iter().zip(&two).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits));
         assert!(same, "{algorithm:?}: images differ between 1 and 2 threads");
     }
+}
+
+/// The pixels of a render on a pool of `threads` threads.
+pub fn pixels_on_threads(sc: &RenderScene, s: &RenderSettings, threads: usize) -> Vec<[f32; 3]> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| pbrt_sppm::integrators::render(sc, s).unwrap().image.pixels)
 }
 
 #[test]

@@ -346,8 +346,8 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
         // A camera subpath reaching here on a reflecting BSDF arrives on `wo`'s side
         // (else f is 0 and the density does not count).
         let guide = pass.guide_at(place.p, wo, &at).map(|m| m.toward(wo));
-        let (half, after) = (to.half, after_specular);
-        let v = LightVertex { place, wo, beta, at, partial, len, half, after_specular: after, terminated, guide };
+        let half = to.half;
+        let v = LightVertex { place, wo, beta, at, partial, len, half, after_specular, terminated, guide };
         if !v.at.is_delta() {
             // Direct light is not light-traced (`mis`), unless light tracing is alone.
             let traced = len > 1 || pass.techniques == Techniques::Only(Technique::LightTrace);
