@@ -154,6 +154,8 @@ struct PrimInfo {
     /// Its intersection cost in triangle tests.
     cost: f32,
     index: u32,
+    /// Leaves hold one group's primitives only (see [`Bvh::build_grouped`]).
+    group: u32,
 }
 
 enum BuildNode {
@@ -181,13 +183,30 @@ impl Bvh {
 
     /// [`Bvh::build`] with at most `max_leaf` (at most 255) primitives per leaf.
     pub fn build_with_max_leaf(bounds: &[Bounds3], cost: impl Fn(usize) -> f32, max_leaf: usize) -> (Bvh, Vec<u32>) {
+        Bvh::build_grouped(bounds, cost, max_leaf, |_| 0)
+    }
+
+    /// [`Bvh::build_with_max_leaf`] whose leaves each hold primitives of one group
+    /// (`group(i)`): a leaf that SAH would fill from several is split by group instead.
+    pub fn build_grouped(
+        bounds: &[Bounds3],
+        cost: impl Fn(usize) -> f32,
+        max_leaf: usize,
+        group: impl Fn(usize) -> u32,
+    ) -> (Bvh, Vec<u32>) {
         if bounds.is_empty() {
             return (Bvh::default(), Vec::new());
         }
         let mut info: Vec<PrimInfo> = bounds
             .iter()
             .enumerate()
-            .map(|(i, b)| PrimInfo { bounds: *b, centroid: b.centroid(), cost: cost(i), index: i as u32 })
+            .map(|(i, b)| PrimInfo {
+                bounds: *b,
+                centroid: b.centroid(),
+                cost: cost(i),
+                index: i as u32,
+                group: group(i),
+            })
             .collect();
         let root = build_recursive(&mut info, 0, max_leaf.clamp(1, u8::MAX as usize));
         let mut nodes = Vec::new();
@@ -569,17 +588,14 @@ fn build_recursive(prims: &mut [PrimInfo], first: usize, max_leaf: usize) -> Bui
     let centroids = prims.iter().fold(Bounds3::default(), |b, p| b.union_point(p.centroid));
     let axis = centroids.max_extent();
     let (lo, hi) = (centroids.min[axis], centroids.max[axis]);
-    let mid = if hi <= lo {
+    let split = if hi <= lo {
         // All centroids coincide: a leaf if it fits, else split by count.
-        if n <= max_leaf {
-            return BuildNode::Leaf { bounds, first, count: n };
-        }
-        n / 2
+        (n > max_leaf).then_some(n / 2)
     } else {
-        match sah_split(prims, &bounds, axis, lo, hi, max_leaf) {
-            Some(mid) => mid,
-            None => return BuildNode::Leaf { bounds, first, count: n },
-        }
+        sah_split(prims, &bounds, axis, lo, hi, max_leaf)
+    };
+    let Some(mid) = split.or_else(|| split_groups(prims)) else {
+        return BuildNode::Leaf { bounds, first, count: n };
     };
     let (left, right) = prims.split_at_mut(mid);
     let (a, b) = if n > PARALLEL_THRESHOLD {
@@ -636,6 +652,16 @@ fn sah_split(
     let mid = partition(prims, |p| bin_of(p.centroid) <= best);
     // A split that leaves one side empty (degenerate bins) falls back to halves.
     Some(if mid == 0 || mid == n { n / 2 } else { mid })
+}
+
+/// For a would-be leaf whose primitives are of several groups: the first one's group
+/// to the left, the others to the right. `None` when they are all of one group.
+fn split_groups(prims: &mut [PrimInfo]) -> Option<usize> {
+    let g = prims.first()?.group;
+    if prims.iter().all(|p| p.group == g) {
+        return None;
+    }
+    Some(partition(prims, |p| p.group == g))
 }
 
 fn partition(prims: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize {
@@ -944,5 +970,35 @@ mod tests {
             false
         });
         assert!(!seen.is_empty() && seen.iter().all(|l| leaves.contains(l)));
+    }
+
+    /// Two groups' boxes interleaved in space (a cheap cost, large leaves allowed): every
+    /// leaf holds one group's primitives, and they are still covered once; without
+    /// groups the same boxes share leaves.
+    #[test]
+    fn grouped_leaves_hold_one_group() {
+        let boxes: Vec<Bounds3> = (0..400)
+            .map(|i| {
+                let c = Vec3::new((i % 10) as f32 * 0.3, (i / 10 % 8) as f32 * 0.3, (i / 80) as f32 * 0.3);
+                Bounds3::new(c, c + Vec3::splat(0.5))
+            })
+            .collect();
+        let group = |i: usize| i.is_multiple_of(3) as u32;
+        let leaves = |bvh: &mut Bvh, order: &[u32]| {
+            let mut mixed = 0;
+            let mut covered = vec![0; order.len()];
+            bvh.relabel_leaves(|first, count| {
+                let groups: Vec<u32> = order[first..first + count].iter().map(|&i| group(i as usize)).collect();
+                mixed += groups.iter().any(|&g| g != groups[0]) as usize;
+                covered[first..first + count].iter_mut().for_each(|c| *c += 1);
+                (first as u32, 0)
+            });
+            assert!(covered.iter().all(|&c| c == 1));
+            mixed
+        };
+        let (mut bvh, order) = Bvh::build_grouped(&boxes, |_| 0.5, 16, group);
+        assert_eq!(leaves(&mut bvh, &order), 0);
+        let (mut bvh, order) = Bvh::build_with_max_leaf(&boxes, |_| 0.5, 16);
+        assert!(leaves(&mut bvh, &order) > 0, "the case must mix groups without them");
     }
 }

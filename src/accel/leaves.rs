@@ -1,6 +1,6 @@
-//! Leaf blocks: for a BVH over a single mesh, each leaf gets one block holding copies
-//! of the vertices its triangles use and each triangle's corners as a byte index into
-//! them. A ray that reaches the leaf then waits on one run of memory, where reading
+//! Leaf blocks: for a BVH over meshes alone, each leaf (of one mesh's triangles) gets
+//! one block holding copies of the vertices its triangles use and each triangle's
+//! corners as a byte index into them. A ray that reaches the leaf then waits on one run of memory, where reading
 //! the mesh would wait on its indices and then on the vertices they name.
 //!
 //! The copies are the mesh's exact f32 values, so every triangle test gives the same
@@ -10,8 +10,9 @@
 //!
 //! ```text
 //! [0]                  the leaf's first triangle (the mesh stores its triangles in leaf order)
-//! [1 .. 1 + 3g]        corner indices, a byte each, 12 per group: triangle k's at bytes 3k..3k+3
-//! [1 + 3g ..]          the vertices, three f32 each
+//! [1]                  the mesh's shape, as the BVH's owner numbers its shapes
+//! [2 .. 2 + 3g]        corner indices, a byte each, 12 per group: triangle k's at bytes 3k..3k+3
+//! [2 + 3g ..]          the vertices, three f32 each
 //! ```
 //!
 //! The BVH leaf holds the block's offset and, as its tag, the block's vertex count,
@@ -38,6 +39,7 @@ pub struct LeafBlocks {
 #[derive(Clone, Copy)]
 pub struct Block<'a> {
     first: u32,
+    shape: u32,
     /// Twelve corner bytes per group.
     corners: &'a [u8],
     /// The vertices and one word after them.
@@ -46,9 +48,9 @@ pub struct Block<'a> {
     count: usize,
 }
 
-/// A block's most words per triangle: a first-triangle word and three words of
-/// corners per group of up to four, and three vertices of three words each.
-const MOST_WORDS_PER_TRIANGLE: usize = 1 + 3 + 9;
+/// A block's most words per triangle: two header words and three words of corners
+/// per group of up to four, and three vertices of three words each.
+const MOST_WORDS_PER_TRIANGLE: usize = 2 + 3 + 9;
 
 impl LeafBlocks {
     /// Whether the blocks of a mesh with this many triangles can be referred to by
@@ -57,10 +59,11 @@ impl LeafBlocks {
         triangles.checked_mul(MOST_WORDS_PER_TRIANGLE).is_some_and(|w| w < u32::MAX as usize)
     }
 
-    /// Appends the block of triangles `first..first + count` of `mesh`; returns its
-    /// reference and vertex count, the BVH leaf's reference and tag. The mesh must
-    /// [`fit`](Self::fit), and `count` be at most [`MAX_LEAF`].
-    pub fn push(&mut self, mesh: &TriangleMesh, first: usize, count: usize) -> (u32, u8) {
+    /// Appends the block of triangles `first..first + count` of `mesh`, which is
+    /// `shape` to the caller; returns its reference and vertex count, the BVH leaf's
+    /// reference and tag. The meshes of one store must together [`fit`](Self::fit),
+    /// and `count` be at most [`MAX_LEAF`].
+    pub fn push(&mut self, mesh: &TriangleMesh, shape: u32, first: usize, count: usize) -> (u32, u8) {
         assert!(count <= MAX_LEAF, "a leaf block holds at most {MAX_LEAF} triangles");
         self.words.pop(); // the previous block's spare word
         let at = self.words.len() as u32;
@@ -73,7 +76,7 @@ impl LeafBlocks {
             });
             corner_bytes[k] = local as u8;
         }
-        self.words.push(first as u32);
+        self.words.extend([first as u32, shape]);
         // Native byte order, so that the bytes lie in memory in this order.
         self.words.extend(corner_bytes.chunks_exact(4).map(|b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]])));
         self.words.extend(verts.iter().flat_map(|&v| mesh.p[v as usize].map(f32::to_bits)));
@@ -97,7 +100,7 @@ impl LeafBlocks {
     /// A block's length in words, without the spare word.
     #[inline(always)]
     fn len(leaf: Leaf) -> usize {
-        1 + 3 * leaf.count.div_ceil(4) + 3 * leaf.tag as usize
+        2 + 3 * leaf.count.div_ceil(4) + 3 * leaf.tag as usize
     }
 
     /// The block of a leaf the BVH handed over; `None` for a reference this store did
@@ -105,12 +108,12 @@ impl LeafBlocks {
     #[inline(always)]
     pub fn block(&self, leaf: Leaf) -> Option<Block<'_>> {
         let words = self.words.get(leaf.first..leaf.first + Self::len(leaf) + 1)?;
-        let (&first, rest) = words.split_first()?;
+        let [first, shape, rest @ ..] = words else { return None };
         let (corners, verts) = rest.split_at_checked(3 * leaf.count.div_ceil(4))?;
         // SAFETY: the same memory as `corners`, read as bytes: u8 needs no alignment
         // and takes any bit pattern, and the borrow keeps the words alive and unchanged.
         let corners = unsafe { std::slice::from_raw_parts(corners.as_ptr().cast::<u8>(), 4 * corners.len()) };
-        Some(Block { first, corners, verts, vertex_count: leaf.tag as u32, count: leaf.count })
+        Some(Block { first: *first, shape: *shape, corners, verts, vertex_count: leaf.tag as u32, count: leaf.count })
     }
 
     /// Asks the cache for the lines of the leaf's block past its first, which the
@@ -139,6 +142,12 @@ impl Block<'_> {
 
     pub fn count(&self) -> usize {
         self.count
+    }
+
+    /// The block's mesh, as the caller of [`LeafBlocks::push`] named it.
+    #[inline(always)]
+    pub fn shape(&self) -> u32 {
+        self.shape
     }
 
     /// Group `g`'s corners for [`crate::shapes::edge_candidates`] (triangles past the
@@ -239,7 +248,7 @@ mod tests {
         let mut leaves = Vec::new();
         let (mut first, mut count) = (0, 1);
         while first + count <= mesh.triangle_count() {
-            let (at, tag) = blocks.push(&mesh, first, count);
+            let (at, tag) = blocks.push(&mesh, count as u32, first, count);
             leaves.push((Leaf { first: at as usize, count, tag }, first));
             first += count;
             count = count % MAX_LEAF + 1;
@@ -251,6 +260,7 @@ mod tests {
             assert_eq!(block.count(), leaf.count);
             for k in 0..leaf.count {
                 assert_eq!(block.triangle(k) as usize, first + k);
+                assert_eq!(block.shape() as usize, leaf.count);
                 let bits = |c: [Vec3; 3]| c.map(|v| v.to_array().map(f32::to_bits));
                 assert_eq!(bits(block.corners(k)), bits(mesh.corners(first + k)));
             }
@@ -269,10 +279,10 @@ mod tests {
     fn shared_vertices_are_copied_once_per_block() {
         let mesh = strip(16);
         let mut blocks = LeafBlocks::default();
-        let (_, tag) = blocks.push(&mesh, 0, 16);
-        // 16 strip triangles use 18 vertices; the block is 1 + 3·4 + 3·18 words.
+        let (_, tag) = blocks.push(&mesh, 0, 0, 16);
+        // 16 strip triangles use 18 vertices; the block is 2 + 3·4 + 3·18 words.
         assert_eq!(tag, 18);
-        assert_eq!(blocks.words.len(), 1 + 12 + 54 + 1);
+        assert_eq!(blocks.words.len(), 2 + 12 + 54 + 1);
         assert_eq!(blocks.block(Leaf { first: 0, count: 16, tag: tag + 1 }).map(|b| b.count()), None);
     }
 

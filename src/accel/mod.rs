@@ -41,14 +41,15 @@ struct Prim {
 #[derive(Default)]
 struct Blas {
     bvh: Bvh,
-    /// Leaf entries in BVH order; empty when the BVH holds a single mesh, whose
+    /// Leaf entries in BVH order; empty when the BVH holds meshes alone, whose
     /// triangles are then stored in BVH order and copied into `blocks`.
     prims: Vec<Prim>,
     shapes: Vec<ShapeRef>,
-    /// The BVH's only shape, when it is a mesh small enough for leaf blocks, which
-    /// `localize` builds once it has put the mesh in BVH order.
-    single_mesh: Option<(u32, MeshFlags)>,
-    /// The single mesh's leaf blocks, which its BVH's leaves then refer to.
+    /// Per shape, its mesh, when every shape is a mesh and together they are small
+    /// enough for leaf blocks (else empty); `localize` builds the blocks once it has
+    /// put the meshes in BVH order.
+    block_meshes: Vec<(u32, MeshFlags)>,
+    /// The meshes' leaf blocks, which the BVH's leaves then refer to.
     blocks: LeafBlocks,
 }
 
@@ -194,23 +195,29 @@ impl Blas {
             }
         }
         let cost = |i: usize| ShapeSet::prim_cost(shapes[prims[i].shape as usize]);
-        let single_mesh = match shapes.as_slice() {
-            [ShapeRef::Mesh { mesh, flags }] if LeafBlocks::fit(set.meshes[*mesh as usize].triangle_count()) => {
-                Some((*mesh, *flags))
-            }
-            _ => None,
-        };
-        let (bvh, order) = match single_mesh {
-            Some(_) => Bvh::build_with_max_leaf(&bounds, |_| BLOCK_TRIANGLE_COST, leaves::MAX_LEAF),
-            None => Bvh::build(&bounds, cost),
+        let mut block_meshes: Vec<(u32, MeshFlags)> = shapes
+            .iter()
+            .map_while(|s| match s {
+                ShapeRef::Mesh { mesh, flags } => Some((*mesh, *flags)),
+                _ => None,
+            })
+            .collect();
+        if block_meshes.len() < shapes.len() || !LeafBlocks::fit(prims.len()) {
+            block_meshes.clear();
+        }
+        // Leaves of one mesh each, so that a block names one mesh.
+        let (bvh, order) = match block_meshes.is_empty() {
+            false => Bvh::build_grouped(&bounds, |_| BLOCK_TRIANGLE_COST, leaves::MAX_LEAF, |i| prims[i].shape),
+            true => Bvh::build(&bounds, cost),
         };
         let prims = order.iter().map(|&i| prims[i as usize]).collect();
-        Blas { bvh, prims, shapes, single_mesh, blocks: LeafBlocks::default() }
+        Blas { bvh, prims, shapes, block_meshes, blocks: LeafBlocks::default() }
     }
 
     /// Reorders each mesh's triangles into this BVH's leaf order; records the file's
     /// numbers in `ids` and points the primitives at the new positions. A BVH over a
-    /// single mesh then needs no primitive list: its leaves refer to leaf blocks.
+    /// BVH over meshes alone then needs no primitive list: its leaves refer to leaf
+    /// blocks.
     fn localize(&mut self, meshes: &mut [Arc<TriangleMesh>], ids: &mut [Vec<u32>]) {
         for (shape, s) in self.shapes.iter().enumerate() {
             let ShapeRef::Mesh { mesh, .. } = s else { continue };
@@ -222,10 +229,16 @@ impl Blas {
             }
             ids[mesh] = order;
         }
-        if let Some((mesh, _)) = self.single_mesh {
-            let m = &meshes[mesh as usize];
+        if !self.block_meshes.is_empty() {
             let mut blocks = LeafBlocks::default();
-            self.bvh.relabel_leaves(|first, count| blocks.push(m, first, count));
+            let (prims, block_meshes) = (&self.prims, &self.block_meshes);
+            // A leaf's triangles are one mesh's (`build_grouped`), numbered one after
+            // another from its first's new number.
+            self.bvh.relabel_leaves(|first, count| {
+                let Prim { shape, tri } = prims[first];
+                let mesh = &meshes[block_meshes[shape as usize].0 as usize];
+                blocks.push(mesh, shape, tri as usize, count)
+            });
             blocks.shrink_to_fit();
             (self.blocks, self.prims) = (blocks, Vec::new());
         }
@@ -271,13 +284,15 @@ impl Blas {
         wr: &WatertightRay,
         mut t_max: f32,
     ) -> Option<(f32, u32, LocalHit)> {
-        let Some((mesh, flags)) = self.single_mesh else {
+        if self.block_meshes.is_empty() {
             return self.hit_mixed_leaf::<KX, KY, KZ, ANY>(g, leaf.prims(), ray, wr, t_max);
-        };
+        }
         // The block's lines are all requested before the first test waits on its
         // first, so the leaf costs one cache miss's latency, not one per line.
         self.blocks.prefetch(leaf);
         let block = self.blocks.block(leaf)?;
+        let shape = block.shape();
+        let &(mesh, flags) = self.block_meshes.get(shape as usize)?;
         let mut best = None;
         let groups = block.count().div_ceil(4);
         let mut g = 0;
@@ -285,7 +300,7 @@ impl Blas {
             let (candidates, step) = block.edge_candidates::<I, KX, KY, KZ>(isa, g, wr);
             let triangle = |k| (block.corners(4 * g + k), block.triangle(4 * g + k));
             if let Some((tri, hit)) = hit_candidates::<KX, KY, KZ, ANY>(candidates, triangle, wr, &mut t_max) {
-                best = Some((hit.t, 0, LocalHit::Triangle { mesh, tri, flags, hit }));
+                best = Some((hit.t, shape, LocalHit::Triangle { mesh, tri, flags, hit }));
                 if ANY {
                     break;
                 }

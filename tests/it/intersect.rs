@@ -453,41 +453,56 @@ fn edge_filter_keeps_every_triangle_the_full_test_hits() {
 }
 
 /// The BVH (which tests a mesh's triangles four at a time) finds the closest t of all
-/// the mesh's triangles, alone in its BVH and beside a sphere (where leaves mix
-/// shapes). Where triangles meet, their t differ in the last bits, and pbrt's test
-/// compares t with t_max before dividing by the determinant, so a triangle within
-/// about an ulp of the closest hit found so far may be passed over: the answer is one
-/// of the triangles' t, at most 4 ulps above the smallest. Traversal with AVX and
-/// with SSE give the same hit.
+/// the mesh's triangles, alone in its BVH, beside a sphere (where leaves mix shapes)
+/// and beside a second mesh through it (where each leaf holds one mesh's triangles,
+/// and a hit must name the right one). Where triangles meet, their t differ in the
+/// last bits, and pbrt's test compares t with t_max before dividing by the
+/// determinant, so a triangle within about an ulp of the closest hit found so far may
+/// be passed over: the answer is one of the triangles' t, at most 4 ulps above the
+/// smallest. Traversal with AVX and with SSE give the same hit.
 #[test]
 fn mesh_traversal_finds_the_closest_hit_of_all_triangles() {
-    for with_sphere in [false, true] {
+    for beside in ["", "sphere", "mesh"] {
         let mut rng = Rng::new(6061);
         let mut text = perturbed_sphere(&mut rng);
-        if with_sphere {
-            text += " AttributeBegin Translate 0.2 0 0 Shape \"sphere\" \"float radius\" 0.3 AttributeEnd";
+        match beside {
+            "sphere" => text += " AttributeBegin Translate 0.2 0 0 Shape \"sphere\" \"float radius\" 0.3 AttributeEnd",
+            "mesh" => {
+                let second = sphere_mesh(12, 10, || 2.0 + rng.uniform()).replace("WorldBegin", "");
+                text += &format!(" AttributeBegin Translate 1.5 0 0 {second} AttributeEnd");
+            }
+            _ => {}
         }
         let s = scene(&text);
-        let mesh = s.meshes[0].clone();
-        let verts: Vec<Vec3> = mesh.p.iter().map(|v| Vec3::from(*v)).collect();
-        let tris: Vec<[u32; 3]> = mesh.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let verts: Vec<Vec3> = s.meshes[0].p.iter().map(|v| Vec3::from(*v)).collect();
+        let tris: Vec<[u32; 3]> = s.meshes[0].indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
         let mut g = pbrt_sppm::accel::Geometry::new(&s);
-        assert_eq!(g.shapes.quadrics.len(), with_sphere as usize);
+        assert_eq!(g.shapes.quadrics.len(), (beside == "sphere") as usize);
         for ray in sphere_probe_rays(&verts, &tris, &mut rng) {
-            let brute = (0..mesh.triangle_count())
-                .filter_map(|t| mesh.intersect_triangle(t, &ray, f32::INFINITY))
-                .map(|h| h.t)
-                .fold(f32::INFINITY, f32::min);
+            // The closest t of each mesh's triangles.
+            let brute: Vec<f32> = (s.meshes.iter())
+                .map(|m| {
+                    let hits = (0..m.triangle_count()).filter_map(|t| m.intersect_triangle(t, &ray, f32::INFINITY));
+                    hits.map(|h| h.t).fold(f32::INFINITY, f32::min)
+                })
+                .collect();
+            let (shape, closest) =
+                (0..brute.len()).map(|k| (k, brute[k])).fold((0, f32::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
             let sphere = g.shapes.quadrics.first().and_then(|q| q.intersect_t(&ray, f32::INFINITY)).map(|h| h.t);
             let hit = g.intersect(&ray);
             let got = hit.map_or(f32::INFINITY, |h| h.t);
-            if sphere.is_some_and(|t| t <= brute) {
+            if sphere.is_some_and(|t| t <= closest) {
                 assert_eq!(Some(got), sphere, "{ray:?}");
             } else {
-                let close = got == brute || (got > brute && got <= brute * (1.0 + 4.0 * f32::EPSILON));
-                assert!(close, "{got} {brute} {ray:?}");
+                let close = got == closest || (got > closest && got <= closest * (1.0 + 4.0 * f32::EPSILON));
+                assert!(close, "{got} {closest} {ray:?}");
+                // Where the meshes' closest hits are clearly apart, the hit names the mesh.
+                let apart = brute.iter().all(|&t| t == closest || t > closest * (1.0 + 64.0 * f32::EPSILON));
+                if closest.is_finite() && apart {
+                    assert_eq!(hit.map(|h| h.shape_index), Some(shape as u32), "{ray:?}");
+                }
             }
-            let any = brute.is_finite() || sphere.is_some();
+            let any = closest.is_finite() || sphere.is_some();
             assert_eq!(g.intersect_p(&Ray { t_max: f32::INFINITY, ..ray }), any);
             // The SSE node test finds the same hit as the AVX one.
             if g.uses_avx() {
