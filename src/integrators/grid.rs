@@ -74,6 +74,9 @@ pub struct Grid {
     /// Bucket b holds `entries[offsets[b]..offsets[b + 1]]`.
     offsets: Vec<u32>,
     entries: Vec<(u64, u32)>,
+    /// The sites, by pixel: [`Grid::gather_within`] tests distances on them, a small
+    /// record each, before its caller reads a pixel's large one.
+    sites: Vec<Option<Site>>,
 }
 
 impl Grid {
@@ -84,8 +87,8 @@ impl Grid {
 
     /// `sites[i]` is pixel i's visible point, if photons should reach it. `None` when
     /// there is none.
-    pub fn build(sites: &[Option<Site>]) -> Option<Grid> {
-        let (lo, hi, max_r) = bounds(sites)?;
+    pub fn build(sites: Vec<Option<Site>>) -> Option<Grid> {
+        let (lo, hi, max_r) = bounds(&sites)?;
         let diag = hi - lo;
         let max_diag = diag.max_element().max(f32::MIN_POSITIVE);
         // Cells twice the largest radius: each r-box overlaps at most 2 cells per axis.
@@ -93,7 +96,7 @@ impl Grid {
         let res = [0, 1, 2].map(|a| ((base * diag[a] / max_diag) as u64).clamp(1, 1 << 20));
         let inv_cell =
             Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32) / diag.max(Vec3::splat(f32::MIN_POSITIVE));
-        let mut grid = Grid { lo, inv_cell, res, offsets: Vec::new(), entries: Vec::new() };
+        let mut grid = Grid { lo, inv_cell, res, offsets: Vec::new(), entries: Vec::new(), sites: Vec::new() };
         let total: usize =
             sites.par_chunks(CHUNK).map(|c| c.iter().flatten().map(|s| grid.overlap_count(s)).sum::<usize>()).sum();
         let buckets = total.next_power_of_two().max(SUPER);
@@ -112,6 +115,7 @@ impl Grid {
             })
             .collect();
         (grid.offsets, grid.entries) = sort_by_bucket(&chunks, total, buckets);
+        grid.sites = sites;
         Some(grid)
     }
 
@@ -158,6 +162,18 @@ impl Grid {
             any = true;
         }
         any
+    }
+
+    /// [`Grid::gather`] for the pixels whose site's ball holds `p` (its boundary
+    /// included); whether the cell held any pixel, in reach or not.
+    pub fn gather_within(&self, p: Vec3, mut f: impl FnMut(u32)) -> bool {
+        self.gather(p, |pixel| {
+            if let Some(s) = self.sites[pixel as usize]
+                && (s.p - p).length_squared() <= s.radius * s.radius
+            {
+                f(pixel)
+            }
+        })
     }
 }
 
@@ -300,7 +316,7 @@ mod tests {
             .collect();
         for radius in [1e4, 1.0, 1e-9, f32::MIN_POSITIVE] {
             let sites: Vec<Option<Site>> = pts.iter().map(|&p| Some(Site { p, radius })).collect();
-            let Some(grid) = Grid::build(&sites) else { panic!("no grid") };
+            let Some(grid) = Grid::build(sites.clone()) else { panic!("no grid") };
             assert!(grid.entries() <= 8 * sites.len(), "radius {radius}: {} entries", grid.entries());
             assert!(grid.res.iter().all(|&r| r <= 1 << 20), "radius {radius}: {:?}", grid.res);
             for (i, &p) in pts.iter().enumerate().step_by(97) {
@@ -314,13 +330,18 @@ mod tests {
     #[test]
     fn gather_finds_every_site_whose_ball_holds_the_point_once_in_pixel_order() {
         let sites = sites(3 * CHUNK + 17, 5);
-        let Some(grid) = Grid::build(&sites) else { panic!("no grid") };
+        let Some(grid) = Grid::build(sites.clone()) else { panic!("no grid") };
         let mut rng = Rng::new(9);
         for _ in 0..2000 {
             let p = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform() * 0.1) * 10.0;
             let mut found = Vec::new();
-            grid.gather(p, |i| found.push(i));
+            let any = grid.gather(p, |i| found.push(i));
             assert!(found.windows(2).all(|w| w[0] < w[1]), "not in pixel order or repeated: {found:?}");
+            // Within: those of the cell whose ball holds p, and the same answer.
+            let mut within = Vec::new();
+            assert_eq!(grid.gather_within(p, |i| within.push(i)), any);
+            let holds = |i: &u32| sites[*i as usize].is_some_and(|s| (s.p - p).length_squared() <= s.radius * s.radius);
+            assert_eq!(within, found.iter().copied().filter(holds).collect::<Vec<_>>());
             for (i, s) in sites.iter().enumerate() {
                 if let Some(s) = s
                     && (s.p - p).length() < s.radius
@@ -336,7 +357,7 @@ mod tests {
         let sites = sites(5 * CHUNK, 3);
         let build = |threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
-            pool.install(|| Grid::build(&sites)).ok_or("no grid".to_string())
+            pool.install(|| Grid::build(sites.clone())).ok_or("no grid".to_string())
         };
         let (Ok(a), Ok(b)) = (build(1), build(3)) else { panic!("no grid") };
         assert_eq!(a.offsets, b.offsets);
@@ -350,7 +371,7 @@ mod tests {
 
     #[test]
     fn no_sites_no_grid() {
-        assert!(Grid::build(&[None, None]).is_none());
-        assert!(Grid::build(&[]).is_none());
+        assert!(Grid::build(vec![None, None]).is_none());
+        assert!(Grid::build(Vec::new()).is_none());
     }
 }

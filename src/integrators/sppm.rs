@@ -287,7 +287,7 @@ impl<'a> Sppm<'a> {
         }
         let t1 = Instant::now();
         self.stats.visible_points += self.pixels.iter().filter(|p| p.vp.is_some()).count() as u64;
-        let grid = Grid::build(&self.sites());
+        let grid = Grid::build(self.sites());
         let t2 = Instant::now();
         let (phi, m, beam_sums) = self.photon_pass(grid.as_ref(), preview);
         let t3 = Instant::now();
@@ -1120,16 +1120,16 @@ fn deposit_on_surface(
     out: &mut Vec<Deposit>,
 ) -> bool {
     let PhotonHere { p, wi, beta, terminated } = photon;
-    grid.gather(p, |pixel| {
+    // The grid's sites are the visible points and radii (`Sppm::sites`).
+    grid.gather_within(p, |pixel| {
         let Some(vp) = &pixels[pixel as usize].vp else { return };
         let Scatterer::Surface(bsdf) = &vp.at else { return };
-        let r = pixels[pixel as usize].radius as f32;
         // DEVIATION(pbrt): appearance, `--fix photons-behind`. pbrt counts photons
         // that reach an opaque visible point from behind its surface in M (f is
         // 0 there, or nearly), which only shrinks the radius (Mitsuba #145); the
         // fix leaves them out. Transmitting surfaces count them either way.
         let behind = wi.dot(vp.ng) * vp.wo.dot(vp.ng) <= 0.0;
-        if (vp.p - p).length_squared() > r * r || (behind && skip_behind && !bsdf.transmits()) {
+        if behind && skip_behind && !bsdf.transmits() {
             return;
         }
         // Both sides grew their first lane for ending the others: pbrt-v4 ends a
@@ -1145,14 +1145,11 @@ fn deposit_on_surface(
 /// shrinking r keeps it consistent (the flux in a ball scales with r³, 3/(4r) with
 /// 1/r: their product with r², as the pixel's update assumes).
 fn deposit_in_medium(grid: &Grid, pixels: &[Pixel], mp: &MediumPoint, beta: Rgb, out: &mut Vec<Deposit>) -> bool {
-    grid.gather(mp.p, |pixel| {
+    grid.gather_within(mp.p, |pixel| {
         let px = &pixels[pixel as usize];
         let Some(vp) = &px.vp else { return };
         let Scatterer::Medium(phase) = &vp.at else { return };
-        let r = px.radius as f32;
-        if (vp.p - mp.p).length_squared() <= r * r {
-            out.push((pixel, beta * phase.p(vp.wo, mp.wo) * (0.75 / r)));
-        }
+        out.push((pixel, beta * phase.p(vp.wo, mp.wo) * (0.75 / px.radius as f32)));
     })
 }
 
