@@ -125,6 +125,13 @@ impl Camera {
         RayDifferential { rx: shifted(1.0, 0.0), ry: shifted(0.0, 1.0) }.scaled(ray, scale)
     }
 
+    /// Whether rays read their lens sample: a realistic camera's, or a perspective or
+    /// orthographic one with a lens radius (a pinhole's is never read).
+    pub fn reads_lens_sample(&self) -> bool {
+        self.lens.is_some()
+            || (self.lens_radius > 0.0 && matches!(self.kind, CameraKind::Perspective | CameraKind::Orthographic))
+    }
+
     /// The ray through `p_raster` and lens sample `u_lens` at `time` with its weight:
     /// 1 but for a realistic camera, whose lens may stop it (`None`) or weight it.
     pub fn generate_ray_weighted(&self, p_raster: [f32; 2], u_lens: [f32; 2], time: f32) -> Option<(Ray, f32)> {

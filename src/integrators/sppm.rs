@@ -615,7 +615,15 @@ pub(super) fn camera_ray(
         }
         _ => [pixel[0] + u[0], pixel[1] + u[1]],
     };
-    let (p_raster, u_lens) = (p_film, sampler.get2d());
+    // A pinhole's lens sample is drawn past, not computed (1–2% of a camera pass).
+    let u_lens = match scene.camera.reads_lens_sample() {
+        true => sampler.get2d(),
+        false => {
+            sampler.skip2d();
+            [0.5; 2]
+        }
+    };
+    let p_raster = p_film;
     // The pass's time (see `RenderScene::pass_time`), or one of the ray's own.
     let time = time.unwrap_or_else(|| scene.camera.time(sampler.get1d()));
     // As in pbrt, only the camera ray has differentials: rays spawned later have none.

@@ -67,6 +67,11 @@ pub trait Sampler {
     fn get1d(&mut self) -> f32;
     /// Uniform in [0, 1)².
     fn get2d(&mut self) -> [f32; 2];
+    /// Moves past a 2D sample the caller does not need, as [`Sampler::get2d`] would,
+    /// so that the samples after it are the same either way.
+    fn skip2d(&mut self) {
+        self.get2d();
+    }
 }
 
 impl Sampler for Rng {

@@ -58,6 +58,11 @@ impl Sampler for SobolSample {
         let i = self.shuffled(shuffle);
         [to_unit(laine_karras(i, s0).reverse_bits()), to_unit(laine_karras(sobol1_reversed(i), s1).reverse_bits())]
     }
+
+    /// A dimension is its seeds: skipping one needs no hashing.
+    fn skip2d(&mut self) {
+        self.dimension += 1;
+    }
 }
 
 /// The second Sobol' dimension (primitive polynomial x + 1), bit-reversed: its
@@ -151,6 +156,17 @@ mod tests {
     }
 
     /// 1D samples of one block are stratified: one in each of 2^m equal intervals.
+    /// Skipping a 2D sample leaves the samples after it as drawing it would.
+    #[test]
+    fn skipping_a_sample_keeps_the_ones_after() {
+        for k in [0u32, 5, 1000] {
+            let (mut a, mut b) = (SobolSample::new(9, k), SobolSample::new(9, k));
+            a.get2d();
+            b.skip2d();
+            assert_eq!((a.get2d(), a.get1d()), (b.get2d(), b.get1d()));
+        }
+    }
+
     #[test]
     fn one_dimensional_blocks_are_stratified() {
         let m = 7;
