@@ -17,7 +17,7 @@
 use super::adaptive::{self, Chain, Deposit, PhotonCounts, PhotonSampling};
 use super::beams::{self, Beam, VolumeGather, VolumePhoton};
 use super::error::RenderError;
-use super::grid::{Grid, Grouped, Site};
+use super::grid::{Binning, Grid, Grouped, Site};
 use super::passes::{self, PassMode};
 use super::preview::{self, Preview};
 use super::volume::{self, MediumPoint};
@@ -280,14 +280,16 @@ impl<'a> Sppm<'a> {
         }
         let n = self.pixels.len();
         for band in preview::bands(n, 4 * super::PIXELS_PER_TASK, usize::MAX, preview.is_some()) {
-            self.camera_pass(band.clone());
+            self.stats.visible_points += self.camera_pass(band.clone());
             if let Some(show) = preview.as_mut() {
                 show(&|| self.provisional(band.end, None));
             }
         }
         let t1 = Instant::now();
-        self.stats.visible_points += self.pixels.iter().filter(|p| p.vp.is_some()).count() as u64;
-        let grid = Grid::build(self.sites());
+        // Adaptive chains' visibility is the cell a photon lands in holding a visible
+        // point (`adaptive`), which overlap binning gives.
+        let binning = if self.chains.is_some() { Binning::Overlap } else { Binning::Centre };
+        let grid = Grid::build(self.sites(), binning);
         let t2 = Instant::now();
         let (phi, m, beam_sums) = self.photon_pass(grid.as_ref(), preview);
         let t3 = Instant::now();
@@ -310,14 +312,16 @@ impl<'a> Sppm<'a> {
     }
 
     /// Phase 1, for the pixels in `band`: trace one camera path per pixel to its first
-    /// diffuse vertex, adding emitted and directly reflected light on the way.
-    fn camera_pass(&mut self, band: Range<usize>) {
+    /// diffuse vertex, adding emitted and directly reflected light on the way. Returns
+    /// how many pixels found a visible point (counted here, where each pixel's memory
+    /// is in cache: a pass over all of them after took ~1.5% of f16-9a's time).
+    fn camera_pass(&mut self, band: Range<usize>) -> u64 {
         let (scene, width, origin, iter, seed, max_depth) =
             (self.scene, self.width, self.origin, self.iteration, self.seed, self.max_depth);
         let (diff_scale, kind, live) = (self.differential_scale, self.sampler, &self.live);
         let time = scene.pass_time(iter, false);
         let first = band.start;
-        let trace = |i: usize, px: &mut Pixel, beams: Option<&mut Vec<Beam>>| {
+        let trace = |i: usize, px: &mut Pixel, beams: Option<&mut Vec<Beam>>| -> u64 {
             let i = first + i;
             if i.is_multiple_of(256) {
                 live.add_camera(256);
@@ -337,16 +341,22 @@ impl<'a> Sppm<'a> {
             };
             px.ld += scene.film_rgb(ld);
             px.vp = vp;
+            px.vp.is_some() as u64
         };
         let pixels = self.pixels[band.clone()].par_iter_mut();
         if self.volume == VolumeGather::Beams {
             let beams = self.beams[band].par_iter_mut();
-            pixels.zip(beams).enumerate().with_max_len(super::PIXELS_PER_TASK).for_each(|(i, (p, b))| {
-                b.clear();
-                trace(i, p, Some(b))
-            });
+            pixels
+                .zip(beams)
+                .enumerate()
+                .with_max_len(super::PIXELS_PER_TASK)
+                .map(|(i, (p, b))| {
+                    b.clear();
+                    trace(i, p, Some(b))
+                })
+                .sum()
         } else {
-            pixels.enumerate().with_max_len(super::PIXELS_PER_TASK).for_each(|(i, p)| trace(i, p, None));
+            pixels.enumerate().with_max_len(super::PIXELS_PER_TASK).map(|(i, p)| trace(i, p, None)).sum()
         }
     }
 
@@ -966,7 +976,8 @@ fn shadow(
 pub struct PhotonPath {
     /// Surfaces hit.
     pub hits: u64,
-    /// Whether the path met a grid cell holding a visible point (a superset of the
+    /// Whether the path met a grid cell holding a visible point: under overlap
+    /// binning, which adaptive chains use, the cell it landed in (a superset of the
     /// paths that deposit: what adaptive photon tracing calls visible).
     pub near: bool,
 }

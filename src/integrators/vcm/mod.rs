@@ -31,7 +31,7 @@ pub mod vertex;
 
 use super::buckets::{BucketSums, PassLanes};
 use super::error::RenderError;
-use super::grid::{Grid, Grouped, Site};
+use super::grid::{Binning, Grid, Grouped, Site};
 use super::passes;
 use super::sppm::{PixelState, Stats};
 use crate::filters::PixelFilter;
@@ -576,6 +576,7 @@ impl<'a> Vcm<'a> {
                     // A first vertex is direct light, never merged (`mis`).
                     .map(|s| (s.edges() >= 2).then_some(Site { p: s.p, radius: pass.radius }))
                     .collect::<Vec<_>>(),
+                Binning::Overlap,
             ),
             false => None,
         };
