@@ -628,15 +628,17 @@ impl Cameras<'_> {
             return [Vec3::ZERO; 4];
         }
         let mut sum = [DVec3::ZERO; 4];
-        grid.gather(p, |k| {
+        grid.gather_sites(p, |k, site| {
             *candidates += 1;
+            // The site is the spot's point: light vertices out of reach are passed over
+            // without reading their spot.
+            if (site.p - p).length_squared() > r2 {
+                return;
+            }
             let spot = &self.lights.spots[k as usize];
             // Direct light (one edge from the light) is never merged (see `mis`): first
             // light vertices are not in the grid.
-            if spot.edges() + v.len > pass.max_len
-                || spot.in_medium() != in_medium
-                || (spot.p - p).length_squared() > r2
-            {
+            if spot.edges() + v.len > pass.max_len || spot.in_medium() != in_medium {
                 return;
             }
             let lv = &self.lights.vertices[k as usize];

@@ -576,7 +576,7 @@ impl<'a> Vcm<'a> {
                     // A first vertex is direct light, never merged (`mis`).
                     .map(|s| (s.edges() >= 2).then_some(Site { p: s.p, radius: pass.radius }))
                     .collect::<Vec<_>>(),
-                Binning::Overlap,
+                Binning::Centre,
             ),
             false => None,
         };
