@@ -205,7 +205,7 @@ fn extent(photons: &[VolumePhoton]) -> f32 {
 pub fn estimate(beams: &[&[Beam]], photons: &[VolumePhoton], r: f32, scale: f64) -> Vec<DVec3> {
     let bin = r.max(extent(photons) / MAX_CELLS as f32);
     let sites: Vec<Option<Site>> = photons.par_iter().map(|p| Some(Site { p: p.p, radius: bin })).collect();
-    let Some(grid) = Grid::build(sites, Binning::Overlap) else { return vec![DVec3::ZERO; beams.len()] };
+    let Some(grid) = Grid::build(&sites, Binning::Overlap) else { return vec![DVec3::ZERO; beams.len()] };
     let norm = scale / (std::f64::consts::PI * r as f64 * r as f64);
     beams
         .par_iter()
@@ -239,7 +239,7 @@ mod tests {
             .collect();
         let r = 0.07;
         let sites: Vec<Option<Site>> = photons.iter().map(|p| Some(Site { p: p.p, radius: r })).collect();
-        let Some(grid) = Grid::build(sites, Binning::Overlap) else { panic!("no grid") };
+        let Some(grid) = Grid::build(&sites, Binning::Overlap) else { panic!("no grid") };
         let uniform = HenyeyGreenstein::new(0.0).p(Vec3::Z, Vec3::Z);
         for k in 0..200 {
             let o = u3() * 5.0 - 2.5;
@@ -347,7 +347,7 @@ mod tests {
         let photons = [ph(1.0, 0.01, toward), ph(3.0, -0.05, away), ph(-0.05, 0.0, toward), ph(10.05, 0.0, toward)];
         let photons = [&photons[..], &[ph(5.0, 0.11, toward)]].concat();
         let sites: Vec<Option<Site>> = photons.iter().map(|p| Some(Site { p: p.p, radius: 0.1 })).collect();
-        let Some(grid) = Grid::build(sites, Binning::Overlap) else { panic!("no grid") };
+        let Some(grid) = Grid::build(&sites, Binning::Overlap) else { panic!("no grid") };
         let mut b = beam(Vec3::ZERO, Vec3::X, 10.0, exact(Vec3::new(0.5, 1.0, 0.0)));
         b.phase = HenyeyGreenstein::new(0.5);
         let got = b.gather(&grid, &photons, 0.1);

@@ -126,8 +126,8 @@ impl Grid {
 
     /// `sites[i]` is pixel i's visible point, if photons should reach it. `None` when
     /// there is none.
-    pub fn build(sites: Vec<Option<Site>>, binning: Binning) -> Option<Grid> {
-        let (lo, hi, max_r) = bounds(&sites)?;
+    pub fn build(sites: &[Option<Site>], binning: Binning) -> Option<Grid> {
+        let (lo, hi, max_r) = bounds(sites)?;
         let diag = hi - lo;
         let max_diag = diag.max_element().max(f32::MIN_POSITIVE);
         // Cells twice the largest radius: each r-box overlaps at most 2 cells per axis.
@@ -240,7 +240,7 @@ impl Grid {
     }
 
     /// [`Grid::gather`] for the pixels whose site's ball holds `p` (its boundary
-    /// included); whether the cell held any pixel, in reach or not.
+    /// included); whether the cells looked in held any pixel, in reach or not.
     pub fn gather_within(&self, p: Vec3, mut f: impl FnMut(u32)) -> bool {
         self.gather_entries(p, |e| {
             if (e.site.p - p).length_squared() <= e.site.radius * e.site.radius {
@@ -383,7 +383,7 @@ mod tests {
         for (radius, binning) in [1e4, 1.0, 1e-9, f32::MIN_POSITIVE].into_iter().flat_map(|r| BINNINGS.map(|b| (r, b)))
         {
             let sites: Vec<Option<Site>> = pts.iter().map(|&p| Some(Site { p, radius })).collect();
-            let Some(grid) = Grid::build(sites.clone(), binning) else { panic!("no grid") };
+            let Some(grid) = Grid::build(&sites, binning) else { panic!("no grid") };
             let most = if binning == Binning::Centre { 1 } else { 8 };
             assert!(grid.entries() <= most * sites.len(), "radius {radius}: {} entries", grid.entries());
             assert!(grid.res.iter().all(|&r| r <= 1 << 20), "radius {radius}: {:?}", grid.res);
@@ -402,7 +402,7 @@ mod tests {
     fn gather_finds_every_site_whose_ball_holds_the_point_once() {
         let sites = sites(3 * CHUNK + 17, 5);
         for binning in BINNINGS {
-            let Some(grid) = Grid::build(sites.clone(), binning) else { panic!("no grid") };
+            let Some(grid) = Grid::build(&sites, binning) else { panic!("no grid") };
             gathers_every_site_once(&grid, &sites, binning == Binning::Overlap);
         }
     }
@@ -439,7 +439,7 @@ mod tests {
         for binning in BINNINGS {
             let build = |threads| {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
-                pool.install(|| Grid::build(sites.clone(), binning)).ok_or("no grid".to_string())
+                pool.install(|| Grid::build(&sites, binning)).ok_or("no grid".to_string())
             };
             let (Ok(a), Ok(b)) = (build(1), build(3)) else { panic!("no grid") };
             assert_eq!(a.offsets, b.offsets);
@@ -454,7 +454,7 @@ mod tests {
 
     #[test]
     fn no_sites_no_grid() {
-        assert!(Grid::build(vec![None, None], Binning::Overlap).is_none());
-        assert!(Grid::build(Vec::new(), Binning::Centre).is_none());
+        assert!(Grid::build(&[None, None], Binning::Overlap).is_none());
+        assert!(Grid::build(&[], Binning::Centre).is_none());
     }
 }

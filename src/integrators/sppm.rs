@@ -289,7 +289,7 @@ impl<'a> Sppm<'a> {
         // Adaptive chains' visibility is the cell a photon lands in holding a visible
         // point (`adaptive`), which overlap binning gives.
         let binning = if self.chains.is_some() { Binning::Overlap } else { Binning::Centre };
-        let grid = Grid::build(self.sites(), binning);
+        let grid = Grid::build(&self.sites(), binning);
         let t2 = Instant::now();
         let (phi, m, beam_sums) = self.photon_pass(grid.as_ref(), preview);
         let t3 = Instant::now();

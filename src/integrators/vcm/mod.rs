@@ -570,7 +570,7 @@ impl<'a> Vcm<'a> {
         let t1 = Instant::now();
         let grid = match self.settings.techniques.uses(Technique::Merge) {
             true => Grid::build(
-                lights
+                &lights
                     .spots
                     .par_iter()
                     // A first vertex is direct light, never merged (`mis`).
