@@ -229,11 +229,14 @@ impl RenderScene {
         let area_params = scene.area_lights.clone();
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
         let geometry = Geometry::new(scene);
+        let alpha_rules = AlphaEmission::new(scene.syntax, scene.fixes);
         let rules = EmitterRules {
             spread_power: scene.syntax == Syntax::V3 || scene.fixes.has(Fix::MeshPower),
             pbrt_sampling: !scene.fixes.has(Fix::ShapeSampling) && !bidirectional,
+            masks_samples: alpha_rules.samples,
         };
-        let emitters = area_lights(&geometry, &shape_area_lights, &area_params, rules, &mut lights);
+        let emitters =
+            area_lights(&geometry, (&shape_area_lights, &world_shape_alpha), &area_params, rules, &mut lights);
         let Interiors { media, world_shape_media, object_shape_media, bssrdf } = interiors(scene, bidirectional);
         let light_media = scene.lights.iter().map(|l| l.medium).collect();
         let powers: Vec<f64> = lights.iter().map(|l| l.power(world)).collect();
@@ -257,7 +260,7 @@ impl RenderScene {
             world_shape_alpha,
             object_shape_alpha,
             has_alpha,
-            alpha_rules: AlphaEmission::new(scene.syntax, scene.fixes),
+            alpha_rules,
             fixes: if bidirectional { scene.fixes.with(Fix::ShapeSampling) } else { scene.fixes },
             syntax: scene.syntax,
             needs_differentials,
@@ -739,11 +742,16 @@ struct EmitterRules {
     /// Spheres, disks and cylinders are sampled as pbrt samples them (`--fix
     /// shape-sampling` turns it off; see `shapes::pbrt_sampling`).
     pbrt_sampling: bool,
+    /// An alpha mask cuts light samples away ([`AlphaEmission::samples`]), so they
+    /// need their (u, v).
+    masks_samples: bool,
 }
 
+/// The area lights of the world shapes (`area_lights[i]`: shape i's, with its alpha
+/// `alpha[i]`), appended to `lights`; each emitting shape's first light.
 fn area_lights(
     g: &Geometry,
-    area_lights: &[Option<u32>],
+    (area_lights, alpha): (&[Option<u32>], &[Option<ShapeAlpha>]),
     params: &[AreaLightDesc],
     rules: EmitterRules,
     lights: &mut Vec<Light>,
@@ -753,10 +761,13 @@ fn area_lights(
         let Some(a) = area else { continue };
         let desc = &params[*a as usize];
         let first_light = lights.len() as u32;
+        // Only an emission image and an alpha mask read a sample's (u, v).
+        let reads_uv = desc.image.is_some() || (rules.masks_samples && alpha[i].is_some());
         let pieces = g.shapes.pieces(g.world_shape(i), rules.pbrt_sampling);
         let per_piece = !rules.spread_power && desc.power.is_some() && pieces.len() > 1;
         let l = desc.emission(pieces.iter().map(|(_, a)| *a).sum());
         for (emitter, area) in pieces {
+            let emitter = emitter.reading_uv(reads_uv);
             let l = if per_piece { desc.emission(area) } else { l };
             // The BVH dropped zero-area primitives; one whose area underflows in f32
             // still keeps its slot (lights are found by primitive) but emits nothing.

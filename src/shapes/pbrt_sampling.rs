@@ -53,8 +53,9 @@ impl QuadricShape {
         if self.reverse_orientation { -n } else { n }
     }
 
-    /// pbrt's `Shape::Sample(u)`: a point by (object-space) area.
-    pub(super) fn sample_area_pbrt(&self, object_area: f64, u: [f32; 2]) -> ShapeSample {
+    /// pbrt's `Shape::Sample(u)`: a point by (object-space) area, with its (u, v) if
+    /// `uv`.
+    pub(super) fn sample_area_pbrt(&self, object_area: f64, uv: bool, u: [f32; 2]) -> ShapeSample {
         let u = [u[0] as f64, u[1] as f64];
         let (p_obj, n_obj) = match &self.quadric {
             Quadric::Sphere(s) => {
@@ -77,7 +78,7 @@ impl QuadricShape {
         };
         let p = self.render_from_object.transform_point3(p_obj);
         let n = self.pbrt_normal(n_obj);
-        let uv = self.uv_of_object_point(p_obj).map(|x| x as f32);
+        let uv = if uv { self.uv_of_object_point(p_obj).map(|x| x as f32) } else { [0.0; 2] };
         let pdf = if object_area > 0.0 { (1.0 / object_area) as f32 } else { 0.0 };
         ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), uv, pdf }
     }
@@ -97,6 +98,7 @@ impl QuadricShape {
     pub(super) fn sample_solid_angle_pbrt(
         &self,
         object_area: f64,
+        uv: bool,
         reference: Point3,
         u: [f32; 2],
     ) -> Option<ShapeSample> {
@@ -104,12 +106,12 @@ impl QuadricShape {
             Some((c, r, false)) => {
                 // The point where the cone's ray meets the sphere of the object radius
                 // about the world centre, whatever the transform's scale.
-                let mut s = self.sample_sphere_cone(reference.0.as_dvec3(), c, r, u)?;
+                let mut s = self.sample_sphere_cone(reference.0.as_dvec3(), c, r, u, uv)?;
                 let n = (s.p.0.as_dvec3() - c).normalize_or_zero();
                 s.n = Normal3((if self.reverse_orientation { -n } else { n }).as_vec3());
                 Some(s)
             }
-            _ => area_to_solid_angle(self.sample_area_pbrt(object_area, u), reference),
+            _ => area_to_solid_angle(self.sample_area_pbrt(object_area, uv, u), reference),
         }
     }
 

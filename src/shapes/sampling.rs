@@ -40,8 +40,10 @@ pub enum QuadricSampler {
     /// Cells of (u,v): `nu × nv`, cumulative weights (J × cell size), their total.
     Table { nu: usize, nv: usize, cdf: Vec<f64>, total: f64 },
     /// As pbrt samples spheres, disks and cylinders ([`super::pbrt_sampling`]), with
-    /// the object-space area.
-    Pbrt { object_area: f64 },
+    /// the object-space area. `uv`: whether samples carry their (u, v), which only an
+    /// emission image or an alpha mask reads; else (0, 0), sparing an arctangent a
+    /// sample (pbrt's samples have none).
+    Pbrt { object_area: f64, uv: bool },
 }
 
 const TABLE_RES: usize = 32;
@@ -124,7 +126,7 @@ impl QuadricShape {
     pub fn pdf_area_uv(&self, s: &QuadricSampler, uv: [f64; 2]) -> f64 {
         match s {
             QuadricSampler::Uniform { area } => 1.0 / area,
-            QuadricSampler::Pbrt { object_area } => 1.0 / object_area,
+            QuadricSampler::Pbrt { object_area, .. } => 1.0 / object_area,
             QuadricSampler::Table { nu, nv, cdf, total } => {
                 let i = ((uv[0] * *nu as f64) as usize).min(nu - 1);
                 let j = ((uv[1] * *nv as f64) as usize).min(nv - 1);
@@ -150,8 +152,8 @@ impl QuadricShape {
 
     /// A point by area; `pdf` is w.r.t. world-space area.
     pub fn sample_area(&self, s: &QuadricSampler, u: [f32; 2]) -> ShapeSample {
-        if let QuadricSampler::Pbrt { object_area } = s {
-            return self.sample_area_pbrt(*object_area, u);
+        if let QuadricSampler::Pbrt { object_area, uv } = s {
+            return self.sample_area_pbrt(*object_area, *uv, u);
         }
         let (uv, p_uv) = self.sample_uv(s, [u[0] as f64, u[1] as f64]);
         let (p, n) = self.point_normal(uv);
@@ -175,20 +177,29 @@ impl QuadricShape {
     /// Full spheres seen from outside sample the cone they subtend (pbrt); everything
     /// else converts an area sample.
     pub fn sample_solid_angle(&self, s: &QuadricSampler, reference: Point3, u: [f32; 2]) -> Option<ShapeSample> {
-        if let QuadricSampler::Pbrt { object_area } = s {
-            return self.sample_solid_angle_pbrt(*object_area, reference, u);
+        if let QuadricSampler::Pbrt { object_area, uv } = s {
+            return self.sample_solid_angle_pbrt(*object_area, *uv, reference, u);
         }
         let r = reference.0.as_dvec3();
         if let Some((c, radius)) = self.full_sphere() {
             let d2 = (c - r).length_squared();
             if d2 > radius * radius * 1.0001 {
-                return self.sample_sphere_cone(r, c, radius, u);
+                return self.sample_sphere_cone(r, c, radius, u, true);
             }
         }
         area_to_solid_angle(self.sample_area(s, u), reference)
     }
 
-    pub(super) fn sample_sphere_cone(&self, r: DVec3, c: DVec3, radius: f64, u: [f32; 2]) -> Option<ShapeSample> {
+    /// A point of the sphere (centre `c`, `radius`) seen from `r` through its cone of
+    /// directions, with its (u, v) if `uv`.
+    pub(super) fn sample_sphere_cone(
+        &self,
+        r: DVec3,
+        c: DVec3,
+        radius: f64,
+        u: [f32; 2],
+        uv: bool,
+    ) -> Option<ShapeSample> {
         let axis = (c - r).normalize();
         let d2 = (c - r).length_squared();
         let cos_max = (1.0 - radius * radius / d2).max(0.0).sqrt();
@@ -208,13 +219,16 @@ impl QuadricShape {
             n = -n;
         }
         let pdf = 1.0 / (TAU * (1.0 - cos_max));
-        let uv = self.uv_of_object_point(self.object_from_render.transform_point3(p)).map(|x| x as f32);
+        let uv = match uv {
+            true => self.uv_of_object_point(self.object_from_render.transform_point3(p)).map(|x| x as f32),
+            false => [0.0; 2],
+        };
         Some(ShapeSample { p: Point3(p.as_vec3()), n: Normal3(n.as_vec3()), uv, pdf: pdf as f32 })
     }
 
     /// The area density [`QuadricShape::sample_area`] gives the surface point `p`.
     pub fn pdf_area(&self, s: &QuadricSampler, p: Point3) -> f32 {
-        if let QuadricSampler::Pbrt { object_area } = s {
+        if let QuadricSampler::Pbrt { object_area, .. } = s {
             return (1.0 / object_area) as f32;
         }
         let uv = self.uv_of_object_point(self.object_from_render.transform_point3(p.0.as_dvec3()));
@@ -224,7 +238,7 @@ impl QuadricShape {
     /// The solid-angle density of [`QuadricShape::sample_solid_angle`] for direction `wi`
     /// (0 when the ray misses).
     pub fn pdf_solid_angle(&self, s: &QuadricSampler, reference: Point3, wi: Vector3) -> f32 {
-        if let QuadricSampler::Pbrt { object_area } = s {
+        if let QuadricSampler::Pbrt { object_area, .. } = s {
             return self.pdf_solid_angle_pbrt(*object_area, reference, wi);
         }
         let ray = Ray::new(reference, wi);

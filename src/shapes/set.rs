@@ -75,6 +75,19 @@ pub enum Piece {
     Patch { mesh: u32, patch: u32, flags: MeshFlags },
 }
 
+impl Piece {
+    /// The piece, its samples carrying their (u, v) only if `uv` (where they may skip
+    /// it: pbrt's quadric sampling).
+    pub fn reading_uv(self, uv: bool) -> Piece {
+        match self {
+            Piece::Quadric { index, sampler: QuadricSampler::Pbrt { object_area, .. } } => {
+                Piece::Quadric { index, sampler: QuadricSampler::Pbrt { object_area, uv } }
+            }
+            p => p,
+        }
+    }
+}
+
 impl ShapeSet {
     /// How many BVH primitives the shape has.
     pub fn prim_count(&self, s: ShapeRef) -> usize {
@@ -177,7 +190,7 @@ impl ShapeSet {
                 if pbrt_sampling && super::pbrt_sampling::pbrt_samples(&q.quadric) {
                     let object_area = q.quadric.world_area(glam::DMat3::IDENTITY);
                     return vec![(
-                        Piece::Quadric { index, sampler: QuadricSampler::Pbrt { object_area } },
+                        Piece::Quadric { index, sampler: QuadricSampler::Pbrt { object_area, uv: true } },
                         object_area,
                     )];
                 }

@@ -152,3 +152,34 @@ fn alpha_cuts_area_light_emission_where_it_cuts_the_surface() {
             .image;
     assert!(as_pbrt_v3.pixels.iter().flatten().sum::<f32>() > 0.0, "pbrt-v3's cut-away light lights the floor");
 }
+
+/// pbrt's disk sampling skips a sample's (u, v) where nothing reads it (pbrt's samples
+/// have none): an alpha mask on the disk still cuts half of them by angle, and an
+/// unmasked disk's samples carry (0, 0).
+#[test]
+fn a_masked_disk_light_reads_its_samples_uv() {
+    let disk = |alpha: &str| {
+        let text = format!(
+            "LookAt 0 -3 4  0 0 0  0 0 1\nCamera \"perspective\"\n\
+             Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\n\
+             Texture \"half\" \"float\" \"checkerboard\" \"float uscale\" 2 \"float tex1\" 0 \"float tex2\" 1\n\
+             AttributeBegin\nTranslate 0 0 1\nRotate 180 1 0 0\nAreaLightSource \"diffuse\" \"rgb L\" [5 5 5]\n\
+             Shape \"disk\" \"float radius\" 1 {alpha}\nAttributeEnd\n"
+        );
+        RenderScene::new(&scene(&text))
+    };
+    let samples = |s: &RenderScene| {
+        assert_eq!(s.lights.len(), 1);
+        let mut rng = pbrt_sppm::sampling::Rng::new(5);
+        let light = &s.lights[0];
+        let all: Vec<_> = (0..4000)
+            .map(|_| light.sample_li(&s.geometry.shapes, glam::Vec3::ZERO, rng.uniform2()).expect("a sample"))
+            .collect();
+        let masked = all.iter().filter(|ls| s.emission_masked(light, ls.surface.as_ref())).count();
+        let uv_read = all.iter().any(|ls| ls.surface.as_ref().is_some_and(|x| x.uv != [0.0; 2]));
+        (masked as f64 / all.len() as f64, uv_read)
+    };
+    let (cut, uv_read) = samples(&disk("\"texture alpha\" \"half\""));
+    assert!((cut - 0.5).abs() < 0.03 && uv_read, "{cut} of a half-masked disk's samples cut");
+    assert_eq!(samples(&disk("")), (0.0, false));
+}
