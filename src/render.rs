@@ -235,8 +235,7 @@ impl RenderScene {
             pbrt_sampling: !scene.fixes.has(Fix::ShapeSampling) && !bidirectional,
             masks_samples: alpha_rules.samples,
         };
-        let emitters =
-            area_lights(&geometry, (&shape_area_lights, &world_shape_alpha), &area_params, rules, &mut lights);
+        let emitters = area_lights(&geometry, &shape_area_lights, &world_shape_alpha, &area_params, rules, &mut lights);
         let Interiors { media, world_shape_media, object_shape_media, bssrdf } = interiors(scene, bidirectional);
         let light_media = scene.lights.iter().map(|l| l.medium).collect();
         let powers: Vec<f64> = lights.iter().map(|l| l.power(world)).collect();
@@ -747,11 +746,12 @@ struct EmitterRules {
     masks_samples: bool,
 }
 
-/// The area lights of the world shapes (`area_lights[i]`: shape i's, with its alpha
+/// The area lights of the world shapes (`area_lights[i]`: shape i's, whose alpha is
 /// `alpha[i]`), appended to `lights`; each emitting shape's first light.
 fn area_lights(
     g: &Geometry,
-    (area_lights, alpha): (&[Option<u32>], &[Option<ShapeAlpha>]),
+    area_lights: &[Option<u32>],
+    alpha: &[Option<ShapeAlpha>],
     params: &[AreaLightDesc],
     rules: EmitterRules,
     lights: &mut Vec<Light>,
