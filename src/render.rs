@@ -230,11 +230,7 @@ impl RenderScene {
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
         let geometry = Geometry::new(scene);
         let alpha_rules = AlphaEmission::new(scene.syntax, scene.fixes);
-        let rules = EmitterRules {
-            spread_power: scene.syntax == Syntax::V3 || scene.fixes.has(Fix::MeshPower),
-            pbrt_sampling: !scene.fixes.has(Fix::ShapeSampling) && !bidirectional,
-            masks_samples: alpha_rules.samples,
-        };
+        let rules = EmitterRules::new(scene, bidirectional, alpha_rules);
         let emitters = area_lights(&geometry, &shape_area_lights, &world_shape_alpha, &area_params, rules, &mut lights);
         let Interiors { media, world_shape_media, object_shape_media, bssrdf } = interiors(scene, bidirectional);
         let light_media = scene.lights.iter().map(|l| l.medium).collect();
@@ -744,6 +740,16 @@ struct EmitterRules {
     /// An alpha mask cuts light samples away ([`AlphaEmission::samples`]), so they
     /// need their (u, v).
     masks_samples: bool,
+}
+
+impl EmitterRules {
+    fn new(scene: &SceneDescription, bidirectional: bool, alpha: AlphaEmission) -> EmitterRules {
+        EmitterRules {
+            spread_power: scene.syntax == Syntax::V3 || scene.fixes.has(Fix::MeshPower),
+            pbrt_sampling: !scene.fixes.has(Fix::ShapeSampling) && !bidirectional,
+            masks_samples: alpha.samples,
+        }
+    }
 }
 
 /// The area lights of the world shapes (`area_lights[i]`: shape i's, whose alpha is
