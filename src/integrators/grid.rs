@@ -197,27 +197,19 @@ impl Grid {
         }
     }
 
-    /// Calls `f` for every pixel whose site's ball may hold `p`: those binned in the
-    /// cell containing `p` (overlap binning; none outside the grid), or in the cells
-    /// the box of the largest radius about `p` overlaps (centre binning), cell by
-    /// cell, in pixel order within a cell. Whether there was any.
-    pub fn gather(&self, p: Vec3, mut f: impl FnMut(u32)) -> bool {
-        self.gather_entries(p, |e| f(e.pixel))
-    }
-
-    /// [`Grid::gather`], handing over each pixel's site too.
+    /// Calls `f(pixel, site)` for every pixel whose site's ball may hold `p`: those
+    /// binned in the cell containing `p` (overlap binning; none outside the grid), or
+    /// in the cells the box of the largest radius about `p` overlaps (centre binning),
+    /// cell by cell, in pixel order within a cell. Whether there was any.
     pub fn gather_sites(&self, p: Vec3, mut f: impl FnMut(u32, &Site)) -> bool {
-        self.gather_entries(p, |e| f(e.pixel, &e.site))
-    }
-
-    fn gather_entries(&self, p: Vec3, mut f: impl FnMut(&Entry)) -> bool {
+        let mut f = |e: &Entry| f(e.pixel, &e.site);
         let c = (p - self.lo) * self.inv_cell;
-        let mut any = false;
         if self.binning == Binning::Centre {
             let margin = self.reach * self.inv_cell;
             if (0..3).any(|a| c[a] < -margin[a] || c[a] >= self.res[a] as f32 + margin[a]) {
                 return false;
             }
+            let mut any = false;
             self.box_cells(p - self.reach, p + self.reach, |key| any |= self.cell_entries(key, &mut f));
             return any;
         }
@@ -239,12 +231,12 @@ impl Grid {
         any
     }
 
-    /// [`Grid::gather`] for the pixels whose site's ball holds `p` (its boundary
+    /// [`Grid::gather_sites`] for the pixels whose site's ball holds `p` (its boundary
     /// included); whether the cells looked in held any pixel, in reach or not.
     pub fn gather_within(&self, p: Vec3, mut f: impl FnMut(u32)) -> bool {
-        self.gather_entries(p, |e| {
-            if (e.site.p - p).length_squared() <= e.site.radius * e.site.radius {
-                f(e.pixel)
+        self.gather_sites(p, |pixel, site| {
+            if (site.p - p).length_squared() <= site.radius * site.radius {
+                f(pixel)
             }
         })
     }
@@ -389,7 +381,7 @@ mod tests {
             assert!(grid.res.iter().all(|&r| r <= 1 << 20), "radius {radius}: {:?}", grid.res);
             for (i, &p) in pts.iter().enumerate().step_by(97) {
                 let mut found = false;
-                grid.gather(p, |j| found |= j == i as u32);
+                grid.gather_sites(p, |j, _| found |= j == i as u32);
                 assert!(found, "radius {radius}: site {i} at {p:?} not found at its own position");
             }
         }
@@ -412,7 +404,7 @@ mod tests {
         for _ in 0..2000 {
             let p = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform() * 0.1) * 10.0;
             let mut found = Vec::new();
-            let any = grid.gather(p, |i| found.push(i));
+            let any = grid.gather_sites(p, |i, _| found.push(i));
             let mut once = found.clone();
             once.sort_unstable();
             once.dedup();
