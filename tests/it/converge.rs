@@ -25,7 +25,7 @@ fn write_scene(d: &Path) -> PathBuf {
 LookAt 0 1 -4  0 0.5 0  0 1 0
 Camera "perspective" "float fov" [ 40 ]
 Film "image" "integer xresolution" 48 "integer yresolution" [ 32 ] "string filename" "x.exr"
-Integrator "sppm" "integer photonsperiteration" [ 4000 ] "integer numiterations" 8
+Integrator "sppm" "integer photonsperiteration" [ 40000 ] "integer numiterations" 8
 WorldBegin
 Include "world.pbrt"
 WorldEnd
