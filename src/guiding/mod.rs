@@ -1,16 +1,19 @@
 //! Path guiding (issue 59): a distribution of incident light over space and direction,
 //! learnt from the light paths already traced, that camera paths draw directions from
-//! beside their BSDF. It is the spatial-directional tree of Müller et al. (2017),
-//! "Practical Path Guiding": a binary tree over the scene ([`STree`]) whose leaves hold
-//! quadtrees over the sphere of directions ([`DTree`]), trained in rounds of doubling
-//! size ([`Guide`]).
+//! beside their BSDF, and a distribution of incident importance (where the camera's
+//! paths arrive from), that light paths draw from. Each is the spatial-directional tree
+//! of Müller et al. (2017), "Practical Path Guiding": a binary tree over the scene
+//! ([`STree`]) whose leaves hold quadtrees over the sphere of directions ([`DTree`]),
+//! trained in rounds of doubling size ([`Guide`]).
 //!
 //! ```text
-//! pbrt-sppm render room.pbrt --integrator vcm --guiding on
+//! pbrt-sppm render room.pbrt --integrator vcm --guiding on      # camera subpaths
+//! pbrt-sppm render room.pbrt --integrator vcm --guiding light   # light subpaths
+//! pbrt-sppm render room.pbrt --integrator vcm --guiding both
 //! ```
 //!
-//! State that several integrators may share (vcm's and bdpt's camera subpaths today),
-//! so it lives here, apart from any of them.
+//! State that several integrators may share (vcm's and bdpt's subpaths today), so it
+//! lives here, apart from any of them.
 
 pub mod dtree;
 pub mod stree;
@@ -18,9 +21,54 @@ pub mod training;
 
 pub use dtree::DTree;
 pub use stree::STree;
-pub use training::{Guide, Record};
+pub use training::{Guide, Record, Records};
 
 use glam::Vec3;
+
+/// Which subpaths draw directions from a guide (`--guiding`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Guiding {
+    #[default]
+    Off,
+    /// Camera subpaths, from the incident light (`on`).
+    Camera,
+    /// Light subpaths, from the incident importance.
+    Light,
+    /// Both.
+    Both,
+}
+
+impl Guiding {
+    /// Camera subpaths are guided.
+    pub fn camera(self) -> bool {
+        matches!(self, Guiding::Camera | Guiding::Both)
+    }
+
+    /// Light subpaths are guided.
+    pub fn light(self) -> bool {
+        matches!(self, Guiding::Light | Guiding::Both)
+    }
+
+    /// The option's value that asks for it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Guiding::Off => "off",
+            Guiding::Camera => "on",
+            Guiding::Light => "light",
+            Guiding::Both => "both",
+        }
+    }
+}
+
+impl std::str::FromStr for Guiding {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Guiding, String> {
+        [Guiding::Off, Guiding::Camera, Guiding::Light, Guiding::Both]
+            .into_iter()
+            .find(|g| g.name() == s)
+            .ok_or_else(|| format!("expected off, on, light or both, not \"{s}\""))
+    }
+}
 
 /// The share of directions a guided vertex draws from its BSDF (Müller et al.'s fixed
 /// one half): the BSDF keeps what the guide has not learnt reachable.
@@ -77,6 +125,15 @@ impl Mix<'_> {
             _ => d,
         }
     }
+}
+
+/// Where a vertex kept for later stands in a guide: its leaf ([`STree::leaf`]) and the
+/// normal its mixture folds about (see [`Mix`]), so that the mixture is made again
+/// without descending the tree.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Guided {
+    pub leaf: u32,
+    pub fold: Option<Vec3>,
 }
 
 /// A guided vertex's mixture density for one direction known in advance (a light

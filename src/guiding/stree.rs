@@ -56,9 +56,20 @@ impl STree {
 
     /// The directional tree that samples at `p`.
     pub fn sampling(&self, p: Vec3) -> &DTree {
-        match &self.nodes[self.leaf_index(p)] {
+        self.sampling_of(self.leaf(p))
+    }
+
+    /// The leaf holding `p`, named for [`Self::sampling_of`] (a vertex that keeps it
+    /// need not descend the tree again).
+    pub fn leaf(&self, p: Vec3) -> u32 {
+        self.leaf_index(p) as u32
+    }
+
+    /// The directional tree that samples in leaf `leaf` (from [`Self::leaf`]).
+    pub fn sampling_of(&self, leaf: u32) -> &DTree {
+        match &self.nodes[leaf as usize] {
             SNode::Leaf { sampling, .. } => sampling,
-            SNode::Inner { .. } => unreachable!("leaf_index ends at a leaf"),
+            SNode::Inner { .. } => panic!("node {leaf} is no leaf: ask STree::leaf"),
         }
     }
 

@@ -300,7 +300,7 @@ mod tests {
     /// A guide after one round, its sums not short decimals.
     fn trained_guide() -> crate::guiding::Guide {
         use glam::Vec3;
-        let mut g = crate::guiding::Guide::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0 / 7.0));
+        let mut g = crate::guiding::Guide::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0 / 7.0), true);
         let d = |k: u32| Vec3::new((k as f32).sin(), (k as f32).cos(), 0.3).normalize();
         let records: Vec<_> = (0..5000)
             .map(|k| crate::guiding::Record {
@@ -309,7 +309,9 @@ mod tests {
                 energy: 1.0 / (1 + k) as f32,
             })
             .collect();
-        g.add_pass(&records);
+        // The importance tree learns the same points from the other way.
+        let importance = records.iter().map(|r| crate::guiding::Record { d: -r.d, ..*r }).collect();
+        g.add_pass(&crate::guiding::Records { radiance: records, importance });
         g
     }
 
@@ -324,7 +326,7 @@ mod tests {
         assert_eq!(back.fingerprint, c.fingerprint);
         assert_eq!(format!("{:?}", back.chains), format!("{:?}", c.chains));
         assert_eq!((back.light_paths, &back.guide), (Some(12_345), &c.guide));
-        assert!(c.guide.as_ref().is_some_and(|g| g.recorded() == 1));
+        assert!(c.guide.as_ref().is_some_and(|g| g.recorded() == 1 && g.importance().is_some()));
     }
 
     #[test]

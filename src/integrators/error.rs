@@ -22,7 +22,8 @@ pub enum RenderError {
     #[error("adaptive photon sampling is for SPPM; vcm and bdpt trace uniform light paths (--photon-sampling uniform)")]
     AdaptiveVcm,
     #[error(
-        "path guiding is for vcm and bdpt; SPPM's camera paths stop at their first diffuse surface (--guiding off)"
+        "path guiding is for vcm and bdpt; SPPM's camera paths stop at their first diffuse surface, and its \
+         photons find what the camera sees with --photon-sampling adaptive (--guiding off)"
     )]
     GuidingSppm,
     #[error("--volume-gather is SPPM's; vcm and bdpt connect and merge in media as they do on surfaces")]

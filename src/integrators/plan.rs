@@ -6,6 +6,7 @@ use super::beams::VolumeGather;
 use super::error::RenderError;
 use super::passes::{DEFAULT_ALPHA, PassMode};
 use super::vcm::Techniques;
+use crate::guiding::Guiding;
 use crate::sampling::SamplerKind;
 use crate::scene::Integrator;
 use std::ops::Range;
@@ -111,8 +112,8 @@ pub struct RenderSettings {
     /// Render only these passes of the planned ones (`--pass-range A..B`; independent
     /// passes only).
     pub pass_range: Option<Range<u32>>,
-    /// vcm's and bdpt's camera subpaths draw from a path guide (`--guiding on`).
-    pub guiding: bool,
+    /// Which of vcm's and bdpt's subpaths draw from a path guide (`--guiding`).
+    pub guiding: Guiding,
 }
 
 /// The settings a render runs with, the scene's defaults and the overrides combined.
@@ -134,8 +135,8 @@ pub struct Plan {
     pub range: Range<u32>,
     /// Stop after the iteration that passes this many seconds.
     pub time_limit: Option<f64>,
-    /// Camera subpaths draw from a path guide ([`crate::guiding`]).
-    pub guiding: bool,
+    /// Which subpaths draw from a path guide ([`crate::guiding`]).
+    pub guiding: Guiding,
 }
 
 impl Plan {
@@ -156,7 +157,7 @@ impl Plan {
         // SPPM's fingerprint stays as it was before other integrators existed.
         .chain((self.algorithm != Algorithm::Sppm).then(|| ("integrator", self.algorithm.name())))
         .chain(self.balances().then(|| ("light-subpaths", "balanced".to_string())))
-        .chain(self.guiding.then(|| ("guiding", "on".to_string())))
+        .chain((self.guiding != Guiding::Off).then(|| ("guiding", self.guiding.name().to_string())))
         // Checkpoints made before it existed (without it) still resume.
         .chain((self.algorithm == Algorithm::Sppm).then(|| ("volume-gather", self.volume_gather.name().into())))
         .map(|(k, v)| (k.to_string(), v))
@@ -212,7 +213,7 @@ impl Plan {
         if !sppm && settings.photon_sampling == PhotonSampling::Adaptive {
             return Err(RenderError::AdaptiveVcm);
         }
-        if sppm && settings.guiding {
+        if sppm && settings.guiding != Guiding::Off {
             return Err(RenderError::GuidingSppm);
         }
         if !sppm && settings.volume_gather.is_some() {

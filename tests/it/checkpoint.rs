@@ -98,7 +98,8 @@ fn a_render_killed_at_random_moments_and_resumed_matches_an_uninterrupted_one() 
         ("uniform", &[][..], 1),
         ("adaptive", &["--photon-sampling", "adaptive"][..], 2),
         ("vcm", &["--integrator", "vcm"][..], 3),
-        ("guided", &["--integrator", "vcm", "--guiding", "on"][..], 4),
+        // Both guides: the checkpoint saves the importance tree beside the light's.
+        ("guided", &["--integrator", "vcm", "--guiding", "both"][..], 4),
     ];
     for (name, extra, seed) in cases {
         let d = dir(name);

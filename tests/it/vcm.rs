@@ -788,7 +788,7 @@ fn extra_rays_for_light_seen_through_glass_keep_the_mean_and_cut_the_noise() {
             techniques: Techniques::Bdpt,
             balance: false,
             prefix_rays,
-            guiding: false,
+            guiding: pbrt_sppm::guiding::Guiding::Off,
         };
         let mut vcm = Vcm::new(&scene, 4, 0, settings).expect("renders");
         for _ in 0..4 {

@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use pbrt_sppm::fixes::Fixes;
+use pbrt_sppm::guiding::Guiding;
 use pbrt_sppm::integrators::adaptive::PhotonSampling;
 use pbrt_sppm::integrators::beams::VolumeGather;
 use pbrt_sppm::integrators::checkpoint::Every;
@@ -129,9 +130,11 @@ pub struct RenderArgs {
     #[arg(long, value_parser = parse_photon_sampling)]
     pub photon_sampling: Option<PhotonSampling>,
     /// Path guiding for vcm and bdpt: `on` (camera subpaths also draw directions from
-    /// a map of incident light learnt over the first 31 passes) or `off`. Default: `off`.
-    #[arg(long, value_parser = parse_on_off)]
-    pub guiding: Option<bool>,
+    /// a map of incident light learnt over the first 31 passes), `light` (light
+    /// subpaths draw from a map of where camera subpaths arrive from), `both` or
+    /// `off`. Default: `off`.
+    #[arg(long, value_parser = str::parse::<Guiding>)]
+    pub guiding: Option<Guiding>,
     /// How SPPM gathers photons in participating media: `beams` (every medium segment
     /// of a camera path gathers the photons near it) or `points` (a camera path
     /// scatters at a point and gathers photons in a ball there). Default: `beams`
@@ -268,14 +271,6 @@ fn parse_photon_sampling(s: &str) -> Result<PhotonSampling, String> {
     }
 }
 
-fn parse_on_off(s: &str) -> Result<bool, String> {
-    match s {
-        "on" => Ok(true),
-        "off" => Ok(false),
-        _ => Err(format!("expected on or off, not \"{s}\"")),
-    }
-}
-
 fn parse_integrator(s: &str) -> Result<Algorithm, String> {
     s.parse()
 }
@@ -388,7 +383,7 @@ impl RenderArgs {
             time_limit: self.time_limit.map(f64::from),
             passes: self.pass_mode()?,
             pass_range: self.pass_range.clone(),
-            guiding: self.guiding.unwrap_or(false),
+            guiding: self.guiding.unwrap_or_default(),
         };
         Ok(Request {
             scene: self.scene.clone(),

@@ -14,7 +14,7 @@ use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
 use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique, Techniques};
 use crate::accel::Hit;
-use crate::guiding::{Mix, Record};
+use crate::guiding::{Mix, Record, Toward};
 use crate::integrators::grid::Grid;
 use crate::integrators::sppm::{Surface, camera_ray, surface};
 use crate::integrators::subsurface;
@@ -52,7 +52,7 @@ pub struct PixelSample {
     pub work: Work,
     /// What the subpath found past its guidable vertices, for the guide's training
     /// (only when the pass trains, [`Pass::training`]).
-    pub records: Vec<Record>,
+    pub records: crate::guiding::Records,
 }
 
 impl PixelSample {
@@ -106,6 +106,9 @@ struct Vertex<'a> {
     exit: bool,
     /// The guided mixture the subpath samples from here, if any ([`Pass::guide_at`]).
     guide: Option<Mix<'a>>,
+    /// The guided mixture a light subpath reaching here would draw `wo` from, if light
+    /// subpaths are guided here ([`Pass::light_guided`]).
+    light_toward: Option<Toward>,
 }
 
 impl<'a> Vertex<'a> {
@@ -113,15 +116,19 @@ impl<'a> Vertex<'a> {
     /// that count only some techniques (`direct`, `prefix`), which set the rest.
     fn plain(place: Place, at: &'a Scatterer, wo: Vec3, partial: Partial, len: u32) -> Vertex<'a> {
         let (merges, first_diffuse, terminated, exit) = (false, false, false, false);
-        Vertex { place, at, wo, partial, len, merges, first_diffuse, terminated, exit, guide: None }
+        let (guide, light_toward) = (None, None);
+        Vertex { place, at, wo, partial, len, merges, first_diffuse, terminated, exit, guide, light_toward }
     }
 
-    /// f and both densities toward `wi`, the forward one the camera walk's (its guided
-    /// mixture's, where it has one).
+    /// f and both densities toward `wi`, the forward one the camera walk's and the
+    /// reverse one a light walk's (each its guided mixture's, where it has one).
     fn eval(&self, wi: Vec3) -> crate::materials::BsdfEval {
         let mut e = self.at.eval(self.wo, wi, TransportMode::Radiance);
         if let Some(m) = &self.guide {
             e.pdf = m.pdf(e.pdf, wi);
+        }
+        if let Some(t) = &self.light_toward {
+            e.pdf_rev = t.pdf(e.pdf_rev);
         }
         e
     }
@@ -277,9 +284,24 @@ impl Cameras<'_> {
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
             let merges = !history.past_diffuse_specular && !at.is_delta();
-            let guide = pass.guide_at(place.p, wo, &at);
+            let (guide, light_toward) = (pass.guide_at(place.p, wo, &at), light_toward(pass, &place, &at, wo));
             let (first_diffuse, exit) = (!history.diffuse, false);
-            let v = Vertex { place, at: &at, wo, partial, len, merges, first_diffuse, terminated, exit, guide };
+            let v = Vertex {
+                place,
+                at: &at,
+                wo,
+                partial,
+                len,
+                merges,
+                first_diffuse,
+                terminated,
+                exit,
+                guide,
+                light_toward,
+            };
+            if pass.records_importance_at(&at) {
+                out.records.importance.push(Record { p: place.p, d: wo, energy: beta.element_sum() / 3.0 });
+            }
             if let Some((hit, si)) = &surf {
                 if pass.techniques.uses(Technique::EmitterHit) {
                     let found = beta * self.emitted(hit, si, &v, origin, dist2);
@@ -308,7 +330,7 @@ impl Cameras<'_> {
             (medium, origin) = (l.from.toward(l.wi), ray.o.0);
         }
         let total = out.total();
-        out.records = pending.iter().map(|q: &Pending| q.record(total)).collect();
+        out.records.radiance = pending.iter().map(|q: &Pending| q.record(total)).collect();
         (out, prefix)
     }
 
@@ -383,6 +405,7 @@ impl Cameras<'_> {
             exit: true,
             first_diffuse: false,
             guide: None,
+            light_toward: light_toward(self.pass, &place, &at, wo),
             ..*v
         };
         out.work.vertices += 1;
@@ -592,7 +615,7 @@ impl Cameras<'_> {
             return Vec3::ZERO;
         }
         let dir = d / dist2.sqrt();
-        let (ec, el) = (v.eval(dir), lv.eval(-dir));
+        let (ec, el) = (v.eval(dir), lv.eval(-dir, pass));
         if ec.f == Vec3::ZERO || el.f == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -679,6 +702,13 @@ fn light_densities(pass: &Pass, k: usize, ls: &crate::lights::LightSample, p: Ve
     }
 }
 
+/// The guided mixture a light subpath reaching a camera vertex would draw the
+/// vertex's `wo` from, if light subpaths are guided there.
+fn light_toward(pass: &Pass, place: &Place, at: &Scatterer, wo: Vec3) -> Option<Toward> {
+    let g = pass.light_guided(place.p, wo, at)?;
+    pass.light_mix(g).map(|m| m.toward(wo))
+}
+
 /// How a camera subpath left a vertex ([`scatter`]).
 struct Scattered {
     beta: Rgb,
@@ -695,10 +725,13 @@ struct Scattered {
 /// divided the throughput by so far, updated here.
 fn scatter(pass: &Pass, v: &Vertex, (beta, eta_scale): (Rgb, &mut f32), s: &mut impl Sampler) -> Option<Scattered> {
     let cos = |wi: Vec3| v.at.cos(wi);
-    let smp = match &v.guide {
-        Some(mix) => v.at.sample_guided(v.wo, s, mix, cos)?,
+    let mut smp = match &v.guide {
+        Some(mix) => v.at.sample_guided(v.wo, s, (mix, TransportMode::Radiance), cos)?,
         None => v.at.sample(v.wo, s, TransportMode::Radiance, |wi, _| cos(wi))?,
     };
+    if let Some(t) = &v.light_toward {
+        smp.pdf_rev = t.pdf(smp.pdf_rev);
+    }
     let mut beta = beta * smp.f * smp.scale;
     *eta_scale *= v.at.eta_scale(v.wo, smp.wi);
     // pbrt's path tracer's roulette, after three bounces and only below a throughput of

@@ -6,7 +6,7 @@
 use super::mis::{self, Factors, Partial};
 use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique, Techniques};
-use crate::guiding::Toward;
+use crate::guiding::{Guided, Toward};
 use crate::integrators::sppm::{Surface, surface};
 use crate::interaction::Footprint;
 use crate::lights::Light;
@@ -65,15 +65,22 @@ pub struct LightVertex {
     /// The guided mixture a camera subpath reaching here would draw `wo` from, if the
     /// vertex is guided ([`Pass::guide_at`]).
     pub guide: Option<Toward>,
+    /// Where the light subpath draws its next direction from a guide of importance,
+    /// if it does ([`Pass::light_guided`]).
+    pub light_guide: Option<Guided>,
 }
 
 impl LightVertex {
-    /// f and both densities toward `wi`, carrying importance; the reverse density is
-    /// a camera walk's (its guided mixture's, where it has one).
-    pub fn eval(&self, wi: Vec3) -> crate::materials::BsdfEval {
+    /// f and both densities toward `wi`, carrying importance; the forward density is
+    /// the light walk's, the reverse one a camera walk's (each its guided mixture's,
+    /// where it has one).
+    pub fn eval(&self, wi: Vec3, pass: &Pass) -> crate::materials::BsdfEval {
         let mut e = self.at.eval(self.wo, wi, TransportMode::Importance);
         if let Some(g) = &self.guide {
             e.pdf_rev = g.pdf(e.pdf_rev);
+        }
+        if let Some(m) = self.light_guide.and_then(|g| pass.light_mix(g)) {
+            e.pdf = m.pdf(e.pdf, wi);
         }
         e
     }
@@ -346,8 +353,9 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
         // A camera subpath reaching here on a reflecting BSDF arrives on `wo`'s side
         // (else f is 0 and the density does not count).
         let guide = pass.guide_at(place.p, wo, &at).map(|m| m.toward(wo));
+        let light_guide = pass.light_guided(place.p, wo, &at);
         let half = to.half;
-        let v = LightVertex { place, wo, beta, at, partial, len, half, after_specular, terminated, guide };
+        let v = LightVertex { place, wo, beta, at, partial, len, half, after_specular, terminated, guide, light_guide };
         if !v.at.is_delta() {
             // Direct light is not light-traced (`mis`), unless light tracing is alone.
             let traced = len > 1 || pass.techniques == Techniques::Only(Technique::LightTrace);
@@ -377,7 +385,11 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
 /// roulette against `before`, the throughput as the subpath left the vertex before),
 /// and whether the bounce was specular.
 fn scatter(pass: &Pass, v: &LightVertex, before: Rgb, s: &mut impl Sampler) -> Option<(Ray, Rgb, Partial, bool)> {
-    let smp = v.at.sample(v.wo, s, TransportMode::Importance, |wi, specular| v.leaving_cos(wi, specular, pass))?;
+    let cos = |wi, specular| v.leaving_cos(wi, specular, pass);
+    let smp = match v.light_guide.and_then(|g| pass.light_mix(g)) {
+        Some(mix) => v.at.sample_guided(v.wo, s, (&mix, TransportMode::Importance), |wi| cos(wi, false))?,
+        None => v.at.sample(v.wo, s, TransportMode::Importance, cos)?,
+    };
     let bnew = v.beta * smp.f * smp.scale;
     // As SPPM's photons: continue with the probability the throughput kept.
     let q = (1.0 - luminance(bnew) / luminance(before).max(1e-30)).max(0.0);
@@ -408,7 +420,7 @@ fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Ve
     if pixel.is_none() && scene.film.filter.is_none() {
         return;
     }
-    let e = v.eval(cs.wi);
+    let e = v.eval(cs.wi, pass);
     if e.f == Vec3::ZERO || cs.pdf <= 0.0 {
         return;
     }

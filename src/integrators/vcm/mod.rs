@@ -35,7 +35,7 @@ use super::grid::{Binning, Grid, Grouped, Site};
 use super::passes;
 use super::sppm::{PixelState, Stats};
 use crate::filters::PixelFilter;
-use crate::guiding::Guide;
+use crate::guiding::{Guide, Guided, Guiding, Mix, Records, STree};
 use crate::render::RenderScene;
 use crate::sampling::SamplerKind;
 use crate::scene::Film;
@@ -56,13 +56,40 @@ use std::time::Instant;
 pub const NEE_ALL_LIGHTS_MAX: usize = 8;
 
 /// What a band of camera subpaths gives besides the image: work, guide records.
-type Out = (camera::Work, Vec<crate::guiding::Record>);
+type Out = (camera::Work, Records);
 
 /// Two neighbouring bands' [`Out`]: work sums in any order; records join in pixel
 /// order (the guide's sums then do not depend on the thread count).
 fn join((wa, mut ra): Out, (wb, rb): Out) -> Out {
-    ra.extend(rb);
+    ra.append(rb);
     (wa + wb, ra)
+}
+
+/// Whether a vertex may be guided: on a surface whose BSDF can be
+/// ([`crate::materials::Bsdf::guidable`]).
+fn guidable(at: &vertex::Scatterer) -> bool {
+    matches!(at, vertex::Scatterer::Surface(b) if b.guidable())
+}
+
+/// Where a vertex stands in `tree`, if it is guided there: on a guidable surface, in a
+/// leaf that has learnt something; folded toward `wo`'s side where the BSDF only
+/// reflects.
+fn guided_in(tree: &STree, p: glam::Vec3, wo: glam::Vec3, at: &vertex::Scatterer) -> Option<Guided> {
+    let vertex::Scatterer::Surface(b) = at else { return None };
+    if !b.guidable() {
+        return None;
+    }
+    let leaf = tree.leaf(p);
+    if tree.sampling_of(leaf).total() <= 0.0 {
+        return None;
+    }
+    let fold = b.reflecting_normal().map(|n| if wo.dot(n) < 0.0 { -n } else { n });
+    Some(Guided { leaf, fold })
+}
+
+/// The mixture of a vertex guided by `tree` ([`guided_in`]).
+fn mix(tree: &STree, g: Guided) -> Mix<'_> {
+    Mix { tree: tree.sampling_of(g.leaf), bsdf_share: crate::guiding::BSDF_SHARE, fold: g.fold }
 }
 
 /// Pixel ranges splats are grouped into for the parallel reduction.
@@ -165,8 +192,10 @@ pub struct Pass<'a> {
     /// [`light::LightVertex::leaving_cos`]).
     pub correct_specular: bool,
     /// The path guide camera subpaths draw from ([`crate::guiding`]), if any.
-    pub guide: Option<std::sync::Arc<crate::guiding::STree>>,
-    /// Camera subpaths record what they find for the guide's training.
+    pub guide: Option<std::sync::Arc<STree>>,
+    /// The importance light subpaths draw from, if any.
+    pub light_guide: Option<std::sync::Arc<STree>>,
+    /// Camera subpaths record what they find for the guides' training.
     pub training: bool,
 }
 
@@ -177,20 +206,33 @@ impl Pass<'_> {
     /// the density a camera subpath would have drawn their way back with.
     /// `wo`: the direction the camera subpath arrives from (the side a reflecting
     /// BSDF's guide folds to).
-    pub fn guide_at(&self, p: glam::Vec3, wo: glam::Vec3, at: &vertex::Scatterer) -> Option<crate::guiding::Mix<'_>> {
+    pub fn guide_at(&self, p: glam::Vec3, wo: glam::Vec3, at: &vertex::Scatterer) -> Option<Mix<'_>> {
         let tree = self.guide.as_deref()?;
-        let vertex::Scatterer::Surface(b) = at else { return None };
-        let t = tree.sampling(p);
-        if !b.guidable() || t.total() <= 0.0 {
-            return None;
-        }
-        let fold = b.reflecting_normal().map(|n| if wo.dot(n) < 0.0 { -n } else { n });
-        Some(crate::guiding::Mix { tree: t, bsdf_share: crate::guiding::BSDF_SHARE, fold })
+        guided_in(tree, p, wo, at).map(|g| mix(tree, g))
+    }
+
+    /// Where a light subpath's vertex stands in the importance guide, if it is guided
+    /// there (as [`Self::guide_at`], `wo` the direction the light arrived from). Camera
+    /// subpaths ask it too, for the density a light subpath would have drawn their way
+    /// back with.
+    pub fn light_guided(&self, p: glam::Vec3, wo: glam::Vec3, at: &vertex::Scatterer) -> Option<Guided> {
+        guided_in(self.light_guide.as_deref()?, p, wo, at)
+    }
+
+    /// The mixture a light subpath draws from where [`Self::light_guided`] put it.
+    pub fn light_mix(&self, g: Guided) -> Option<Mix<'_>> {
+        self.light_guide.as_deref().map(|tree| mix(tree, g))
     }
 
     /// Whether a camera subpath records what it finds past a vertex for the guide.
     pub fn records_at(&self, at: &vertex::Scatterer) -> bool {
-        self.training && matches!(at, vertex::Scatterer::Surface(b) if b.guidable())
+        self.training && self.guide.is_some() && guidable(at)
+    }
+
+    /// Whether a camera subpath records the importance arriving at a vertex for the
+    /// light subpaths' guide.
+    pub fn records_importance_at(&self, at: &vertex::Scatterer) -> bool {
+        self.training && self.light_guide.is_some() && guidable(at)
     }
 
     /// Next-event estimation's probability of choosing light `k`.
@@ -255,9 +297,9 @@ pub struct VcmSettings {
     /// Let the pixels that need it trace more rays for their prefix light
     /// (`camera/prefix.rs`).
     pub prefix_rays: bool,
-    /// Camera subpaths draw directions from a path guide too (`--guiding`,
+    /// Which subpaths draw directions from a path guide too (`--guiding`,
     /// [`crate::guiding`]).
-    pub guiding: bool,
+    pub guiding: Guiding,
 }
 
 /// The choice of light subpaths per pass under way: the pilot's measurements while it
@@ -301,7 +343,7 @@ struct Done {
     stored: usize,
     camera: camera::Work,
     /// The camera subpaths' records for the guide, in pixel order (a training pass's).
-    records: Vec<crate::guiding::Record>,
+    records: Records,
     times: [Instant; 5],
 }
 
@@ -584,7 +626,7 @@ impl<'a> Vcm<'a> {
         let cams = self.cameras(&pass, &lights, grid.as_ref(), iteration);
         let (width, live, scene) = (self.size.0, &self.live, self.scene);
         let tasks = crate::integrators::PIXELS_PER_TASK;
-        let (mut work, mut records) = (camera::Work::default(), Vec::new());
+        let (mut work, mut records) = (camera::Work::default(), Records::default());
         let halves = balance::Halves::new(pass.light_paths);
         let lanes = buckets.map(|b| (b, b.lanes(iteration)));
         for band in super::preview::bands(sums.len(), 4 * tasks, usize::MAX, preview.is_some()) {
@@ -614,7 +656,7 @@ impl<'a> Vcm<'a> {
                 None => band_sums.map(|(i, s)| pixel(i, s)).map(|p| (p.work, p.records)).reduce(Default::default, join),
             };
             work = work + w;
-            records.extend(r);
+            records.append(r);
             if let Some(show) = preview.as_mut() {
                 show(&|| provisional(sums, self.passes_done(), &self.scene.film, band.end));
             }
@@ -648,7 +690,8 @@ impl<'a> Vcm<'a> {
             nee_all: scene.lights.len() <= NEE_ALL_LIGHTS_MAX,
             cones: self.cones.clone(),
             correct_specular: scene.integrator.requested != "sppm",
-            guide: self.guide.as_ref().map(|g| g.tree()),
+            guide: self.guide.as_ref().filter(|_| self.settings.guiding.camera()).map(|g| g.tree()),
+            light_guide: self.guide.as_ref().and_then(|g| g.importance()),
             training: self.guide.as_ref().is_some_and(|g| g.trains_on(iteration)),
         }
     }
@@ -698,7 +741,8 @@ impl<'a> Vcm<'a> {
 /// hit (none for pbrt-v3's whitted and directlighting, which trace no light subpaths).
 fn guide(scene: &RenderScene, settings: &VcmSettings) -> Option<Guide> {
     let b = scene.geometry.bounds()?;
-    (settings.guiding && settings.techniques.traces_lights()).then(|| Guide::new(b.min, b.max))
+    let g = settings.guiding;
+    (g != Guiding::Off && settings.techniques.traces_lights()).then(|| Guide::new(b.min, b.max, g.light()))
 }
 
 /// The image part way through a pass: the first `camera_done` pixels with this pass's

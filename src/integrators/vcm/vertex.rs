@@ -211,26 +211,27 @@ impl Scatterer {
         Some(Sampled { wi: smp.wi, f: smp.f, scale, pdf, pdf_rev, specular: smp.specular })
     }
 
-    /// Samples a camera walk's direction from the guided mixture `mix`: the BSDF with
-    /// its share, the guide otherwise (three numbers either way, so that the sampler's
-    /// dimensions stay in step). f and the densities are the BSDF's for the pair, the
-    /// forward one the mixture's; `cos` as [`Self::sample`]'s. A medium is not guided.
+    /// Samples a direction for the quantity `mode` carries from the guided mixture
+    /// `mix`: the BSDF with its share, the guide otherwise (four numbers either way, so
+    /// that the sampler's dimensions stay in step). f and the densities are the BSDF's
+    /// for the pair, the forward one the mixture's; `cos` as [`Self::sample`]'s for a
+    /// bounce that is not specular. A medium is not guided.
     pub fn sample_guided(
         &self,
         wo: Vec3,
         s: &mut impl Sampler,
-        mix: &Mix,
+        (mix, mode): (&Mix, TransportMode),
         cos: impl Fn(Vec3) -> f32,
     ) -> Option<Sampled> {
         let Scatterer::Surface(b) = self else {
-            return self.sample(wo, s, TransportMode::Radiance, |wi, _| cos(wi));
+            return self.sample(wo, s, mode, |wi, _| cos(wi));
         };
         let (choice, u, u_lobe) = (s.get1d(), s.get2d(), s.get1d());
         let wi = match choice < mix.bsdf_share {
-            true => b.sample_f(wo, u, u_lobe, TransportMode::Radiance)?.wi,
+            true => b.sample_f(wo, u, u_lobe, mode)?.wi,
             false => mix.sample_guide(u),
         };
-        let e = b.eval(wo, wi, TransportMode::Radiance);
+        let e = b.eval(wo, wi, mode);
         let pdf = mix.pdf(e.pdf, wi);
         if pdf.is_nan() || pdf <= 0.0 || e.f == Vec3::ZERO {
             return None;
@@ -330,18 +331,20 @@ mod tests {
     #[test]
     fn the_guided_mixture_integrates_to_one_and_its_samples_follow_it() {
         let (at, tree) = guided();
-        // Unfolded (guide samples behind the surface end the path) and folded about +z.
-        for fold in [None, Some(Vec3::Z)] {
+        // Unfolded (guide samples behind the surface end the path) and folded about +z,
+        // for a camera walk and a light walk (the guide of importance).
+        for (fold, mode) in [None, Some(Vec3::Z)].into_iter().zip([TransportMode::Radiance, TransportMode::Importance])
+        {
             let mix = Mix { tree: &tree, bsdf_share: 0.5, fold };
-            check_mixture(&at, &mix);
+            check_mixture(&at, &mix, mode);
         }
     }
 
-    fn check_mixture(at: &Scatterer, mix: &Mix) {
+    fn check_mixture(at: &Scatterer, mix: &Mix, mode: TransportMode) {
         let wo = Vec3::new(0.3, 0.2, 0.9).normalize();
         let pdf = |p: [f32; 2]| {
             let wi = from_square(p);
-            mix.pdf(at.eval(wo, wi, TransportMode::Radiance).pdf, wi) as f64
+            mix.pdf(at.eval(wo, wi, mode).pdf, wi) as f64
         };
         let n = 2048;
         let sum: f64 =
@@ -351,10 +354,10 @@ mod tests {
         // χ² on a 16 × 16 grid of the square: each cell within 5σ of its integral.
         let (samples, bins, mut rng) = (400_000usize, 16usize, Rng::new(11));
         let (mut drawn, cos) = (0usize, |wi: Vec3| wi.z.abs());
-        let hist = histogram(samples, bins, || match at.sample_guided(wo, &mut rng, mix, cos) {
+        let hist = histogram(samples, bins, || match at.sample_guided(wo, &mut rng, (mix, mode), cos) {
             Some(smp) => {
                 drawn += 1;
-                let expect = mix.pdf(at.eval(wo, smp.wi, TransportMode::Radiance).pdf, smp.wi);
+                let expect = mix.pdf(at.eval(wo, smp.wi, mode).pdf, smp.wi);
                 assert!((smp.pdf - expect).abs() <= 1e-4 * expect, "{} vs {expect}", smp.pdf);
                 assert!((smp.scale - cos(smp.wi) / smp.pdf).abs() <= 1e-5 * smp.scale);
                 to_square(smp.wi)
