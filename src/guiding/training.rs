@@ -3,7 +3,8 @@
 //! building half while its sampling half (the rounds before) guides them; after
 //! [`ROUNDS`] rounds it is frozen. A guide for light subpaths trains its importance
 //! tree in the same rounds, from the same camera subpaths: where they arrived from at
-//! each vertex, weighed by their throughput there (Vorba et al. 2014's importons).
+//! each vertex past the first, weighed by their throughput there (Vorba et al. 2014's
+//! importons).
 //!
 //! The guide a pass samples from is a function of the passes before it and nothing
 //! else: records are added in pixel order, whatever the thread count, so a render

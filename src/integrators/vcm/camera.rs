@@ -299,7 +299,11 @@ impl Cameras<'_> {
                 guide,
                 light_toward,
             };
-            if pass.records_importance_at(&at) {
+            // The importance arriving from the vertex before, which light leaving here
+            // that way would meet: not at the first vertex, where it arrives from the
+            // lens (light tracing connects there; a light subpath sent that way lands
+            // behind the camera).
+            if len > 1 && pass.records_importance_at(&at) {
                 out.records.importance.push(Record { p: place.p, d: wo, energy: beta.element_sum() / 3.0 });
             }
             if let Some((hit, si)) = &surf {
