@@ -25,6 +25,7 @@
 
 use crate::math::{Bounds3, Ray};
 use glam::{Vec3, Vec4};
+use rayon::prelude::*;
 use std::mem::MaybeUninit;
 use std::ops::Range;
 
@@ -177,12 +178,16 @@ const PARALLEL_THRESHOLD: usize = 4096;
 impl Bvh {
     /// Builds over the given boxes, primitive i costing `cost(i)` triangle tests to
     /// intersect; returns the hierarchy and the primitive order.
-    pub fn build(bounds: &[Bounds3], cost: impl Fn(usize) -> f32) -> (Bvh, Vec<u32>) {
+    pub fn build(bounds: &[Bounds3], cost: impl Fn(usize) -> f32 + Sync) -> (Bvh, Vec<u32>) {
         Bvh::build_with_max_leaf(bounds, cost, MAX_LEAF)
     }
 
     /// [`Bvh::build`] with at most `max_leaf` (at most 255) primitives per leaf.
-    pub fn build_with_max_leaf(bounds: &[Bounds3], cost: impl Fn(usize) -> f32, max_leaf: usize) -> (Bvh, Vec<u32>) {
+    pub fn build_with_max_leaf(
+        bounds: &[Bounds3],
+        cost: impl Fn(usize) -> f32 + Sync,
+        max_leaf: usize,
+    ) -> (Bvh, Vec<u32>) {
         Bvh::build_grouped(bounds, cost, max_leaf, |_| 0)
     }
 
@@ -190,15 +195,15 @@ impl Bvh {
     /// (`group(i)`): a leaf that SAH would fill from several is split by group instead.
     pub fn build_grouped(
         bounds: &[Bounds3],
-        cost: impl Fn(usize) -> f32,
+        cost: impl Fn(usize) -> f32 + Sync,
         max_leaf: usize,
-        group: impl Fn(usize) -> u32,
+        group: impl Fn(usize) -> u32 + Sync,
     ) -> (Bvh, Vec<u32>) {
         if bounds.is_empty() {
             return (Bvh::default(), Vec::new());
         }
         let mut info: Vec<PrimInfo> = bounds
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(i, b)| PrimInfo {
                 bounds: *b,
@@ -212,7 +217,7 @@ impl Bvh {
         let mut nodes = Vec::new();
         collapse(&root, &mut nodes);
         nodes.shrink_to_fit();
-        (Bvh { nodes, bounds: root.bounds() }, info.iter().map(|p| p.index).collect())
+        (Bvh { nodes, bounds: root.bounds() }, info.par_iter().map(|p| p.index).collect())
     }
 
     /// Replaces each leaf's (first, tag) by `relabel(first, count)`, for callers that

@@ -30,6 +30,9 @@ const INSTANCE_COST: f32 = 16.0;
 /// trip, so larger leaves pay (and their blocks share more vertices).
 const BLOCK_TRIANGLE_COST: f32 = 0.5;
 
+/// A shape with at least this many primitives has their boxes made on all threads.
+const PARALLEL_PRIMS: usize = 1 << 14;
+
 /// A BVH leaf entry: a shape, and its primitive (triangle, patch) (8 bytes).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Prim {
@@ -182,16 +185,21 @@ macro_rules! with_isa {
 
 impl Blas {
     fn build(shapes: Vec<ShapeRef>, set: &ShapeSet) -> Blas {
-        let mut prims = Vec::new();
-        let mut bounds = Vec::new();
+        let (mut prims, mut bounds) = (Vec::new(), Vec::new());
         for (i, &s) in shapes.iter().enumerate() {
             // Zero-area primitives are left out: `localize` then drops such triangles
             // from their mesh, and the map back to file numbers skips them.
-            for k in 0..set.prim_count(s) {
-                if let Some(b) = set.prim_bounds(s, k) {
-                    prims.push(Prim { shape: i as u32, tri: k as u32 });
-                    bounds.push(b);
+            let bound = |k: usize| set.prim_bounds(s, k).map(|b| (Prim { shape: i as u32, tri: k as u32 }, b));
+            let n = set.prim_count(s);
+            if n < PARALLEL_PRIMS {
+                for (q, c) in (0..n).filter_map(bound) {
+                    prims.push(q);
+                    bounds.push(c);
                 }
+            } else {
+                let (p, b): (Vec<Prim>, Vec<Bounds3>) = (0..n).into_par_iter().filter_map(bound).unzip();
+                prims.extend(p);
+                bounds.extend(b);
             }
         }
         let cost = |i: usize| ShapeSet::prim_cost(shapes[prims[i].shape as usize]);
@@ -210,7 +218,7 @@ impl Blas {
             false => Bvh::build_grouped(&bounds, |_| BLOCK_TRIANGLE_COST, leaves::MAX_LEAF, |i| prims[i].shape),
             true => Bvh::build(&bounds, cost),
         };
-        let prims = order.iter().map(|&i| prims[i as usize]).collect();
+        let prims = order.par_iter().map(|&i| prims[i as usize]).collect();
         Blas { bvh, prims, shapes, block_meshes, blocks: LeafBlocks::default() }
     }
 
@@ -219,15 +227,29 @@ impl Blas {
     /// BVH over meshes alone then needs no primitive list: its leaves refer to leaf
     /// blocks.
     fn localize(&mut self, meshes: &mut [Arc<TriangleMesh>], ids: &mut [Vec<u32>]) {
-        for (shape, s) in self.shapes.iter().enumerate() {
-            let ShapeRef::Mesh { mesh, .. } = s else { continue };
-            let mesh = *mesh as usize;
-            let order: Vec<u32> = self.prims.iter().filter(|p| p.shape == shape as u32).map(|p| p.tri).collect();
-            meshes[mesh] = Arc::new(meshes[mesh].reordered(&order));
-            for (next, p) in self.prims.iter_mut().filter(|p| p.shape == shape as u32).enumerate() {
-                p.tri = next as u32;
+        // Each mesh shape's triangles in leaf order, in one pass over the primitives (a
+        // pass per shape was 2.7 s of a 192-mesh scene's 12.6M triangles).
+        let mut orders: Vec<Vec<u32>> = vec![Vec::new(); self.shapes.len()];
+        for p in &mut self.prims {
+            if let ShapeRef::Mesh { .. } = self.shapes[p.shape as usize] {
+                let order = &mut orders[p.shape as usize];
+                let next = order.len() as u32;
+                order.push(p.tri);
+                p.tri = next;
             }
-            ids[mesh] = order;
+        }
+        let shapes = &self.shapes;
+        let reordered: Vec<(usize, Arc<TriangleMesh>, Vec<u32>)> = orders
+            .into_par_iter()
+            .enumerate()
+            .filter_map(|(shape, order)| match shapes[shape] {
+                ShapeRef::Mesh { mesh, .. } => Some((mesh as usize, order)),
+                _ => None,
+            })
+            .map(|(mesh, order)| (mesh, Arc::new(meshes[mesh].reordered(&order)), order))
+            .collect();
+        for (mesh, m, order) in reordered {
+            (meshes[mesh], ids[mesh]) = (m, order);
         }
         if !self.block_meshes.is_empty() {
             let mut blocks = LeafBlocks::default();
@@ -427,41 +449,42 @@ impl Geometry {
         for blas in std::iter::once(&mut world).chain(objects.iter_mut()) {
             blas.localize(&mut set.meshes, &mut triangle_ids);
         }
-        for m in &set.meshes {
+        // Collapsing pages into huge ones copies them: on all threads.
+        set.meshes.par_iter().for_each(|m| {
             hugepages::advise(&m.p);
             hugepages::advise(&m.indices);
-        }
+        });
         for blas in std::iter::once(&world).chain(objects.iter()) {
-            blas.bvh.advise_huge_pages();
-            blas.blocks.advise_huge_pages();
+            rayon::join(|| blas.bvh.advise_huge_pages(), || blas.blocks.advise_huge_pages());
         }
-        let mut next = scene.shapes.len() as u32;
-        let mut instances: Vec<Instance> = scene
-            .instances
-            .iter()
+        // Each instance's shapes are numbered after the world's and the instances' before.
+        let firsts: Vec<u32> = (scene.instances.iter())
+            .scan(scene.shapes.len() as u32, |next, i| {
+                let first = *next;
+                *next += objects[i.object as usize].shapes.len() as u32;
+                Some(first)
+            })
+            .collect();
+        let mut instances: Vec<Instance> = (scene.instances.par_iter().zip(firsts))
             .enumerate()
-            .map(|(k, i)| {
-                let first_shape_index = next;
-                next += objects[i.object as usize].shapes.len() as u32;
-                Instance {
-                    render_from_instance: i.world_from_instance,
-                    instance_from_render: i.world_from_instance.inverse(),
-                    object: i.object,
-                    first_shape_index,
-                    index: k as u32,
-                    motion: i.motion.clone(),
-                }
+            .map(|(k, (i, first_shape_index))| Instance {
+                render_from_instance: i.world_from_instance,
+                instance_from_render: i.world_from_instance.inverse(),
+                object: i.object,
+                first_shape_index,
+                index: k as u32,
+                motion: i.motion.clone(),
             })
             .collect();
         let bounds: Vec<Bounds3> = instances
-            .iter()
+            .par_iter()
             .map(|i| {
                 let b = objects[i.object as usize].bvh.bounds();
                 i.motion.as_ref().map_or_else(|| instance_bounds(&i.render_from_instance, b), |m| m.motion_bounds(b))
             })
             .collect();
         let (tlas, order) = Bvh::build(&bounds, |_| INSTANCE_COST);
-        instances = order.iter().map(|&k| instances[k as usize].clone()).collect();
+        instances = order.par_iter().map(|&k| instances[k as usize].clone()).collect();
         Geometry { shapes: set, instances, world, objects, tlas, triangle_ids, avx: Avx::detect() }
     }
 
