@@ -2,6 +2,7 @@
 //!
 //! ```text
 //! cargo run --release --bin pbrt-bench -- parse [--runs 5] [--dir target/bench-data] [--peers ../shared/peers]
+//! cargo run --release --bin pbrt-bench -- load [--runs 3] [--scale 1] [--dir target/bench-data/load] [--peers ../shared/peers]
 //! cargo run --release --bin pbrt-bench -- rays [--runs 5] [--dir target/bench-data] [--dump] [--sse]
 //! cargo run --release --bin pbrt-bench -- sppm [--runs 3] [SCENE.pbrt ...]
 //! cargo run --release --bin pbrt-bench -- converge [SCENE.pbrt[@half] ...] [--runs 3] ...
@@ -28,8 +29,11 @@
 //! (VmHWM) is its own, and prints the median whole-process time, MB/s and peak memory.
 //! When `--peers` holds `pbrt-v3`, it reads the same files in alternate runs (A B A B):
 //! they have no `WorldEnd`, so pbrt-v3 parses and creates the shapes, then stops.
+//! `load` times load to first pixel on a generated scene of pbrt-v4's scale, beside
+//! pbrt-v3 and pbrt-v4 (see `load.rs`).
 
 mod converge;
+mod load;
 mod stress;
 // pbrt-imgtool also reads ERRORS.csv files with it; here only drawing is used.
 #[allow(dead_code)]
@@ -71,6 +75,7 @@ fn main() -> ExitCode {
             sppm_bench(scenes, runs)
         }
         Some("converge") => converge::main(&args[2..]),
+        Some("load") => load::main(&args[2..]),
         Some("stress") => stress::main(&args[2..]),
         Some("--once") => match args.get(2) {
             Some(scene) => once(Path::new(scene)),
@@ -94,6 +99,7 @@ Commands:
   sppm      seconds per SPPM iteration and per million photons, 1 and 2 threads
   converge  error (relMSE) against wall time, ours beside pbrt-v3 and pbrt-v4
   parse     loading speed and peak memory on generated scenes, beside pbrt-v3
+  load      load to first pixel on a generated scene of pbrt-v4's scale, beside pbrt-v3 and pbrt-v4
   rays      BVH build and ray throughput on a 1M-triangle mesh
   stress    numerical stress sweeps (spawned rays, closed meshes, grazing rays, furnace)
 ";
@@ -141,6 +147,7 @@ fn help(args: &[String]) -> Option<String> {
         Some("parse") => HELP_PARSE.into(),
         Some("rays") => HELP_RAYS.into(),
         Some("converge") => converge::HELP.into(),
+        Some("load") => load::HELP.into(),
         Some("stress") => stress::HELP.into(),
         _ => HELP.into(),
     })
