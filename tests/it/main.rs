@@ -17,6 +17,7 @@ mod interfaces;
 mod interrupts;
 mod intersect;
 mod layout;
+mod load_bench;
 mod media;
 mod messages;
 mod mitsuba;
