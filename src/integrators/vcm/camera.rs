@@ -120,6 +120,24 @@ impl<'a> Vertex<'a> {
         Vertex { place, at, wo, partial, len, merges, first_diffuse, terminated, exit, guide, light_toward }
     }
 
+    /// The vertex a camera subpath arrived at, `len` edges from the camera (`history`:
+    /// how it scattered before), with the guided mixtures of both subpaths there. Not
+    /// yet ended by dispersion (the caller sets that).
+    fn arrived(
+        pass: &'a Pass,
+        place: Place,
+        at: &'a Scatterer,
+        wo: Vec3,
+        partial: Partial,
+        len: u32,
+        history: &History,
+    ) -> Vertex<'a> {
+        let merges = !history.past_diffuse_specular && !at.is_delta();
+        let (guide, light_toward) = (pass.guide_at(place.p, wo, at), light_toward(pass, &place, at, wo));
+        let (first_diffuse, terminated, exit) = (!history.diffuse, false, false);
+        Vertex { place, at, wo, partial, len, merges, first_diffuse, terminated, exit, guide, light_toward }
+    }
+
     /// f and both densities toward `wi`, the forward one the camera walk's and the
     /// reverse one a light walk's (each its guided mixture's, where it has one).
     fn eval(&self, wi: Vec3) -> crate::materials::BsdfEval {
@@ -283,27 +301,8 @@ impl Cameras<'_> {
             len += 1;
             let dist2 = (place.p - prev).length_squared() as f64;
             partial.arrive(Some(dist2), at.measure(wo, place.ng));
-            let merges = !history.past_diffuse_specular && !at.is_delta();
-            let (guide, light_toward) = (pass.guide_at(place.p, wo, &at), light_toward(pass, &place, &at, wo));
-            let (first_diffuse, exit) = (!history.diffuse, false);
-            let v = Vertex {
-                place,
-                at: &at,
-                wo,
-                partial,
-                len,
-                merges,
-                first_diffuse,
-                terminated,
-                exit,
-                guide,
-                light_toward,
-            };
-            // The importance arriving from the vertex before, which light leaving here
-            // that way would meet: not at the first vertex, where it arrives from the
-            // lens (light tracing connects there; a light subpath sent that way lands
-            // behind the camera).
-            if len > 1 && pass.records_importance_at(&at) {
+            let v = Vertex::arrived(pass, place, &at, wo, partial, len, &history);
+            if pass.records_importance_at(&at, len) {
                 out.records.importance.push(Record { p: place.p, d: wo, energy: beta.element_sum() / 3.0 });
             }
             if let Some((hit, si)) = &surf {

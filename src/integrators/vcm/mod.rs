@@ -229,10 +229,13 @@ impl Pass<'_> {
         self.training && self.guide.is_some() && guidable(at)
     }
 
-    /// Whether a camera subpath records the importance arriving at a vertex for the
-    /// light subpaths' guide.
-    pub fn records_importance_at(&self, at: &vertex::Scatterer) -> bool {
-        self.training && self.light_guide.is_some() && guidable(at)
+    /// Whether a camera subpath records the importance arriving at a vertex `len` edges
+    /// from the camera for the light subpaths' guide: the importance from the vertex
+    /// before, which light leaving here that way would meet. Not at the first vertex,
+    /// where it arrives from the lens: light tracing connects there, and a light
+    /// subpath sent that way lands behind the camera.
+    pub fn records_importance_at(&self, at: &vertex::Scatterer, len: u32) -> bool {
+        self.training && self.light_guide.is_some() && len > 1 && guidable(at)
     }
 
     /// Next-event estimation's probability of choosing light `k`.
