@@ -173,7 +173,7 @@ fn rebuild(c: &Command) -> Command {
 /// The table; `triangles`: the big meshes' triangles, for memory per million (none
 /// when only the instances are rendered).
 fn report(results: &[Runs], bytes: u64, triangles: Option<usize>) {
-    let ours = results.first().map(|r| super::median(r.1.iter().map(|x| x.0).collect()));
+    let ours = results.iter().find(|r| r.0 == "pbrt-sppm").map(|r| super::median(r.1.iter().map(|x| x.0).collect()));
     println!(
         "{:<10} {:>8} {:>7} {:>9} {:>14} {:>9}",
         "renderer", "median s", "MB/s", "peak MiB", "MiB/M triangles", "s / ours"
