@@ -91,8 +91,8 @@ pub fn main(args: &[String]) -> ExitCode {
         size.instances,
         INSTANCE_TRIANGLES
     );
-    let contenders = contenders(&dir, &peers, prefix);
-    match race(&contenders, runs, &dir) {
+    let mut contenders = contenders(&dir, &peers, prefix);
+    match race(&mut contenders, runs, &dir) {
         Ok(results) => {
             report(&results, bytes, (prefix != "instances").then_some(size.meshes * MESH_TRIANGLES));
             ExitCode::SUCCESS
@@ -132,7 +132,7 @@ fn contenders(dir: &Path, peers: &Path, prefix: &str) -> Vec<Contender> {
         found.push(Contender { name, command: c });
     }
     for c in &mut found {
-        c.command.current_dir(dir).stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped());
+        c.command.current_dir(dir).stdin(Stdio::null()).stdout(Stdio::null());
     }
     found
 }
@@ -141,33 +141,26 @@ fn contenders(dir: &Path, peers: &Path, prefix: &str) -> Vec<Contender> {
 type Runs = (&'static str, Vec<(f64, u64)>);
 
 /// Each contender's runs, alternating contenders.
-fn race(contenders: &[Contender], runs: usize, dir: &Path) -> Result<Vec<Runs>, String> {
+fn race(contenders: &mut [Contender], runs: usize, dir: &Path) -> Result<Vec<Runs>, String> {
     let mut results: Vec<_> = contenders.iter().map(|c| (c.name, Vec::new())).collect();
     for _ in 0..runs {
-        for (c, r) in contenders.iter().zip(&mut results) {
+        for (c, r) in contenders.iter_mut().zip(&mut results) {
+            // Standard error to a file: a pipe nobody reads while the child runs can
+            // fill and stall it.
+            let log = dir.join(format!("{}.stderr", c.name));
+            let file = std::fs::File::create(&log).map_err(|e| format!("{}: {e}", log.display()))?;
             let start = Instant::now();
-            let mut child = rebuild(&c.command).spawn().map_err(|e| format!("{}: {e}", c.name))?;
-            let stderr = child.stderr.take();
+            let mut child = c.command.stderr(file).spawn().map_err(|e| format!("{}: {e}", c.name))?;
             let (status, kib) = super::wait_with_peak(&mut child)?;
             let secs = start.elapsed().as_secs_f64();
             if !status.success() {
-                let text = stderr.map(std::io::read_to_string).and_then(Result::ok).unwrap_or_default();
+                let text = std::fs::read_to_string(&log).unwrap_or_default();
                 return Err(format!("{} failed in {}: {status}\n{text}", c.name, dir.display()));
             }
             r.1.push((secs, kib));
         }
     }
     Ok(results)
-}
-
-/// A copy of a command (a `Command` runs once per value).
-fn rebuild(c: &Command) -> Command {
-    let mut n = Command::new(c.get_program());
-    n.args(c.get_args()).stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped());
-    if let Some(d) = c.get_current_dir() {
-        n.current_dir(d);
-    }
-    n
 }
 
 /// The table; `triangles`: the big meshes' triangles, for memory per million (none
@@ -216,7 +209,7 @@ fn generate(dir: &Path, size: Size) -> std::io::Result<u64> {
     write_tops(dir)?;
     let bytes = std::fs::read_dir(dir)?
         .filter_map(Result::ok)
-        .filter(|e| e.file_name() != "complete")
+        .filter(|e| e.file_name() != "complete" && !e.file_name().to_string_lossy().ends_with(".stderr"))
         .filter_map(|e| e.metadata().ok())
         .map(|m| m.len())
         .sum();
