@@ -34,9 +34,10 @@ use crate::materials::MaterialDesc;
 use crate::math::animated::AnimatedTransform;
 use crate::parser::Syntax;
 use crate::parser::error::{Diagnostic, LoadError, Located};
-use crate::parser::params::ParamList;
+use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::parser::stmt::{ActiveTransform, Entity, StatementReader, Stmt, StmtKind, read_scene_bytes};
+use crate::shapes::read_ahead::ReadAhead;
 use crate::shapes::{self, Built, ShapeContext, mesh_params as mesh, plymesh};
 use crate::spectrum::transport::Colour;
 use crate::textures::TextureDesc;
@@ -168,6 +169,29 @@ struct PendingShape {
     media: media::MediaPair,
 }
 
+/// A world `plymesh` shape built at the end of the world: read before the file's
+/// version was known (how its quads are read depends on it), or with its file read
+/// ahead (`ahead`) so that the main thread goes on reading the scene meanwhile.
+struct Deferred {
+    /// Where its shapes go in `shapes`.
+    at: usize,
+    pending: PendingShape,
+    area_light: Option<u32>,
+    ahead: bool,
+}
+
+/// An `ObjectInstance` statement. Its object is found by name at the end of the
+/// world (v4 files may define it later); a million of these are common, so the name
+/// is an index and a still transform is stored once.
+struct InstanceUse {
+    /// Into `Builder::instance_names`.
+    name: u32,
+    span: Span,
+    /// The CTM at the statement, and its end transform when it moves.
+    ctm: DMat4,
+    end: Option<Box<DMat4>>,
+}
+
 struct PendingObject {
     name: String,
     span: Span,
@@ -193,15 +217,19 @@ struct Builder {
     shape_materials: Vec<MaterialRef>,
     /// Per world shape: its alpha parameters and the scope to resolve them in.
     shape_alphas: Vec<Option<(AlphaParams, Rc<Scope>)>>,
-    /// World `plymesh` shapes read before the file's version was known: where each
-    /// goes in `shapes`, and what it needs to be built at the end.
-    deferred_shapes: Vec<(usize, PendingShape, Option<u32>)>,
+    /// World `plymesh` shapes built at the end of the world, each in its place.
+    deferred_shapes: Vec<Deferred>,
+    /// PLY files being read on the thread pool meanwhile.
+    read_ahead: ReadAhead,
     meshes: Vec<crate::shapes::TriangleMesh>,
     patches: Vec<crate::shapes::PatchMesh>,
     objects: Vec<PendingObject>,
     object_names: HashMap<String, u32>,
     current_object: Option<u32>,
-    instance_uses: Vec<(String, [DMat4; 2], Span)>,
+    instance_uses: Vec<InstanceUse>,
+    /// The object names instances use, each once (`InstanceUse::name` indexes it).
+    instance_names: Vec<String>,
+    instance_name_ids: HashMap<String, u32>,
     /// Moving world shapes, each alone in an object placed by its start and end
     /// transforms (as pbrt wraps them).
     moving_shapes: Vec<(u32, [DMat4; 2])>,
@@ -274,12 +302,15 @@ impl Builder {
             shape_materials: Vec::new(),
             shape_alphas: Vec::new(),
             deferred_shapes: Vec::new(),
+            read_ahead: ReadAhead::default(),
             meshes: Vec::new(),
             patches: Vec::new(),
             objects: Vec::new(),
             object_names: HashMap::new(),
             current_object: None,
             instance_uses: Vec::new(),
+            instance_names: Vec::new(),
+            instance_name_ids: HashMap::new(),
             moving_shapes: Vec::new(),
             transform_times: [0.0, 1.0],
             first_motion: None,
@@ -309,6 +340,24 @@ impl Builder {
     }
 
     fn run(&mut self) -> Res<SceneDescription> {
+        if let Err(e) = self.read_statements() {
+            // Shapes read ahead stand before the failing statement: their errors first.
+            self.build_deferred_shapes(true)?;
+            return Err(e);
+        }
+        for (kind, _, span) in self.stack.iter().rev() {
+            let what = match kind {
+                PushKind::Attribute => "AttributeBegin",
+                PushKind::Transform => "TransformBegin",
+                PushKind::Object => "ObjectBegin",
+                PushKind::Import => continue,
+            };
+            self.warnings.push(Diagnostic::warning(*span, format!("{what} is never closed")));
+        }
+        self.finish()
+    }
+
+    fn read_statements(&mut self) -> Res<()> {
         while let Some(stmt) = self.reader.next_stmt()? {
             if matches!(stmt.kind, StmtKind::WorldEnd) {
                 self.check_placement(&stmt)?;
@@ -321,16 +370,7 @@ impl Builder {
             self.check_placement(&stmt)?;
             self.apply(stmt)?;
         }
-        for (kind, _, span) in self.stack.iter().rev() {
-            let what = match kind {
-                PushKind::Attribute => "AttributeBegin",
-                PushKind::Transform => "TransformBegin",
-                PushKind::Object => "ObjectBegin",
-                PushKind::Import => continue,
-            };
-            self.warnings.push(Diagnostic::warning(*span, format!("{what} is never closed")));
-        }
-        self.finish()
+        Ok(())
     }
 
     fn check_placement(&self, stmt: &Stmt) -> Res<()> {
@@ -568,7 +608,13 @@ impl Builder {
         if self.gs.ctm[0] != self.gs.ctm[1] {
             self.first_motion.get_or_insert(span);
         }
-        self.instance_uses.push((name, self.gs.ctm, span));
+        let next = self.instance_names.len() as u32;
+        let name = *self.instance_name_ids.entry(name).or_insert_with_key(|n| {
+            self.instance_names.push(n.clone());
+            next
+        });
+        let [ctm, end] = self.gs.ctm;
+        self.instance_uses.push(InstanceUse { name, span, ctm, end: (end != ctm).then(|| Box::new(end)) });
         Ok(())
     }
 
@@ -785,6 +831,7 @@ impl Builder {
         if self.current_object.is_none() && self.gs.ctm[0] != self.gs.ctm[1] {
             return self.moving_shape(pending, span);
         }
+        let ahead = pending.entity.name == crate::shapes::plymesh::NAME && self.read_ply_ahead(&pending.entity.params);
         match self.current_object {
             Some(obj) => {
                 if self.gs.area_light.is_some() {
@@ -797,9 +844,12 @@ impl Builder {
             }
             None => {
                 let area_light = self.gs.area_light;
-                if pending.entity.name == crate::shapes::plymesh::NAME && self.known_syntax().is_none() {
-                    // How its quads are read depends on the file's version, not known yet.
-                    self.deferred_shapes.push((self.shapes.len(), pending, area_light));
+                let unknown_quads =
+                    pending.entity.name == crate::shapes::plymesh::NAME && self.known_syntax().is_none();
+                // An emitting shape is built in turn: area lights are numbered by first use.
+                if unknown_quads || (ahead && area_light.is_none()) {
+                    let at = self.shapes.len();
+                    self.deferred_shapes.push(Deferred { at, pending, area_light, ahead: !unknown_quads });
                     return Ok(());
                 }
                 for (shape, alpha) in self.build_shape(&pending, area_light)? {
@@ -811,6 +861,19 @@ impl Builder {
             }
         }
         Ok(())
+    }
+
+    /// Starts reading a `plymesh` shape's file on the thread pool, if its name and the
+    /// file's version (how quads are read) are known; whether it started.
+    fn read_ply_ahead(&self, p: &ParamList) -> bool {
+        // The same parameter `plymesh` reads, looked at without marking it used.
+        let name = p.named("filename").filter(|f| f.ty == ParamType::String).map(|f| f.strings());
+        let (Some(syntax), Some([name])) = (self.known_syntax(), name) else {
+            return false;
+        };
+        let quads = if syntax == Syntax::V3 { plymesh::Quads::Split } else { plymesh::Quads::Patches };
+        self.read_ahead.start(self.reader.resolve_path(name), quads, &self.reader.files);
+        true
     }
 
     /// A world shape whose transform moves: alone in an object of its own, made with the
@@ -862,15 +925,25 @@ impl Builder {
         self.opts.syntax.or(self.syntax).or(self.reader.evidence.as_ref().map(|e| e.0))
     }
 
-    /// Builds the world shapes whose reading waited for the file's version, each in its
-    /// place in file order.
-    fn build_deferred_shapes(&mut self) -> Res<()> {
-        for (at, pending, area_light) in std::mem::take(&mut self.deferred_shapes).into_iter().rev() {
-            for (k, (shape, alpha)) in self.build_shape(&pending, area_light)?.into_iter().enumerate() {
-                self.shapes.insert(at + k, shape);
-                self.shape_spans.insert(at + k, pending.entity.name_span);
-                self.shape_materials.insert(at + k, pending.material.clone());
-                self.shape_alphas.insert(at + k, alpha.map(|a| (a, pending.scope.clone())));
+    /// Builds the deferred world shapes read ahead (`ahead`) or the others, each in its
+    /// place. They are built in file order, so the first error is the one reading them
+    /// in turn meets first; the ones read ahead come before the end of the world's
+    /// other checks, as their errors did when they were built at their statements.
+    fn build_deferred_shapes(&mut self, ahead: bool) -> Res<()> {
+        let (now, later) = std::mem::take(&mut self.deferred_shapes).into_iter().partition(|d| d.ahead == ahead);
+        self.deferred_shapes = later;
+        let mut built = Vec::with_capacity(now.len());
+        for d in now {
+            let shapes = self.build_shape(&d.pending, d.area_light)?;
+            built.push((d, shapes));
+        }
+        // From the last, so that each earlier place stays where it was.
+        for (d, shapes) in built.into_iter().rev() {
+            for (k, (shape, alpha)) in shapes.into_iter().enumerate() {
+                self.shapes.insert(d.at + k, shape);
+                self.shape_spans.insert(d.at + k, d.pending.entity.name_span);
+                self.shape_materials.insert(d.at + k, d.pending.material.clone());
+                self.shape_alphas.insert(d.at + k, alpha.map(|a| (a, d.pending.scope.clone())));
             }
         }
         Ok(())
@@ -888,7 +961,8 @@ impl Builder {
             _ => plymesh::Quads::Patches,
         };
         let mut warn = Vec::new();
-        let mut ctx = ShapeContext { resolve: &resolve, quads, files: &self.reader.files, warn: &mut warn };
+        let (files, ahead) = (&self.reader.files, &self.read_ahead);
+        let mut ctx = ShapeContext { resolve: &resolve, quads, files, ahead, warn: &mut warn };
         let built = shapes::read(&s.entity.name, p, at, &mut ctx);
         self.warnings.append(&mut warn);
         let Some(built) = built? else {
@@ -1114,29 +1188,15 @@ impl Builder {
     fn finish(&mut self) -> Res<SceneDescription> {
         let syntax = self.opts.syntax.or(self.reader.evidence.as_ref().map(|e| e.0)).unwrap_or(Syntax::V4);
         self.syntax = Some(syntax);
+        self.build_deferred_shapes(true)?;
         self.settle_unknown_names(syntax)?;
-        self.build_deferred_shapes()?;
+        self.build_deferred_shapes(false)?;
         self.materials[0].ty =
             if syntax == Syntax::V3 { crate::materials::matte::NAME } else { crate::materials::diffuse::NAME }.into();
-        let moving = self.moving_shapes.len();
-        let uses = self.resolve_instances()?;
+        let object_of_name = self.resolve_instances()?;
         let (mut objects, remap) = self.build_objects()?;
         let frame = self.motion_frame(syntax);
-        let named = uses.len() - moving;
-        let instances = uses
-            .into_iter()
-            .enumerate()
-            .map(|(k, (obj, [m0, m1]))| InstanceDesc {
-                object: remap[obj as usize],
-                world_from_instance: m0,
-                motion: (m0 != m1).then(|| {
-                    // pbrt-v4 interpolates an instance in rendering space, a shape from
-                    // its own space there.
-                    let inner = if k < named { frame.inverse() } else { DMat4::IDENTITY };
-                    Box::new(AnimatedTransform::framed(m0, m1, self.transform_times, frame, inner))
-                }),
-            })
-            .collect();
+        let instances = self.instances(&object_of_name, &remap, frame);
         self.resolve_world_shapes()?;
         self.drop_interface_emitters();
         let bugs = self.pbrt_bugs(syntax, &objects);
@@ -1259,22 +1319,46 @@ impl Builder {
         self.approximated.iter().map(locate).collect()
     }
 
-    /// Instances name objects that may be defined later (v4); unknown names are errors.
-    /// Moving shapes come after the instances the file names.
-    fn resolve_instances(&mut self) -> Res<Vec<(u32, [DMat4; 2])>> {
-        let uses = std::mem::take(&mut self.instance_uses);
-        let named: Vec<(u32, [DMat4; 2])> = uses
+    /// The instances the file names, then the moving world shapes' (as pbrt wraps
+    /// them), objects numbered as built (`remap`); `frame` is the motion frame.
+    fn instances(&mut self, object_of_name: &[u32], remap: &[u32], frame: DMat4) -> Vec<InstanceDesc> {
+        let times = self.transform_times;
+        // Moving world shapes come after the instances the file names.
+        let named = std::mem::take(&mut self.instance_uses)
             .into_iter()
-            .map(|(name, m, span)| {
-                let &obj = self
-                    .object_names
-                    .get(&name)
-                    .ok_or_else(|| Diagnostic::error(span, format!("object \"{name}\" is not defined")))?;
-                self.objects[obj as usize].used = true;
-                Ok((obj, m))
+            .map(|u| (object_of_name[u.name as usize], u.ctm, u.end, true));
+        let moving = std::mem::take(&mut self.moving_shapes)
+            .into_iter()
+            .map(|(obj, [m0, m1])| (obj, m0, (m0 != m1).then(|| Box::new(m1)), false));
+        named
+            .chain(moving)
+            .map(|(obj, m0, end, named)| InstanceDesc {
+                object: remap[obj as usize],
+                world_from_instance: m0,
+                motion: end.map(|m1| {
+                    // pbrt-v4 interpolates an instance in rendering space, a shape from
+                    // its own space there.
+                    let inner = if named { frame.inverse() } else { DMat4::IDENTITY };
+                    Box::new(AnimatedTransform::framed(m0, *m1, times, frame, inner))
+                }),
             })
-            .collect::<Res<_>>()?;
-        Ok(named.into_iter().chain(std::mem::take(&mut self.moving_shapes)).collect())
+            .collect()
+    }
+
+    /// The object each name instances use stands for (the last defined by that name),
+    /// by name index, and marks them used. Objects may be defined after their
+    /// instances (v4); a name never defined is an error at its first use.
+    fn resolve_instances(&mut self) -> Res<Vec<u32>> {
+        let found: Vec<Option<u32>> = self.instance_names.iter().map(|n| self.object_names.get(n).copied()).collect();
+        if let Some(u) = self.instance_uses.iter().find(|u| found[u.name as usize].is_none()) {
+            let name = &self.instance_names[u.name as usize];
+            return Err(Diagnostic::error(u.span, format!("object \"{name}\" is not defined")));
+        }
+        let objects: Vec<u32> = found.into_iter().flatten().collect();
+        for &obj in &objects {
+            self.objects[obj as usize].used = true;
+        }
+        Ok(objects)
     }
 
     /// Builds the objects that are instanced (opening their mesh files); returns them

@@ -50,6 +50,7 @@ pub mod params;
 mod pbrt_sampling;
 pub mod plymesh;
 pub mod quadric;
+pub mod read_ahead;
 pub mod sampling;
 pub mod set;
 pub mod sphere;
@@ -234,6 +235,8 @@ pub struct ShapeContext<'a> {
     /// How a PLY file's quads are read (the file's pbrt version decides).
     pub quads: plymesh::Quads,
     pub files: &'a crate::limits::Files,
+    /// PLY files already being read (see [`read_ahead`]).
+    pub ahead: &'a read_ahead::ReadAhead,
     pub warn: &'a mut Vec<Diagnostic>,
 }
 

@@ -59,7 +59,7 @@ pub struct PlyMesh {
 }
 
 /// How a file's quads are read.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Quads {
     /// Two triangles each (pbrt-v3).
     Split,
@@ -543,7 +543,7 @@ pub const NAME: &str = "plymesh";
 /// as the file's version reads them (a file of both is two shapes, as in pbrt-v4).
 pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     let (name, at, path) = super::mesh_file(ctx, NAME, p, span)?;
-    let m = load(&path, ctx.quads, ctx.files).map_err(|e| {
+    let m = ctx.ahead.take(&path, ctx.quads).unwrap_or_else(|| load(&path, ctx.quads, ctx.files)).map_err(|e| {
         // Read errors name the file already; format errors get its name first.
         Diagnostic::error(at, if e.starts_with("cannot read") { e } else { format!("{name}: {e}") })
     })?;

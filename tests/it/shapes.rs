@@ -219,6 +219,54 @@ fn v4_ply_of_triangles_and_quads_is_two_shapes_in_file_order() {
     assert!(close(split_area, 2f64.sqrt(), 1e-6), "{split_area}");
 }
 
+/// World `plymesh` files are read on the thread pool while the scene is read on, and
+/// built at the end of the world: the shapes, meshes and warnings are those of reading
+/// them in turn, and a file's error still comes before the errors of later statements
+/// and of the end of the world.
+#[test]
+fn plymesh_files_read_ahead_keep_order_and_first_errors() {
+    let tri = |z: f32, degenerate: bool| {
+        let far = if degenerate { 0 } else { 1 };
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+             element face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 {z}\n1 0 {z}\n0 {far} {z}\n\
+             3 0 1 2\n3 0 1 2\n"
+        )
+    };
+    let bad = "ply\nformat ascii 1.0\nelement vertex 3\n";
+    let (a, b) = (tri(1.0, false), tri(2.0, true));
+    let dir = crate::common::scratch("read-ahead", "order", &[("a.ply", &a), ("b.ply", &b), ("bad.ply", bad)]);
+    let load = |lines: &[&str]| {
+        let text = format!("Film \"rgb\"\nWorldBegin\n{}\n", lines.join("\n"));
+        std::fs::write(dir.join("scene.pbrt"), text).unwrap();
+        crate::common::load_file(&dir.join("scene.pbrt"))
+    };
+    let ply = |f: &str| format!("Shape \"plymesh\" \"string filename\" \"{f}.ply\"");
+    let (pa, pb, pbad) = (ply("a"), ply("b"), ply("bad"));
+    let s = load(&["Shape \"sphere\"", &pa, "Shape \"disk\"", &pb, &pa]).unwrap_or_else(|e| panic!("{e}"));
+    let r = pbrt_sppm::cli::check::report(&s, true);
+    let shapes = r["shapes"].as_array().unwrap();
+    let kinds: Vec<_> = shapes.iter().map(|s| s["kind"].clone()).collect();
+    assert_eq!(kinds, [json!("sphere"), json!("plymesh"), json!("disk"), json!("plymesh"), json!("plymesh")]);
+    let files: Vec<_> = shapes.iter().map(|s| s["params"]["filename"].clone()).collect();
+    assert_eq!(files[1..], [json!("a.ply"), Value::Null, json!("b.ply"), json!("a.ply")]);
+    // The meshes in their places: z = 1, 2, 1 (b's triangles have zero area).
+    let z = |i: usize| match &s.shapes[i].geometry {
+        pbrt_sppm::scene::Geometry::Mesh { mesh, .. } => s.meshes[*mesh as usize].p[0][2],
+        _ => panic!("shape {i} is not a mesh"),
+    };
+    assert_eq!([z(1), z(3), z(4)], [1.0, 2.0, 1.0]);
+    let degenerate: Vec<_> = s.warnings.iter().filter(|w| w.message.contains("zero area")).collect();
+    assert_eq!(degenerate.len(), 1, "{:?}", s.warnings);
+    assert_eq!(degenerate[0].line, 6, "b.ply's statement");
+    // A broken file's error, located at its statement, beats what comes after it: a
+    // bad statement, an undefined object at the end of the world, a second bad file.
+    for after in ["Bogus 1 2 3", "ObjectInstance \"nowhere\"", &pbad] {
+        let e = load(&[&pa, &pbad, "Shape \"disk\"", after]).expect_err("bad.ply").to_string();
+        assert!(e.contains("scene.pbrt:4:") && e.contains("bad.ply"), "after {after:?}: {e}");
+    }
+}
+
 /// Writes a PLY with the given format and texture-coordinate names and loads it.
 fn ply_roundtrip(format: &str, uv: (&str, &str)) -> pbrt_sppm::shapes::TriangleMesh {
     let dir = std::env::temp_dir().join(format!("pbrt-sppm-ply-{}-{format}-{}", std::process::id(), uv.0));
