@@ -239,38 +239,57 @@ impl Extent {
 }
 
 /// Per SAH bin: the summed intersection cost of its primitives and their extent.
+/// The sums are f64: exact for the costs the build is given (small multiples of
+/// powers of two), so they do not depend on the order they are added in.
 #[derive(Clone, Copy)]
 struct Bins {
-    cost: [f32; BINS],
+    cost: [f64; BINS],
     extent: [Extent; BINS],
 }
 
 impl Bins {
     const EMPTY: Bins = Bins { cost: [0.0; BINS], extent: [Extent::EMPTY; BINS] };
+    /// Nodes over more primitives than this fill two sets of bins, one from the even
+    /// primitives and one from the odd: consecutive primitives often fall in one bin,
+    /// and each would wait on the other's update of it.
+    const TWO_SETS: usize = 64;
 
-    fn fill(mut self, prims: &[PrimInfo], bin_of: impl Fn(Vec4) -> usize) -> Bins {
-        for p in prims {
-            let b = bin_of(p.centroid2());
-            self.cost[b] += p.cost();
-            self.extent[b] = self.extent[b].with(p);
+    fn add(&mut self, p: &PrimInfo, b: usize) {
+        self.cost[b] += p.cost() as f64;
+        self.extent[b] = self.extent[b].with(p);
+    }
+
+    fn merge(mut self, o: &Bins) -> Bins {
+        for b in 0..BINS {
+            self.cost[b] += o.cost[b];
+            self.extent[b] = self.extent[b].union(o.extent[b]);
         }
         self
     }
 
-    /// Fills the bins from runs of `BIN_RUN` primitives, on all threads, added up in
-    /// order: the same sums whatever the number of threads.
+    fn fill(prims: &[PrimInfo], bin_of: impl Fn(Vec4) -> usize) -> Bins {
+        let (mut even, mut odd) = (Bins::EMPTY, Bins::EMPTY);
+        if prims.len() <= Bins::TWO_SETS {
+            prims.iter().for_each(|p| even.add(p, bin_of(p.centroid2())));
+            return even;
+        }
+        let mut pairs = prims.chunks_exact(2);
+        for pair in &mut pairs {
+            let (b0, b1) = (bin_of(pair[0].centroid2()), bin_of(pair[1].centroid2()));
+            even.add(&pair[0], b0);
+            odd.add(&pair[1], b1);
+        }
+        pairs.remainder().iter().for_each(|p| even.add(p, bin_of(p.centroid2())));
+        even.merge(&odd)
+    }
+
+    /// Fills the bins from runs of `BIN_RUN` primitives, on all threads.
     fn of(prims: &[PrimInfo], bin_of: impl Fn(Vec4) -> usize + Sync) -> Bins {
         if prims.len() <= BIN_RUN {
-            return Bins::EMPTY.fill(prims, bin_of);
+            return Bins::fill(prims, bin_of);
         }
-        let runs: Vec<Bins> = prims.par_chunks(BIN_RUN).map(|c| Bins::EMPTY.fill(c, &bin_of)).collect();
-        runs.iter().fold(Bins::EMPTY, |mut all, run| {
-            for b in 0..BINS {
-                all.cost[b] += run.cost[b];
-                all.extent[b] = all.extent[b].union(run.extent[b]);
-            }
-            all
-        })
+        let runs: Vec<Bins> = prims.par_chunks(BIN_RUN).map(|c| Bins::fill(c, &bin_of)).collect();
+        runs.iter().fold(Bins::EMPTY, |all, run| all.merge(run))
     }
 }
 
@@ -346,6 +365,15 @@ impl Bvh {
         collapse(&root, &mut nodes);
         nodes.shrink_to_fit();
         (Bvh { nodes, bounds: root.bounds() }, info.par_iter().map(PrimInfo::index).collect())
+    }
+
+    /// Each leaf's (first, count), in the order [`Bvh::relabel_leaves`] visits them.
+    pub fn leaves(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.nodes.iter().flat_map(|node| {
+            (0..WIDTH)
+                .filter(|&slot| node.valid & 1 << slot != 0 && node.count[slot] > 0)
+                .map(|slot| (node.child[slot] as usize, node.count[slot] as usize))
+        })
     }
 
     /// Replaces each leaf's (first, tag) by `relabel(first, count)`, for callers that
@@ -754,7 +782,9 @@ fn sah_split(
     max_leaf: usize,
 ) -> Option<Split> {
     let n = prims.len();
-    let bin_of = |c: Vec4| (((c[axis] - lo) / (hi - lo) * BINS as f32) as usize).min(BINS - 1);
+    // Through i32: the same bins (the value lies in 0..=BINS, or is NaN: 0), with a
+    // shorter conversion than to a 64-bit unsigned.
+    let bin_of = |c: Vec4| (((c[axis] - lo) / (hi - lo) * BINS as f32) as i32).min(BINS as i32 - 1) as usize;
     let bins = Bins::of(prims, bin_of);
     let area = |e: &Extent| e.bounds.bounds3().surface_area();
     // Sweep from the right for the right-hand areas, then from the left.
@@ -763,7 +793,7 @@ fn sah_split(
     let mut right_cost = [0f32; BINS];
     for i in (1..BINS).rev() {
         acc = acc.union(bins.extent[i]);
-        acc_cost += bins.cost[i];
+        acc_cost += bins.cost[i] as f32;
         right_area[i] = area(&acc);
         right_cost[i] = acc_cost;
     }
@@ -772,13 +802,13 @@ fn sah_split(
     let (mut left, mut left_cost) = (Extent::EMPTY, 0f32);
     for i in 0..BINS - 1 {
         left = left.union(bins.extent[i]);
-        left_cost += bins.cost[i];
+        left_cost += bins.cost[i] as f32;
         let split = TRAVERSAL_COST + (left_cost * area(&left) + right_cost[i + 1] * right_area[i + 1]) / total;
         if split < best_cost {
             (best, best_cost) = (i, split);
         }
     }
-    if n <= max_leaf && best_cost >= left_cost + bins.cost[BINS - 1] {
+    if n <= max_leaf && best_cost >= left_cost + bins.cost[BINS - 1] as f32 {
         return None;
     }
     let mid = partition(prims, |p| bin_of(p.centroid2()) <= best);
