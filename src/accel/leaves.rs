@@ -67,21 +67,62 @@ impl LeafBlocks {
         assert!(count <= MAX_LEAF, "a leaf block holds at most {MAX_LEAF} triangles");
         self.words.pop(); // the previous block's spare word
         let at = self.words.len() as u32;
-        let mut verts: Vec<u32> = Vec::with_capacity(3 * count);
-        let mut corner_bytes = vec![0u8; 12 * count.div_ceil(4)];
+        let (mut verts, mut vert_count) = ([0u32; 3 * MAX_LEAF], 0);
+        let mut corner_bytes = [0u8; 3 * MAX_LEAF];
         for (k, &v) in mesh.indices[3 * first..3 * (first + count)].iter().enumerate() {
-            let local = verts.iter().position(|&u| u == v).unwrap_or_else(|| {
-                verts.push(v);
-                verts.len() - 1
+            let local = verts[..vert_count].iter().position(|&u| u == v).unwrap_or_else(|| {
+                verts[vert_count] = v;
+                vert_count += 1;
+                vert_count - 1
             });
             corner_bytes[k] = local as u8;
         }
         self.words.extend([first as u32, shape]);
         // Native byte order, so that the bytes lie in memory in this order.
-        self.words.extend(corner_bytes.chunks_exact(4).map(|b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]])));
-        self.words.extend(verts.iter().flat_map(|&v| mesh.p[v as usize].map(f32::to_bits)));
+        let corner_words = corner_bytes[..12 * count.div_ceil(4)].chunks_exact(4);
+        self.words.extend(corner_words.map(|b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]])));
+        self.words.extend(verts[..vert_count].iter().flat_map(|&v| mesh.p[v as usize].map(f32::to_bits)));
         self.words.push(0);
-        (at, verts.len() as u8)
+        (at, vert_count as u8)
+    }
+
+    /// The blocks of `leaves` (mesh, shape, first, count) and each one's reference and
+    /// vertex count: the same as pushing them one after another, on all threads.
+    pub fn of_leaves(leaves: &[(&TriangleMesh, u32, usize, usize)]) -> (LeafBlocks, Vec<(u32, u8)>) {
+        use rayon::prelude::*;
+        let parts: Vec<(LeafBlocks, Vec<(u32, u8)>)> = leaves
+            .par_chunks(4096)
+            .map(|run| {
+                let mut blocks = LeafBlocks::default();
+                let refs =
+                    run.iter().map(|&(mesh, shape, first, count)| blocks.push(mesh, shape, first, count)).collect();
+                (blocks, refs)
+            })
+            .collect();
+        // Each run's words end with a spare word that the next run's first block
+        // replaces: copied to their places on all threads.
+        let lens: Vec<usize> = parts.iter().map(|p| p.0.words.len() - 1).collect();
+        let mut words = Vec::with_capacity(lens.iter().sum::<usize>() + 1);
+        words.par_extend(rayon::iter::repeat_n(0u32, lens.iter().sum::<usize>() + 1));
+        let mut rest = &mut words[..];
+        let mut places = Vec::with_capacity(parts.len());
+        for &n in &lens {
+            let place;
+            (place, rest) = std::mem::take(&mut rest).split_at_mut(n);
+            places.push(place);
+        }
+        places
+            .into_par_iter()
+            .zip(&parts)
+            .for_each(|(place, (blocks, _))| place.copy_from_slice(&blocks.words[..place.len()]));
+        let mut refs = Vec::with_capacity(leaves.len());
+        let mut base = 0;
+        for ((_, run_refs), n) in parts.into_iter().zip(lens) {
+            refs.extend(run_refs.into_iter().map(|(at, count)| (base + at, count)));
+            base += n as u32;
+        }
+        let all = LeafBlocks { words };
+        (all, refs)
     }
 
     pub fn shrink_to_fit(&mut self) {
@@ -273,6 +314,24 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Blocks made on all threads, over several runs of leaves, are the words and
+    /// references of pushing the leaves one after another.
+    #[test]
+    fn blocks_of_many_leaves_are_those_pushed_in_turn() {
+        let mesh = strip(150_000);
+        let (mut leaves, mut first) = (Vec::new(), 0);
+        while first + MAX_LEAF <= mesh.triangle_count() {
+            let count = 1 + (first * 7) % MAX_LEAF;
+            leaves.push((&mesh, (first % 5) as u32, first, count));
+            first += count;
+        }
+        assert!(leaves.len() > 2 * 4096, "several runs");
+        let mut pushed = LeafBlocks::default();
+        let refs: Vec<(u32, u8)> = leaves.iter().map(|&(m, s, f, c)| pushed.push(m, s, f, c)).collect();
+        let (all, all_refs) = LeafBlocks::of_leaves(&leaves);
+        assert!(all.words == pushed.words && all_refs == refs);
     }
 
     #[test]

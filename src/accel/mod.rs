@@ -183,25 +183,70 @@ macro_rules! with_isa {
     };
 }
 
-impl Blas {
-    fn build(shapes: Vec<ShapeRef>, set: &ShapeSet) -> Blas {
-        let (mut prims, mut bounds) = (Vec::new(), Vec::new());
-        for (i, &s) in shapes.iter().enumerate() {
-            // Zero-area primitives are left out: `localize` then drops such triangles
-            // from their mesh, and the map back to file numbers skips them.
-            let bound = |k: usize| set.prim_bounds(s, k).map(|b| (Prim { shape: i as u32, tri: k as u32 }, b));
-            let n = set.prim_count(s);
-            if n < PARALLEL_PRIMS {
-                for (q, c) in (0..n).filter_map(bound) {
-                    prims.push(q);
-                    bounds.push(c);
-                }
-            } else {
-                let (p, b): (Vec<Prim>, Vec<Bounds3>) = (0..n).into_par_iter().filter_map(bound).unzip();
-                prims.extend(p);
-                bounds.extend(b);
+/// Each primitive of `shapes` (numbered as in that list) and its box, in order, but
+/// zero-area ones, which are left out: `localize` then drops such triangles from
+/// their mesh, and the map back to file numbers skips them. On all threads, in runs
+/// of `PARALLEL_PRIMS` over shapes large and small alike: a first pass counts each
+/// run's primitives, a second writes them in their final places (temporary lists
+/// cost as much again in page faults).
+fn prim_boxes(shapes: &[ShapeRef], set: &ShapeSet) -> (Vec<Prim>, Vec<Bounds3>) {
+    // Where each shape's primitives start among all of them.
+    let starts: Vec<usize> = std::iter::once(0)
+        .chain(shapes.iter().scan(0, |n, &s| {
+            *n += set.prim_count(s);
+            Some(*n)
+        }))
+        .collect();
+    let all = starts[shapes.len()];
+    // Calls `kept` with each primitive of run `r` that has a box, in order.
+    let visit = |r: usize, kept: &mut dyn FnMut(Prim, Bounds3)| {
+        let run = r * PARALLEL_PRIMS..all.min((r + 1) * PARALLEL_PRIMS);
+        let mut shape = starts.partition_point(|&s| s <= run.start) - 1;
+        for g in run {
+            while starts[shape + 1] <= g {
+                shape += 1;
+            }
+            let k = g - starts[shape];
+            if let Some(b) = set.prim_bounds(shapes[shape], k) {
+                kept(Prim { shape: shape as u32, tri: k as u32 }, b);
             }
         }
+    };
+    let runs = all.div_ceil(PARALLEL_PRIMS);
+    let counts: Vec<usize> = (0..runs)
+        .into_par_iter()
+        .map(|r| {
+            let mut n = 0;
+            visit(r, &mut |_, _| n += 1);
+            n
+        })
+        .collect();
+    let total = counts.iter().sum();
+    // Filled on all threads first: the first touch of fresh pages is most of the cost.
+    let (mut prims, mut bounds) = (Vec::with_capacity(total), Vec::with_capacity(total));
+    prims.par_extend(rayon::iter::repeat_n(Prim { shape: 0, tri: 0 }, total));
+    bounds.par_extend(rayon::iter::repeat_n(Bounds3::default(), total));
+    let (mut p_rest, mut b_rest) = (prims.as_mut_slice(), bounds.as_mut_slice());
+    let mut slots = Vec::with_capacity(runs);
+    for &n in &counts {
+        let (p, b);
+        (p, p_rest) = std::mem::take(&mut p_rest).split_at_mut(n);
+        (b, b_rest) = std::mem::take(&mut b_rest).split_at_mut(n);
+        slots.push((p, b));
+    }
+    slots.into_par_iter().enumerate().for_each(|(r, (p, b))| {
+        let mut i = 0;
+        visit(r, &mut |q, c| {
+            (p[i], b[i]) = (q, c);
+            i += 1;
+        });
+    });
+    (prims, bounds)
+}
+
+impl Blas {
+    fn build(shapes: Vec<ShapeRef>, set: &ShapeSet) -> Blas {
+        let (prims, bounds) = prim_boxes(&shapes, set);
         let cost = |i: usize| ShapeSet::prim_cost(shapes[prims[i].shape as usize]);
         let mut block_meshes: Vec<(u32, MeshFlags)> = shapes
             .iter()
@@ -252,15 +297,18 @@ impl Blas {
             (meshes[mesh], ids[mesh]) = (m, order);
         }
         if !self.block_meshes.is_empty() {
-            let mut blocks = LeafBlocks::default();
             let (prims, block_meshes) = (&self.prims, &self.block_meshes);
             // A leaf's triangles are one mesh's (`build_grouped`), numbered one after
             // another from its first's new number.
-            self.bvh.relabel_leaves(|first, count| {
-                let Prim { shape, tri } = prims[first];
-                let mesh = &meshes[block_meshes[shape as usize].0 as usize];
-                blocks.push(mesh, shape, tri as usize, count)
-            });
+            let leaves: Vec<(&TriangleMesh, u32, usize, usize)> = (self.bvh.leaves())
+                .map(|(first, count)| {
+                    let Prim { shape, tri } = prims[first];
+                    (&*meshes[block_meshes[shape as usize].0 as usize], shape, tri as usize, count)
+                })
+                .collect();
+            let (mut blocks, refs) = LeafBlocks::of_leaves(&leaves);
+            let mut refs = refs.into_iter();
+            self.bvh.relabel_leaves(|_, _| refs.next().expect("a block for every leaf"));
             blocks.shrink_to_fit();
             (self.blocks, self.prims) = (blocks, Vec::new());
         }
