@@ -394,6 +394,17 @@ impl Bvh {
         super::hugepages::advise(&self.nodes);
     }
 
+    /// Moves the nodes to memory whose pages are huge from the first write (see
+    /// [`super::hugepages`]), copying them on all threads.
+    pub fn move_to_huge_pages(&mut self) {
+        if !super::hugepages::large(&self.nodes) {
+            return;
+        }
+        let mut home = super::hugepages::with_capacity(self.nodes.len());
+        home.par_extend(self.nodes.par_iter().copied());
+        self.nodes = home;
+    }
+
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }

@@ -3,27 +3,58 @@
 //! every step, and each TLB miss is a page walk (a two-dimensional one under a
 //! hypervisor); 2 MiB pages cut most of those walks away. Embree does the same.
 
+//!
+//! Arrays made once at their final size (leaf blocks, and BVH nodes copied there when
+//! built) are marked before they are written, so their pages are huge from the first
+//! write. Folding pages already written (`MADV_COLLAPSE`) makes the kernel copy them:
+//! 0.7 s for the 290 MB of a 12.6M-triangle scene's nodes and blocks on our test
+//! machine, against 0.1–0.3 s for writing them to fresh huge pages.
+
+const HUGE: usize = 2 << 20;
+
 /// Asks Linux to back the 2 MiB-aligned middle of `data` with huge pages now
-/// (`MADV_HUGEPAGE`, then `MADV_COLLAPSE` to fold in pages already written). Slices
-/// under 4 MiB are left alone; a kernel that declines changes nothing.
+/// (`MADV_HUGEPAGE`, then `MADV_COLLAPSE` to fold in pages already written; cheap
+/// where they are huge already). Slices under 4 MiB are left alone; a kernel that
+/// declines changes nothing.
 pub fn advise<T>(data: &[T]) {
+    madvise(data.as_ptr(), std::mem::size_of_val(data), true);
+}
+
+/// Whether `data` is large enough for huge pages to be worth it (4 MiB).
+pub fn large<T>(data: &[T]) -> bool {
+    std::mem::size_of_val(data) >= 2 * HUGE
+}
+
+/// An empty vector with room for `n` values, its pages marked to be huge ones when
+/// first written (from 4 MiB).
+pub fn with_capacity<T>(n: usize) -> Vec<T> {
+    let v = Vec::with_capacity(n);
+    madvise(v.as_ptr(), n * std::mem::size_of::<T>(), false);
+    v
+}
+
+/// `MADV_HUGEPAGE` on the 2 MiB-aligned middle of the `bytes` bytes at `start` (an
+/// allocation of the caller's), then `MADV_COLLAPSE` if `collapse`.
+fn madvise<T>(start: *const T, bytes: usize, collapse: bool) {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
-        const HUGE: usize = 2 << 20;
-        let (start, bytes) = (data.as_ptr() as usize, std::mem::size_of_val(data));
+        let start = start as usize;
         let (first, end) = (start.next_multiple_of(HUGE), (start + bytes) / HUGE * HUGE);
         if bytes >= 2 * HUGE && end > first {
             let (ptr, len) = (first as *mut libc::c_void, end - first);
-            // SAFETY: the range lies inside `data`'s allocation, which outlives the call;
-            // these advices change how the kernel backs the pages, never their contents.
+            // SAFETY: the range lies inside the caller's allocation, which outlives the
+            // call; these advices change how the kernel backs the pages, never their
+            // contents.
             unsafe {
                 libc::madvise(ptr, len, libc::MADV_HUGEPAGE);
-                libc::madvise(ptr, len, libc::MADV_COLLAPSE);
+                if collapse {
+                    libc::madvise(ptr, len, libc::MADV_COLLAPSE);
+                }
             }
         }
     }
     #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-    let _ = data;
+    let _ = (start, bytes, collapse);
 }
 
 #[cfg(test)]
@@ -38,5 +69,8 @@ mod tests {
         super::advise(&v[1..5]);
         super::advise::<u8>(&[]);
         assert!(v.iter().enumerate().all(|(i, &x)| x == value(i)));
+        let mut w = super::with_capacity(v.len());
+        w.extend_from_slice(&v);
+        assert!(w == v && w.capacity() == v.len());
     }
 }

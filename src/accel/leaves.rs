@@ -102,7 +102,7 @@ impl LeafBlocks {
         // Each run's words end with a spare word that the next run's first block
         // replaces: copied to their places on all threads.
         let lens: Vec<usize> = parts.iter().map(|p| p.0.words.len() - 1).collect();
-        let mut words = Vec::with_capacity(lens.iter().sum::<usize>() + 1);
+        let mut words = super::hugepages::with_capacity(lens.iter().sum::<usize>() + 1);
         words.par_extend(rayon::iter::repeat_n(0u32, lens.iter().sum::<usize>() + 1));
         let mut rest = &mut words[..];
         let mut places = Vec::with_capacity(parts.len());

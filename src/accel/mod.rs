@@ -259,10 +259,11 @@ impl Blas {
             block_meshes.clear();
         }
         // Leaves of one mesh each, so that a block names one mesh.
-        let (bvh, order) = match block_meshes.is_empty() {
+        let (mut bvh, order) = match block_meshes.is_empty() {
             false => Bvh::build_grouped(&bounds, |_| BLOCK_TRIANGLE_COST, leaves::MAX_LEAF, |i| prims[i].shape),
             true => Bvh::build(&bounds, cost),
         };
+        bvh.move_to_huge_pages();
         let prims = order.par_iter().map(|&i| prims[i as usize]).collect();
         Blas { bvh, prims, shapes, block_meshes, blocks: LeafBlocks::default() }
     }
@@ -497,7 +498,9 @@ impl Geometry {
         for blas in std::iter::once(&mut world).chain(objects.iter_mut()) {
             blas.localize(&mut set.meshes, &mut triangle_ids);
         }
-        // Collapsing pages into huge ones copies them: on all threads.
+        // Folding mesh pages into huge ones copies them: on all threads. Nodes and
+        // blocks were written to huge pages already; folding them again costs nothing
+        // then, and catches those the kernel could not give at the first write.
         set.meshes.par_iter().for_each(|m| {
             hugepages::advise(&m.p);
             hugepages::advise(&m.indices);
