@@ -119,6 +119,17 @@ impl Node {
         node
     }
 
+    /// This node with its child nodes' references moved on by `base` (for a subtree
+    /// written on its own and appended at `base`).
+    fn shifted(mut self, base: u32) -> Node {
+        for slot in 0..WIDTH {
+            if self.valid & 1 << slot != 0 && self.count[slot] == 0 {
+                self.child[slot] += base;
+            }
+        }
+        self
+    }
+
     /// A slot's (child, count, tag).
     #[inline(always)]
     fn slot(&self, slot: usize) -> (u32, u8, u8) {
@@ -314,7 +325,7 @@ struct Settings<'a> {
 
 enum BuildNode {
     Leaf { bounds: Bounds3, first: usize, count: usize },
-    Interior { bounds: Bounds3, children: Box<(BuildNode, BuildNode)> },
+    Interior { bounds: Bounds3, prims: usize, children: Box<(BuildNode, BuildNode)> },
 }
 
 const BINS: usize = 12;
@@ -333,13 +344,13 @@ const BIN_RUN: usize = 1 << 16;
 impl Bvh {
     /// Builds over the given boxes, primitive i costing `cost(i)` triangle tests to
     /// intersect; returns the hierarchy and the primitive order.
-    pub fn build(bounds: &[Bounds3], cost: impl Fn(usize) -> f32 + Sync) -> (Bvh, Vec<u32>) {
+    pub fn build(bounds: Vec<Bounds3>, cost: impl Fn(usize) -> f32 + Sync) -> (Bvh, Vec<u32>) {
         Bvh::build_with_max_leaf(bounds, cost, MAX_LEAF)
     }
 
     /// [`Bvh::build`] with at most `max_leaf` (at most 255) primitives per leaf.
     pub fn build_with_max_leaf(
-        bounds: &[Bounds3],
+        bounds: Vec<Bounds3>,
         cost: impl Fn(usize) -> f32 + Sync,
         max_leaf: usize,
     ) -> (Bvh, Vec<u32>) {
@@ -349,7 +360,7 @@ impl Bvh {
     /// [`Bvh::build_with_max_leaf`] whose leaves each hold primitives of one group
     /// (`group(i)`): a leaf that SAH would fill from several is split by group instead.
     pub fn build_grouped(
-        bounds: &[Bounds3],
+        bounds: Vec<Bounds3>,
         cost: impl Fn(usize) -> f32 + Sync,
         max_leaf: usize,
         group: impl Fn(usize) -> u32 + Sync,
@@ -359,6 +370,8 @@ impl Bvh {
         }
         let mut info: Vec<PrimInfo> =
             bounds.par_iter().enumerate().map(|(i, b)| PrimInfo::new(b, cost(i), i as u32)).collect();
+        // The records hold the boxes: not both at the build's peak.
+        drop(bounds);
         let settings = Settings { max_leaf: max_leaf.clamp(1, u8::MAX as usize), group: &group };
         let root = build_recursive(&mut info, 0, &settings, None);
         let mut nodes = Vec::new();
@@ -779,7 +792,7 @@ fn build_recursive(prims: &mut [PrimInfo], first: usize, settings: &Settings, kn
     } else {
         (build_recursive(left, first, settings, el), build_recursive(right, first + mid, settings, er))
     };
-    BuildNode::Interior { bounds, children: Box::new((a, b)) }
+    BuildNode::Interior { bounds, prims: n, children: Box::new((a, b)) }
 }
 
 /// Partitions by the cheapest of the bin boundaries; `None` when a leaf is cheaper.
@@ -860,37 +873,75 @@ impl BuildNode {
     }
 }
 
-/// Writes `node` (and, recursively, its subtree) as `WIDTH`-wide nodes; returns its
-/// index. A binary node's descendants, up to `WIDTH` of them, become its children,
-/// opening the largest interior child first.
-fn collapse(node: &BuildNode, nodes: &mut Vec<Node>) -> u32 {
-    let mut kids: Vec<&BuildNode> = match node {
-        BuildNode::Leaf { .. } => vec![node],
-        BuildNode::Interior { children, .. } => vec![&children.0, &children.1],
+/// A node's children in the `WIDTH`-wide tree: its binary descendants, up to `WIDTH`
+/// of them, opening the largest interior one first.
+fn wide_children(node: &BuildNode) -> ([&BuildNode; WIDTH], usize) {
+    let mut kids = [node; WIDTH];
+    let mut n = match node {
+        BuildNode::Leaf { .. } => 1,
+        BuildNode::Interior { children, .. } => {
+            (kids[0], kids[1]) = (&children.0, &children.1);
+            2
+        }
     };
-    while kids.len() < WIDTH {
-        let open = kids
+    while n < WIDTH {
+        let open = kids[..n]
             .iter()
             .enumerate()
             .filter(|(_, k)| matches!(k, BuildNode::Interior { .. }))
             .max_by(|a, b| a.1.bounds().surface_area().total_cmp(&b.1.bounds().surface_area()))
             .map(|(i, _)| i);
         let Some(i) = open else { break };
-        if let BuildNode::Interior { children, .. } = kids.remove(i) {
-            kids.push(&children.0);
-            kids.push(&children.1);
+        if let BuildNode::Interior { children, .. } = kids[i] {
+            // Removed from its place, its two children go last.
+            kids.copy_within(i + 1..n, i);
+            (kids[n - 1], kids[n]) = (&children.0, &children.1);
+            n += 1;
         }
     }
+    (kids, n)
+}
+
+/// Subtrees over this many primitives write their children's subtrees on all threads.
+const PARALLEL_COLLAPSE: usize = 1 << 18;
+
+/// Writes `node` (and, recursively, its subtree) as `WIDTH`-wide nodes in pre-order;
+/// returns its index. Below a large node the children's subtrees are written on all
+/// threads, each into a list of its own, then appended in order with their node
+/// references shifted: the same nodes as writing them one after another.
+fn collapse(node: &BuildNode, nodes: &mut Vec<Node>) -> u32 {
+    let (kids, n) = wide_children(node);
+    let kids = &kids[..n];
     let index = nodes.len();
     nodes.push(Node::new(&[]));
-    let encoded: Vec<(Bounds3, u32, u8)> = kids
-        .into_iter()
-        .map(|k| match k {
-            BuildNode::Leaf { bounds, first, count } => (*bounds, *first as u32, *count as u8),
-            BuildNode::Interior { bounds, .. } => (*bounds, collapse(k, nodes), 0),
-        })
-        .collect();
-    nodes[index] = Node::new(&encoded);
+    let leaf = |k: &BuildNode| match *k {
+        BuildNode::Leaf { bounds, first, count } => Some((bounds, first as u32, count as u8)),
+        BuildNode::Interior { .. } => None,
+    };
+    let mut encoded = [(Bounds3::default(), 0u32, 0u8); WIDTH];
+    if matches!(node, BuildNode::Interior { prims, .. } if *prims > PARALLEL_COLLAPSE) {
+        let subtrees: Vec<Vec<Node>> = kids
+            .par_iter()
+            .map(|k| {
+                let mut sub = Vec::new();
+                if leaf(k).is_none() {
+                    collapse(k, &mut sub);
+                }
+                sub
+            })
+            .collect();
+        nodes.reserve(subtrees.iter().map(Vec::len).sum());
+        for (slot, (k, sub)) in kids.iter().zip(subtrees).enumerate() {
+            let base = nodes.len() as u32;
+            nodes.extend(sub.into_iter().map(|n| n.shifted(base)));
+            encoded[slot] = leaf(k).unwrap_or((k.bounds(), base, 0));
+        }
+    } else {
+        for (slot, k) in kids.iter().enumerate() {
+            encoded[slot] = leaf(k).unwrap_or_else(|| (k.bounds(), collapse(k, nodes), 0));
+        }
+    }
+    nodes[index] = Node::new(&encoded[..n]);
     index as u32
 }
 
@@ -929,7 +980,7 @@ mod tests {
                 Bounds3::new(c, c + Vec3::new(rnd(), rnd(), rnd()))
             })
             .collect();
-        let (bvh, order) = Bvh::build(&boxes, |_| 1.0);
+        let (bvh, order) = Bvh::build(boxes.clone(), |_| 1.0);
         let sorted: Vec<Bounds3> = order.iter().map(|&i| boxes[i as usize]).collect();
         for _ in 0..500 {
             let o = Vec3::new(rnd(), rnd(), rnd()) * 100.0;
@@ -1001,7 +1052,7 @@ mod tests {
             .collect();
         let ray = Ray::new(Point3(Vec3::new(0.5, 0.5, -1.0)), Vector3(Vec3::Z));
         let tested = |cost: f32| {
-            let (bvh, _) = Bvh::build(&boxes, |_| cost);
+            let (bvh, _) = Bvh::build(boxes.clone(), |_| cost);
             let mut n = 0;
             bvh.intersect_p(&ray, f32::INFINITY, |_, _| {
                 n += 1;
@@ -1096,7 +1147,7 @@ mod tests {
                 Bounds3::new(Vec3::new(x, -0.5, -0.5), Vec3::new(1.01 * x, 0.5, 0.5))
             })
             .collect();
-        let (bvh, order) = Bvh::build(&boxes, |_| 1.0);
+        let (bvh, order) = Bvh::build(boxes.clone(), |_| 1.0);
         let sorted: Vec<Bounds3> = order.iter().map(|&i| boxes[i as usize]).collect();
         for (o, d) in [(Vec3::new(-1.0, 0.1, 0.0), Vec3::X), (Vec3::new(1e38, 0.0, 0.2), -Vec3::X)] {
             let (ray, entry) = (Ray::new(Point3(o), Vector3(d)), box_entry(o, d));
@@ -1128,7 +1179,7 @@ mod tests {
                 Bounds3::new(c, c + Vec3::splat(0.9))
             })
             .collect();
-        let (mut bvh, _) = Bvh::build_with_max_leaf(&boxes, |_| 0.5, 16);
+        let (mut bvh, _) = Bvh::build_with_max_leaf(boxes.clone(), |_| 0.5, 16);
         let mut covered = vec![0; boxes.len()];
         let mut leaves = Vec::new();
         bvh.relabel_leaves(|first, count| {
@@ -1173,13 +1224,14 @@ mod tests {
             assert!(covered.iter().all(|&c| c == 1));
             mixed
         };
-        let (mut bvh, order) = Bvh::build_grouped(&boxes, |_| 0.5, 16, group);
+        let (mut bvh, order) = Bvh::build_grouped(boxes.clone(), |_| 0.5, 16, group);
         assert_eq!(leaves(&mut bvh, &order), 0);
-        let (mut bvh, order) = Bvh::build_with_max_leaf(&boxes, |_| 0.5, 16);
+        let (mut bvh, order) = Bvh::build_with_max_leaf(boxes.clone(), |_| 0.5, 16);
         assert!(leaves(&mut bvh, &order) > 0, "the case must mix groups without them");
     }
 
-    /// A build large enough to bin on all threads (`BIN_RUN`) and to hand extents
+    /// A build large enough to bin and collapse on all threads (`BIN_RUN`,
+    /// `PARALLEL_COLLAPSE`) and to hand extents
     /// down from the bins: every child box is exactly the union of what lies under
     /// it, and the tree is the same on one thread as on several.
     #[test]
@@ -1191,7 +1243,7 @@ mod tests {
             state ^= state << 17;
             (state >> 40) as f32 / (1u64 << 24) as f32
         };
-        let boxes: Vec<Bounds3> = (0..3 * BIN_RUN)
+        let boxes: Vec<Bounds3> = (0..PARALLEL_COLLAPSE + 3 * BIN_RUN)
             .map(|_| {
                 let c = Vec3::new(next(), next(), next()) * 100.0;
                 Bounds3::new(c, c + Vec3::new(next(), next(), next()))
@@ -1201,7 +1253,7 @@ mod tests {
         let cost = |i: usize| 1.0 + (i % 7) as f32 * 0.1;
         let on = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a thread pool");
-            pool.install(|| Bvh::build(&boxes, cost))
+            pool.install(|| Bvh::build(boxes.clone(), cost))
         };
         let (bvh, order) = on(2);
         let (one, one_order) = on(1);

@@ -260,8 +260,8 @@ impl Blas {
         }
         // Leaves of one mesh each, so that a block names one mesh.
         let (mut bvh, order) = match block_meshes.is_empty() {
-            false => Bvh::build_grouped(&bounds, |_| BLOCK_TRIANGLE_COST, leaves::MAX_LEAF, |i| prims[i].shape),
-            true => Bvh::build(&bounds, cost),
+            false => Bvh::build_grouped(bounds, |_| BLOCK_TRIANGLE_COST, leaves::MAX_LEAF, |i| prims[i].shape),
+            true => Bvh::build(bounds, cost),
         };
         bvh.move_to_huge_pages();
         let prims = order.par_iter().map(|&i| prims[i as usize]).collect();
@@ -524,8 +524,7 @@ impl Geometry {
                 i.motion.as_ref().map_or_else(|| instance_bounds(&i.world_from_instance, b), |m| m.motion_bounds(b))
             })
             .collect();
-        let (tlas, order) = Bvh::build(&bounds, |_| INSTANCE_COST);
-        drop(bounds);
+        let (tlas, order) = Bvh::build(bounds, |_| INSTANCE_COST);
         // Made in the TLAS's order at once: a copy in file order and its reordering
         // held two lists at the peak (280 MB more for a million instances).
         let instances: Vec<Instance> = order
