@@ -369,16 +369,41 @@ fn decode_exr(bytes: &[u8]) -> Res<RgbImage> {
     })
 }
 
+/// `from_srgb` of each 8-bit value as `image` converts it to f32 from `img`'s colour
+/// type (grey converts to slightly other values than colour): the values the general
+/// path gives, bit for bit. `None` for other than 8-bit grey or colour.
+fn srgb8_table(img: &image::DynamicImage) -> Option<[f32; 256]> {
+    use image::DynamicImage as D;
+    let values = || (0..=255u8).flat_map(|b| [b, b, b]);
+    let row = match img {
+        D::ImageLuma8(_) => D::ImageLuma8(image::GrayImage::from_raw(256, 1, (0..=255).collect())?),
+        D::ImageLumaA8(_) => {
+            D::ImageLumaA8(image::GrayAlphaImage::from_raw(256, 1, (0..=255).flat_map(|b| [b, 255]).collect())?)
+        }
+        D::ImageRgb8(_) => D::ImageRgb8(image::RgbImage::from_raw(256, 1, values().collect())?),
+        D::ImageRgba8(_) => {
+            D::ImageRgba8(image::RgbaImage::from_raw(256, 1, (0..=255).flat_map(|b| [b, b, b, 255]).collect())?)
+        }
+        _ => return None,
+    }
+    .to_rgb32f();
+    Some(std::array::from_fn(|b| from_srgb(row.get_pixel(b as u32, 0).0[0])))
+}
+
 pub fn read_png(path: &Path) -> Res<RgbImage> {
     let bytes = std::fs::read(path).map_err(|e| ImageError::read(path, e))?;
     decode_png(&bytes).map_err(|e| ImageError::read(path, e))
 }
 
 fn decode_png(bytes: &[u8]) -> Res<RgbImage> {
-    let img =
-        image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(ImageError::decode)?.to_rgb32f();
+    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(ImageError::decode)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
-    let pixels = img.pixels().map(|p| p.0.map(from_srgb)).collect();
+    // Eight bits a channel: 256 values, decoded once each (a power per value was a
+    // tenth of loading a scene of four 1024² textures).
+    let pixels = match srgb8_table(&img) {
+        Some(decoded) => img.to_rgb8().pixels().map(|p| p.0.map(|b| decoded[b as usize])).collect(),
+        None => img.to_rgb32f().pixels().map(|p| p.0.map(from_srgb)).collect(),
+    };
     Ok(RgbImage { width: w, height: h, pixels, bands: None, origin: (0, 0), full: (w, h), meta: ImageMeta::default() })
 }
 
@@ -391,4 +416,34 @@ pub fn stored_values(name: &str, image: Arc<RgbImage>) -> Arc<RgbImage> {
     let mut raw = (*image).clone();
     raw.pixels.iter_mut().for_each(|px| *px = px.map(to_srgb));
     Arc::new(raw)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 8-bit PNGs (colour and grey, with alpha and without) decode through the table to the bits the general
+    /// path (f32 conversion, then `from_srgb`) gives, for every value.
+    #[test]
+    fn eight_bit_pngs_decode_as_the_general_path() {
+        let colour = image::DynamicImage::ImageRgb8(image::RgbImage::from_fn(256, 3, |x, y| {
+            image::Rgb([x as u8, (x as u8).wrapping_mul(7), (y * 90) as u8])
+        }));
+        let grey = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(256, 1, |x, _| image::Luma([x as u8])));
+        // With alpha, of every value.
+        let grey_alpha = image::DynamicImage::ImageLumaA8(image::GrayAlphaImage::from_fn(256, 2, |x, y| {
+            image::LumaA([x as u8, (x as u8).wrapping_mul(3).wrapping_add(y as u8)])
+        }));
+        let colour_alpha = image::DynamicImage::ImageRgba8(image::RgbaImage::from_fn(256, 2, |x, y| {
+            image::Rgba([x as u8, 255 - x as u8, (y * 90) as u8, (x as u8).wrapping_mul(5)])
+        }));
+        for img in [colour, grey, grey_alpha, colour_alpha] {
+            let mut png = Vec::new();
+            img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).expect("encode");
+            let got = decode_png(&png).expect("decode");
+            let want: Vec<[f32; 3]> = img.to_rgb32f().pixels().map(|p| p.0.map(from_srgb)).collect();
+            let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&got.pixels), bits(&want));
+        }
+    }
 }
