@@ -831,7 +831,6 @@ impl Builder {
         if self.current_object.is_none() && self.gs.ctm[0] != self.gs.ctm[1] {
             return self.moving_shape(pending, span);
         }
-        let ahead = pending.entity.name == crate::shapes::plymesh::NAME && self.read_ply_ahead(&pending.entity.params);
         match self.current_object {
             Some(obj) => {
                 if self.gs.area_light.is_some() {
@@ -844,8 +843,11 @@ impl Builder {
             }
             None => {
                 let area_light = self.gs.area_light;
-                let unknown_quads =
-                    pending.entity.name == crate::shapes::plymesh::NAME && self.known_syntax().is_none();
+                let ply = pending.entity.name == crate::shapes::plymesh::NAME;
+                // World shapes only: an object's files are read when it is built, at
+                // the end, and only if an instance uses it.
+                let ahead = ply && self.read_ply_ahead(&pending.entity.params);
+                let unknown_quads = ply && self.known_syntax().is_none();
                 // An emitting shape is built in turn: area lights are numbered by first use.
                 if unknown_quads || (ahead && area_light.is_none()) {
                     let at = self.shapes.len();
