@@ -35,6 +35,16 @@ pub struct LeafBlocks {
     words: Vec<u32>,
 }
 
+/// A leaf's triangles: `first..first + count` of `mesh`, which is `shape` to the
+/// BVH's owner.
+#[derive(Clone, Copy)]
+pub struct LeafTriangles<'a> {
+    pub mesh: &'a TriangleMesh,
+    pub shape: u32,
+    pub first: usize,
+    pub count: usize,
+}
+
 /// One leaf's block.
 #[derive(Clone, Copy)]
 pub struct Block<'a> {
@@ -86,16 +96,15 @@ impl LeafBlocks {
         (at, vert_count as u8)
     }
 
-    /// The blocks of `leaves` (mesh, shape, first, count) and each one's reference and
-    /// vertex count: the same as pushing them one after another, on all threads.
-    pub fn of_leaves(leaves: &[(&TriangleMesh, u32, usize, usize)]) -> (LeafBlocks, Vec<(u32, u8)>) {
+    /// The blocks of `leaves` and each one's reference and vertex count: the same as
+    /// pushing them one after another, on all threads.
+    pub fn of_leaves(leaves: &[LeafTriangles]) -> (LeafBlocks, Vec<(u32, u8)>) {
         use rayon::prelude::*;
         let parts: Vec<(LeafBlocks, Vec<(u32, u8)>)> = leaves
             .par_chunks(4096)
             .map(|run| {
                 let mut blocks = LeafBlocks::default();
-                let refs =
-                    run.iter().map(|&(mesh, shape, first, count)| blocks.push(mesh, shape, first, count)).collect();
+                let refs = run.iter().map(|l| blocks.push(l.mesh, l.shape, l.first, l.count)).collect();
                 (blocks, refs)
             })
             .collect();
@@ -324,12 +333,12 @@ mod tests {
         let (mut leaves, mut first) = (Vec::new(), 0);
         while first + MAX_LEAF <= mesh.triangle_count() {
             let count = 1 + (first * 7) % MAX_LEAF;
-            leaves.push((&mesh, (first % 5) as u32, first, count));
+            leaves.push(LeafTriangles { mesh: &mesh, shape: (first % 5) as u32, first, count });
             first += count;
         }
         assert!(leaves.len() > 2 * 4096, "several runs");
         let mut pushed = LeafBlocks::default();
-        let refs: Vec<(u32, u8)> = leaves.iter().map(|&(m, s, f, c)| pushed.push(m, s, f, c)).collect();
+        let refs: Vec<(u32, u8)> = leaves.iter().map(|l| pushed.push(l.mesh, l.shape, l.first, l.count)).collect();
         let (all, all_refs) = LeafBlocks::of_leaves(&leaves);
         assert!(all.words == pushed.words && all_refs == refs);
     }

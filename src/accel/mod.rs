@@ -7,7 +7,7 @@ mod hugepages;
 mod leaves;
 
 pub use bvh::{Avx, Bvh, Isa, Leaf, Sse};
-use leaves::LeafBlocks;
+use leaves::{LeafBlocks, LeafTriangles};
 
 use crate::interaction::SurfaceInteraction;
 use crate::math::animated::AnimatedTransform;
@@ -301,10 +301,11 @@ impl Blas {
             let (prims, block_meshes) = (&self.prims, &self.block_meshes);
             // A leaf's triangles are one mesh's (`build_grouped`), numbered one after
             // another from its first's new number.
-            let leaves: Vec<(&TriangleMesh, u32, usize, usize)> = (self.bvh.leaves())
+            let leaves: Vec<LeafTriangles> = (self.bvh.leaves())
                 .map(|(first, count)| {
                     let Prim { shape, tri } = prims[first];
-                    (&*meshes[block_meshes[shape as usize].0 as usize], shape, tri as usize, count)
+                    let mesh = &*meshes[block_meshes[shape as usize].0 as usize];
+                    LeafTriangles { mesh, shape, first: tri as usize, count }
                 })
                 .collect();
             let (mut blocks, refs) = LeafBlocks::of_leaves(&leaves);
