@@ -1,10 +1,10 @@
 //! A bounding volume hierarchy: binned SAH build (parallel for large subtrees, and the
 //! bins of large nodes filled on all threads), each node handed its primitives' boxes
-//! by its parent's bins; collapsed into 8-wide nodes, with closure-based closest-hit and any-hit traversal
-//! using pbrt's conservative slab test: on all eight boxes at once with AVX where the
-//! processor has AVX2 (detected at run time, as Embree does), else four at a time with
-//! SSE through glam. Both do the same operations in the same order and give the same
-//! bits; the caller picks with an [`Isa`] value.
+//! by its parent's bins; collapsed into 8-wide nodes, with closure-based closest-hit
+//! and any-hit traversal using pbrt's conservative slab test: on all eight boxes at
+//! once with AVX where the processor has AVX2 (detected at run time, as Embree does),
+//! else four at a time with SSE through glam. Both do the same operations in the same
+//! order and give the same bits; the caller picks with an [`Isa`] value.
 //!
 //! DEVIATION(pbrt): no image difference. pbrt and the issue use flat 32-byte binary nodes.
 //! Incoherent rays on large meshes wait on one dependent cache miss per node they
