@@ -27,7 +27,7 @@ pub fn limits() -> Limits {
 /// Tokenizer and statement reader: reads statements until the end or an error.
 pub fn statements(data: &[u8]) {
     let Ok(mut reader) =
-        StatementReader::new(Path::new("fuzz.pbrt"), data.to_vec(), crate::limits::Files::new(limits()))
+        StatementReader::new(Path::new("fuzz.pbrt"), data.to_vec().into(), crate::limits::Files::new(limits()))
     else {
         return;
     };

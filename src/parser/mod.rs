@@ -1,9 +1,11 @@
 //! From bytes to statements: [`source`] (files, spans), [`lexer`] (tokens),
-//! [`params`] (typed parameter lists), [`stmt`] (directives over a file stack),
+//! [`params`] (typed parameter lists), [`numbers`] (floats, integers, long lists),
+//! [`stmt`] (directives over a file stack),
 //! [`error`] (located diagnostics).
 
 pub mod error;
 pub mod lexer;
+pub mod numbers;
 pub mod params;
 pub mod source;
 pub mod stmt;

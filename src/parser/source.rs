@@ -7,6 +7,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
+use crate::limits::FileBytes;
+
 /// Index of a file in a [`SourceMap`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub struct FileId(pub u32);
@@ -38,7 +40,8 @@ pub struct SourceFile {
     pub path: PathBuf,
     /// The name used in messages: the path as the user or the scene wrote it.
     pub name: String,
-    pub text: Arc<[u8]>,
+    /// Shared with the reader's frame (adding a file does not copy it).
+    pub text: Arc<FileBytes>,
     line_starts: OnceLock<Vec<u32>>,
 }
 
@@ -64,12 +67,17 @@ pub struct SourceMap {
 
 impl SourceMap {
     /// Adds a file's bytes. Files larger than 4 GiB cannot be addressed by a span.
-    pub fn add(&mut self, path: &Path, name: String, text: Vec<u8>) -> Result<FileId, String> {
+    pub fn add(&mut self, path: &Path, name: String, text: FileBytes) -> Result<FileId, String> {
         if text.len() >= u32::MAX as usize {
             return Err(format!("{name}: file is larger than 4 GiB"));
         }
         let id = FileId(self.files.len() as u32);
-        self.files.push(SourceFile { path: path.to_path_buf(), name, text: text.into(), line_starts: OnceLock::new() });
+        self.files.push(SourceFile {
+            path: path.to_path_buf(),
+            name,
+            text: Arc::new(text),
+            line_starts: OnceLock::new(),
+        });
         Ok(id)
     }
 
@@ -127,7 +135,7 @@ mod tests {
     #[test]
     fn line_and_column_are_one_based_and_handle_crlf() {
         let mut map = SourceMap::default();
-        let Ok(id) = map.add(Path::new("a.pbrt"), "a.pbrt".into(), b"ab\r\ncd\ref\n  g".to_vec()) else {
+        let Ok(id) = map.add(Path::new("a.pbrt"), "a.pbrt".into(), b"ab\r\ncd\ref\n  g".to_vec().into()) else {
             panic!("small file rejected")
         };
         let at = |o: usize| {

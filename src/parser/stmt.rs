@@ -17,10 +17,11 @@
 
 use super::Syntax;
 use super::error::Diagnostic;
-use super::lexer::{Lexer, TokenKind, decode_string, is_space};
+use super::lexer::{Lexer, TokenKind, decode_string};
+use super::numbers::{parallel_numbers, parse_f32, parse_f64, parse_int};
 use super::params::{Param, ParamList, ParamType, Values};
 use super::source::{FileId, SourceMap, Span};
-use crate::limits::{Files, Limits};
+use crate::limits::{FileBytes, Files, Limits};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -137,7 +138,7 @@ enum FrameKind {
 
 struct Frame {
     file: FileId,
-    text: Arc<[u8]>,
+    text: Arc<FileBytes>,
     pos: usize,
     kind: FrameKind,
 }
@@ -160,13 +161,15 @@ pub struct StatementReader {
 }
 
 /// Reads a scene file's bytes within the limits, decompressing gzip and rejecting UTF-16.
-pub fn read_scene_bytes(path: &Path, files: &Files) -> Result<Vec<u8>, String> {
-    let mut bytes = files.read(path)?;
+pub fn read_scene_bytes(path: &Path, files: &Files) -> Result<FileBytes, String> {
+    let bytes = files.read(path)?;
     if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
         return Err(format!("\"{}\" is UTF-16; pbrt scene files must be ASCII or UTF-8", path.display()));
     }
     if bytes.starts_with(&[0xef, 0xbb, 0xbf]) {
+        let mut bytes = bytes.into_vec();
         bytes[..3].fill(b' '); // a UTF-8 byte-order mark: keep offsets, drop the mark
+        return Ok(bytes.into());
     }
     Ok(bytes)
 }
@@ -177,7 +180,7 @@ const V4_ONLY: [&str; 4] = ["Option", "ColorSpace", "Attribute", "Import"];
 
 impl StatementReader {
     /// Starts reading `text` as the top-level file `path` (the base for relative paths).
-    pub fn new(path: &Path, text: Vec<u8>, files: Files) -> Result<StatementReader, String> {
+    pub fn new(path: &Path, text: FileBytes, files: Files) -> Result<StatementReader, String> {
         let mut sources = SourceMap::default();
         let file = sources.add(path, path.display().to_string(), text)?;
         let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -460,7 +463,7 @@ impl StatementReader {
         }
         let path = self.resolve_path(name);
         let bytes = match self.in_memory.get(name) {
-            Some(b) => b.to_vec(),
+            Some(b) => b.to_vec().into(),
             None => read_scene_bytes(&path, &self.files).map_err(|e| Diagnostic::error(span, e))?,
         };
         let file =
@@ -678,160 +681,4 @@ pub fn resolve_relative(base: &Path, name: &str) -> PathBuf {
     }
     let joined = base.join(p);
     if !joined.exists() && p.exists() { p.to_path_buf() } else { joined }
-}
-
-/// Number lists at least this long (in bytes) are parsed in parallel pieces.
-const PARALLEL_LIST_BYTES: usize = 1 << 20;
-const PIECE_BYTES: usize = 1 << 18;
-
-/// A long list of plain numbers (`text` starts inside its brackets) parsed by pieces on
-/// all threads: the text up to the first `]` is cut at whitespace and each piece's
-/// words are parsed alone. Returns the offset of that `]`, or `None`, having pushed
-/// nothing, when any word is not a number of the list's kind (a comment, a string, a
-/// bracket, a bad number): the sequential reader then meets it and reports it.
-fn parallel_numbers(text: &[u8], values: &mut Values) -> Option<usize> {
-    use rayon::prelude::*;
-    let close = memchr::memchr(b']', text)?;
-    if close < PARALLEL_LIST_BYTES {
-        return None;
-    }
-    let pieces = pieces_at_spaces(&text[..close], PIECE_BYTES);
-    fn parse_all<T: Send>(pieces: &[&[u8]], parse: fn(&[u8]) -> Option<T>, out: &mut Vec<T>) -> Option<()> {
-        let parts: Vec<Vec<T>> = pieces.par_iter().map(|p| words(p).map(parse).collect()).collect::<Option<_>>()?;
-        out.reserve(parts.iter().map(Vec::len).sum());
-        parts.into_iter().for_each(|p| out.extend(p));
-        Some(())
-    }
-    match values {
-        Values::Floats(v) => parse_all(&pieces, parse_f32, v)?,
-        Values::Ints(v) => parse_all(&pieces, parse_int, v)?,
-        _ => return None,
-    }
-    Some(close)
-}
-
-/// `text` cut into pieces of about `size` bytes, each ending just before a whitespace
-/// byte (so no word is split).
-fn pieces_at_spaces(text: &[u8], size: usize) -> Vec<&[u8]> {
-    let mut pieces = Vec::with_capacity(text.len() / size + 1);
-    let mut rest = text;
-    while rest.len() > size {
-        let cut = rest[size..].iter().position(|&c| is_space(c)).map_or(rest.len(), |k| size + k);
-        let (piece, tail) = rest.split_at(cut);
-        pieces.push(piece);
-        rest = tail;
-    }
-    pieces.push(rest);
-    pieces
-}
-
-/// The whitespace-separated words of `text` (pbrt's whitespace: space, tab, CR, LF).
-fn words(text: &[u8]) -> impl Iterator<Item = &[u8]> {
-    text.split(|&c| is_space(c)).filter(|w| !w.is_empty())
-}
-
-/// A correctly rounded `f32`, rounded once from the decimal text.
-///
-/// Plain decimals with at most 8 significant digits and 10 fraction digits take Clinger's
-/// exact path: the digits (≤ 2²⁴) and the power of ten (≤ 10¹⁰) are both exact in `f32`,
-/// so one division rounds correctly. Everything else goes to the standard parser.
-pub fn parse_f32(b: &[u8]) -> Option<f32> {
-    fast_f32(b).or_else(|| std::str::from_utf8(b).ok()?.parse().ok())
-}
-
-fn fast_f32(b: &[u8]) -> Option<f32> {
-    const POW10: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
-    let (neg, digits) = match b.first()? {
-        b'-' => (true, &b[1..]),
-        b'+' => (false, &b[1..]),
-        _ => (false, b),
-    };
-    let (mut mantissa, mut fraction, mut seen_dot, mut any) = (0u32, 0usize, false, false);
-    for &c in digits {
-        match c {
-            b'0'..=b'9' => {
-                mantissa = mantissa.checked_mul(10)?.checked_add((c - b'0') as u32)?;
-                fraction += seen_dot as usize;
-                any = true;
-            }
-            b'.' if !seen_dot => seen_dot = true,
-            _ => return None, // exponents, inf, nan, junk: the slow path decides
-        }
-    }
-    if !any || mantissa > 1 << 24 || fraction > 10 {
-        return None;
-    }
-    let v = mantissa as f32 / POW10[fraction];
-    Some(if neg { -v } else { v })
-}
-
-pub fn parse_f64(b: &[u8]) -> Option<f64> {
-    std::str::from_utf8(b).ok()?.parse().ok()
-}
-
-/// pbrt-v4's strict integer syntax: optional sign, then digits (`None` on overflow).
-pub fn parse_int(b: &[u8]) -> Option<i32> {
-    let (neg, digits) = match b.first()? {
-        b'-' => (true, &b[1..]),
-        b'+' => (false, &b[1..]),
-        _ => (false, b),
-    };
-    if digits.is_empty() {
-        return None;
-    }
-    let mut v: i64 = 0;
-    for &c in digits {
-        if !c.is_ascii_digit() || v > i32::MAX as i64 + 1 {
-            return None;
-        }
-        v = v * 10 + (c - b'0') as i64;
-    }
-    i32::try_from(if neg { -v } else { v }).ok()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn fast_float_path_agrees_with_the_standard_parser() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
-        for _ in 0..200_000 {
-            let r = next();
-            let digits = (r % 100_000_000) as u32;
-            let places = ((r >> 32) % 12) as usize;
-            let s = format!("{digits}");
-            let text = if places < s.len() {
-                format!("{}{}.{}", if r >> 63 == 1 { "-" } else { "" }, &s[..s.len() - places], &s[s.len() - places..])
-            } else {
-                format!(".{}{s}", "0".repeat(places - s.len()))
-            };
-            let want = text.parse::<f32>().map(f32::to_bits).ok();
-            assert_eq!(parse_f32(text.as_bytes()).map(f32::to_bits), want, "{text}");
-        }
-        for t in ["5.", ".5", "-0", "+3", "1e3", "16777217", "0.00000000001", "inf", "-nan"] {
-            let (Ok(want), Some(got)) = (t.parse::<f32>(), parse_f32(t.as_bytes())) else { panic!("{t}") };
-            assert!(got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()), "{t}");
-        }
-        assert_eq!(parse_f32(b"1.2.3"), None);
-        assert_eq!(parse_f32(b"."), None);
-    }
-
-    #[test]
-    fn strict_integers() {
-        assert_eq!(parse_int(b"-2147483648"), Some(i32::MIN));
-        assert_eq!(parse_int(b"2147483647"), Some(i32::MAX));
-        assert_eq!(parse_int(b"2147483648"), None);
-        assert_eq!(parse_int(b"99999999999999999999"), None);
-        assert_eq!(parse_int(b"+7"), Some(7));
-        for bad in [&b"5.0"[..], b"", b"-", b"1e3", b"0x10"] {
-            assert_eq!(parse_int(bad), None);
-        }
-    }
 }

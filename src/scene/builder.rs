@@ -29,7 +29,7 @@ use super::options::RenderOptions;
 use super::shapes::{AlphaParams, alpha_params};
 use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped};
 use crate::imageio::RgbImage;
-use crate::limits::{Files, Limits};
+use crate::limits::{FileBytes, Files, Limits};
 use crate::materials::MaterialDesc;
 use crate::math::animated::AnimatedTransform;
 use crate::parser::Syntax;
@@ -83,10 +83,10 @@ pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<SceneDescription, L
 pub fn load_scene_from_bytes(path: &Path, bytes: Vec<u8>, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
     let files = Files::new(opts.limits);
     files.note(path, &bytes);
-    load(path, bytes, opts, files)
+    load(path, bytes.into(), opts, files)
 }
 
-fn load(path: &Path, bytes: Vec<u8>, opts: &LoadOptions, files: Files) -> Result<SceneDescription, LoadError> {
+fn load(path: &Path, bytes: FileBytes, opts: &LoadOptions, files: Files) -> Result<SceneDescription, LoadError> {
     let mut reader =
         StatementReader::new(path, bytes, files).map_err(|e| LoadError::in_file(path.display().to_string(), e))?;
     reader.in_memory = opts.in_memory.clone();

@@ -26,6 +26,7 @@ use super::MediumContext;
 use super::grid::Blackbody;
 use super::lanes::{Lanes, Sigma, sigma_t_bound};
 use super::tracking::{Field, Props, Tracked};
+use crate::limits::FileBytes;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::scene::values::{self, Range, Res};
@@ -168,7 +169,7 @@ pub fn read(p: &ParamList, ctx: &mut MediumContext) -> Res<Tracked> {
 }
 
 /// The file's bytes, where its name is written, and the name.
-fn load(p: &ParamList, ctx: &MediumContext) -> Res<(Vec<u8>, crate::parser::source::Span, String)> {
+fn load(p: &ParamList, ctx: &MediumContext) -> Res<(FileBytes, crate::parser::source::Span, String)> {
     let name = p.string("filename")?.unwrap_or_default();
     let at = values::span_of(p, "filename").unwrap_or(ctx.at);
     if name.is_empty() {

@@ -1,0 +1,359 @@
+//! The numbers of a scene file: correctly rounded floats, pbrt-v4's strict integers,
+//! and long number lists read on all threads.
+//!
+//! ```text
+//! Shape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  1 1 0 ... ]   # 50 MB of numbers
+//!     "integer indices" [ 0 1 2 ... ]
+//! ```
+//!
+//! A list of more than [`PARALLEL_LIST_BYTES`] of text is cut at whitespace into pieces;
+//! the words of each piece are counted, then parsed straight into their places in the
+//! parameter's array, both on all threads. Any word that is not a plain number of the
+//! list's kind (a comment, a string, a bracket, a bad number) hands the whole list back
+//! to the sequential reader, which reports it at its line and column.
+
+use super::lexer::is_space;
+use super::params::Values;
+use std::mem::MaybeUninit;
+
+/// Number lists at least this long (in bytes) are parsed in parallel pieces.
+const PARALLEL_LIST_BYTES: usize = 1 << 20;
+const PIECE_BYTES: usize = 1 << 18;
+
+/// A kind of number a long list holds.
+trait ListNumber: Sized + Send {
+    /// Reads one number whose text starts at `text[at]` (not whitespace) and runs to the
+    /// next whitespace byte or the end: the number and where its text ends.
+    fn scan(text: &[u8], at: usize) -> Option<(Self, usize)>;
+}
+
+impl ListNumber for f32 {
+    fn scan(text: &[u8], at: usize) -> Option<(f32, usize)> {
+        match fast_f32(text, at) {
+            Ok(read) => Some(read),
+            Err(end) => Some((parse_f32(&text[at..end])?, end)),
+        }
+    }
+}
+
+impl ListNumber for i32 {
+    fn scan(text: &[u8], at: usize) -> Option<(i32, usize)> {
+        scan_int(text, at)
+    }
+}
+
+/// A long list of plain numbers (`text` starts inside its brackets) parsed by pieces on
+/// all threads: the text up to the first `]`. Returns the offset of that `]`, or `None`,
+/// having pushed nothing, when any word is not a number of the list's kind: the
+/// sequential reader then meets it and reports it.
+pub fn parallel_numbers(text: &[u8], values: &mut Values) -> Option<usize> {
+    let close = memchr::memchr(b']', text)?;
+    if close < PARALLEL_LIST_BYTES {
+        return None;
+    }
+    let pieces = pieces_at_spaces(&text[..close], PIECE_BYTES);
+    match values {
+        Values::Floats(v) => parse_pieces(&pieces, v)?,
+        Values::Ints(v) => parse_pieces(&pieces, v)?,
+        _ => return None,
+    }
+    Some(close)
+}
+
+/// Appends the numbers of `pieces`, in order, to `out`; `None` (and `out` as it was)
+/// when a word is not a number.
+fn parse_pieces<T: ListNumber>(pieces: &[&[u8]], out: &mut Vec<T>) -> Option<()> {
+    use rayon::prelude::*;
+    let counts: Vec<usize> = pieces.par_iter().map(|p| count_words(p)).collect();
+    let total: usize = counts.iter().sum();
+    out.reserve(total);
+    let mut rest = &mut out.spare_capacity_mut()[..total];
+    let mut slots = Vec::with_capacity(pieces.len());
+    for &n in &counts {
+        let (slot, tail) = rest.split_at_mut(n);
+        slots.push(slot);
+        rest = tail;
+    }
+    pieces.par_iter().zip(slots).try_for_each(|(piece, slot)| parse_into(piece, slot))?;
+    // SAFETY: every piece returned `Some`, so each wrote its whole slot, and the slots
+    // tile the first `total` places after the vector's length.
+    unsafe { out.set_len(out.len() + total) };
+    Some(())
+}
+
+/// `text` cut into pieces of about `size` bytes, each ending just before a whitespace
+/// byte (so no word is split).
+fn pieces_at_spaces(text: &[u8], size: usize) -> Vec<&[u8]> {
+    let mut pieces = Vec::with_capacity(text.len() / size + 1);
+    let mut rest = text;
+    while rest.len() > size {
+        let cut = rest[size..].iter().position(|&c| is_space(c)).map_or(rest.len(), |k| size + k);
+        let (piece, tail) = rest.split_at(cut);
+        pieces.push(piece);
+        rest = tail;
+    }
+    pieces.push(rest);
+    pieces
+}
+
+/// How many whitespace-separated words `text` holds: the non-space bytes at the start
+/// or after a space. Runs of 255 byte pairs are summed in a `u8`, which the compiler
+/// turns into vector instructions (15x faster than one sum of `usize`s here).
+fn count_words(text: &[u8]) -> usize {
+    let mut starts = !text.first().is_none_or(|&c| is_space(c)) as usize;
+    let (before, after) = (text.chunks(255), text.get(1..).unwrap_or_default().chunks(255));
+    for (before, after) in before.zip(after) {
+        let mut run = 0u8;
+        for (&a, &b) in before.iter().zip(after) {
+            run += (is_space(a) & !is_space(b)) as u8;
+        }
+        starts += run as usize;
+    }
+    starts
+}
+
+/// Parses the words of `text` into `out`, which has room for exactly as many; `None`
+/// at the first word that is not a number.
+fn parse_into<T: ListNumber>(text: &[u8], out: &mut [MaybeUninit<T>]) -> Option<()> {
+    let (mut at, mut n) = (0, 0);
+    loop {
+        while text.get(at).is_some_and(|&c| is_space(c)) {
+            at += 1;
+        }
+        if at == text.len() {
+            return (n == out.len()).then_some(());
+        }
+        let (value, end) = T::scan(text, at)?;
+        out.get_mut(n)?.write(value);
+        (n, at) = (n + 1, end);
+    }
+}
+
+/// The decimal digit at `text[i]`, or 10 for anything else (and past the end).
+fn digit(text: &[u8], i: usize) -> u8 {
+    text.get(i).map_or(10, |c| c.wrapping_sub(b'0').min(10))
+}
+
+/// A correctly rounded `f32`, rounded once from the decimal text.
+pub fn parse_f32(b: &[u8]) -> Option<f32> {
+    match fast_f32(b, 0) {
+        Ok((v, _)) => Some(v),
+        Err(_) => std::str::from_utf8(b).ok()?.parse().ok(),
+    }
+}
+
+/// Plain decimals with at most 8 significant digits and 10 fraction digits take
+/// Clinger's exact path: the digits (≤ 2²⁴) and the power of ten (≤ 10¹⁰) are both
+/// exact in `f32`, so one division rounds correctly. Everything else (exponents, `inf`,
+/// more digits, junk) is `Err` with the end of the word, for the standard parser.
+fn fast_f32(text: &[u8], at: usize) -> Result<(f32, usize), usize> {
+    const POW10: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
+    let neg = text.get(at) == Some(&b'-');
+    let from = at + matches!(text.get(at), Some(b'-' | b'+')) as usize;
+    let mut mantissa = 0;
+    let mut i = read_digits(text, from, &mut mantissa);
+    let (mut digits, mut fraction) = (i - from, 0);
+    if text.get(i) == Some(&b'.') {
+        let end = read_digits(text, i + 1, &mut mantissa);
+        (fraction, i) = (end - i - 1, end);
+        digits += fraction;
+    }
+    let ends = text.get(i).is_none_or(|&c| is_space(c));
+    // At most 19 digits cannot have wrapped the mantissa.
+    if ends && (1..=19).contains(&digits) && mantissa <= 1 << 24 && fraction <= 10 {
+        let v = mantissa as f32 / POW10[fraction];
+        return Ok((if neg { -v } else { v }, i));
+    }
+    Err(i + text[i..].iter().position(|&c| is_space(c)).unwrap_or(text.len() - i))
+}
+
+/// Reads the decimal digits from `text[i]` on into `mantissa` (wrapping: the caller
+/// bounds their count) and returns where they end. Eight bytes at a time where the
+/// text has them (SWAR: the digits' run length from a bit mask, their value from three
+/// multiplications), then one at a time.
+fn read_digits(text: &[u8], mut i: usize, mantissa: &mut u64) -> usize {
+    const POW10: [u64; 9] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000, 100_000_000];
+    const LANES: u64 = 0x0101_0101_0101_0101;
+    while let Some(&bytes) = text.get(i..).and_then(|t| t.first_chunk::<8>()) {
+        // Digits become 0..=9 in their bytes; anything else 10 or more.
+        let x = u64::from_le_bytes(bytes) ^ (b'0' as u64 * LANES);
+        let not_digit = (((x & (0x7f * LANES)) + (0x76 * LANES)) | x) & (0x80 * LANES);
+        let n = (not_digit.trailing_zeros() / 8) as usize;
+        if n == 0 {
+            return i;
+        }
+        // The n digits to the top bytes (the first digit is the lowest byte), zeros below.
+        let v = x << (64 - 8 * n);
+        let v = (v.wrapping_mul(10) + (v >> 8)) & 0x00ff_00ff_00ff_00ff;
+        let v = (v.wrapping_mul(100) + (v >> 16)) & 0x0000_ffff_0000_ffff;
+        let v = (v.wrapping_mul(10_000) + (v >> 32)) & 0xffff_ffff;
+        *mantissa = mantissa.wrapping_mul(POW10[n]).wrapping_add(v);
+        i += n;
+        if n < 8 {
+            return i;
+        }
+    }
+    while let d @ 0..=9 = digit(text, i) {
+        *mantissa = mantissa.wrapping_mul(10).wrapping_add(d as u64);
+        i += 1;
+    }
+    i
+}
+
+pub fn parse_f64(b: &[u8]) -> Option<f64> {
+    std::str::from_utf8(b).ok()?.parse().ok()
+}
+
+/// pbrt-v4's strict integer syntax: optional sign, then digits (`None` on overflow).
+pub fn parse_int(b: &[u8]) -> Option<i32> {
+    scan_int(b, 0).map(|(v, _)| v)
+}
+
+fn scan_int(text: &[u8], at: usize) -> Option<(i32, usize)> {
+    let neg = text.get(at) == Some(&b'-');
+    let from = at + matches!(text.get(at), Some(b'-' | b'+')) as usize;
+    let mut v = 0;
+    let end = read_digits(text, from, &mut v);
+    if end == from || !text.get(end).is_none_or(|&c| is_space(c)) {
+        return None;
+    }
+    if end - from > 18 {
+        // Leading zeros, or too large: more digits than `v` holds exactly.
+        let digits = &text[from..end];
+        let first = digits.iter().position(|&c| c != b'0').unwrap_or(digits.len());
+        v = 0;
+        if digits.len() - first > 10 || read_digits(digits, first, &mut v) != digits.len() {
+            return None;
+        }
+    }
+    let v = if neg { -(v as i64) } else { v as i64 };
+    Some((i32::try_from(v).ok()?, end))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_float_path_agrees_with_the_standard_parser() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for _ in 0..200_000 {
+            let r = next();
+            let digits = (r % 100_000_000) as u32;
+            let places = ((r >> 32) % 12) as usize;
+            let s = format!("{digits}");
+            let text = if places < s.len() {
+                format!("{}{}.{}", if r >> 63 == 1 { "-" } else { "" }, &s[..s.len() - places], &s[s.len() - places..])
+            } else {
+                format!(".{}{s}", "0".repeat(places - s.len()))
+            };
+            let want = text.parse::<f32>().map(f32::to_bits).ok();
+            assert_eq!(parse_f32(text.as_bytes()).map(f32::to_bits), want, "{text}");
+        }
+        for t in ["5.", ".5", "-0", "+3", "1e3", "16777217", "0.00000000001", "inf", "-nan"] {
+            let (Ok(want), Some(got)) = (t.parse::<f32>(), parse_f32(t.as_bytes())) else { panic!("{t}") };
+            assert!(got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()), "{t}");
+        }
+        assert_eq!(parse_f32(b"1.2.3"), None);
+        assert_eq!(parse_f32(b"."), None);
+    }
+
+    #[test]
+    fn strict_integers() {
+        assert_eq!(parse_int(b"-2147483648"), Some(i32::MIN));
+        assert_eq!(parse_int(b"2147483647"), Some(i32::MAX));
+        assert_eq!(parse_int(b"2147483648"), None);
+        assert_eq!(parse_int(b"99999999999999999999"), None);
+        assert_eq!(parse_int(b"+7"), Some(7));
+        for bad in [&b"5.0"[..], b"", b"-", b"1e3", b"0x10"] {
+            assert_eq!(parse_int(bad), None);
+        }
+    }
+
+    /// Numbers in the forms real files use and the ones that take the slow paths:
+    /// short and long digit runs (over 8 and over 19 digits), leading zeros, signs,
+    /// exponents.
+    fn number_words(n: usize, ints: bool) -> Vec<String> {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        (0..n)
+            .map(|_| {
+                let r = next();
+                let digits = format!("{}", r % 10u64.pow(1 + (r >> 60) as u32 % 12));
+                let zeros = "0".repeat(((r >> 40) % 4 == 0) as usize * ((r >> 50) % 24) as usize);
+                let sign = ["", "-", "+", ""][(r >> 20) as usize % 4];
+                match (ints, (r >> 30) % 5) {
+                    (true, _) => format!("{sign}{zeros}{digits}"),
+                    (false, 0) => format!("{sign}{digits}e-{}", r % 40),
+                    (false, 1) => format!("{sign}{zeros}{digits}"),
+                    (false, _) => {
+                        let cut = (r >> 8) as usize % (digits.len() + 1);
+                        format!("{sign}{zeros}{}.{}", &digits[..cut], &digits[cut..])
+                    }
+                }
+            })
+            .collect()
+    }
+
+    /// The words joined by varied whitespace, past the parallel reader's threshold.
+    fn long_list(words: &[String]) -> String {
+        let spaces = [" ", "\n", "\t ", "\r\n", "   "];
+        let mut text: String = words.iter().enumerate().map(|(k, w)| format!("{w}{}", spaces[k % 5])).collect();
+        assert!(text.len() > PARALLEL_LIST_BYTES, "the list must take the parallel path");
+        text.push(']');
+        text
+    }
+
+    #[test]
+    fn long_lists_read_in_parallel_match_the_standard_parsers_word_by_word() {
+        let floats = number_words(200_000, false);
+        let mut values = Values::Floats(Vec::new());
+        let text = long_list(&floats);
+        assert_eq!(parallel_numbers(text.as_bytes(), &mut values), Some(text.len() - 1));
+        let Values::Floats(got) = values else { unreachable!() };
+        let want: Vec<u32> = floats.iter().map(|w| w.parse::<f32>().unwrap().to_bits()).collect();
+        assert_eq!(got.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), want);
+
+        // Integers that fit, and a list whose one word overflows (left to the reader).
+        let ints: Vec<String> = number_words(300_000, true).into_iter().filter(|w| w.parse::<i32>().is_ok()).collect();
+        let mut values = Values::Ints(vec![7]);
+        let text = long_list(&ints);
+        assert_eq!(parallel_numbers(text.as_bytes(), &mut values), Some(text.len() - 1));
+        let Values::Ints(got) = values else { unreachable!() };
+        let want: Vec<i32> = std::iter::once(7).chain(ints.iter().map(|w| w.parse().unwrap())).collect();
+        assert_eq!(got, want);
+    }
+
+    #[test]
+    fn a_word_that_is_not_a_number_leaves_a_long_list_untouched() {
+        for (bad, ints) in [("1.5x", false), ("#", false), ("\"a\"", false), ("5.0", true), ("2147483648", true)] {
+            let mut words: Vec<String> =
+                number_words(250_000, true).into_iter().filter(|w| w.parse::<i32>().is_ok()).collect();
+            words[123_456] = bad.to_string();
+            let mut values = if ints { Values::Ints(Vec::new()) } else { Values::Floats(Vec::new()) };
+            assert_eq!(parallel_numbers(long_list(&words).as_bytes(), &mut values), None, "{bad}");
+            assert_eq!(values.len(), 0, "{bad}");
+        }
+    }
+
+    #[test]
+    fn words_are_counted_across_runs_and_edges() {
+        for n in [0, 1, 2, 254, 255, 256, 510, 511, 1000] {
+            for text in ["7".repeat(n), " ".repeat(n), "7 ".repeat(n), " 7".repeat(n), "77\t".repeat(n)] {
+                let want = text.split(|c: char| c.is_ascii_whitespace()).filter(|w| !w.is_empty()).count();
+                assert_eq!(count_words(text.as_bytes()), want, "{text:?}");
+            }
+        }
+    }
+}
