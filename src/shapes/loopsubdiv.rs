@@ -435,7 +435,7 @@ pub fn read(ctx: &mut super::ShapeContext, p: &ParamList, span: Span) -> Res<sup
     let positions = p.array("P", ParamType::Point3)?.ok_or_else(|| need("\"point3 P\""))?;
     let indices = p.array("indices", ParamType::Integer)?.ok_or_else(|| need("\"integer indices\""))?;
     let n_p = positions.values.len() / 3;
-    let indices = super::mesh_params::check_indices(indices.ints().to_vec(), n_p, indices.value_span, ctx.warn)?;
+    let indices = super::mesh_params::check_indices(indices.ints(), n_p, indices.value_span, ctx.warn)?;
     // v3 also reads "nlevels"; both default to 3.
     let levels_at = p.find("levels", &[ParamType::Integer]).or(p.find("nlevels", &[ParamType::Integer]));
     let levels = p.int("levels")?.or(p.int("nlevels")?).unwrap_or(3).max(0) as u32;

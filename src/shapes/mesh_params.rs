@@ -18,9 +18,13 @@ use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::shapes::{PatchMesh, TriangleMesh};
 use glam::{DMat3, DMat4, DVec3};
+use rayon::prelude::*;
+
+/// Arrays longer than this are copied and checked on all threads.
+const PARALLEL_VALUES: usize = 1 << 16;
 
 fn triples(v: &[f32]) -> Vec<[f32; 3]> {
-    v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+    map_values(v.as_chunks::<3>().0, |c| c)
 }
 
 /// Reads the mesh arrays of a `trianglemesh` statement.
@@ -75,9 +79,9 @@ fn points_and_indices(
         .ok_or_else(|| Diagnostic::error(span, format!("{shape} needs \"point3 P\"")))?;
     let n_p = positions.values.len() / 3;
     let indices_span = p.find("indices", &[ParamType::Integer]).map(|i| i.value_span);
-    let indices: Vec<i32> = match p.array("indices", ParamType::Integer)? {
-        Some(i) => i.ints().to_vec(),
-        None if n_p == arity => (0..arity as i32).collect(),
+    let indices = match p.array("indices", ParamType::Integer)? {
+        Some(i) => i.ints(),
+        None if n_p == arity => &[0, 1, 2, 3][..arity],
         None => {
             let face = if arity == 3 { "triangle" } else { "patch" };
             let msg = format!(
@@ -148,7 +152,7 @@ fn uvs(p: &ParamList, n_p: usize, warn: &mut Vec<Diagnostic>) -> Result<Option<V
 
 /// Drops a trailing partial triangle (warning) and rejects out-of-range indices.
 pub fn check_indices(
-    idx: Vec<i32>,
+    idx: &[i32],
     n_vertices: usize,
     span: Span,
     warn: &mut Vec<Diagnostic>,
@@ -159,25 +163,44 @@ pub fn check_indices(
 /// Drops a trailing partial face of `arity` corners (warning) and rejects out-of-range
 /// indices.
 fn check_face_indices(
-    mut idx: Vec<i32>,
+    idx: &[i32],
     arity: usize,
     n_vertices: usize,
     span: Span,
     warn: &mut Vec<Diagnostic>,
 ) -> Result<Vec<u32>, Diagnostic> {
-    if !idx.len().is_multiple_of(arity) {
+    let faces = idx.len() / arity;
+    if faces * arity != idx.len() {
         let (n, extra) = (idx.len(), idx.len() % arity);
         let msg = format!("{n} vertex indices is not a multiple of {arity}; the last {extra} are ignored");
         warn.push(Diagnostic::warning(span, msg));
-        idx.truncate(idx.len() / arity * arity);
     }
-    if let Some(&bad) = idx.iter().find(|&&i| i < 0 || i as usize >= n_vertices) {
+    let idx = &idx[..faces * arity];
+    let out_of_range = |&i: &i32| i < 0 || i as usize >= n_vertices;
+    let bad = match idx.len() < PARALLEL_VALUES {
+        true => idx.iter().find(|i| out_of_range(i)),
+        false => idx.par_chunks(PARALLEL_VALUES).find_map_first(|c| c.iter().find(|i| out_of_range(i))),
+    };
+    if let Some(bad) = bad {
         return Err(Diagnostic::error(
             span,
             format!("vertex index {bad} is out of range: the mesh has {n_vertices} vertices"),
         ));
     }
-    Ok(idx.into_iter().map(|i| i as u32).collect())
+    Ok(map_values(idx, |i| i as u32))
+}
+
+/// `f` of each value, on all threads for long arrays.
+fn map_values<T: Copy + Sync, U: Send>(values: &[T], f: impl Fn(T) -> U + Sync) -> Vec<U> {
+    let mut out = Vec::with_capacity(values.len());
+    let chunk = PARALLEL_VALUES.max(values.len().div_ceil(64));
+    out.spare_capacity_mut()[..values.len()]
+        .par_chunks_mut(chunk)
+        .zip(values.par_chunks(chunk))
+        .for_each(|(o, v)| o.iter_mut().zip(v).for_each(|(o, &v)| _ = o.write(f(v))));
+    // SAFETY: the chunks of the first `len` places were each written in full.
+    unsafe { out.set_len(values.len()) };
+    out
 }
 
 /// Applies the shape's transform: points by `m`, tangents by its linear part, normals by
@@ -258,7 +281,6 @@ pub fn degenerate_patches_warning(mesh: &PatchMesh) -> Option<String> {
 
 /// One warning counting zero-area triangles, which the renderer drops.
 pub fn degenerate_warning(mesh: &TriangleMesh) -> Option<String> {
-    use rayon::prelude::*;
-    let n = (0..mesh.triangle_count()).into_par_iter().filter(|&t| mesh.is_degenerate(t)).count();
+    let n = mesh.degenerate_count();
     (n > 0).then(|| format!("{n} of {} triangles have zero area and are dropped", mesh.triangle_count()))
 }
