@@ -118,10 +118,9 @@ impl SourceMap {
 
 fn line_starts(text: &[u8]) -> Vec<u32> {
     let mut starts = vec![0u32];
-    for (i, &c) in text.iter().enumerate() {
+    for i in memchr::memchr2_iter(b'\n', b'\r', text) {
         // CR alone, LF alone and CR LF each end one line.
-        let ends_line = c == b'\n' || (c == b'\r' && text.get(i + 1) != Some(&b'\n'));
-        if ends_line {
+        if text[i] == b'\n' || text.get(i + 1) != Some(&b'\n') {
             starts.push(i as u32 + 1);
         }
     }

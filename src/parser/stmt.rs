@@ -272,13 +272,15 @@ impl StatementReader {
         Span { file: after.file, start: after.end, end: after.end }
     }
 
-    fn require(&mut self, after: Span, what: &str) -> Result<Tok, Diagnostic> {
+    /// The next token, or "premature end of file: expected {what}" (`what` is formatted
+    /// only then: this runs for every number and string of a scene).
+    fn require(&mut self, after: Span, what: impl std::fmt::Display) -> Result<Tok, Diagnostic> {
         self.next()?
             .ok_or_else(|| Diagnostic::error(self.end_span(after), format!("premature end of file: expected {what}")))
     }
 
     fn number(&mut self, after: Span, directive: &str) -> Result<(f64, Span), Diagnostic> {
-        let t = self.require(after, &format!("a number for {directive}"))?;
+        let t = self.require(after, format_args!("a number for {directive}"))?;
         let text = self.text(t.span);
         match (t.kind, parse_f64(text)) {
             (TokKind::Word, Some(v)) => Ok((v, t.span)),
@@ -312,7 +314,7 @@ impl StatementReader {
     }
 
     fn string(&mut self, after: Span, directive: &str) -> Result<(String, Span), Diagnostic> {
-        let t = self.require(after, &format!("a quoted string for {directive}"))?;
+        let t = self.require(after, format_args!("a quoted string for {directive}"))?;
         if t.kind != TokKind::Str {
             return Err(Diagnostic::error(
                 t.span,
@@ -349,13 +351,16 @@ impl StatementReader {
     fn directive(&mut self, t: Tok) -> Result<Option<StmtKind>, Diagnostic> {
         use StmtKind as K;
         let kw = t.span;
-        let word = self.word(t);
-        if V3_ONLY.contains(&word.as_str()) {
+        // The file's text is shared, so the keyword is borrowed, not copied, while the
+        // statement's reading moves the reader on. No directive is anything but ASCII.
+        let text = self.sources.file(kw.file).text.clone();
+        let word = std::str::from_utf8(&text[kw.start as usize..kw.end as usize]).unwrap_or_default();
+        if self.evidence.is_none() && V3_ONLY.contains(&word) {
             self.note_evidence(Syntax::V3, kw, format!("{word} (v3 only)"));
-        } else if V4_ONLY.contains(&word.as_str()) {
+        } else if self.evidence.is_none() && V4_ONLY.contains(&word) {
             self.note_evidence(Syntax::V4, kw, format!("{word} (v4 only)"));
         }
-        Ok(Some(match word.as_str() {
+        Ok(Some(match word {
             "Identity" => K::Identity,
             "Translate" => K::Translate(self.numbers(kw, "Translate")?),
             "Scale" => K::Scale(self.numbers(kw, "Scale")?),
@@ -397,7 +402,7 @@ impl StatementReader {
             "Texture" => self.texture(kw)?,
             "Include" => return self.include(kw, FrameKind::Include).map(|_| None),
             "Import" => K::ImportBegin(self.include(kw, FrameKind::Import)?),
-            _ => return Err(Diagnostic::error(kw, format!("unknown directive '{word}'"))),
+            _ => return Err(Diagnostic::error(kw, format!("unknown directive '{}'", self.word(t)))),
         }))
     }
 
@@ -504,7 +509,7 @@ impl StatementReader {
         if let Some(s) = evidence {
             self.note_evidence(s, decl.span, format!("parameter type \"{type_name}\""));
         }
-        let first = self.require(decl.span, &format!("a value for \"{text}\""))?;
+        let first = self.require(decl.span, format_args!("a value for \"{text}\""))?;
         let mut sink = ValueSink::new(ty);
         let value_span = match first.kind {
             TokKind::LBracket => loop {

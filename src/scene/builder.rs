@@ -407,14 +407,15 @@ impl Builder {
                 | K::ImportBegin(_)
                 | K::WorldEnd
         );
-        let word = self.reader.sources.snippet(stmt.span);
-        if options_only && self.in_world {
-            return Err(Diagnostic::error(stmt.span, format!("{word} is allowed only before WorldBegin")));
+        let misplaced = |when| {
+            let word = self.reader.sources.snippet(stmt.span);
+            Err(Diagnostic::error(stmt.span, format!("{word} is allowed only {when} WorldBegin")))
+        };
+        match (options_only && self.in_world, world_only && !self.in_world) {
+            (true, _) => misplaced("before"),
+            (_, true) => misplaced("after"),
+            _ => Ok(()),
         }
-        if world_only && !self.in_world {
-            return Err(Diagnostic::error(stmt.span, format!("{word} is allowed only after WorldBegin")));
-        }
-        Ok(())
     }
 
     pub(super) fn evidence(&mut self, directive: &str, ty: &str, span: Span) {
