@@ -95,8 +95,8 @@ impl SurfaceInteraction {
     // DEVIATION(pbrt): robustness. pbrt transforms instances in f32; the rounded matrix and its
     // rounded inverse do not compose to the identity, which lets spawned rays re-hit
     // mirrored or strongly scaled instances. Instances use f64 maps here.
-    pub fn transformed_f64(&self, m: &glam::DMat4) -> SurfaceInteraction {
-        let m3 = glam::DMat3::from_mat4(*m);
+    pub fn transformed_f64(&self, m: &glam::DAffine3) -> SurfaceInteraction {
+        let m3 = m.matrix3;
         let normal_m = m3.inverse().transpose();
         let p_i = self.p.0.as_dvec3();
         let p = m.transform_point3(p_i);

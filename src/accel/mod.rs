@@ -19,7 +19,7 @@ pub use crate::shapes::{LocalHit, ShapeRef};
 use crate::shapes::{
     MeshFlags, QuadricShape, ShapeSet, TriangleHit, TriangleMesh, WatertightRay, edge_candidates, watertight,
 };
-use glam::{DMat3, DMat4, Vec3};
+use glam::{DAffine3, DMat4, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
@@ -59,8 +59,11 @@ struct Blas {
 /// A placed object.
 #[derive(Clone, Debug)]
 pub struct Instance {
-    pub render_from_instance: DMat4,
-    pub instance_from_render: DMat4,
+    /// The maps as 3 x 4 matrices: mapping rays and hit points uses only the top three
+    /// rows of the 4 x 4 ones (the same operations, so the same bits), and a million
+    /// instances save 64 MB.
+    pub render_from_instance: DAffine3,
+    pub instance_from_render: DAffine3,
     object: u32,
     /// The `check --shapes` index of the object's first shape for this instance.
     first_shape_index: u32,
@@ -72,18 +75,18 @@ pub struct Instance {
 
 impl Instance {
     /// Instance-from-render at `time`.
-    fn instance_from_render_at(&self, time: f32) -> std::borrow::Cow<'_, DMat4> {
+    fn instance_from_render_at(&self, time: f32) -> std::borrow::Cow<'_, DAffine3> {
         match &self.motion {
             None => std::borrow::Cow::Borrowed(&self.instance_from_render),
-            Some(m) => std::borrow::Cow::Owned(m.at(time as f64).inverse()),
+            Some(m) => std::borrow::Cow::Owned(DAffine3::from_mat4(m.at(time as f64).inverse())),
         }
     }
 
     /// Render-from-instance at `time`.
-    fn render_from_instance_at(&self, time: f32) -> std::borrow::Cow<'_, DMat4> {
+    fn render_from_instance_at(&self, time: f32) -> std::borrow::Cow<'_, DAffine3> {
         match &self.motion {
             None => std::borrow::Cow::Borrowed(&self.render_from_instance),
-            Some(m) => std::borrow::Cow::Owned(m.at(time as f64)),
+            Some(m) => std::borrow::Cow::Owned(DAffine3::from_mat4(m.at(time as f64))),
         }
     }
 }
@@ -457,9 +460,9 @@ fn hit_candidates<const KX: usize, const KY: usize, const KZ: usize, const ANY: 
 /// A render-space ray in instance space: mapped in f64, rounded once to f32, and its
 /// origin moved forward by that rounding (pbrt's rule). Returns the ray and the shift
 /// `dt` (instance t + dt = render t).
-fn instance_ray(instance_from_render: &DMat4, r: &Ray) -> (Ray, f32) {
+fn instance_ray(instance_from_render: &DAffine3, r: &Ray) -> (Ray, f32) {
     let o = instance_from_render.transform_point3(r.o.0.as_dvec3());
-    let d = (DMat3::from_mat4(*instance_from_render) * r.d.0.as_dvec3()).as_vec3();
+    let d = (instance_from_render.matrix3 * r.d.0.as_dvec3()).as_vec3();
     let o32 = o.as_vec3();
     let o_err = gamma(2) * o32.abs() + (o - o32.as_dvec3()).abs().as_vec3();
     let len2 = d.length_squared();
@@ -533,8 +536,10 @@ impl Geometry {
             .map(|&k| {
                 let i = &scene.instances[k as usize];
                 Instance {
-                    render_from_instance: i.world_from_instance,
-                    instance_from_render: i.world_from_instance.inverse(),
+                    render_from_instance: DAffine3::from_mat4(i.world_from_instance),
+                    // The 4 x 4 inverse's top rows, as before (an affine inverse rounds
+                    // differently).
+                    instance_from_render: DAffine3::from_mat4(i.world_from_instance.inverse()),
                     object: i.object,
                     first_shape_index: firsts[k as usize],
                     index: k,
