@@ -171,17 +171,14 @@ fn report(results: &[Runs], bytes: u64, triangles: Option<usize>) {
         "{:<10} {:>8} {:>7} {:>9} {:>14} {:>9}",
         "renderer", "median s", "MB/s", "peak MiB", "MiB/M triangles", "s / ours"
     );
-    let triangles = triangles.map_or(f64::NAN, |t| t as f64 / 1e6);
     for (name, runs) in results {
         let mut runs = runs.clone();
         let (t, kib) = super::median_and_peak(&mut runs);
         let mib = kib as f64 / 1024.0;
         let ratio = ours.map_or(f64::NAN, |o| t / o);
-        println!(
-            "{name:<10} {t:>8.2} {:>7.0} {mib:>9.0} {:>14.1} {ratio:>9.2}",
-            bytes as f64 / 1e6 / t,
-            mib / triangles
-        );
+        // Not defined when only the instances are rendered.
+        let per_m = triangles.map_or("—".to_string(), |n| format!("{:.1}", mib / (n as f64 / 1e6)));
+        println!("{name:<10} {t:>8.2} {:>7.0} {mib:>9.0} {per_m:>14} {ratio:>9.2}", bytes as f64 / 1e6 / t);
     }
     println!("(every run: {})", results.first().map_or(0, |r| r.1.len()));
 }
