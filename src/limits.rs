@@ -191,7 +191,7 @@ const MAP_BYTES: u64 = 1 << 20;
 /// The bytes of an input file: read into memory, or mapped when large.
 ///
 /// Reading copies the page cache into fresh pages (about 30 ms for 50 MB on the 2-core
-/// test machine, a quarter of parsing a large mesh); a read-only, pre-faulted mapping
+/// test machine, as long as parsing its numbers on both cores); a read-only, pre-faulted mapping
 /// shares the cached pages (about 1.5 ms; a writable private one would copy them all
 /// when pre-faulted). Like any program that maps its input, a file cut short by
 /// another process while it is mapped ends the process (SIGBUS).
@@ -201,8 +201,8 @@ pub enum FileBytes {
 }
 
 impl FileBytes {
-    /// A private mapping of the first `len` bytes of `file`, or `None` when it is small
-    /// or cannot be mapped (the caller reads it instead).
+    /// A read-only mapping of the first `len` bytes of `file`, or `None` when it is
+    /// small or cannot be mapped (the caller reads it instead).
     fn map(file: &std::fs::File, len: u64) -> Option<FileBytes> {
         if len < MAP_BYTES || usize::try_from(len).is_err() {
             return None;

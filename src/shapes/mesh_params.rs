@@ -190,8 +190,12 @@ fn check_face_indices(
     Ok(map_values(idx, |i| i as u32))
 }
 
-/// `f` of each value, on all threads for long arrays.
+/// `f` of each value, on all threads for long arrays (a small mesh would wait longer
+/// for the pool than for its copy).
 fn map_values<T: Copy + Sync, U: Send>(values: &[T], f: impl Fn(T) -> U + Sync) -> Vec<U> {
+    if values.len() < PARALLEL_VALUES {
+        return values.iter().map(|&v| f(v)).collect();
+    }
     let mut out = Vec::with_capacity(values.len());
     let chunk = PARALLEL_VALUES.max(values.len().div_ceil(64));
     out.spare_capacity_mut()[..values.len()]

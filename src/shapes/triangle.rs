@@ -46,8 +46,11 @@ impl TriangleMesh {
     pub fn degenerate_count(&self) -> usize {
         use rayon::prelude::*;
         let corner = |i: u32| self.p[i as usize];
-        let triangles = self.indices.as_chunks::<3>().0;
-        triangles.par_chunks(1 << 14).map(|run| run.iter().filter(|t| zero_area(t.map(corner))).count()).sum()
+        let count = |run: &[[u32; 3]]| run.iter().filter(|t| zero_area(t.map(corner))).count();
+        match self.indices.as_chunks::<3>().0 {
+            small if small.len() < 1 << 14 => count(small),
+            triangles => triangles.par_chunks(1 << 14).map(count).sum(),
+        }
     }
 
     /// Σ ½‖(p1 − p0) × (p2 − p0)‖.
