@@ -10,7 +10,6 @@ pub use bvh::{Avx, Bvh, Isa, Leaf, Sse};
 use leaves::{LeafBlocks, LeafTriangles};
 
 use crate::interaction::SurfaceInteraction;
-use crate::math::animated::AnimatedTransform;
 use crate::math::float::gamma;
 use crate::math::{Bounds3, Point3, Ray, Vector3};
 use crate::scene::{Geometry as ShapeGeometry, SceneDescription, ShapeDesc};
@@ -59,35 +58,42 @@ struct Blas {
 /// A placed object.
 #[derive(Clone, Debug)]
 pub struct Instance {
-    /// The maps as 3 x 4 matrices: mapping rays and hit points uses only the top three
-    /// rows of the 4 x 4 ones (the same operations, so the same bits), and a million
-    /// instances save 64 MB.
-    pub render_from_instance: DAffine3,
-    pub instance_from_render: DAffine3,
+    /// Instance-from-render as a 3 x 4 matrix: mapping rays uses only the top three
+    /// rows of the 4 x 4 one (the same operations, so the same bits).
+    instance_from_render: DAffine3,
     object: u32,
     /// The `check --shapes` index of the object's first shape for this instance.
     first_shape_index: u32,
-    /// The instance's position among the scene's `ObjectInstance`s.
+    /// The instance's position among the scene's `ObjectInstance`s, where its
+    /// render-from-instance map and its motion are (they are not needed per ray).
     pub index: u32,
-    /// Its motion, when its transform is animated (then the maps above are its start).
-    motion: Option<Box<AnimatedTransform>>,
+    /// Whether its transform is animated (then the map above is its start).
+    moving: bool,
 }
 
-impl Instance {
-    /// Instance-from-render at `time`.
-    fn instance_from_render_at(&self, time: f32) -> std::borrow::Cow<'_, DAffine3> {
-        match &self.motion {
-            None => std::borrow::Cow::Borrowed(&self.instance_from_render),
+impl Geometry {
+    /// Instance-from-render of instance `inst` at `time`.
+    /// (Per ray and instance: the scene's record is read only for a moving one.)
+    fn instance_from_render_at<'a>(&self, inst: &'a Instance, time: f32) -> std::borrow::Cow<'a, DAffine3> {
+        let motion = if inst.moving { self.placement(inst).motion.as_deref() } else { None };
+        match motion {
+            None => std::borrow::Cow::Borrowed(&inst.instance_from_render),
             Some(m) => std::borrow::Cow::Owned(DAffine3::from_mat4(m.at(time as f64).inverse())),
         }
     }
 
-    /// Render-from-instance at `time`.
-    fn render_from_instance_at(&self, time: f32) -> std::borrow::Cow<'_, DAffine3> {
-        match &self.motion {
-            None => std::borrow::Cow::Borrowed(&self.render_from_instance),
-            Some(m) => std::borrow::Cow::Owned(DAffine3::from_mat4(m.at(time as f64))),
+    /// Render-from-instance of instance `inst` at `time`.
+    fn render_from_instance_at(&self, inst: &Instance, time: f32) -> DAffine3 {
+        let placement = self.placement(inst);
+        match &placement.motion {
+            None => DAffine3::from_mat4(placement.world_from_instance),
+            Some(m) => DAffine3::from_mat4(m.at(time as f64)),
         }
+    }
+
+    /// The scene's record of an instance.
+    fn placement(&self, inst: &Instance) -> &crate::scene::InstanceDesc {
+        &self.placements[inst.index as usize]
     }
 }
 
@@ -108,7 +114,10 @@ pub struct Hit {
 /// Everything rays can hit.
 pub struct Geometry {
     pub shapes: ShapeSet,
+    /// In the instances' BVH order.
     pub instances: Vec<Instance>,
+    /// The scene's instances (shared, not copied), in file order.
+    placements: Arc<Vec<crate::scene::InstanceDesc>>,
     world: Blas,
     objects: Vec<Blas>,
     tlas: Bvh,
@@ -536,18 +545,18 @@ impl Geometry {
             .map(|&k| {
                 let i = &scene.instances[k as usize];
                 Instance {
-                    render_from_instance: DAffine3::from_mat4(i.world_from_instance),
                     // The 4 x 4 inverse's top rows, as before (an affine inverse rounds
                     // differently).
                     instance_from_render: DAffine3::from_mat4(i.world_from_instance.inverse()),
                     object: i.object,
                     first_shape_index: firsts[k as usize],
                     index: k,
-                    motion: i.motion.clone(),
+                    moving: i.motion.is_some(),
                 }
             })
             .collect();
-        Geometry { shapes: set, instances, world, objects, tlas, triangle_ids, avx: Avx::detect() }
+        let placements = scene.instances.clone();
+        Geometry { shapes: set, instances, placements, world, objects, tlas, triangle_ids, avx: Avx::detect() }
     }
 
     /// Whether BVH traversal uses AVX2, as it does by default where the processor has it.
@@ -577,7 +586,7 @@ impl Geometry {
         }
         self.tlas.intersect(ray, t_max, |k, t_max| {
             let inst = &self.instances[k];
-            let (r, dt) = instance_ray(&inst.instance_from_render_at(ray.time), ray);
+            let (r, dt) = instance_ray(&self.instance_from_render_at(inst, ray.time), ray);
             let (t, shape, local) = self.objects[inst.object as usize].intersect(self, &r, t_max - dt)?;
             let t = t + dt;
             let shape_index = inst.first_shape_index + shape;
@@ -594,7 +603,7 @@ impl Geometry {
         }
         self.tlas.intersect_p(ray, ray.t_max, |k, t_max| {
             let inst = &self.instances[k];
-            let (r, dt) = instance_ray(&inst.instance_from_render_at(ray.time), ray);
+            let (r, dt) = instance_ray(&self.instance_from_render_at(inst, ray.time), ray);
             self.objects[inst.object as usize].intersect_p(self, &r, t_max - dt)
         })
     }
@@ -604,7 +613,7 @@ impl Geometry {
         let si = SurfaceInteraction { time: hit.time, ..self.shapes.interaction(&hit.local) };
         match hit.instance {
             Some(k) => {
-                let m = self.instances[k as usize].render_from_instance_at(hit.time);
+                let m = self.render_from_instance_at(&self.instances[k as usize], hit.time);
                 SurfaceInteraction { t: hit.t, ..si.transformed_f64(&m) }
             }
             None => si,

@@ -1234,7 +1234,7 @@ impl Builder {
             integrator: r.integrator,
             shapes: std::mem::take(&mut self.shapes),
             objects,
-            instances,
+            instances: Arc::new(instances),
             meshes: std::mem::take(&mut self.meshes).into_iter().map(Arc::new).collect(),
             patches: std::mem::take(&mut self.patches).into_iter().map(Arc::new).collect(),
             lights,

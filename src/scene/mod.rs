@@ -162,7 +162,8 @@ pub struct SceneDescription {
     /// World shapes (not inside object definitions), in creation order.
     pub shapes: Vec<ShapeDesc>,
     pub objects: Vec<ObjectDesc>,
-    pub instances: Vec<InstanceDesc>,
+    /// Shared with the accelerator, which keeps only what rays need beside it.
+    pub instances: std::sync::Arc<Vec<InstanceDesc>>,
     /// Shared with the render scene, which reads them and keeps its own reordered
     /// copies of the triangle meshes.
     pub meshes: Vec<std::sync::Arc<TriangleMesh>>,
