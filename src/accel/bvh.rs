@@ -323,9 +323,11 @@ struct Settings<'a> {
     group: &'a (dyn Fn(usize) -> u32 + Sync),
 }
 
+/// 40 bytes (32-bit counts: a build has fewer than 2³² primitives, as the nodes'
+/// references already assume); a pair of children is one heap block of 96.
 enum BuildNode {
-    Leaf { bounds: Bounds3, first: usize, count: usize },
-    Interior { bounds: Bounds3, prims: usize, children: Box<(BuildNode, BuildNode)> },
+    Leaf { bounds: Bounds3, first: u32, count: u32 },
+    Interior { bounds: Bounds3, prims: u32, children: Box<(BuildNode, BuildNode)> },
 }
 
 const BINS: usize = 12;
@@ -792,7 +794,7 @@ fn build_recursive(prims: &mut [PrimInfo], first: usize, settings: &Settings, kn
     let bounds = extent.bounds.bounds3();
     let n = prims.len();
     if n == 1 {
-        return BuildNode::Leaf { bounds, first, count: 1 };
+        return BuildNode::Leaf { bounds, first: first as u32, count: 1 };
     }
     let centroids = extent.centroids.bounds3();
     let axis = centroids.max_extent();
@@ -804,7 +806,7 @@ fn build_recursive(prims: &mut [PrimInfo], first: usize, settings: &Settings, kn
         sah_split(prims, &bounds, axis, lo, hi, settings.max_leaf)
     };
     let Some(Split { mid, extents }) = split.or_else(|| split_groups(prims, settings.group).map(Split::at)) else {
-        return BuildNode::Leaf { bounds, first, count: n };
+        return BuildNode::Leaf { bounds, first: first as u32, count: n as u32 };
     };
     let (left, right) = prims.split_at_mut(mid);
     let (el, er) = extents.map_or((None, None), |(l, r)| (Some(l), Some(r)));
@@ -813,7 +815,7 @@ fn build_recursive(prims: &mut [PrimInfo], first: usize, settings: &Settings, kn
     } else {
         (build_recursive(left, first, settings, el), build_recursive(right, first + mid, settings, er))
     };
-    BuildNode::Interior { bounds, prims: n, children: Box::new((a, b)) }
+    BuildNode::Interior { bounds, prims: n as u32, children: Box::new((a, b)) }
 }
 
 /// Partitions by the cheapest of the bin boundaries; `None` when a leaf is cheaper.
@@ -936,11 +938,11 @@ fn collapse(node: &BuildNode, nodes: &mut Vec<Node>) -> u32 {
     let index = nodes.len();
     nodes.push(Node::new(&[]));
     let leaf = |k: &BuildNode| match *k {
-        BuildNode::Leaf { bounds, first, count } => Some((bounds, first as u32, count as u8)),
+        BuildNode::Leaf { bounds, first, count } => Some((bounds, first, count as u8)),
         BuildNode::Interior { .. } => None,
     };
     let mut encoded = [(Bounds3::default(), 0u32, 0u8); WIDTH];
-    if matches!(node, BuildNode::Interior { prims, .. } if *prims > PARALLEL_COLLAPSE) {
+    if matches!(node, BuildNode::Interior { prims, .. } if *prims as usize > PARALLEL_COLLAPSE) {
         let subtrees: Vec<Vec<Node>> = kids
             .par_iter()
             .map(|k| {
