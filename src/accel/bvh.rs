@@ -334,19 +334,6 @@ const BINS: usize = 12;
 /// Builds of at least this many primitives hand their freed build tree back to the
 /// system (see [`return_freed_heap`]).
 const TRIM_PRIMS: usize = 1 << 16;
-
-/// Returns the heap's free pages to the system. A build tree is a box per interior
-/// node, about 110 bytes each from the heap; freed, they stay resident, and the large
-/// arrays made next (instances, leaf blocks) come from fresh mappings beside them. For
-/// a million instances this took 153 MB off the peak (665 to 512 MB), for the load
-/// benchmark's whole scene 132 MB (1,485 to 1,353 MB), in no measurable time.
-fn return_freed_heap() {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    // SAFETY: malloc_trim only releases pages of free chunks; it is thread-safe.
-    unsafe {
-        libc::malloc_trim(0);
-    }
-}
 /// A node visit's cost in triangle tests, for SAH. A visit is a dependent cache miss
 /// on large scenes, and a leaf's triangles are fetched together, so leaves of a few
 /// triangles pay: with 8-wide nodes this gives 18 bytes of BVH per triangle (2.0
@@ -784,6 +771,19 @@ mod avx {
         let m = _mm256_min_ps(m, _mm256_permute_ps::<0b10_11_00_01>(m));
         let at_least = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(v, m)) as u32;
         ((at_least & slots | slots << WIDTH).trailing_zeros() as usize) & (WIDTH - 1)
+    }
+}
+
+/// Returns the heap's free pages to the system. A build tree is a 96-byte heap block
+/// per interior node; freed, the blocks stay resident, and the large arrays made next
+/// (instances, leaf blocks) come from fresh mappings beside them. For a million
+/// instances this took 153 MB off the peak (665 to 512 MB), for the load benchmark's
+/// whole scene 132 MB (1,485 to 1,353 MB), in no measurable time.
+fn return_freed_heap() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only releases pages of free chunks; it is thread-safe.
+    unsafe {
+        libc::malloc_trim(0);
     }
 }
 

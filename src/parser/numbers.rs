@@ -31,7 +31,7 @@ impl ListNumber for f32 {
     fn scan(text: &[u8], at: usize) -> Option<(f32, usize)> {
         match fast_f32(text, at) {
             Ok(read) => Some(read),
-            Err(end) => Some((parse_f32(&text[at..end])?, end)),
+            Err(end) => Some((standard(&text[at..end])?, end)),
         }
     }
 }
@@ -138,8 +138,13 @@ fn digit(text: &[u8], i: usize) -> u8 {
 pub fn parse_f32(b: &[u8]) -> Option<f32> {
     match fast_f32(b, 0) {
         Ok((v, _)) => Some(v),
-        Err(_) => std::str::from_utf8(b).ok()?.parse().ok(),
+        Err(_) => standard(b),
     }
+}
+
+/// The standard library's correctly rounded parse: every form the fast paths decline.
+fn standard<T: std::str::FromStr>(b: &[u8]) -> Option<T> {
+    std::str::from_utf8(b).ok()?.parse().ok()
 }
 
 /// Plain decimals with at most 8 significant digits and 10 fraction digits take
@@ -171,7 +176,7 @@ pub fn parse_f64(b: &[u8]) -> Option<f64> {
         let v = d.mantissa as f64 / POW10[d.fraction];
         return Some(if d.neg { -v } else { v });
     }
-    std::str::from_utf8(b).ok()?.parse().ok()
+    standard(b)
 }
 
 /// The parts of a plain decimal (`-12.5`, `+.5`, `3.`) read from `text[at]` on.
