@@ -19,6 +19,7 @@ pub mod limits;
 pub mod materials;
 pub mod math;
 pub mod media;
+pub mod memory;
 pub mod mitsuba;
 pub mod parser;
 pub mod render;

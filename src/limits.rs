@@ -81,6 +81,9 @@ pub struct Limits {
     pub include_depth: u64,
     /// Triangles one `loopsubdiv` shape refines into.
     pub triangles: u64,
+    /// Bytes the scene may need at its peak ([`crate::memory`]); 0: the memory the
+    /// system has free when the load starts.
+    pub memory: u64,
 }
 
 impl Default for Limits {
@@ -94,12 +97,13 @@ impl Default for Limits {
             texture_pixels: 1 << 28,
             include_depth: 64,
             triangles: 1 << 28,
+            memory: 0,
         }
     }
 }
 
 /// Every limit: its name on the command line and what it bounds.
-pub const NAMES: [(&str, &str); 8] = [
+pub const NAMES: [(&str, &str); 9] = [
     ("pixels", "film pixels"),
     ("photons", "photons per iteration"),
     ("iterations", "SPPM iterations"),
@@ -108,6 +112,7 @@ pub const NAMES: [(&str, &str); 8] = [
     ("texture-pixels", "pixels of one texture image"),
     ("include-depth", "nested Include/Import files"),
     ("triangles", "triangles of one subdivided (loopsubdiv) shape"),
+    ("memory", "bytes the scene needs at its peak, estimated (0: what the system has free)"),
 ];
 
 impl Limits {
@@ -121,6 +126,7 @@ impl Limits {
             "texture-pixels" => &mut self.texture_pixels,
             "include-depth" => &mut self.include_depth,
             "triangles" => &mut self.triangles,
+            "memory" => &mut self.memory,
             _ => return None,
         })
     }
@@ -137,6 +143,15 @@ impl Limits {
         let slot = self.slot(name.trim()).ok_or_else(|| format!("unknown limit \"{name}\" (names: {})", names()))?;
         *slot = n as u64;
         Ok(())
+    }
+
+    /// The memory limit in bytes, and whether it is the default (the memory free now;
+    /// no limit where that cannot be read).
+    pub fn memory_bytes(&self) -> (u64, bool) {
+        match self.memory {
+            0 => (crate::memory::available().unwrap_or(u64::MAX), true),
+            n => (n, false),
+        }
     }
 
     /// `"{what} is over the limit of N (raise it with --limit NAME=N)"`.

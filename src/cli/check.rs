@@ -77,6 +77,7 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
             "seed": i.seed,
         },
         "counts": counts(scene),
+        "memory": memory(scene),
         "world_bounds": bounds(scene.world_bounds()),
         "warnings": scene.warnings,
         "skipped": scene.skipped,
@@ -103,6 +104,16 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
         out["shapes"] = Value::Array(shapes);
     }
     out
+}
+
+/// The estimated peak memory and the limit it was checked against (`null`: none).
+fn memory(scene: &SceneDescription) -> Value {
+    let (limit, free) = scene.limits.memory_bytes();
+    json!({
+        "estimate_bytes": scene.memory.bytes(),
+        "limit_bytes": (limit != u64::MAX).then_some(limit),
+        "limit_is_free_memory": free,
+    })
 }
 
 /// The film's part of the report.
@@ -275,6 +286,14 @@ pub fn summary(s: &SceneDescription) -> String {
         i.requested, i.iterations, i.max_depth, i.photons_per_iteration, i.radius
     );
     let _ = writeln!(out, "counts      {}", counts_line(s));
+    let (limit, free) = s.limits.memory_bytes();
+    let limit = match (limit, free) {
+        (u64::MAX, _) => "no limit".to_string(),
+        (l, true) => format!("{} free", crate::memory::size(l)),
+        (l, false) => format!("limit {}", crate::memory::size(l)),
+    };
+    let _ =
+        writeln!(out, "memory      about {} at the peak, estimated ({limit})", crate::memory::size(s.memory.bytes()));
     for k in &s.skipped {
         let _ = writeln!(out, "skipped     {}:{}:{}: {} ({})", k.file, k.line, k.column, k.what, k.why);
     }

@@ -21,6 +21,7 @@ pub fn limits() -> Limits {
         texture_pixels: 1 << 16,
         include_depth: 16,
         triangles: 1 << 16,
+        memory: 1 << 30,
     }
 }
 

@@ -32,6 +32,7 @@ use crate::imageio::RgbImage;
 use crate::limits::{FileBytes, Files, Limits};
 use crate::materials::MaterialDesc;
 use crate::math::animated::AnimatedTransform;
+use crate::memory::MemoryNeed;
 use crate::parser::Syntax;
 use crate::parser::error::{Diagnostic, LoadError, Located};
 use crate::parser::params::{ParamList, ParamType};
@@ -265,6 +266,9 @@ struct Builder {
     camera_media: media::MediaPair,
     /// Per pending light: the outside medium current at its statement.
     pending_light_media: Vec<Option<u32>>,
+    /// What the scene read so far will need in memory, and the limit it must stay
+    /// under (with whether that is the default, the memory free at the start).
+    memory: (MemoryNeed, (u64, bool)),
 }
 
 impl Builder {
@@ -278,7 +282,9 @@ impl Builder {
             built: None,
             building: false,
         };
+        let memory_limit = opts.limits.memory_bytes();
         Builder {
+            memory: (MemoryNeed::default(), memory_limit),
             reader,
             opts,
             gs: GraphicsState {
@@ -615,6 +621,7 @@ impl Builder {
             next
         });
         let [ctm, end] = self.gs.ctm;
+        self.need_memory(span, |n| n.instances += 1)?;
         self.instance_uses.push(InstanceUse { name, span, ctm, end: (end != ctm).then(|| Box::new(end)) });
         Ok(())
     }
@@ -1008,12 +1015,20 @@ impl Builder {
             Built::Mesh { mesh: mut m, kind, filename } => {
                 mesh::transform(&mut m, &s.ctm);
                 self.check_mesh(where_, mesh::validate(&m), mesh::degenerate_warning(&m))?;
+                self.need_memory(where_, |n| {
+                    n.triangles += m.triangle_count() as u64;
+                    n.vertices += m.p.len() as u64;
+                })?;
                 self.meshes.push(m);
                 Geometry::Mesh { mesh: self.meshes.len() as u32 - 1, kind, filename }
             }
             Built::Patches { mesh: mut m, kind, filename } => {
                 mesh::transform_patches(&mut m, &s.ctm);
                 self.check_mesh(where_, mesh::validate_patches(&m), mesh::degenerate_patches_warning(&m))?;
+                self.need_memory(where_, |n| {
+                    n.triangles += 2 * m.patch_count() as u64;
+                    n.vertices += m.p.len() as u64;
+                })?;
                 self.patches.push(m);
                 Geometry::Patches { mesh: self.patches.len() as u32 - 1, kind, filename }
             }
@@ -1024,6 +1039,23 @@ impl Builder {
         };
         out.push(geometry);
         Ok(())
+    }
+
+    /// Adds to what the scene needs in memory; an error at `at` once that is over the
+    /// limit.
+    fn need_memory(&mut self, at: Span, add: impl FnOnce(&mut MemoryNeed)) -> Res<()> {
+        let (need, (limit, by_default)) = &mut self.memory;
+        add(need);
+        need.check(*limit, *by_default).map_err(|e| Diagnostic::error(at, e))
+    }
+
+    /// Adds the film's pixels to what the scene needs, at the `Film` statement (or
+    /// `WorldBegin` where the film is the default one).
+    fn need_film_memory(&mut self, film: &super::Film) -> Res<()> {
+        let [x0, x1, y0, y1] = film.pixel_bounds;
+        let pixels = (x1 - x0) as u64 * (y1 - y0) as u64;
+        let Some(at) = self.render.film.as_ref().map(|e| e.name_span).or(self.world_begin) else { return Ok(()) };
+        self.need_memory(at, |n| n.pixels = pixels)
     }
 
     /// An invalid mesh is a located error; a degenerate one a located warning.
@@ -1208,6 +1240,7 @@ impl Builder {
         let (media, camera_medium) = self.resolve_media(&mut objects, &mut lights)?;
         self.render.emitting_media = media.iter().any(|m| m.kind.emissive());
         let r = self.resolve_options(syntax)?;
+        self.need_film_memory(&r.film)?;
         self.report_left_out();
         // In file order, whatever the order they were found in.
         self.skipped.sort_by_key(|(span, _, _)| span.map(|s| (s.file.0, s.start)));
@@ -1251,6 +1284,7 @@ impl Builder {
             pbrt_bugs: bugs::located(&bugs, self.opts.fixes, sources),
             fixes: self.opts.fixes,
             limits: self.opts.limits,
+            memory: self.memory.0,
             inputs: self.reader.files.list(),
         })
     }

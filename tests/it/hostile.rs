@@ -182,10 +182,73 @@ fn limits_are_located_errors_that_name_their_flag() {
         .unwrap();
     let (code, err) = sppm(&["check", scene.to_str().unwrap()]);
     assert_eq!(code, Some(1), "{err}");
+    // 4·10⁸ pixels pass the pixel limit once raised, and then need more memory than
+    // any test machine has free.
     let (code, err) = sppm(&["check", scene.to_str().unwrap(), "--limit", "pixels=4e8"]);
-    assert_eq!(code, Some(0), "the flag raises the limit: {err}");
+    assert!(code == Some(1) && err.contains("1:6: error: the memory the scene needs"), "{err}");
+    let (code, err) = sppm(&["check", scene.to_str().unwrap(), "--limit", "pixels=4e8", "--limit", "memory=1e15"]);
+    assert_eq!(code, Some(0), "the flags raise the limits: {err}");
     let (code, err) = sppm(&["check", scene.to_str().unwrap(), "--limit", "pixles=4"]);
     assert_eq!((code, err.contains("unknown limit \"pixles\"")), (Some(1), true), "{err}");
+}
+
+/// A flat grid mesh of 2·n² triangles over (n+1)² vertices.
+fn grid_mesh(n: usize) -> String {
+    let p: Vec<String> = (0..=n).flat_map(|j| (0..=n).map(move |i| format!("{i} 0 {j}"))).collect();
+    let k = |i: usize, j: usize| j * (n + 1) + i;
+    let quads = (0..n).flat_map(|j| (0..n).map(move |i| (i, j)));
+    let t: Vec<String> = quads
+        .map(|(i, j)| {
+            format!("{} {} {} {} {} {}", k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j), k(i + 1, j + 1), k(i, j + 1))
+        })
+        .collect();
+    format!("Shape \"trianglemesh\" \"point P\" [{}] \"integer indices\" [{}]", p.join(" "), t.join(" "))
+}
+
+#[test]
+fn scenes_that_need_more_memory_than_the_limit_stop_at_the_statement() {
+    use pbrt_sppm::memory::{BASE_BYTES, INSTANCE_BYTES, PIXEL_BYTES, RENDER_BYTES, TRIANGLE_BYTES, VERTEX_BYTES};
+    let d = dir("memory");
+    let check = |name: &str, text: &str, limit: u64| {
+        let path = d.join(name);
+        std::fs::write(&path, text).unwrap();
+        let limit = format!("memory={limit}");
+        let (code, err) = sppm(&["check", path.to_str().unwrap(), "--quiet", "--limit", &limit]);
+        (code, err.replace(&format!("{}:", path.display()), ""))
+    };
+    // Two meshes of 20,000 triangles: the second passes a limit the first fits in.
+    let mesh = grid_mesh(100);
+    let one = BASE_BYTES + 20_000 * TRIANGLE_BYTES + 101 * 101 * VERTEX_BYTES;
+    let two = one + 20_000 * TRIANGLE_BYTES + 101 * 101 * VERTEX_BYTES;
+    let film = "Film \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 32\n";
+    let text = format!("{film}WorldBegin\n{mesh}\n{mesh}\n");
+    let (code, err) = check("meshes.pbrt", &text, two - 1);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.starts_with("4:22: error: the memory the scene needs by here, about "), "{err}");
+    assert!(err.contains("(40k triangles), is over the limit of") && err.contains("--limit memory=N"), "{err}");
+    let all = two + 64 * 32 * PIXEL_BYTES + RENDER_BYTES;
+    assert_eq!(check("meshes.pbrt", &text, all - 1).1.split(": error").next(), Some("1:6"), "the film's pixels last");
+    let (code, err) = check("meshes.pbrt", &text, all);
+    assert_eq!(code, Some(0), "{err}");
+    // Instances, one a line: the seventh passes the limit.
+    let uses = "ObjectInstance \"o\"\n".repeat(10);
+    let text = format!("{film}WorldBegin\nObjectBegin \"o\"\nShape \"sphere\"\nObjectEnd\n{uses}");
+    let (_, err) = check("instances.pbrt", &text, BASE_BYTES + 7 * INSTANCE_BYTES - 1);
+    assert!(err.starts_with("12:1: error: ") && err.contains("(7 instances)"), "{err}");
+    // `check --json` reports the estimate and the limit.
+    let path = d.join("meshes.pbrt");
+    std::fs::write(&path, format!("{film}WorldBegin\n{mesh}\n")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
+        .args(["check", "--json", path.to_str().unwrap(), "--limit", "memory=5e9"])
+        .output()
+        .unwrap();
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let memory = &report["memory"];
+    assert_eq!(memory["estimate_bytes"].as_u64(), Some(one + 64 * 32 * PIXEL_BYTES + RENDER_BYTES), "{memory}");
+    assert_eq!(
+        (memory["limit_bytes"].as_u64(), memory["limit_is_free_memory"].as_bool()),
+        (Some(5_000_000_000), Some(false))
+    );
 }
 
 #[test]
