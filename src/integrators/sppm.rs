@@ -27,6 +27,7 @@ use crate::lights::Light;
 use crate::materials::{Bsdf, TransportMode};
 use crate::math::{Point3, Vector3};
 use crate::media::HenyeyGreenstein;
+use crate::memory::DEPOSITS_HELD;
 use crate::parser::Syntax;
 use crate::render::RenderScene;
 use crate::sampling::power_heuristic;
@@ -389,12 +390,19 @@ impl<'a> Sppm<'a> {
         let r = self.beam_radius();
         let mut gather = beams.then(|| beams::Gather::new(self.beams.iter().map(Vec::as_slice).collect(), r, scale));
         let most = if beams { BEAM_BAND } else { DEPOSIT_BAND };
+        let mut runs = DepositRuns::default();
         for band in preview::bands(chunks, 8, most, preview.is_some()) {
-            let (deposits, more, counts) = self.uniform_photons(grid, band.start as u64..band.end as u64);
-            self.stats.photons = self.stats.photons.plus(counts);
-            (phi, m) = sum_deposits(deposits, w, phi, m);
-            if let Some(g) = gather.as_mut() {
-                more.into_iter().for_each(|chunk| g.add(chunk));
+            let mut rest = band.clone();
+            while !rest.is_empty() {
+                let run = runs.next(&rest);
+                rest.start = run.end;
+                let (deposits, more, counts) = self.uniform_photons(grid, run.start as u64..run.end as u64);
+                runs.saw(run.len(), deposits.iter().map(Vec::len).sum());
+                self.stats.photons = self.stats.photons.plus(counts);
+                (phi, m) = sum_deposits(deposits, w, phi, m);
+                if let Some(g) = gather.as_mut() {
+                    more.into_iter().for_each(|chunk| g.add(chunk));
+                }
             }
             if let Some(show) = preview.as_mut() {
                 let done = band.end as f64 / chunks as f64;
@@ -557,6 +565,36 @@ impl<'a> Sppm<'a> {
 type PhotonPass = (Vec<DVec3>, Vec<u64>, Option<Vec<DVec3>>);
 /// Per chunk of photons: deposits, photons in media (with beams); the counts.
 type UniformPhotons = (Vec<Vec<Deposit>>, Vec<Vec<VolumePhoton>>, PhotonCounts);
+
+/// Cuts a band of photon chunks into runs whose deposits stay near [`DEPOSITS_HELD`]
+/// (16 bytes each, and as many again while grouped by pixel): a short first run, then
+/// runs as long as the deposits per chunk of the run before allow, growing at most
+/// eightfold a run (chunks are alike, but a rare photon may meet thousands of visible
+/// points). Every run's deposits are summed before the next is traced, in chunk
+/// order, so where the runs are cut changes no bit of the image. A wide radius meets
+/// thousands of visible points per photon: in fixed bands of 256 chunks a 1024² film
+/// held 1.1 GB of deposits.
+#[derive(Default)]
+struct DepositRuns {
+    /// The last run's length and deposits per chunk; `None` before the first.
+    last: Option<(usize, f64)>,
+}
+
+impl DepositRuns {
+    /// The next run: the start of `rest`, at least one chunk unless `rest` is empty.
+    fn next(&self, rest: &Range<usize>) -> Range<usize> {
+        let len = match self.last {
+            None => 2 * rayon::current_num_threads(),
+            Some((len, d)) => ((DEPOSITS_HELD as f64 / d.max(1.0)) as usize).min(8 * len),
+        };
+        rest.start..rest.start + len.max(1).min(rest.len())
+    }
+
+    /// Notes the deposits a run of `chunks` made.
+    fn saw(&mut self, chunks: usize, deposits: usize) {
+        self.last = Some((chunks, deposits as f64 / chunks.max(1) as f64));
+    }
+}
 
 /// Φ and M per pixel from lists of deposits, each deposit's flux times `w`. Each
 /// pixel sums its contributions in a fixed order (list by list, deposit by deposit),
@@ -1191,4 +1229,39 @@ fn scatter_in_medium(
         return None;
     }
     Some((beta, crate::math::Ray::new(Point3(mp.p), Vector3(s.wi)).at_time(mp.time)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn deposit_runs_cover_a_band_in_order_and_follow_the_deposits() {
+        // Deposits per chunk: few, then a wide radius's flood, then few again.
+        let per_chunk = |c: usize| if (1000..2000).contains(&c) { 1 << 20 } else { 10 };
+        let (mut runs, mut cut) = (DepositRuns::default(), Vec::<Range<usize>>::new());
+        for band in preview::bands(4096, 8, DEPOSIT_BAND, false) {
+            let mut rest = band;
+            while !rest.is_empty() {
+                let run = runs.next(&rest);
+                rest.start = run.end;
+                runs.saw(run.len(), run.clone().map(per_chunk).sum());
+                cut.push(run);
+            }
+        }
+        assert_eq!(cut[0].len(), 2 * rayon::current_num_threads(), "a short first run: {cut:?}");
+        assert!(cut[0].start == 0 && cut.last().map(|r| r.end) == Some(4096), "{cut:?}");
+        assert!(cut.windows(2).all(|w| w[0].end == w[1].start && w[1].len() <= 8 * w[0].len().max(32)), "{cut:?}");
+        // The run that meets the flood measures a mix; from the one after it, runs hold
+        // DEPOSITS_HELD (4 chunks of flood, fewer at a band's end); after the flood they
+        // grow back.
+        let first_flooded = cut.iter().position(|r| r.end > 1000).unwrap_or(0);
+        let inside = cut[first_flooded + 2..].iter().filter(|r| r.end <= 2000);
+        assert!(inside.clone().count() > 200 && inside.clone().all(|r| r.len() <= 4), "{cut:?}");
+        assert!(cut.iter().any(|r| r.start >= 2000 && r.len() > 4), "{cut:?}");
+        // A run is never empty, whatever the deposits.
+        runs.saw(1, usize::MAX);
+        assert_eq!(runs.next(&(5..9)), 5..6);
+        assert!(runs.next(&(9..9)).is_empty());
+    }
 }
