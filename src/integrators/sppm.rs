@@ -17,7 +17,7 @@
 use super::adaptive::{self, Chain, Deposit, PhotonCounts, PhotonSampling};
 use super::beams::{self, Beam, VolumeGather, VolumePhoton};
 use super::error::RenderError;
-use super::grid::{Binning, Grid, Grouped, Site};
+use super::grid::{Binning, Grid, Grouped, Site, prefetch};
 use super::passes::{self, PassMode};
 use super::preview::{self, Preview};
 use super::volume::{self, MediumPoint};
@@ -902,6 +902,11 @@ fn direct_light(
     };
     let light = &scene.lights[idx];
     let (u_light, u_bsdf, u_lobe) = (sampler.get2d(), sampler.get2d(), sampler.get1d());
+    // At glass and mirrors the estimate is 0 (pbrt computes it, and finds so): the
+    // numbers above are drawn all the same, so the path's sequence goes on unchanged.
+    if bsdf.only_specular() && !specular_too {
+        return Vec3::ZERO;
+    }
     let ns = bsdf.shading_normal();
     let mut ld = Vec3::ZERO;
     let v4 = scene.syntax == crate::parser::Syntax::V4;
@@ -1178,22 +1183,26 @@ fn deposit_on_surface(
 ) -> bool {
     let PhotonHere { p, wi, beta, terminated } = photon;
     // The grid's sites are the visible points and radii (`Sppm::sites`).
-    grid.gather_within(p, |pixel| {
-        let Some(vp) = &pixels[pixel as usize].vp else { return };
-        let Scatterer::Surface(bsdf) = &vp.at else { return };
-        // DEVIATION(pbrt): appearance, `--fix photons-behind`. pbrt counts photons
-        // that reach an opaque visible point from behind its surface in M (f is
-        // 0 there, or nearly), which only shrinks the radius (Mitsuba #145); the
-        // fix leaves them out. Transmitting surfaces count them either way.
-        let behind = wi.dot(vp.ng) * vp.wo.dot(vp.ng) <= 0.0;
-        if behind && skip_behind && !bsdf.transmits() {
-            return;
-        }
-        // Both sides grew their first lane for ending the others: pbrt-v4 ends a
-        // wavelength set once.
-        let once = if terminated && vp.terminated { transport::ONCE } else { 1.0 };
-        out.push((pixel, beta * bsdf.f(vp.wo, wi) * once));
-    })
+    grid.gather_within_prefetched(
+        p,
+        |pixel| prefetch(&pixels[pixel as usize]),
+        |pixel| {
+            let Some(vp) = &pixels[pixel as usize].vp else { return };
+            let Scatterer::Surface(bsdf) = &vp.at else { return };
+            // DEVIATION(pbrt): appearance, `--fix photons-behind`. pbrt counts photons
+            // that reach an opaque visible point from behind its surface in M (f is
+            // 0 there, or nearly), which only shrinks the radius (Mitsuba #145); the
+            // fix leaves them out. Transmitting surfaces count them either way.
+            let behind = wi.dot(vp.ng) * vp.wo.dot(vp.ng) <= 0.0;
+            if behind && skip_behind && !bsdf.transmits() {
+                return;
+            }
+            // Both sides grew their first lane for ending the others: pbrt-v4 ends a
+            // wavelength set once.
+            let once = if terminated && vp.terminated { transport::ONCE } else { 1.0 };
+            out.push((pixel, beta * bsdf.f(vp.wo, wi) * once));
+        },
+    )
 }
 
 /// Deposits a photon that scattered at `mp` (its weight `beta` there, before σs) on the

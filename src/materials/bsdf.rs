@@ -162,6 +162,12 @@ impl Bsdf {
         }
     }
 
+    /// Whether every lobe is specular (and there is one): light samples then see f = 0
+    /// and BSDF samples are all specular, so a light sampling estimate here is 0.
+    pub fn only_specular(&self) -> bool {
+        matches!(self.lobes, Lobes::One(_) | Lobes::Many(_)) && self.lobes().iter().all(|l| l.kind() == Kind::Specular)
+    }
+
     /// Whether a path guide may draw directions here beside the BSDF: every sample
     /// has a density `eval` gives (no specular lobe), and f is a value, not a random
     /// walk's estimate (not a layered BSDF).
