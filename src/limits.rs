@@ -145,12 +145,12 @@ impl Limits {
         Ok(())
     }
 
-    /// The memory limit in bytes, and whether it is the default (the memory free now;
-    /// no limit where that cannot be read).
-    pub fn memory_bytes(&self) -> (u64, bool) {
+    /// An empty memory budget under this memory limit: the given one, or by default
+    /// the memory free now (no limit where that cannot be read).
+    pub fn memory_budget(&self) -> crate::memory::MemoryBudget {
         match self.memory {
-            0 => (crate::memory::available().unwrap_or(u64::MAX), true),
-            n => (n, false),
+            0 => crate::memory::MemoryBudget::new(crate::memory::available().unwrap_or(u64::MAX), true),
+            n => crate::memory::MemoryBudget::new(n, false),
         }
     }
 

@@ -36,6 +36,38 @@ pub const RENDER_BYTES: u64 = DEPOSITS_HELD as u64 * 32;
 /// The process before any scene: code, thread stacks, the pool.
 pub const BASE_BYTES: u64 = 16 << 20;
 
+/// The estimate so far and the limit it is held to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemoryBudget {
+    pub need: MemoryNeed,
+    /// In bytes; `u64::MAX` where no limit was given and the free memory is unknown.
+    pub limit: u64,
+    /// Whether the limit is the default: the memory free when the load started.
+    pub free_memory: bool,
+}
+
+impl MemoryBudget {
+    pub fn new(limit: u64, free_memory: bool) -> MemoryBudget {
+        MemoryBudget { need: MemoryNeed::default(), limit, free_memory }
+    }
+
+    /// "about 1.7 GiB at the peak, estimated (21.9 GiB free)", as `check` prints it.
+    pub fn summary(&self) -> String {
+        let limit = match (self.limit, self.free_memory) {
+            (u64::MAX, _) => "no limit".to_string(),
+            (l, true) => format!("{} free", size(l)),
+            (l, false) => format!("limit {}", size(l)),
+        };
+        format!("about {} at the peak, estimated ({limit})", size(self.need.bytes()))
+    }
+
+    /// Adds to the estimate; `Err` with the message once it is over the limit.
+    pub fn add(&mut self, f: impl FnOnce(&mut MemoryNeed)) -> Result<(), String> {
+        f(&mut self.need);
+        self.need.check(self.limit, self.free_memory)
+    }
+}
+
 /// What a scene holds that its peak memory grows with.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct MemoryNeed {
@@ -144,6 +176,22 @@ mod tests {
         assert!(need.check(want, false).is_ok());
         let e = need.check(want - 1, false).unwrap_err();
         assert!(e.contains("1.0M triangles, 1000 instances, 4096 pixels") && e.contains("--limit memory=N"), "{e}");
+    }
+
+    #[test]
+    fn a_budget_refuses_the_addition_that_passes_its_limit() {
+        let mut budget = MemoryBudget::new(BASE_BYTES + 10 * INSTANCE_BYTES, false);
+        for _ in 0..10 {
+            assert!(budget.add(|n| n.instances += 1).is_ok());
+        }
+        let e = budget.add(|n| n.instances += 1).unwrap_err();
+        assert!(e.contains("(11 instances)") && !e.contains("free when"), "{e}");
+        assert_eq!(budget.summary(), format!("about 16 MiB at the peak, estimated (limit {})", size(budget.limit)));
+        let free = MemoryBudget::new(1 << 30, true);
+        assert!(free.summary().ends_with("(1.0 GiB free)"), "{}", free.summary());
+        assert!(MemoryBudget::new(u64::MAX, true).summary().ends_with("(no limit)"));
+        let e = MemoryBudget { need: MemoryNeed { pixels: 1 << 30, ..MemoryNeed::default() }, ..free }.add(|_| ());
+        assert!(e.is_err_and(|e| e.contains("the memory free when loading started (1.0 GiB)")));
     }
 
     #[test]

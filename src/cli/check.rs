@@ -108,11 +108,11 @@ pub fn report(scene: &SceneDescription, with_shapes: bool) -> Value {
 
 /// The estimated peak memory and the limit it was checked against (`null`: none).
 fn memory(scene: &SceneDescription) -> Value {
-    let (limit, free) = scene.limits.memory_bytes();
+    let m = &scene.memory;
     json!({
-        "estimate_bytes": scene.memory.bytes(),
-        "limit_bytes": (limit != u64::MAX).then_some(limit),
-        "limit_is_free_memory": free,
+        "estimate_bytes": m.need.bytes(),
+        "limit_bytes": (m.limit != u64::MAX).then_some(m.limit),
+        "limit_is_free_memory": m.free_memory,
     })
 }
 
@@ -286,14 +286,7 @@ pub fn summary(s: &SceneDescription) -> String {
         i.requested, i.iterations, i.max_depth, i.photons_per_iteration, i.radius
     );
     let _ = writeln!(out, "counts      {}", counts_line(s));
-    let (limit, free) = s.limits.memory_bytes();
-    let limit = match (limit, free) {
-        (u64::MAX, _) => "no limit".to_string(),
-        (l, true) => format!("{} free", crate::memory::size(l)),
-        (l, false) => format!("limit {}", crate::memory::size(l)),
-    };
-    let _ =
-        writeln!(out, "memory      about {} at the peak, estimated ({limit})", crate::memory::size(s.memory.bytes()));
+    let _ = writeln!(out, "memory      {}", s.memory.summary());
     for k in &s.skipped {
         let _ = writeln!(out, "skipped     {}:{}:{}: {} ({})", k.file, k.line, k.column, k.what, k.why);
     }

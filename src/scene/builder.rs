@@ -32,7 +32,7 @@ use crate::imageio::RgbImage;
 use crate::limits::{FileBytes, Files, Limits};
 use crate::materials::MaterialDesc;
 use crate::math::animated::AnimatedTransform;
-use crate::memory::MemoryNeed;
+use crate::memory::{MemoryBudget, MemoryNeed};
 use crate::parser::Syntax;
 use crate::parser::error::{Diagnostic, LoadError, Located};
 use crate::parser::params::{ParamList, ParamType};
@@ -266,9 +266,8 @@ struct Builder {
     camera_media: media::MediaPair,
     /// Per pending light: the outside medium current at its statement.
     pending_light_media: Vec<Option<u32>>,
-    /// What the scene read so far will need in memory, and the limit it must stay
-    /// under (with whether that is the default, the memory free at the start).
-    memory: (MemoryNeed, (u64, bool)),
+    /// What the scene read so far will need in memory, and the limit it must stay under.
+    memory: MemoryBudget,
 }
 
 impl Builder {
@@ -282,9 +281,8 @@ impl Builder {
             built: None,
             building: false,
         };
-        let memory_limit = opts.limits.memory_bytes();
         Builder {
-            memory: (MemoryNeed::default(), memory_limit),
+            memory: opts.limits.memory_budget(),
             reader,
             opts,
             gs: GraphicsState {
@@ -1044,9 +1042,7 @@ impl Builder {
     /// Adds to what the scene needs in memory; an error at `at` once that is over the
     /// limit.
     fn need_memory(&mut self, at: Span, add: impl FnOnce(&mut MemoryNeed)) -> Res<()> {
-        let (need, (limit, by_default)) = &mut self.memory;
-        add(need);
-        need.check(*limit, *by_default).map_err(|e| Diagnostic::error(at, e))
+        self.memory.add(add).map_err(|e| Diagnostic::error(at, e))
     }
 
     /// Adds the film's pixels to what the scene needs, at the `Film` statement (or
@@ -1284,7 +1280,7 @@ impl Builder {
             pbrt_bugs: bugs::located(&bugs, self.opts.fixes, sources),
             fixes: self.opts.fixes,
             limits: self.opts.limits,
-            memory: self.memory.0,
+            memory: self.memory,
             inputs: self.reader.files.list(),
         })
     }

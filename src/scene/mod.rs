@@ -189,8 +189,8 @@ pub struct SceneDescription {
     pub fixes: crate::fixes::Fixes,
     /// The limits the scene was loaded under (the renderer checks its overrides too).
     pub limits: crate::limits::Limits,
-    /// What its peak memory is estimated from ([`crate::memory`]).
-    pub memory: crate::memory::MemoryNeed,
+    /// Its estimated peak memory and the limit it was held to ([`crate::memory`]).
+    pub memory: crate::memory::MemoryBudget,
     /// Every file the scene was made from (the top-level file, Includes, meshes,
     /// images, SPD files), sorted by path: what a checkpoint's fingerprint hashes.
     pub inputs: Vec<crate::limits::InputFile>,
