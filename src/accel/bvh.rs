@@ -1,6 +1,7 @@
 //! A bounding volume hierarchy: binned SAH build (parallel for large subtrees, and the
 //! bins of large nodes filled on all threads), each node handed its primitives' boxes
-//! by its parent's bins; collapsed into 8-wide nodes, with closure-based closest-hit
+//! by its parent's bins, written as 8-wide nodes a wide node at a time (the binary
+//! tree is decided as it is written, never stored), with closure-based closest-hit
 //! and any-hit traversal using pbrt's conservative slab test: on all eight boxes at
 //! once with AVX where the processor has AVX2 (detected at run time, as Embree does),
 //! else four at a time with SSE through glam. Both do the same operations in the same
@@ -323,16 +324,9 @@ struct Settings<'a> {
     group: &'a (dyn Fn(usize) -> u32 + Sync),
 }
 
-/// 40 bytes (32-bit counts: a build has fewer than 2³² primitives, as the nodes'
-/// references already assume); a pair of children is one heap block of 96.
-enum BuildNode {
-    Leaf { bounds: Bounds3, first: u32, count: u32 },
-    Interior { bounds: Bounds3, prims: u32, children: Box<(BuildNode, BuildNode)> },
-}
-
 const BINS: usize = 12;
-/// Builds of at least this many primitives hand their freed build tree back to the
-/// system (see [`return_freed_heap`]).
+/// Builds of at least this many primitives hand their freed records back to the system
+/// (see [`return_freed_heap`]).
 const TRIM_PRIMS: usize = 1 << 16;
 /// A node visit's cost in triangle tests, for SAH. A visit is a dependent cache miss
 /// on large scenes, and a leaf's triangles are fetched together, so leaves of a few
@@ -343,6 +337,9 @@ const TRAVERSAL_COST: f32 = 4.0;
 /// The most primitives in a leaf, unless the caller asks for another limit.
 const MAX_LEAF: usize = 8;
 const PARALLEL_THRESHOLD: usize = 4096;
+/// Wide nodes over more primitives than this write their children's subtrees on all
+/// threads.
+const PARALLEL_COLLAPSE: usize = 1 << 18;
 /// Nodes over more primitives than this bin them on all threads, in runs this long.
 const BIN_RUN: usize = 1 << 16;
 
@@ -378,12 +375,11 @@ impl Bvh {
         // The records hold the boxes: not both at the build's peak.
         drop(bounds);
         let settings = Settings { max_leaf: max_leaf.clamp(1, u8::MAX as usize), group: &group };
-        let root = build_recursive(&mut info, 0, &settings, None);
+        let root = decide(&mut info, 0, &settings, None);
         let mut nodes = Vec::new();
-        collapse(&root, &mut nodes);
+        write_wide(&mut info, 0, root, &settings, &mut nodes);
         nodes.shrink_to_fit();
         let bounds = root.bounds();
-        drop(root);
         if info.len() >= TRIM_PRIMS {
             return_freed_heap();
         }
@@ -774,11 +770,10 @@ mod avx {
     }
 }
 
-/// Returns the heap's free pages to the system. A build tree is a 96-byte heap block
-/// per interior node; freed, the blocks stay resident, and the large arrays made next
-/// (instances, leaf blocks) come from fresh mappings beside them. For a million
-/// instances this took 153 MB off the peak (665 to 512 MB), for the load benchmark's
-/// whole scene 132 MB (1,485 to 1,353 MB), in no measurable time.
+/// Returns the heap's free pages to the system: the build's records, once freed, may
+/// stay resident in the heap while the large arrays made next (instances, leaf blocks)
+/// come from fresh mappings beside them. (When the build kept a binary tree of heap
+/// blocks, this took 153 MB off the peak of a million instances.)
 fn return_freed_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: malloc_trim only releases pages of free chunks; it is thread-safe.
@@ -787,14 +782,37 @@ fn return_freed_heap() {
     }
 }
 
-/// Builds over `prims`, which start at `first` in the final order; `known` is their
-/// extent if the parent's bins gave it.
-fn build_recursive(prims: &mut [PrimInfo], first: usize, settings: &Settings, known: Option<Extent>) -> BuildNode {
+/// A node of the binary build, decided but not written: a leaf, or an interior node
+/// whose primitives are partitioned at `mid` (its children not decided yet).
+#[derive(Clone, Copy)]
+enum Decided {
+    Leaf { bounds: Bounds3, first: u32, count: u32 },
+    Interior { bounds: Bounds3, first: u32, count: u32, mid: u32, extents: Option<(Extent, Extent)> },
+}
+
+impl Decided {
+    fn bounds(&self) -> Bounds3 {
+        match self {
+            Decided::Leaf { bounds, .. } | Decided::Interior { bounds, .. } => *bounds,
+        }
+    }
+
+    /// Its primitives' range within the build.
+    fn range(&self) -> Range<usize> {
+        let (Decided::Leaf { first, count, .. } | Decided::Interior { first, count, .. }) = *self;
+        first as usize..(first + count) as usize
+    }
+}
+
+/// Decides the node over `prims` (starting at `first` in the final order; `known`, its
+/// extent if the parent's bins gave it): a leaf, or a split, partitioning `prims`.
+fn decide(prims: &mut [PrimInfo], first: usize, settings: &Settings, known: Option<Extent>) -> Decided {
     let extent = known.unwrap_or_else(|| Extent::of(prims));
     let bounds = extent.bounds.bounds3();
     let n = prims.len();
+    let (first, count) = (first as u32, n as u32);
     if n == 1 {
-        return BuildNode::Leaf { bounds, first: first as u32, count: 1 };
+        return Decided::Leaf { bounds, first, count };
     }
     let centroids = extent.centroids.bounds3();
     let axis = centroids.max_extent();
@@ -805,17 +823,121 @@ fn build_recursive(prims: &mut [PrimInfo], first: usize, settings: &Settings, kn
     } else {
         sah_split(prims, &bounds, axis, lo, hi, settings.max_leaf)
     };
-    let Some(Split { mid, extents }) = split.or_else(|| split_groups(prims, settings.group).map(Split::at)) else {
-        return BuildNode::Leaf { bounds, first: first as u32, count: n as u32 };
-    };
+    match split.or_else(|| split_groups(prims, settings.group).map(Split::at)) {
+        Some(Split { mid, extents }) => Decided::Interior { bounds, first, count, mid: mid as u32, extents },
+        None => Decided::Leaf { bounds, first, count },
+    }
+}
+
+/// The two children of an interior node over `prims` (its own primitives, which start
+/// at `first` and are partitioned at `mid`), decided on two threads for large nodes.
+fn open(
+    prims: &mut [PrimInfo],
+    (first, mid): (usize, usize),
+    extents: Option<(Extent, Extent)>,
+    settings: &Settings,
+) -> (Decided, Decided) {
+    let n = prims.len();
     let (left, right) = prims.split_at_mut(mid);
     let (el, er) = extents.map_or((None, None), |(l, r)| (Some(l), Some(r)));
-    let (a, b) = if n > PARALLEL_THRESHOLD {
-        rayon::join(|| build_recursive(left, first, settings, el), || build_recursive(right, first + mid, settings, er))
+    if n > PARALLEL_THRESHOLD {
+        rayon::join(|| decide(left, first, settings, el), || decide(right, first + mid, settings, er))
     } else {
-        (build_recursive(left, first, settings, el), build_recursive(right, first + mid, settings, er))
+        (decide(left, first, settings, el), decide(right, first + mid, settings, er))
+    }
+}
+
+/// A node's children in the `WIDTH`-wide tree: its binary descendants, up to `WIDTH`
+/// of them, opening the largest interior one first (`prims` are the node's, starting
+/// at `base`).
+fn wide_kids(prims: &mut [PrimInfo], base: usize, node: Decided, settings: &Settings) -> ([Decided; WIDTH], usize) {
+    let mut kids = [node; WIDTH];
+    let mut n = 1;
+    let mut open_at = |kids: &mut [Decided; WIDTH], i: usize, n: usize| {
+        let Decided::Interior { first, count, mid, extents, .. } = kids[i] else { return };
+        let r = first as usize - base..(first + count) as usize - base;
+        let (a, b) = open(&mut prims[r], (first as usize, mid as usize), extents, settings);
+        // Removed from its place, its two children go last.
+        kids.copy_within(i + 1..n, i);
+        (kids[n - 1], kids[n]) = (a, b);
     };
-    BuildNode::Interior { bounds, prims: n as u32, children: Box::new((a, b)) }
+    if matches!(node, Decided::Interior { .. }) {
+        open_at(&mut kids, 0, 1);
+        n = 2;
+    }
+    while n < WIDTH {
+        let open = kids[..n]
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| matches!(k, Decided::Interior { .. }))
+            .max_by(|a, b| a.1.bounds().surface_area().total_cmp(&b.1.bounds().surface_area()))
+            .map(|(i, _)| i);
+        let Some(i) = open else { break };
+        open_at(&mut kids, i, n);
+        n += 1;
+    }
+    (kids, n)
+}
+
+/// Writes `node` (over `prims`, starting at `base`) and, recursively, its subtree as
+/// `WIDTH`-wide nodes in pre-order; returns its index. The binary tree is decided a
+/// wide node at a time and never stored. Below a large node the children's subtrees
+/// are written on all threads, each into a list of its own, then appended in order
+/// with their node references shifted: the same nodes as writing them one after
+/// another.
+fn write_wide(prims: &mut [PrimInfo], base: usize, node: Decided, settings: &Settings, nodes: &mut Vec<Node>) -> u32 {
+    let (kids, n) = wide_kids(prims, base, node, settings);
+    let kids = &kids[..n];
+    let index = nodes.len();
+    nodes.push(Node::new(&[]));
+    let leaf = |k: &Decided| match *k {
+        Decided::Leaf { bounds, first, count } => Some((bounds, first, count as u8)),
+        Decided::Interior { .. } => None,
+    };
+    let mut encoded = [(Bounds3::default(), 0u32, 0u8); WIDTH];
+    if prims.len() > PARALLEL_COLLAPSE {
+        let subtrees: Vec<Vec<Node>> = kid_slices(prims, base, kids)
+            .into_par_iter()
+            .map(|(k, slice)| {
+                let mut sub = Vec::new();
+                if leaf(&k).is_none() {
+                    write_wide(slice, k.range().start, k, settings, &mut sub);
+                }
+                sub
+            })
+            .collect();
+        nodes.reserve(subtrees.iter().map(Vec::len).sum());
+        for (slot, (k, sub)) in kids.iter().zip(subtrees).enumerate() {
+            let base = nodes.len() as u32;
+            nodes.extend(sub.into_iter().map(|n| n.shifted(base)));
+            encoded[slot] = leaf(k).unwrap_or((k.bounds(), base, 0));
+        }
+    } else {
+        for (slot, k) in kids.iter().enumerate() {
+            let r = k.range();
+            encoded[slot] = leaf(k).unwrap_or_else(|| {
+                (k.bounds(), write_wide(&mut prims[r.start - base..r.end - base], r.start, *k, settings, nodes), 0)
+            });
+        }
+    }
+    nodes[index] = Node::new(&encoded[..n]);
+    index as u32
+}
+
+/// Each kid with its own primitives: disjoint parts of `prims` (which start at `base`),
+/// in the kids' order.
+fn kid_slices<'a>(prims: &'a mut [PrimInfo], base: usize, kids: &[Decided]) -> Vec<(Decided, &'a mut [PrimInfo])> {
+    let mut by_start: Vec<usize> = (0..kids.len()).collect();
+    by_start.sort_by_key(|&k| kids[k].range().start);
+    let mut slices: Vec<Option<&'a mut [PrimInfo]>> = (0..kids.len()).map(|_| None).collect();
+    let (mut rest, mut at) = (prims, base);
+    for k in by_start {
+        let r = kids[k].range();
+        let (_, tail) = std::mem::take(&mut rest).split_at_mut(r.start - at);
+        let (mine, tail) = tail.split_at_mut(r.len());
+        (slices[k], rest, at) = (Some(mine), tail, r.end);
+    }
+    kids.iter().zip(slices).map(|(k, s)| (*k, s.unwrap_or_default())).collect()
 }
 
 /// Partitions by the cheapest of the bin boundaries; `None` when a leaf is cheaper.
@@ -886,86 +1008,6 @@ fn partition(prims: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize 
         }
     }
     i
-}
-
-impl BuildNode {
-    fn bounds(&self) -> Bounds3 {
-        match self {
-            BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => *bounds,
-        }
-    }
-}
-
-/// A node's children in the `WIDTH`-wide tree: its binary descendants, up to `WIDTH`
-/// of them, opening the largest interior one first.
-fn wide_children(node: &BuildNode) -> ([&BuildNode; WIDTH], usize) {
-    let mut kids = [node; WIDTH];
-    let mut n = match node {
-        BuildNode::Leaf { .. } => 1,
-        BuildNode::Interior { children, .. } => {
-            (kids[0], kids[1]) = (&children.0, &children.1);
-            2
-        }
-    };
-    while n < WIDTH {
-        let open = kids[..n]
-            .iter()
-            .enumerate()
-            .filter(|(_, k)| matches!(k, BuildNode::Interior { .. }))
-            .max_by(|a, b| a.1.bounds().surface_area().total_cmp(&b.1.bounds().surface_area()))
-            .map(|(i, _)| i);
-        let Some(i) = open else { break };
-        if let BuildNode::Interior { children, .. } = kids[i] {
-            // Removed from its place, its two children go last.
-            kids.copy_within(i + 1..n, i);
-            (kids[n - 1], kids[n]) = (&children.0, &children.1);
-            n += 1;
-        }
-    }
-    (kids, n)
-}
-
-/// Subtrees over this many primitives write their children's subtrees on all threads.
-const PARALLEL_COLLAPSE: usize = 1 << 18;
-
-/// Writes `node` (and, recursively, its subtree) as `WIDTH`-wide nodes in pre-order;
-/// returns its index. Below a large node the children's subtrees are written on all
-/// threads, each into a list of its own, then appended in order with their node
-/// references shifted: the same nodes as writing them one after another.
-fn collapse(node: &BuildNode, nodes: &mut Vec<Node>) -> u32 {
-    let (kids, n) = wide_children(node);
-    let kids = &kids[..n];
-    let index = nodes.len();
-    nodes.push(Node::new(&[]));
-    let leaf = |k: &BuildNode| match *k {
-        BuildNode::Leaf { bounds, first, count } => Some((bounds, first, count as u8)),
-        BuildNode::Interior { .. } => None,
-    };
-    let mut encoded = [(Bounds3::default(), 0u32, 0u8); WIDTH];
-    if matches!(node, BuildNode::Interior { prims, .. } if *prims as usize > PARALLEL_COLLAPSE) {
-        let subtrees: Vec<Vec<Node>> = kids
-            .par_iter()
-            .map(|k| {
-                let mut sub = Vec::new();
-                if leaf(k).is_none() {
-                    collapse(k, &mut sub);
-                }
-                sub
-            })
-            .collect();
-        nodes.reserve(subtrees.iter().map(Vec::len).sum());
-        for (slot, (k, sub)) in kids.iter().zip(subtrees).enumerate() {
-            let base = nodes.len() as u32;
-            nodes.extend(sub.into_iter().map(|n| n.shifted(base)));
-            encoded[slot] = leaf(k).unwrap_or((k.bounds(), base, 0));
-        }
-    } else {
-        for (slot, k) in kids.iter().enumerate() {
-            encoded[slot] = leaf(k).unwrap_or_else(|| (k.bounds(), collapse(k, nodes), 0));
-        }
-    }
-    nodes[index] = Node::new(&encoded[..n]);
-    index as u32
 }
 
 #[cfg(test)]
