@@ -829,22 +829,18 @@ fn decide(prims: &mut [PrimInfo], first: usize, settings: &Settings, known: Opti
     }
 }
 
-/// The two children of an interior node over `prims` (its own primitives, which start
-/// at `first` and are partitioned at `mid`), decided on two threads for large nodes.
-fn open(
-    prims: &mut [PrimInfo],
-    (first, mid): (usize, usize),
-    extents: Option<(Extent, Extent)>,
-    settings: &Settings,
-) -> (Decided, Decided) {
+/// The two children of `node` decided (on two threads for large nodes), or `None` for
+/// a leaf; `prims` are the node's own, partitioned at its split.
+fn open(prims: &mut [PrimInfo], node: Decided, settings: &Settings) -> Option<(Decided, Decided)> {
+    let Decided::Interior { first, mid, extents, .. } = node else { return None };
+    let (first, mid) = (first as usize, mid as usize);
     let n = prims.len();
     let (left, right) = prims.split_at_mut(mid);
     let (el, er) = extents.map_or((None, None), |(l, r)| (Some(l), Some(r)));
-    if n > PARALLEL_THRESHOLD {
-        rayon::join(|| decide(left, first, settings, el), || decide(right, first + mid, settings, er))
-    } else {
-        (decide(left, first, settings, el), decide(right, first + mid, settings, er))
-    }
+    Some(match n > PARALLEL_THRESHOLD {
+        true => rayon::join(|| decide(left, first, settings, el), || decide(right, first + mid, settings, er)),
+        false => (decide(left, first, settings, el), decide(right, first + mid, settings, er)),
+    })
 }
 
 /// A node's children in the `WIDTH`-wide tree: its binary descendants, up to `WIDTH`
@@ -854,12 +850,12 @@ fn wide_kids(prims: &mut [PrimInfo], base: usize, node: Decided, settings: &Sett
     let mut kids = [node; WIDTH];
     let mut n = 1;
     let mut open_at = |kids: &mut [Decided; WIDTH], i: usize, n: usize| {
-        let Decided::Interior { first, count, mid, extents, .. } = kids[i] else { return };
-        let r = first as usize - base..(first + count) as usize - base;
-        let (a, b) = open(&mut prims[r], (first as usize, mid as usize), extents, settings);
-        // Removed from its place, its two children go last.
-        kids.copy_within(i + 1..n, i);
-        (kids[n - 1], kids[n]) = (a, b);
+        let r = kids[i].range();
+        if let Some((a, b)) = open(&mut prims[r.start - base..r.end - base], kids[i], settings) {
+            // Removed from its place, its two children go last.
+            kids.copy_within(i + 1..n, i);
+            (kids[n - 1], kids[n]) = (a, b);
+        }
     };
     if matches!(node, Decided::Interior { .. }) {
         open_at(&mut kids, 0, 1);
