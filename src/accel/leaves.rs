@@ -170,16 +170,8 @@ impl LeafBlocks {
     /// first corner load waits on anyway, so they all arrive together.
     #[inline(always)]
     pub fn prefetch(&self, leaf: Leaf) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            let start = self.words.as_ptr().wrapping_add(leaf.first) as usize;
-            let end = start + 4 * Self::len(leaf);
-            for line in ((start | 63) + 1..end).step_by(64) {
-                // SAFETY: a prefetch reads nothing the program sees and cannot fault;
-                // it is `unsafe` only for its `sse` target feature, which every x86_64 has.
-                unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(line as *const i8) };
-            }
-        }
+        let start = self.words.as_ptr().wrapping_add(leaf.first) as usize;
+        crate::memory::prefetch_lines((start | 63) + 1..start + 4 * Self::len(leaf));
     }
 }
 

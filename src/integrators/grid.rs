@@ -278,15 +278,8 @@ impl Grid {
 /// Asks the cache for the lines `value` spans, for a read that follows soon.
 #[inline(always)]
 pub fn prefetch<T>(value: &T) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let start = value as *const T as usize;
-        for line in (start & !63..start + std::mem::size_of::<T>()).step_by(64) {
-            // SAFETY: a prefetch reads nothing the program sees and cannot fault; it is
-            // `unsafe` only for its `sse` target feature, which every x86_64 has.
-            unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(line as *const i8) };
-        }
-    }
+    let start = value as *const T as usize;
+    crate::memory::prefetch_lines(start..start + std::mem::size_of::<T>());
 }
 
 impl Grid {

@@ -1048,8 +1048,7 @@ impl Builder {
     /// Adds the film's pixels to what the scene needs, at the `Film` statement (or
     /// `WorldBegin` where the film is the default one).
     fn need_film_memory(&mut self, film: &super::Film) -> Res<()> {
-        let [x0, x1, y0, y1] = film.pixel_bounds;
-        let pixels = (x1 - x0) as u64 * (y1 - y0) as u64;
+        let pixels = film.pixel_count();
         let Some(at) = self.render.film.as_ref().map(|e| e.name_span).or(self.world_begin) else { return Ok(()) };
         self.need_memory(at, |n| n.pixels = pixels)
     }
