@@ -96,9 +96,12 @@ def test_colour_chooses_what_paths_carry():
 def test_check_is_check_json(tmp_path):
     f = tmp_path / "sphere.pbrt"
     f.write_text(SPHERE)
-    out = cli("check", "--json", "--shapes", f)
+    # A fixed memory limit: by default it is the memory free at each load, which moves.
+    out = cli("check", "--json", "--shapes", "--limit", "memory=8e9", f)
     assert out.returncode == 0, out.stderr
-    assert pbrt_sppm.load(f).check(shapes=True) == json.loads(out.stdout)
+    got = pbrt_sppm.load(f, limits={"memory": "8e9"}).check(shapes=True)
+    assert got == json.loads(out.stdout)
+    assert got["memory"]["limit_bytes"] == 8_000_000_000 and not got["memory"]["limit_is_free_memory"]
 
 
 def test_trace_answers_as_the_geometry_says():
