@@ -260,11 +260,27 @@ impl Grid {
     /// handed to `prefetch` (which asks the cache for what `f` will read of it), then
     /// handed to `f` in the same order. Their cache misses overlap rather than follow
     /// each other.
-    pub fn gather_within_prefetched(&self, p: Vec3, prefetch: impl Fn(u32), mut f: impl FnMut(u32)) -> bool {
+    pub fn gather_within_prefetched(&self, p: Vec3, prefetch: impl Fn(u32), f: impl FnMut(u32)) -> bool {
+        let near = |pixel, site: &Site| {
+            let near = (site.p - p).length_squared() <= site.radius * site.radius;
+            if near {
+                prefetch(pixel);
+            }
+            near
+        };
+        self.gather_picked(p, near, f)
+    }
+
+    /// [`Grid::gather_sites`] in two steps: `pick` sees every entry and keeps some
+    /// (asking the cache for what `f` will read of them); then `f` gets the kept ones,
+    /// in the same order. Whether the cells looked in held any entry.
+    pub fn gather_picked(&self, p: Vec3, mut pick: impl FnMut(u32, &Site) -> bool, mut f: impl FnMut(u32)) -> bool {
         const LISTED: usize = 32;
         let (mut listed, mut count, mut more) = ([0u32; LISTED], 0, Vec::new());
-        let any = self.gather_within(p, |pixel| {
-            prefetch(pixel);
+        let any = self.gather_sites(p, |pixel, site| {
+            if !pick(pixel, site) {
+                return;
+            }
             match listed.get_mut(count) {
                 Some(slot) => (*slot, count) = (pixel, count + 1),
                 None => more.push(pixel),
@@ -486,6 +502,16 @@ mod tests {
             grid.gather_within(Vec3::splat(0.5), |i| within.push(i));
             assert_eq!(within.len(), 100);
             assert_eq!(prefetched(&grid, Vec3::splat(0.5)), (within.clone(), within));
+            // Picked by another rule: every entry is seen, the kept ones come in order.
+            let (mut seen, mut all, mut kept) = (0, Vec::new(), Vec::new());
+            grid.gather_sites(Vec3::splat(0.5), |i, _| all.push(i));
+            let pick = |i: u32, _: &Site| {
+                seen += 1;
+                i.is_multiple_of(3)
+            };
+            grid.gather_picked(Vec3::splat(0.5), pick, |i| kept.push(i));
+            assert_eq!(seen, all.len());
+            assert_eq!(kept, all.into_iter().filter(|i| i.is_multiple_of(3)).collect::<Vec<_>>());
         }
     }
 

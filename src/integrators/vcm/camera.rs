@@ -15,7 +15,7 @@ use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique, Techniques};
 use crate::accel::Hit;
 use crate::guiding::{Mix, Record, Toward};
-use crate::integrators::grid::Grid;
+use crate::integrators::grid::{Grid, Site, prefetch};
 use crate::integrators::sppm::{Surface, camera_ray, surface};
 use crate::integrators::subsurface;
 use crate::interaction::{Footprint, SurfaceInteraction, light_sample_point};
@@ -654,13 +654,21 @@ impl Cameras<'_> {
             return [Vec3::ZERO; 4];
         }
         let mut sum = [DVec3::ZERO; 4];
-        grid.gather_sites(p, |k, site| {
+        // The site is the spot's point: light vertices out of reach are passed over
+        // without reading their spot. Those in reach are listed first, with their
+        // spots and vertices asked of the cache, so that the misses overlap (they were
+        // half the lookup's time on `doorway`).
+        let near = |k: u32, site: &Site| {
             *candidates += 1;
-            // The site is the spot's point: light vertices out of reach are passed over
-            // without reading their spot.
-            if (site.p - p).length_squared() > r2 {
-                return;
+            let d2 = (site.p - p).length_squared();
+            let near = d2 <= r2 || d2.is_nan(); // (as the test was: not beyond r)
+            if near {
+                prefetch(&self.lights.spots[k as usize]);
+                prefetch(&self.lights.vertices[k as usize]);
             }
+            near
+        };
+        grid.gather_picked(p, near, |k| {
             let spot = &self.lights.spots[k as usize];
             // Direct light (one edge from the light) is never merged (see `mis`): first
             // light vertices are not in the grid.
