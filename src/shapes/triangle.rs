@@ -182,6 +182,9 @@ impl WatertightRay {
 pub struct TriangleHit {
     pub t: f32,
     pub b: [f32; 3],
+    /// The corners tested, as stored: the interaction takes them from here rather
+    /// than through the mesh's indices, a dependent cache miss.
+    pub p: [Vec3; 3],
 }
 
 impl TriangleMesh {
@@ -312,7 +315,7 @@ pub fn watertight<const KX: usize, const KY: usize, const KZ: usize>(
     if t > t_max {
         return None;
     }
-    Some(TriangleHit { t, b: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
+    Some(TriangleHit { t, b: [e0 * inv_det, e1 * inv_det, e2 * inv_det], p: [p0, p1, p2] })
 }
 
 /// The corners of the four triangles `idx` lists as lanes (`[c][axis]`), with `load`
@@ -412,7 +415,7 @@ impl TriangleMesh {
 
     /// Differential geometry at a hit (pbrt-v3's triangle interaction).
     pub fn interaction(&self, tri: usize, hit: &TriangleHit, flags: MeshFlags) -> SurfaceInteraction {
-        let [p0, p1, p2] = self.corners(tri);
+        let [p0, p1, p2] = hit.p;
         let uv = self.uvs(tri);
         let [b0, b1, b2] = hit.b;
         let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
