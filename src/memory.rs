@@ -1,6 +1,6 @@
 //! The memory a scene needs at its peak, estimated while it loads, and the memory the
-//! machine has for it: what `--limit memory=N` bounds. (Also a cache prefetch helper
-//! the accelerator and the photon grid share.)
+//! machine has for it: what `--limit memory=N` bounds. (Also the cache prefetch
+//! helpers the accelerator, the photon grid, SPPM and vcm share.)
 //!
 //! ```text
 //! pbrt-sppm render city.pbrt --limit memory=16e9
@@ -145,6 +145,13 @@ pub fn prefetch_lines(range: std::ops::Range<usize>) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = range;
+}
+
+/// Asks the cache for the lines `value` spans, for a read that follows soon.
+#[inline(always)]
+pub fn prefetch<T>(value: &T) {
+    let start = value as *const T as usize;
+    prefetch_lines(start..start + std::mem::size_of::<T>());
 }
 
 /// The memory the process may still take: the system's `MemAvailable`, or what its

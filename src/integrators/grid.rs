@@ -216,7 +216,7 @@ impl Grid {
             let (lo, hi) = (p - self.reach, p + self.reach);
             self.box_cells(lo, hi, |key| {
                 if let Some(k) = keys.get_mut(n) {
-                    prefetch(&self.offsets[bucket(key, self.offsets.len() - 1)]);
+                    crate::memory::prefetch(&self.offsets[bucket(key, self.offsets.len() - 1)]);
                     *k = key;
                 }
                 n += 1;
@@ -289,13 +289,6 @@ impl Grid {
         listed[..count].iter().chain(&more).for_each(|&pixel| f(pixel));
         any
     }
-}
-
-/// Asks the cache for the lines `value` spans, for a read that follows soon.
-#[inline(always)]
-pub fn prefetch<T>(value: &T) {
-    let start = value as *const T as usize;
-    crate::memory::prefetch_lines(start..start + std::mem::size_of::<T>());
 }
 
 impl Grid {

@@ -17,7 +17,7 @@
 use super::adaptive::{self, Chain, Deposit, PhotonCounts, PhotonSampling};
 use super::beams::{self, Beam, VolumeGather, VolumePhoton};
 use super::error::RenderError;
-use super::grid::{Binning, Grid, Grouped, Site, prefetch};
+use super::grid::{Binning, Grid, Grouped, Site};
 use super::passes::{self, PassMode};
 use super::preview::{self, Preview};
 use super::volume::{self, MediumPoint};
@@ -27,7 +27,7 @@ use crate::lights::Light;
 use crate::materials::{Bsdf, TransportMode};
 use crate::math::{Point3, Vector3};
 use crate::media::HenyeyGreenstein;
-use crate::memory::DEPOSITS_HELD;
+use crate::memory::{DEPOSITS_HELD, prefetch};
 use crate::parser::Syntax;
 use crate::render::RenderScene;
 use crate::sampling::power_heuristic;
