@@ -28,7 +28,11 @@ trait ListNumber: Sized + Send {
 }
 
 impl ListNumber for f32 {
+    #[inline(always)]
     fn scan(text: &[u8], at: usize) -> Option<(f32, usize)> {
+        if let Some(read) = short_f32(text, at) {
+            return Some(read);
+        }
         match fast_f32(text, at) {
             Ok(read) => Some(read),
             Err(end) => Some((standard(&text[at..end])?, end)),
@@ -37,9 +41,48 @@ impl ListNumber for f32 {
 }
 
 impl ListNumber for i32 {
+    #[inline(always)]
     fn scan(text: &[u8], at: usize) -> Option<(i32, usize)> {
+        // The usual index: 1 to 7 digits and whitespace, read as one 8-byte word.
+        if let Some(&bytes) = text.get(at..).and_then(|t| t.first_chunk::<8>()) {
+            let bytes = u64::from_le_bytes(bytes);
+            let (n, v) = digit_run(bytes);
+            if (1..8).contains(&n) && is_space((bytes >> (8 * n)) as u8) {
+                return Some((v as i32, at + n));
+            }
+        }
         scan_int(text, at)
     }
+}
+
+/// The usual coordinate, `-12.375`: an optional minus, up to 7 digits, a point and up
+/// to 7 digits, then whitespace, read as two 8-byte words. Its digits (at most 2²⁴)
+/// and the power of ten (at most 10⁷) are exact in `f32`, so one division rounds it
+/// correctly, as [`fast_f32`] does; `None` for anything else.
+#[inline(always)]
+fn short_f32(text: &[u8], at: usize) -> Option<(f32, usize)> {
+    const POW10: [u64; 8] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000];
+    let word = |i: usize| text.get(i..).and_then(|t| t.first_chunk::<8>()).map(|b| u64::from_le_bytes(*b));
+    let neg = text.get(at) == Some(&b'-');
+    let from = at + neg as usize;
+    let whole_bytes = word(from)?;
+    let (n1, whole) = digit_run(whole_bytes);
+    let after = (whole_bytes >> (8 * n1.min(7))) as u8;
+    let (n2, fraction, end) = match after {
+        b'.' if n1 < 8 => {
+            let bytes = word(from + n1 + 1)?;
+            let (n2, fraction) = digit_run(bytes);
+            (n2 < 8 && is_space((bytes >> (8 * n2.min(7))) as u8)).then_some((n2, fraction, from + n1 + 1 + n2))?
+        }
+        c if n1 < 8 && is_space(c) => (0, 0, from + n1),
+        _ => return None,
+    };
+    let mantissa = whole * POW10[n2] + fraction;
+    if n1 + n2 == 0 || mantissa > 1 << 24 {
+        return None;
+    }
+    let v = mantissa as f32 / POW10[n2] as f32;
+    Some((if neg { -v } else { v }, end))
 }
 
 /// A long list of plain numbers (`text` starts inside its brackets) parsed by pieces on
@@ -219,20 +262,11 @@ impl Decimal {
 /// multiplications), then one at a time.
 fn read_digits(text: &[u8], mut i: usize, mantissa: &mut u64) -> usize {
     const POW10: [u64; 9] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000, 100_000_000];
-    const LANES: u64 = 0x0101_0101_0101_0101;
     while let Some(&bytes) = text.get(i..).and_then(|t| t.first_chunk::<8>()) {
-        // Digits become 0..=9 in their bytes; anything else 10 or more.
-        let x = u64::from_le_bytes(bytes) ^ (b'0' as u64 * LANES);
-        let not_digit = (((x & (0x7f * LANES)) + (0x76 * LANES)) | x) & (0x80 * LANES);
-        let n = (not_digit.trailing_zeros() / 8) as usize;
+        let (n, v) = digit_run(u64::from_le_bytes(bytes));
         if n == 0 {
             return i;
         }
-        // The n digits to the top bytes (the first digit is the lowest byte), zeros below.
-        let v = x << (64 - 8 * n);
-        let v = (v.wrapping_mul(10) + (v >> 8)) & 0x00ff_00ff_00ff_00ff;
-        let v = (v.wrapping_mul(100) + (v >> 16)) & 0x0000_ffff_0000_ffff;
-        let v = (v.wrapping_mul(10_000) + (v >> 32)) & 0xffff_ffff;
         *mantissa = mantissa.wrapping_mul(POW10[n]).wrapping_add(v);
         i += n;
         if n < 8 {
@@ -244,6 +278,24 @@ fn read_digits(text: &[u8], mut i: usize, mantissa: &mut u64) -> usize {
         i += 1;
     }
     i
+}
+
+/// The run of decimal digits that 8 bytes start with (the first byte the lowest): its
+/// length, 0 to 8, and its value. SWAR: the length from a bit mask, the value from
+/// three multiplications.
+#[inline(always)]
+fn digit_run(bytes: u64) -> (usize, u64) {
+    const LANES: u64 = 0x0101_0101_0101_0101;
+    // Digits become 0..=9 in their bytes; anything else 10 or more.
+    let x = bytes ^ (b'0' as u64 * LANES);
+    let not_digit = (((x & (0x7f * LANES)) + (0x76 * LANES)) | x) & (0x80 * LANES);
+    let n = (not_digit.trailing_zeros() / 8) as usize;
+    // The n digits to the top bytes (the first digit is the lowest byte), zeros below.
+    let v = x.checked_shl(64 - 8 * n as u32).unwrap_or(0);
+    let v = (v.wrapping_mul(10) + (v >> 8)) & 0x00ff_00ff_00ff_00ff;
+    let v = (v.wrapping_mul(100) + (v >> 16)) & 0x0000_ffff_0000_ffff;
+    let v = (v.wrapping_mul(10_000) + (v >> 32)) & 0xffff_ffff;
+    (n, v)
 }
 
 /// pbrt-v4's strict integer syntax: optional sign, then digits (`None` on overflow).
@@ -326,6 +378,29 @@ mod tests {
             assert_eq!(parse_f64(t.as_bytes()).map(f64::to_bits), t.parse::<f64>().ok().map(f64::to_bits), "{t}");
         }
         assert_eq!(parse_f64(b"1.2.3"), None);
+    }
+
+    #[test]
+    fn list_words_read_as_the_standard_parsers_read_them() {
+        let floats =
+            ["0", "-0.0", "5.", ".5", "-.5", "-", ".", "-.", "1.2.3", "12345678.5", "1234567.1234567", "0.00000001"];
+        let more = ["16777216", "16777217", "8388607.5", "-9999999.9", "0.1234567", "7x", "+1.5", "1e3", "00000001.5"];
+        let ints = ["0", "7", "1234567", "12345678", "-5", "+5", "0000007", "2147483647", "2147483648", "5.0", "-"];
+        for (word, after) in
+            floats.iter().chain(&more).flat_map(|w| ["", " ", "\n", "x", "        ", "\t7 7 7 7 "].map(|a| (w, a)))
+        {
+            let text = format!("{word}{after}");
+            let whole = text.split(|c: char| c.is_ascii_whitespace()).next().unwrap_or_default();
+            let want = whole.parse::<f32>().ok().map(|v| (v.to_bits(), whole.len()));
+            let got = <f32 as ListNumber>::scan(text.as_bytes(), 0).map(|(v, end)| (v.to_bits(), end));
+            assert_eq!(got, want, "{text:?}");
+        }
+        for (word, after) in ints.iter().flat_map(|w| ["", " ", "\r\n", "x", "         "].map(|a| (w, a))) {
+            let text = format!("{word}{after}");
+            let whole = text.split(|c: char| c.is_ascii_whitespace()).next().unwrap_or_default();
+            let want = whole.parse::<i32>().ok().map(|v| (v, whole.len()));
+            assert_eq!(<i32 as ListNumber>::scan(text.as_bytes(), 0), want, "{text:?}");
+        }
     }
 
     #[test]
