@@ -276,6 +276,21 @@ impl ParamList {
         Ok(Some(p))
     }
 
+    /// The values of the last parameter of this name, moved out: the parameter keeps
+    /// its name, type and spans and is left with no values of the same kind. For
+    /// readers that keep a long array as it is (a mesh's points), which would otherwise
+    /// copy it.
+    pub fn take_values(&mut self, name: &str) -> Option<Values> {
+        let p = self.params.iter_mut().rev().find(|p| p.name == name)?;
+        let empty = match p.values {
+            Values::Ints(_) => Values::Ints(Vec::new()),
+            Values::Floats(_) => Values::Floats(Vec::new()),
+            Values::Strings(_) => Values::Strings(Vec::new()),
+            Values::Bools(_) => Values::Bools(Vec::new()),
+        };
+        Some(std::mem::replace(&mut p.values, empty))
+    }
+
     /// The last parameter of this name, whatever its type, without marking it used.
     pub fn named(&self, name: &str) -> Option<&Param> {
         self.params.iter().rev().find(|p| p.name == name)

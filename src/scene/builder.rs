@@ -826,7 +826,7 @@ impl Builder {
         self.warn_motion(span);
         let params = self.with_attributes("shape", e.params);
         let e = Entity { params, ..e };
-        let pending = PendingShape {
+        let mut pending = PendingShape {
             entity: e,
             ctm: self.gs.ctm[0],
             reverse_orientation: self.gs.reverse_orientation,
@@ -860,7 +860,7 @@ impl Builder {
                     self.deferred_shapes.push(Deferred { at, pending, area_light, ahead: !unknown_quads });
                     return Ok(());
                 }
-                for (shape, alpha) in self.build_shape(&pending, area_light)? {
+                for (shape, alpha) in self.build_shape(&mut pending, area_light)? {
                     self.shapes.push(shape);
                     self.shape_spans.push(pending.entity.name_span);
                     self.shape_materials.push(pending.material.clone());
@@ -941,8 +941,8 @@ impl Builder {
         let (now, later) = std::mem::take(&mut self.deferred_shapes).into_iter().partition(|d| d.ahead == ahead);
         self.deferred_shapes = later;
         let mut built = Vec::with_capacity(now.len());
-        for d in now {
-            let shapes = self.build_shape(&d.pending, d.area_light)?;
+        for mut d in now {
+            let shapes = self.build_shape(&mut d.pending, d.area_light)?;
             built.push((d, shapes));
         }
         // From the last, so that each earlier place stays where it was.
@@ -961,8 +961,12 @@ impl Builder {
     /// (a pbrt-v4 PLY file of triangles and quads makes two); the material and alpha are
     /// resolved later. Empty when the shape type is unsupported (warned and listed as
     /// skipped).
-    fn build_shape(&mut self, s: &PendingShape, area_light: Option<u32>) -> Res<Vec<(ShapeDesc, Option<AlphaParams>)>> {
-        let (p, at) = (&s.entity.params, s.entity.name_span);
+    fn build_shape(
+        &mut self,
+        s: &mut PendingShape,
+        area_light: Option<u32>,
+    ) -> Res<Vec<(ShapeDesc, Option<AlphaParams>)>> {
+        let at = s.entity.name_span;
         let resolve = |n: &str| self.reader.resolve_path(n);
         let quads = match self.known_syntax() {
             Some(Syntax::V3) => plymesh::Quads::Split,
@@ -971,8 +975,9 @@ impl Builder {
         let mut warn = Vec::new();
         let (files, ahead) = (&self.reader.files, &self.read_ahead);
         let mut ctx = ShapeContext { resolve: &resolve, quads, files, ahead, warn: &mut warn };
-        let built = shapes::read(&s.entity.name, p, at, &mut ctx);
+        let built = shapes::read(&s.entity.name, &mut s.entity.params, at, &mut ctx);
         self.warnings.append(&mut warn);
+        let p = &s.entity.params;
         let Some(built) = built? else {
             let what = format!("Shape \"{}\"", s.entity.name);
             self.skip(at, what, checks::why_left_out(Family::Shape, &s.entity.name));
@@ -1402,9 +1407,9 @@ impl Builder {
             if !self.objects[i].used {
                 continue;
             }
-            let pending = std::mem::take(&mut self.objects[i].shapes);
+            let mut pending = std::mem::take(&mut self.objects[i].shapes);
             let mut shapes = Vec::with_capacity(pending.len());
-            for s in &pending {
+            for s in &mut pending {
                 for (mut shape, alpha) in self.build_shape(s, None)? {
                     shape.material = self.resolve_material(&s.material)?;
                     if let Some(a) = alpha {

@@ -419,7 +419,7 @@ fn bilinear_pdf([x, y]: [f32; 2], w: [f32; 4]) -> f32 {
 /// `Shape "bilinearmesh"` (v4; see [`super::mesh_params`] for its parameters).
 pub const NAME: &str = "bilinearmesh";
 
-pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
+pub fn read(ctx: &mut ShapeContext, p: &mut ParamList, span: Span) -> Res<Built> {
     let mesh = super::mesh_params::patches_from_params(p, NAME, span, ctx.warn)?;
     Ok(Built::Patches { mesh, kind: NAME, filename: None })
 }

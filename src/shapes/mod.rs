@@ -243,7 +243,8 @@ pub struct ShapeContext<'a> {
 /// A `Shape` type: the name scenes use and its reader.
 pub struct ShapeType {
     pub name: &'static str,
-    pub read: fn(&mut ShapeContext, &ParamList, Span) -> Res<Built>,
+    /// Gets the list to itself: a reader may move long arrays out of it.
+    pub read: fn(&mut ShapeContext, &mut ParamList, Span) -> Res<Built>,
 }
 
 /// A quadric's reader as a shape reader.
@@ -293,17 +294,17 @@ pub const REGISTRY: [ShapeType; 14] = [
     quadric_type!(hyperboloid),
     ShapeType { name: triangle::NAME, read: triangle::read },
     ShapeType { name: bilinear::NAME, read: bilinear::read },
-    ShapeType { name: loopsubdiv::NAME, read: loopsubdiv::read },
-    ShapeType { name: plymesh::NAME, read: plymesh::read },
-    ShapeType { name: objmesh::NAME, read: objmesh::read },
-    ShapeType { name: heightfield::NAME, read: heightfield::read },
-    ShapeType { name: nurbs::NAME, read: nurbs::read },
-    ShapeType { name: curve::NAME, read: curve::read },
+    ShapeType { name: loopsubdiv::NAME, read: |c, p, at| loopsubdiv::read(c, p, at) },
+    ShapeType { name: plymesh::NAME, read: |c, p, at| plymesh::read(c, p, at) },
+    ShapeType { name: objmesh::NAME, read: |c, p, at| objmesh::read(c, p, at) },
+    ShapeType { name: heightfield::NAME, read: |c, p, at| heightfield::read(c, p, at) },
+    ShapeType { name: nurbs::NAME, read: |c, p, at| nurbs::read(c, p, at) },
+    ShapeType { name: curve::NAME, read: |c, p, at| curve::read(c, p, at) },
 ];
 
 /// Builds a shape's geometry in object space, or `None` for a type we do not render
 /// (the caller skips it with a warning).
-pub fn read(ty: &str, p: &ParamList, span: Span, ctx: &mut ShapeContext) -> Res<Option<Built>> {
+pub fn read(ty: &str, p: &mut ParamList, span: Span, ctx: &mut ShapeContext) -> Res<Option<Built>> {
     let Some(t) = REGISTRY.iter().find(|t| t.name == ty) else { return Ok(None) };
     (t.read)(ctx, p, span).map(Some)
 }

@@ -517,7 +517,7 @@ impl TriangleMesh {
 /// `Shape "trianglemesh"` (see [`super::mesh_params`] for its parameters).
 pub const NAME: &str = "trianglemesh";
 
-pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
+pub fn read(ctx: &mut ShapeContext, p: &mut ParamList, span: Span) -> Res<Built> {
     let mesh = super::mesh_params::from_params(p, NAME, span, ctx.warn)?;
     Ok(Built::Mesh { mesh, kind: NAME, filename: None })
 }
