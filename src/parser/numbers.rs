@@ -90,7 +90,7 @@ fn short_f32(text: &[u8], at: usize) -> Option<(f32, usize)> {
 /// having pushed nothing, when any word is not a number of the list's kind: the
 /// sequential reader then meets it and reports it.
 pub fn parallel_numbers(text: &[u8], values: &mut Values) -> Option<usize> {
-    let close = memchr::memchr(b']', text)?;
+    let close = find_close(text)?;
     if close < PARALLEL_LIST_BYTES {
         return None;
     }
@@ -101,6 +101,22 @@ pub fn parallel_numbers(text: &[u8], values: &mut Values) -> Option<usize> {
         _ => return None,
     }
     Some(close)
+}
+
+/// Where the first `]` is: looked for in the first [`PARALLEL_LIST_BYTES`] at once,
+/// and past them (a long list) in pieces of as many on all threads, the first piece
+/// that holds one deciding. (One search through a 30 MB list took 1.2 ms of a 50 MB
+/// file's 50.)
+fn find_close(text: &[u8]) -> Option<usize> {
+    use rayon::prelude::*;
+    let (head, rest) = text.split_at(text.len().min(PARALLEL_LIST_BYTES));
+    if let Some(at) = memchr::memchr(b']', head) {
+        return Some(at);
+    }
+    let found =
+        rest.par_chunks(PARALLEL_LIST_BYTES).map(|c| memchr::memchr(b']', c)).position_first(|at| at.is_some())?;
+    let piece = &rest[found * PARALLEL_LIST_BYTES..];
+    Some(head.len() + found * PARALLEL_LIST_BYTES + memchr::memchr(b']', piece)?)
 }
 
 /// Appends the numbers of `pieces`, in order, to `out`; `None` (and `out` as it was)
@@ -483,6 +499,18 @@ mod tests {
             let mut values = if ints { Values::Ints(Vec::new()) } else { Values::Floats(Vec::new()) };
             assert_eq!(parallel_numbers(long_list(&words).as_bytes(), &mut values), None, "{bad}");
             assert_eq!(values.len(), 0, "{bad}");
+        }
+    }
+
+    #[test]
+    fn the_first_close_bracket_is_found_in_any_piece() {
+        let n = 5 * PARALLEL_LIST_BYTES + 123;
+        let mut text = vec![b'7'; n];
+        assert_eq!(find_close(&text), None);
+        let edges = [0, 1, PARALLEL_LIST_BYTES - 1, PARALLEL_LIST_BYTES, 3 * PARALLEL_LIST_BYTES - 1, n - 1];
+        for &at in edges.iter().rev() {
+            text[at] = b']';
+            assert_eq!(find_close(&text), Some(at));
         }
     }
 
