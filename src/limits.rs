@@ -43,13 +43,15 @@ impl Files {
     /// `file-bytes`, gunzipped to at most as many) and notes it.
     pub fn read(&self, path: &Path) -> Result<FileBytes, String> {
         read_file(path, &self.limits, |raw| match raw {
-            FileBytes::Mapped(map) => self.note_later(path, Arc::clone(map)),
-            FileBytes::Owned(bytes) => self.note(path, bytes),
+            FileBytes::Mapped(map) if map.len() >= HASH_THREAD_BYTES => self.note_later(path, Arc::clone(map)),
+            bytes => self.note(path, bytes),
         })
     }
 
     /// [`Files::note`] on a thread of its own: hashing a large file (2 ms for 50 MB)
-    /// then overlaps reading it, where it held up the parse.
+    /// then overlaps reading it, where it held up the parse. Smaller files (the PLY
+    /// files read on the thread pool, mostly) are hashed where they are read: a thread
+    /// costs about as much as hashing a megabyte.
     fn note_later(&self, path: &Path, map: Arc<memmap2::Mmap>) {
         let (files, path_buf, bytes) = (self.clone(), path.to_path_buf(), Arc::clone(&map));
         match std::thread::Builder::new().spawn(move || files.note(&path_buf, &bytes)) {
@@ -223,6 +225,9 @@ fn read_all(file: std::fs::File, len: u64, path: &Path, limits: &Limits) -> Resu
     Ok(raw)
 }
 
+/// Files at least this large are hashed on a thread of their own.
+const HASH_THREAD_BYTES: usize = 8 << 20;
+
 /// Files at least this large are mapped rather than read.
 const MAP_BYTES: u64 = 1 << 20;
 
@@ -298,7 +303,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("pbrt-sppm-files-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (big, small) = (dir.join("big.pbrt"), dir.join("small.pbrt"));
-        let text: Vec<u8> = (0..3 << 20).map(|i: u32| b"0123456789 "[i as usize % 11]).collect();
+        let text: Vec<u8> = (0..HASH_THREAD_BYTES as u32 + 5).map(|i| b"0123456789 "[i as usize % 11]).collect();
         std::fs::write(&big, &text).unwrap();
         std::fs::write(&small, b"WorldBegin").unwrap();
         let files = Files::new(Limits::default());
