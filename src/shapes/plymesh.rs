@@ -36,7 +36,12 @@ fn vertex_slot(name: &str) -> Option<usize> {
 /// What the reader collects before building the mesh.
 #[derive(Default)]
 struct Collected {
-    vertices: Vec<[f32; 14]>,
+    /// Each vertex's position (slots 0 to 2 of [`VERTEX_NAMES`]), kept by the mesh.
+    p: Vec<[f32; 3]>,
+    /// Each vertex's other slots (normal and texture coordinates), only when the file
+    /// has any: a 14-slot record per vertex was 56 bytes of pages to fault in, clear
+    /// and free for every 12 the mesh keeps.
+    attributes: Vec<[f32; 11]>,
     /// Triangulated vertex indices (checked against the vertex count at the end).
     tris: Vec<i64>,
     /// `face_indices` per triangle, when the file has them.
@@ -47,6 +52,21 @@ struct Collected {
     /// Whether quads are split into triangles (pbrt-v3) or kept (pbrt-v4).
     split_quads: bool,
     faces: usize,
+}
+
+impl Collected {
+    fn push_vertex(&mut self, v: &[f32; 14], with_attributes: bool) {
+        let (p, rest) = v.split_first_chunk::<3>().expect("14 slots");
+        self.p.push(*p);
+        if with_attributes {
+            self.attributes.push(rest.try_into().expect("11 slots"));
+        }
+    }
+}
+
+/// Whether any of these vertex property slots is past the position's.
+fn has_attributes(slots: &[Option<usize>]) -> bool {
+    slots.iter().any(|s| s.is_some_and(|k| k >= 3))
 }
 
 /// What a PLY file holds: its triangles, and its quads when they are kept as patches.
@@ -206,13 +226,14 @@ fn check_header(header: &Header) -> Result<(), String> {
 fn build(header: &Header, got: Collected) -> Result<PlyMesh, String> {
     let names = vertex_property_names(header);
     let has = |n: &str| names.contains(&n);
-    let p: Vec<[f32; 3]> = got.vertices.iter().map(|v| [v[0], v[1], v[2]]).collect();
-    let n = (has("nx") && has("ny") && has("nz")).then(|| got.vertices.iter().map(|v| [v[3], v[4], v[5]]).collect());
+    let p = got.p;
+    let attributes = &got.attributes;
+    let n = (has("nx") && has("ny") && has("nz")).then(|| attributes.iter().map(|v| [v[0], v[1], v[2]]).collect());
     let uv_pair = [(6, "u", "v"), (8, "s", "t"), (10, "texture_u", "texture_v"), (12, "texture_s", "texture_t")]
         .into_iter()
         .find(|(_, a, b)| has(a) && has(b));
     let uv: Option<Vec<[f32; 2]>> =
-        uv_pair.map(|(slot, _, _)| got.vertices.iter().map(|v| [v[slot], v[slot + 1]]).collect());
+        uv_pair.map(|(slot, _, _)| attributes.iter().map(|v| [v[slot - 3], v[slot - 2]]).collect());
     let n_v = p.len() as i64;
     let check = |list: &[i64], per: usize, what: &str| match list.iter().position(|&i| i < 0 || i >= n_v) {
         Some(k) => Err(format!("{what} {} has vertex index {}, but there are {n_v} vertices", k / per, list[k])),
@@ -322,7 +343,9 @@ fn read_ascii(reader: &mut impl BufRead, header: &Header, got: &mut Collected) -
         match name.as_str() {
             "vertex" => {
                 let v = Parser::<AsciiVertex>::new().read_payload_for_element(reader, def, header).map_err(err)?;
-                got.vertices = v.into_iter().map(|v| v.0).collect();
+                let slots: Vec<Option<usize>> = def.properties.keys().map(|k| vertex_slot(k)).collect();
+                let with_attributes = has_attributes(&slots);
+                v.iter().for_each(|v| got.push_vertex(&v.0, with_attributes));
             }
             "face" => {
                 let faces = Parser::<AsciiFace>::new().read_payload_for_element(reader, def, header).map_err(err)?;
@@ -414,7 +437,8 @@ fn read_binary<const BIG: bool>(data: &[u8], header: &Header, got: &mut Collecte
         match name.as_str() {
             "vertex" => {
                 let slots: Vec<Option<usize>> = props.iter().map(|(k, _)| vertex_slot(k)).collect();
-                got.vertices.reserve(def.count.min(room));
+                let with_attributes = has_attributes(&slots);
+                got.p.reserve(def.count.min(room));
                 for _ in 0..def.count {
                     let mut v = [0f32; 14];
                     for ((_, ty), slot) in props.iter().zip(&slots) {
@@ -423,7 +447,7 @@ fn read_binary<const BIG: bool>(data: &[u8], header: &Header, got: &mut Collecte
                             v[*s] = x as f32;
                         }
                     }
-                    got.vertices.push(v);
+                    got.push_vertex(&v, with_attributes);
                 }
             }
             _ => {
@@ -470,15 +494,18 @@ fn fast_path(
         let stride = 4 * props.len();
         let bytes = count.checked_mul(stride).filter(|&n| n <= data.len() - *pos).ok_or("PLY file ends early")?;
         let slots: Vec<Option<usize>> = props.iter().map(|(k, _)| vertex_slot(k)).collect();
-        got.vertices.extend(data[*pos..*pos + bytes].chunks_exact(stride).map(|c| {
+        let with_attributes = has_attributes(&slots);
+        got.p.reserve(count);
+        got.attributes.reserve(if with_attributes { count } else { 0 });
+        for c in data[*pos..*pos + bytes].chunks_exact(stride) {
             let mut v = [0f32; 14];
             for (k, slot) in slots.iter().enumerate() {
                 if let Some(s) = slot {
                     v[*s] = f32::from_le_bytes([c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3]]);
                 }
             }
-            v
-        }));
+            got.push_vertex(&v, with_attributes);
+        }
         *pos += bytes;
         return Ok(true);
     }
