@@ -43,15 +43,46 @@ struct Collected {
     /// and free for every 12 the mesh keeps.
     attributes: Vec<[f32; 11]>,
     /// Triangulated vertex indices (checked against the vertex count at the end).
-    tris: Vec<i64>,
+    tris: Indices,
     /// `face_indices` per triangle, when the file has them.
     tri_ids: Vec<i32>,
     /// Quads kept whole: four vertex indices each, in patch order (p00 p10 p01 p11).
-    quads: Vec<i64>,
+    quads: Indices,
     quad_ids: Vec<i32>,
     /// Whether quads are split into triangles (pbrt-v3) or kept (pbrt-v4).
     split_quads: bool,
     faces: usize,
+}
+
+/// Vertex indices as the mesh keeps them (`u32`; they were `i64` until the end, 24 MB
+/// for a million triangles). One outside `u32`'s range, or `u32::MAX` itself, is kept
+/// as `u32::MAX`, past any vertex count a file within the size limit can have, and
+/// the first such is remembered as written, for the message.
+#[derive(Default)]
+struct Indices {
+    values: Vec<u32>,
+    first_wide: Option<(usize, i64)>,
+}
+
+impl Indices {
+    fn push(&mut self, i: i64) {
+        let narrow = u32::try_from(i).ok().filter(|&v| v != u32::MAX);
+        if narrow.is_none() && self.first_wide.is_none() {
+            self.first_wide = Some((self.values.len(), i));
+        }
+        self.values.push(narrow.unwrap_or(u32::MAX));
+    }
+
+    /// The indices, or the first that is no vertex's: its place and its value.
+    fn checked(self, n_v: usize) -> Result<Vec<u32>, (usize, i64)> {
+        match self.values.iter().position(|&i| i as usize >= n_v) {
+            None => Ok(self.values),
+            Some(k) => match self.first_wide {
+                Some((wide, value)) if wide == k => Err((k, value)),
+                _ => Err((k, self.values[k] as i64)),
+            },
+        }
+    }
 }
 
 impl Collected {
@@ -234,13 +265,13 @@ fn build(header: &Header, got: Collected) -> Result<PlyMesh, String> {
         .find(|(_, a, b)| has(a) && has(b));
     let uv: Option<Vec<[f32; 2]>> =
         uv_pair.map(|(slot, _, _)| attributes.iter().map(|v| [v[slot - 3], v[slot - 2]]).collect());
-    let n_v = p.len() as i64;
-    let check = |list: &[i64], per: usize, what: &str| match list.iter().position(|&i| i < 0 || i >= n_v) {
-        Some(k) => Err(format!("{what} {} has vertex index {}, but there are {n_v} vertices", k / per, list[k])),
-        None => Ok(list.iter().map(|&i| i as u32).collect::<Vec<u32>>()),
+    let n_v = p.len();
+    let check = |list: Indices, per: usize, what: &str| {
+        list.checked(n_v)
+            .map_err(|(k, value)| format!("{what} {} has vertex index {value}, but there are {n_v} vertices", k / per))
     };
-    let indices = check(&got.tris, 3, "triangle")?;
-    let quads = check(&got.quads, 4, "quad")?;
+    let indices = check(got.tris, 3, "triangle")?;
+    let quads = check(got.quads, 4, "quad")?;
     // DEVIATION(pbrt): no image difference (nothing rendered reads face indices). pbrt-v4 hands the whole per-face list
     // to both the triangles and the patches of a mixed file, each indexing it by its own primitive number; here each
     // primitive keeps its own face's index.
@@ -373,7 +404,7 @@ fn push_face(got: &mut Collected, f: &[i64], id: Option<i64>) -> Result<(), Stri
         n => return Err(format!("face {} has {n} vertices (pbrt reads triangles and quads)", got.faces)),
     };
     got.faces += 1;
-    list.extend(order.iter().map(|&k| f[k]));
+    order.iter().for_each(|&k| list.push(f[k]));
     if let Some(id) = id {
         // One per primitive: a split quad's two triangles share its id.
         ids.extend(std::iter::repeat_n(id as i32, prims));
@@ -452,7 +483,7 @@ fn read_binary<const BIG: bool>(data: &[u8], header: &Header, got: &mut Collecte
             }
             _ => {
                 let is_face = name == "face";
-                got.tris.reserve(if is_face { 3 * def.count.min(room) } else { 0 });
+                got.tris.values.reserve(if is_face { 3 * def.count.min(room) } else { 0 });
                 let (mut indices, mut scratch) = (Vec::new(), Vec::new());
                 for _ in 0..def.count {
                     let mut id = None;
@@ -525,6 +556,8 @@ fn fast_path(
         return Ok(false);
     }
     let mut indices = Vec::with_capacity(4);
+    // Triangles, most often; at most as many faces as the file has room for.
+    got.tris.values.reserve(3 * count.min((data.len() - *pos) / 13));
     for _ in 0..count {
         let n = *data.get(*pos).ok_or("PLY file ends early")? as usize;
         let words = data.get(*pos + 1..*pos + 1 + 4 * n).ok_or("PLY file ends early")?;
@@ -588,6 +621,21 @@ pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn indices_outside_u32_are_reported_as_written() {
+        let list = |values: &[i64]| {
+            let mut l = Indices::default();
+            values.iter().for_each(|&i| l.push(i));
+            l
+        };
+        assert_eq!(list(&[0, 2, 1]).checked(3), Ok(vec![0, 2, 1]));
+        assert_eq!(list(&[0, 3, -1]).checked(3), Err((1, 3)));
+        assert_eq!(list(&[0, 1, -1]).checked(3), Err((2, -1)));
+        assert_eq!(list(&[0, 1 << 40, -1]).checked(3), Err((1, 1 << 40)));
+        assert_eq!(list(&[0, 1, u32::MAX as i64]).checked(3), Err((2, u32::MAX as i64)));
+        assert_eq!(list(&[7, -5, 1 << 40]).checked(3), Err((0, 7)), "the first bad one, wide or not");
+    }
 
     /// A PLY file of `n` jittered vertices (position, normal, uv) and faces of three and
     /// four corners, little- or big-endian, face indices as `int` or `uint`.
