@@ -985,13 +985,26 @@ fn sah_split(
     if n <= max_leaf && best_cost >= left_cost + bins.cost[BINS - 1] as f32 {
         return None;
     }
-    let mid = partition(prims, |p| bin_of(p.centroid2()) <= best);
+    let side = |bins: &[Extent]| bins.iter().fold(Extent::EMPTY, |a, &e| a.union(e));
+    let (left, right) = (side(&bins.extent[..=best]), side(&bins.extent[best + 1..]));
+    // `bin_of` never decreases as the centroid grows, so the bins up to `best` hold
+    // exactly the centroids up to the largest among them: one comparison a primitive
+    // where the bin took a division (the partition was a third of the build). A NaN
+    // centroid (bin 0) would make that largest one NaN: then the bins decide.
+    let last_left = left.centroids.hi[axis];
+    let mid = match last_left.is_nan() {
+        false => partition(prims, |p| p.centroid2()[axis] <= last_left || p.centroid2()[axis].is_nan()),
+        true => partition(prims, |p| bin_of(p.centroid2()) <= best),
+    };
+    if cfg!(test) {
+        let (l, r) = prims.split_at(mid);
+        assert!(l.iter().all(|p| bin_of(p.centroid2()) <= best) && r.iter().all(|p| bin_of(p.centroid2()) > best));
+    }
     // A split that leaves one side empty (degenerate bins) falls back to halves.
     if mid == 0 || mid == n {
         return Some(Split::at(n / 2));
     }
-    let side = |bins: &[Extent]| bins.iter().fold(Extent::EMPTY, |a, &e| a.union(e));
-    Some(Split { mid, extents: Some((side(&bins.extent[..=best]), side(&bins.extent[best + 1..]))) })
+    Some(Split { mid, extents: Some((left, right)) })
 }
 
 /// For a would-be leaf whose primitives are of several groups: the first one's group
