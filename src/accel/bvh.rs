@@ -830,7 +830,13 @@ fn decide(prims: &mut [PrimInfo], first: usize, settings: &Settings, known: Opti
         // All centroids coincide: a leaf if it fits, else split by count.
         (n > settings.max_leaf).then(|| Split::at(n / 2))
     } else {
-        sah_split(prims, &bounds, axis, lo, hi, settings.max_leaf)
+        // The axis as a constant: a lane picked by a run-time index was a branch per
+        // primitive in the binning loop.
+        match axis {
+            0 => sah_split::<0>(prims, &bounds, lo, hi, settings.max_leaf),
+            1 => sah_split::<1>(prims, &bounds, lo, hi, settings.max_leaf),
+            _ => sah_split::<2>(prims, &bounds, lo, hi, settings.max_leaf),
+        }
     };
     match split.or_else(|| split_groups(prims, settings.group).map(Split::at)) {
         Some(Split { mid, extents }) => Decided::Interior { bounds, first, count, mid: mid as u32, extents },
@@ -946,11 +952,10 @@ fn kid_slices<'a>(prims: &'a mut [PrimInfo], base: usize, kids: &[Decided]) -> V
 }
 
 /// Partitions by the cheapest of the bin boundaries; `None` when a leaf is cheaper.
-/// `lo` and `hi` bound the doubled centroids on `axis`.
-fn sah_split(
+/// `lo` and `hi` bound the doubled centroids on axis `AXIS`.
+fn sah_split<const AXIS: usize>(
     prims: &mut [PrimInfo],
     bounds: &Bounds3,
-    axis: usize,
     lo: f32,
     hi: f32,
     max_leaf: usize,
@@ -958,7 +963,7 @@ fn sah_split(
     let n = prims.len();
     // Through i32: the same bins (the value lies in 0..=BINS, or is NaN: 0), with a
     // shorter conversion than to a 64-bit unsigned.
-    let bin_of = |c: Vec4| (((c[axis] - lo) / (hi - lo) * BINS as f32) as i32).min(BINS as i32 - 1) as usize;
+    let bin_of = |c: Vec4| (((c[AXIS] - lo) / (hi - lo) * BINS as f32) as i32).min(BINS as i32 - 1) as usize;
     let bins = Bins::of(prims, bin_of);
     let area = |e: &Extent| e.bounds.bounds3().surface_area();
     // Sweep from the right for the right-hand areas, then from the left.
@@ -991,9 +996,9 @@ fn sah_split(
     // exactly the centroids up to the largest among them: one comparison a primitive
     // where the bin took a division (the partition was a third of the build). A NaN
     // centroid (bin 0) would make that largest one NaN: then the bins decide.
-    let last_left = left.centroids.hi[axis];
+    let last_left = left.centroids.hi[AXIS];
     let mid = match last_left.is_nan() {
-        false => partition(prims, |p| p.centroid2()[axis] <= last_left || p.centroid2()[axis].is_nan()),
+        false => partition(prims, |p| p.centroid2()[AXIS] <= last_left || p.centroid2()[AXIS].is_nan()),
         true => partition(prims, |p| bin_of(p.centroid2()) <= best),
     };
     if cfg!(test) {
