@@ -103,10 +103,7 @@ impl ShapeSet {
     pub fn prim_bounds(&self, s: ShapeRef, prim: usize) -> Option<Bounds3> {
         match s {
             ShapeRef::Quadric(q) => Some(self.quadrics[q as usize].bounds()),
-            ShapeRef::Mesh { mesh, .. } => {
-                let m = &self.meshes[mesh as usize];
-                (!m.is_degenerate(prim)).then(|| m.triangle_bounds(prim))
-            }
+            ShapeRef::Mesh { mesh, .. } => self.meshes[mesh as usize].bounds_unless_degenerate(prim),
             ShapeRef::Patches { mesh, .. } => {
                 let m = &self.patches[mesh as usize];
                 (!m.is_degenerate(prim)).then(|| m.patch_bounds(prim))

@@ -218,6 +218,15 @@ impl TriangleMesh {
         Bounds3::new(a, b).union_point(c)
     }
 
+    /// [`Self::triangle_bounds`], or `None` for a [degenerate](Self::is_degenerate)
+    /// triangle, from one read of its corners (the BVH build asks this of every
+    /// triangle, twice).
+    #[inline]
+    pub fn bounds_unless_degenerate(&self, tri: usize) -> Option<Bounds3> {
+        let [a, b, c] = self.corners(tri);
+        (!zero_area([a, b, c].map(|v| v.to_array()))).then(|| Bounds3::new(a, b).union_point(c))
+    }
+
     /// pbrt's watertight ray–triangle test (pbrt-v3 `Triangle::Intersect`).
     #[inline]
     pub fn intersect_triangle(&self, tri: usize, ray: &Ray, t_max: f32) -> Option<TriangleHit> {
