@@ -87,10 +87,10 @@ impl Indices {
 
 impl Collected {
     fn push_vertex(&mut self, v: &[f32; 14], with_attributes: bool) {
-        let (p, rest) = v.split_first_chunk::<3>().expect("14 slots");
-        self.p.push(*p);
+        let [x, y, z, rest @ ..] = *v;
+        self.p.push([x, y, z]);
         if with_attributes {
-            self.attributes.push(rest.try_into().expect("11 slots"));
+            self.attributes.push(rest);
         }
     }
 }
