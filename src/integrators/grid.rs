@@ -25,6 +25,14 @@ pub struct Site {
     pub radius: f32,
 }
 
+impl Site {
+    /// Whether `p` lies within the radius.
+    #[inline(always)]
+    pub fn reaches(&self, p: Vec3) -> bool {
+        (self.p - p).length_squared() <= self.radius * self.radius
+    }
+}
+
 /// Items in groups, each group keeping the items' order (a stable counting sort).
 pub struct Grouped<T> {
     items: Vec<T>,
@@ -250,7 +258,7 @@ impl Grid {
     /// included); whether the cells looked in held any pixel, in reach or not.
     pub fn gather_within(&self, p: Vec3, mut f: impl FnMut(u32)) -> bool {
         self.gather_sites(p, |pixel, site| {
-            if (site.p - p).length_squared() <= site.radius * site.radius {
+            if site.reaches(p) {
                 f(pixel)
             }
         })
@@ -262,7 +270,7 @@ impl Grid {
     /// each other.
     pub fn gather_within_prefetched(&self, p: Vec3, prefetch: impl Fn(u32), f: impl FnMut(u32)) -> bool {
         let near = |pixel, site: &Site| {
-            let near = (site.p - p).length_squared() <= site.radius * site.radius;
+            let near = site.reaches(p);
             if near {
                 prefetch(pixel);
             }

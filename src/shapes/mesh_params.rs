@@ -23,10 +23,6 @@ use rayon::prelude::*;
 /// Arrays longer than this are copied and checked on all threads.
 const PARALLEL_VALUES: usize = 1 << 16;
 
-fn triples(v: &[f32]) -> Vec<[f32; 3]> {
-    map_values(v.as_chunks::<3>().0, |c| c)
-}
-
 /// Reads the mesh arrays of a `trianglemesh` statement, moving the long ones out of
 /// the list (a 50 MB inline mesh copied its points and indices in 8 ms).
 /// `ty` names the shape in messages.
@@ -93,36 +89,38 @@ fn points_and_indices(
     };
     let indices = match kept {
         Some(kept) => {
-            let mut indices = take_ints(p, "indices");
-            indices.truncate(kept);
-            indices.shrink_to_fit();
             // Checked: none is negative.
-            bytemuck::allocation::cast_vec(indices)
+            bytemuck::allocation::cast_vec(take_ints(p, "indices", kept))
         }
         None => (0..arity as u32).collect(),
     };
-    Ok((take_triples(p, "P"), indices))
+    Ok((take_arrays(p, "P", n_p), indices))
 }
 
-/// The floats of parameter `name` (looked up and checked) as triples, moved out of the
-/// list. The vector is cut to its length (in place: a list read by pushes has room to
-/// spare, which the mesh would keep), so its room is whole triples and nothing is
-/// copied.
-fn take_triples(p: &mut ParamList, name: &str) -> Vec<[f32; 3]> {
+/// The floats of parameter `name` (looked up and checked) in groups of `N`, moved out
+/// of the list; past `len` groups dropped. The vector is cut to its length (in place:
+/// a list read by pushes has room to spare, which the mesh would keep), so its room is
+/// whole groups and nothing is copied.
+fn take_arrays<const N: usize>(p: &mut ParamList, name: &str, len: usize) -> Vec<[f32; N]> {
     let mut floats = match p.take_values(name) {
         Some(Values::Floats(v)) => v,
         _ => Vec::new(),
     };
+    floats.truncate(N * len);
     floats.shrink_to_fit();
-    bytemuck::allocation::try_cast_vec(floats).unwrap_or_else(|(_, v)| triples(&v))
+    bytemuck::allocation::try_cast_vec(floats).unwrap_or_else(|(_, v)| v.as_chunks::<N>().0.to_vec())
 }
 
-/// The integers of parameter `name` (looked up and checked), moved out of the list.
-fn take_ints(p: &mut ParamList, name: &str) -> Vec<i32> {
-    match p.take_values(name) {
+/// The integers of parameter `name` (looked up and checked), moved out of the list and
+/// cut to `len` (in place).
+fn take_ints(p: &mut ParamList, name: &str, len: usize) -> Vec<i32> {
+    let mut ints = match p.take_values(name) {
         Some(Values::Ints(v)) => v,
         _ => Vec::new(),
-    }
+    };
+    ints.truncate(len);
+    ints.shrink_to_fit();
+    ints
 }
 
 /// A per-vertex array of triples, ignored (warning) when its count is not `n_p`.
@@ -139,7 +137,7 @@ fn per_vertex(
         warn.push(Diagnostic::warning(a.span, msg));
         return Ok(None);
     }
-    Ok(Some(take_triples(p, name)))
+    Ok(Some(take_arrays(p, name, n_p)))
 }
 
 /// `faceIndices`, ignored (warning) unless there is one per face.
@@ -151,9 +149,7 @@ fn face_indices(
 ) -> Result<Option<Vec<i32>>, Diagnostic> {
     let Some(f) = p.array("faceIndices", ParamType::Integer)? else { return Ok(None) };
     if f.ints().len() == faces {
-        let mut f = take_ints(p, "faceIndices");
-        f.shrink_to_fit();
-        return Ok(Some(f));
+        return Ok(Some(take_ints(p, "faceIndices", faces)));
     }
     let msg = format!("\"faceIndices\" has {} entries for {faces} {what}; ignored", f.ints().len());
     warn.push(Diagnostic::warning(f.span, msg));
@@ -181,13 +177,7 @@ fn uvs(p: &mut ParamList, n_p: usize, warn: &mut Vec<Diagnostic>) -> Result<Opti
         ));
     }
     let name = a.name.clone();
-    let mut floats = match p.take_values(&name) {
-        Some(Values::Floats(v)) => v,
-        _ => Vec::new(),
-    };
-    floats.truncate(2 * n_p);
-    floats.shrink_to_fit();
-    Ok(Some(bytemuck::allocation::try_cast_vec(floats).unwrap_or_else(|(_, v)| v.as_chunks::<2>().0.to_vec())))
+    Ok(Some(take_arrays(p, &name, n_p)))
 }
 
 /// Drops a trailing partial triangle (warning) and rejects out-of-range indices.
