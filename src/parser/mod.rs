@@ -7,6 +7,7 @@ pub mod error;
 pub mod lexer;
 pub mod numbers;
 pub mod params;
+mod quick;
 pub mod source;
 pub mod stmt;
 
