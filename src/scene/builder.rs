@@ -19,6 +19,7 @@
 
 mod bugs;
 mod checks;
+mod instances;
 mod media;
 mod typed;
 
@@ -181,18 +182,6 @@ struct Deferred {
     ahead: bool,
 }
 
-/// An `ObjectInstance` statement. Its object is found by name at the end of the
-/// world (v4 files may define it later); a million of these are common, so the name
-/// is an index and a still transform is stored once.
-struct InstanceUse {
-    /// Into `Builder::instance_names`.
-    name: u32,
-    span: Span,
-    /// The CTM at the statement, and its end transform when it moves.
-    ctm: DMat4,
-    end: Option<Box<DMat4>>,
-}
-
 struct PendingObject {
     name: String,
     span: Span,
@@ -227,10 +216,7 @@ struct Builder {
     objects: Vec<PendingObject>,
     object_names: HashMap<String, u32>,
     current_object: Option<u32>,
-    instance_uses: Vec<InstanceUse>,
-    /// The object names instances use, each once (`InstanceUse::name` indexes it).
-    instance_names: Vec<String>,
-    instance_name_ids: HashMap<String, u32>,
+    instance_uses: instances::InstanceUses,
     /// Moving world shapes, each alone in an object placed by its start and end
     /// transforms (as pbrt wraps them).
     moving_shapes: Vec<(u32, [DMat4; 2])>,
@@ -312,9 +298,7 @@ impl Builder {
             objects: Vec::new(),
             object_names: HashMap::new(),
             current_object: None,
-            instance_uses: Vec::new(),
-            instance_names: Vec::new(),
-            instance_name_ids: HashMap::new(),
+            instance_uses: Default::default(),
             moving_shapes: Vec::new(),
             transform_times: [0.0, 1.0],
             first_motion: None,
@@ -613,14 +597,8 @@ impl Builder {
         if self.gs.ctm[0] != self.gs.ctm[1] {
             self.first_motion.get_or_insert(span);
         }
-        let next = self.instance_names.len() as u32;
-        let name = *self.instance_name_ids.entry(name).or_insert_with_key(|n| {
-            self.instance_names.push(n.clone());
-            next
-        });
-        let [ctm, end] = self.gs.ctm;
         self.need_memory(span, |n| n.instances += 1)?;
-        self.instance_uses.push(InstanceUse { name, span, ctm, end: (end != ctm).then(|| Box::new(end)) });
+        self.instance_uses.push(name, span, self.gs.ctm);
         Ok(())
     }
 
@@ -1360,36 +1338,24 @@ impl Builder {
     /// them), objects numbered as built (`remap`); `frame` is the motion frame.
     fn instances(&mut self, object_of_name: &[u32], remap: &[u32], frame: DMat4) -> Vec<InstanceDesc> {
         let times = self.transform_times;
+        let mut instances = std::mem::take(&mut self.instance_uses).resolve(object_of_name, remap, frame, times);
         // Moving world shapes come after the instances the file names.
-        let named = std::mem::take(&mut self.instance_uses)
-            .into_iter()
-            .map(|u| (object_of_name[u.name as usize], u.ctm, u.end, true));
-        let moving = std::mem::take(&mut self.moving_shapes)
-            .into_iter()
-            .map(|(obj, [m0, m1])| (obj, m0, (m0 != m1).then(|| Box::new(m1)), false));
-        named
-            .chain(moving)
-            .map(|(obj, m0, end, named)| InstanceDesc {
-                object: remap[obj as usize],
-                world_from_instance: m0,
-                motion: end.map(|m1| {
-                    // pbrt-v4 interpolates an instance in rendering space, a shape from
-                    // its own space there.
-                    let inner = if named { frame.inverse() } else { DMat4::IDENTITY };
-                    Box::new(AnimatedTransform::framed(m0, *m1, times, frame, inner))
-                }),
-            })
-            .collect()
+        instances.extend(std::mem::take(&mut self.moving_shapes).into_iter().map(|(obj, [m0, m1])| InstanceDesc {
+            object: remap[obj as usize],
+            world_from_instance: m0,
+            // pbrt-v4 interpolates a shape from its own space in rendering space.
+            motion: (m0 != m1).then(|| Box::new(AnimatedTransform::framed(m0, m1, times, frame, DMat4::IDENTITY))),
+        }));
+        instances
     }
 
     /// The object each name instances use stands for (the last defined by that name),
     /// by name index, and marks them used. Objects may be defined after their
     /// instances (v4); a name never defined is an error at its first use.
     fn resolve_instances(&mut self) -> Res<Vec<u32>> {
-        let found: Vec<Option<u32>> = self.instance_names.iter().map(|n| self.object_names.get(n).copied()).collect();
-        if let Some(u) = self.instance_uses.iter().find(|u| found[u.name as usize].is_none()) {
-            let name = &self.instance_names[u.name as usize];
-            return Err(Diagnostic::error(u.span, format!("object \"{name}\" is not defined")));
+        let found: Vec<Option<u32>> = self.instance_uses.names().map(|n| self.object_names.get(n).copied()).collect();
+        if let Some(e) = self.instance_uses.first_undefined(&found) {
+            return Err(e);
         }
         let objects: Vec<u32> = found.into_iter().flatten().collect();
         for &obj in &objects {
