@@ -253,16 +253,19 @@ impl SceneDescription {
         }
     }
 
-    /// Union of all shapes' world bounds (`None` for an empty scene).
+    /// Union of all shapes' world bounds (`None` for an empty scene). On all threads:
+    /// a large scene's meshes and instances took a tenth of a second on one (unions are
+    /// exact, so the result does not depend on how the work is split).
     pub fn world_bounds(&self) -> Option<[DVec3; 2]> {
+        use rayon::prelude::*;
         let object_bounds: Vec<Option<[DVec3; 2]>> =
-            self.objects.iter().map(|o| o.shapes.iter().filter_map(|s| self.local_bounds(s)).reduce(union)).collect();
-        let world = self.shapes.iter().filter_map(|s| self.local_bounds(s));
+            self.objects.par_iter().map(|o| o.shapes.iter().filter_map(|s| self.local_bounds(s)).reduce(union)).collect();
+        let world = self.shapes.par_iter().filter_map(|s| self.local_bounds(s));
         let inst = self
             .instances
-            .iter()
+            .par_iter()
             .filter_map(|i| object_bounds[i.object as usize].map(|b| transform_bounds(&i.world_from_instance, b)));
-        world.chain(inst).reduce(union)
+        world.chain(inst).reduce_with(union)
     }
 
     /// Shapes whose geometry is a triangle mesh count their triangles.
