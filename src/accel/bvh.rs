@@ -164,15 +164,17 @@ pub struct Bvh {
 /// A primitive during the build, 32 bytes: its box, with its intersection cost (in
 /// triangle tests) in `lo.w` and its index's bits in `hi.w`, so that a union or a
 /// centroid is one SIMD operation. The build is bound by memory; as separate fields
-/// a record took 48 bytes.
-#[derive(Clone, Copy)]
-struct PrimInfo {
+/// a record took 48 bytes. Callers with many primitives write these directly
+/// ([`Bvh::build_records`]) rather than a list of boxes to be converted.
+#[derive(Clone, Copy, Default)]
+pub struct PrimInfo {
     lo: Vec4,
     hi: Vec4,
 }
 
 impl PrimInfo {
-    fn new(b: &Bounds3, cost: f32, index: u32) -> PrimInfo {
+    /// Primitive number `index`, costing `cost` triangle tests, in box `b`.
+    pub fn new(b: &Bounds3, cost: f32, index: u32) -> PrimInfo {
         PrimInfo { lo: b.min.extend(cost), hi: b.max.extend(f32::from_bits(index)) }
     }
 
@@ -335,7 +337,7 @@ const TRIM_PRIMS: usize = 1 << 16;
 /// (`shapes::set::QUADRIC_COST`), so they still get leaves of their own.
 const TRAVERSAL_COST: f32 = 4.0;
 /// The most primitives in a leaf, unless the caller asks for another limit.
-const MAX_LEAF: usize = 8;
+pub const MAX_LEAF: usize = 8;
 const PARALLEL_THRESHOLD: usize = 4096;
 /// Wide nodes over more primitives than this write their children's subtrees on all
 /// threads.
@@ -367,13 +369,22 @@ impl Bvh {
         max_leaf: usize,
         group: impl Fn(usize) -> u32 + Sync,
     ) -> (Bvh, Vec<u32>) {
-        if bounds.is_empty() {
-            return (Bvh::default(), Vec::new());
-        }
-        let mut info: Vec<PrimInfo> =
+        let info: Vec<PrimInfo> =
             bounds.par_iter().enumerate().map(|(i, b)| PrimInfo::new(b, cost(i), i as u32)).collect();
         // The records hold the boxes: not both at the build's peak.
         drop(bounds);
+        Bvh::build_records(info, max_leaf, group)
+    }
+
+    /// [`Bvh::build_grouped`] from the primitives' records, record i numbered i.
+    pub fn build_records(
+        mut info: Vec<PrimInfo>,
+        max_leaf: usize,
+        group: impl Fn(usize) -> u32 + Sync,
+    ) -> (Bvh, Vec<u32>) {
+        if info.is_empty() {
+            return (Bvh::default(), Vec::new());
+        }
         let settings = Settings { max_leaf: max_leaf.clamp(1, u8::MAX as usize), group: &group };
         let root = decide(&mut info, 0, &settings, None);
         let mut nodes = Vec::new();

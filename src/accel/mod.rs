@@ -195,71 +195,98 @@ macro_rules! with_isa {
     };
 }
 
-/// Each primitive of `shapes` (numbered as in that list) and its box, in order, but
-/// zero-area ones, which are left out: `localize` then drops such triangles from
-/// their mesh, and the map back to file numbers skips them. On all threads, in runs
-/// of `PARALLEL_PRIMS` over shapes large and small alike: a first pass counts each
-/// run's primitives, a second writes them in their final places (temporary lists
-/// cost as much again in page faults).
-fn prim_boxes(shapes: &[ShapeRef], set: &ShapeSet) -> (Vec<Prim>, Vec<Bounds3>) {
-    // Where each shape's primitives start among all of them.
-    let starts: Vec<usize> = std::iter::once(0)
-        .chain(shapes.iter().scan(0, |n, &s| {
-            *n += set.prim_count(s);
-            Some(*n)
-        }))
-        .collect();
-    let all = starts[shapes.len()];
-    // Calls `kept` with each primitive of run `r` that has a box, in order.
-    let visit = |r: usize, kept: &mut dyn FnMut(Prim, Bounds3)| {
-        let run = r * PARALLEL_PRIMS..all.min((r + 1) * PARALLEL_PRIMS);
-        let mut shape = starts.partition_point(|&s| s <= run.start) - 1;
+/// The primitives of `shapes` (numbered as in that list), in order, but zero-area
+/// ones, which are left out: `localize` then drops such triangles from their mesh, and
+/// the map back to file numbers skips them. On all threads, in runs of
+/// `PARALLEL_PRIMS` over shapes large and small alike: [`PrimRuns::count`] counts each
+/// run's primitives, [`PrimRuns::fill`] writes them and their build records in their
+/// final places (temporary lists cost as much again in page faults).
+struct PrimRuns<'a> {
+    shapes: &'a [ShapeRef],
+    set: &'a ShapeSet,
+    /// Where each shape's primitives start among all of them, zero-area ones included.
+    starts: Vec<usize>,
+    /// Per run, the primitives it keeps.
+    counts: Vec<usize>,
+}
+
+impl<'a> PrimRuns<'a> {
+    fn count(shapes: &'a [ShapeRef], set: &'a ShapeSet) -> PrimRuns<'a> {
+        let starts: Vec<usize> = std::iter::once(0)
+            .chain(shapes.iter().scan(0, |n, &s| {
+                *n += set.prim_count(s);
+                Some(*n)
+            }))
+            .collect();
+        let mut runs = PrimRuns { shapes, set, starts, counts: Vec::new() };
+        let counts = (0..runs.all().div_ceil(PARALLEL_PRIMS)).into_par_iter().map(|r| {
+            let mut n = 0;
+            runs.visit(r, &mut |_, _| n += 1);
+            n
+        });
+        runs.counts = counts.collect();
+        runs
+    }
+
+    /// How many primitives the shapes have, zero-area ones included.
+    fn all(&self) -> usize {
+        self.starts[self.shapes.len()]
+    }
+
+    /// How many are kept.
+    fn kept(&self) -> usize {
+        self.counts.iter().sum()
+    }
+
+    /// Calls `kept` with each primitive of run `r` that has a box, in order.
+    fn visit(&self, r: usize, kept: &mut dyn FnMut(Prim, Bounds3)) {
+        let run = r * PARALLEL_PRIMS..self.all().min((r + 1) * PARALLEL_PRIMS);
+        let mut shape = self.starts.partition_point(|&s| s <= run.start) - 1;
         for g in run {
-            while starts[shape + 1] <= g {
+            while self.starts[shape + 1] <= g {
                 shape += 1;
             }
-            let k = g - starts[shape];
-            if let Some(b) = set.prim_bounds(shapes[shape], k) {
+            let k = g - self.starts[shape];
+            if let Some(b) = self.set.prim_bounds(self.shapes[shape], k) {
                 kept(Prim { shape: shape as u32, tri: k as u32 }, b);
             }
         }
-    };
-    let runs = all.div_ceil(PARALLEL_PRIMS);
-    let counts: Vec<usize> = (0..runs)
-        .into_par_iter()
-        .map(|r| {
-            let mut n = 0;
-            visit(r, &mut |_, _| n += 1);
-            n
-        })
-        .collect();
-    let total = counts.iter().sum();
-    // Filled on all threads first: the first touch of fresh pages is most of the cost.
-    let (mut prims, mut bounds) = (Vec::with_capacity(total), Vec::with_capacity(total));
-    prims.par_extend(rayon::iter::repeat_n(Prim { shape: 0, tri: 0 }, total));
-    bounds.par_extend(rayon::iter::repeat_n(Bounds3::default(), total));
-    let (mut p_rest, mut b_rest) = (prims.as_mut_slice(), bounds.as_mut_slice());
-    let mut slots = Vec::with_capacity(runs);
-    for &n in &counts {
-        let (p, b);
-        (p, p_rest) = std::mem::take(&mut p_rest).split_at_mut(n);
-        (b, b_rest) = std::mem::take(&mut b_rest).split_at_mut(n);
-        slots.push((p, b));
     }
-    slots.into_par_iter().enumerate().for_each(|(r, (p, b))| {
-        let mut i = 0;
-        visit(r, &mut |q, c| {
-            (p[i], b[i]) = (q, c);
-            i += 1;
+
+    /// The kept primitives and their build records (record i for primitive i, costing
+    /// `cost(its shape)`), written straight from their boxes: a list of boxes to
+    /// convert was 24 bytes a primitive of fresh pages more.
+    fn fill(&self, cost: impl Fn(&ShapeRef) -> f32 + Sync) -> (Vec<Prim>, Vec<bvh::PrimInfo>) {
+        let total = self.kept();
+        // Filled on all threads first: the first touch of fresh pages is most of the cost.
+        let (mut prims, mut records) = (Vec::with_capacity(total), Vec::with_capacity(total));
+        prims.par_extend(rayon::iter::repeat_n(Prim { shape: 0, tri: 0 }, total));
+        records.par_extend(rayon::iter::repeat_n(bvh::PrimInfo::default(), total));
+        let (mut p_rest, mut b_rest) = (prims.as_mut_slice(), records.as_mut_slice());
+        let mut slots = Vec::with_capacity(self.counts.len());
+        let mut first = 0;
+        for &n in &self.counts {
+            let (p, b);
+            (p, p_rest) = std::mem::take(&mut p_rest).split_at_mut(n);
+            (b, b_rest) = std::mem::take(&mut b_rest).split_at_mut(n);
+            slots.push((first, p, b));
+            first += n;
+        }
+        slots.into_par_iter().enumerate().for_each(|(r, (first, p, b))| {
+            let mut i = 0;
+            self.visit(r, &mut |q, c| {
+                let cost = cost(&self.shapes[q.shape as usize]);
+                (p[i], b[i]) = (q, bvh::PrimInfo::new(&c, cost, (first + i) as u32));
+                i += 1;
+            });
         });
-    });
-    (prims, bounds)
+        (prims, records)
+    }
 }
 
 impl Blas {
     fn build(shapes: Vec<ShapeRef>, set: &ShapeSet) -> Blas {
-        let (prims, bounds) = prim_boxes(&shapes, set);
-        let cost = |i: usize| ShapeSet::prim_cost(shapes[prims[i].shape as usize]);
+        let runs = PrimRuns::count(&shapes, set);
         let mut block_meshes: Vec<(u32, MeshFlags)> = shapes
             .iter()
             .map_while(|s| match s {
@@ -267,13 +294,21 @@ impl Blas {
                 _ => None,
             })
             .collect();
-        if block_meshes.len() < shapes.len() || !LeafBlocks::fit(prims.len()) {
+        if block_meshes.len() < shapes.len() || !LeafBlocks::fit(runs.kept()) {
             block_meshes.clear();
         }
         // Leaves of one mesh each, so that a block names one mesh.
-        let (mut bvh, order) = match block_meshes.is_empty() {
-            false => Bvh::build_grouped(bounds, |_| BLOCK_TRIANGLE_COST, leaves::MAX_LEAF, |i| prims[i].shape),
-            true => Bvh::build(bounds, cost),
+        let (mut bvh, order, prims) = match block_meshes.is_empty() {
+            false => {
+                let (prims, records) = runs.fill(|_| BLOCK_TRIANGLE_COST);
+                let (bvh, order) = Bvh::build_records(records, leaves::MAX_LEAF, |i| prims[i].shape);
+                (bvh, order, prims)
+            }
+            true => {
+                let (prims, records) = runs.fill(|&s| ShapeSet::prim_cost(s));
+                let (bvh, order) = Bvh::build_records(records, bvh::MAX_LEAF, |_| 0);
+                (bvh, order, prims)
+            }
         };
         bvh.move_to_huge_pages();
         let prims = order.par_iter().map(|&i| prims[i as usize]).collect();
