@@ -258,8 +258,11 @@ impl SceneDescription {
     /// exact, so the result does not depend on how the work is split).
     pub fn world_bounds(&self) -> Option<[DVec3; 2]> {
         use rayon::prelude::*;
-        let object_bounds: Vec<Option<[DVec3; 2]>> =
-            self.objects.par_iter().map(|o| o.shapes.iter().filter_map(|s| self.local_bounds(s)).reduce(union)).collect();
+        let object_bounds: Vec<Option<[DVec3; 2]>> = self
+            .objects
+            .par_iter()
+            .map(|o| o.shapes.iter().filter_map(|s| self.local_bounds(s)).reduce(union))
+            .collect();
         let world = self.shapes.par_iter().filter_map(|s| self.local_bounds(s));
         let inst = self
             .instances
