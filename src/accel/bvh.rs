@@ -424,17 +424,6 @@ impl Bvh {
         super::hugepages::advise(&self.nodes);
     }
 
-    /// Moves the nodes to memory whose pages are huge from the first write (see
-    /// [`super::hugepages`]), copying them on all threads.
-    pub fn move_to_huge_pages(&mut self) {
-        if !super::hugepages::large(&self.nodes) {
-            return;
-        }
-        let mut home = super::hugepages::with_capacity(self.nodes.len());
-        home.par_extend(self.nodes.par_iter().copied());
-        self.nodes = home;
-    }
-
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }
@@ -928,7 +917,12 @@ fn write_wide(prims: &mut [PrimInfo], base: usize, node: Decided, settings: &Set
                 sub
             })
             .collect();
-        nodes.reserve(subtrees.iter().map(Vec::len).sum());
+        // The subtrees are copied once, into room whose pages are huge from the first
+        // write when it is large (`super::hugepages`): at the root of a large build,
+        // the final array rays walk (it was copied into huge pages afterwards).
+        let mut home = super::hugepages::with_capacity(nodes.len() + subtrees.iter().map(Vec::len).sum::<usize>());
+        home.extend_from_slice(nodes);
+        *nodes = home;
         for (slot, (k, sub)) in kids.iter().zip(subtrees).enumerate() {
             let base = nodes.len() as u32;
             nodes.extend(sub.into_iter().map(|n| n.shifted(base)));

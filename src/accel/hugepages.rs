@@ -3,8 +3,8 @@
 //! every step, and each TLB miss is a page walk (a two-dimensional one under a
 //! hypervisor); 2 MiB pages cut most of those walks away. Embree does the same.
 //!
-//! Arrays made once at their final size (leaf blocks, and BVH nodes copied there when
-//! built) are marked before they are written, so their pages are huge from the first
+//! Arrays made once at their final size (leaf blocks, and a large build's BVH nodes,
+//! its subtrees appended there once written) are marked before they are written, so their pages are huge from the first
 //! write. Folding pages already written (`MADV_COLLAPSE`) makes the kernel copy them:
 //! 0.7 s for the 290 MB of a 12.6M-triangle scene's nodes and blocks on our test
 //! machine, against 0.1–0.4 s for writing them to fresh huge pages.
@@ -17,11 +17,6 @@ const HUGE: usize = 2 << 20;
 /// declines changes nothing.
 pub fn advise<T>(data: &[T]) {
     madvise(data.as_ptr(), std::mem::size_of_val(data), true);
-}
-
-/// Whether `data` is large enough for huge pages to be worth it (4 MiB).
-pub fn large<T>(data: &[T]) -> bool {
-    std::mem::size_of_val(data) >= 2 * HUGE
 }
 
 /// An empty vector with room for `n` values, its pages marked to be huge ones when

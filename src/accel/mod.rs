@@ -298,7 +298,7 @@ impl Blas {
             block_meshes.clear();
         }
         // Leaves of one mesh each, so that a block names one mesh.
-        let (mut bvh, order, prims) = match block_meshes.is_empty() {
+        let (bvh, order, prims) = match block_meshes.is_empty() {
             false => {
                 let (prims, records) = runs.fill(|_| BLOCK_TRIANGLE_COST);
                 let (bvh, order) = Bvh::build_records(records, leaves::MAX_LEAF, |i| prims[i].shape);
@@ -310,7 +310,6 @@ impl Blas {
                 (bvh, order, prims)
             }
         };
-        bvh.move_to_huge_pages();
         let prims = order.par_iter().map(|&i| prims[i as usize]).collect();
         Blas { bvh, prims, shapes, block_meshes, blocks: LeafBlocks::default() }
     }
