@@ -228,7 +228,18 @@ impl RenderScene {
         let shape_area_lights: Vec<Option<u32>> = scene.shapes.iter().map(|s| s.area_light).collect();
         let area_params = scene.area_lights.clone();
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
-        let geometry = Geometry::new(scene);
+        // A spectral scene's colours need its colour space's RGB-to-spectrum table,
+        // 40 ms to unpack on first use: it is unpacked meanwhile, on another thread.
+        let geometry = match scene.spectral {
+            true => {
+                rayon::join(
+                    || Geometry::new(scene),
+                    || crate::spectrum::sigmoid::RgbToSpectrumTable::of(scene.color_space),
+                )
+                .0
+            }
+            false => Geometry::new(scene),
+        };
         let alpha_rules = AlphaEmission::new(scene.syntax, scene.fixes);
         let rules = EmitterRules::new(scene, bidirectional, alpha_rules);
         let emitters = area_lights(&geometry, &shape_area_lights, &world_shape_alpha, &area_params, rules, &mut lights);
