@@ -32,6 +32,18 @@ pub struct EmitterInfo {
     pub first_light: u32,
 }
 
+/// The scene's BVHs. A spectral scene's colours need its colour space's RGB-to-spectrum
+/// table, 40 ms to unpack on first use: it is unpacked meanwhile, on another thread.
+fn build_geometry(scene: &SceneDescription) -> Geometry {
+    match scene.spectral {
+        true => {
+            rayon::join(|| Geometry::new(scene), || crate::spectrum::sigmoid::RgbToSpectrumTable::of(scene.color_space))
+                .0
+        }
+        false => Geometry::new(scene),
+    }
+}
+
 /// The sphere around the scene's shapes (distant and infinite lights emit across it).
 pub fn world_sphere(scene: &SceneDescription) -> WorldSphere {
     match scene.world_bounds() {
@@ -228,18 +240,7 @@ impl RenderScene {
         let shape_area_lights: Vec<Option<u32>> = scene.shapes.iter().map(|s| s.area_light).collect();
         let area_params = scene.area_lights.clone();
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
-        // A spectral scene's colours need its colour space's RGB-to-spectrum table,
-        // 40 ms to unpack on first use: it is unpacked meanwhile, on another thread.
-        let geometry = match scene.spectral {
-            true => {
-                rayon::join(
-                    || Geometry::new(scene),
-                    || crate::spectrum::sigmoid::RgbToSpectrumTable::of(scene.color_space),
-                )
-                .0
-            }
-            false => Geometry::new(scene),
-        };
+        let geometry = build_geometry(scene);
         let alpha_rules = AlphaEmission::new(scene.syntax, scene.fixes);
         let rules = EmitterRules::new(scene, bidirectional, alpha_rules);
         let emitters = area_lights(&geometry, &shape_area_lights, &world_shape_alpha, &area_params, rules, &mut lights);
