@@ -919,7 +919,7 @@ fn write_wide(prims: &mut [PrimInfo], base: usize, node: Decided, settings: &Set
             .collect();
         // The subtrees are copied once, into room whose pages are huge from the first
         // write when it is large (`super::hugepages`): at the root of a large build,
-        // the final array rays walk (it was copied into huge pages afterwards).
+        // this is the final array rays walk.
         let mut home = super::hugepages::with_capacity(nodes.len() + subtrees.iter().map(Vec::len).sum::<usize>());
         home.extend_from_slice(nodes);
         *nodes = home;
@@ -1028,8 +1028,8 @@ fn split_groups(prims: &mut [PrimInfo], group: &dyn Fn(usize) -> u32) -> Option<
 }
 
 /// Moves the primitives `pred` keeps to the front, in the order a swap per kept one
-/// gives. Without a branch: the predicate is a coin toss on the upper levels, and its
-/// mispredictions were a third of the build's partitioning time.
+/// gives. Without a branch (the predicate is a coin toss on the upper levels): a build
+/// of 6.3M boxes took about 2% less.
 fn partition(prims: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize {
     let mut i = 0;
     for j in 0..prims.len() {
