@@ -516,7 +516,7 @@ fn rays_bench(dir: &Path, runs: usize, dump: bool, sse: bool) -> ExitCode {
         mesh_bytes as f64 / tris as f64,
         geometry.accel_bytes() as f64 / tris as f64
     );
-    println!("BVH build (median of {runs}): {:.3} s", median(build_times));
+    println!("BVH build (median of {runs}): {:.3} s; SAH cost {:.2}", median(build_times), geometry.sah_cost());
     let (camera, random) = ray_sets();
     if dump {
         let ok = write_f32s(&dir.join("vertices.f32"), p.iter().flatten().copied())

@@ -593,6 +593,11 @@ impl Geometry {
         Geometry { shapes: set, instances, placements, world, objects, tlas, triangle_ids, avx: Avx::detect() }
     }
 
+    /// The world BVH's SAH cost ([`Bvh::sah_cost`]), to compare builds by.
+    pub fn sah_cost(&self) -> f64 {
+        self.world.bvh.sah_cost()
+    }
+
     /// Whether BVH traversal uses AVX2, as it does by default where the processor has it.
     pub fn uses_avx(&self) -> bool {
         self.avx.is_some()
