@@ -63,7 +63,8 @@ pub struct Block<'a> {
 const MOST_WORDS_PER_TRIANGLE: usize = 2 + 3 + 9;
 
 /// A block's length in words (without the spare word after the last block) for a leaf
-/// of `count` triangles using `vertices` vertices.
+/// of `count` triangles using `vertices` vertices. (Traversal asks it of every leaf.)
+#[inline(always)]
 fn block_len(count: usize, vertices: usize) -> usize {
     2 + 3 * count.div_ceil(4) + 3 * vertices
 }
@@ -77,10 +78,12 @@ struct LocalVertices {
 }
 
 impl LocalVertices {
+    const NONE: LocalVertices = LocalVertices { verts: [0; 3 * MAX_LEAF], count: 0, corners: [0; 3 * MAX_LEAF] };
+
     fn of(leaf: &LeafTriangles) -> LocalVertices {
         let LeafTriangles { mesh, first, count, .. } = *leaf;
         assert!(count <= MAX_LEAF, "a leaf block holds at most {MAX_LEAF} triangles");
-        let mut local = LocalVertices { verts: [0; 3 * MAX_LEAF], count: 0, corners: [0; 3 * MAX_LEAF] };
+        let mut local = LocalVertices::NONE;
         for (k, &v) in mesh.indices[3 * first..3 * (first + count)].iter().enumerate() {
             local.corners[k] = local.place(v) as u8;
         }
@@ -91,7 +94,7 @@ impl LocalVertices {
     /// first `3 * count` of `places`), and the places after them.
     fn of_places<'p>(leaf: &LeafTriangles, places: &'p [u8]) -> (LocalVertices, &'p [u8]) {
         let (mine, rest) = places.split_at(3 * leaf.count);
-        let mut local = LocalVertices { verts: [0; 3 * MAX_LEAF], count: 0, corners: [0; 3 * MAX_LEAF] };
+        let mut local = LocalVertices::NONE;
         local.corners[..mine.len()].copy_from_slice(mine);
         let indices = &leaf.mesh.indices[3 * leaf.first..3 * (leaf.first + leaf.count)];
         // A vertex's place is the count of those before it at its first use.
