@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 /// A file a scene was made from: its path made absolute and a 64-bit XXH3 of its bytes
-/// as stored.
+/// as stored (0 when the load was told not to hash: [`Files::without_hashes`]).
 #[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub struct InputFile {
     pub path: PathBuf,
@@ -32,6 +32,7 @@ pub struct Files {
     read: Arc<Mutex<Vec<InputFile>>>,
     /// Hashes of mapped files under way on threads of their own ([`Files::list`] waits).
     hashing: Arc<Mutex<Vec<std::thread::JoinHandle<()>>>>,
+    skip_hashes: bool,
 }
 
 impl Files {
@@ -39,11 +40,20 @@ impl Files {
         Files { limits, ..Default::default() }
     }
 
+    /// As [`Files::new`], for a load whose file hashes nobody reads (`check`, `trace`,
+    /// `export`: they write no checkpoint or part). Hashing a 50 MB file took 8 ms of
+    /// a core that its parse wanted.
+    pub fn without_hashes(limits: Limits) -> Files {
+        Files { limits, skip_hashes: true, ..Default::default() }
+    }
+
     /// Reads a whole input file within the limits (a regular file of at most
     /// `file-bytes`, gunzipped to at most as many) and notes it.
     pub fn read(&self, path: &Path) -> Result<FileBytes, String> {
         read_file(path, &self.limits, |raw| match raw {
-            FileBytes::Mapped(map) if map.len() >= HASH_THREAD_BYTES => self.note_later(path, Arc::clone(map)),
+            FileBytes::Mapped(map) if map.len() >= HASH_THREAD_BYTES && !self.skip_hashes => {
+                self.note_later(path, Arc::clone(map))
+            }
             bytes => self.note(path, bytes),
         })
     }
@@ -67,7 +77,7 @@ impl Files {
     /// Notes a file read otherwise (a scene given as bytes, such as standard input).
     pub fn note(&self, path: &Path, bytes: &[u8]) {
         let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
-        let hash = xxhash_rust::xxh3::xxh3_64(bytes);
+        let hash = if self.skip_hashes { 0 } else { xxhash_rust::xxh3::xxh3_64(bytes) };
         if let Ok(mut log) = self.read.lock() {
             log.push(InputFile { path, hash });
         }
@@ -299,20 +309,27 @@ mod tests {
     use super::*;
 
     #[test]
-    fn mapped_files_are_listed_with_their_hash() {
+    fn mapped_files_are_listed_with_their_hash_unless_told_not_to() {
         let dir = std::env::temp_dir().join(format!("pbrt-sppm-files-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (big, small) = (dir.join("big.pbrt"), dir.join("small.pbrt"));
         let text: Vec<u8> = (0..HASH_THREAD_BYTES as u32 + 5).map(|i| b"0123456789 "[i as usize % 11]).collect();
         std::fs::write(&big, &text).unwrap();
         std::fs::write(&small, b"WorldBegin").unwrap();
-        let files = Files::new(Limits::default());
-        assert!(matches!(files.read(&big), Ok(FileBytes::Mapped(_))), "a large file is mapped");
-        assert!(matches!(files.read(&small), Ok(FileBytes::Owned(_))));
-        let list = files.clone().list();
+        let listed = |files: Files| {
+            assert!(matches!(files.read(&big), Ok(FileBytes::Mapped(_))), "a large file is mapped");
+            assert!(matches!(files.read(&small), Ok(FileBytes::Owned(_))));
+            files.clone().list()
+        };
+        let (hashed, unhashed) =
+            (listed(Files::new(Limits::default())), listed(Files::without_hashes(Limits::default())));
         std::fs::remove_dir_all(&dir).unwrap();
-        let hashes: Vec<u64> = list.iter().map(|f| f.hash).collect();
+        let hashes: Vec<u64> = hashed.iter().map(|f| f.hash).collect();
         assert_eq!(hashes, [xxhash_rust::xxh3::xxh3_64(&text), xxhash_rust::xxh3::xxh3_64(b"WorldBegin")]);
+        // Without hashes, the same files are still listed.
+        let names = |list: &[InputFile]| list.iter().map(|f| f.path.clone()).collect::<Vec<_>>();
+        assert_eq!(names(&unhashed), names(&hashed));
+        assert!(unhashed.iter().all(|f| f.hash == 0));
     }
 
     #[test]

@@ -63,11 +63,14 @@ pub struct LoadOptions {
     /// What paths carry (`--colour`); by default as the file's pbrt: wavelengths for
     /// pbrt-v4, RGB for pbrt-v3.
     pub colour: Option<Colour>,
+    /// Leaves the files read unhashed (their [`crate::limits::InputFile`] hashes 0), for
+    /// commands that make no render fingerprint.
+    pub skip_input_hashes: bool,
 }
 
 /// Reads, parses and builds a scene file.
 pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
-    let files = Files::new(opts.limits);
+    let files = files_for(opts);
     let bytes = read_scene_bytes(path, &files).map_err(|e| {
         // A file that exists but cannot be used (UTF-16, corrupt gzip, too large) is
         // blamed at its start; a missing one has no line to point at.
@@ -83,9 +86,16 @@ pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<SceneDescription, L
 /// As [`load_scene`], with the top-level file's bytes given (its path still anchors
 /// relative file names, and names it in the list of files read).
 pub fn load_scene_from_bytes(path: &Path, bytes: Vec<u8>, opts: &LoadOptions) -> Result<SceneDescription, LoadError> {
-    let files = Files::new(opts.limits);
+    let files = files_for(opts);
     files.note(path, &bytes);
     load(path, bytes.into(), opts, files)
+}
+
+fn files_for(opts: &LoadOptions) -> Files {
+    match opts.skip_input_hashes {
+        true => Files::without_hashes(opts.limits),
+        false => Files::new(opts.limits),
+    }
 }
 
 fn load(path: &Path, bytes: FileBytes, opts: &LoadOptions, files: Files) -> Result<SceneDescription, LoadError> {

@@ -35,13 +35,13 @@ fn main() -> ExitCode {
     };
     let cli = Cli::parse_from(args);
     let result = match cli.command {
-        Command::Check { scene, json, shapes, common } => load(&scene, &common).map(|s| match json {
+        Command::Check { scene, json, shapes, common } => load(&scene, &common, Purpose::Inspect).map(|s| match json {
             true => print(&(serde_json::to_string_pretty(&check::report(&s, shapes)).unwrap_or_default() + "\n")),
             false => print(&check::summary(&s)),
         }),
-        Command::Trace { scene, rays, common } => load(&scene, &common).map(|s| trace(&s, rays)),
+        Command::Trace { scene, rays, common } => load(&scene, &common, Purpose::Inspect).map(|s| trace(&s, rays)),
         Command::Export { scene, mitsuba: _, output, common } => {
-            load(&scene, &common).map(|s| mitsuba(&s, &scene, output, common.quiet))
+            load(&scene, &common, Purpose::Inspect).map(|s| mitsuba(&s, &scene, output, common.quiet))
         }
         Command::Merge { parts, outfile, partial, allow_gaps, quiet } => {
             Ok(merge(&parts, outfile.as_deref(), partial.as_deref(), allow_gaps, quiet))
@@ -52,10 +52,19 @@ fn main() -> ExitCode {
     result.unwrap_or_else(|code| code)
 }
 
+/// What a command loads a scene for.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Purpose {
+    /// To render it: the files read are hashed for the render's fingerprint.
+    Render,
+    /// To report on, trace or export it: no fingerprint, so no hashes.
+    Inspect,
+}
+
 /// Loads a scene (`-`: standard input) under the command line's limits and fixes,
 /// printing its warnings unless quiet.
-pub(crate) fn load(scene: &Path, common: &Common) -> Result<SceneDescription, ExitCode> {
-    let s = read(scene, common, false)?;
+pub(crate) fn load(scene: &Path, common: &Common, purpose: Purpose) -> Result<SceneDescription, ExitCode> {
+    let s = read(scene, common, false, purpose)?;
     if !common.quiet {
         s.warnings.iter().for_each(|w| say!("{w}"));
     }
@@ -64,7 +73,12 @@ pub(crate) fn load(scene: &Path, common: &Common) -> Result<SceneDescription, Ex
 
 /// Loads a scene without printing its warnings; an error is printed on a line of its
 /// own (`line_open`: after ending the line a caller left open).
-pub(crate) fn read(scene: &Path, common: &Common, line_open: bool) -> Result<SceneDescription, ExitCode> {
+pub(crate) fn read(
+    scene: &Path,
+    common: &Common,
+    line_open: bool,
+    purpose: Purpose,
+) -> Result<SceneDescription, ExitCode> {
     let end_line = || {
         if line_open {
             say!("");
@@ -79,7 +93,15 @@ pub(crate) fn read(scene: &Path, common: &Common, line_open: bool) -> Result<Sce
         limits.set(spec).map_err(|e| fail(Path::new("--limit"), e))?;
     }
     let fixes = common.fixes.unwrap_or_default();
-    let opts = LoadOptions { syntax: common.syntax, limits, fixes, colour: common.colour, ..Default::default() };
+    let skip_input_hashes = purpose == Purpose::Inspect;
+    let opts = LoadOptions {
+        syntax: common.syntax,
+        limits,
+        fixes,
+        colour: common.colour,
+        skip_input_hashes,
+        ..Default::default()
+    };
     let loaded = if scene.as_os_str() == "-" {
         let stdin = Path::new("<stdin>");
         let mut bytes = Vec::new();
@@ -176,7 +198,7 @@ fn plan(args: &PlanArgs) -> ExitCode {
     }
     // A scene that does not load fails here, not on every node.
     let common = Common { syntax: None, limits: Vec::new(), quiet: true, fixes: None, colour: None };
-    if let Err(code) = load(&args.scene, &common) {
+    if let Err(code) = load(&args.scene, &common, Purpose::Inspect) {
         return code;
     }
     let absolute = |p: &Path| normalized(p).display().to_string();

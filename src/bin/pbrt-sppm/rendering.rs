@@ -4,7 +4,7 @@
 
 use crate::args::RenderArgs;
 use crate::print::{self, fail, say};
-use crate::{load, read, signals};
+use crate::{Purpose, load, read, signals};
 use pbrt_sppm::cli::check;
 use pbrt_sppm::integrators::Algorithm;
 use pbrt_sppm::integrators::completed::{Abort, Snapshot};
@@ -38,11 +38,11 @@ fn loading(args: &RenderArgs) -> Result<SceneDescription, ExitCode> {
     let (scene, common) = (&args.scene, &args.common);
     let tell = !common.quiet && std::io::stderr().is_terminal();
     if !tell {
-        return load(scene, common);
+        return load(scene, common, Purpose::Render);
     }
     eprint!("loading {} ...", scene.display());
     let start = std::time::Instant::now();
-    let s = read(scene, common, true)?;
+    let s = read(scene, common, true, Purpose::Render)?;
     let method = args.integrator.unwrap_or_else(|| Algorithm::by_default(&s.integrator)).name();
     eprintln!(" {:.2} s: {}; {method}", start.elapsed().as_secs_f64(), check::counts_line(&s));
     s.warnings.iter().for_each(|w| say!("{w}"));
