@@ -10,6 +10,7 @@ pub mod cli;
 pub mod filters;
 pub mod fixes;
 pub mod guiding;
+pub mod hugepages;
 pub mod imageio;
 pub mod integrators;
 pub mod interaction;

@@ -419,9 +419,9 @@ impl Bvh {
         }
     }
 
-    /// See [`super::hugepages`].
+    /// See [`crate::hugepages`].
     pub fn advise_huge_pages(&self) {
-        super::hugepages::advise(&self.nodes);
+        crate::hugepages::advise(&self.nodes);
     }
 
     pub fn node_count(&self) -> usize {
@@ -947,9 +947,9 @@ fn write_wide(prims: &mut [PrimInfo], base: usize, node: Decided, settings: &Set
             })
             .collect();
         // The subtrees are copied once, into room whose pages are huge from the first
-        // write when it is large (`super::hugepages`): at the root of a large build,
+        // write when it is large (`crate::hugepages`): at the root of a large build,
         // this is the final array rays walk.
-        let mut home = super::hugepages::with_capacity(nodes.len() + subtrees.iter().map(Vec::len).sum::<usize>());
+        let mut home = crate::hugepages::with_capacity(nodes.len() + subtrees.iter().map(Vec::len).sum::<usize>());
         home.extend_from_slice(nodes);
         *nodes = home;
         for (slot, (k, sub)) in kids.iter().zip(subtrees).enumerate() {

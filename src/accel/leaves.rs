@@ -198,7 +198,7 @@ impl LeafBlocks {
             .collect();
         // Zeroed on all threads first (the kernel clears the fresh pages on both),
         // then each run of blocks is written into its own part.
-        let mut words = super::hugepages::with_capacity(next + 1);
+        let mut words = crate::hugepages::with_capacity(next + 1);
         words.par_extend(rayon::iter::repeat_n(0u32, next + 1));
         let mut rest = &mut words[..next];
         let mut parts = Vec::with_capacity(runs.len());
@@ -225,9 +225,9 @@ impl LeafBlocks {
         self.words.shrink_to_fit();
     }
 
-    /// See [`super::hugepages`].
+    /// See [`crate::hugepages`].
     pub fn advise_huge_pages(&self) {
-        super::hugepages::advise(&self.words);
+        crate::hugepages::advise(&self.words);
     }
 
     pub fn heap_bytes(&self) -> usize {

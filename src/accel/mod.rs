@@ -3,7 +3,6 @@
 //! share their object's BVH and geometry; only a transform is stored per instance.
 
 pub mod bvh;
-mod hugepages;
 mod leaves;
 
 pub use bvh::{Avx, Bvh, Isa, Leaf, Sse};
@@ -549,8 +548,8 @@ impl Geometry {
         // blocks were written to huge pages already; folding them again costs nothing
         // then, and catches those the kernel could not give at the first write.
         set.meshes.par_iter().for_each(|m| {
-            hugepages::advise(&m.p);
-            hugepages::advise(&m.indices);
+            crate::hugepages::advise(&m.p);
+            crate::hugepages::advise(&m.indices);
         });
         for blas in std::iter::once(&world).chain(objects.iter()) {
             rayon::join(|| blas.bvh.advise_huge_pages(), || blas.blocks.advise_huge_pages());

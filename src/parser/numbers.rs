@@ -30,6 +30,9 @@ trait ListNumber: Sized + Send {
 impl ListNumber for f32 {
     #[inline(always)]
     fn scan(text: &[u8], at: usize) -> Option<(f32, usize)> {
+        if let Some(read) = word_f32(text, at) {
+            return Some(read);
+        }
         if let Some(read) = short_f32(text, at) {
             return Some(read);
         }
@@ -53,6 +56,40 @@ impl ListNumber for i32 {
         }
         scan_int(text, at)
     }
+}
+
+/// The commonest coordinate: an optional minus, then at most 8 bytes of digits with a
+/// point among them (`0.008598`, `-12.375`), then whitespace or the text's end. One
+/// 8-byte word holds it all: the point is taken out and the digits, at most 7, read
+/// as one run, then rounded as in [`short_f32`].
+#[inline(always)]
+fn word_f32(text: &[u8], at: usize) -> Option<(f32, usize)> {
+    const LANES: u64 = 0x0101_0101_0101_0101;
+    let neg = text.get(at) == Some(&b'-');
+    let from = at + neg as usize;
+    let bytes = u64::from_le_bytes(*text.get(from..)?.first_chunk::<8>()?);
+    let x = bytes ^ (b'0' as u64 * LANES);
+    let not_digit = (((x & (0x7f * LANES)) + (0x76 * LANES)) | x) & (0x80 * LANES);
+    let point = not_digit.trailing_zeros() / 8;
+    if point == 8 || (bytes >> (8 * point)) as u8 != b'.' {
+        return None;
+    }
+    // The first byte after the point that is not a digit ends the number (8: none in
+    // the word, so the byte after it must be whitespace or nothing).
+    let end = (not_digit & (not_digit - 1)).trailing_zeros() / 8;
+    let ends = match end {
+        8 => text.get(from + 8).is_none_or(|&c| is_space(c)),
+        _ => is_space((bytes >> (8 * end)) as u8),
+    };
+    let digits = end - 1;
+    if !ends || digits == 0 {
+        return None;
+    }
+    // The digits above the point move down one byte into its place.
+    let below = (1u64 << (8 * point)) - 1;
+    let joined = (x & below) | ((x >> 8) & !below);
+    let v = short_quotient(digit_value(joined, digits), (end - point - 1) as usize);
+    Some((if neg { -v } else { v }, from + end as usize))
 }
 
 /// The usual coordinate, `-12.375`: an optional minus, up to 7 digits, a point and up
@@ -128,7 +165,15 @@ fn parse_pieces<T: ListNumber>(pieces: &[&[u8]], out: &mut Vec<T>) -> Option<()>
     use rayon::prelude::*;
     let counts: Vec<usize> = pieces.par_iter().map(|p| count_words(p)).collect();
     let total: usize = counts.iter().sum();
-    out.reserve(total);
+    if out.capacity() - out.len() < total {
+        // Pages huge from their first write: a fault per 2 MiB instead of per 4 KiB
+        // (a 4 KiB fault cost about 1 ns a number on our test machines, under a
+        // hypervisor), and the accelerator's folding of mesh arrays into huge pages
+        // has nothing left to copy.
+        let mut grown = crate::hugepages::with_capacity(out.len() + total);
+        grown.append(out);
+        *out = grown;
+    }
     let mut rest = &mut out.spare_capacity_mut()[..total];
     let mut slots = Vec::with_capacity(pieces.len());
     for &n in &counts {
@@ -158,36 +203,71 @@ fn pieces_at_spaces(text: &[u8], size: usize) -> Vec<&[u8]> {
     pieces
 }
 
-/// How many whitespace-separated words `text` holds: the non-space bytes at the start
-/// or after a space. Runs of 255 byte pairs are summed in a `u8`, which the compiler
-/// turns into vector instructions (15x faster than one sum of `usize`s here).
+/// How many whitespace-separated words `text` holds: the word starts of
+/// [`start_masks`], counted 64 bytes at a time.
 fn count_words(text: &[u8]) -> usize {
-    let mut starts = !text.first().is_none_or(|&c| is_space(c)) as usize;
-    let (before, after) = (text.chunks(255), text.get(1..).unwrap_or_default().chunks(255));
-    for (before, after) in before.zip(after) {
-        let mut run = 0u8;
-        for (&a, &b) in before.iter().zip(after) {
-            run += (is_space(a) & !is_space(b)) as u8;
-        }
-        starts += run as usize;
-    }
-    starts
+    start_masks(text).map(|(_, starts)| starts.count_ones() as usize).sum()
 }
 
 /// Parses the words of `text` into `out`, which has room for exactly as many; `None`
-/// at the first word that is not a number.
+/// at the first word that is not a number. Each word's start comes from a mask of the
+/// whitespace, so no number waits for the one before it to be read.
 fn parse_into<T: ListNumber>(text: &[u8], out: &mut [MaybeUninit<T>]) -> Option<()> {
-    let (mut at, mut n) = (0, 0);
-    loop {
-        while text.get(at).is_some_and(|&c| is_space(c)) {
-            at += 1;
+    let mut n = 0;
+    for (base, mut starts) in start_masks(text) {
+        while starts != 0 {
+            let at = base + starts.trailing_zeros() as usize;
+            starts &= starts - 1;
+            // A number's reader ends it at whitespace or the text's end, so each word
+            // is read whole or refused.
+            let (value, _) = T::scan(text, at)?;
+            out.get_mut(n)?.write(value);
+            n += 1;
         }
-        if at == text.len() {
-            return (n == out.len()).then_some(());
+    }
+    (n == out.len()).then_some(())
+}
+
+/// For each 64-byte block of `text`, in order: where it starts, and a bit for each of
+/// its bytes that begins a word (not whitespace, and first or after whitespace).
+#[inline(always)]
+fn start_masks(text: &[u8]) -> impl Iterator<Item = (usize, u64)> + '_ {
+    let (blocks, tail) = text.as_chunks::<64>();
+    let mut last = [b' '; 64];
+    last[..tail.len()].copy_from_slice(tail);
+    let last = (!tail.is_empty()).then_some(last);
+    // Whether the byte before the block is whitespace (the text's start counts as it).
+    let mut space_before = 1;
+    blocks.iter().copied().chain(last).enumerate().map(move |(k, block)| {
+        let space = space_bits(&block);
+        let starts = !space & (space << 1 | space_before);
+        space_before = space >> 63;
+        (64 * k, starts)
+    })
+}
+
+/// The whitespace bytes of a block as bits, bit `i` for `block[i]`.
+#[inline(always)]
+fn space_bits(block: &[u8; 64]) -> u64 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        let mut bits = 0;
+        for (k, lane) in block.as_chunks::<16>().0.iter().enumerate() {
+            // SAFETY: SSE2 is part of every x86_64 target, and the load reads the 16
+            // bytes of `lane`, unaligned.
+            let mask = unsafe {
+                let v = _mm_loadu_si128(lane.as_ptr().cast());
+                let eq = |c: u8| _mm_cmpeq_epi8(v, _mm_set1_epi8(c as i8));
+                _mm_movemask_epi8(_mm_or_si128(_mm_or_si128(eq(b' '), eq(b'\n')), _mm_or_si128(eq(b'\t'), eq(b'\r'))))
+            };
+            bits |= u64::from(mask as u16) << (16 * k);
         }
-        let (value, end) = T::scan(text, at)?;
-        out.get_mut(n)?.write(value);
-        (n, at) = (n + 1, end);
+        bits
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        block.iter().enumerate().fold(0, |bits, (i, &c)| bits | u64::from(is_space(c)) << i)
     }
 }
 
@@ -324,13 +404,19 @@ fn digit_run(bytes: u64) -> (usize, u64) {
     // Digits become 0..=9 in their bytes; anything else 10 or more.
     let x = bytes ^ (b'0' as u64 * LANES);
     let not_digit = (((x & (0x7f * LANES)) + (0x76 * LANES)) | x) & (0x80 * LANES);
-    let n = (not_digit.trailing_zeros() / 8) as usize;
-    // The n digits to the top bytes (the first digit is the lowest byte), zeros below.
-    let v = x.checked_shl(64 - 8 * n as u32).unwrap_or(0);
+    let n = not_digit.trailing_zeros() / 8;
+    (n as usize, digit_value(x, n))
+}
+
+/// The value of the decimal digits in the first `n` bytes of `x` (each byte 0..=9, the
+/// first digit the lowest byte), `n` ≤ 8.
+#[inline(always)]
+fn digit_value(x: u64, n: u32) -> u64 {
+    // The n digits to the top bytes, zeros below.
+    let v = x.checked_shl(64 - 8 * n).unwrap_or(0);
     let v = (v.wrapping_mul(10) + (v >> 8)) & 0x00ff_00ff_00ff_00ff;
     let v = (v.wrapping_mul(100) + (v >> 16)) & 0x0000_ffff_0000_ffff;
-    let v = (v.wrapping_mul(10_000) + (v >> 32)) & 0xffff_ffff;
-    (n, v)
+    (v.wrapping_mul(10_000) + (v >> 32)) & 0xffff_ffff
 }
 
 /// pbrt-v4's strict integer syntax: optional sign, then digits (`None` on overflow).
@@ -435,6 +521,35 @@ mod tests {
             let whole = text.split(|c: char| c.is_ascii_whitespace()).next().unwrap_or_default();
             let want = whole.parse::<i32>().ok().map(|v| (v, whole.len()));
             assert_eq!(<i32 as ListNumber>::scan(text.as_bytes(), 0), want, "{text:?}");
+        }
+    }
+
+    /// Every place of the point in words of up to 9 bytes, signed or not, followed by
+    /// whitespace, junk or nothing: the one-word reader reads what the standard parser
+    /// reads, or hands the word on.
+    #[test]
+    fn one_word_coordinates_read_as_the_standard_parser() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..20 {
+            for len in 1..=9 {
+                for point in 0..len {
+                    state ^= state << 13;
+                    state ^= state >> 7;
+                    state ^= state << 17;
+                    let mut word: Vec<u8> = (0..len).map(|k| b'0' + (state >> (4 * k)) as u8 % 10).collect();
+                    word[point] = b'.';
+                    for (sign, after) in [("", ""), ("-", " "), ("", "\n"), ("-", "x"), ("", "."), ("", "5 ")] {
+                        let text = format!("{sign}{}{after}", String::from_utf8_lossy(&word));
+                        let whole = text.split(|c: char| c.is_ascii_whitespace()).next().unwrap_or_default();
+                        let want = whole.parse::<f32>().ok().map(|v| (v.to_bits(), whole.len()));
+                        let got = <f32 as ListNumber>::scan(text.as_bytes(), 0).map(|(v, end)| (v.to_bits(), end));
+                        assert_eq!(got, want, "{text:?}");
+                        if let Some((v, end)) = word_f32(text.as_bytes(), 0) {
+                            assert_eq!(Some((v.to_bits(), end)), want, "{text:?}");
+                        }
+                    }
+                }
+            }
         }
     }
 
