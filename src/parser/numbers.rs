@@ -267,8 +267,14 @@ fn space_bits(block: &[u8; 64]) -> u64 {
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        block.iter().enumerate().fold(0, |bits, (i, &c)| bits | u64::from(is_space(c)) << i)
+        space_bits_scalar(block)
     }
+}
+
+/// [`space_bits`] a byte at a time: for other targets, and to check the vector one.
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+fn space_bits_scalar(block: &[u8; 64]) -> u64 {
+    block.iter().enumerate().fold(0, |bits, (i, &c)| bits | u64::from(is_space(c)) << i)
 }
 
 /// m / 10^k correctly rounded to `f32`, for m ≤ 2²⁴ and k ≤ 7, by one multiplication in
@@ -682,6 +688,20 @@ mod tests {
         for &at in edges.iter().rev() {
             text[at] = b']';
             assert_eq!(find_close(&text), Some(at));
+        }
+    }
+
+    /// Every byte value at every place of a block, among random bytes.
+    #[test]
+    fn vector_space_masks_are_the_scalar_ones() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        for k in 0..64 * 256 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let mut block: [u8; 64] = std::array::from_fn(|i| b" \t\r\n7.x]"[(state >> (i % 60)) as usize % 8]);
+            block[k % 64] = (k / 64) as u8;
+            assert_eq!(space_bits(&block), space_bits_scalar(&block), "{block:?}");
         }
     }
 
