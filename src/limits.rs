@@ -9,7 +9,8 @@
 //! `file-bytes`, and gzip streams are decompressed to at most `file-bytes` too.
 //!
 //! A load reads every input file through [`Files`], which also notes its name and a
-//! hash of its bytes ([`Files::list`]): what a checkpoint's scene fingerprint is made of.
+//! hash of its bytes ([`Files::list`]): what a checkpoint's scene fingerprint is made of
+//! (commands that make no fingerprint skip the hashes: [`Files::without_hashes`]).
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
