@@ -744,13 +744,14 @@ impl Builder {
             let word = self.reader.sources.snippet(span);
             self.warnings.push(Diagnostic::warning(span, format!("{word} closes a {}", name(top))));
         }
-        let Some((top, saved, _)) = self.stack.pop() else { return Ok(()) };
-        if top == PushKind::Transform {
-            self.gs.ctm = saved.ctm;
-            self.gs.active = saved.active;
+        let Some((top, saved, _)) = self.stack.last_mut() else { return Ok(()) };
+        if *top == PushKind::Transform {
+            (self.gs.ctm, self.gs.active) = (saved.ctm, saved.active);
         } else {
-            self.gs = saved;
+            std::mem::swap(&mut self.gs, saved);
         }
+        // The state replaced is dropped where it lies.
+        self.stack.truncate(self.stack.len() - 1);
         Ok(())
     }
 
