@@ -163,9 +163,8 @@ fn quiet_on_closed_pipe() {
     }
 }
 
-/// Loads one scene in this process; prints `seconds peak_kib triangles`.
-/// Loads a scene as `check` does (its files unhashed: hashes are made for a render's
-/// fingerprint) and prints the seconds, peak KiB and triangles.
+/// Loads one scene in this process as `check` does (its files unhashed: hashes are
+/// made for a render's fingerprint); prints `seconds peak_kib triangles`.
 fn once(scene: &Path) -> ExitCode {
     let start = Instant::now();
     let s = match load_scene(scene, &LoadOptions { skip_input_hashes: true, ..Default::default() }) {
