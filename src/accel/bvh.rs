@@ -1061,17 +1061,28 @@ fn split_groups(prims: &mut [PrimInfo], group: &dyn Fn(usize) -> u32) -> Option<
 }
 
 /// Moves the primitives `pred` keeps to the front, in the order a swap per kept one
-/// gives. Without a branch (the predicate is a coin toss on the upper levels): a build
-/// of 6.3M boxes took about 2% less.
+/// gives (the first kept one swapped with the first place, and so on). A block of
+/// primitives is tested first, noting the places of the kept ones without a branch
+/// (the predicate is a coin toss on the upper levels); then they are swapped into
+/// place. Swapping as each was tested (with selects, the partition was two fifths
+/// of the split decisions' samples) reloaded the place the last step had just
+/// stored; this order took the load scene's wall time to 0.96 (7 pairs).
 fn partition(prims: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize {
+    const BLOCK: usize = 64;
+    let mut kept = [0u8; BLOCK];
     let mut i = 0;
-    for j in 0..prims.len() {
-        let (p, q) = (prims[j], prims[i]);
-        let keep = pred(&p);
-        let mask = BVec4A::splat(keep);
-        prims[i] = PrimInfo { lo: Vec4::select(mask, p.lo, q.lo), hi: Vec4::select(mask, p.hi, q.hi) };
-        prims[j] = PrimInfo { lo: Vec4::select(mask, q.lo, p.lo), hi: Vec4::select(mask, q.hi, p.hi) };
-        i += keep as usize;
+    for start in (0..prims.len()).step_by(BLOCK) {
+        let end = (start + BLOCK).min(prims.len());
+        let mut n = 0;
+        for (at, p) in prims[start..end].iter().enumerate() {
+            kept[n] = at as u8;
+            n += pred(p) as usize;
+        }
+        // Places before `start` are settled: no swap below reaches a later block.
+        for &at in &kept[..n] {
+            prims.swap(i, start + at as usize);
+            i += 1;
+        }
     }
     i
 }
@@ -1079,6 +1090,38 @@ fn partition(prims: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The block partition gives the order of the plain one (a swap as each kept
+    /// primitive is found), on lengths around the block's, with few, half and most
+    /// primitives kept. Fails if a block's kept places are swapped out of order.
+    #[test]
+    fn block_partition_is_the_swap_per_kept_order() {
+        fn reference(prims: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize {
+            let mut i = 0;
+            for j in 0..prims.len() {
+                if pred(&prims[j]) {
+                    prims.swap(i, j);
+                    i += 1;
+                }
+            }
+            i
+        }
+        let mut rng = crate::sampling::Rng::new(7);
+        for len in [0, 1, 2, 63, 64, 65, 127, 128, 129, 1000] {
+            for keep in [0.05, 0.5, 0.95] {
+                let prims: Vec<PrimInfo> = (0..len)
+                    .map(|i| {
+                        let x = rng.uniform();
+                        PrimInfo::new(&Bounds3 { min: Vec3::splat(x), max: Vec3::splat(x) }, 1.0, i)
+                    })
+                    .collect();
+                let pred = |p: &PrimInfo| p.lo.x < keep;
+                let (mut a, mut b) = (prims.clone(), prims);
+                assert_eq!(partition(&mut a, pred), reference(&mut b, pred));
+                assert!(a.iter().zip(&b).all(|(p, q)| p.index() == q.index()), "len {len}, keep {keep}");
+            }
+        }
+    }
 
     /// pbrt's box test for the ray (o, d): the entry t, clamped to 0, below `t`.
     fn box_entry(o: Vec3, d: Vec3) -> impl Fn(&Bounds3, f32) -> Option<f32> {
