@@ -26,7 +26,7 @@
 //! for their leaf blocks.
 
 use crate::math::{Bounds3, Ray};
-use glam::{BVec4A, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 use std::mem::MaybeUninit;
 use std::ops::Range;
@@ -324,6 +324,9 @@ impl Split {
 struct Settings<'a> {
     max_leaf: usize,
     group: &'a (dyn Fn(usize) -> u32 + Sync),
+    /// Nodes over more primitives than this write their children's subtrees on all
+    /// threads ([`PARALLEL_COLLAPSE`]; tests set it low to nest that several deep).
+    parallel_collapse: usize,
 }
 
 const BINS: usize = 12;
@@ -377,24 +380,20 @@ impl Bvh {
     }
 
     /// [`Bvh::build_grouped`] from the primitives' records, record i numbered i.
-    pub fn build_records(
-        mut info: Vec<PrimInfo>,
-        max_leaf: usize,
-        group: impl Fn(usize) -> u32 + Sync,
-    ) -> (Bvh, Vec<u32>) {
+    pub fn build_records(info: Vec<PrimInfo>, max_leaf: usize, group: impl Fn(usize) -> u32 + Sync) -> (Bvh, Vec<u32>) {
         if info.is_empty() {
             return (Bvh::default(), Vec::new());
         }
-        let settings = Settings { max_leaf: max_leaf.clamp(1, u8::MAX as usize), group: &group };
-        let root = decide(&mut info, 0, &settings, None);
-        let mut nodes = Vec::new();
-        write_wide(&mut info, 0, root, &settings, &mut nodes);
-        nodes.shrink_to_fit();
-        let bounds = root.bounds();
-        if info.len() >= TRIM_PRIMS {
+        let settings = Settings {
+            max_leaf: max_leaf.clamp(1, u8::MAX as usize),
+            group: &group,
+            parallel_collapse: PARALLEL_COLLAPSE,
+        };
+        let (bvh, order) = build_with(info, &settings);
+        if order.len() >= TRIM_PRIMS {
             return_freed_heap();
         }
-        (Bvh { nodes, bounds }, info.par_iter().map(PrimInfo::index).collect())
+        (bvh, order)
     }
 
     /// Each leaf's (first, count), in the order [`Bvh::relabel_leaves`] visits them.
@@ -808,6 +807,24 @@ mod avx {
     }
 }
 
+/// Builds over `info` (not empty), returning the hierarchy and the primitive order.
+/// A large build writes its subtrees in pieces on all threads and copies them once,
+/// into their final array.
+fn build_with(mut info: Vec<PrimInfo>, settings: &Settings) -> (Bvh, Vec<u32>) {
+    let root = decide(&mut info, 0, settings, None);
+    let nodes = match info.len() > settings.parallel_collapse {
+        true => join_pieces(write_pieces(&mut info, 0, root, settings)),
+        false => {
+            let mut nodes = Vec::new();
+            write_wide(&mut info, 0, root, settings, &mut nodes);
+            nodes.shrink_to_fit();
+            nodes
+        }
+    };
+    let bounds = root.bounds();
+    (Bvh { nodes, bounds }, info.par_iter().map(PrimInfo::index).collect())
+}
+
 /// Returns the heap's free pages to the system: the build's records, once freed, may
 /// stay resident in the heap while the large arrays made next (instances, leaf blocks)
 /// come from fresh mappings beside them. (When the build kept a binary tree of heap
@@ -920,53 +937,71 @@ fn wide_kids(prims: &mut [PrimInfo], base: usize, node: Decided, settings: &Sett
 }
 
 /// Writes `node` (over `prims`, starting at `base`) and, recursively, its subtree as
-/// `WIDTH`-wide nodes in pre-order; returns its index. The binary tree is decided a
-/// wide node at a time and never stored. Below a large node the children's subtrees
-/// are written on all threads, each into a list of its own, then appended in order
-/// with their node references shifted: the same nodes as writing them one after
-/// another.
+/// `WIDTH`-wide nodes in pre-order, on this thread; returns its index. The binary
+/// tree is decided a wide node at a time and never stored.
 fn write_wide(prims: &mut [PrimInfo], base: usize, node: Decided, settings: &Settings, nodes: &mut Vec<Node>) -> u32 {
     let (kids, n) = wide_kids(prims, base, node, settings);
-    let kids = &kids[..n];
     let index = nodes.len();
     nodes.push(Node::new(&[]));
-    let leaf = |k: &Decided| match *k {
-        Decided::Leaf { bounds, first, count } => Some((bounds, first, count as u8)),
-        Decided::Interior { .. } => None,
-    };
     let mut encoded = [(Bounds3::default(), 0u32, 0u8); WIDTH];
-    if prims.len() > PARALLEL_COLLAPSE {
-        let subtrees: Vec<Vec<Node>> = kid_slices(prims, base, kids)
-            .into_par_iter()
-            .map(|(k, slice)| {
-                let mut sub = Vec::new();
-                if leaf(&k).is_none() {
-                    write_wide(slice, k.range().start, k, settings, &mut sub);
-                }
-                sub
-            })
-            .collect();
-        // The subtrees are copied once, into room whose pages are huge from the first
-        // write when it is large (`crate::hugepages`): at the root of a large build,
-        // this is the final array rays walk.
-        let mut home = crate::hugepages::with_capacity(nodes.len() + subtrees.iter().map(Vec::len).sum::<usize>());
-        home.extend_from_slice(nodes);
-        *nodes = home;
-        for (slot, (k, sub)) in kids.iter().zip(subtrees).enumerate() {
-            let base = nodes.len() as u32;
-            nodes.extend(sub.into_iter().map(|n| n.shifted(base)));
-            encoded[slot] = leaf(k).unwrap_or((k.bounds(), base, 0));
-        }
-    } else {
-        for (slot, k) in kids.iter().enumerate() {
-            let r = k.range();
-            encoded[slot] = leaf(k).unwrap_or_else(|| {
-                (k.bounds(), write_wide(&mut prims[r.start - base..r.end - base], r.start, *k, settings, nodes), 0)
-            });
-        }
+    for (slot, k) in kids[..n].iter().enumerate() {
+        let r = k.range();
+        encoded[slot] = leaf_slot(k).unwrap_or_else(|| {
+            (k.bounds(), write_wide(&mut prims[r.start - base..r.end - base], r.start, *k, settings, nodes), 0)
+        });
     }
     nodes[index] = Node::new(&encoded[..n]);
     index as u32
+}
+
+/// A leaf's slot (box, first, count), or `None` for an interior node.
+fn leaf_slot(k: &Decided) -> Option<(Bounds3, u32, u8)> {
+    match *k {
+        Decided::Leaf { bounds, first, count } => Some((bounds, first, count as u8)),
+        Decided::Interior { .. } => None,
+    }
+}
+
+/// The nodes of a large node's subtree (over `prims`, starting at `base`) in
+/// pre-order, as pieces: the node itself, then its children's subtrees, written on all
+/// threads. A piece's child references count from the piece's own first node, so
+/// [`join_pieces`] only adds each piece's place. Copied together at each large level,
+/// as they were, a 12.6M-triangle scene's nodes went twice into fresh huge pages.
+fn write_pieces(prims: &mut [PrimInfo], base: usize, node: Decided, settings: &Settings) -> Vec<Vec<Node>> {
+    let (kids, n) = wide_kids(prims, base, node, settings);
+    let kids = &kids[..n];
+    let below: Vec<Vec<Vec<Node>>> = kid_slices(prims, base, kids)
+        .into_par_iter()
+        .map(|(k, slice)| match leaf_slot(&k) {
+            Some(_) => Vec::new(),
+            None if slice.len() > settings.parallel_collapse => write_pieces(slice, k.range().start, k, settings),
+            None => {
+                let mut sub = Vec::new();
+                write_wide(slice, k.range().start, k, settings, &mut sub);
+                vec![sub]
+            }
+        })
+        .collect();
+    let mut encoded = [(Bounds3::default(), 0u32, 0u8); WIDTH];
+    let mut next = 1;
+    for (slot, (k, pieces)) in kids.iter().zip(&below).enumerate() {
+        encoded[slot] = leaf_slot(k).unwrap_or((k.bounds(), next, 0));
+        next += pieces.iter().map(Vec::len).sum::<usize>() as u32;
+    }
+    let mut all = vec![vec![Node::new(&encoded[..n])]];
+    all.extend(below.into_iter().flatten());
+    all
+}
+
+/// The pieces of [`write_pieces`] as one array, copied once into room whose pages
+/// are huge from the first write when it is large (`crate::hugepages`).
+fn join_pieces(pieces: Vec<Vec<Node>>) -> Vec<Node> {
+    let mut nodes = crate::hugepages::with_capacity(pieces.iter().map(Vec::len).sum());
+    for piece in pieces {
+        let base = nodes.len() as u32;
+        nodes.extend(piece.into_iter().map(|n| n.shifted(base)));
+    }
+    nodes
 }
 
 /// Each kid with its own primitives: disjoint parts of `prims` (which start at `base`),
@@ -1090,6 +1125,27 @@ fn partition(prims: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Subtrees written in pieces on all threads, nested several levels deep, give
+    /// the nodes of the one-thread writer in the same order. Fails if a piece's child
+    /// references are counted from the wrong place.
+    #[test]
+    fn pieces_join_into_the_serial_nodes() {
+        let mut rng = crate::sampling::Rng::new(11);
+        let info: Vec<PrimInfo> = (0..20_000)
+            .map(|i| {
+                let c = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 100.0;
+                PrimInfo::new(&Bounds3::new(c, c + Vec3::splat(rng.uniform())), 1.0, i)
+            })
+            .collect();
+        let group = |_: usize| 0;
+        let build = |parallel_collapse: usize| {
+            build_with(info.clone(), &Settings { max_leaf: MAX_LEAF, group: &group, parallel_collapse })
+        };
+        let (serial, serial_order) = build(usize::MAX);
+        let (pieces, order) = build(64);
+        assert!(serial.nodes.len() > 100 && serial.nodes == pieces.nodes && serial_order == order);
+    }
 
     /// The block partition gives the order of the plain one (a swap as each kept
     /// primitive is found), on lengths around the block's, with few, half and most
