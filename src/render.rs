@@ -271,7 +271,8 @@ impl RenderScene {
             fixes: if bidirectional { scene.fixes.with(Fix::ShapeSampling) } else { scene.fixes },
             syntax: scene.syntax,
             needs_differentials,
-            motion: scene.camera.camera_from_world_end.is_some() || scene.instances.iter().any(|i| i.motion.is_some()),
+            motion: scene.camera.camera_from_world_end.is_some()
+                || scene.instances.iter().any(|i| i.motion().is_some()),
             emitters,
             lights,
             light_spectra: scene.lights.iter().map(|l| l.spectrum.clone()).collect(),

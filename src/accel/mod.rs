@@ -74,7 +74,7 @@ impl Geometry {
     /// Instance-from-render of instance `inst` at `time`.
     /// (Per ray and instance: the scene's record is read only for a moving one.)
     fn instance_from_render_at<'a>(&self, inst: &'a Instance, time: f32) -> std::borrow::Cow<'a, DAffine3> {
-        let motion = if inst.moving { self.placement(inst).motion.as_deref() } else { None };
+        let motion = if inst.moving { self.placement(inst).motion() } else { None };
         match motion {
             None => std::borrow::Cow::Borrowed(&inst.instance_from_render),
             Some(m) => std::borrow::Cow::Owned(DAffine3::from_mat4(m.at(time as f64).inverse())),
@@ -84,8 +84,8 @@ impl Geometry {
     /// Render-from-instance of instance `inst` at `time`.
     fn render_from_instance_at(&self, inst: &Instance, time: f32) -> DAffine3 {
         let placement = self.placement(inst);
-        match &placement.motion {
-            None => DAffine3::from_mat4(placement.world_from_instance),
+        match placement.motion() {
+            None => placement.world_from_instance_affine(),
             Some(m) => DAffine3::from_mat4(m.at(time as f64)),
         }
     }
@@ -567,7 +567,7 @@ impl Geometry {
             .par_iter()
             .map(|i| {
                 let b = objects[i.object as usize].bvh.bounds();
-                i.motion.as_ref().map_or_else(|| instance_bounds(&i.world_from_instance, b), |m| m.motion_bounds(b))
+                i.motion().map_or_else(|| instance_bounds(&i.world_from_instance(), b), |m| m.motion_bounds(b))
             })
             .collect();
         let (tlas, order) = Bvh::build(bounds, |_| INSTANCE_COST);
@@ -580,11 +580,11 @@ impl Geometry {
                 Instance {
                     // The 4 x 4 inverse's top rows, as before (an affine inverse rounds
                     // differently).
-                    instance_from_render: DAffine3::from_mat4(i.world_from_instance.inverse()),
+                    instance_from_render: DAffine3::from_mat4(i.world_from_instance().inverse()),
                     object: i.object,
                     first_shape_index: firsts[k as usize],
                     index: k,
-                    moving: i.motion.is_some(),
+                    moving: i.motion().is_some(),
                 }
             })
             .collect();

@@ -171,7 +171,7 @@ fn counts(scene: &SceneDescription) -> Value {
     counts.insert("patches".into(), patches.into());
     counts.insert(crate::shapes::curve::NAME.into(), curves.into());
     counts.insert("instances".into(), scene.instances.len().into());
-    counts.insert("moving_instances".into(), scene.instances.iter().filter(|i| i.motion.is_some()).count().into());
+    counts.insert("moving_instances".into(), scene.instances.iter().filter(|i| i.motion().is_some()).count().into());
     counts.insert("lights".into(), (scene.lights.len() as u64 + emitters).into());
     counts.insert("materials".into(), scene.materials.len().into());
     counts.insert("media".into(), scene.media.len().into());

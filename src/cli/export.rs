@@ -151,7 +151,7 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         let why = "white balance is not exported: Mitsuba's image keeps the colours as rendered";
         notes.push(note(source, "Film \"whitebalance\"", why));
     }
-    let moving = scene.instances.iter().filter(|i| i.motion.is_some()).count();
+    let moving = scene.instances.iter().filter(|i| i.motion().is_some()).count();
     if moving > 0 || scene.camera.camera_from_world_end.is_some() {
         let why = "motion is not exported: moving shapes, instances and the camera stand at their start";
         notes.push(note(source, &format!("ActiveTransform ({moving} moving instances)"), why));
@@ -172,7 +172,8 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         .instances
         .iter()
         .map(|i| {
-            let out = InstanceOut { object: i.object, to_world: row_major(&i.world_from_instance), first_shape_index };
+            let out =
+                InstanceOut { object: i.object, to_world: row_major(&i.world_from_instance()), first_shape_index };
             first_shape_index += scene.objects[i.object as usize].shapes.len() as u32;
             out
         })

@@ -1351,11 +1351,10 @@ impl Builder {
         let times = self.transform_times;
         let mut instances = std::mem::take(&mut self.instance_uses).resolve(object_of_name, remap, frame, times);
         // Moving world shapes come after the instances the file names.
-        instances.extend(std::mem::take(&mut self.moving_shapes).into_iter().map(|(obj, [m0, m1])| InstanceDesc {
-            object: remap[obj as usize],
-            world_from_instance: m0,
+        instances.extend(std::mem::take(&mut self.moving_shapes).into_iter().map(|(obj, [m0, m1])| {
             // pbrt-v4 interpolates a shape from its own space in rendering space.
-            motion: (m0 != m1).then(|| Box::new(AnimatedTransform::framed(m0, m1, times, frame, DMat4::IDENTITY))),
+            let motion = (m0 != m1).then(|| AnimatedTransform::framed(m0, m1, times, frame, DMat4::IDENTITY));
+            InstanceDesc::new(remap[obj as usize], m0, motion)
         }));
         instances
     }

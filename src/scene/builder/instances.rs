@@ -45,7 +45,7 @@ impl InstanceUses {
         if end != start {
             self.ends.push((at, end));
         }
-        self.records.push(InstanceDesc { object: id, world_from_instance: start, motion: None });
+        self.records.push(InstanceDesc::new(id, start, None));
     }
 
     /// The names instances use, each once, in order of first use.
@@ -69,7 +69,7 @@ impl InstanceUses {
         let inner = frame.inverse();
         for (at, end) in self.ends {
             let r = &mut records[at];
-            r.motion = Some(Box::new(AnimatedTransform::framed(r.world_from_instance, end, times, frame, inner)));
+            r.set_motion(AnimatedTransform::framed(r.world_from_instance(), end, times, frame, inner));
         }
         records
     }
