@@ -699,7 +699,7 @@ fn bump(textures: &Textures, d: TexValue, si: &SurfaceInteraction, fp: &Footprin
 /// The shading normal and ∂p/∂u that normal map `img` gives (pbrt-v4's `NormalMap`):
 /// its RGB at (u, 1 − v), repeating, read as a normal in the frame of the shading ∂p/∂u
 /// and normal. The normal stays on the side of the geometric one.
-fn normal_map(img: &crate::imageio::RgbImage, si: &SurfaceInteraction) -> (Vec3, Vec3) {
+fn normal_map(img: &crate::imageio::Texels, si: &SurfaceInteraction) -> (Vec3, Vec3) {
     let sh = &si.shading;
     let rgb = crate::imageio::lookup(img, si.uv[0], 1.0 - si.uv[1], crate::imageio::Wrap::Repeat, true);
     let local = (2.0 * rgb - Vec3::ONE).normalize_or_zero();

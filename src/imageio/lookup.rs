@@ -13,9 +13,38 @@ pub enum Wrap {
     Black,
 }
 
+/// What lookups read: an image's size and its texels, row by row.
+pub trait TexelSource {
+    fn size(&self) -> (usize, usize);
+    fn texel(&self, i: usize) -> [f32; 3];
+}
+
+impl TexelSource for RgbImage {
+    fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    #[inline]
+    fn texel(&self, i: usize) -> [f32; 3] {
+        self.pixels[i]
+    }
+}
+
+impl<T: TexelSource> TexelSource for std::sync::Arc<T> {
+    fn size(&self) -> (usize, usize) {
+        (**self).size()
+    }
+
+    #[inline]
+    fn texel(&self, i: usize) -> [f32; 3] {
+        (**self).texel(i)
+    }
+}
+
 /// Bilinear lookup at (s, t) with t = 0 at the bottom row unless `top_down`.
-pub fn lookup(img: &RgbImage, s: f32, t: f32, wrap: Wrap, top_down: bool) -> Rgb {
-    let (w, h) = (img.width as i64, img.height as i64);
+pub fn lookup(img: &impl TexelSource, s: f32, t: f32, wrap: Wrap, top_down: bool) -> Rgb {
+    let (w, h) = img.size();
+    let (w, h) = (w as i64, h as i64);
     if w == 0 || h == 0 {
         return Vec3::ZERO;
     }
@@ -30,7 +59,7 @@ pub fn lookup(img: &RgbImage, s: f32, t: f32, wrap: Wrap, top_down: bool) -> Rgb
             Wrap::Black if xi < 0 || yi < 0 || xi >= w || yi >= h => return Vec3::ZERO,
             Wrap::Black => (xi, yi),
         };
-        Vec3::from(img.pixels[(yi * w + xi) as usize])
+        Vec3::from(img.texel((yi * w + xi) as usize))
     };
     let (x0, y0) = (x0 as i64, y0 as i64);
     (1.0 - fx) * (1.0 - fy) * texel(x0, y0)

@@ -6,8 +6,10 @@
 pub mod lookup;
 pub mod metrics;
 pub mod tev;
+pub mod texels;
 
-pub use lookup::{Wrap, lookup};
+pub use lookup::{TexelSource, Wrap, lookup};
+pub use texels::Texels;
 
 use exr::prelude::*;
 use std::path::{Path, PathBuf};
@@ -293,6 +295,24 @@ pub fn read_image_within(path: &Path, files: &crate::limits::Files) -> Res<RgbIm
 /// Decodes an EXR or PNG held in memory, refusing (from the header alone) images of
 /// more than `max_pixels` pixels.
 pub fn decode_image(bytes: &[u8], png: bool, max_pixels: u64) -> Res<RgbImage> {
+    check_pixels(bytes, png, max_pixels)?;
+    if png { decode_png(bytes) } else { decode_exr(bytes) }
+}
+
+/// [`read_image_within`] for textures and normal maps: an 8-bit PNG is kept as its
+/// bytes ([`Texels`]).
+pub fn read_texels_within(path: &Path, files: &crate::limits::Files) -> Res<Texels> {
+    let bytes = files.read(path).map_err(ImageError::Input)?;
+    let png = is_png(path);
+    let texels = check_pixels(&bytes, png, files.limits.texture_pixels).and_then(|()| match png {
+        true => decode_png_texels(&bytes),
+        false => decode_exr(&bytes).map(Texels::from_image),
+    });
+    texels.map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
+}
+
+/// Refuses, from the header alone, an image of more than `max_pixels` pixels.
+fn check_pixels(bytes: &[u8], png: bool, max_pixels: u64) -> Res<()> {
     let (w, h) = if png {
         let (w, h) = image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Png)
             .into_dimensions()
@@ -309,7 +329,7 @@ pub fn decode_image(bytes: &[u8], png: bool, max_pixels: u64) -> Res<RgbImage> {
         let what = format!("the image's {w}x{h} pixels");
         return Err(ImageError::Input(crate::limits::Limits::over(what, "texture-pixels", max_pixels)));
     }
-    if png { decode_png(bytes) } else { decode_exr(bytes) }
+    Ok(())
 }
 
 fn is_png(path: &Path) -> bool {
@@ -395,27 +415,53 @@ pub fn read_png(path: &Path) -> Res<RgbImage> {
     decode_png(&bytes).map_err(|e| ImageError::read(path, e))
 }
 
+/// A PNG as [`Texels`]: 8-bit ones as their bytes and the table of
+/// [`srgb8_table`], so that each texel reads as [`decode_png`] would give it.
+fn decode_png_texels(bytes: &[u8]) -> Res<Texels> {
+    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(ImageError::decode)?;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    Ok(match srgb8_table(&img) {
+        Some(values) => Texels::from_bytes(w, h, img.into_rgb8().into_raw(), values),
+        None => Texels::from_image(linear_png(img)),
+    })
+}
+
 fn decode_png(bytes: &[u8]) -> Res<RgbImage> {
     let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(ImageError::decode)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     // Eight bits a channel: 256 values, decoded once each (a power per value was a
     // tenth of loading a scene of four 1024² textures).
-    let pixels = match srgb8_table(&img) {
-        Some(decoded) => img.to_rgb8().pixels().map(|p| p.0.map(|b| decoded[b as usize])).collect(),
-        None => img.to_rgb32f().pixels().map(|p| p.0.map(from_srgb)).collect(),
-    };
-    Ok(RgbImage { width: w, height: h, pixels, bands: None, origin: (0, 0), full: (w, h), meta: ImageMeta::default() })
+    Ok(match srgb8_table(&img) {
+        Some(decoded) => {
+            let pixels = img.to_rgb8().pixels().map(|p| p.0.map(|b| decoded[b as usize])).collect();
+            RgbImage {
+                width: w,
+                height: h,
+                pixels,
+                bands: None,
+                origin: (0, 0),
+                full: (w, h),
+                meta: ImageMeta::default(),
+            }
+        }
+        None => linear_png(img),
+    })
+}
+
+/// A PNG of other than 8-bit grey or colour, sRGB-decoded channel by channel.
+fn linear_png(img: image::DynamicImage) -> RgbImage {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let pixels = img.to_rgb32f().pixels().map(|p| p.0.map(from_srgb)).collect();
+    RgbImage { width: w, height: h, pixels, bands: None, origin: (0, 0), full: (w, h), meta: ImageMeta::default() }
 }
 
 /// `image` with the values its file stores: PNGs are read sRGB-decoded, so they are
 /// encoded back (for linear image textures and normal maps).
-pub fn stored_values(name: &str, image: Arc<RgbImage>) -> Arc<RgbImage> {
+pub fn stored_values(name: &str, image: Arc<Texels>) -> Arc<Texels> {
     if !name.to_ascii_lowercase().ends_with(".png") {
         return image;
     }
-    let mut raw = (*image).clone();
-    raw.pixels.iter_mut().for_each(|px| *px = px.map(to_srgb));
-    Arc::new(raw)
+    Arc::new(image.map_values(to_srgb))
 }
 
 #[cfg(test)]

@@ -58,7 +58,7 @@ pub use params::{Metal, Resolver, RoughnessRemap, TexValue};
 pub use transport::TransportMode;
 
 use crate::fixes::Fixes;
-use crate::imageio::RgbImage;
+use crate::imageio::Texels;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::Syntax;
 use crate::parser::params::ParamList;
@@ -248,7 +248,7 @@ pub struct MaterialDesc {
     pub bump: Option<TexValue>,
     /// A v4 `normalmap` image, which replaces the bump map when both are given (as in
     /// pbrt-v4).
-    pub normal_map: Option<Arc<RgbImage>>,
+    pub normal_map: Option<Arc<Texels>>,
 }
 
 impl MaterialKind {
@@ -311,7 +311,7 @@ pub struct Material {
     /// The bump map (a float texture), if any.
     pub bump: Option<TexValue>,
     /// The normal map (tangent-space normals as stored), if any; it wins over `bump`.
-    pub normal_map: Option<Arc<RgbImage>>,
+    pub normal_map: Option<Arc<Texels>>,
     /// The pbrt bugs fixed (`--fix`).
     fixes: Fixes,
     /// Light subpaths meet camera paths (vcm, bdpt): hair takes its adjoint for them.

@@ -9,7 +9,7 @@
 //! Material "diffuse" "string normalmap" "normals.png"     # v4
 //! ```
 
-use crate::imageio::RgbImage;
+use crate::imageio::Texels;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList};
 use crate::parser::source::Span;
@@ -121,7 +121,7 @@ pub fn metal(p: &ParamList, prefix: &str, v4: Option<&str>, r: &mut dyn Resolver
 /// The material's normal map (v4 `normalmap`, an RGB image of tangent-space normals,
 /// its values as stored: no sRGB decoding). An image that cannot be read leaves the
 /// surface smooth (noted).
-pub fn normal_map(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<Option<Arc<RgbImage>>> {
+pub fn normal_map(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<Option<Arc<Texels>>> {
     let Some(file) = p.string("normalmap")? else { return Ok(None) };
     let at = p.named("normalmap").map_or_else(Span::default, |x| x.value_span);
     match r.image(&file) {

@@ -247,7 +247,8 @@ struct Builder {
     built_textures: Vec<TextureDesc>,
     /// Texture lookups one evaluation of each built texture makes.
     texture_lookups: Vec<u64>,
-    images: HashMap<PathBuf, Arc<RgbImage>>,
+    images: HashMap<PathBuf, Arc<crate::imageio::Texels>>,
+    light_images: HashMap<PathBuf, Arc<RgbImage>>,
     /// Decided when the whole file is read.
     syntax: Option<Syntax>,
     approximated: Vec<(Span, String, Approx)>,
@@ -323,6 +324,7 @@ impl Builder {
             built_textures: Vec::new(),
             texture_lookups: Vec::new(),
             images: HashMap::new(),
+            light_images: HashMap::new(),
             syntax: None,
             approximated: Vec::new(),
             attributes: Vec::new(),

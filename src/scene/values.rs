@@ -12,7 +12,6 @@
 //! Each lookup marks the parameter used, so what no lookup asked for is reported as
 //! unused at its own span; a wrong type, arity or value is a located error.
 
-use crate::imageio::RgbImage;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, Param, ParamList, ParamType, SpectrumValue};
 use crate::parser::source::Span;
@@ -326,7 +325,7 @@ pub trait Resolver {
     fn material_type(&self, built: u32) -> Option<&str>;
     fn spectra(&self) -> SpectrumContext<'_>;
     /// An image for `imagemap` (cached); errors are plain messages.
-    fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String>;
+    fn image(&mut self, name: &str) -> Result<Arc<crate::imageio::Texels>, String>;
 }
 
 /// A spectrum input: constant (non-negative) or a spectrum texture.

@@ -13,7 +13,7 @@
 
 use super::mapping::{self, Mapping2D, map_2d};
 use super::{Input, TexCtx, TextureKind, TextureSite};
-use crate::imageio::{RgbImage, Wrap, lookup};
+use crate::imageio::{Texels, Wrap, lookup};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
@@ -59,7 +59,7 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
 }
 
 #[inline]
-pub fn eval(image: &Arc<RgbImage>, map: &Mapping2D, (wrap, scale, invert): (Wrap, f32, bool), ctx: &TexCtx) -> Rgb {
+pub fn eval(image: &Arc<Texels>, map: &Mapping2D, (wrap, scale, invert): (Wrap, f32, bool), ctx: &TexCtx) -> Rgb {
     let [s, t] = map_2d(map, ctx);
     let v = lookup(image, s, t, wrap, false) * scale;
     if invert { (Vec3::ONE - v).max(Vec3::ZERO) } else { v }

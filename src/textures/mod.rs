@@ -40,7 +40,7 @@ pub use mapping::{Mapping2D, TextureSite, UvMapping};
 pub use noise::Octaves;
 
 use crate::fixes::{Fix, Fixes};
-use crate::imageio::RgbImage;
+use crate::imageio::Texels;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::scene::values::{self, Range, Res, Resolver, TexValue, float_input, spectrum_input};
@@ -159,7 +159,7 @@ pub enum TextureKind {
         map: Mapping2D,
     },
     Image {
-        image: Arc<RgbImage>,
+        image: Arc<Texels>,
         map: Mapping2D,
         wrap: Wrap,
         scale: f32,

@@ -4,7 +4,7 @@
 //! then v4 forward references; a texture that refers to itself is an error.
 
 use super::{Builder, Res, Scope};
-use crate::imageio::RgbImage;
+use crate::imageio::{RgbImage, Texels};
 use crate::lights::{self, LightContext, LightDesc};
 use crate::materials::params::{bump_map, normal_map};
 use crate::materials::{self, MaterialDesc, MaterialKind, Resolver, TexValue};
@@ -50,14 +50,26 @@ impl Builder {
         }
     }
 
-    /// An image by scene-relative name, read once, its size checked before decoding.
-    pub(super) fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String> {
+    /// An image for a texture or normal map by scene-relative name, read once, its size
+    /// checked before decoding.
+    pub(super) fn image(&mut self, name: &str) -> Result<Arc<Texels>, String> {
         let path = self.reader.resolve_path(name);
         if let Some(img) = self.images.get(&path) {
             return Ok(img.clone());
         }
-        let img = Arc::new(crate::imageio::read_image_within(&path, &self.reader.files).map_err(|e| e.to_string())?);
+        let img = Arc::new(crate::imageio::read_texels_within(&path, &self.reader.files).map_err(|e| e.to_string())?);
         self.images.insert(path, img.clone());
+        Ok(img)
+    }
+
+    /// [`Builder::image`] for lights, which keep every value as `f32`.
+    fn light_image(&mut self, name: &str) -> Result<Arc<RgbImage>, String> {
+        let path = self.reader.resolve_path(name);
+        if let Some(img) = self.light_images.get(&path) {
+            return Ok(img.clone());
+        }
+        let img = Arc::new(crate::imageio::read_image_within(&path, &self.reader.files).map_err(|e| e.to_string())?);
+        self.light_images.insert(path, img.clone());
         Ok(img)
     }
 
@@ -73,7 +85,7 @@ impl Builder {
             let kind = {
                 let (syntax, space) = (self.syntax(), self.space());
                 let mut note_missing = |at: Span, what: String| missing.push((at, what));
-                let mut images = |n: &str| self.image(n);
+                let mut images = |n: &str| self.light_image(n);
                 let mut ctx = LightContext {
                     syntax,
                     spectra: SpectrumContext {
@@ -140,7 +152,7 @@ impl Builder {
             let space = self.space();
             let spectra =
                 SpectrumContext { base_dir: &base, normalize_emission: syntax == Syntax::V4, files: &files, space };
-            let mut images = |n: &str| self.image(n);
+            let mut images = |n: &str| self.light_image(n);
             let desc = lights::diffuse::read(&e.name, &e.params, (syntax, &spectra), &mut images, &mut warnings);
             self.warnings.append(&mut warnings);
             let desc = desc?.ok_or_else(|| Diagnostic::error(e.name_span, "unsupported area light"))?;
@@ -315,7 +327,7 @@ impl Resolver for Scoped<'_> {
         self.b.spectrum_context(false)
     }
 
-    fn image(&mut self, name: &str) -> Result<Arc<RgbImage>, String> {
+    fn image(&mut self, name: &str) -> Result<Arc<Texels>, String> {
         self.b.image(name)
     }
 }
