@@ -20,6 +20,8 @@ use crate::scene::values::SpectrumContext;
 use crate::scene::{AlphaRule, ShapeAlpha};
 use crate::textures::{self, TextureDesc, TextureKind, TextureSite};
 use glam::Vec3;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::sync::Arc;
 
@@ -54,23 +56,15 @@ impl Builder {
     /// checked before decoding.
     pub(super) fn image(&mut self, name: &str) -> Result<Arc<Texels>, String> {
         let path = self.reader.resolve_path(name);
-        if let Some(img) = self.images.get(&path) {
-            return Ok(img.clone());
-        }
-        let img = Arc::new(crate::imageio::read_texels_within(&path, &self.reader.files).map_err(|e| e.to_string())?);
-        self.images.insert(path, img.clone());
-        Ok(img)
+        let files = &self.reader.files;
+        read_once(&mut self.images, path, |p| crate::imageio::read_texels_within(p, files))
     }
 
     /// [`Builder::image`] for lights, which keep every value as `f32`.
     fn light_image(&mut self, name: &str) -> Result<Arc<RgbImage>, String> {
         let path = self.reader.resolve_path(name);
-        if let Some(img) = self.light_images.get(&path) {
-            return Ok(img.clone());
-        }
-        let img = Arc::new(crate::imageio::read_image_within(&path, &self.reader.files).map_err(|e| e.to_string())?);
-        self.light_images.insert(path, img.clone());
-        Ok(img)
+        let files = &self.reader.files;
+        read_once(&mut self.light_images, path, |p| crate::imageio::read_image_within(p, files))
     }
 
     /// Every `LightSource` of a supported type, typed.
@@ -330,4 +324,18 @@ impl Resolver for Scoped<'_> {
     fn image(&mut self, name: &str) -> Result<Arc<Texels>, String> {
         self.b.image(name)
     }
+}
+
+/// The image at `path` from `cache`, or read by `read` and kept there.
+fn read_once<T, E: std::fmt::Display>(
+    cache: &mut HashMap<PathBuf, Arc<T>>,
+    path: PathBuf,
+    read: impl FnOnce(&Path) -> Result<T, E>,
+) -> Result<Arc<T>, String> {
+    if let Some(img) = cache.get(&path) {
+        return Ok(img.clone());
+    }
+    let img = Arc::new(read(&path).map_err(|e| e.to_string())?);
+    cache.insert(path, img.clone());
+    Ok(img)
 }
