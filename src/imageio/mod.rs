@@ -96,10 +96,15 @@ pub struct RgbImage {
 impl RgbImage {
     /// A black image covering the whole display window.
     pub fn new(width: usize, height: usize) -> RgbImage {
+        RgbImage::from_pixels(width, height, vec![[0.0; 3]; width * height])
+    }
+
+    /// An image of `pixels`, row by row, covering the whole display window.
+    pub fn from_pixels(width: usize, height: usize, pixels: Vec<[f32; 3]>) -> RgbImage {
         RgbImage {
             width,
             height,
-            pixels: vec![[0.0; 3]; width * height],
+            pixels,
             bands: None,
             origin: (0, 0),
             full: (width, height),
@@ -422,7 +427,7 @@ fn decode_png_texels(bytes: &[u8]) -> Res<Texels> {
     let (w, h) = (img.width() as usize, img.height() as usize);
     Ok(match srgb8_table(&img) {
         Some(values) => Texels::from_bytes(w, h, img.into_rgb8().into_raw(), values),
-        None => Texels::from_image(linear_png(img)),
+        None => Texels::from_image(decode_wide_png(img)),
     })
 }
 
@@ -433,26 +438,16 @@ fn decode_png(bytes: &[u8]) -> Res<RgbImage> {
     // tenth of loading a scene of four 1024² textures).
     Ok(match srgb8_table(&img) {
         Some(decoded) => {
-            let pixels = img.to_rgb8().pixels().map(|p| p.0.map(|b| decoded[b as usize])).collect();
-            RgbImage {
-                width: w,
-                height: h,
-                pixels,
-                bands: None,
-                origin: (0, 0),
-                full: (w, h),
-                meta: ImageMeta::default(),
-            }
+            RgbImage::from_pixels(w, h, img.to_rgb8().pixels().map(|p| p.0.map(|b| decoded[b as usize])).collect())
         }
-        None => linear_png(img),
+        None => decode_wide_png(img),
     })
 }
 
 /// A PNG of other than 8-bit grey or colour, sRGB-decoded channel by channel.
-fn linear_png(img: image::DynamicImage) -> RgbImage {
+fn decode_wide_png(img: image::DynamicImage) -> RgbImage {
     let (w, h) = (img.width() as usize, img.height() as usize);
-    let pixels = img.to_rgb32f().pixels().map(|p| p.0.map(from_srgb)).collect();
-    RgbImage { width: w, height: h, pixels, bands: None, origin: (0, 0), full: (w, h), meta: ImageMeta::default() }
+    RgbImage::from_pixels(w, h, img.to_rgb32f().pixels().map(|p| p.0.map(from_srgb)).collect())
 }
 
 /// `image` with the values its file stores: PNGs are read sRGB-decoded, so they are

@@ -47,14 +47,6 @@ impl Texels {
         };
         Texels { width: self.width, height: self.height, store }
     }
-
-    /// Heap bytes held (for the memory report).
-    pub fn heap_bytes(&self) -> usize {
-        match &self.store {
-            Store::Values(v) => std::mem::size_of_val(v.as_slice()),
-            Store::Bytes { rgb, .. } => std::mem::size_of_val(rgb.as_slice()) + 1024,
-        }
-    }
 }
 
 impl TexelSource for Texels {
