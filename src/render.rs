@@ -109,6 +109,9 @@ pub struct RenderScene {
     /// own), where the file gives them as spectra.
     light_spectra: Vec<Option<std::sync::Arc<EmissionSpectrum>>>,
     pub light_power: Distribution1D,
+    /// Per light, an area light's emitter's box (`None` for other lights): a ray that
+    /// misses it cannot find that light.
+    light_boxes: Vec<Option<crate::math::Bounds3>>,
     /// pbrt-v4's choice of light for a point's direct light, by each light's bounds
     /// (v4 scenes without media and with few lights).
     light_choice: Option<LightChoice>,
@@ -251,6 +254,7 @@ impl RenderScene {
         let sources: Vec<f64> = powers.iter().copied().chain(medium_emitters.iter().map(|e| e.1.power)).collect();
         let photon_scale = photon_scale(sources.iter().sum());
         let light_power = Distribution1D::new(&powers);
+        let light_boxes = light_boxes(&lights, &geometry);
         let light_choice = (scene.syntax == Syntax::V4 && media.is_empty())
             .then(|| LightChoice::new(&lights, &geometry.shapes))
             .flatten();
@@ -277,6 +281,7 @@ impl RenderScene {
             lights,
             light_spectra: scene.lights.iter().map(|l| l.spectrum.clone()).collect(),
             light_power,
+            light_boxes,
             light_choice,
             photon_sources: Distribution1D::new(&sources),
             medium_emitters,
@@ -318,6 +323,12 @@ impl RenderScene {
             return Some((((u * n as f32) as usize).min(n - 1), n as f32));
         }
         self.light_power.sample(u).map(|(i, pmf)| (i, 1.0 / pmf))
+    }
+
+    /// Whether a ray may find light `idx`: false only where it misses an area light's
+    /// box, so that tracing it could not reach that light.
+    pub fn may_reach_light(&self, idx: usize, ray: &Ray) -> bool {
+        self.light_boxes.get(idx).copied().flatten().is_none_or(|b| b.may_meet_ray(ray.o.0, ray.d.0))
     }
 
     /// The media on either side of a hit shape.
@@ -415,6 +426,13 @@ impl RenderScene {
             return self.geometry.intersect_p(ray);
         }
         self.geometry.intersect(ray).is_some_and(|hit| self.unmasked(ray, hit, true).is_some())
+    }
+
+    /// Whether the ray finds anything: `intersect(ray).is_some()`, by the cheaper
+    /// any-hit query where no alpha mask is about (shadow rays read masks their own
+    /// way, so with masks this asks for the first hit).
+    pub fn hits_anything(&self, ray: &Ray) -> bool {
+        if self.has_alpha { self.intersect(ray).is_some() } else { self.geometry.intersect_p(ray) }
     }
 
     /// `hit`, or if a mask cuts it away, the first hit beyond it that none cuts, found
@@ -763,6 +781,19 @@ impl EmitterRules {
             masks_samples: alpha.samples,
         }
     }
+}
+
+/// Each light's box for [`RenderScene::may_reach_light`]: its emitter's, for an area
+/// light (one per triangle of an emitting mesh, so made on all threads).
+fn light_boxes(lights: &[Light], geometry: &Geometry) -> Vec<Option<crate::math::Bounds3>> {
+    use rayon::prelude::*;
+    lights
+        .par_iter()
+        .map(|l| match l {
+            Light::Area(a) => Some(geometry.shapes.piece_bounds(&a.emitter)),
+            _ => None,
+        })
+        .collect()
 }
 
 /// The area lights of the world shapes (`area_lights[i]`: shape i's, whose alpha is

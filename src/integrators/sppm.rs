@@ -950,8 +950,24 @@ fn bsdf_strategy(
     // is the light's density needed (measured from the offset origin, so the surface
     // just left is never taken for the light).
     let ray = si.spawn_ray(Vector3(s.wi));
-    let (hit, tr) = trace_lit(scene, &ray, || here.medium_toward(scene, si, s.wi), sampler);
-    let li = tr * scene.chosen_light_along(hit.as_ref(), idx, s.wi);
+    // In vacuum only the light's own hit counts, so the trace is cut short: a ray
+    // that misses an area light's box is not traced (where a few lights are small,
+    // that is most of these rays), and for a light without a surface (the sky),
+    // which counts only where the ray escapes, any hit will do. (Through media the
+    // trace draws numbers, which the path after it must find in their places.)
+    let li = if !scene.media.is_empty() {
+        let (hit, tr) = trace_lit(scene, &ray, || here.medium_toward(scene, si, s.wi), sampler);
+        tr * scene.chosen_light_along(hit.as_ref(), idx, s.wi)
+    } else if !matches!(light, Light::Area(_)) {
+        match scene.hits_anything(&ray) {
+            true => Vec3::ZERO,
+            false => scene.chosen_light_along(None, idx, s.wi),
+        }
+    } else if scene.may_reach_light(idx, &ray) {
+        scene.chosen_light_along(scene.intersect(&ray).as_ref(), idx, s.wi)
+    } else {
+        Vec3::ZERO
+    };
     if li == Vec3::ZERO {
         return Vec3::ZERO;
     }

@@ -82,6 +82,34 @@ impl Bounds3 {
         o
     }
 
+    /// Whether the ray from `o` along `d` (t ≥ 0) may meet the box: false only where
+    /// it misses the box grown by 10⁻⁵ of its size and place, in f64, so that no
+    /// shape's own rounded test finds a hit inside a box this excludes. An empty or
+    /// unbounded box, or a ray that is not finite, may always meet it.
+    pub fn may_meet_ray(&self, o: Vec3, d: Vec3) -> bool {
+        let bounded = self.min.is_finite() && self.max.is_finite() && !self.is_empty();
+        if !bounded || !o.is_finite() || !d.is_finite() {
+            return true;
+        }
+        let size = self.min.abs().max(self.max.abs()).max_element() + self.diagonal().max_element();
+        let pad = 1e-5 * size as f64 + f64::from(f32::MIN_POSITIVE);
+        let (lo, hi) = (self.min.as_dvec3() - pad, self.max.as_dvec3() + pad);
+        let (o, d) = (o.as_dvec3(), d.as_dvec3());
+        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+        for a in 0..3 {
+            if d[a] == 0.0 {
+                if o[a] < lo[a] || o[a] > hi[a] {
+                    return false;
+                }
+                continue;
+            }
+            let (near, far) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
+            t0 = t0.max(near.min(far));
+            t1 = t1.min(near.max(far));
+        }
+        t0 <= t1
+    }
+
     /// pbrt's slab test with precomputed 1/d and direction signs; the far distances
     /// are enlarged by 1 + 2γ(3) so that rounding never misses a box the ray truly
     /// crosses. Returns the entry distance (negative when the origin is inside).
@@ -104,5 +132,31 @@ impl Bounds3 {
             }
         }
         (t_min < t_max && t_far > 0.0).then_some(t_min)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Bounds3;
+    use glam::Vec3;
+
+    /// Rays through the box (from outside, from inside, grazing a face, parallel to an
+    /// axis) may meet it; rays pointing away from it or passing beside it do not;
+    /// an empty box or a ray that is not finite is never ruled out.
+    #[test]
+    fn may_meet_ray_rules_out_only_clear_misses() {
+        let b = Bounds3::new(Vec3::new(1.0, 2.0, 3.0), Vec3::new(2.0, 3.0, 4.0));
+        let toward = |o: Vec3, p: Vec3| b.may_meet_ray(o, (p - o).normalize());
+        assert!(toward(Vec3::ZERO, b.centroid()));
+        assert!(b.may_meet_ray(b.centroid(), Vec3::new(0.3, -0.8, 0.1).normalize()));
+        assert!(toward(Vec3::new(0.0, 2.0, 3.5), Vec3::new(3.0, 2.0, 3.5)), "along a face");
+        assert!(b.may_meet_ray(Vec3::new(1.5, 2.5, -10.0), Vec3::Z), "parallel to two axes");
+        assert!(!b.may_meet_ray(Vec3::new(1.5, 2.5, -10.0), -Vec3::Z), "pointing away");
+        assert!(!b.may_meet_ray(Vec3::new(1.5, 5.0, -10.0), Vec3::Z), "beside it");
+        assert!(!toward(Vec3::ZERO, Vec3::new(10.0, 2.5, 3.5)), "passing below");
+        assert!(Bounds3::default().may_meet_ray(Vec3::ZERO, Vec3::X));
+        assert!(b.may_meet_ray(Vec3::splat(f32::NAN), Vec3::X));
+        // A ray just outside a face, closer than the margin, is kept.
+        assert!(b.may_meet_ray(Vec3::new(0.0, 3.0 + 1e-6, 3.5), Vec3::X));
     }
 }
