@@ -124,6 +124,10 @@ pub struct Stats {
 pub struct Sppm<'a> {
     pub(super) scene: &'a RenderScene,
     pub pixels: Vec<Pixel>,
+    /// Where each pixel gathers photons this iteration: written by the camera pass
+    /// while the pixel is in cache (a pass over the pixels after it read 216 bytes a
+    /// pixel to keep 20).
+    sites: Vec<Option<Site>>,
     width: usize,
     origin: (u32, u32),
     pub iteration: u32,
@@ -179,9 +183,17 @@ impl<'a> Sppm<'a> {
             bytes: (w * h).saturating_mul(std::mem::size_of::<Pixel>()),
         })?;
         pixels.resize(w * h, pixel);
+        let mut sites = Vec::new();
+        sites.try_reserve_exact(w * h).map_err(|_| RenderError::OutOfMemory {
+            width: w,
+            height: h,
+            bytes: (w * h).saturating_mul(std::mem::size_of::<Pixel>() + std::mem::size_of::<Option<Site>>()),
+        })?;
+        sites.resize(w * h, None);
         Ok(Sppm {
             scene,
             pixels,
+            sites,
             width: w,
             origin: (x0, y0),
             iteration: 0,
@@ -290,7 +302,7 @@ impl<'a> Sppm<'a> {
         // Adaptive chains' visibility is the cell a photon lands in holding a visible
         // point (`adaptive`), which overlap binning gives.
         let binning = if self.chains.is_some() { Binning::Overlap } else { Binning::Centre };
-        let grid = Grid::build(&self.sites(), binning);
+        let grid = Grid::build(&self.sites, binning);
         let t2 = Instant::now();
         let (phi, m, beam_sums) = self.photon_pass(grid.as_ref(), preview);
         let t3 = Instant::now();
@@ -322,7 +334,7 @@ impl<'a> Sppm<'a> {
         let (diff_scale, kind, live) = (self.differential_scale, self.sampler, &self.live);
         let time = scene.pass_time(iter, false);
         let first = band.start;
-        let trace = |i: usize, px: &mut Pixel, beams: Option<&mut Vec<Beam>>| -> u64 {
+        let trace = |i: usize, (px, site): (&mut Pixel, &mut Option<Site>), beams: Option<&mut Vec<Beam>>| -> u64 {
             let i = first + i;
             if i.is_multiple_of(256) {
                 live.add_camera(256);
@@ -341,10 +353,12 @@ impl<'a> Sppm<'a> {
                 }
             };
             px.ld += scene.film_rgb(ld);
+            // Photons are gathered at each visible point that can reflect.
+            *site = vp.as_ref().filter(|vp| vp.beta != Vec3::ZERO).map(|vp| Site { p: vp.p, radius: px.radius as f32 });
             px.vp = vp;
             px.vp.is_some() as u64
         };
-        let pixels = self.pixels[band.clone()].par_iter_mut();
+        let pixels = self.pixels[band.clone()].par_iter_mut().zip(self.sites[band.clone()].par_iter_mut());
         if self.volume == VolumeGather::Beams {
             let beams = self.beams[band].par_iter_mut();
             pixels
@@ -460,15 +474,6 @@ impl<'a> Sppm<'a> {
             PassMode::Classic => GAMMA,
         };
         passes::radius(self.r1, alpha, self.iteration) as f32
-    }
-
-    /// Where photons are gathered: each pixel's visible point, if it can reflect.
-    fn sites(&self) -> Vec<Option<Site>> {
-        let site = |p: &Pixel| {
-            let vp = p.vp.as_ref().filter(|vp| vp.beta != Vec3::ZERO)?;
-            Some(Site { p: vp.p, radius: p.radius as f32 })
-        };
-        self.pixels.par_iter().map(site).collect()
     }
 
     /// Phase 4: the progressive radius and flux update; with independent passes, the
