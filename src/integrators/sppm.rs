@@ -176,19 +176,13 @@ impl<'a> Sppm<'a> {
         let [x0, x1, y0, y1] = scene.film.pixel_bounds;
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
         let pixel = Pixel { radius: radius as f64, ld: DVec3::ZERO, tau: DVec3::ZERO, n: 0.0, vp: None };
-        let mut pixels = Vec::new();
-        pixels.try_reserve_exact(w * h).map_err(|_| RenderError::OutOfMemory {
-            width: w,
-            height: h,
-            bytes: (w * h).saturating_mul(std::mem::size_of::<Pixel>()),
-        })?;
+        // Per pixel: its state and where it gathers photons.
+        let bytes = (w * h).saturating_mul(std::mem::size_of::<Pixel>() + std::mem::size_of::<Option<Site>>());
+        let out_of_memory = |_| RenderError::OutOfMemory { width: w, height: h, bytes };
+        let (mut pixels, mut sites) = (Vec::new(), Vec::new());
+        pixels.try_reserve_exact(w * h).map_err(out_of_memory)?;
+        sites.try_reserve_exact(w * h).map_err(out_of_memory)?;
         pixels.resize(w * h, pixel);
-        let mut sites = Vec::new();
-        sites.try_reserve_exact(w * h).map_err(|_| RenderError::OutOfMemory {
-            width: w,
-            height: h,
-            bytes: (w * h).saturating_mul(std::mem::size_of::<Pixel>() + std::mem::size_of::<Option<Site>>()),
-        })?;
         sites.resize(w * h, None);
         Ok(Sppm {
             scene,
