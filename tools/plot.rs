@@ -69,8 +69,13 @@ pub fn draw(series: &[Series], x_label: &str, metric: &str, out: &Path) -> Resul
     let (x0, x1, y0, y1) = all.fold((f64::MAX, f64::MIN, f64::MAX, f64::MIN), |(a, b, c, d), &(x, y)| {
         (a.min(x), b.max(x), c.min(y), d.max(y))
     });
-    let draw =
-        |tmp: &Path| render(series, (x0, x1, y0, y1), x_label, metric, tmp).map_err(|e| ImageError::write(out, e));
+    let (w, h) = (900, 600);
+    let mut pixels = vec![0u8; 3 * (w * h) as usize];
+    render(series, (x0, x1, y0, y1), x_label, metric, BitMapBackend::with_buffer(&mut pixels, (w, h)))?;
+    // Encoded by the `image` crate the renderer uses (plotters' own encoder would
+    // build a second, older version of it).
+    let png = image::RgbImage::from_raw(w, h, pixels).ok_or("plot: the buffer does not match its size")?;
+    let draw = |tmp: &Path| png.save_with_format(tmp, image::ImageFormat::Png).map_err(|e| ImageError::write(out, e));
     pbrt_sppm::imageio::atomically(out, draw).map_err(|e| e.to_string())
 }
 
@@ -79,10 +84,10 @@ fn render(
     (x0, x1, y0, y1): (f64, f64, f64, f64),
     x_label: &str,
     metric: &str,
-    out: &Path,
+    backend: BitMapBackend,
 ) -> Result<(), String> {
     {
-        let root = BitMapBackend::new(out, (900, 600)).into_drawing_area();
+        let root = backend.into_drawing_area();
         let e = |e: DrawingAreaErrorKind<_>| format!("plot: {e}");
         root.fill(&WHITE).map_err(e)?;
         let mut chart = ChartBuilder::on(&root)
