@@ -142,9 +142,10 @@ impl Techniques {
         }
     }
 
-    /// Whether passes trace light subpaths at all.
+    /// Whether passes trace light subpaths at all: not for techniques of the camera
+    /// subpaths alone (a camera subpath's own numbers never depend on them).
     pub fn traces_lights(self) -> bool {
-        self != Techniques::Direct
+        !matches!(self, Techniques::Direct | Techniques::Only(Technique::EmitterHit | Technique::Direct))
     }
 
     /// The weight to apply: the MIS weight, or 1 for a technique alone.
