@@ -142,10 +142,17 @@ impl Techniques {
         }
     }
 
-    /// Whether passes trace light subpaths at all: not for techniques of the camera
-    /// subpaths alone (a camera subpath's own numbers never depend on them).
+    /// Whether light subpaths take part in the estimator at all (not in pbrt-v3's
+    /// whitted and directlighting): its MIS constants and its guide count on them.
+    pub fn bidirectional(self) -> bool {
+        self != Techniques::Direct
+    }
+
+    /// Whether passes trace light subpaths: not where they take no part, nor for a
+    /// technique of the camera subpaths alone (a camera subpath's own numbers never
+    /// depend on them, so they were traced and thrown away).
     pub fn traces_lights(self) -> bool {
-        !matches!(self, Techniques::Direct | Techniques::Only(Technique::EmitterHit | Technique::Direct))
+        self.bidirectional() && !matches!(self, Techniques::Only(Technique::EmitterHit | Technique::Direct))
     }
 
     /// The weight to apply: the MIS weight, or 1 for a technique alone.
@@ -160,7 +167,7 @@ impl Techniques {
     /// The pass's constants: merging counts only where it is used (a technique alone
     /// takes weight 1 and reads none).
     fn factors(self, radius: f64, light_paths: f64) -> PassFactors {
-        PassFactors::new(radius, light_paths.max(1.0), self.traces_lights(), self.uses(Technique::Merge))
+        PassFactors::new(radius, light_paths.max(1.0), self.bidirectional(), self.uses(Technique::Merge))
     }
 }
 
@@ -746,7 +753,7 @@ impl<'a> Vcm<'a> {
 fn guide(scene: &RenderScene, settings: &VcmSettings) -> Option<Guide> {
     let b = scene.geometry.bounds()?;
     let g = settings.guiding;
-    (g != Guiding::Off && settings.techniques.traces_lights()).then(|| Guide::new(b.min, b.max, g.light()))
+    (g != Guiding::Off && settings.techniques.bidirectional()).then(|| Guide::new(b.min, b.max, g.light()))
 }
 
 /// The image part way through a pass: the first `camera_done` pixels with this pass's
