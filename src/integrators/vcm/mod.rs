@@ -749,7 +749,8 @@ impl<'a> Vcm<'a> {
 }
 
 /// The guide a render trains, if it asks for one: over the box around what rays can
-/// hit (none for pbrt-v3's whitted and directlighting, which trace no light subpaths).
+/// hit (none for pbrt-v3's whitted and directlighting, whose estimator has no light
+/// subpaths).
 fn guide(scene: &RenderScene, settings: &VcmSettings) -> Option<Guide> {
     let b = scene.geometry.bounds()?;
     let g = settings.guiding;
