@@ -86,48 +86,45 @@ fn render(
     metric: &str,
     backend: BitMapBackend,
 ) -> Result<(), String> {
-    {
-        let root = backend.into_drawing_area();
-        let e = |e: DrawingAreaErrorKind<_>| format!("plot: {e}");
-        root.fill(&WHITE).map_err(e)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(format!("{metric} against {x_label}"), ("sans-serif", 22))
-            .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(80)
-            // Padding keeps single points and flat lines inside a visible range.
-            .build_cartesian_2d(
-                (x0 / 1.2..x1 * 1.2).log_scale().with_key_points(key_points(x0 / 1.2, x1 * 1.2)),
-                (y0 / 1.5..y1 * 1.5).log_scale().with_key_points(key_points(y0 / 1.5, y1 * 1.5)),
-            )
-            .map_err(e)?;
+    let root = backend.into_drawing_area();
+    let e = |e: DrawingAreaErrorKind<_>| format!("plot: {e}");
+    root.fill(&WHITE).map_err(e)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(format!("{metric} against {x_label}"), ("sans-serif", 22))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(80)
+        // Padding keeps single points and flat lines inside a visible range.
+        .build_cartesian_2d(
+            (x0 / 1.2..x1 * 1.2).log_scale().with_key_points(key_points(x0 / 1.2, x1 * 1.2)),
+            (y0 / 1.5..y1 * 1.5).log_scale().with_key_points(key_points(y0 / 1.5, y1 * 1.5)),
+        )
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(metric)
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()
+        .map_err(e)?;
+    for (i, s) in series.iter().enumerate() {
+        let colour = Palette99::pick(i).to_rgba();
+        let slope = log_slope(&s.points).map_or("n/a".into(), |k| format!("{k:.2}"));
         chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc(metric)
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .draw()
-            .map_err(e)?;
-        for (i, s) in series.iter().enumerate() {
-            let colour = Palette99::pick(i).to_rgba();
-            let slope = log_slope(&s.points).map_or("n/a".into(), |k| format!("{k:.2}"));
-            chart
-                .draw_series(LineSeries::new(s.points.iter().copied(), colour.stroke_width(2)))
-                .map_err(e)?
-                .label(format!("{} (slope {slope})", s.label))
-                .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(2)));
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 16))
-            .draw()
-            .map_err(e)?;
-        root.present().map_err(e)?;
+            .draw_series(LineSeries::new(s.points.iter().copied(), colour.stroke_width(2)))
+            .map_err(e)?
+            .label(format!("{} (slope {slope})", s.label))
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(2)));
     }
-    Ok(())
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 16))
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)
 }
 
 /// Ticks at 1, 2 and 5 times the powers of ten within [lo, hi] (plotters' log axes
