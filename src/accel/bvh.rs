@@ -997,13 +997,24 @@ fn write_pieces(prims: &mut [PrimInfo], base: usize, node: Decided, settings: &S
 }
 
 /// The pieces of [`write_pieces`] as one array, copied once into room whose pages
-/// are huge from the first write when it is large (`crate::hugepages`).
+/// are huge from the first write when it is large (`crate::hugepages`), on all
+/// threads: the first write of fresh pages is most of the copy's cost, and on one
+/// thread it left the other idle for 0.2 s of a 12.6M-triangle scene's load.
 fn join_pieces(pieces: Vec<Vec<Node>>) -> Vec<Node> {
-    let mut nodes = crate::hugepages::with_capacity(pieces.iter().map(Vec::len).sum());
-    for piece in pieces {
-        let base = nodes.len() as u32;
-        nodes.extend(piece.into_iter().map(|n| n.shifted(base)));
-    }
+    let starts: Vec<usize> = std::iter::once(0)
+        .chain(pieces.iter().scan(0, |n, p| {
+            *n += p.len();
+            Some(*n)
+        }))
+        .collect();
+    let total = starts[pieces.len()];
+    let node = |i: usize| {
+        let p = starts.partition_point(|&s| s <= i) - 1;
+        pieces[p][i - starts[p]].shifted(starts[p] as u32)
+    };
+    let mut nodes = crate::hugepages::with_capacity(total);
+    // An indexed iterator: rayon writes each run of it in place.
+    nodes.par_extend((0..total).into_par_iter().map(node));
     nodes
 }
 
