@@ -33,11 +33,11 @@ pub enum StmtKind {
     Translate([f64; 3]),
     Scale([f64; 3]),
     Rotate([f64; 4]),
-    LookAt([f64; 9]),
+    LookAt(Box<[f64; 9]>),
     CoordinateSystem(String),
     CoordSysTransform(String),
-    Transform([f64; 16]),
-    ConcatTransform([f64; 16]),
+    Transform(Box<[f64; 16]>),
+    ConcatTransform(Box<[f64; 16]>),
     TransformTimes([f64; 2]),
     ActiveTransform(ActiveTransform),
     ReverseOrientation,
@@ -76,7 +76,7 @@ pub enum StmtKind {
     Texture {
         name: String,
         ty: String,
-        class: Entity,
+        class: Box<Entity>,
     },
     /// `Import "file"`: the statements that follow, up to the matching `ImportEnd`,
     /// come from the imported file.
@@ -190,9 +190,9 @@ fn quick_kind(kw: &[u8], r: &mut quick::Bytes) -> Option<StmtKind> {
         b"Translate" => K::Translate(r.numbers()?),
         b"Scale" => K::Scale(r.numbers()?),
         b"Rotate" => K::Rotate(r.numbers()?),
-        b"LookAt" => K::LookAt(r.numbers()?),
-        b"Transform" => K::Transform(r.bracketed()?),
-        b"ConcatTransform" => K::ConcatTransform(r.bracketed()?),
+        b"LookAt" => K::LookAt(Box::new(r.numbers()?)),
+        b"Transform" => K::Transform(Box::new(r.bracketed()?)),
+        b"ConcatTransform" => K::ConcatTransform(Box::new(r.bracketed()?)),
         b"ObjectInstance" => K::ObjectInstance(r.string()?),
         b"NamedMaterial" => K::NamedMaterial(r.string()?),
         b"CoordSysTransform" => K::CoordSysTransform(r.string()?),
@@ -424,11 +424,11 @@ impl StatementReader {
             "Translate" => K::Translate(self.numbers(kw, "Translate")?),
             "Scale" => K::Scale(self.numbers(kw, "Scale")?),
             "Rotate" => K::Rotate(self.numbers(kw, "Rotate")?),
-            "LookAt" => K::LookAt(self.numbers(kw, "LookAt")?),
+            "LookAt" => K::LookAt(Box::new(self.numbers(kw, "LookAt")?)),
             "CoordinateSystem" => K::CoordinateSystem(self.string(kw, "CoordinateSystem")?.0),
             "CoordSysTransform" => K::CoordSysTransform(self.string(kw, "CoordSysTransform")?.0),
-            "Transform" => K::Transform(self.bracketed(kw, "Transform")?),
-            "ConcatTransform" => K::ConcatTransform(self.bracketed(kw, "ConcatTransform")?),
+            "Transform" => K::Transform(Box::new(self.bracketed(kw, "Transform")?)),
+            "ConcatTransform" => K::ConcatTransform(Box::new(self.bracketed(kw, "ConcatTransform")?)),
             "TransformTimes" => K::TransformTimes(self.numbers(kw, "TransformTimes")?),
             "ActiveTransform" => K::ActiveTransform(self.active_transform(kw)?),
             "ReverseOrientation" => K::ReverseOrientation,
@@ -470,7 +470,7 @@ impl StatementReader {
         let (name, _) = self.string(kw, "Texture")?;
         let (ty, ty_span) = self.string(kw, "Texture")?;
         let class = self.entity(ty_span, "Texture")?;
-        Ok(StmtKind::Texture { name, ty, class })
+        Ok(StmtKind::Texture { name, ty, class: Box::new(class) })
     }
 
     /// `Include "file"` or `Import "file"`: reading goes on in that file; its name.

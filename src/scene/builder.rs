@@ -477,7 +477,7 @@ impl Builder {
             K::Material(e) => self.material(e),
             K::MakeNamedMaterial(e) => self.make_named_material(e),
             K::NamedMaterial(name) => self.named_material(name, span),
-            K::Texture { name, ty, class } => self.texture(name, ty, class),
+            K::Texture { name, ty, class } => self.texture(name, ty, *class),
         }
     }
 
