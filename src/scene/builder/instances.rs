@@ -45,7 +45,7 @@ impl InstanceUses {
         if end != start {
             self.ends.push((at, end));
         }
-        self.records.push(InstanceDesc::new(id, start, None));
+        crate::hugepages::push(&mut self.records, InstanceDesc::new(id, start, None));
     }
 
     /// The names instances use, each once, in order of first use.
