@@ -5,7 +5,7 @@
 //! per file (binary search), so parsing a 50 MB mesh never counts lines.
 
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex};
 
 use crate::limits::FileBytes;
 
@@ -42,7 +42,36 @@ pub struct SourceFile {
     pub name: String,
     /// Shared with the reader's frame (adding a file does not copy it).
     pub text: Arc<FileBytes>,
-    line_starts: OnceLock<Vec<u32>>,
+    lines: Mutex<LineStarts>,
+}
+
+/// Where a file's lines start, found as far as messages have needed: a warning near
+/// the top of a 71 MB file of instances made the whole table (50 ms on one thread).
+#[derive(Default)]
+struct LineStarts {
+    starts: Vec<u32>,
+    /// Line breaks before this offset are in `starts`.
+    scanned: usize,
+}
+
+impl LineStarts {
+    /// The start of the line holding `offset` (at most the text's length): its
+    /// 1-based number and its offset.
+    fn line_of(&mut self, text: &[u8], offset: usize) -> (usize, usize) {
+        if self.starts.is_empty() {
+            self.starts.push(0);
+        }
+        if offset > self.scanned {
+            let breaks = memchr::memchr2_iter(b'\n', b'\r', &text[self.scanned..offset]).map(|i| self.scanned + i);
+            // CR alone, LF alone and CR LF each end one line.
+            let ends = |&i: &usize| text[i] == b'\n' || text.get(i + 1) != Some(&b'\n');
+            let found: Vec<u32> = breaks.filter(ends).map(|i| i as u32 + 1).collect();
+            self.starts.extend(found);
+            self.scanned = offset;
+        }
+        let line = self.starts.partition_point(|&s| s as usize <= offset).max(1);
+        (line, self.starts[line - 1] as usize)
+    }
 }
 
 /// A resolved location, for printing.
@@ -72,12 +101,7 @@ impl SourceMap {
             return Err(format!("{name}: file is larger than 4 GiB"));
         }
         let id = FileId(self.files.len() as u32);
-        self.files.push(SourceFile {
-            path: path.to_path_buf(),
-            name,
-            text: Arc::new(text),
-            line_starts: OnceLock::new(),
-        });
+        self.files.push(SourceFile { path: path.to_path_buf(), name, text: Arc::new(text), lines: Mutex::default() });
         Ok(id)
     }
 
@@ -96,10 +120,8 @@ impl SourceMap {
     /// 1-based line and column (in characters) of the span's start.
     pub fn location(&self, span: Span) -> Location {
         let f = self.file(span.file);
-        let starts = f.line_starts.get_or_init(|| line_starts(&f.text));
         let offset = (span.start as usize).min(f.text.len());
-        let line = starts.partition_point(|&s| s as usize <= offset).max(1);
-        let line_start = starts[line - 1] as usize;
+        let (line, line_start) = f.line_of(offset);
         let column = String::from_utf8_lossy(&f.text[line_start..offset]).chars().count() + 1;
         Location { file: f.name.clone(), line: line as u32, column: column as u32 }
     }
@@ -107,24 +129,20 @@ impl SourceMap {
     /// The full source line holding the span's start, without its line break.
     pub fn line_text(&self, span: Span) -> String {
         let f = self.file(span.file);
-        let starts = f.line_starts.get_or_init(|| line_starts(&f.text));
-        let offset = (span.start as usize).min(f.text.len());
-        let line = starts.partition_point(|&s| s as usize <= offset).max(1);
-        let start = starts[line - 1] as usize;
+        let (_, start) = f.line_of((span.start as usize).min(f.text.len()));
         let end = f.text[start..].iter().position(|&c| c == b'\n' || c == b'\r').map_or(f.text.len(), |e| start + e);
         String::from_utf8_lossy(&f.text[start..end]).into_owned()
     }
 }
 
-fn line_starts(text: &[u8]) -> Vec<u32> {
-    let mut starts = vec![0u32];
-    for i in memchr::memchr2_iter(b'\n', b'\r', text) {
-        // CR alone, LF alone and CR LF each end one line.
-        if text[i] == b'\n' || text.get(i + 1) != Some(&b'\n') {
-            starts.push(i as u32 + 1);
-        }
+impl SourceFile {
+    /// [`LineStarts::line_of`] for this file's text.
+    fn line_of(&self, offset: usize) -> (usize, usize) {
+        // Each scan's lines are added at once, so even a poisoned lock holds a whole
+        // table.
+        let mut lines = self.lines.lock().unwrap_or_else(|e| e.into_inner());
+        lines.line_of(&self.text, offset)
     }
-    starts
 }
 
 #[cfg(test)]
@@ -146,5 +164,31 @@ mod tests {
         assert_eq!(at(7), (3, 1));
         assert_eq!(at(12), (4, 3));
         assert_eq!(map.line_text(Span::new(id, 12, 13)), "  g");
+    }
+
+    /// Lines found as far as each message needs, asked for in any order, are those of
+    /// one scan of the whole text (a CR at the end of one scan and its LF at the start
+    /// of the next end one line, not two).
+    #[test]
+    fn lines_found_piece_by_piece_are_those_of_one_whole_scan() {
+        let mut rng = crate::sampling::Rng::new(5);
+        let text: Vec<u8> = (0..3000).map(|_| [b'a', b'\n', b'\r', b'b'][(rng.uniform() * 4.0) as usize % 4]).collect();
+        let mut starts = vec![0];
+        for (i, &c) in text.iter().enumerate() {
+            if c == b'\n' || (c == b'\r' && text.get(i + 1) != Some(&b'\n')) {
+                starts.push(i + 1);
+            }
+        }
+        let whole = |o: usize| {
+            let line = starts.iter().filter(|&&s| s <= o).count();
+            (line as u32, (o - starts[line - 1] + 1) as u32)
+        };
+        let mut map = SourceMap::default();
+        let Ok(id) = map.add(Path::new("a.pbrt"), "a.pbrt".into(), text.clone().into()) else { panic!("rejected") };
+        for _ in 0..2000 {
+            let o = (rng.uniform() * 3001.0) as usize % 3001;
+            let l = map.location(Span::new(id, o, o));
+            assert_eq!((l.line, l.column), whole(o), "offset {o}");
+        }
     }
 }
