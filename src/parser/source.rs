@@ -2,7 +2,8 @@
 //!
 //! Every token and parameter carries a [`Span`] (file id + byte range). Line and column
 //! are computed only when a message is printed, from a line-start table built lazily
-//! per file (binary search), so parsing a 50 MB mesh never counts lines.
+//! per file, only as far into it as the messages reach (binary search), so parsing a
+//! 50 MB mesh never counts lines.
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
