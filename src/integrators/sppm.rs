@@ -896,11 +896,16 @@ fn direct_light(
     if scene.lights.is_empty() {
         return Vec3::ZERO;
     }
-    let Some((idx, weight)) = scene.direct_light_choice(sampler.get1d(), Some((si.p.0, si.n.0))) else {
+    let (mut u_light, u_bsdf, u_lobe) = (sampler.get2d(), sampler.get2d(), sampler.get1d());
+    let Some(pick) = scene.direct_light_choice(u_light[0], Some((si.p.0, si.n.0))) else {
         return Vec3::ZERO;
     };
+    // DEVIATION(pbrt): noise only. pbrt-v3 picks the light with a number of its own;
+    // under a padded sampler that leaves each light a random subset of the light
+    // samples. The pick's rest keeps them stratified (docs/sampling.md).
+    u_light[0] = pick.rest;
+    let (idx, weight) = (pick.index, 1.0 / pick.pmf);
     let light = &scene.lights[idx];
-    let (u_light, u_bsdf, u_lobe) = (sampler.get2d(), sampler.get2d(), sampler.get1d());
     // At glass and mirrors the estimate is 0 (pbrt computes it, and finds so): the
     // numbers above are drawn all the same, so the path's sequence goes on unchanged.
     if bsdf.only_specular() && !specular_too {

@@ -111,9 +111,12 @@ pub fn direct_light(scene: &RenderScene, mp: &MediumPoint, sampler: &mut impl Sa
     if scene.lights.is_empty() {
         return Vec3::ZERO;
     }
-    let Some((idx, weight)) = scene.direct_light_choice(sampler.get1d(), None) else { return Vec3::ZERO };
+    let (mut u_light, u_phase) = (sampler.get2d(), sampler.get2d());
+    // The light is picked from the light sample's first number, as at surfaces.
+    let Some(pick) = scene.direct_light_choice(u_light[0], None) else { return Vec3::ZERO };
+    u_light[0] = pick.rest;
+    let (idx, weight) = (pick.index, 1.0 / pick.pmf);
     let light = &scene.lights[idx];
-    let (u_light, u_phase) = (sampler.get2d(), sampler.get2d());
     let mut ld = Vec3::ZERO;
     if let Some(ls) = light.sample_li(&scene.geometry.shapes, mp.p, u_light)
         && !scene.emission_masked(light, ls.surface.as_ref())

@@ -12,6 +12,7 @@
 
 use super::Light;
 use super::bounds::LightBounds;
+use crate::sampling::{Pick, rest_of};
 use crate::shapes::ShapeSet;
 use glam::Vec3;
 
@@ -47,16 +48,18 @@ impl LightChoice {
     }
 
     /// A light for the point `p` with normal `n` (zero in a medium), from a uniform
-    /// `u`, and 1 over its probability.
-    pub fn choose(&self, u: f32, p: Vec3, n: Vec3) -> Option<(usize, f32)> {
+    /// `u`.
+    pub fn choose(&self, u: f32, p: Vec3, n: Vec3) -> Option<Pick> {
         let n_inf = self.infinite.len();
         if self.bounded.is_empty() && n_inf == 0 {
             return None;
         }
         let p_inf = n_inf as f32 / (n_inf + usize::from(!self.bounded.is_empty())) as f32;
         if u < p_inf || self.bounded.is_empty() {
-            let k = ((u / p_inf * n_inf as f32) as usize).min(n_inf - 1);
-            return Some((self.infinite[k], n_inf as f32 / p_inf));
+            let x = u as f64 / p_inf as f64 * n_inf as f64;
+            let k = (x as usize).min(n_inf - 1);
+            let rest = rest_of(x - k as f64, 1.0);
+            return Some(Pick { index: self.infinite[k], pmf: p_inf / n_inf as f32, rest });
         }
         let u = ((u - p_inf) / (1.0 - p_inf)).clamp(0.0, 1.0);
         let mut weights = [0.0f32; MAX_LIGHTS];
@@ -69,16 +72,19 @@ impl LightChoice {
         weights.iter_mut().for_each(|w| *w = if w.is_finite() { w.max(floor) } else { floor });
         let total: f32 = weights.iter().sum();
         let target = u * total;
-        let (mut acc, mut pick) = (0.0, weights.len() - 1);
+        // The first light whose running sum passes the target (the last one, if
+        // rounding leaves the target at the total), and the sum below it.
+        let (mut below, mut pick) = (0.0, weights.len() - 1);
         for (k, w) in weights.iter().enumerate() {
-            acc += w;
-            if target < acc {
+            if target < below + w || k == pick {
                 pick = k;
                 break;
             }
+            below += w;
         }
-        let prob = (1.0 - p_inf) * weights[pick] / total;
-        Some((self.bounded[pick].0, 1.0 / prob))
+        let pmf = (1.0 - p_inf) * weights[pick] / total;
+        let rest = rest_of((target - below) as f64, weights[pick] as f64);
+        Some(Pick { index: self.bounded[pick].0, pmf, rest })
     }
 }
 
@@ -99,14 +105,38 @@ mod tests {
         let (mut counts, mut sum_w) = ([0usize; 2], [0.0f64; 2]);
         let n = 100_000;
         for k in 0..n {
-            let (i, w) = choice.choose((k as f32 + 0.5) / n as f32, Vec3::ZERO, Vec3::Z).unwrap();
-            counts[i] += 1;
-            sum_w[i] += w as f64;
+            let pick = choice.choose((k as f32 + 0.5) / n as f32, Vec3::ZERO, Vec3::Z).unwrap();
+            counts[pick.index] += 1;
+            sum_w[pick.index] += 1.0 / pick.pmf as f64;
         }
         assert!(counts[0] > 90 * counts[1], "{counts:?}");
         // Each light's weight 1/p, summed over the times it is chosen, estimates n.
         for w in sum_w {
             assert!((w / n as f64 - 1.0).abs() < 0.02, "{sum_w:?}");
+        }
+    }
+
+    /// Whichever branch picks it (lights at infinity or bounded ones), a light's
+    /// rests over stratified numbers are stratified too.
+    #[test]
+    fn each_light_keeps_a_stratified_rest() {
+        let shapes = ShapeSet::default();
+        let sky = Light::Infinite(crate::lights::infinite::InfiniteLight { l: Vec3::ONE, map: None });
+        let lights = [point(Vec3::new(0.0, 0.0, 1.0), 1.0), sky, point(Vec3::new(0.0, 0.0, 3.0), 1.0)];
+        let choice = LightChoice::new(&lights, &shapes).expect("few lights");
+        let n = 6_000;
+        let mut rests = vec![Vec::new(); 3];
+        for k in 0..n {
+            let pick = choice.choose((k as f32 + 0.5) / n as f32, Vec3::ZERO, Vec3::Z).unwrap();
+            rests[pick.index].push(pick.rest);
+        }
+        for r in &mut rests {
+            assert!(r.len() > 100, "{}", r.len());
+            r.sort_by(f32::total_cmp);
+            let m = r.len() as f32;
+            for (j, x) in r.iter().enumerate() {
+                assert!(*x >= (j as f32 - 0.01) / m && *x < (j as f32 + 1.01) / m, "{j} of {m}: {x}");
+            }
         }
     }
 
@@ -124,7 +154,7 @@ mod tests {
         let lights = [point(Vec3::new(0.0, 0.0, 2.0), 1.0), Light::Spot(spot_away)];
         let choice = LightChoice::new(&lights, &shapes).unwrap();
         let picks: Vec<_> = (0..10_000).filter_map(|k| choice.choose(k as f32 / 1e4, Vec3::ZERO, Vec3::Z)).collect();
-        let spot = picks.iter().filter(|(i, _)| *i == 1).count();
+        let spot = picks.iter().filter(|p| p.index == 1).count();
         assert!(spot > 0 && spot < 10, "{spot}");
     }
 }

@@ -147,6 +147,29 @@ pub fn uniform_cone(u: [f32; 2], cos_max: f32) -> Vec3 {
     Vec3::new(phi.cos() * sin_t, phi.sin() * sin_t, cos_t)
 }
 
+/// A discrete choice made from one uniform number, and what is left of that number.
+///
+/// `rest` is where the number fell within the chosen entry's share, rescaled to
+/// [0, 1): uniform again, and stratified as the number was. A light chosen from the
+/// first coordinate of its own 2D sample takes `rest` as that coordinate, so the points
+/// drawn on each light stay as well spread as the 2D samples (a padded sampler's
+/// separate choice number would pick a random half of them for each of two lights).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pick {
+    pub index: usize,
+    /// The probability of `index`.
+    pub pmf: f32,
+    pub rest: f32,
+}
+
+/// `offset` over `width`, as a number in [0, 1) (0 for an empty width).
+pub fn rest_of(offset: f64, width: f64) -> f32 {
+    if width > 0.0 { ((offset / width) as f32).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 }
+}
+
+/// The largest f32 below 1.
+pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
 /// A discrete distribution proportional to non-negative weights.
 #[derive(Clone, Debug, Default)]
 pub struct Distribution1D {
@@ -171,12 +194,18 @@ impl Distribution1D {
 
     /// An index and its probability.
     pub fn sample(&self, u: f32) -> Option<(usize, f32)> {
+        self.pick(u).map(|p| (p.index, p.pmf))
+    }
+
+    /// An index, its probability and where `u` fell within the index's share.
+    pub fn pick(&self, u: f32) -> Option<Pick> {
         if self.is_empty() {
             return None;
         }
         let target = u as f64 * self.total;
-        let i = self.cdf.partition_point(|&c| c <= target).min(self.cdf.len() - 1);
-        Some((i, self.pmf(i)))
+        let index = self.cdf.partition_point(|&c| c <= target).min(self.cdf.len() - 1);
+        let lo = if index == 0 { 0.0 } else { self.cdf[index - 1] };
+        Some(Pick { index, pmf: self.pmf(index), rest: rest_of(target - lo, self.cdf[index] - lo) })
     }
 
     pub fn pmf(&self, i: usize) -> f32 {
@@ -197,4 +226,32 @@ pub fn concentric_disk(u: [f32; 2]) -> Vec2 {
         (o.y, std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y))
     };
     r * Vec2::new(theta.cos(), theta.sin())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Stratified numbers picked by weight: each index gets its share, and the rests
+    /// of its picks are stratified in turn (the j-th smallest of m in [j/m, (j+1)/m)).
+    #[test]
+    fn a_pick_leaves_each_index_a_stratified_rest() {
+        let d = Distribution1D::new(&[1.0, 3.0, 0.0, 4.0]);
+        let n = 8_000;
+        let mut rests = vec![Vec::new(); 4];
+        for k in 0..n {
+            let p = d.pick((k as f32 + 0.5) / n as f32).expect("weights");
+            assert!((0.0..1.0).contains(&p.rest), "{p:?}");
+            assert_eq!(p.pmf, d.pmf(p.index));
+            rests[p.index].push(p.rest);
+        }
+        assert_eq!(rests.iter().map(Vec::len).collect::<Vec<_>>(), [1_000, 3_000, 0, 4_000]);
+        for r in &mut rests {
+            r.sort_by(f32::total_cmp);
+            let m = r.len() as f32;
+            for (j, x) in r.iter().enumerate() {
+                assert!(*x >= (j as f32 - 0.01) / m && *x < (j as f32 + 1.01) / m, "{j} of {m}: {x}");
+            }
+        }
+    }
 }

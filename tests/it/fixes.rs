@@ -208,7 +208,7 @@ fn photons_from_behind_shrink_the_radius_unless_fixed() {
 fn a_smooth_coat_reflects_an_area_light_as_in_pbrt_v4() {
     let text = "LookAt 0 0 -5  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 5 \
                 Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8 \
-                Sampler \"halton\" \"integer pixelsamples\" 16 Integrator \"sppm\" \
+                Sampler \"halton\" \"integer pixelsamples\" 256 Integrator \"sppm\" \
                 WorldBegin AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \
                 Translate 0 0 -6 Shape \"disk\" \"float radius\" 100 AttributeEnd \
                 Material \"coateddiffuse\" \"rgb reflectance\" [0 0 0] \"float roughness\" 0 \

@@ -147,14 +147,16 @@ fn the_same_seed_gives_identical_pixels_for_any_thread_count() {
 /// and antialiased edges converge faster than with independent numbers.
 #[test]
 fn sobol_camera_paths_have_less_error_than_random_ones_at_equal_iterations() {
-    let text = "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32 \
+    // pbrt-v3 syntax, so paths carry RGB: a v4 file's wavelengths, drawn per pass for
+    // all pixels, add noise that no camera-path sampler removes.
+    let text = "Film \"image\" \"integer xresolution\" 32 \"integer yresolution\" 32 \
         LookAt 0 3 -3  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50 \
         Integrator \"sppm\" \"integer maxdepth\" 1 \"integer photonsperiteration\" 100 \"float radius\" 0.01 \
         WorldBegin \
-        AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [4 4 4] Translate 0 2 0 Rotate 90 1 0 0 \
+        AttributeBegin AreaLightSource \"diffuse\" \"color L\" [4 4 4] Translate 0 2 0 Rotate 90 1 0 0 \
           Shape \"disk\" \"float radius\" 0.7 AttributeEnd \
-        Material \"diffuse\" Shape \"sphere\" \"float radius\" 0.5 \
-        Shape \"trianglemesh\" \"point3 P\" [-4 -0.5 -4  4 -0.5 -4  4 -0.5 4  -4 -0.5 4] \"integer indices\" [0 1 2 0 2 3]";
+        Material \"matte\" Shape \"sphere\" \"float radius\" 0.5 \
+        Shape \"trianglemesh\" \"point P\" [-4 -0.5 -4  4 -0.5 -4  4 -0.5 4  -4 -0.5 4] \"integer indices\" [0 1 2 0 2 3]";
     let sc = RenderScene::new(&scene(text));
     let render = |iterations, sampler, seed| {
         let s = RenderSettings { iterations: Some(iterations), seed: Some(seed), sampler, ..Default::default() };
@@ -164,7 +166,46 @@ fn sobol_camera_paths_have_less_error_than_random_ones_at_equal_iterations() {
     let error = |sampler| (1..=3).map(|seed| relmse(&render(16, sampler, seed), &reference)).sum::<f64>();
     let (sobol, random) = (error(SamplerKind::Sobol), error(SamplerKind::Random));
     eprintln!("relMSE at 16 iterations, sum of 3 seeds: Sobol' {sobol:.3e}, random {random:.3e}");
-    assert!(sobol < 0.5 * random, "relMSE with Sobol' points {sobol:.3e}, with random numbers {random:.3e}");
+    // Measured: 0.13 of random's squared differences between seeds.
+    assert!(sobol < 0.3 * random, "relMSE with Sobol' points {sobol:.3e}, with random numbers {random:.3e}");
+}
+
+/// With two lights, the light is picked from the first number of the light sample
+/// itself, so each light's points stay stratified over a pixel's iterations. (Picked
+/// with a number of its own, each light got a random half of the stratified points:
+/// Sobol' paths then had 0.30 of random paths' variance on this scene; now 0.13, as
+/// with one light.)
+#[test]
+fn sobol_camera_paths_stay_stratified_when_a_light_is_picked_among_two() {
+    let text = "Film \"image\" \"integer xresolution\" 32 \"integer yresolution\" 32 \
+        LookAt 0 2.5 6  0 0.7 0  0 1 0 Camera \"perspective\" \"float fov\" 40 \
+        Integrator \"sppm\" \"integer maxdepth\" 1 \"integer photonsperiteration\" 100 \
+        WorldBegin LightSource \"point\" \"color I\" [4 4 4] \"point from\" [2 3 2] \
+        AttributeBegin AreaLightSource \"diffuse\" \"color L\" [6 6 6] Translate 0 3 0 Rotate 90 1 0 0 \
+          Shape \"disk\" \"float radius\" 0.8 AttributeEnd \
+        Material \"matte\" AttributeBegin Translate 0 0.7 0 Shape \"sphere\" \"float radius\" 0.7 AttributeEnd \
+        Shape \"trianglemesh\" \"point P\" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] \"integer indices\" [0 2 1 0 3 2]";
+    let sc = RenderScene::new(&scene(text));
+    let render = |sampler, seed| {
+        let s = RenderSettings { iterations: Some(16), seed: Some(seed), sampler, ..Default::default() };
+        pbrt_sppm::integrators::render(&sc, &s).expect("renders").image.pixels
+    };
+    // Two independent images differ by twice the variance of one.
+    let variance = |sampler| {
+        let px: Vec<_> = (1..=4).map(|seed| render(sampler, seed)).collect();
+        let diff = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+            a.iter()
+                .flat_map(|p| p.iter())
+                .zip(b.iter().flat_map(|p| p.iter()))
+                .map(|(x, y)| (x - y) as f64)
+                .map(|d| d * d)
+                .sum::<f64>()
+        };
+        diff(&px[0], &px[1]) + diff(&px[2], &px[3])
+    };
+    let (sobol, random) = (variance(SamplerKind::Sobol), variance(SamplerKind::Random));
+    eprintln!("squared differences between seeds: Sobol' {sobol:.3e}, random {random:.3e}");
+    assert!(random > 0.0 && sobol < 0.2 * random, "Sobol' {sobol:.3e}, random {random:.3e}");
 }
 
 /// The keyhole room: light enters through a small hole, so about one uniform photon in

@@ -562,9 +562,10 @@ impl Cameras<'_> {
         if self.pass.nee_all {
             return (0..scene.lights.len()).map(|k| self.direct_from(v, k, 1.0, s.get2d(), s)).sum();
         }
-        let (pick_u, u) = (s.get1d(), s.get2d());
-        let Some((k, pick)) = scene.light_power.sample(pick_u) else { return Vec3::ZERO };
-        self.direct_from(v, k, pick, u, s)
+        // The light is picked from its sample's first number (`Pick`'s rest).
+        let u = s.get2d();
+        let Some(pick) = scene.light_power.pick(u[0]) else { return Vec3::ZERO };
+        self.direct_from(v, pick.index, pick.pmf, [pick.rest, u[1]], s)
     }
 
     /// One next-event estimate from light `k`, chosen with probability `pick`.
