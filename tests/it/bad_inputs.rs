@@ -90,8 +90,7 @@ fn unknown_commands_and_shapes_without_json_are_usage_errors() {
 
 #[test]
 fn utf16_files_are_rejected_with_a_message() {
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-utf16-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::Scratch::new("utf16");
     let path = dir.join("utf16.pbrt");
     std::fs::write(&path, [0xff, 0xfe, b'W', 0, b'o', 0]).unwrap();
     let e = load_scene(&path, &LoadOptions::default()).unwrap_err();

@@ -86,10 +86,8 @@ fn thin_lens_rays_meet_at_the_focal_distance() {
     assert!((pa - pb).length() < 1e-4, "{pa} vs {pb}");
 }
 
-fn dir() -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("pbrt-sppm-img-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir(name: &str) -> crate::common::Scratch {
+    crate::common::Scratch::new(&format!("img-{name}"))
 }
 
 #[test]
@@ -107,10 +105,11 @@ fn exr_round_trip_keeps_crop_window_and_metadata() {
         world_to_camera: Some(std::array::from_fn(|i| i as f32)),
         software: Some("pbrt-sppm test".into()),
     };
-    let path = dir().join("round.exr");
+    let d = dir("round");
+    let path = d.join("round.exr");
     write_image(&path, &img).unwrap();
     assert_eq!(read_image(&path).unwrap(), img);
-    let leftovers: Vec<_> = std::fs::read_dir(dir())
+    let leftovers: Vec<_> = std::fs::read_dir(&d)
         .unwrap()
         .flatten()
         .filter(|e| e.file_name().to_string_lossy().contains(".tmp."))
@@ -121,7 +120,8 @@ fn exr_round_trip_keeps_crop_window_and_metadata() {
 #[test]
 fn half_float_exrs_are_read() {
     use exr::prelude::*;
-    let path = dir().join("half.exr");
+    let d = dir("half");
+    let path = d.join("half.exr");
     let layer = Layer::new(
         (2, 1),
         LayerAttributes::named(""),
@@ -139,7 +139,8 @@ fn half_float_exrs_are_read() {
 fn png_previews_are_srgb_encoded() {
     let mut img = RgbImage::new(3, 1);
     img.pixels = vec![[0.0, 0.5, 1.0], [0.2140, 0.0031308, 2.0], [-1.0, 0.0, 0.0]];
-    let path = dir().join("preview.png");
+    let d = dir("preview");
+    let path = d.join("preview.png");
     write_image(&path, &img).unwrap();
     let back = read_image(&path).unwrap();
     // 0.5 linear is 188/255 in sRGB; 0.214 linear is 0.4999 (127/255); values clamp.
@@ -153,7 +154,8 @@ fn png_previews_are_srgb_encoded() {
 #[test]
 fn a_failed_write_leaves_no_file() {
     let img = RgbImage::new(2, 2);
-    let path = dir().join("no-such-folder").join("x.exr");
+    let d = dir("failed-write");
+    let path = d.join("no-such-folder").join("x.exr");
     assert!(write_image(&path, &img).is_err());
     assert!(!path.exists());
 }

@@ -4,7 +4,7 @@
 
 use pbrt_sppm::imageio::read_image;
 use pbrt_sppm::integrators::checkpoint::Checkpoint;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
@@ -26,7 +26,7 @@ Material "matte" "color Kd" [ .6 .6 .6 ]
 Shape "trianglemesh" "point P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ] "integer indices" [ 0 2 1  0 3 2 ]
 "#;
 
-fn dir(name: &str) -> PathBuf {
+fn dir(name: &str) -> crate::common::Scratch {
     crate::common::scratch("ckpt", name, &[("scene.pbrt", SCENE), ("geometry.pbrt", GEOMETRY)])
 }
 

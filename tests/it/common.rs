@@ -11,12 +11,52 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// An empty scratch folder `pbrt-sppm-{kind}-{name}-{pid}` in the system's temporary
-/// folder holding `files` (name, text).
-pub fn scratch(kind: &str, name: &str, files: &[(&str, &str)]) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pbrt-sppm-{kind}-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
+/// A test's own empty folder, `pbrt-sppm-{name}-{pid}` in the system's temporary
+/// folder, removed when the test is done with it. A failing test leaves it, to look at.
+pub struct Scratch(PathBuf);
+
+impl Scratch {
+    /// `name` must differ between the tests that may run at once.
+    pub fn new(name: &str) -> Scratch {
+        let d = std::env::temp_dir().join(format!("pbrt-sppm-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        Scratch(d)
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for Scratch {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("left for a look: {}", self.0.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+/// A [`Scratch`] folder `{kind}-{name}` holding `files` (name, text).
+pub fn scratch(kind: &str, name: &str, files: &[(&str, &str)]) -> Scratch {
+    let d = Scratch::new(&format!("{kind}-{name}"));
     for (file, text) in files {
         std::fs::write(d.join(file), text).unwrap();
     }

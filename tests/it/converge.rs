@@ -8,11 +8,8 @@ use pbrt_sppm::imageio::{RgbImage, metrics, read_image};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pbrt-sppm-converge-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir(name: &str) -> crate::common::Scratch {
+    crate::common::Scratch::new(&format!("converge-{name}"))
 }
 
 /// A small v3 scene whose world sits in an included file; the comment and the bare

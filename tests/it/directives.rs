@@ -406,8 +406,7 @@ fn import_does_not_leak_state_back() {
 #[test]
 fn gzip_scene_files_are_read() {
     use std::io::Write;
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-gz-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::Scratch::new("gz");
     let path = dir.join("scene.pbrt.gz");
     let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
     gz.write_all(b"WorldBegin\nShape \"sphere\" \"float radius\" 4\n").unwrap();

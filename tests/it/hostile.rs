@@ -3,7 +3,6 @@
 //! rendering, the command line's refusals, and a closed or full standard output.
 
 use crate::common::{load, root};
-use std::path::PathBuf;
 use std::process::Command;
 
 fn first_error(text: &str) -> String {
@@ -13,10 +12,8 @@ fn first_error(text: &str) -> String {
     }
 }
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pbrt-sppm-hostile-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir(name: &str) -> crate::common::Scratch {
+    crate::common::Scratch::new(&format!("hostile-{name}"))
 }
 
 fn sppm(args: &[&str]) -> (Option<i32>, String) {
@@ -415,7 +412,8 @@ fn a_full_or_closed_standard_output_is_an_error_not_a_panic() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.starts_with("<stdout>: error: cannot write") && !err.contains("panicked"), "{err}");
     // A reader that goes away (`| head`): the write fails, and that is reported, not a panic.
-    let img = dir("stdout").join("a.exr");
+    let d = dir("stdout");
+    let img = d.join("a.exr");
     pbrt_sppm::imageio::write_image(&img, &pbrt_sppm::imageio::RgbImage::new(2, 2)).unwrap();
     let out =
         with_stdout_closed(Command::new(env!("CARGO_BIN_EXE_pbrt-imgtool")).args(["info", img.to_str().unwrap()]));

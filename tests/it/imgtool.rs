@@ -4,10 +4,8 @@
 use pbrt_sppm::imageio::{RgbImage, read_image, write_image};
 use std::process::Command;
 
-fn dir() -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("pbrt-sppm-imgtool-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir(name: &str) -> crate::common::Scratch {
+    crate::common::Scratch::new(&format!("imgtool-{name}"))
 }
 
 fn image(pixels: Vec<[f32; 3]>) -> RgbImage {
@@ -27,7 +25,7 @@ fn tool(args: &[&str]) -> (Option<i32>, String, String) {
 
 #[test]
 fn diff_reports_every_metric_and_thresholds_the_exit_status() {
-    let d = dir();
+    let d = dir("diff");
     let (a, b) = (d.join("a.exr"), d.join("b.exr"));
     write_image(&a, &image(vec![[1.0, 2.0, 3.0], [0.0, 0.0, 0.0]])).unwrap();
     // B (the reference) is half-float, as pbrt-v3 writes.
@@ -75,7 +73,7 @@ fn diff_reports_every_metric_and_thresholds_the_exit_status() {
 
 #[test]
 fn info_and_convert() {
-    let d = dir();
+    let d = dir("info");
     let exr = d.join("info.exr");
     let mut img = image(vec![[0.25, 0.5, 1.0], [0.75, 0.0, -1.0]]);
     img.origin = (3, 4);
@@ -114,7 +112,7 @@ fn info_and_convert() {
 
 #[test]
 fn plot_draws_one_line_per_csv_and_rejects_a_missing_column() {
-    let d = dir();
+    let d = dir("plot");
     let (a, b) = (d.join("fast.csv"), d.join("slow.csv"));
     let csv = |k: f64| {
         let rows: String = (1..=10)
@@ -158,8 +156,7 @@ fn plot_draws_one_line_per_csv_and_rejects_a_missing_column() {
 
 #[test]
 fn report_tabulates_the_ladder_and_writes_its_files() {
-    let d = dir().join("report");
-    std::fs::create_dir_all(&d).unwrap();
+    let d = dir("report");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/pbrt-scenes/v3/caustic-ring.pbrt");
     let reference = d.join("ref.exr");
     let out = Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
@@ -206,7 +203,7 @@ fn report_tabulates_the_ladder_and_writes_its_files() {
 /// with the deviation it takes there, and a worst line that agrees with the rows.
 #[test]
 fn tiles_prints_the_whole_image_and_explains_the_floor() {
-    let d = dir();
+    let d = dir("tiles");
     // 2 × 2 pixels, a tile each: the lower row is dark (below 5% of the image mean).
     let square = |px: Vec<[f32; 3]>| {
         let mut img = RgbImage::new(2, 2);
@@ -235,7 +232,7 @@ fn tiles_prints_the_whole_image_and_explains_the_floor() {
 /// CSV", not a UTF-8 complaint.
 #[test]
 fn plot_writes_beside_the_csv_and_names_a_file_that_is_not_one() {
-    let d = dir();
+    let d = dir("plot-beside");
     let csv = d.join("run-errors.csv");
     std::fs::write(&csv, "iteration,seconds,photons,mse,rmse,relmse\n1,0.5,10,0.4,0.6,0.4\n2,1,20,0.2,0.4,0.2\n")
         .unwrap();

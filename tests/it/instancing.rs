@@ -69,8 +69,7 @@ fn write_grid_ply(path: &std::path::Path, n: usize) {
 
 #[test]
 fn many_instances_cost_about_one_copy() {
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-inst-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::Scratch::new("inst");
     write_grid_ply(&dir.join("grid.ply"), 123); // 30,258 triangles
     let mut scene =
         String::from("WorldBegin\nObjectBegin \"g\"\nShape \"plymesh\" \"string filename\" \"grid.ply\"\nObjectEnd\n");

@@ -5,7 +5,7 @@
 
 use pbrt_sppm::imageio::read_image;
 use pbrt_sppm::integrators::checkpoint::Checkpoint;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
@@ -30,7 +30,7 @@ Material "matte" "rgb Kd" [ .6 .6 .6 ]
 Shape "trianglemesh" "point P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ] "integer indices" [ 0 2 1  0 3 2 ]
 "#;
 
-fn dir(name: &str) -> PathBuf {
+fn dir(name: &str) -> crate::common::Scratch {
     crate::common::scratch("int", name, &[("scene.pbrt", SCENE)])
 }
 

@@ -259,8 +259,7 @@ fn no_lights_or_no_visible_points_render_black() {
 
 #[test]
 fn render_command_writes_exr_with_crop_window_metadata_and_errors_csv() {
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-render-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::Scratch::new("render");
     let scene_path = dir.join("crop.pbrt");
     let text = std::fs::read_to_string(root().join("pbrt-scenes/v4/cornell-glass.pbrt"))
         .unwrap()
@@ -334,8 +333,7 @@ fn write_exr(path: &std::path::Path, w: usize, h: usize, f: impl Fn(usize, usize
 
 #[test]
 fn imagemap_textures_put_t_zero_at_the_bottom_row() {
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-tex-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::Scratch::new("tex");
     // 2×2: top row red, green; bottom row blue, white.
     write_exr(&dir.join("quad.exr"), 2, 2, |x, y| {
         [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]][y * 2 + x]
@@ -383,8 +381,7 @@ fn imagemap_textures_put_t_zero_at_the_bottom_row() {
 
 #[test]
 fn a_constant_environment_map_lights_like_a_constant_infinite_light() {
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-env-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::Scratch::new("env");
     write_exr(&dir.join("sky.exr"), 32, 16, |_, _| [0.5, 0.5, 0.5]);
     let scene_for = |light: &str| {
         format!(
@@ -472,8 +469,7 @@ fn the_time_limit_stops_after_the_iteration_that_passes_it() {
 fn an_empty_view_warns_and_renders_black() {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm")).args(["-", "--outfile"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2), "clap rejects a missing value");
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-empty-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::Scratch::new("empty");
     let path = dir.join("empty.pbrt");
     std::fs::write(&path, "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4 WorldBegin LightSource \"point\" \"rgb I\" [1 1 1]").unwrap();
     let exr = dir.join("empty.exr");

@@ -189,7 +189,7 @@ fn mixed_ply(dir: &std::path::Path) {
 
 #[test]
 fn v4_ply_of_triangles_and_quads_is_two_shapes_in_file_order() {
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-mixed-ply-{}", std::process::id()));
+    let dir = crate::common::Scratch::new("mixed-ply");
     mixed_ply(&dir);
     let world = "WorldBegin\nShape \"sphere\"\nShape \"plymesh\" \"string filename\" \"mixed.ply\"\nShape \"disk\"\n";
     let report_of = |text: &str| {
@@ -269,8 +269,7 @@ fn plymesh_files_read_ahead_keep_order_and_first_errors() {
 
 /// Writes a PLY with the given format and texture-coordinate names and loads it.
 fn ply_roundtrip(format: &str, uv: (&str, &str)) -> pbrt_sppm::shapes::TriangleMesh {
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-ply-{}-{format}-{}", std::process::id(), uv.0));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::Scratch::new(&format!("ply-{format}-{}", uv.0));
     let head = format!(
         "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
          property float {}\nproperty float {}\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n",

@@ -7,7 +7,7 @@ use pbrt_sppm::imageio::read_image;
 use pbrt_sppm::integrators::passes::{self, PassMode};
 use pbrt_sppm::integrators::sppm::Sppm;
 use pbrt_sppm::render::RenderScene;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 pub const SCENE: &str = r#"LookAt 0 2 -4  0 0.5 0  0 1 0
@@ -25,7 +25,7 @@ Material "matte" "color Kd" [ .6 .6 .6 ]
 Shape "trianglemesh" "point P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ] "integer indices" [ 0 2 1  0 3 2 ]
 "#;
 
-pub fn dir(name: &str) -> PathBuf {
+pub fn dir(name: &str) -> crate::common::Scratch {
     crate::common::scratch("shards", name, &[("scene.pbrt", SCENE)])
 }
 
@@ -263,7 +263,7 @@ fn plan_prints_a_job_array_and_a_merge_that_waits_for_it() {
         &["plan", "--slurm", "--passes", "4", "--shards", "2", "elsewhere/../elsewhere/away.pbrt"],
     );
     let s = String::from_utf8_lossy(&o.stdout);
-    let root = std::fs::canonicalize(&d).unwrap_or(d.clone());
+    let root = std::fs::canonicalize(&d).unwrap_or(d.to_path_buf());
     assert!(o.status.success() && !s.contains("/../") && !s.contains("/./"), "{s}");
     assert!(
         s.contains(&format!("parts='{}/away.parts'", root.display()))

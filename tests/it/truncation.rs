@@ -62,8 +62,7 @@ fn truncated_scenes_never_panic() {
 
 #[test]
 fn truncated_ply_files_never_panic() {
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-plycut-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::Scratch::new("plycut");
     let scene = dir.join("scene.pbrt");
     std::fs::write(&scene, "WorldBegin\nShape \"plymesh\" \"string filename\" \"cut.ply\"\n").unwrap();
     for source in ["icosphere.ply", "slab_be.ply"] {
@@ -85,8 +84,7 @@ fn truncated_ply_files_never_panic() {
 #[test]
 fn truncated_gzip_scenes_never_panic_and_say_where() {
     use std::io::Write;
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-gzcut-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::Scratch::new("gzcut");
     let text = std::fs::read(root().join("pbrt-scenes/v3/cornell-glass.pbrt")).unwrap();
     let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
     enc.write_all(&text).unwrap();
