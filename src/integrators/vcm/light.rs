@@ -259,13 +259,12 @@ struct Start<'a> {
 /// Emits from a light chosen by power (`None`: nothing emitted).
 fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let scene = pass.scene;
-    // The light is picked from its emission's first number (`Pick`'s rest).
     // The light is picked with a number of its own. Picked from the emission's first
     // number instead (as camera vertices pick theirs), this pass's Sobol' points
     // gave a caustic under a small light more outliers (docs/sampling.md).
     let (li, pick) = scene.light_power.sample(s.get1d())?;
-    let (u1, u2) = (s.get2d(), s.get2d());
     let light = &scene.lights[li];
+    let (u1, u2) = (s.get2d(), s.get2d());
     let e = match &pass.cones[li] {
         Some(cone) => super::aim::emit(light, cone, u1),
         None => light.sample_le(&scene.geometry.shapes, scene.world, u1, u2)?,
