@@ -13,7 +13,7 @@ use crate::math::Ray;
 use crate::math::frame::coordinate_system;
 use crate::media::MediumInterface;
 use crate::parser::Syntax;
-use crate::sampling::{Distribution1D, Pick, rest_of};
+use crate::sampling::{Distribution1D, Pick};
 use crate::scene::{
     AlphaRule, AreaLightDesc, Film, Integrator, MaterialKind, MixRule, SceneDescription, ShapeAlpha, TexValue,
 };
@@ -321,9 +321,7 @@ impl RenderScene {
             return choice.choose(u, p, normal);
         }
         if self.media.is_empty() {
-            let x = u as f64 * n as f64;
-            let index = (x as usize).min(n - 1);
-            return Some(Pick { index, pmf: 1.0 / n as f32, rest: rest_of(x - index as f64, 1.0) });
+            return Some(Pick::uniform(u as f64, n));
         }
         self.light_power.pick(u)
     }

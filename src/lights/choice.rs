@@ -56,10 +56,8 @@ impl LightChoice {
         }
         let p_inf = n_inf as f32 / (n_inf + usize::from(!self.bounded.is_empty())) as f32;
         if u < p_inf || self.bounded.is_empty() {
-            let x = u as f64 / p_inf as f64 * n_inf as f64;
-            let k = (x as usize).min(n_inf - 1);
-            let rest = rest_of(x - k as f64, 1.0);
-            return Some(Pick { index: self.infinite[k], pmf: p_inf / n_inf as f32, rest });
+            let p = Pick::uniform(u as f64 / p_inf as f64, n_inf);
+            return Some(Pick { index: self.infinite[p.index], pmf: p_inf / n_inf as f32, rest: p.rest });
         }
         let u = ((u - p_inf) / (1.0 - p_inf)).clamp(0.0, 1.0);
         let mut weights = [0.0f32; MAX_LIGHTS];

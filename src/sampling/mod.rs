@@ -162,6 +162,16 @@ pub struct Pick {
     pub rest: f32,
 }
 
+impl Pick {
+    /// One of `n` equally likely entries, picked by `u` in [0, 1), with probability
+    /// 1/`n`.
+    pub fn uniform(u: f64, n: usize) -> Pick {
+        let x = u * n as f64;
+        let index = (x as usize).min(n - 1);
+        Pick { index, pmf: 1.0 / n as f32, rest: rest_of(x - index as f64, 1.0) }
+    }
+}
+
 /// `offset` over `width`, as a number in [0, 1) (0 for an empty width).
 pub fn rest_of(offset: f64, width: f64) -> f32 {
     if width > 0.0 { ((offset / width) as f32).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 }
