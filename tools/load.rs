@@ -92,7 +92,9 @@ pub fn main(args: &[String]) -> ExitCode {
         INSTANCE_TRIANGLES
     );
     let mut contenders = contenders(&dir, &peers, prefix);
-    match race(&mut contenders, runs, &dir) {
+    let raced = race(&mut contenders, runs, &dir);
+    let _ = std::fs::remove_file(dir.join(FIRST_PIXEL));
+    match raced {
         Ok(results) => {
             report(&results, bytes, (prefix != "instances").then_some(size.meshes * MESH_TRIANGLES));
             ExitCode::SUCCESS
@@ -104,6 +106,10 @@ pub fn main(args: &[String]) -> ExitCode {
     }
 }
 
+/// The image every contender writes, in the scene's folder (their working directory),
+/// removed after the race.
+const FIRST_PIXEL: &str = "first-pixel.exr";
+
 /// One renderer: its name and how it renders the scene's first pixel.
 struct Contender {
     name: &'static str,
@@ -113,11 +119,11 @@ struct Contender {
 /// Ours (beside this tool) and the peers found, each rendering the top files that
 /// begin with `prefix`.
 fn contenders(dir: &Path, peers: &Path, prefix: &str) -> Vec<Contender> {
-    let out = std::env::temp_dir().join(format!("pbrt-bench-load-{}.exr", std::process::id()));
+    let out = FIRST_PIXEL;
     let mut found = Vec::new();
     if let Ok(exe) = std::env::current_exe() {
         let mut c = Command::new(exe.with_file_name("pbrt-sppm"));
-        c.args(["render", "--quiet", "--spp", "1", "--photons", "1000", "--outfile"]).arg(&out);
+        c.args(["render", "--quiet", "--spp", "1", "--photons", "1000", "--outfile"]).arg(out);
         c.arg(format!("{prefix}-v4.pbrt"));
         found.push(Contender { name: "pbrt-sppm", command: c });
     }
@@ -127,7 +133,7 @@ fn contenders(dir: &Path, peers: &Path, prefix: &str) -> Vec<Contender> {
             continue;
         };
         let mut c = Command::new(exe);
-        c.args(["--quiet", "--nthreads", "2"]).args(extra).arg("--outfile").arg(&out);
+        c.args(["--quiet", "--nthreads", "2"]).args(extra).arg("--outfile").arg(out);
         c.arg(format!("{prefix}-v{version}.pbrt"));
         found.push(Contender { name, command: c });
     }

@@ -2,12 +2,13 @@
 //! describe alike, and one we load; the benchmark times our first pixel when no peer
 //! is found.
 
+use crate::common::Scratch;
 use std::process::Command;
 
 #[test]
 fn the_load_benchmark_writes_a_scene_both_top_files_describe_alike() {
-    let dir = std::env::temp_dir().join(format!("pbrt-sppm-load-bench-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let scratch = Scratch::new("load-bench");
+    let dir = scratch.join("data");
     // The smallest scale: one mesh of 65,536 triangles, one instance.
     let out = Command::new(env!("CARGO_BIN_EXE_pbrt-bench"))
         .args(["load", "--scale", "0.000001", "--runs", "1", "--dir"])
@@ -20,6 +21,8 @@ fn the_load_benchmark_writes_a_scene_both_top_files_describe_alike() {
     assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
     assert!(text.contains("1 meshes") && text.contains("1 instances"), "{text}");
     assert!(text.lines().any(|l| l.starts_with("pbrt-sppm ")), "no row of ours: {text}");
+    // The first pixel's image is the race's scratch, not a result: nothing is left.
+    assert!(!dir.join("first-pixel.exr").exists(), "the benchmark left its image behind");
     let counts = |file: &str| {
         let out = Command::new(env!("CARGO_BIN_EXE_pbrt-sppm")).args(["check", "--json"]).arg(dir.join(file)).output();
         let out = out.unwrap();
@@ -35,5 +38,4 @@ fn the_load_benchmark_writes_a_scene_both_top_files_describe_alike() {
     assert!(v4.1.is_some_and(|t| t > 65_000) && v4.2 == Some(1), "{v4:?}");
     let (meshes, instances) = (counts("meshes-v4.pbrt"), counts("instances-v4.pbrt"));
     assert_eq!((meshes.2, instances.2), (Some(0), Some(1)));
-    let _ = std::fs::remove_dir_all(&dir);
 }

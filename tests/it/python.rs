@@ -1,7 +1,7 @@
 //! The Python package (`tools/python`): built with maturin into a virtual environment
 //! and tested there with its pytest suite, which compares it with the command line.
 
-use crate::common::{cannot_run, python_venv, root};
+use crate::common::{Scratch, cannot_run, python_venv, root};
 use std::path::Path;
 use std::process::Command;
 
@@ -41,8 +41,12 @@ fn the_python_package_builds_and_its_tests_pass() {
     };
     let venv = python.parent().and_then(Path::parent).unwrap().to_path_buf();
     install(&venv, &Path::new(env!("CARGO_TARGET_TMPDIR")).join("python-wheels"));
+    // pytest's temporary folders go in ours, removed with it, not left in /tmp.
+    let temp = Scratch::new("pytest");
     let out = Command::new(&python)
-        .args(["-m", "pytest", "-q", "-rs", "-p", "no:cacheprovider", "tests"])
+        .args(["-m", "pytest", "-q", "-rs", "-p", "no:cacheprovider", "--basetemp"])
+        .arg(temp.join("base"))
+        .arg("tests")
         .current_dir(root().join("tools/python"))
         .env("PBRT_SPPM_BIN", env!("CARGO_BIN_EXE_pbrt-sppm"))
         .env("PYTHONDONTWRITEBYTECODE", "1")
