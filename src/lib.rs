@@ -5,6 +5,7 @@
 //! ([`scene`]) → render-ready scene → image.
 
 pub mod accel;
+pub mod approx;
 pub mod camera;
 pub mod cli;
 pub mod filters;
@@ -29,3 +30,4 @@ pub mod scene;
 pub mod shapes;
 pub mod spectrum;
 pub mod textures;
+pub mod values;

@@ -2,7 +2,7 @@
 //! `tools/mitsuba_reference.py` reads. Each light type writes its own entry (its module's
 //! `mitsuba`); `cli::export` assembles the whole.
 
-use crate::materials::params::TexValue;
+use crate::values::TexValue;
 use serde::Serialize;
 
 /// A light, in world space (area lights go with their shapes).

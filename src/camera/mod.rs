@@ -24,14 +24,14 @@
 //! spherical ones (pbrt has no importance for them either), so light paths never end
 //! on them.
 
+pub mod desc;
 pub mod realistic;
 
 use crate::math::animated::AnimatedTransform;
 use crate::math::equal_area;
 use crate::math::ray::RayDifferential;
 use crate::math::{Point3, Ray, Vector3};
-use crate::scene::options::SphericalMapping;
-use crate::scene::{Camera as CameraDesc, CameraKind, Film};
+use desc::{Camera as CameraDesc, CameraKind, Film, SphericalMapping};
 use glam::Vec3;
 use glam::{DMat4, DVec3};
 

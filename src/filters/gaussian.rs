@@ -2,7 +2,7 @@
 //! at the radius, so that it falls to zero there (pbrt-v4's `GaussianFilter`).
 
 use crate::parser::params::ParamList;
-use crate::scene::values::{self, Range, Res};
+use crate::values::{self, Range, Res};
 
 /// f(x) along an axis of radius r.
 pub fn profile(p: &ParamList) -> Res<impl Fn(f32, f32) -> f32 + use<>> {

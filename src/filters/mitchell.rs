@@ -2,7 +2,7 @@
 //! Netravali's cubic, negative near its edge (pbrt-v4's `MitchellFilter`).
 
 use crate::parser::params::ParamList;
-use crate::scene::values::{self, Range, Res};
+use crate::values::{self, Range, Res};
 
 /// f(x) along an axis of radius r.
 pub fn profile(p: &ParamList) -> Res<impl Fn(f32, f32) -> f32 + use<>> {

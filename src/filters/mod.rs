@@ -27,7 +27,7 @@ mod sinc;
 mod triangle;
 
 use crate::parser::params::ParamList;
-use crate::scene::values::{self, Range, Res};
+use crate::values::{self, Range, Res};
 
 /// How one axis of a filter is drawn.
 #[derive(Clone, Debug, PartialEq)]

@@ -15,8 +15,8 @@ use crate::mitsuba::LightOut;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::sampling::concentric_disk;
-use crate::scene::values::Res;
 use crate::spectrum::{Rgb, luminance};
+use crate::values::Res;
 use glam::{DMat4, DVec3, Vec3};
 use std::f32::consts::PI;
 

@@ -44,9 +44,9 @@ use crate::math::Ray;
 use crate::mitsuba::{LightOut, Unsupported};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::{self, Res};
 use crate::shapes::{ShapeSample, ShapeSet};
 use crate::spectrum::{EmissionSpectrum, Rgb};
+use crate::values::{self, Res};
 use glam::{DMat4, Vec3};
 
 /// A `LightSource` type: the name scenes use, its reader, and the parameter whose

@@ -6,8 +6,8 @@ use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::scene::values::{self, Range, Res, SpectrumContext};
 use crate::spectrum::Rgb;
+use crate::values::{self, Range, Res, SpectrumContext};
 use glam::{DMat4, DVec3, Vec3};
 use std::sync::Arc;
 

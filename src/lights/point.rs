@@ -16,8 +16,8 @@ use crate::parser::Syntax;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::sampling::uniform_sphere;
-use crate::scene::values::Res;
 use crate::spectrum::{Rgb, luminance};
+use crate::values::Res;
 use glam::{DMat4, DVec3, Vec3};
 use std::f32::consts::PI;
 

@@ -18,8 +18,8 @@ use crate::parser::Syntax;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::sampling::uniform_cone;
-use crate::scene::values::{self, Range, Res};
 use crate::spectrum::{Rgb, luminance};
+use crate::values::{self, Range, Res};
 use glam::{DMat4, DVec3, Vec3};
 use std::f32::consts::PI;
 

@@ -24,9 +24,9 @@ use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::scene::values::{self, Range, Res};
 use crate::spectrum::Rgb;
 use crate::textures::TexCtx;
+use crate::values::{self, Range, Res};
 use glam::Vec3;
 
 pub const NAMES: [&str; 2] = ["coateddiffuse", "coatedconductor"];

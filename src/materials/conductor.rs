@@ -16,8 +16,8 @@ use super::params::{Metal, Resolver, RoughnessRemap, TexValue, metal, remap_v3, 
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
 use crate::textures::TexCtx;
+use crate::values::Res;
 use glam::Vec3;
 
 pub const NAMES: [&str; 2] = ["metal", "conductor"];

@@ -23,10 +23,10 @@ use super::params::{Resolver, RoughnessRemap, TexValue, float, remap_v3, remap_v
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::scene::values::{self, Range, Res};
 use crate::spectrum::Rgb;
 use crate::spectrum::named::Sellmeier;
 use crate::textures::TexCtx;
+use crate::values::{self, Range, Res};
 use glam::Vec3;
 use std::sync::Arc;
 

@@ -12,11 +12,11 @@ use super::fourierbsdf::{FourierTable, Table};
 use super::lobes::Lobe;
 use super::params::{Resolver, TexValue};
 use super::shared::Loaded;
+use crate::approx::Approx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::approx::Approx;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::Vec3;
 
 pub const NAME: &str = "fourier";
@@ -31,7 +31,7 @@ pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mat
         p.wrong_type()
             .unwrap_or_else(|| crate::parser::error::Diagnostic::error(at, "fourier needs \"string bsdffile\""))
     })?;
-    let name_at = crate::scene::values::span_of(p, "bsdffile").unwrap_or(at);
+    let name_at = crate::values::span_of(p, "bsdffile").unwrap_or(at);
     let table = {
         let spectra = r.spectra();
         let read = |b: &[u8]| FourierTable::read(b).map_err(|e| e.to_string());

@@ -54,7 +54,7 @@ impl<C: Fn() -> TexCtx> Inputs<'_, C> {
 
     /// A constant spectrum in the path's lanes: its samples (at least `floor`) where it
     /// has them, else its RGB upsampled as an unbounded value.
-    pub fn sampled(&self, v: &crate::scene::values::Sampled, floor: f32) -> Rgb {
+    pub fn sampled(&self, v: &crate::values::Sampled, floor: f32) -> Rgb {
         match (&self.spectral, &v.samples) {
             (Some(s), Some(t)) => s.values(|l| crate::spectrum::piecewise_linear(t, l).max(floor)),
             _ => self.lanes_unbounded(v.rgb),

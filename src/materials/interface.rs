@@ -11,7 +11,7 @@ use super::params::Resolver;
 use crate::mitsuba::MaterialOut;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 
 pub const NAMES: [&str; 3] = ["interface", "none", ""];
 

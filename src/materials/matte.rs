@@ -12,8 +12,8 @@ use super::params::{Resolver, TexValue, float, spectrum};
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::{Range, Res};
 use crate::textures::TexCtx;
+use crate::values::{Range, Res};
 use glam::Vec3;
 
 pub const NAME: &str = "matte";

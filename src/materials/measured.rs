@@ -19,8 +19,8 @@ use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
 use crate::textures::TexCtx;
+use crate::values::Res;
 use glam::Vec3;
 
 pub const NAME: &str = "measured";
@@ -32,7 +32,7 @@ pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mat
     let name = p
         .string("filename")?
         .ok_or_else(|| p.wrong_type().unwrap_or_else(|| Diagnostic::error(at, "measured needs \"string filename\"")))?;
-    let name_at = crate::scene::values::span_of(p, "filename").unwrap_or(at);
+    let name_at = crate::values::span_of(p, "filename").unwrap_or(at);
     let spectra = r.spectra();
     let path = spectra.base_dir.join(&name);
     let read = |b: &[u8]| MeasuredTable::read(b).map_err(|e| e.to_string());

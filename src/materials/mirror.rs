@@ -12,8 +12,8 @@ use super::params::{Resolver, TexValue, spectrum};
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
 use crate::textures::TexCtx;
+use crate::values::Res;
 
 pub const NAME: &str = "mirror";
 

@@ -11,12 +11,12 @@
 
 use super::MaterialKind;
 use super::params::{Resolver, TexValue, float, spectrum};
+use crate::approx::Approx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::scene::approx::Approx;
-use crate::scene::values::{Range, Res};
+use crate::values::{Range, Res};
 
 pub const NAME: &str = "mix";
 

@@ -57,16 +57,16 @@ pub use mix::MixRule;
 pub use params::{Metal, Resolver, RoughnessRemap, TexValue};
 pub use transport::TransportMode;
 
+use crate::approx::Approx;
 use crate::fixes::Fixes;
 use crate::imageio::Texels;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::Syntax;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::approx::Approx;
-use crate::scene::values::Res;
 use crate::spectrum::Rgb;
 use crate::spectrum::transport::PassSpectrum;
+use crate::values::Res;
 use glam::Vec3;
 use inputs::{Inputs, Lobes, MATERIAL_LOBES, lambert};
 use std::sync::Arc;

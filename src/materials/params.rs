@@ -9,14 +9,14 @@
 //! Material "diffuse" "string normalmap" "normals.png"     # v4
 //! ```
 
+use crate::approx::Approx;
 use crate::imageio::Texels;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList};
 use crate::parser::source::Span;
-use crate::scene::approx::Approx;
-use crate::scene::values::{self, Range, Res, Sampled};
-pub use crate::scene::values::{Resolver, TexValue, float_input as float, spectrum_input as spectrum};
 use crate::spectrum::Rgb;
+use crate::values::{self, Range, Res, Sampled};
+pub use crate::values::{Resolver, TexValue, float_input as float, spectrum_input as spectrum};
 use glam::Vec3;
 use std::sync::Arc;
 

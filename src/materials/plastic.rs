@@ -15,8 +15,8 @@ use crate::fixes::Fix;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::{Range, Res};
 use crate::textures::TexCtx;
+use crate::values::{Range, Res};
 
 pub const NAME: &str = "plastic";
 

@@ -32,9 +32,9 @@ use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::{Res, span_of};
 use crate::spectrum::colorspace::ColorSpaceName;
 use crate::textures::TexCtx;
+use crate::values::{Res, span_of};
 use glam::Vec3;
 use std::sync::{Arc, OnceLock};
 

@@ -13,8 +13,8 @@ use super::params::{Resolver, RoughnessRemap, TexValue, float, remap_v3, spectru
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::{Range, Res};
 use crate::textures::TexCtx;
+use crate::values::{Range, Res};
 
 pub const NAME: &str = "translucent";
 

@@ -17,8 +17,8 @@ use super::lanes::{Lanes, Sigma, sigma_t_bound};
 use super::phase::HenyeyGreenstein;
 use super::tracking::{Field, Props, Tracked};
 use crate::parser::params::ParamList;
-use crate::scene::values::{self, Range, Res};
 use crate::textures::noise::noise;
+use crate::values::{self, Range, Res};
 use glam::{DMat4, Vec3};
 use std::sync::Arc;
 

@@ -34,7 +34,7 @@ use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::scene::values::{self, Range, Res};
+use crate::values::{self, Range, Res};
 use glam::{DMat4, DVec3, Vec3};
 use std::sync::Arc;
 

@@ -20,7 +20,7 @@ use super::{MediumContext, presets};
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
-use crate::scene::values::{self, Range, Res};
+use crate::values::{self, Range, Res};
 use glam::Vec3;
 
 pub const NAME: &str = "homogeneous";

@@ -34,7 +34,7 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::sampling::Sampler;
-use crate::scene::values::{self, Range, Res, SpectrumContext};
+use crate::values::{self, Range, Res, SpectrumContext};
 use glam::{DMat4, Vec3};
 pub use homogeneous::{Coefficients, Flight, Homogeneous};
 pub use lanes::Lanes;

@@ -23,9 +23,9 @@ use super::tracking::{Field, Props, Tracked};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::scene::values::{self, Range, Res};
 use crate::spectrum::colorspace::ColorSpaceName;
 use crate::spectrum::sigmoid::{RgbIlluminantSpectrum, RgbUnboundedSpectrum};
+use crate::values::{self, Range, Res};
 use glam::Vec3;
 use std::sync::Arc;
 

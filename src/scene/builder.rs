@@ -23,12 +23,12 @@ mod instances;
 mod media;
 mod typed;
 
-use super::approx::Approx;
 use super::entities;
 use super::names::Family;
 use super::options::RenderOptions;
 use super::shapes::{AlphaParams, alpha_params};
 use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped};
+use crate::approx::Approx;
 use crate::imageio::RgbImage;
 use crate::limits::{FileBytes, Files, Limits};
 use crate::materials::MaterialDesc;

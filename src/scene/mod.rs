@@ -6,13 +6,11 @@
 //! built: never-instanced objects, never-used named materials and textures are listed
 //! in [`SceneDescription::skipped`] and their files are never opened.
 
-pub mod approx;
 pub mod builder;
 pub mod entities;
 pub mod names;
 pub mod options;
 pub mod shapes;
-pub mod values;
 
 use crate::math::animated::AnimatedTransform;
 use crate::math::bounds::transform_bounds;
@@ -21,10 +19,10 @@ use crate::parser::error::Located;
 use crate::shapes::{PatchMesh, Quadric, TriangleMesh};
 use glam::{DAffine3, DMat4, DVec3, DVec4};
 
+pub use crate::approx::Approx;
 pub use crate::lights::{AreaLightDesc, EnvMapDesc, LightDesc, LightKind};
 pub use crate::materials::{CoatBase, Coated, MaterialDesc, MaterialKind, Metal, MixRule, RoughnessRemap, TexValue};
 pub use crate::textures::{Mapping2D, Octaves, TextureDesc, TextureKind, TextureSite, UvMapping, Wrap};
-pub use approx::Approx;
 pub use builder::{LoadOptions, load_scene, load_scene_from_bytes};
 pub use options::{Camera, CameraKind, Film, Integrator};
 

@@ -18,7 +18,7 @@ use crate::math::float::gamma;
 use crate::math::{Bounds3, Normal3, Point3, Ray, Vector3};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::{DVec3, Quat, Vec2, Vec3};
 
 /// One bilinear patch mesh's vertex data (already in the space of its transform).

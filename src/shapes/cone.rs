@@ -9,7 +9,7 @@ use super::quadric::{E, Local, QuadricSurface, newton};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]

@@ -23,7 +23,7 @@ use crate::math::{Bounds3, Normal3, Point3, Ray, Vector3};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::sync::Arc;
 

@@ -11,7 +11,7 @@ use crate::mitsuba::GeometryOut;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::{DMat3, DMat4, DVec3};
 
 #[derive(Clone, Debug, PartialEq)]

@@ -16,7 +16,7 @@ use crate::limits::Limits;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 
 pub const NAME: &str = "heightfield";
 

@@ -16,7 +16,7 @@ use super::{integrate_unit_interval, phi_max_radians};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::{DVec3, Vec3};
 
 #[derive(Clone, Debug, PartialEq)]

@@ -19,7 +19,7 @@ use crate::limits::Limits;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::Vec3;
 
 const NONE: u32 = u32::MAX;

@@ -73,7 +73,7 @@ pub use triangle::{MeshFlags, TriangleHit, TriangleMesh, WatertightRay, corner_l
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::{DMat3, DMat4, DVec3};
 
 /// `phimax` in degrees, clamped to [0, 360], as radians (pbrt: `Radians(Clamp(phiMax, 0, 360))`).

@@ -19,7 +19,7 @@ use super::{Built, ShapeContext, TriangleMesh};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::{Vec3, Vec4};
 
 pub const NAME: &str = "nurbs";

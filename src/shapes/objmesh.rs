@@ -6,8 +6,8 @@ use super::{Built, ShapeContext};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
 use crate::shapes::TriangleMesh;
+use crate::values::Res;
 
 pub fn load(path: &std::path::Path, files: &crate::limits::Files) -> Result<TriangleMesh, String> {
     let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };

@@ -3,7 +3,7 @@
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 
 /// A finite float, `default` when not given.
 pub fn f(p: &ParamList, name: &str, default: f32) -> Res<f32> {

@@ -17,8 +17,8 @@ use super::{Built, ShapeContext};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
 use crate::shapes::{PatchMesh, TriangleMesh};
+use crate::values::Res;
 use ply_rs::parser::Parser;
 use ply_rs::ply::{
     Addable, ElementDef, Encoding, Header, Property, PropertyAccess, PropertyDef, PropertyType, ScalarType,

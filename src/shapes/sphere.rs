@@ -10,7 +10,7 @@ use super::quadric::{E, Local, QuadricSurface};
 use crate::mitsuba::GeometryOut;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::{DMat3, DMat4, DVec3};
 
 #[derive(Clone, Debug, PartialEq)]

@@ -139,7 +139,7 @@ use crate::math::frame::coordinate_system;
 use crate::math::{Bounds3, Normal3, Point3, Ray, Vector3};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
+use crate::values::Res;
 use glam::{Mat4, Vec3, Vec4};
 
 /// Orientation flags of the shape a mesh came from.

@@ -12,9 +12,9 @@ use super::{Input, TexCtx, TextureKind, TextureSite};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values;
-use crate::scene::values::{Res, TexValue};
 use crate::spectrum::Rgb;
+use crate::values;
+use crate::values::{Res, TexValue};
 use glam::Mat4;
 
 pub const NAME: &str = "checkerboard";

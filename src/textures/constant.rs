@@ -7,8 +7,8 @@
 use super::{Input, TextureKind, TextureSite};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::{Res, TexValue};
 use crate::spectrum::Rgb;
+use crate::values::{Res, TexValue};
 
 pub const NAME: &str = "constant";
 

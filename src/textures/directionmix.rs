@@ -9,8 +9,8 @@ use super::{Input, TexCtx, TextureKind, TextureSite};
 use crate::parser::params::ParamList;
 use crate::parser::params::ParamType;
 use crate::parser::source::Span;
-use crate::scene::values::{Res, TexValue};
 use crate::spectrum::Rgb;
+use crate::values::{Res, TexValue};
 use glam::{DVec3, Vec3};
 
 pub const NAME: &str = "directionmix";

@@ -13,8 +13,8 @@ use super::noise::noise2;
 use super::{Input, TexCtx, TextureKind, TextureSite};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::{Res, TexValue};
 use crate::spectrum::Rgb;
+use crate::values::{Res, TexValue};
 
 pub const NAME: &str = "dots";
 

@@ -13,13 +13,13 @@
 
 use super::mapping::{self, Mapping2D, map_2d};
 use super::{Input, TexCtx, TextureKind, TextureSite};
+use crate::approx::Approx;
 use crate::imageio::{Texels, Wrap, lookup};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::approx::Approx;
-use crate::scene::values::{self, Range, Res, TexValue};
 use crate::spectrum::Rgb;
+use crate::values::{self, Range, Res, TexValue};
 use glam::Vec3;
 use std::sync::Arc;
 

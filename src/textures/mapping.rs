@@ -15,7 +15,7 @@
 use super::TexCtx;
 use crate::parser::Syntax;
 use crate::parser::params::{ParamList, ParamType};
-use crate::scene::values::{self, Range, Res};
+use crate::values::{self, Range, Res};
 use glam::{DMat4, Mat4, Vec3};
 use std::f32::consts::PI;
 

@@ -10,12 +10,12 @@ use super::noise::{Octaves, fbm};
 use super::{Input, TexCtx, TextureKind, TextureSite};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
 use crate::spectrum::Rgb;
+use crate::values::Res;
 use glam::{Mat4, Vec3};
 
 use crate::parser::Syntax;
-use crate::scene::values::{self, Range};
+use crate::values::{self, Range};
 
 pub const NAME: &str = "marble";
 

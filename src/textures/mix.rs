@@ -7,9 +7,9 @@
 use super::{Input, TextureKind, TextureSite};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Range;
-use crate::scene::values::{Res, TexValue};
 use crate::spectrum::Rgb;
+use crate::values::Range;
+use crate::values::{Res, TexValue};
 use glam::Vec3;
 
 pub const NAME: &str = "mix";

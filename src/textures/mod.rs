@@ -43,8 +43,8 @@ use crate::fixes::{Fix, Fixes};
 use crate::imageio::Texels;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::{self, Range, Res, Resolver, TexValue, float_input, spectrum_input};
 use crate::spectrum::Rgb;
+use crate::values::{self, Range, Res, Resolver, TexValue, float_input, spectrum_input};
 use glam::{Mat4, Vec3};
 use std::sync::Arc;
 

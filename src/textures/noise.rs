@@ -8,7 +8,7 @@
 
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
-use crate::scene::values::{self, Range, Res};
+use crate::values::{self, Range, Res};
 use glam::Vec3;
 
 /// The noise textures' parameters: `octaves` and `roughness` (ω, each octave's weight

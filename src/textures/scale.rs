@@ -9,9 +9,9 @@
 use super::{Input, TextureKind, TextureSite};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Range;
-use crate::scene::values::{Res, TexValue};
 use crate::spectrum::Rgb;
+use crate::values::Range;
+use crate::values::{Res, TexValue};
 
 pub const NAME: &str = "scale";
 

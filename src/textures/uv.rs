@@ -8,8 +8,8 @@ use super::mapping::{self, Mapping2D, map_2d};
 use super::{Input, TexCtx, TextureKind, TextureSite};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
 use crate::spectrum::Rgb;
+use crate::values::Res;
 use glam::Vec3;
 
 pub const NAME: &str = "uv";

@@ -10,8 +10,8 @@ use super::noise::{Octaves, turbulence};
 use super::{Input, TexCtx, TextureKind, TextureSite};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::values::Res;
 use crate::spectrum::Rgb;
+use crate::values::Res;
 use glam::{Mat4, Vec3};
 
 pub const NAME: &str = "wrinkled";

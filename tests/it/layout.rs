@@ -1,6 +1,6 @@
 //! The source's layout: no two modules of `src/` import each other, directly or through
-//! others (a module and its own submodules aside), so each concept has one direction
-//! of dependence. Paths are read from `use` lines and inline `crate::`/`super::` paths
+//! others (a module and its own submodules aside), and no two of its folders, so each
+//! concept has one direction of dependence. Paths are read from `use` lines and inline `crate::`/`super::` paths
 //! outside comments and test modules.
 
 use crate::common::root;
@@ -93,6 +93,31 @@ fn no_module_of_src_depends_on_itself_through_others() {
         .flat_map(|(m, uses)| uses.iter().filter(|u| reaches(&g, u, m)).map(move |u| format!("{m} ↔ {u}")))
         .collect();
     assert!(cycles.is_empty(), "import cycles: {cycles:?}");
+}
+
+/// The top-level folder or file of `src/` a module is in (`materials::bsdf` → `materials`).
+fn top(module: &str) -> &str {
+    module.split("::").next().unwrap_or_default()
+}
+
+#[test]
+fn no_folder_of_src_depends_on_itself_through_others() {
+    // The families (shapes, materials, lights, …) are read by `scene`, so none may read
+    // `scene`; between folders, as between modules, dependence goes one way.
+    let mut known = BTreeMap::new();
+    modules(&root().join("src"), &[], &mut known);
+    let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (m, uses) in dependencies(&known) {
+        let from = top(&m).to_string();
+        let to: Vec<String> = uses.iter().map(|u| top(u).to_string()).filter(|t| *t != from).collect();
+        g.entry(from).or_default().extend(to);
+    }
+    assert!(g["scene"].contains("materials"), "the scene reads the material family");
+    let cycles: Vec<String> = g
+        .iter()
+        .flat_map(|(f, uses)| uses.iter().filter(|u| reaches(&g, u, f)).map(move |u| format!("{f} ↔ {u}")))
+        .collect();
+    assert!(cycles.is_empty(), "folders that import each other: {cycles:?}");
 }
 
 /// (lines, file, name) of each function in `text` longer than `limit` lines, counted

@@ -8,8 +8,8 @@ use crate::pbrt_refs::{Check, v4_bound};
 use glam::Vec3;
 use pbrt_sppm::math::{Point3, Ray, Vector3};
 use pbrt_sppm::render::RenderScene;
-use pbrt_sppm::scene::values::TexValue;
 use pbrt_sppm::textures::{TexCtx, TextureKind, Textures};
+use pbrt_sppm::values::TexValue;
 
 const GRID: &str = "../../../pbrt-scenes/verify/textures/ptex-grid.ptx";
 

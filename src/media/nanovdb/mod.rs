@@ -29,7 +29,7 @@ use super::tracking::{Field, Props, Tracked};
 use crate::limits::FileBytes;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
-use crate::scene::values::{self, Range, Res};
+use crate::values::{self, Range, Res};
 use file::FloatGrid;
 use glam::{DMat4, DVec3, Vec3};
 use std::sync::Arc;

@@ -35,7 +35,7 @@ impl Builder {
             StmtKind::MakeNamedMaterial(e) => match e.params.string("type") {
                 Ok(Some(ty)) => {
                     named_type = ty;
-                    let at = crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span);
+                    let at = crate::values::span_of(&e.params, "type").unwrap_or(e.name_span);
                     (Family::Material, named_type.as_str(), at)
                 }
                 _ => return Ok(()),

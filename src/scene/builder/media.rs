@@ -18,8 +18,8 @@ use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
-use crate::scene::values::SpectrumContext;
 use crate::spectrum::transport::Colour;
+use crate::values::SpectrumContext;
 use glam::DMat4;
 
 /// A medium name as the file uses it: its definition, if read, and its first use.
@@ -45,7 +45,7 @@ impl Builder {
 
     pub(super) fn named_medium(&mut self, e: Entity) -> Res<()> {
         if let Some(ty) = medium_type(&e) {
-            let at = crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span);
+            let at = crate::values::span_of(&e.params, "type").unwrap_or(e.name_span);
             self.evidence("MakeNamedMedium", &ty, at);
         }
         let i = self.medium_slot(&e.name) as usize;
@@ -161,7 +161,7 @@ impl Builder {
 /// `heterogeneous` (pbrt-v4 creates every named medium, and stops at that one).
 fn checked_type(e: &Entity, syntax: Syntax) -> Res<(String, Span)> {
     let ty = e.params.string("type")?.unwrap_or_default();
-    let at = crate::scene::values::span_of(&e.params, "type").unwrap_or(e.name_span);
+    let at = crate::values::span_of(&e.params, "type").unwrap_or(e.name_span);
     if ty.is_empty() {
         return Err(Diagnostic::error(e.name_span, "MakeNamedMedium needs a \"string type\""));
     }

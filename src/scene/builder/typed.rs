@@ -4,6 +4,7 @@
 //! then v4 forward references; a texture that refers to itself is an error.
 
 use super::{Builder, Res, Scope};
+use crate::approx::Approx;
 use crate::imageio::{RgbImage, Texels};
 use crate::lights::{self, LightContext, LightDesc};
 use crate::materials::params::{bump_map, normal_map};
@@ -13,12 +14,11 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::{FloatValue, ParamList};
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
-use crate::scene::approx::Approx;
 use crate::scene::names::Family;
 use crate::scene::shapes::AlphaParams;
-use crate::scene::values::SpectrumContext;
 use crate::scene::{AlphaRule, ShapeAlpha};
 use crate::textures::{self, TextureDesc, TextureKind, TextureSite};
+use crate::values::SpectrumContext;
 use glam::Vec3;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

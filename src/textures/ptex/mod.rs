@@ -21,13 +21,13 @@ pub mod filter;
 pub mod triangle;
 
 use super::{Input, TexCtx, TextureKind, TextureSite};
+use crate::approx::Approx;
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
-use crate::scene::approx::Approx;
-use crate::scene::values::{self, Range, Res, TexValue};
 use crate::spectrum::Rgb;
+use crate::values::{self, Range, Res, TexValue};
 use file::PtexFile;
 use glam::Vec3;
 use std::sync::Arc;
