@@ -57,6 +57,12 @@ fn log_i0(x: f32) -> f32 {
 }
 
 /// The longitudinal scattering function.
+/// The least longitudinal variance v of the R lobe (the others' are ¼ and 4 times it):
+/// `beta_m` ≈ 0.0028 gives it.
+const MIN_V0: f32 = 4e-6;
+/// The least azimuthal logistic scale: `beta_n` ≈ 6e-6 gives it.
+const MIN_S: f32 = 1e-6;
+
 fn mp(cos_i: f32, cos_o: f32, sin_i: f32, sin_o: f32, v: f32) -> f32 {
     let (a, b) = (cos_i * cos_o / v, sin_i * sin_o / v);
     if v <= 0.1 {
@@ -113,8 +119,12 @@ struct Outgoing {
 
 impl HairBxdf {
     pub fn new(h: f32, eta: f32, sigma_a: Rgb, [beta_m, beta_n]: [f32; 2], alpha: f32) -> HairBxdf {
-        let v0 = sqr(0.726 * beta_m + 0.812 * sqr(beta_m) + 3.7 * beta_m.powi(20));
-        let s = 0.626_657_07 * (0.265 * beta_n + 1.194 * sqr(beta_n) + 5.372 * beta_n.powi(22));
+        // DEVIATION(pbrt): robustness. pbrt divides by v and s, so `beta_m` or `beta_n`
+        // of 0 (allowed) makes every hair pixel NaN; and below v ≈ 1e-6 its f32
+        // exponent in `mp` (a − 1/v, both near 1/v) keeps no digits. Both are raised
+        // to floors no roughness above 0.003 reaches, so other hair renders as in pbrt.
+        let v0 = sqr(0.726 * beta_m + 0.812 * sqr(beta_m) + 3.7 * beta_m.powi(20)).max(MIN_V0);
+        let s = (0.626_657_07 * (0.265 * beta_n + 1.194 * sqr(beta_n) + 5.372 * beta_n.powi(22))).max(MIN_S);
         let mut sin2k_alpha = [alpha.to_radians().sin(), 0.0, 0.0];
         let mut cos2k_alpha = [safe_sqrt(1.0 - sqr(sin2k_alpha[0])), 0.0, 0.0];
         for i in 1..P_MAX {
@@ -308,6 +318,23 @@ mod tests {
                 * std::f64::consts::PI
                 / n as f64;
             assert!((sum - 1.0).abs() < 0.05, "albedo {sum}");
+        }
+    }
+
+    #[test]
+    fn smooth_fibres_of_roughness_zero_stay_finite() {
+        // pbrt allows β = 0 and divides by it: NaN in every pixel of the hair.
+        let mut rng = Rng::new(7);
+        for betas in [[0.0, 0.3], [0.3, 0.0], [0.0, 0.0], [1e-30, 1e-30]] {
+            let hair = HairBxdf::new(0.3, 1.55, Vec3::new(0.3, 0.6, 1.2), betas, 2.0);
+            for _ in 0..2000 {
+                let wo = uniform_sphere(rng.uniform2());
+                let wi = uniform_sphere(rng.uniform2());
+                assert!(hair.f(wo, wi).is_finite() && hair.pdf(wo, wi).is_finite(), "{betas:?} {wo} {wi}");
+                if let Some((wi, f, pdf)) = hair.sample(wo, rng.uniform(), rng.uniform2()) {
+                    assert!(f.is_finite() && pdf.is_finite() && wi.is_finite(), "{betas:?}: {f} {pdf}");
+                }
+            }
         }
     }
 }

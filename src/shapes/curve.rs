@@ -16,6 +16,7 @@
 //! the width, as pbrt's, so rays leaving a curve start clear of it. Curves cannot be
 //! area lights (pbrt cannot sample them and stops).
 
+use super::mesh_params::MAX_COORDINATE;
 use super::{Built, ShapeContext};
 use crate::interaction::{Shading, SurfaceInteraction};
 use crate::limits::Limits;
@@ -418,9 +419,11 @@ pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     let at = |name: &str| p.named(name).map_or(span, |q| q.value_span);
     let width = p.float("width")?.unwrap_or(1.0);
     let widths = [p.float("width0")?.unwrap_or(width), p.float("width1")?.unwrap_or(width)];
-    if let Some(k) = (0..2).find(|&k| !(widths[k] >= 0.0 && widths[k].is_finite())) {
+    // Widths and points past ±1e18 overflow f32 arithmetic (a width of 1e30 gave vcm NaN).
+    if let Some(k) = (0..2).find(|&k| !(widths[k] >= 0.0 && widths[k] <= MAX_COORDINATE)) {
         let name = if p.named(&format!("width{k}")).is_some() { format!("width{k}") } else { "width".into() };
-        return Err(Diagnostic::error(at(&name), format!("curve: {name} must be a finite number ≥ 0")));
+        let msg = format!("curve: {name} must be a number from 0 to {MAX_COORDINATE:e}");
+        return Err(Diagnostic::error(at(&name), msg));
     }
     let degree = p.int("degree")?.unwrap_or(3);
     if degree != 2 && degree != 3 {
@@ -436,8 +439,9 @@ pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     }
     let points = p.array("P", ParamType::Point3)?.ok_or_else(|| Diagnostic::error(span, "curve needs \"point3 P\""))?;
     let cp: Vec<Vec3> = points.floats().chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
-    if !cp.iter().all(|p| p.is_finite()) {
-        return Err(Diagnostic::error(points.value_span, "curve: a control point is not finite"));
+    if !cp.iter().all(|p| p.is_finite() && p.abs().max_element() <= MAX_COORDINATE) {
+        let msg = format!("curve: control points must be finite and within ±{MAX_COORDINATE:e}");
+        return Err(Diagnostic::error(points.value_span, msg));
     }
     let count = if basis == "bezier" {
         (cp.len() > degree && (cp.len() - 1).is_multiple_of(degree)).then(|| (cp.len() - 1) / degree)

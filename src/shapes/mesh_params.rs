@@ -269,7 +269,7 @@ fn transform_vertices(p: &mut [[f32; 3]], s: Option<&mut [[f32; 3]]>, n: Option<
 }
 
 /// Coordinates beyond this overflow f32 arithmetic (squared lengths, areas).
-const MAX_COORDINATE: f32 = 1e18;
+pub(crate) const MAX_COORDINATE: f32 = 1e18;
 
 /// Rejects non-finite or overflowing vertex data, naming the first bad vertex.
 pub fn validate(mesh: &TriangleMesh) -> Result<(), String> {
