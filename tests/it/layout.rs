@@ -88,11 +88,13 @@ fn no_module_of_src_depends_on_itself_through_others() {
     modules(&root().join("src"), &[], &mut known);
     let g = dependencies(&known);
     assert!(g["materials::bsdf"].contains("materials::lobes"), "the reader sees `use super::lobes`");
-    let cycles: Vec<String> = g
-        .iter()
-        .flat_map(|(m, uses)| uses.iter().filter(|u| reaches(&g, u, m)).map(move |u| format!("{m} ↔ {u}")))
-        .collect();
+    let cycles = cycles(&g);
     assert!(cycles.is_empty(), "import cycles: {cycles:?}");
+}
+
+/// Each pair `a ↔ b` where a uses b and b reaches a.
+fn cycles(g: &BTreeMap<String, BTreeSet<String>>) -> Vec<String> {
+    g.iter().flat_map(|(m, uses)| uses.iter().filter(|u| reaches(g, u, m)).map(move |u| format!("{m} ↔ {u}"))).collect()
 }
 
 /// The top-level folder or file of `src/` a module is in (`materials::bsdf` → `materials`).
@@ -113,10 +115,7 @@ fn no_folder_of_src_depends_on_itself_through_others() {
         g.entry(from).or_default().extend(to);
     }
     assert!(g["scene"].contains("materials"), "the scene reads the material family");
-    let cycles: Vec<String> = g
-        .iter()
-        .flat_map(|(f, uses)| uses.iter().filter(|u| reaches(&g, u, f)).map(move |u| format!("{f} ↔ {u}")))
-        .collect();
+    let cycles = cycles(&g);
     assert!(cycles.is_empty(), "folders that import each other: {cycles:?}");
 }
 
