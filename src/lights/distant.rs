@@ -7,7 +7,7 @@
 //! v4's `illuminance` scales L so that a surface facing the light receives that many
 //! lux. Photons start on a disk of the scene's bounding sphere.
 
-use super::params::{LightContext, direction, emission, illuminance};
+use super::params::{LightContext, direction, emission, illuminance, in_range};
 use super::{Emission, LightKind, LightSample, WorldSphere};
 use crate::math::frame::coordinate_system;
 use crate::math::{Point3, Ray, Vector3};
@@ -33,7 +33,7 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
     let (_, d) = direction(p, m, span)?;
     let mut l = emission(p, "L", &ctx.spectra)?;
     if let Some(e) = illuminance(p)? {
-        l *= e / luminance(l).max(1e-9);
+        l = in_range(p, "L", l * (e / luminance(l).max(1e-9)))?;
     }
     Ok(LightKind::Distant(Distant { toward_light: -d, l }))
 }

@@ -13,7 +13,7 @@
 //! unreadable, which is noted) the light is the same every way, as pbrt-v3's.
 
 use super::bounds::LightBounds;
-use super::params::{LightContext, emission, finite_image, power};
+use super::params::{LightContext, emission, finite_image, in_range, power};
 use super::{Emission, LightKind, LightSample};
 use crate::imageio::RgbImage;
 use crate::imageio::lookup::{Wrap, lookup};
@@ -83,7 +83,7 @@ pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Re
         && let Some(w) = power(p)?
     {
         let mean = image.as_ref().map_or(1.0, |img| mean_of(img, profile));
-        i *= w / (4.0 * PI * mean).max(1e-30);
+        i = in_range(p, "I", i * (w / (4.0 * PI * mean).max(1e-30)))?;
     }
     let light_from_world = DMat3::from_mat4(*m).inverse();
     Ok(LightKind::Goniometric(Goniometric {

@@ -17,7 +17,7 @@
 //! scene's bounding sphere.
 
 use super::envmap::{EnvMap, Mapping};
-use super::params::{LightContext, emission, finite_image, illuminance};
+use super::params::{LightContext, emission, finite_image, illuminance, in_range};
 use super::{Emission, LightKind, LightSample, WorldSphere};
 use crate::fixes::{Fix, Fixes};
 use crate::imageio::RgbImage;
@@ -71,7 +71,7 @@ pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Re
             None => PI * luminance(l),
             Some(env) => upper_hemisphere_illuminance(&env.image, env.mapping) * luminance(l),
         };
-        l *= e / up.max(1e-9);
+        l = in_range(p, "L", l * (e / up.max(1e-9)))?;
     }
     Ok(LightKind::Infinite(Infinite { l, map, pbrt_map_illuminance }))
 }

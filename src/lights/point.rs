@@ -8,7 +8,7 @@
 //! v4's `power` (watts) sets I = power / 4π times the emission as read.
 
 use super::bounds::LightBounds;
-use super::params::{LightContext, emission, point3, power};
+use super::params::{LightContext, emission, in_range, point3, power};
 use super::{Emission, LightKind, LightSample};
 use crate::math::{Point3, Ray, Vector3};
 use crate::mitsuba::LightOut;
@@ -38,7 +38,7 @@ pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Re
     };
     let mut i = emission(p, "I", &ctx.spectra)?;
     if let Some(w) = power(p)? {
-        i *= w / (4.0 * PI);
+        i = in_range(p, "I", i * (w / (4.0 * PI)))?;
     }
     Ok(LightKind::Point(Point { position, i }))
 }

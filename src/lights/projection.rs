@@ -13,7 +13,7 @@
 //! uniform rectangle of `I`; pbrt-v4 requires the image.
 
 use super::bounds::LightBounds;
-use super::params::{LightContext, emission, finite_image, power};
+use super::params::{LightContext, emission, finite_image, in_range, power};
 use super::{Emission, LightKind, LightSample};
 use crate::imageio::RgbImage;
 use crate::imageio::lookup::{Wrap, lookup};
@@ -85,7 +85,7 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
     let mut light =
         Projection { position: m.transform_point3(DVec3::ZERO), light_from_world, i, image, tan_half, nearest: v4 };
     if v4 && let Some(w) = power(p)? {
-        light.i *= w / light.unit_power().max(1e-30);
+        light.i = in_range(p, "I", light.i * (w / light.unit_power().max(1e-30)))?;
     }
     Ok(LightKind::Projection(light))
 }

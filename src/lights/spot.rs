@@ -9,7 +9,7 @@
 //! divides by the cone's effective solid angle.
 
 use super::bounds::LightBounds;
-use super::params::{LightContext, direction, emission, power};
+use super::params::{LightContext, direction, emission, in_range, power};
 use super::{Emission, LightKind, LightSample};
 use crate::math::frame::coordinate_system;
 use crate::math::{Point3, Ray, Vector3};
@@ -45,7 +45,7 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
     let mut i = emission(p, "I", &ctx.spectra)?;
     if let Some(w) = power(p)? {
         let solid = 2.0 * PI * (1.0 - 0.5 * (cos_start + cos_total));
-        i *= w / solid.max(1e-9);
+        i = in_range(p, "I", i * (w / solid.max(1e-9)))?;
     }
     let position = m.transform_point3(from);
     let smooth_falloff = ctx.syntax == Syntax::V4;
