@@ -42,9 +42,9 @@ pub fn in_range(p: &ParamList, name: &str, v: Rgb) -> Res<Rgb> {
     if v.is_finite() {
         return Ok(v);
     }
-    let factors = ["scale", "power", "illuminance"].into_iter().filter(|n| p.named(n).is_some());
+    let mut factors = ["scale", "power", "illuminance"].into_iter().filter(|n| p.named(n).is_some());
     let times: String = factors.clone().map(|f| format!(" times \"{f}\"")).collect();
-    let at = factors.last().or(Some(name)).and_then(|n| p.named(n)).map(|q| q.value_span);
+    let at = factors.next_back().or(Some(name)).and_then(|n| p.named(n)).map(|q| q.value_span);
     let msg = format!("\"{name}\"{times} is beyond the range of 32-bit floats");
     Err(Diagnostic::error(at.unwrap_or_default(), msg))
 }
