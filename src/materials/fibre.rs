@@ -56,13 +56,13 @@ fn log_i0(x: f32) -> f32 {
     if x > 12.0 { x + 0.5 * (-(2.0 * PI).ln() + (1.0 / x).ln() + 1.0 / (8.0 * x)) } else { i0(x).ln() }
 }
 
-/// The longitudinal scattering function.
 /// The least longitudinal variance v of the R lobe (the others' are ¼ and 4 times it):
 /// `beta_m` ≈ 0.0028 gives it.
 const MIN_V0: f32 = 4e-6;
 /// The least azimuthal logistic scale: `beta_n` ≈ 6e-6 gives it.
 const MIN_S: f32 = 1e-6;
 
+/// The longitudinal scattering function.
 fn mp(cos_i: f32, cos_o: f32, sin_i: f32, sin_o: f32, v: f32) -> f32 {
     let (a, b) = (cos_i * cos_o / v, sin_i * sin_o / v);
     if v <= 0.1 {
