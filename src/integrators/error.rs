@@ -42,6 +42,13 @@ pub enum RenderError {
     CheckpointSampling,
     #[error("the checkpoint holds {saved} spectral bucket sums, the film {film}")]
     CheckpointBuckets { saved: usize, film: usize },
+    // DEVIATION(pbrt): robustness. pbrt writes such a light's pixels as Inf; vcm
+    // dropped its infinite samples and rendered the scene as if it were not there.
+    #[error(
+        "the area light on world shape {shape} (counted from 0 in the file's order): its \"power\" over a piece of \
+         area {area:.2e} is a radiance beyond the range of 32-bit floats"
+    )]
+    LightOverflow { shape: u32, area: f32 },
     // DEVIATION(pbrt): robustness. pbrt writes such pixels as Inf.
     #[error(
         "pixel ({}, {}) is {value:?}, beyond the range of 32-bit floats: lower the lights or the Film's \"scale\"",

@@ -119,6 +119,7 @@ pub fn run(
     resume: Option<Checkpoint>,
 ) -> Result<RenderOutput, RenderError> {
     check_reference(scene, monitor)?;
+    check_area_lights(scene)?;
     let mut engine = Engine::new(scene, plan)?;
     let now = Instant::now();
     let mut progress = Progress {
@@ -293,6 +294,17 @@ fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &m
 }
 
 /// Fails when a reference image's size fits neither the film nor its crop.
+/// An area light's v4 `power` becomes a radiance only over its shape's area, when the
+/// render scene is made: a huge power on a tiny shape can overflow there, after the
+/// load's own range checks.
+fn check_area_lights(scene: &RenderScene) -> Result<(), RenderError> {
+    let overflowing = scene.lights.iter().find_map(|l| match l {
+        crate::lights::Light::Area(a) if !a.l.is_finite() => Some(a),
+        _ => None,
+    });
+    overflowing.map_or(Ok(()), |a| Err(RenderError::LightOverflow { shape: a.shape, area: a.area }))
+}
+
 fn check_reference(scene: &RenderScene, monitor: &Monitor) -> Result<(), RenderError> {
     let film = &scene.film;
     let [x0, x1, y0, y1] = film.pixel_bounds;

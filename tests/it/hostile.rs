@@ -113,6 +113,32 @@ fn non_finite_numbers_are_errors_where_finite_ones_are_needed() {
 }
 
 #[test]
+fn an_area_light_whose_power_overflows_on_its_shape_is_an_error_in_every_integrator() {
+    // The load checks `power` alone; over a tiny triangle it becomes an infinite
+    // radiance, which vcm and bdpt used to drop (an image without the light).
+    let d = dir("light-overflow");
+    let scene = d.join("overflow.pbrt");
+    let text = "Camera \"perspective\" Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n\
+        Sampler \"halton\" \"integer pixelsamples\" 1\nWorldBegin\n\
+        LightSource \"point\" \"point3 from\" [0 0 -1]\n\
+        AttributeBegin AreaLightSource \"diffuse\" \"float power\" 1e38\n\
+        Shape \"trianglemesh\" \"point3 P\" [0 0 5 1e-10 0 5 0 1e-10 5] \"integer indices\" [0 1 2]\n\
+        AttributeEnd\nShape \"sphere\" \"float radius\" 10\n";
+    std::fs::write(&scene, text).unwrap();
+    for integrator in ["sppm", "vcm", "bdpt"] {
+        let out = d.join(format!("{integrator}.exr"));
+        let (out_path, scene_path) = (out.to_str().unwrap(), scene.to_str().unwrap());
+        let (code, err) = sppm(&["render", "--quiet", "--integrator", integrator, "--outfile", out_path, scene_path]);
+        assert_eq!(code, Some(1), "{integrator}: {err}");
+        assert!(
+            err.contains("world shape 0") && err.contains("beyond the range of 32-bit floats"),
+            "{integrator}: {err}"
+        );
+        assert!(!out.exists(), "{integrator} wrote an image");
+    }
+}
+
+#[test]
 fn huge_vertices_are_errors_and_do_not_blank_the_scene() {
     let got = first_error(
         "WorldBegin Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 3e38 1 0] \"integer indices\" [0 1 2]",
