@@ -293,7 +293,6 @@ fn after_iteration(engine: &Engine, monitor: &Monitor, plan: &Plan, progress: &m
     }
 }
 
-/// Fails when a reference image's size fits neither the film nor its crop.
 /// An area light's v4 `power` becomes a radiance only over its shape's area, when the
 /// render scene is made: a huge power on a tiny shape can overflow there, after the
 /// load's own range checks.
@@ -305,6 +304,7 @@ fn check_area_lights(scene: &RenderScene) -> Result<(), RenderError> {
     overflowing.map_or(Ok(()), |a| Err(RenderError::LightOverflow { shape: a.shape, area: a.area }))
 }
 
+/// Fails when a reference image's size fits neither the film nor its crop.
 fn check_reference(scene: &RenderScene, monitor: &Monitor) -> Result<(), RenderError> {
     let film = &scene.film;
     let [x0, x1, y0, y1] = film.pixel_bounds;
