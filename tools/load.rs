@@ -119,11 +119,10 @@ struct Contender {
 /// Ours (beside this tool) and the peers found, each rendering the top files that
 /// begin with `prefix`.
 fn contenders(dir: &Path, peers: &Path, prefix: &str) -> Vec<Contender> {
-    let out = FIRST_PIXEL;
     let mut found = Vec::new();
     if let Ok(exe) = std::env::current_exe() {
         let mut c = Command::new(exe.with_file_name("pbrt-sppm"));
-        c.args(["render", "--quiet", "--spp", "1", "--photons", "1000", "--outfile"]).arg(out);
+        c.args(["render", "--quiet", "--spp", "1", "--photons", "1000", "--outfile"]).arg(FIRST_PIXEL);
         c.arg(format!("{prefix}-v4.pbrt"));
         found.push(Contender { name: "pbrt-sppm", command: c });
     }
@@ -133,7 +132,7 @@ fn contenders(dir: &Path, peers: &Path, prefix: &str) -> Vec<Contender> {
             continue;
         };
         let mut c = Command::new(exe);
-        c.args(["--quiet", "--nthreads", "2"]).args(extra).arg("--outfile").arg(out);
+        c.args(["--quiet", "--nthreads", "2"]).args(extra).arg("--outfile").arg(FIRST_PIXEL);
         c.arg(format!("{prefix}-v{version}.pbrt"));
         found.push(Contender { name, command: c });
     }

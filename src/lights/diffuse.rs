@@ -81,6 +81,7 @@ pub fn read(
     (syntax, spectra): (Syntax, &SpectrumContext),
     images: &mut ImageReader,
     warnings: &mut Vec<Diagnostic>,
+    span: Span,
 ) -> Res<Option<AreaLightDesc>> {
     if !NAMES.contains(&ty) {
         return Ok(None);
@@ -94,7 +95,7 @@ pub fn read(
         }
     };
     Ok(Some(AreaLightDesc {
-        l: emission(p, "L", spectra)?,
+        l: emission(p, "L", spectra, span)?,
         spectrum: values::emission_spectrum(p, "L", spectra)?.map(Arc::new),
         two_sided: p.bool("twosided")?.unwrap_or(false),
         power: power(p)?,

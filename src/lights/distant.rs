@@ -31,9 +31,9 @@ pub struct Distant {
 
 pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res<LightKind> {
     let (_, d) = direction(p, m, span)?;
-    let mut l = emission(p, "L", &ctx.spectra)?;
+    let mut l = emission(p, "L", &ctx.spectra, span)?;
     if let Some(e) = illuminance(p)? {
-        l = in_range(p, "L", l * (e / luminance(l).max(1e-9)))?;
+        l = in_range(p, "L", l * (e / luminance(l).max(1e-9)), span)?;
     }
     Ok(LightKind::Distant(Distant { toward_light: -d, l }))
 }

@@ -52,7 +52,7 @@ pub struct Goniometric {
     pub profile: Profile,
 }
 
-pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Res<LightKind> {
+pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res<LightKind> {
     let profile = if ctx.syntax == Syntax::V4 { Profile::EqualArea } else { Profile::LatLong };
     let param = if profile == Profile::EqualArea { "filename" } else { "mapname" };
     let image = match p.string(param)?.filter(|n| !n.is_empty()) {
@@ -78,12 +78,12 @@ pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Re
             }
         }
     };
-    let mut i = emission(p, "I", &ctx.spectra)?;
+    let mut i = emission(p, "I", &ctx.spectra, span)?;
     if profile == Profile::EqualArea
         && let Some(w) = power(p)?
     {
         let mean = image.as_ref().map_or(1.0, |img| mean_of(img, profile));
-        i = in_range(p, "I", i * (w / (4.0 * PI * mean).max(1e-30)))?;
+        i = in_range(p, "I", i * (w / (4.0 * PI * mean).max(1e-30)), span)?;
     }
     let light_from_world = DMat3::from_mat4(*m).inverse();
     Ok(LightKind::Goniometric(Goniometric {

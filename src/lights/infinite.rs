@@ -60,9 +60,9 @@ pub struct Infinite {
     pub pbrt_map_illuminance: bool,
 }
 
-pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Res<LightKind> {
+pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res<LightKind> {
     values::ignored(p, &["portal"], "portals are not supported; the whole map is sampled", ctx.warnings);
-    let mut l = emission(p, "L", &ctx.spectra)?;
+    let mut l = emission(p, "L", &ctx.spectra, span)?;
     let map = map(p, m, ctx)?;
     let mut pbrt_map_illuminance = false;
     if let Some(e) = illuminance(p)? {
@@ -71,7 +71,7 @@ pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Re
             None => PI * luminance(l),
             Some(env) => upper_hemisphere_illuminance(&env.image, env.mapping) * luminance(l),
         };
-        l = in_range(p, "L", l * (e / up.max(1e-9)))?;
+        l = in_range(p, "L", l * (e / up.max(1e-9)), span)?;
     }
     Ok(LightKind::Infinite(Infinite { l, map, pbrt_map_illuminance }))
 }

@@ -24,29 +24,30 @@ pub struct LightContext<'a> {
 
 /// Light emission: the spectrum `name` (default 1) times `scale` (a float, or in v3 a
 /// spectrum).
-pub fn emission(p: &ParamList, name: &str, spectra: &SpectrumContext) -> Res<Rgb> {
+pub fn emission(p: &ParamList, name: &str, spectra: &SpectrumContext, at: Span) -> Res<Rgb> {
     let l = values::rgb(p, name, spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE);
     let scale = if values::given(p, "scale", &[ParamType::Float]) {
         Vec3::splat(values::float(p, "scale", 1.0, Range::NonNegative)?)
     } else {
         values::rgb(p, "scale", spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE)
     };
-    in_range(p, name, l * scale)
+    in_range(p, name, l * scale, at)
 }
 
 /// A light's emission after its `scale`, `power` or `illuminance`, which must stay
-/// within f32's range: an error at the parameter that scaled it (or at `name`).
+/// within f32's range: an error at the parameter that scaled it (or at `name`, or at
+/// the statement, `at`).
 // DEVIATION(pbrt): robustness. pbrt-v3 writes Inf pixels for such a light; ours lit
 // nothing with it in SPPM and wrote NaN in vcm.
-pub fn in_range(p: &ParamList, name: &str, v: Rgb) -> Res<Rgb> {
+pub fn in_range(p: &ParamList, name: &str, v: Rgb, at: Span) -> Res<Rgb> {
     if v.is_finite() {
         return Ok(v);
     }
     let mut factors = ["scale", "power", "illuminance"].into_iter().filter(|n| p.named(n).is_some());
     let times: String = factors.clone().map(|f| format!(" times \"{f}\"")).collect();
-    let at = factors.next_back().or(Some(name)).and_then(|n| p.named(n)).map(|q| q.value_span);
+    let at = factors.next_back().or(Some(name)).and_then(|n| p.named(n)).map_or(at, |q| q.value_span);
     let msg = format!("\"{name}\"{times} is beyond the range of 32-bit floats");
-    Err(Diagnostic::error(at.unwrap_or_default(), msg))
+    Err(Diagnostic::error(at, msg))
 }
 
 pub fn point3(p: &ParamList, name: &str, default: [f32; 3]) -> Res<DVec3> {

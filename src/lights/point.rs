@@ -30,15 +30,15 @@ pub struct Point {
     pub i: Rgb,
 }
 
-pub fn read(p: &ParamList, m: &DMat4, _span: Span, ctx: &mut LightContext) -> Res<LightKind> {
+pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res<LightKind> {
     let from = point3(p, "from", [0.0; 3])?;
     let position = match ctx.syntax {
         Syntax::V3 => m.transform_point3(DVec3::ZERO) + from,
         Syntax::V4 => m.transform_point3(from),
     };
-    let mut i = emission(p, "I", &ctx.spectra)?;
+    let mut i = emission(p, "I", &ctx.spectra, span)?;
     if let Some(w) = power(p)? {
-        i = in_range(p, "I", i * (w / (4.0 * PI)))?;
+        i = in_range(p, "I", i * (w / (4.0 * PI)), span)?;
     }
     Ok(LightKind::Point(Point { position, i }))
 }

@@ -78,14 +78,14 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
     let i = if v4 {
         Vec3::splat(values::float(p, "scale", 1.0, Range::NonNegative)?)
     } else {
-        emission(p, "I", &ctx.spectra)?
+        emission(p, "I", &ctx.spectra, span)?
     };
     let flip = if v4 { DMat3::from_diagonal(DVec3::new(1.0, -1.0, 1.0)) } else { DMat3::IDENTITY };
     let light_from_world = flip * DMat3::from_mat4(*m).inverse();
     let mut light =
         Projection { position: m.transform_point3(DVec3::ZERO), light_from_world, i, image, tan_half, nearest: v4 };
     if v4 && let Some(w) = power(p)? {
-        light.i = in_range(p, "I", light.i * (w / light.unit_power().max(1e-30)))?;
+        light.i = in_range(p, "I", light.i * (w / light.unit_power().max(1e-30)), span)?;
     }
     Ok(LightKind::Projection(light))
 }

@@ -42,10 +42,10 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
     let cone = values::float(p, "coneangle", 30.0, Range::NonNegative)?;
     let delta = values::float(p, "conedeltaangle", 5.0, Range::NonNegative)?;
     let (cos_total, cos_start) = (cone.to_radians().cos(), (cone - delta).to_radians().cos());
-    let mut i = emission(p, "I", &ctx.spectra)?;
+    let mut i = emission(p, "I", &ctx.spectra, span)?;
     if let Some(w) = power(p)? {
         let solid = 2.0 * PI * (1.0 - 0.5 * (cos_start + cos_total));
-        i = in_range(p, "I", i * (w / solid.max(1e-9)))?;
+        i = in_range(p, "I", i * (w / solid.max(1e-9)), span)?;
     }
     let position = m.transform_point3(from);
     let smooth_falloff = ctx.syntax == Syntax::V4;

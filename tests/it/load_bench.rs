@@ -10,19 +10,25 @@ fn the_load_benchmark_writes_a_scene_both_top_files_describe_alike() {
     let scratch = Scratch::new("load-bench");
     let dir = scratch.join("data");
     // The smallest scale: one mesh of 65,536 triangles, one instance.
-    let out = Command::new(env!("CARGO_BIN_EXE_pbrt-bench"))
+    let child = Command::new(env!("CARGO_BIN_EXE_pbrt-bench"))
         .args(["load", "--scale", "0.000001", "--runs", "1", "--dir"])
         .arg(&dir)
         .arg("--peers")
         .arg(dir.join("no-peers-here"))
-        .output()
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
         .unwrap();
+    let pid = child.id();
+    let out = child.wait_with_output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
     assert!(text.contains("1 meshes") && text.contains("1 instances"), "{text}");
     assert!(text.lines().any(|l| l.starts_with("pbrt-sppm ")), "no row of ours: {text}");
     // The first pixel's image is the race's scratch, not a result: nothing is left.
     assert!(!dir.join("first-pixel.exr").exists(), "the benchmark left its image behind");
+    let old_place = std::env::temp_dir().join(format!("pbrt-bench-load-{pid}.exr"));
+    assert!(!old_place.exists(), "the benchmark wrote {}", old_place.display());
     let counts = |file: &str| {
         let out = Command::new(env!("CARGO_BIN_EXE_pbrt-sppm")).args(["check", "--json"]).arg(dir.join(file)).output();
         let out = out.unwrap();

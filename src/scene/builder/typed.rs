@@ -147,7 +147,8 @@ impl Builder {
             let spectra =
                 SpectrumContext { base_dir: &base, normalize_emission: syntax == Syntax::V4, files: &files, space };
             let mut images = |n: &str| self.light_image(n);
-            let desc = lights::diffuse::read(&e.name, &e.params, (syntax, &spectra), &mut images, &mut warnings);
+            let desc =
+                lights::diffuse::read(&e.name, &e.params, (syntax, &spectra), &mut images, &mut warnings, e.name_span);
             self.warnings.append(&mut warnings);
             let desc = desc?.ok_or_else(|| Diagnostic::error(e.name_span, "unsupported area light"))?;
             finish_params(&e.params, &mut self.warnings)?;
