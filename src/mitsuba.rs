@@ -69,6 +69,10 @@ pub enum MaterialOut {
         reflectance: [f32; 3],
         transmittance: [f32; 3],
     },
+    /// A pane that reflects or passes light straight on (Mitsuba's `thindielectric`).
+    ThinDielectric {
+        eta: f32,
+    },
     Conductor {
         eta: [f32; 3],
         k: [f32; 3],

@@ -55,6 +55,8 @@ def material(m):
     if t == "dielectric":
         return {"type": "dielectric", "int_ior": float(m["eta"]), "ext_ior": 1.0,
                 "specular_reflectance": rgb(m["reflectance"]), "specular_transmittance": rgb(m["transmittance"])}
+    if t == "thin_dielectric":
+        return {"type": "thindielectric", "int_ior": float(m["eta"]), "ext_ior": 1.0}
     if t == "none":
         return {"type": "null"}
     raise ExportError(f"unknown material type \"{t}\"")

@@ -38,21 +38,28 @@ pub fn read(ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<Mat
     let v3 = ty == NAMES[0];
     let eta_name = if v3 && p.named("eta").is_none() { "index" } else { "eta" };
     // v3 glass takes a float (texture); v4 dielectric also a spectrum.
-    let dispersion = if v3 { None } else { dispersion(p, eta_name, r)? };
-    let eta = if v3 || values::given(p, eta_name, &[ParamType::Float, ParamType::Texture]) {
-        float(p, eta_name, 1.5, Range::Positive, r)?
-    } else {
-        // A spectral index (v4): RGB has one index, its luminance-weighted mean.
-        match values::rgb(p, eta_name, &r.spectra(), Range::Positive)? {
-            Some(c) => TexValue::Const(Vec3::splat(crate::spectrum::luminance(c))),
-            None => TexValue::Const(Vec3::splat(1.5)),
-        }
-    };
+    let (eta, dispersion) = if v3 { (float(p, eta_name, 1.5, Range::Positive, r)?, None) } else { v4_eta(p, r)? };
     let one = TexValue::Const(Vec3::ONE);
     let (kr, kt) = if v3 { (spectrum(p, "Kr", 1.0, r)?, spectrum(p, "Kt", 1.0, r)?) } else { (one, one) };
     let roughness = if v3 { uv_roughness(p, r)? } else { roughness(p, 0.0, r)? };
     let remap = if v3 { remap_v3(p)? } else { remap_v4(p)? };
     Ok(MaterialKind::Dielectric { eta, dispersion, kr, kt, roughness, remap })
+}
+
+/// pbrt-v4's `"float eta"` or `"spectrum eta"` (default 1.5): one index (for a
+/// spectrum, its luminance-weighted mean, which RGB paths take), and how it varies with
+/// the wavelength where it is given as a spectrum.
+pub fn v4_eta(p: &ParamList, r: &mut dyn Resolver) -> Res<(TexValue, Option<Dispersion>)> {
+    let dispersion = dispersion(p, "eta", r)?;
+    let eta = if values::given(p, "eta", &[ParamType::Float, ParamType::Texture]) {
+        float(p, "eta", 1.5, Range::Positive, r)?
+    } else {
+        match values::rgb(p, "eta", &r.spectra(), Range::Positive)? {
+            Some(c) => TexValue::Const(Vec3::splat(crate::spectrum::luminance(c))),
+            None => TexValue::Const(Vec3::splat(1.5)),
+        }
+    };
+    Ok((eta, dispersion))
 }
 
 /// How a `"spectrum eta"` varies with the wavelength, if it is given as a spectrum.
@@ -91,6 +98,16 @@ pub struct Eta<'a> {
     pub dispersion: Option<&'a Dispersion>,
 }
 
+impl Eta<'_> {
+    /// The index at a hit: at a spectral path's first wavelength where it disperses.
+    pub fn at(&self, i: &Inputs<impl Fn() -> TexCtx>) -> f32 {
+        match (self.dispersion, &i.spectral) {
+            (Some(d), Some(pass)) => d.eta(pass.lambda[0]),
+            _ => i.float(self.mean),
+        }
+    }
+}
+
 /// The glass's lobes at a hit.
 #[inline]
 pub fn lobes<const N: usize>(
@@ -107,11 +124,7 @@ pub fn lobes<const N: usize>(
     let raw = roughness.map(|r| i.float(r));
     let alpha = if raw == [0.0; 2] { raw } else { raw.map(|r| remap.alpha(r)) };
     let alpha = if alpha.iter().all(|a| *a < 1e-3) { [0.0; 2] } else { alpha };
-    let eta = match (eta.dispersion, &i.spectral) {
-        (Some(d), Some(pass)) => d.eta(pass.lambda[0]),
-        _ => i.float(eta.mean),
-    };
-    glass(eta, i.refl(kr), i.refl(kt), alpha, convention, out)
+    glass(eta.at(i), i.refl(kr), i.refl(kt), alpha, convention, out)
 }
 
 /// Smooth glass is one Fresnel-weighted lobe; rough glass is pbrt-v3's pair of

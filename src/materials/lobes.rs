@@ -27,6 +27,10 @@ pub enum Lobe {
     SpecularTransmission { t: Rgb, eta: f32 },
     /// Smooth glass: reflection or refraction chosen by Fresnel (pbrt `FresnelSpecular`).
     FresnelSpecular { r: Rgb, t: Rgb, eta: f32 },
+    /// A thin pane of index `eta` (pbrt-v4 `ThinDielectricBxDF`): mirror reflection or
+    /// straight passage, by the shares of [`super::thindielectric::shares`], times
+    /// `scale` (a `mix` weight). Nothing bends, so radiance is never scaled by η².
+    ThinDielectric { eta: f32, scale: Rgb },
     /// Microfacet reflection (Torrance–Sparrow).
     MicrofacetReflection { r: Rgb, dist: TrowbridgeReitz, fresnel: Fresnel },
     /// Rough refraction from air into index `eta` (pbrt-v3 `MicrofacetTransmission`).
@@ -111,9 +115,10 @@ impl Lobe {
             | Lobe::FresnelBlend { .. }
             | Lobe::Fourier { .. }
             | Lobe::Measured { .. } => Kind::Glossy,
-            Lobe::SpecularReflection { .. } | Lobe::SpecularTransmission { .. } | Lobe::FresnelSpecular { .. } => {
-                Kind::Specular
-            }
+            Lobe::SpecularReflection { .. }
+            | Lobe::SpecularTransmission { .. }
+            | Lobe::FresnelSpecular { .. }
+            | Lobe::ThinDielectric { .. } => Kind::Specular,
         }
     }
 
@@ -135,7 +140,10 @@ impl Lobe {
             Lobe::LambertTransmission(_) | Lobe::SpecularTransmission { .. } | Lobe::MicrofacetTransmission { .. } => {
                 (false, true)
             }
-            Lobe::FresnelSpecular { .. } | Lobe::RoughDielectric { .. } | Lobe::Fourier { .. } => (true, true),
+            Lobe::FresnelSpecular { .. }
+            | Lobe::ThinDielectric { .. }
+            | Lobe::RoughDielectric { .. }
+            | Lobe::Fourier { .. } => (true, true),
             _ => (true, false),
         }
     }
@@ -149,6 +157,7 @@ impl Lobe {
             Lobe::SpecularReflection { r, fresnel } => Lobe::SpecularReflection { r: w * r, fresnel },
             Lobe::SpecularTransmission { t, eta } => Lobe::SpecularTransmission { t: w * t, eta },
             Lobe::FresnelSpecular { r, t, eta } => Lobe::FresnelSpecular { r: w * r, t: w * t, eta },
+            Lobe::ThinDielectric { eta, scale } => Lobe::ThinDielectric { eta, scale: w * scale },
             Lobe::MicrofacetReflection { r, dist, fresnel } => Lobe::MicrofacetReflection { r: w * r, dist, fresnel },
             Lobe::MicrofacetTransmission { t, dist, eta } => Lobe::MicrofacetTransmission { t: w * t, dist, eta },
             Lobe::RoughDielectric { r, t, dist, eta } => Lobe::RoughDielectric { r: w * r, t: w * t, dist, eta },
@@ -233,6 +242,10 @@ impl Lobe {
                 let t_branch = (fr < 1.0).then(|| refracted(eta).map(|(i, ft)| (i, t * ft * (1.0 - fr)))).flatten();
                 [(fr > 0.0).then_some((mirror, fr * r)), t_branch]
             }
+            Lobe::ThinDielectric { eta, scale } => {
+                let (r, t) = super::thindielectric::shares(o.z, eta);
+                [(r > 0.0).then_some((mirror, r * scale)), (t > 0.0).then_some((-o, t * scale))]
+            }
             _ => [None, None],
         }
     }
@@ -263,6 +276,13 @@ impl Lobe {
                 }
                 let (i, ft) = refraction(o, eta, mode)?;
                 return specular(i, t * ft * (1.0 - fr), 1.0 - fr);
+            }
+            Lobe::ThinDielectric { eta, scale } => {
+                let (r, t) = super::thindielectric::shares(o.z, eta);
+                return match u_choice < r {
+                    true => specular(mirror, r * scale, r),
+                    false => specular(-o, t * scale, t),
+                };
             }
             Lobe::MicrofacetReflection { dist, .. } => {
                 let wh = dist.sample_wh(o, u);

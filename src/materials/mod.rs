@@ -45,6 +45,7 @@ pub mod plastic;
 pub mod shared;
 pub mod substrate;
 pub mod subsurface;
+pub mod thindielectric;
 pub mod translucent;
 mod transport;
 pub mod uber;
@@ -91,12 +92,13 @@ const V3: Option<Syntax> = Some(Syntax::V3);
 const V4: Option<Syntax> = Some(Syntax::V4);
 
 /// Every `Material` type we render.
-pub const REGISTRY: [MaterialType; 23] = [
+pub const REGISTRY: [MaterialType; 24] = [
     ty(matte::NAME, V3, matte::read),
     ty(diffuse::NAME, V4, diffuse::read),
     ty(mirror::NAME, V3, mirror::read),
     ty(dielectric::NAMES[0], V3, dielectric::read),
     ty(dielectric::NAMES[1], V4, dielectric::read),
+    ty(thindielectric::NAME, V4, thindielectric::read),
     ty(conductor::NAMES[0], V3, conductor::read),
     ty(conductor::NAMES[1], V4, conductor::read),
     ty(plastic::NAME, V3, plastic::read),
@@ -118,7 +120,7 @@ pub const REGISTRY: [MaterialType; 23] = [
 ];
 
 /// Types we do not render that still say which pbrt a file is for.
-const UNRENDERED: [(&str, Syntax); 2] = [("disney", Syntax::V3), ("thindielectric", Syntax::V4)];
+const UNRENDERED: [(&str, Syntax); 1] = [("disney", Syntax::V3)];
 
 /// The pbrt version a material type name proves, for syntax detection.
 pub fn evidence(ty: &str) -> Option<Syntax> {
@@ -216,6 +218,11 @@ pub enum MaterialKind {
         roughness: [TexValue; 2],
         remap: RoughnessRemap,
     },
+    /// pbrt-v4 `thindielectric`: a pane that reflects or passes light straight on.
+    ThinDielectric {
+        eta: TexValue,
+        dispersion: Option<dielectric::Dispersion>,
+    },
     /// A conductor; smooth when both roughnesses give α below 10⁻³.
     Conductor {
         metal: Metal,
@@ -256,7 +263,9 @@ impl MaterialKind {
     /// spectrum).
     pub fn disperses(&self) -> bool {
         match self {
-            MaterialKind::Dielectric { dispersion, .. } => dispersion.is_some(),
+            MaterialKind::Dielectric { dispersion, .. } | MaterialKind::ThinDielectric { dispersion, .. } => {
+                dispersion.is_some()
+            }
             MaterialKind::Coated(c) => c.coat_dispersion.is_some(),
             _ => false,
         }
@@ -273,6 +282,7 @@ impl MaterialDesc {
             MaterialKind::Dielectric { eta, kr, kt, roughness, .. } => {
                 dielectric::mitsuba([*eta, *kr, *kt], roughness, e)
             }
+            MaterialKind::ThinDielectric { eta, .. } => thindielectric::mitsuba(*eta, e),
             MaterialKind::Conductor { metal, roughness, remap } => conductor::mitsuba(metal, roughness, *remap, e),
             MaterialKind::Plastic { kd, .. } => plastic::mitsuba(*kd, e),
             MaterialKind::Uber { kd, .. } => uber::mitsuba(*kd, e),
@@ -422,6 +432,9 @@ impl Material {
             MaterialKind::Dielectric { eta, dispersion, kr, kt, roughness, remap } => {
                 let eta = dielectric::Eta { mean: *eta, dispersion: dispersion.as_ref() };
                 dielectric::lobes(eta, [*kr, *kt], roughness, *remap, self.convention, i, out)
+            }
+            MaterialKind::ThinDielectric { eta, dispersion } => {
+                thindielectric::lobes(*eta, dispersion.as_ref(), i, out)
             }
             MaterialKind::Conductor { metal, roughness, remap } => conductor::lobes(metal, roughness, *remap, i, out),
             MaterialKind::Plastic { kd, ks, roughness, remap } => {

@@ -499,7 +499,7 @@ fn approximations_are_listed_and_the_readme_names_every_kind() {
          MakeNamedMaterial \"h\" \"string type\" \"hair\" \
          Material \"mix\" \"string namedmaterial1\" \"h\" \"string namedmaterial2\" \"m\" Shape \"disk\" \
          Texture \"f\" \"float\" \"marble\" \
-         Material \"matte\" \"texture sigma\" \"f\" Shape \"disk\" Material \"thindielectric\" Shape \"disk\"",
+         Material \"matte\" \"texture sigma\" \"f\" Shape \"disk\" Material \"disney\" Shape \"disk\"",
     );
     let how: Vec<&str> = s.approximated.iter().map(|a| a.how.as_str()).collect();
     use pbrt_sppm::scene::Approx;

@@ -40,6 +40,7 @@ fn material_variant(name: &str) -> &'static str {
         "matte" | "diffuse" => "Diffuse",
         "mirror" => "Mirror",
         "glass" | "dielectric" => "Dielectric",
+        "thindielectric" => "ThinDielectric",
         "metal" | "conductor" => "Conductor",
         "plastic" => "Plastic",
         "uber" => "Uber",
