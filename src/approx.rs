@@ -11,7 +11,7 @@
 pub enum Approx {
     CoatInBlend,
     HairInBlend,
-    UnsupportedMaterial,
+    DisneyBssrdf,
     UnsupportedTexture,
     MissingImage,
     UnreadablePtex,
@@ -26,7 +26,7 @@ impl Approx {
     pub const ALL: [Approx; 11] = [
         Approx::CoatInBlend,
         Approx::HairInBlend,
-        Approx::UnsupportedMaterial,
+        Approx::DisneyBssrdf,
         Approx::UnsupportedTexture,
         Approx::MissingImage,
         Approx::UnreadablePtex,
@@ -44,7 +44,9 @@ impl Approx {
             Approx::HairInBlend => {
                 "a pbrt-v3 mix blends lobes: its hair part adds nothing (a fibre is not kept as lobes)"
             }
-            Approx::UnsupportedMaterial => "this material type is not supported; rendered as diffuse 0.5",
+            Approx::DisneyBssrdf => {
+                "its BSSRDF is not rendered: light passes its smooth boundary as in pbrt-v3's SPPM and bdpt, which ignore the BSSRDF"
+            }
             Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
             Approx::MissingImage => {
                 "the image cannot be read; as in pbrt-v3, an image texture is a grey texel of 0.5 (sRGB-decoded where `gamma` is on, as it is for PNG and TGA) times `scale`, an environment map a constant sky, a normal map a smooth surface"

@@ -2,6 +2,7 @@
 //! density and sampling. A [`super::Bsdf`] combines up to [`MAX_LOBES`] of them as pbrt's
 //! `BSDF` does.
 
+use super::disney;
 use super::microfacet::{Fresnel, TrowbridgeReitz, fr_dielectric};
 use super::transport::TransportMode;
 use crate::sampling::cosine_hemisphere;
@@ -20,39 +21,101 @@ pub enum Lobe {
     /// Lambertian transmission (`translucent`, `diffusetransmission`).
     LambertTransmission(Rgb),
     /// Oren–Nayar reflection with pbrt's A and B.
-    OrenNayar { r: Rgb, a: f32, b: f32 },
+    OrenNayar {
+        r: Rgb,
+        a: f32,
+        b: f32,
+    },
     /// Mirror reflection times a Fresnel term.
-    SpecularReflection { r: Rgb, fresnel: Fresnel },
+    SpecularReflection {
+        r: Rgb,
+        fresnel: Fresnel,
+    },
     /// Smooth refraction from air into index `eta` (pbrt `SpecularTransmission`).
-    SpecularTransmission { t: Rgb, eta: f32 },
+    SpecularTransmission {
+        t: Rgb,
+        eta: f32,
+    },
     /// Smooth glass: reflection or refraction chosen by Fresnel (pbrt `FresnelSpecular`).
-    FresnelSpecular { r: Rgb, t: Rgb, eta: f32 },
+    FresnelSpecular {
+        r: Rgb,
+        t: Rgb,
+        eta: f32,
+    },
     /// A thin pane of index `eta` (pbrt-v4 `ThinDielectricBxDF`): mirror reflection or
     /// straight passage, by the shares of [`super::thindielectric::shares`], times
     /// `scale` (a `mix` weight). Nothing bends, so radiance is never scaled by η².
-    ThinDielectric { eta: f32, scale: Rgb },
+    ThinDielectric {
+        eta: f32,
+        scale: Rgb,
+    },
+    /// pbrt-v3's Disney lobes (`disney`, evaluated in [`super::disney`]): diffuse with
+    /// Fresnel, fake subsurface, retro-reflection and sheen, all sampled by the cosine
+    /// as pbrt-v3's default `Sample_f`; and the GTR1 clearcoat.
+    DisneyDiffuse(Rgb),
+    DisneyFakeSs {
+        r: Rgb,
+        roughness: f32,
+    },
+    DisneyRetro {
+        r: Rgb,
+        roughness: f32,
+    },
+    DisneySheen(Rgb),
+    DisneyClearcoat {
+        weight: Rgb,
+        gloss: f32,
+    },
     /// Microfacet reflection (Torrance–Sparrow).
-    MicrofacetReflection { r: Rgb, dist: TrowbridgeReitz, fresnel: Fresnel },
+    MicrofacetReflection {
+        r: Rgb,
+        dist: TrowbridgeReitz,
+        fresnel: Fresnel,
+    },
     /// Rough refraction from air into index `eta` (pbrt-v3 `MicrofacetTransmission`).
-    MicrofacetTransmission { t: Rgb, dist: TrowbridgeReitz, eta: f32 },
+    MicrofacetTransmission {
+        t: Rgb,
+        dist: TrowbridgeReitz,
+        eta: f32,
+    },
     /// Rough glass as one lobe (pbrt-v4's rough `DielectricBxDF`): a visible microfacet
     /// normal, then reflection or refraction chosen by its Fresnel term, so a sample's
     /// weight stays near G/G1 ≤ 1 where pbrt-v3's pair of lobes, chosen half and half,
     /// doubles it on every refraction.
-    RoughDielectric { r: Rgb, t: Rgb, dist: TrowbridgeReitz, eta: f32 },
+    RoughDielectric {
+        r: Rgb,
+        t: Rgb,
+        dist: TrowbridgeReitz,
+        eta: f32,
+    },
     /// Ashikhmin–Shirley diffuse + glossy (pbrt `FresnelBlend`, `substrate`).
     /// `scale` multiplies the whole lobe (a `mix` weight: f is not linear in rd, rs).
-    FresnelBlend { rd: Rgb, rs: Rgb, dist: TrowbridgeReitz, scale: Rgb },
+    FresnelBlend {
+        rd: Rgb,
+        rs: Rgb,
+        dist: TrowbridgeReitz,
+        scale: Rgb,
+    },
     /// Where light enters a BSSRDF's material (pbrt-v3's `SeparableBSSRDFAdapter`,
     /// pbrt-v4's `NormalizedFresnelBxDF`): the Fresnel transmittance into index `eta`,
     /// normalised to reflect all it receives, times `scale`.
-    NormalizedFresnel { eta: f32, scale: Rgb },
+    NormalizedFresnel {
+        eta: f32,
+        scale: Rgb,
+    },
     /// A tabulated BSDF in pbrt-v3's Fourier basis, reflecting and transmitting, times
     /// `scale` (a `mix` weight).
-    Fourier { table: super::fourierbsdf::Table, scale: Rgb },
+    Fourier {
+        table: super::fourierbsdf::Table,
+        scale: Rgb,
+    },
     /// pbrt-v4's measured BRDF (reflection only, either side), in the path's lanes,
     /// times `scale` (a `mix` weight).
-    Measured { table: super::measuredbsdf::Table, lanes: super::measuredbsdf::Lanes, scale: Rgb },
+    Measured {
+        table: super::measuredbsdf::Table,
+        lanes: super::measuredbsdf::Lanes,
+        scale: Rgb,
+    },
 }
 
 /// What kind of scattering a lobe does (pbrt's `BxDFType`).
@@ -108,8 +171,13 @@ impl Lobe {
             Lobe::Lambert(_)
             | Lobe::LambertTransmission(_)
             | Lobe::OrenNayar { .. }
-            | Lobe::NormalizedFresnel { .. } => Kind::Diffuse,
+            | Lobe::NormalizedFresnel { .. }
+            | Lobe::DisneyDiffuse(_)
+            | Lobe::DisneyFakeSs { .. }
+            | Lobe::DisneyRetro { .. }
+            | Lobe::DisneySheen(_) => Kind::Diffuse,
             Lobe::MicrofacetReflection { .. }
+            | Lobe::DisneyClearcoat { .. }
             | Lobe::MicrofacetTransmission { .. }
             | Lobe::RoughDielectric { .. }
             | Lobe::FresnelBlend { .. }
@@ -158,6 +226,11 @@ impl Lobe {
             Lobe::SpecularTransmission { t, eta } => Lobe::SpecularTransmission { t: w * t, eta },
             Lobe::FresnelSpecular { r, t, eta } => Lobe::FresnelSpecular { r: w * r, t: w * t, eta },
             Lobe::ThinDielectric { eta, scale } => Lobe::ThinDielectric { eta, scale: w * scale },
+            Lobe::DisneyDiffuse(r) => Lobe::DisneyDiffuse(w * r),
+            Lobe::DisneyFakeSs { r, roughness } => Lobe::DisneyFakeSs { r: w * r, roughness },
+            Lobe::DisneyRetro { r, roughness } => Lobe::DisneyRetro { r: w * r, roughness },
+            Lobe::DisneySheen(r) => Lobe::DisneySheen(w * r),
+            Lobe::DisneyClearcoat { weight, gloss } => Lobe::DisneyClearcoat { weight: w * weight, gloss },
             Lobe::MicrofacetReflection { r, dist, fresnel } => Lobe::MicrofacetReflection { r: w * r, dist, fresnel },
             Lobe::MicrofacetTransmission { t, dist, eta } => Lobe::MicrofacetTransmission { t: w * t, dist, eta },
             Lobe::RoughDielectric { r, t, dist, eta } => Lobe::RoughDielectric { r: w * r, t: w * t, dist, eta },
@@ -191,15 +264,29 @@ impl Lobe {
             Lobe::Fourier { table, scale } => scale * table.0.f(o, i, mode),
             Lobe::Measured { table, lanes, scale } => scale * table.0.f(o, i, lanes),
             Lobe::NormalizedFresnel { eta, scale } if same() => scale * normalized_fresnel(i, eta, mode),
+            Lobe::DisneyDiffuse(r) if same() => disney::diffuse(o, i, r),
+            Lobe::DisneyFakeSs { r, roughness } if same() => disney::fake_ss(o, i, r, roughness),
+            Lobe::DisneyRetro { r, roughness } if same() => disney::retro(o, i, r, roughness),
+            Lobe::DisneySheen(r) if same() => disney::sheen(o, i, r),
+            Lobe::DisneyClearcoat { weight, gloss } if same() => disney::clearcoat(o, i, weight, gloss),
             _ => Vec3::ZERO,
         }
     }
 
     pub fn pdf(&self, o: Vec3, i: Vec3) -> f32 {
         match *self {
-            Lobe::Lambert(_) | Lobe::OrenNayar { .. } | Lobe::NormalizedFresnel { .. } if same_hemisphere(o, i) => {
+            Lobe::Lambert(_)
+            | Lobe::OrenNayar { .. }
+            | Lobe::NormalizedFresnel { .. }
+            | Lobe::DisneyDiffuse(_)
+            | Lobe::DisneyFakeSs { .. }
+            | Lobe::DisneyRetro { .. }
+            | Lobe::DisneySheen(_)
+                if same_hemisphere(o, i) =>
+            {
                 i.z.abs() * FRAC_1_PI
             }
+            Lobe::DisneyClearcoat { gloss, .. } => disney::clearcoat_pdf(o, i, gloss),
             Lobe::LambertTransmission(_) if !same_hemisphere(o, i) => i.z.abs() * FRAC_1_PI,
             Lobe::MicrofacetReflection { dist, .. } if same_hemisphere(o, i) => {
                 let wh = (o + i).normalize_or_zero();
@@ -262,7 +349,14 @@ impl Lobe {
         };
         let mirror = Vec3::new(-o.x, -o.y, o.z);
         let i = match *self {
-            Lobe::Lambert(_) | Lobe::OrenNayar { .. } | Lobe::NormalizedFresnel { .. } => cosine_on(o, u, true),
+            Lobe::Lambert(_)
+            | Lobe::OrenNayar { .. }
+            | Lobe::NormalizedFresnel { .. }
+            | Lobe::DisneyDiffuse(_)
+            | Lobe::DisneyFakeSs { .. }
+            | Lobe::DisneyRetro { .. }
+            | Lobe::DisneySheen(_) => cosine_on(o, u, true),
+            Lobe::DisneyClearcoat { gloss, .. } => disney::clearcoat_sample(o, u, gloss)?,
             Lobe::LambertTransmission(_) => cosine_on(o, u, false),
             Lobe::SpecularReflection { r, fresnel } => return specular(mirror, fresnel.eval(mirror.z) * r, 1.0),
             Lobe::SpecularTransmission { t, eta } => {

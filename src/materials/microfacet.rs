@@ -73,6 +73,13 @@ pub enum Fresnel {
     SwappedCoat {
         eta: f32,
     },
+    /// pbrt-v3's `DisneyFresnel`: the dielectric's term blended towards Schlick's from
+    /// `r0` by `metallic` ([`super::disney::fresnel`]).
+    Disney {
+        r0: Rgb,
+        metallic: f32,
+        eta: f32,
+    },
 }
 
 impl Fresnel {
@@ -84,6 +91,7 @@ impl Fresnel {
             Fresnel::Dielectric { eta } => Vec3::splat(fr_dielectric(cos_i, 1.0, eta)),
             Fresnel::Coat { eta } => Vec3::splat(fr_dielectric(cos_i.abs(), 1.0, eta)),
             Fresnel::SwappedCoat { eta } => Vec3::splat(fr_dielectric(cos_i, eta, 1.0)),
+            Fresnel::Disney { r0, metallic, eta } => super::disney::fresnel(r0, metallic, eta, cos_i),
         }
     }
 }
@@ -93,6 +101,9 @@ impl Fresnel {
 pub struct TrowbridgeReitz {
     pub ax: f32,
     pub ay: f32,
+    /// Masking and shadowing as G1(ωo)·G1(ωi), as pbrt-v3's Disney distribution has
+    /// them, rather than Smith's correlated 1/(1 + Λ(ωo) + Λ(ωi)).
+    pub separable: bool,
 }
 
 /// (cos²θ, tan²θ, cos²φ, sin²φ) of a local direction; `None` when it is tangent.
@@ -109,7 +120,12 @@ fn slope_terms(w: Vec3) -> Option<(f32, f32, f32, f32)> {
 impl TrowbridgeReitz {
     /// α below 10⁻³ is raised to it (pbrt-v3 clamps the same way in its sampling).
     pub fn new(alpha: [f32; 2]) -> TrowbridgeReitz {
-        TrowbridgeReitz { ax: alpha[0].max(1e-3), ay: alpha[1].max(1e-3) }
+        TrowbridgeReitz { ax: alpha[0].max(1e-3), ay: alpha[1].max(1e-3), separable: false }
+    }
+
+    /// pbrt-v3's `DisneyMicrofacetDistribution`: the same, with separable masking.
+    pub fn separable(alpha: [f32; 2]) -> TrowbridgeReitz {
+        TrowbridgeReitz { separable: true, ..TrowbridgeReitz::new(alpha) }
     }
 
     pub fn d(&self, wh: Vec3) -> f32 {
@@ -131,6 +147,9 @@ impl TrowbridgeReitz {
     }
 
     pub fn g(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if self.separable {
+            return self.g1(wo) * self.g1(wi);
+        }
         1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
     }
 

@@ -26,6 +26,7 @@ pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
 pub mod diffusetransmission;
+pub mod disney;
 pub mod fibre;
 pub mod fourier;
 pub mod fourierbsdf;
@@ -58,7 +59,6 @@ pub use mix::MixRule;
 pub use params::{Metal, Resolver, RoughnessRemap, TexValue};
 pub use transport::TransportMode;
 
-use crate::approx::Approx;
 use crate::fixes::Fixes;
 use crate::imageio::Texels;
 use crate::mitsuba::{MaterialExport, MaterialOut};
@@ -92,7 +92,7 @@ const V3: Option<Syntax> = Some(Syntax::V3);
 const V4: Option<Syntax> = Some(Syntax::V4);
 
 /// Every `Material` type we render.
-pub const REGISTRY: [MaterialType; 24] = [
+pub const REGISTRY: [MaterialType; 25] = [
     ty(matte::NAME, V3, matte::read),
     ty(diffuse::NAME, V4, diffuse::read),
     ty(mirror::NAME, V3, mirror::read),
@@ -105,6 +105,7 @@ pub const REGISTRY: [MaterialType; 24] = [
     ty(uber::NAME, V3, uber::read),
     ty(translucent::NAME, V3, translucent::read),
     ty(substrate::NAME, V3, substrate::read),
+    ty(disney::NAME, V3, disney::read),
     ty(coated::NAMES[0], V4, coated::read),
     ty(coated::NAMES[1], V4, coated::read),
     ty(diffusetransmission::NAME, V4, diffusetransmission::read),
@@ -119,25 +120,18 @@ pub const REGISTRY: [MaterialType; 24] = [
     ty(subsurface::NAMES[1], V3, subsurface::read),
 ];
 
-/// Types we do not render that still say which pbrt a file is for.
-const UNRENDERED: [(&str, Syntax); 1] = [("disney", Syntax::V3)];
-
 /// The pbrt version a material type name proves, for syntax detection.
 pub fn evidence(ty: &str) -> Option<Syntax> {
-    match REGISTRY.iter().find(|t| t.name == ty) {
-        Some(t) => t.syntax,
-        None => UNRENDERED.iter().find(|u| u.0 == ty).map(|u| u.1),
-    }
+    REGISTRY.iter().find(|t| t.name == ty).and_then(|t| t.syntax)
 }
 
-/// The material of type `ty`; unsupported types become grey diffuse (noted).
+/// The material of type `ty`, which the scene has checked is one pbrt knows (every one
+/// of them is registered: a test holds the two lists together).
 pub fn read(ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
-    if let Some(t) = REGISTRY.iter().find(|t| t.name == ty) {
-        return (t.read)(ty, p, at, r);
+    match REGISTRY.iter().find(|t| t.name == ty) {
+        Some(t) => (t.read)(ty, p, at, r),
+        None => Err(crate::parser::error::Diagnostic::error(at, format!("material type \"{ty}\" is not supported"))),
     }
-    p.mark_all_used();
-    r.approximate(at, format!("material \"{ty}\""), Approx::UnsupportedMaterial);
-    Ok(MaterialKind::Diffuse { reflectance: TexValue::Const(Vec3::splat(0.5)) })
 }
 
 /// A material some shape uses. Inputs are taken at each hit's (u, v); roughnesses are
@@ -231,6 +225,8 @@ pub enum MaterialKind {
     },
     /// pbrt-v4 `coateddiffuse` / `coatedconductor`: a dielectric coat over a base.
     Coated(Box<Coated>),
+    /// pbrt-v3's Disney BSDF (`disney`).
+    Disney(Box<disney::Disney>),
     /// pbrt's hair fibre (`hair`).
     Hair(Box<hair::Hair>),
     /// No surface: rays continue straight through.
@@ -291,6 +287,7 @@ impl MaterialDesc {
             MaterialKind::DiffuseTransmission { reflectance, .. } => diffusetransmission::mitsuba(*reflectance, e),
             MaterialKind::Coated(c) => coated::mitsuba(c, e),
             MaterialKind::Hair(_) => hair::mitsuba(e),
+            MaterialKind::Disney(d) => disney::mitsuba(d, e),
             MaterialKind::Fourier { .. } => fourier::mitsuba(e),
             MaterialKind::Measured { .. } => measured::mitsuba(e),
             MaterialKind::Subsurface(s) => subsurface::mitsuba(s, e),
@@ -376,6 +373,12 @@ impl Material {
                 let fibre = hair::bxdf(h, inputs, (inputs.ctx)().uv[1]).with_adjoint(self.bidirectional);
                 return Some(Bsdf::hair(frame, fibre));
             }
+            MaterialKind::Disney(d) => {
+                // Up to eight lobes: more than the list every hit sets up.
+                let mut lobes = Lobes::<{ lobes::MAX_LOBES }>::default();
+                disney::lobes(d, inputs, &mut lobes);
+                return Some(Bsdf::new(frame, ng, &lobes.list[..lobes.n], self.convention));
+            }
             _ => {}
         }
         let mut lobes = Lobes::<MATERIAL_LOBES>::default();
@@ -426,6 +429,7 @@ impl Material {
             }
             MaterialKind::Coated(c) => coated::base_lobes(c, i, out),
             MaterialKind::Fourier { table } => out.push(fourier::lobe(*table)),
+            MaterialKind::Disney(d) => disney::lobes(d, i, out),
             MaterialKind::Measured { table } => out.push(measured::lobe(*table, i)),
             MaterialKind::Subsurface(s) => subsurface::lobes(s, self.convention, i, out),
             MaterialKind::Mirror { reflectance } => mirror::lobes(*reflectance, i, out),
