@@ -2,8 +2,8 @@
 //! density and sampling. A [`super::Bsdf`] combines up to [`MAX_LOBES`] of them as pbrt's
 //! `BSDF` does.
 
-use super::disney;
-use super::microfacet::{Fresnel, TrowbridgeReitz, fr_dielectric};
+use super::disneybsdf as disney;
+use super::microfacet::{Fresnel, TrowbridgeReitz, fr_dielectric, fr_thin_dielectric};
 use super::transport::TransportMode;
 use crate::sampling::cosine_hemisphere;
 use crate::spectrum::Rgb;
@@ -43,13 +43,13 @@ pub enum Lobe {
         eta: f32,
     },
     /// A thin pane of index `eta` (pbrt-v4 `ThinDielectricBxDF`): mirror reflection or
-    /// straight passage, by the shares of [`super::thindielectric::shares`], times
+    /// straight passage, by the shares of [`fr_thin_dielectric`], times
     /// `scale` (a `mix` weight). Nothing bends, so radiance is never scaled by η².
     ThinDielectric {
         eta: f32,
         scale: Rgb,
     },
-    /// pbrt-v3's Disney lobes (`disney`, evaluated in [`super::disney`]): diffuse with
+    /// pbrt-v3's Disney lobes (`disney`, evaluated in [`super::disneybsdf`]): diffuse with
     /// Fresnel, fake subsurface, retro-reflection and sheen, all sampled by the cosine
     /// as pbrt-v3's default `Sample_f`; and the GTR1 clearcoat.
     DisneyDiffuse(Rgb),
@@ -330,7 +330,7 @@ impl Lobe {
                 [(fr > 0.0).then_some((mirror, fr * r)), t_branch]
             }
             Lobe::ThinDielectric { eta, scale } => {
-                let (r, t) = super::thindielectric::shares(o.z, eta);
+                let (r, t) = fr_thin_dielectric(o.z, eta);
                 [(r > 0.0).then_some((mirror, r * scale)), (t > 0.0).then_some((-o, t * scale))]
             }
             _ => [None, None],
@@ -343,11 +343,6 @@ impl Lobe {
         if o.z == 0.0 {
             return None;
         }
-        let specular = |i: Vec3, f: Rgb, pdf: f32| {
-            let cos = i.z.abs();
-            (cos > 0.0 && pdf > 0.0).then(|| LobeSample { wi: i, f: f / cos, pdf })
-        };
-        let mirror = Vec3::new(-o.x, -o.y, o.z);
         let i = match *self {
             Lobe::Lambert(_)
             | Lobe::OrenNayar { .. }
@@ -358,26 +353,6 @@ impl Lobe {
             | Lobe::DisneySheen(_) => cosine_on(o, u, true),
             Lobe::DisneyClearcoat { gloss, .. } => disney::clearcoat_sample(o, u, gloss)?,
             Lobe::LambertTransmission(_) => cosine_on(o, u, false),
-            Lobe::SpecularReflection { r, fresnel } => return specular(mirror, fresnel.eval(mirror.z) * r, 1.0),
-            Lobe::SpecularTransmission { t, eta } => {
-                let (i, ft) = refraction(o, eta, mode)?;
-                return specular(i, t * ft * (1.0 - fr_dielectric(i.z, 1.0, eta)), 1.0);
-            }
-            Lobe::FresnelSpecular { r, t, eta } => {
-                let fr = fr_dielectric(o.z, 1.0, eta);
-                if u_choice < fr {
-                    return specular(mirror, fr * r, fr);
-                }
-                let (i, ft) = refraction(o, eta, mode)?;
-                return specular(i, t * ft * (1.0 - fr), 1.0 - fr);
-            }
-            Lobe::ThinDielectric { eta, scale } => {
-                let (r, t) = super::thindielectric::shares(o.z, eta);
-                return match u_choice < r {
-                    true => specular(mirror, r * scale, r),
-                    false => specular(-o, t * scale, t),
-                };
-            }
             Lobe::MicrofacetReflection { dist, .. } => {
                 let wh = dist.sample_wh(o, u);
                 if o.dot(wh) < 0.0 {
@@ -415,6 +390,10 @@ impl Lobe {
                 i
             }
             Lobe::Fourier { .. } | Lobe::Measured { .. } => return self.sample_table(o, u, mode),
+            Lobe::SpecularReflection { .. }
+            | Lobe::SpecularTransmission { .. }
+            | Lobe::FresnelSpecular { .. }
+            | Lobe::ThinDielectric { .. } => return self.sample_specular(o, u_choice, mode),
             Lobe::FresnelBlend { dist, .. } => {
                 if u_choice < 0.5 {
                     cosine_on(o, u, true)
@@ -426,6 +405,39 @@ impl Lobe {
         };
         let pdf = self.pdf(o, i);
         (pdf > 0.0).then(|| LobeSample { wi: i, f: self.f(o, i, mode, true), pdf })
+    }
+
+    /// A specular lobe's one direction for `o` (a dielectric's reflection or refraction
+    /// picked by `u_choice`), its weight f/|cos θi| and the probability it was picked.
+    fn sample_specular(&self, o: Vec3, u_choice: f32, mode: TransportMode) -> Option<LobeSample> {
+        let specular = |i: Vec3, f: Rgb, pdf: f32| {
+            let cos = i.z.abs();
+            (cos > 0.0 && pdf > 0.0).then(|| LobeSample { wi: i, f: f / cos, pdf })
+        };
+        let mirror = Vec3::new(-o.x, -o.y, o.z);
+        match *self {
+            Lobe::SpecularReflection { r, fresnel } => specular(mirror, fresnel.eval(mirror.z) * r, 1.0),
+            Lobe::SpecularTransmission { t, eta } => {
+                let (i, ft) = refraction(o, eta, mode)?;
+                specular(i, t * ft * (1.0 - fr_dielectric(i.z, 1.0, eta)), 1.0)
+            }
+            Lobe::FresnelSpecular { r, t, eta } => {
+                let fr = fr_dielectric(o.z, 1.0, eta);
+                if u_choice < fr {
+                    return specular(mirror, fr * r, fr);
+                }
+                let (i, ft) = refraction(o, eta, mode)?;
+                specular(i, t * ft * (1.0 - fr), 1.0 - fr)
+            }
+            Lobe::ThinDielectric { eta, scale } => {
+                let (r, t) = fr_thin_dielectric(o.z, eta);
+                match u_choice < r {
+                    true => specular(mirror, r * scale, r),
+                    false => specular(-o, t * scale, t),
+                }
+            }
+            _ => None,
+        }
     }
 
     /// A tabulated lobe's sample, by its table's own sampling, times its scale.

@@ -30,6 +30,32 @@ pub fn fr_dielectric(cos_i: f32, mut eta_i: f32, mut eta_t: f32) -> f32 {
     (parl * parl + perp * perp) / 2.0
 }
 
+/// A thin pane's shares reflected and passed through at `cos_o` (|cos θ| of the direction the
+/// light leaves by): each face's Fresnel reflectance R, then the geometric series of
+/// bounces between the two faces, R + T²R/(1 − R²).
+pub fn fr_thin_dielectric(cos_o: f32, eta: f32) -> (f32, f32) {
+    let r = fr_dielectric(cos_o.abs(), 1.0, eta);
+    if r >= 1.0 {
+        return (1.0, 0.0);
+    }
+    let t = 1.0 - r;
+    let r = r + t * t * r / (1.0 - r * r);
+    (r, 1.0 - r)
+}
+
+/// (1 − cos θ)⁵, the weight of Schlick's approximation.
+pub fn schlick_weight(cos: f32) -> f32 {
+    (1.0 - cos).clamp(0.0, 1.0).powi(5)
+}
+
+/// The Disney specular lobe's Fresnel term: the dielectric's, blended towards Schlick's
+/// from `r0` by `metallic`.
+pub fn fr_disney(r0: Rgb, metallic: f32, eta: f32, cos_i: f32) -> Rgb {
+    let w = schlick_weight(cos_i);
+    let schlick = r0 * (1.0 - w) + Vec3::splat(w);
+    Vec3::splat(fr_dielectric(cos_i, 1.0, eta)) * (1.0 - metallic) + schlick * metallic
+}
+
 /// Fresnel reflectance of a conductor, per channel (pbrt-v3 `FrConductor`, η_i = 1).
 pub fn fr_conductor(cos_i: f32, eta: Rgb, k: Rgb) -> Rgb {
     let c = cos_i.clamp(-1.0, 1.0).abs();
@@ -74,7 +100,7 @@ pub enum Fresnel {
         eta: f32,
     },
     /// pbrt-v3's `DisneyFresnel`: the dielectric's term blended towards Schlick's from
-    /// `r0` by `metallic` ([`super::disney::fresnel`]).
+    /// `r0` by `metallic` ([`fr_disney`]).
     Disney {
         r0: Rgb,
         metallic: f32,
@@ -91,7 +117,7 @@ impl Fresnel {
             Fresnel::Dielectric { eta } => Vec3::splat(fr_dielectric(cos_i, 1.0, eta)),
             Fresnel::Coat { eta } => Vec3::splat(fr_dielectric(cos_i.abs(), 1.0, eta)),
             Fresnel::SwappedCoat { eta } => Vec3::splat(fr_dielectric(cos_i, eta, 1.0)),
-            Fresnel::Disney { r0, metallic, eta } => super::disney::fresnel(r0, metallic, eta, cos_i),
+            Fresnel::Disney { r0, metallic, eta } => fr_disney(r0, metallic, eta, cos_i),
         }
     }
 }
@@ -192,6 +218,22 @@ impl TrowbridgeReitz {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_pane_reflects_both_faces_and_passes_the_rest_straight() {
+        let shares = fr_thin_dielectric;
+        // Head-on through glass of 1.5: 4% a face, 2R/(1 + R) ≈ 7.7% for the pane.
+        let (r, t) = shares(1.0, 1.5);
+        assert!((r - 0.08 / 1.04).abs() < 1e-6, "{r}");
+        assert!((r + t - 1.0).abs() < 1e-6);
+        // Either side, the same shares; at grazing, all reflected.
+        assert_eq!(shares(-0.3, 1.5), shares(0.3, 1.5));
+        assert!(shares(1e-6, 1.5).0 > 0.999);
+        // An index of 1 is no surface at all; below 1, light from outside can be
+        // reflected whole.
+        assert_eq!(shares(0.7, 1.0), (0.0, 1.0));
+        assert_eq!(shares(0.1, 0.5), (1.0, 0.0));
+    }
 
     /// E[h(ωh)] over `sample_wh`'s samples, and ∫ h·pdf_wh by quadrature.
     fn sampled_and_integrated(d: TrowbridgeReitz, wo: Vec3, h: impl Fn(Vec3) -> f32) -> (f64, f64) {

@@ -27,6 +27,7 @@ pub mod dielectric;
 pub mod diffuse;
 pub mod diffusetransmission;
 pub mod disney;
+pub mod disneybsdf;
 pub mod fibre;
 pub mod fourier;
 pub mod fourierbsdf;

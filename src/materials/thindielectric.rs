@@ -43,39 +43,6 @@ pub fn lobes<const N: usize>(
     out.push(Lobe::ThinDielectric { eta, scale: Vec3::ONE })
 }
 
-/// The shares reflected and passed through at `cos_o` (|cos θ| of the direction the
-/// light leaves by): each face's Fresnel reflectance R, then the geometric series of
-/// bounces between the two faces, R + T²R/(1 − R²).
-pub fn shares(cos_o: f32, eta: f32) -> (f32, f32) {
-    let r = super::microfacet::fr_dielectric(cos_o.abs(), 1.0, eta);
-    if r >= 1.0 {
-        return (1.0, 0.0);
-    }
-    let t = 1.0 - r;
-    let r = r + t * t * r / (1.0 - r * r);
-    (r, 1.0 - r)
-}
-
 pub fn mitsuba(eta: TexValue, e: &mut dyn MaterialExport) -> MaterialOut {
     MaterialOut::ThinDielectric { eta: e.rgb(eta)[0] }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_pane_reflects_both_faces_and_passes_the_rest_straight() {
-        // Head-on through glass of 1.5: 4% a face, 2R/(1 + R) ≈ 7.7% for the pane.
-        let (r, t) = shares(1.0, 1.5);
-        assert!((r - 0.08 / 1.04).abs() < 1e-6, "{r}");
-        assert!((r + t - 1.0).abs() < 1e-6);
-        // Either side, the same shares; at grazing, all reflected.
-        assert_eq!(shares(-0.3, 1.5), shares(0.3, 1.5));
-        assert!(shares(1e-6, 1.5).0 > 0.999);
-        // An index of 1 is no surface at all; below 1, light from outside can be
-        // reflected whole.
-        assert_eq!(shares(0.7, 1.0), (0.0, 1.0));
-        assert_eq!(shares(0.1, 0.5), (1.0, 0.0));
-    }
 }
