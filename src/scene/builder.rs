@@ -208,6 +208,8 @@ struct Builder {
     in_world: bool,
     /// The `WorldBegin` statement, if read.
     world_begin: Option<Span>,
+    /// Whether a `WorldEnd` was read (pbrt-v3 renders nothing without one).
+    world_ended: bool,
     /// Type names neither pbrt knows, read before the file's version was settled.
     unknown_names: Vec<(Family, String, Span)>,
     render: RenderOptions,
@@ -296,6 +298,7 @@ impl Builder {
             named_coords: HashMap::new(),
             in_world: false,
             world_begin: None,
+            world_ended: false,
             unknown_names: Vec::new(),
             render: RenderOptions::default(),
             shapes: Vec::new(),
@@ -361,6 +364,7 @@ impl Builder {
         while let Some(stmt) = self.reader.next_stmt()? {
             if matches!(stmt.kind, StmtKind::WorldEnd) {
                 self.check_placement(&stmt)?;
+                self.world_ended = true;
                 if let Some(next) = self.reader.next_stmt()? {
                     let msg = "statements after WorldEnd are ignored (only the first frame of a file is rendered)";
                     self.warnings.push(Diagnostic::warning(next.span, msg));
@@ -1238,6 +1242,7 @@ impl Builder {
         self.approximated.sort_by_key(|(span, _, _)| (span.file.0, span.start));
         // Last: every other error comes first, in file order, as the file is read.
         self.check_world_begin()?;
+        self.check_world_end(syntax);
         let warnings = self.warnings_in_file_order();
         let sources = &self.reader.sources;
         let mut film = r.film;

@@ -238,6 +238,20 @@ fn world_begin_resets_and_world_end_ends() {
     assert_eq!(s.syntax, Syntax::V3);
 }
 
+/// pbrt-v3 renders at `WorldEnd` and renders nothing from a file that ends without
+/// one; we render it, with a warning at the file's end. pbrt-v4 needs no `WorldEnd`.
+#[test]
+fn a_v3_file_without_world_end_renders_with_a_warning_at_its_end() {
+    let text = "WorldBegin\nMaterial \"matte\"\nShape \"sphere\"\n";
+    let s = scene(text);
+    assert_eq!((s.syntax, s.shapes.len()), (Syntax::V3, 1));
+    let w: Vec<_> = s.warnings.iter().filter(|w| w.message.contains("without WorldEnd")).collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    assert_eq!((w[0].line, w[0].column), (4, 1), "at the file's end");
+    assert!(warnings(&scene(&format!("{text}WorldEnd\n"))).is_empty());
+    assert!(warnings(&scene("WorldBegin\nMaterial \"diffuse\"\nShape \"sphere\"\n")).is_empty(), "v4");
+}
+
 #[test]
 fn attribute_block_restores_everything_transform_block_only_the_ctm() {
     let s = scene(
@@ -338,16 +352,15 @@ fn named_materials_are_scoped_like_v3_and_resolve_forward_like_v4() {
         NamedMaterial "fwd" Shape "sphere"
         MakeNamedMaterial "fwd" "string type" "glass"
         MakeNamedMaterial "unused" "string type" "metal"
-        Material "disney" Shape "disk""#,
+        Material "disney" Shape "disk"
+        WorldEnd"#,
     );
     let tys: Vec<&str> = s.shapes.iter().map(|x| s.materials[x.material as usize].ty.as_str()).collect();
     assert_eq!(tys, ["mirror", "matte", "glass", "disney"]);
     let what: Vec<&str> = s.skipped.iter().map(|k| k.what.as_str()).collect();
     assert!(what.contains(&"MakeNamedMaterial \"unused\""), "{what:?}");
-    let grey =
-        pbrt_sppm::scene::MaterialKind::Diffuse { reflectance: pbrt_sppm::scene::TexValue::Const([0.5; 3].into()) };
-    assert_eq!(s.materials[3].kind, grey, "an unsupported material is drawn grey diffuse");
-    assert_eq!(s.approximated.iter().map(|a| a.what.as_str()).collect::<Vec<_>>(), ["material \"disney\""]);
+    assert!(matches!(s.materials[3].kind, pbrt_sppm::scene::MaterialKind::Disney(_)), "{:?}", s.materials[3]);
+    assert!(s.approximated.is_empty(), "{:?}", s.approximated);
     assert_eq!(s.materials.len(), 4, "only used materials are built");
 }
 
@@ -538,7 +551,9 @@ fn mix_names_its_materials_and_may_not_mix_itself() {
 #[test]
 fn v3_glass_ignores_roughness_as_pbrt_v3_does_and_v4_dielectric_reads_it() {
     use pbrt_sppm::scene::{MaterialKind, TexValue};
-    let s = scene("WorldBegin\nMaterial \"glass\" \"float roughness\" .3 \"float vroughness\" .2\nShape \"disk\"\n");
+    let s = scene(
+        "WorldBegin\nMaterial \"glass\" \"float roughness\" .3 \"float vroughness\" .2\nShape \"disk\"\nWorldEnd\n",
+    );
     let w: Vec<&str> = s.warnings.iter().map(|w| w.message.as_str()).collect();
     assert_eq!(w, ["parameter \"float roughness\" is not used"]);
     let MaterialKind::Dielectric { roughness, .. } = &s.materials[0].kind else { panic!("{:?}", s.materials[0]) };
@@ -555,7 +570,8 @@ fn a_realistic_camera_reads_its_lens_and_reports_it() {
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("lens.dat"), "# r t eta d\n0 2 1 20\n50 5 1.5 20\n-50 45 1 20\n").unwrap();
     let scene = |camera: &str, film: &str| {
-        let text = format!("Camera \"realistic\" \"string lensfile\" \"lens.dat\" {camera}\n{film}\nWorldBegin\n");
+        let end = if film.contains("\"image\"") { "WorldEnd\n" } else { "" };
+        let text = format!("Camera \"realistic\" \"string lensfile\" \"lens.dat\" {camera}\n{film}\nWorldBegin\n{end}");
         std::fs::write(dir.join("s.pbrt"), text).unwrap();
         load_file(&dir.join("s.pbrt")).unwrap()
     };

@@ -107,7 +107,8 @@ fn triangle_mesh_arrays_and_checks() {
         Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 1 1 0 0 1 0] "integer indices" [0 1 2 0 2 3 0]
           "normal N" [0 0 1 0 0 1 0 0 1 0 0 1] "vector3 S" [1 0 0] "point2 uv" [0 0 1 0 1 1 0 1 5 5]
           "integer faceIndices" [7 8]
-        Shape "trianglemesh" "point P" [0 0 0 1 0 0 0 1 0] "float st" [0 0 1 0]"#,
+        Shape "trianglemesh" "point P" [0 0 0 1 0 0 0 1 0] "float st" [0 0 1 0]
+        WorldEnd"#,
     );
     let m = &s.meshes[0];
     assert_eq!(m.indices, [0, 1, 2, 0, 2, 3], "the partial triangle is dropped");
@@ -323,7 +324,7 @@ fn objmesh_extension() {
 fn unknown_shapes_in_v3_files_are_skipped_with_one_warning() {
     // pbrt-v3 warns and goes on (pbrt-v4 stops: tests/it/messages.rs).
     let s = scene(
-        "Film \"image\" WorldBegin\nShape \"blob\" \"point3 P\" [0 0 0 1 1 1 2 2 2 3 3 3]\nShape \"sphere\" \"float alpha\" 0.5\n",
+        "Film \"image\" WorldBegin\nShape \"blob\" \"point3 P\" [0 0 0 1 1 1 2 2 2 3 3 3]\nShape \"sphere\" \"float alpha\" 0.5\nWorldEnd\n",
     );
     assert_eq!(s.shapes.len(), 1);
     assert_eq!(s.skipped.len(), 1);

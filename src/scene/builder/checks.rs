@@ -95,6 +95,20 @@ impl Builder {
         };
         Err(Diagnostic::error(Span::new(main, end, end), format!("{what}: there is no scene to render")))
     }
+
+    /// pbrt-v3 renders a scene at its `WorldEnd`; a v3 file that ends without one
+    /// renders nothing there ("pbrtCleanup() called while inside world block"). We
+    /// render it, as pbrt-v4 would, and say so at the file's end.
+    pub(super) fn check_world_end(&mut self, syntax: Syntax) {
+        // DEVIATION(pbrt): robustness. The scene is complete; pbrt-v3 drops it.
+        if syntax != Syntax::V3 || self.world_ended || self.world_begin.is_none() {
+            return;
+        }
+        let main = FileId(0);
+        let end = self.reader.sources.file(main).text.len();
+        let msg = "the file ends without WorldEnd: pbrt-v3 renders nothing (\"pbrtCleanup() called while inside world block\"); rendered as if it were there";
+        self.warnings.push(Diagnostic::warning(Span::new(main, end, end), msg));
+    }
 }
 
 fn unknown_error(family: Family, name: &str, at: Span, syntax: Syntax) -> Diagnostic {
