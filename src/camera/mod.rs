@@ -156,10 +156,11 @@ impl Camera {
         let (mut o, mut d) = match self.kind {
             // A realistic camera's rays come from its lens (`generate_ray_weighted`);
             // here, for tools that want a ray per film point, a pinhole's.
-            CameraKind::Perspective | CameraKind::Realistic => (
-                DVec3::ZERO,
-                DVec3::new((sx * self.tan_half_fov) as f64, (sy * self.tan_half_fov) as f64, 1.0).normalize(),
-            ),
+            // Left at z = 1: the lens's focus and the world direction below come out
+            // the same at any length, and the direction is normalised once, at the end.
+            CameraKind::Perspective | CameraKind::Realistic => {
+                (DVec3::ZERO, DVec3::new((sx * self.tan_half_fov) as f64, (sy * self.tan_half_fov) as f64, 1.0))
+            }
             CameraKind::Orthographic => (DVec3::new(sx as f64, sy as f64, 0.0), DVec3::Z),
             CameraKind::Environment => (DVec3::ZERO, self.spherical(p_raster, SphericalMapping::Equirectangular)),
             CameraKind::Spherical(m) => (DVec3::ZERO, self.spherical(p_raster, m)),
