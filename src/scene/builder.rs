@@ -967,11 +967,13 @@ impl Builder {
             Some(Syntax::V3) => plymesh::Quads::Split,
             _ => plymesh::Quads::Patches,
         };
-        let mut warn = Vec::new();
+        let (mut warn, mut approximate) = (Vec::new(), Vec::new());
         let (files, ahead) = (&self.reader.files, &self.read_ahead);
-        let mut ctx = ShapeContext { resolve: &resolve, quads, files, ahead, warn: &mut warn };
+        let mut ctx =
+            ShapeContext { resolve: &resolve, quads, files, ahead, warn: &mut warn, approximate: &mut approximate };
         let built = shapes::read(&s.entity.name, &mut s.entity.params, at, &mut ctx);
         self.warnings.append(&mut warn);
+        approximate.into_iter().for_each(|(at, what, how)| self.note(at, what, how));
         let p = &s.entity.params;
         let Some(built) = built? else {
             let what = format!("Shape \"{}\"", s.entity.name);

@@ -238,6 +238,8 @@ pub struct ShapeContext<'a> {
     /// PLY files already being read (see [`read_ahead`]).
     pub ahead: &'a read_ahead::ReadAhead,
     pub warn: &'a mut Vec<Diagnostic>,
+    /// What is rendered other than as written: where, what, and how.
+    pub approximate: &'a mut Vec<(Span, String, crate::approx::Approx)>,
 }
 
 /// A `Shape` type: the name scenes use and its reader.
@@ -309,15 +311,15 @@ pub fn read(ty: &str, p: &mut ParamList, span: Span, ctx: &mut ShapeContext) -> 
     (t.read)(ctx, p, span).map(Some)
 }
 
-/// A mesh file's `filename` (required), where it was written, and its path; warns that
-/// `displacement` is not supported.
+/// A mesh file's `filename` (required), where it was written, and its path; notes that
+/// `displacement` is not supported (an approximation: the mesh as it is in the file).
 fn mesh_file(ctx: &mut ShapeContext, ty: &str, p: &ParamList, span: Span) -> Res<(String, Span, std::path::PathBuf)> {
     let name =
         p.string("filename")?.ok_or_else(|| Diagnostic::error(span, format!("{ty} needs \"string filename\"")))?;
     let at = p.named("filename").map_or(span, |f| f.value_span);
     if let Some(d) = p.named("displacement") {
         d.mark_used();
-        ctx.warn.push(Diagnostic::warning(d.span, "displacement is not supported; the mesh is used undisplaced"));
+        ctx.approximate.push((d.span, format!("{ty} \"displacement\""), crate::approx::Approx::MeshDisplacement));
     }
     p.mark_known(&["edgelength"]);
     let path = (ctx.resolve)(&name);

@@ -153,6 +153,20 @@ fn meshes_are_stored_transformed_like_pbrt() {
     assert_eq!(s.meshes[0].n.as_ref().unwrap()[0], [0.0, 0.0, 0.5]);
 }
 
+/// pbrt-v4 tessellates and displaces a PLY mesh with a `displacement` texture; we
+/// render it undisplaced, noted where the texture is named.
+#[test]
+fn a_displaced_plymesh_is_an_approximation_located_at_its_texture() {
+    let text = "WorldBegin\nTexture \"d\" \"float\" \"constant\" \"float value\" 0.1\n\
+        Shape \"plymesh\" \"string filename\" \"../../../pbrt-scenes/v3/geometry/icosphere.ply\"\n  \
+        \"texture displacement\" \"d\" \"float edgelength\" 0.5\n";
+    let s = scene(text);
+    assert_eq!(s.meshes[0].triangle_count(), 80, "the mesh as the file has it");
+    let a: Vec<_> = s.approximated.iter().map(|a| (a.line, a.column, a.how.as_str())).collect();
+    assert_eq!(a, [(4, 3, pbrt_sppm::scene::Approx::MeshDisplacement.how())]);
+    assert!(s.warnings.iter().all(|w| !w.message.contains("not used")), "{:?}", s.warnings);
+}
+
 #[test]
 fn plymesh_ascii_binary_quads_and_uv_names() {
     let s = scene(r#"WorldBegin Shape "plymesh" "string filename" "../../../pbrt-scenes/v3/geometry/icosphere.ply""#);
