@@ -190,6 +190,21 @@ impl Lobe {
         }
     }
 
+    /// Whether the lobe reflects to ωo's side with the cosine's density (pbrt's default
+    /// `Sample_f`): Lambert, Oren–Nayar, the BSSRDF's entry and Disney's diffuse lobes.
+    fn cosine_sampled(&self) -> bool {
+        matches!(
+            self,
+            Lobe::Lambert(_)
+                | Lobe::OrenNayar { .. }
+                | Lobe::NormalizedFresnel { .. }
+                | Lobe::DisneyDiffuse(_)
+                | Lobe::DisneyFakeSs { .. }
+                | Lobe::DisneyRetro { .. }
+                | Lobe::DisneySheen(_)
+        )
+    }
+
     /// The index of refraction of a dielectric lobe (the side its normal points to is
     /// air); `None` for the others, which never scale radiance on the way through.
     pub fn eta(&self) -> Option<f32> {
@@ -275,16 +290,12 @@ impl Lobe {
 
     pub fn pdf(&self, o: Vec3, i: Vec3) -> f32 {
         match *self {
-            Lobe::Lambert(_)
-            | Lobe::OrenNayar { .. }
-            | Lobe::NormalizedFresnel { .. }
-            | Lobe::DisneyDiffuse(_)
-            | Lobe::DisneyFakeSs { .. }
-            | Lobe::DisneyRetro { .. }
-            | Lobe::DisneySheen(_)
-                if same_hemisphere(o, i) =>
-            {
-                i.z.abs() * FRAC_1_PI
+            _ if self.cosine_sampled() => {
+                if same_hemisphere(o, i) {
+                    i.z.abs() * FRAC_1_PI
+                } else {
+                    0.0
+                }
             }
             Lobe::DisneyClearcoat { gloss, .. } => disney::clearcoat_pdf(o, i, gloss),
             Lobe::LambertTransmission(_) if !same_hemisphere(o, i) => i.z.abs() * FRAC_1_PI,
@@ -344,13 +355,7 @@ impl Lobe {
             return None;
         }
         let i = match *self {
-            Lobe::Lambert(_)
-            | Lobe::OrenNayar { .. }
-            | Lobe::NormalizedFresnel { .. }
-            | Lobe::DisneyDiffuse(_)
-            | Lobe::DisneyFakeSs { .. }
-            | Lobe::DisneyRetro { .. }
-            | Lobe::DisneySheen(_) => cosine_on(o, u, true),
+            _ if self.cosine_sampled() => cosine_on(o, u, true),
             Lobe::DisneyClearcoat { gloss, .. } => disney::clearcoat_sample(o, u, gloss)?,
             Lobe::LambertTransmission(_) => cosine_on(o, u, false),
             Lobe::MicrofacetReflection { dist, .. } => {
@@ -402,6 +407,8 @@ impl Lobe {
                     reflect(o, wh)
                 }
             }
+            // Every other lobe is cosine-sampled (the first arm).
+            _ => return None,
         };
         let pdf = self.pdf(o, i);
         (pdf > 0.0).then(|| LobeSample { wi: i, f: self.f(o, i, mode, true), pdf })
