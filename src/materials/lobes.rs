@@ -290,13 +290,7 @@ impl Lobe {
 
     pub fn pdf(&self, o: Vec3, i: Vec3) -> f32 {
         match *self {
-            _ if self.cosine_sampled() => {
-                if same_hemisphere(o, i) {
-                    i.z.abs() * FRAC_1_PI
-                } else {
-                    0.0
-                }
-            }
+            _ if self.cosine_sampled() && same_hemisphere(o, i) => i.z.abs() * FRAC_1_PI,
             Lobe::DisneyClearcoat { gloss, .. } => disney::clearcoat_pdf(o, i, gloss),
             Lobe::LambertTransmission(_) if !same_hemisphere(o, i) => i.z.abs() * FRAC_1_PI,
             Lobe::MicrofacetReflection { dist, .. } if same_hemisphere(o, i) => {
