@@ -17,14 +17,13 @@ pub enum Approx {
     UnreadablePtex,
     UnreadableBsdfFile,
     Motion,
-    MeshDisplacement,
     FilmType,
     ColorSpace,
     Sensor,
 }
 
 impl Approx {
-    pub const ALL: [Approx; 12] = [
+    pub const ALL: [Approx; 11] = [
         Approx::CoatInBlend,
         Approx::HairInBlend,
         Approx::DisneyBssrdf,
@@ -33,7 +32,6 @@ impl Approx {
         Approx::UnreadablePtex,
         Approx::UnreadableBsdfFile,
         Approx::Motion,
-        Approx::MeshDisplacement,
         Approx::FilmType,
         Approx::ColorSpace,
         Approx::Sensor,
@@ -59,9 +57,6 @@ impl Approx {
             Approx::UnreadableBsdfFile => "the BSDF file cannot be read; black, as pbrt-v3 renders it",
             Approx::Motion => {
                 "a moving shape inside an object definition keeps its start transform (motion nests there in pbrt)"
-            }
-            Approx::MeshDisplacement => {
-                "displacement is not supported; the mesh is rendered as its file has it, undisplaced"
             }
             Approx::FilmType => "written as an RGB film (R, G, B channels only)",
             Approx::ColorSpace => {

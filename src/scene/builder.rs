@@ -874,7 +874,9 @@ impl Builder {
         let (Some(syntax), Some([name])) = (self.known_syntax(), name) else {
             return false;
         };
-        let quads = if syntax == Syntax::V3 { plymesh::Quads::Split } else { plymesh::Quads::Patches };
+        // A displaced v4 mesh has its quads split, as pbrt-v4 splits them to displace.
+        let split = syntax == Syntax::V3 || p.named("displacement").is_some();
+        let quads = if split { plymesh::Quads::Split } else { plymesh::Quads::Patches };
         self.read_ahead.start(self.reader.resolve_path(name), quads, &self.reader.files);
         true
     }
@@ -967,13 +969,11 @@ impl Builder {
             Some(Syntax::V3) => plymesh::Quads::Split,
             _ => plymesh::Quads::Patches,
         };
-        let (mut warn, mut approximate) = (Vec::new(), Vec::new());
+        let mut warn = Vec::new();
         let (files, ahead) = (&self.reader.files, &self.read_ahead);
-        let mut ctx =
-            ShapeContext { resolve: &resolve, quads, files, ahead, warn: &mut warn, approximate: &mut approximate };
+        let mut ctx = ShapeContext { resolve: &resolve, quads, files, ahead, warn: &mut warn };
         let built = shapes::read(&s.entity.name, &mut s.entity.params, at, &mut ctx);
         self.warnings.append(&mut warn);
-        approximate.into_iter().for_each(|(at, what, how)| self.note(at, what, how));
         let p = &s.entity.params;
         let Some(built) = built? else {
             let what = format!("Shape \"{}\"", s.entity.name);
@@ -1035,6 +1035,10 @@ impl Builder {
             Built::Curves(c) => Geometry::Curves { curves: std::sync::Arc::new(c) },
             Built::Several(parts) => {
                 return parts.into_iter().try_for_each(|b| self.add_geometry(b, s, out));
+            }
+            Built::Displaced(d) => {
+                let mesh = self.displace(*d, s.scope.clone(), &s.ctm)?;
+                return self.add_geometry(mesh, s, out);
             }
         };
         out.push(geometry);

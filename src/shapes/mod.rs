@@ -39,6 +39,7 @@ pub mod cone;
 pub mod curve;
 pub mod cylinder;
 pub mod disk;
+pub mod displace;
 pub mod heightfield;
 pub mod hyperboloid;
 pub mod loopsubdiv;
@@ -224,8 +225,20 @@ pub enum Built {
     },
     /// A pbrt-v4 PLY file of triangles and quads: two shapes, as in pbrt-v4.
     Several(Vec<Built>),
+    /// A pbrt-v4 PLY mesh (its quads split) that a float texture displaces: the scene
+    /// resolves the texture and calls [`displace::displace`].
+    Displaced(Box<Displaced>),
     /// Bézier curves, in object space.
     Curves(curve::Curves),
+}
+
+/// A mesh to displace, as read: `texture` named at `at`, refined to `edge_length`.
+pub struct Displaced {
+    pub mesh: TriangleMesh,
+    pub filename: String,
+    pub texture: String,
+    pub at: Span,
+    pub edge_length: f32,
 }
 
 /// What reading a shape needs besides its parameters.
@@ -238,8 +251,6 @@ pub struct ShapeContext<'a> {
     /// PLY files already being read (see [`read_ahead`]).
     pub ahead: &'a read_ahead::ReadAhead,
     pub warn: &'a mut Vec<Diagnostic>,
-    /// What is rendered other than as written: where, what, and how.
-    pub approximate: &'a mut Vec<(Span, String, crate::approx::Approx)>,
 }
 
 /// A `Shape` type: the name scenes use and its reader.
@@ -311,19 +322,25 @@ pub fn read(ty: &str, p: &mut ParamList, span: Span, ctx: &mut ShapeContext) -> 
     (t.read)(ctx, p, span).map(Some)
 }
 
-/// A mesh file's `filename` (required), where it was written, and its path; notes that
-/// `displacement` is not supported (an approximation: the mesh as it is in the file).
+/// A mesh file's `filename` (required), where it was written, and its path.
 fn mesh_file(ctx: &mut ShapeContext, ty: &str, p: &ParamList, span: Span) -> Res<(String, Span, std::path::PathBuf)> {
     let name =
         p.string("filename")?.ok_or_else(|| Diagnostic::error(span, format!("{ty} needs \"string filename\"")))?;
     let at = p.named("filename").map_or(span, |f| f.value_span);
-    if let Some(d) = p.named("displacement") {
-        d.mark_used();
-        ctx.approximate.push((d.span, format!("{ty} \"displacement\""), crate::approx::Approx::MeshDisplacement));
-    }
-    p.mark_known(&["edgelength"]);
     let path = (ctx.resolve)(&name);
     Ok((name, at, path))
+}
+
+/// A mesh file's `"texture displacement"` and `"float edgelength"` (pbrt-v4's default
+/// 1): the mesh as read, to be displaced by the scene, or as it is without one.
+fn displaced(mesh: TriangleMesh, filename: String, p: &ParamList) -> Res<Built> {
+    let Some(d) = p.find("displacement", &[crate::parser::params::ParamType::Texture]) else {
+        return Ok(Built::Mesh { mesh, kind: plymesh::NAME, filename: Some(filename) });
+    };
+    let [texture] = <[String; 1]>::try_from(d.strings().to_vec())
+        .map_err(|_| Diagnostic::error(d.span, "\"texture displacement\" needs exactly one name"))?;
+    let edge_length = p.float("edgelength")?.unwrap_or(1.0);
+    Ok(Built::Displaced(Box::new(Displaced { mesh, filename, texture, at: d.span, edge_length })))
 }
 
 #[cfg(test)]

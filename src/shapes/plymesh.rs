@@ -601,12 +601,24 @@ pub const NAME: &str = "plymesh";
 
 /// `Shape "plymesh" "string filename" "mesh.ply"`: the file's triangles, and its quads
 /// as the file's version reads them (a file of both is two shapes, as in pbrt-v4).
+/// With pbrt-v4's `"texture displacement"` its quads are split and the scene displaces
+/// it ([`super::displace`]).
 pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
+    // pbrt-v3 has no displacement: there the parameter stays unused, as in pbrt-v3.
+    let displaced = ctx.quads == Quads::Patches && p.named("displacement").is_some();
+    if ctx.quads == Quads::Patches {
+        // pbrt-v4 reads it with or without a displacement.
+        p.mark_known(&["edgelength"]);
+    }
     let (name, at, path) = super::mesh_file(ctx, NAME, p, span)?;
-    let m = ctx.ahead.take(&path, ctx.quads).unwrap_or_else(|| load(&path, ctx.quads, ctx.files)).map_err(|e| {
+    let quads = if displaced { Quads::Split } else { ctx.quads };
+    let m = ctx.ahead.take(&path, quads).unwrap_or_else(|| load(&path, quads, ctx.files)).map_err(|e| {
         // Read errors name the file already; format errors get its name first.
         Diagnostic::error(at, if e.starts_with("cannot read") { e } else { format!("{name}: {e}") })
     })?;
+    if displaced {
+        return super::displaced(m.triangles, name, p);
+    }
     let has_triangles = !m.triangles.indices.is_empty();
     let tris = Built::Mesh { mesh: m.triangles, kind: NAME, filename: Some(name.clone()) };
     Ok(match m.patches {

@@ -153,18 +153,50 @@ fn meshes_are_stored_transformed_like_pbrt() {
     assert_eq!(s.meshes[0].n.as_ref().unwrap()[0], [0.0, 0.0, 0.5]);
 }
 
-/// pbrt-v4 tessellates and displaces a PLY mesh with a `displacement` texture; we
-/// render it undisplaced, noted where the texture is named.
+/// pbrt-v4 refines a PLY mesh with a `displacement` texture until its edges are
+/// shorter than `edgelength` and moves each vertex along its normal by the texture;
+/// pbrt-v3 has no displacement (the parameter is unused there).
 #[test]
-fn a_displaced_plymesh_is_an_approximation_located_at_its_texture() {
-    let text = "WorldBegin\nTexture \"d\" \"float\" \"constant\" \"float value\" 0.1\n\
-        Shape \"plymesh\" \"string filename\" \"../../../pbrt-scenes/v3/geometry/icosphere.ply\"\n  \
-        \"texture displacement\" \"d\" \"float edgelength\" 0.5\n";
-    let s = scene(text);
-    assert_eq!(s.meshes[0].triangle_count(), 80, "the mesh as the file has it");
-    let a: Vec<_> = s.approximated.iter().map(|a| (a.line, a.column, a.how.as_str())).collect();
-    assert_eq!(a, [(4, 3, pbrt_sppm::scene::Approx::MeshDisplacement.how())]);
-    assert!(s.warnings.iter().all(|w| !w.message.contains("not used")), "{:?}", s.warnings);
+fn a_displaced_plymesh_is_refined_and_moved_along_its_normals() {
+    let ply = "Shape \"plymesh\" \"string filename\" \"../../../pbrt-scenes/v3/geometry/icosphere.ply\"";
+    let text = format!(
+        "WorldBegin\nTexture \"d\" \"float\" \"constant\" \"float value\" 0.1\n\
+         {ply} \"texture displacement\" \"d\" \"float edgelength\" 0.2\n"
+    );
+    let plain = &scene(&format!("WorldBegin\n{ply}\n")).meshes[0];
+    let s = scene(&text);
+    let m = &s.meshes[0];
+    assert!(m.triangle_count() > 4 * plain.triangle_count(), "{} triangles", m.triangle_count());
+    assert!(s.warnings.is_empty() && s.approximated.is_empty(), "{:?}", s.warnings);
+    // The file's vertices (first in the list) move out by 0.1 along their unit normals.
+    let r = |p: [f32; 3]| glam::Vec3::from(p).length();
+    for (a, b) in plain.p.iter().zip(&m.p) {
+        assert!((r(*b) - r(*a) - 0.1).abs() < 1e-4, "{a:?} -> {b:?}");
+    }
+    // No edge is 0.2 long or more before displacement: after, none is much more.
+    let longest = m
+        .indices
+        .chunks_exact(3)
+        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+        .map(|(a, b)| glam::Vec3::from(m.p[a as usize]).distance(glam::Vec3::from(m.p[b as usize])))
+        .fold(0.0f32, f32::max);
+    assert!(longest < 0.2 * 1.2, "{longest}");
+    // pbrt-v3 reads no displacement.
+    let v3 = scene(&format!("{text}WorldEnd\n"));
+    assert_eq!(v3.meshes[0].triangle_count(), plain.triangle_count());
+    assert!(
+        v3.warnings.iter().any(|w| w.message.contains("\"texture displacement\" is not used")),
+        "{:?}",
+        v3.warnings
+    );
+    // Without (u, v) pbrt-v4 stops; so do we, at the texture parameter.
+    let e = crate::common::load(
+        "WorldBegin\nTexture \"d\" \"float\" \"constant\"\nShape \"plymesh\" \"string filename\" \
+         \"../../../pbrt-scenes/v3/geometry/slab_be.ply\" \"texture displacement\" \"d\" \"float edgelength\" 0\n",
+    )
+    .unwrap_err()
+    .one_line();
+    assert!(e.contains("edgelength") && e.contains(":3:"), "{e}");
 }
 
 #[test]

@@ -17,6 +17,7 @@ use crate::parser::stmt::Entity;
 use crate::scene::names::Family;
 use crate::scene::shapes::AlphaParams;
 use crate::scene::{AlphaRule, ShapeAlpha};
+use crate::shapes;
 use crate::textures::{self, TextureDesc, TextureKind, TextureSite};
 use crate::values::SpectrumContext;
 use glam::Vec3;
@@ -272,6 +273,27 @@ pub(super) fn finish_params(p: &ParamList, warnings: &mut Vec<Diagnostic>) -> Re
     }
     p.report_unused(warnings);
     Ok(())
+}
+
+impl Builder {
+    /// A pbrt-v4 displaced PLY mesh made a mesh: its float texture found in the shape's
+    /// scope and looked up at each refined vertex. pbrt-v4 looks it up at the vertex's
+    /// object-space point taken as a point of its rendering space (world moved by the
+    /// camera's position): so do we, for 3D textures to land where pbrt-v4's do.
+    pub(super) fn displace(&mut self, d: shapes::Displaced, scope: Rc<Scope>, ctm: &glam::DMat4) -> Res<shapes::Built> {
+        let texture = Scoped { b: self, scope, depth: 0 }.texture(&d.texture, true, d.at)?;
+        let textures = textures::Textures::new(&self.built_textures, self.opts.fixes);
+        let camera = self.render.camera.as_ref().map_or(glam::DMat4::IDENTITY, |c| c.1);
+        let eye = camera.inverse().w_axis.truncate().as_vec3();
+        let height = |p: [f32; 3], n: [f32; 3], uv: [f32; 2]| {
+            let ctx = textures::TexCtx { p: Vec3::from(p) + eye, n: Vec3::from(n), uv, ..Default::default() };
+            textures.float(TexValue::Texture(texture), &ctx)
+        };
+        let mut mesh = d.mesh;
+        shapes::displace::displace(&mut mesh, ctm, d.edge_length, height)
+            .map_err(|e| Diagnostic::error(d.at, format!("{}: {e}", d.filename)))?;
+        Ok(shapes::Built::Mesh { mesh, kind: shapes::plymesh::NAME, filename: Some(d.filename) })
+    }
 }
 
 impl Resolver for Scoped<'_> {
