@@ -4,7 +4,7 @@
 //! ```text
 //! Material "disney" "rgb color" [.8 .2 .1] "float metallic" 0 "float roughness" .4
 //!     "float speculartint" .2 "float sheen" .5 "float clearcoat" .3 "float spectrans" 0
-//! Material "disney" "bool thin" true "float difftrans" 1.2 "float flatness" .5
+//! Material "disney" "bool thin" "true" "float difftrans" 1.2 "float flatness" .5
 //! ```
 //! The lobes are pbrt-v3's, weighted as it weighs them: a Fresnel-modified diffuse
 //! lobe (blended with a fake-subsurface lobe by `flatness` on a `thin` surface),

@@ -37,6 +37,10 @@ pub fn displace(
     let mut r = Refiner { p: std::mem::take(&mut mesh.p), n, uv, indices: Vec::new(), split: HashMap::new() };
     let mut world: Vec<DVec3> =
         r.p.iter().map(|p| world_from_object.transform_point3(DVec3::from(p.map(f64::from)))).collect();
+    if !world.iter().all(|p| p.is_finite()) {
+        // A NaN edge is never short enough: it would split forever.
+        return Err("a vertex that is not a finite point cannot be displaced".into());
+    }
     let old = std::mem::take(&mut mesh.indices);
     // Refined triangles have about half an edge's square of area each at least: refuse
     // up front what would pass the limit, rather than find out at the limit.
@@ -202,5 +206,8 @@ mod tests {
         assert!(displace(&mut no_uv, &DMat4::IDENTITY, 0.5, |_, _, _| 0.0).is_err());
         assert!(displace(&mut square(), &DMat4::IDENTITY, 0.0, |_, _, _| 0.0).is_err());
         assert!(displace(&mut square(), &DMat4::IDENTITY, 1e-6, |_, _, _| 0.0).unwrap_err().contains("more than"));
+        let mut nan = square();
+        nan.p[2][0] = f32::NAN;
+        assert!(displace(&mut nan, &DMat4::IDENTITY, 0.5, |_, _, _| 0.0).unwrap_err().contains("finite"));
     }
 }
