@@ -875,7 +875,7 @@ impl Builder {
             return false;
         };
         // A displaced v4 mesh has its quads split, as pbrt-v4 splits them to displace.
-        let split = syntax == Syntax::V3 || p.named("displacement").is_some();
+        let split = syntax == Syntax::V3 || shapes::displaces(p);
         let quads = if split { plymesh::Quads::Split } else { plymesh::Quads::Patches };
         self.read_ahead.start(self.reader.resolve_path(name), quads, &self.reader.files);
         true

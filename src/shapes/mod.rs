@@ -225,8 +225,9 @@ pub enum Built {
     },
     /// A pbrt-v4 PLY file of triangles and quads: two shapes, as in pbrt-v4.
     Several(Vec<Built>),
-    /// A pbrt-v4 PLY mesh (its quads split) that a float texture displaces: the scene
-    /// resolves the texture and calls [`displace::displace`].
+    /// A mesh file (a v4 `plymesh`, its quads split, or an `objmesh`) that a float
+    /// texture displaces: the scene resolves the texture and calls
+    /// [`displace::displace`].
     Displaced(Box<Displaced>),
     /// Bézier curves, in object space.
     Curves(curve::Curves),
@@ -331,11 +332,17 @@ fn mesh_file(ctx: &mut ShapeContext, ty: &str, p: &ParamList, span: Span) -> Res
     Ok((name, at, path))
 }
 
+/// Whether a mesh file names a `"texture displacement"` (pbrt-v4 reads only a texture
+/// there: another type leaves the mesh as it is).
+pub fn displaces(p: &ParamList) -> bool {
+    p.named("displacement").is_some_and(|d| d.ty == crate::parser::params::ParamType::Texture)
+}
+
 /// A mesh file's `"texture displacement"` and `"float edgelength"` (pbrt-v4's default
 /// 1): the mesh as read, to be displaced by the scene, or as it is without one.
-fn displaced(mesh: TriangleMesh, filename: String, p: &ParamList) -> Res<Built> {
+fn displaced(mesh: TriangleMesh, kind: &'static str, filename: String, p: &ParamList) -> Res<Built> {
     let Some(d) = p.find("displacement", &[crate::parser::params::ParamType::Texture]) else {
-        return Ok(Built::Mesh { mesh, kind: plymesh::NAME, filename: Some(filename) });
+        return Ok(Built::Mesh { mesh, kind, filename: Some(filename) });
     };
     let [texture] = <[String; 1]>::try_from(d.strings().to_vec())
         .map_err(|_| Diagnostic::error(d.span, "\"texture displacement\" needs exactly one name"))?;

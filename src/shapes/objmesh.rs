@@ -44,8 +44,5 @@ pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     let (name, at, path) = super::mesh_file(ctx, NAME, p, span)?;
     let mesh = load(&path, ctx.files).map_err(|e| Diagnostic::error(at, e))?;
     // Displaced as pbrt-v4 displaces a PLY mesh.
-    match super::displaced(mesh, name, p)? {
-        Built::Mesh { mesh, filename, .. } => Ok(Built::Mesh { mesh, kind: NAME, filename }),
-        displaced => Ok(displaced),
-    }
+    super::displaced(mesh, NAME, name, p)
 }

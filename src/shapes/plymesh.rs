@@ -605,7 +605,7 @@ pub const NAME: &str = "plymesh";
 /// it ([`super::displace`]).
 pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     // pbrt-v3 has no displacement: there the parameter stays unused, as in pbrt-v3.
-    let displaced = ctx.quads == Quads::Patches && p.named("displacement").is_some();
+    let displaced = ctx.quads == Quads::Patches && super::displaces(p);
     if ctx.quads == Quads::Patches {
         // pbrt-v4 reads it with or without a displacement.
         p.mark_known(&["edgelength"]);
@@ -617,7 +617,7 @@ pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
         Diagnostic::error(at, if e.starts_with("cannot read") { e } else { format!("{name}: {e}") })
     })?;
     if displaced {
-        return super::displaced(m.triangles, name, p);
+        return super::displaced(m.triangles, NAME, name, p);
     }
     let has_triangles = !m.triangles.indices.is_empty();
     let tris = Built::Mesh { mesh: m.triangles, kind: NAME, filename: Some(name.clone()) };

@@ -189,6 +189,11 @@ fn a_displaced_plymesh_is_refined_and_moved_along_its_normals() {
         "{:?}",
         v3.warnings
     );
+    // Only a texture displaces (pbrt-v4 reads no other type there): a v4 file's quads
+    // stay patches.
+    let slab = "Shape \"plymesh\" \"string filename\" \"../../../pbrt-scenes/v3/geometry/slab_be.ply\"";
+    let s = scene(&format!("WorldBegin\n{slab} \"float displacement\" 0.1\n"));
+    assert!(s.meshes.is_empty() && s.patches.len() == 1, "{} meshes", s.meshes.len());
     // Without (u, v) pbrt-v4 stops; so do we, at the texture parameter.
     let e = crate::common::load(
         "WorldBegin\nTexture \"d\" \"float\" \"constant\"\nShape \"plymesh\" \"string filename\" \
