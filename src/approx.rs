@@ -11,7 +11,6 @@
 pub enum Approx {
     CoatInBlend,
     HairInBlend,
-    DisneyBssrdf,
     UnsupportedTexture,
     MissingImage,
     UnreadablePtex,
@@ -23,10 +22,9 @@ pub enum Approx {
 }
 
 impl Approx {
-    pub const ALL: [Approx; 11] = [
+    pub const ALL: [Approx; 10] = [
         Approx::CoatInBlend,
         Approx::HairInBlend,
-        Approx::DisneyBssrdf,
         Approx::UnsupportedTexture,
         Approx::MissingImage,
         Approx::UnreadablePtex,
@@ -43,9 +41,6 @@ impl Approx {
             Approx::CoatInBlend => "a pbrt-v3 mix blends lobes: its coated part adds only the base under the coat",
             Approx::HairInBlend => {
                 "a pbrt-v3 mix blends lobes: its hair part adds nothing (a fibre is not kept as lobes)"
-            }
-            Approx::DisneyBssrdf => {
-                "its BSSRDF is not rendered: light passes its smooth boundary as in pbrt-v3's SPPM and bdpt, which ignore the BSSRDF"
             }
             Approx::UnsupportedTexture => "this texture class is not supported; a constant 0.5 is used",
             Approx::MissingImage => {

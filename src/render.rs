@@ -141,7 +141,8 @@ pub struct RenderScene {
     spectral: Option<PassCell>,
     /// Spectral, with a material that disperses.
     dispersive: bool,
-    /// Light crosses `subsurface` boundaries through their BSSRDF (vcm and bdpt, for
+    /// Light crosses `subsurface` boundaries (and those of `disney` materials with a
+    /// `scatterdistance`) through their BSSRDF (vcm and bdpt, for
     /// files whose pbrt integrator takes it: [`crate::materials::subsurface::follows_bssrdf`]);
     /// otherwise they are the glass pbrt's other integrators see.
     pub subsurface: bool,
@@ -173,7 +174,10 @@ fn interiors(scene: &SceneDescription, bidirectional: bool) -> Interiors {
     let space = scene.spectral.then_some(scene.color_space);
     let mut bssrdf = vec![false; scene.materials.len()];
     for (k, m) in scene.materials.iter().enumerate() {
-        let MaterialKind::Subsurface(s) = &m.kind else { continue };
+        let MaterialKind::Subsurface(s) = &m.kind else {
+            bssrdf[k] = follows && m.kind.may_have_bssrdf();
+            continue;
+        };
         let Some(medium) = walk.then(|| crate::materials::subsurface::walk_medium(s, space)).flatten() else {
             bssrdf[k] = follows;
             continue;

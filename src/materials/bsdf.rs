@@ -36,6 +36,11 @@ pub struct BsdfEval {
     pub pdf_rev: f32,
 }
 
+impl BsdfEval {
+    /// Nothing either way.
+    pub const NONE: BsdfEval = BsdfEval { f: Vec3::ZERO, pdf: 0.0, pdf_rev: 0.0 };
+}
+
 /// How lobes combine where the shading normal differs from the geometric one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Convention {

@@ -7,6 +7,7 @@
 //! coefficients, and the integrators' probe rays ([`crate::integrators::subsurface`])
 //! find where the light leaves.
 
+use super::disneybssrdf::Burley;
 use crate::math::catmull_rom;
 use crate::media::phase::hg;
 use crate::spectrum::Rgb;
@@ -163,22 +164,59 @@ fn beam_diffusion_ss(sigma_s: f32, sigma_a: f32, g: f32, eta: f32, r: f32) -> f3
     ess / N as f32
 }
 
-/// A BSSRDF's profile at one point: the table and the coefficients per channel (RGB
+/// A BSSRDF's radial profile at one point: the `subsurface` materials' table, or the
+/// `disney` material's two exponentials.
+#[derive(Clone, Debug)]
+pub enum Profile {
+    Tabulated(Tabulated),
+    Burley(Burley),
+}
+
+impl Profile {
+    /// The tabulated profile of σa and σs.
+    pub fn new(table: Arc<BssrdfTable>, sigma_a: Rgb, sigma_s: Rgb) -> Profile {
+        let sigma_t = sigma_a + sigma_s;
+        let rho = Vec3::select(sigma_t.cmpne(Vec3::ZERO), sigma_s / sigma_t, Vec3::ZERO);
+        Profile::Tabulated(Tabulated { table, sigma_t, rho })
+    }
+
+    /// pbrt's `Sr`: the profile at distance `r`, per channel.
+    pub fn sr(&self, r: f32) -> Rgb {
+        match self {
+            Profile::Tabulated(t) => t.sr(r),
+            Profile::Burley(b) => b.sr(r),
+        }
+    }
+
+    /// pbrt's `Sample_Sr`: a radius drawn from channel `ch`'s profile (`None` where the
+    /// channel has none).
+    pub fn sample_sr(&self, ch: usize, u: f32) -> Option<f32> {
+        match self {
+            Profile::Tabulated(t) => t.sample_sr(ch, u),
+            Profile::Burley(b) => b.sample_sr(ch, u),
+        }
+    }
+
+    /// pbrt's `Pdf_Sr`: the density of `sample_sr` on channel `ch` at radius `r`, per
+    /// unit area of the plane it is drawn in.
+    pub fn pdf_sr(&self, ch: usize, r: f32) -> f32 {
+        match self {
+            Profile::Tabulated(t) => t.pdf_sr(ch, r),
+            Profile::Burley(b) => b.pdf_sr(ch, r),
+        }
+    }
+}
+
+/// The tabulated profile at one point: the table and the coefficients per channel (RGB
 /// for pbrt-v3's files, the pass's wavelengths for pbrt-v4's).
 #[derive(Clone, Debug)]
-pub struct Profile {
+pub struct Tabulated {
     pub table: Arc<BssrdfTable>,
     pub sigma_t: Rgb,
     pub rho: Rgb,
 }
 
-impl Profile {
-    pub fn new(table: Arc<BssrdfTable>, sigma_a: Rgb, sigma_s: Rgb) -> Profile {
-        let sigma_t = sigma_a + sigma_s;
-        let rho = Vec3::select(sigma_t.cmpne(Vec3::ZERO), sigma_s / sigma_t, Vec3::ZERO);
-        Profile { table, sigma_t, rho }
-    }
-
+impl Tabulated {
     /// The spline weights of channel `ch` at distance `r`: (ρ offset, ρ weights,
     /// radius offset, radius weights).
     fn weights(&self, ch: usize, r: f32) -> Option<(usize, [f32; 4], usize, [f32; 4])> {
@@ -200,8 +238,8 @@ impl Profile {
         if r_optical != 0.0 { sr / (2.0 * PI * r_optical) } else { sr }
     }
 
-    /// pbrt's `Sr`: the profile at distance `r`, per channel, clamped at 0.
-    pub fn sr(&self, r: f32) -> Rgb {
+    /// The profile at distance `r`, per channel, clamped at 0.
+    fn sr(&self, r: f32) -> Rgb {
         let mut out = Vec3::ZERO;
         for ch in 0..3 {
             if let Some(w) = self.weights(ch, r) {
@@ -211,9 +249,9 @@ impl Profile {
         (out * self.sigma_t * self.sigma_t).max(Vec3::ZERO)
     }
 
-    /// pbrt's `Sample_Sr`: a radius drawn from channel `ch`'s profile (`None` where the
-    /// channel has no extinction).
-    pub fn sample_sr(&self, ch: usize, u: f32) -> Option<f32> {
+    /// A radius drawn from channel `ch`'s profile (`None` where the channel has no
+    /// extinction).
+    fn sample_sr(&self, ch: usize, u: f32) -> Option<f32> {
         if self.sigma_t[ch] == 0.0 {
             return None;
         }
@@ -223,9 +261,7 @@ impl Profile {
         Some(r / self.sigma_t[ch])
     }
 
-    /// pbrt's `Pdf_Sr`: the density of `sample_sr` on channel `ch` at radius `r`, per
-    /// unit area of the plane it is drawn in.
-    pub fn pdf_sr(&self, ch: usize, r: f32) -> f32 {
+    fn pdf_sr(&self, ch: usize, r: f32) -> f32 {
         let Some(w) = self.weights(ch, r) else { return 0.0 };
         let rho_eff: f32 = (0..4).filter(|&i| w.1[i] != 0.0).map(|i| self.table.rho_eff[w.0 + i] * w.1[i]).sum();
         let sr = self.spline(ch, r, w);

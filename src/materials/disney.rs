@@ -12,17 +12,20 @@
 //! Trowbridge–Reitz specular lobe with separable masking and a Fresnel term between a
 //! dielectric's and Schlick's; a GTR1 clearcoat; rough transmission tinted by
 //! √`color`; and, on a thin surface, Lambertian transmission by `difftrans`/2.
-//! A `scatterdistance` makes pbrt-v3 add a BSSRDF under a smooth boundary: the
-//! boundary is rendered (it is all pbrt-v3's SPPM and bdpt see), the BSSRDF is not
-//! (an approximation, noted).
+//! A `scatterdistance` on a surface that is not `thin` puts a smooth boundary in place
+//! of the diffuse lobe and Burley's BSSRDF under it ([`super::disneybssrdf`]). As for
+//! the `subsurface` materials, light goes through the BSSRDF for files whose pbrt-v3
+//! integrator takes it (`path`, `volpath`); pbrt-v3's SPPM and bdpt see the boundary
+//! alone, and so do ours for their files.
 
 use super::MaterialKind;
+use super::bssrdf::Profile;
 use super::disneybsdf::lerp;
+use super::disneybssrdf::Burley;
 use super::inputs::{Inputs, Lobes};
 use super::lobes::Lobe;
 use super::microfacet::{Fresnel, TrowbridgeReitz};
 use super::params::{Resolver, TexValue, float, spectrum};
-use crate::approx::Approx;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
@@ -48,20 +51,17 @@ pub struct Disney {
     pub clearcoat_gloss: TexValue,
     pub spec_trans: TexValue,
     /// Not black: pbrt-v3 puts a BSSRDF under a smooth boundary in place of the
-    /// diffuse lobe (only the boundary is rendered here).
+    /// diffuse lobe.
     pub scatter_distance: TexValue,
     pub thin: bool,
     pub flatness: TexValue,
     pub diff_trans: TexValue,
 }
 
-pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
+pub fn read(_ty: &str, p: &ParamList, _at: Span, r: &mut dyn Resolver) -> Res<MaterialKind> {
     let any = |name: &str, default: f32, r: &mut dyn Resolver| float(p, name, default, Range::Any, r);
     let scatter_distance = spectrum(p, "scatterdistance", 0.0, r)?;
     let thin = p.bool("thin")?.unwrap_or(false);
-    if scatter_distance != TexValue::Const(Vec3::ZERO) && !thin {
-        r.approximate(at, "material \"disney\" with \"scatterdistance\"".into(), Approx::DisneyBssrdf);
-    }
     Ok(MaterialKind::Disney(Box::new(Disney {
         color: spectrum(p, "color", 0.5, r)?,
         metallic: any("metallic", 0.0, r)?,
@@ -79,6 +79,30 @@ pub fn read(_ty: &str, p: &ParamList, at: Span, r: &mut dyn Resolver) -> Res<Mat
         flatness: any("flatness", 0.0, r)?,
         diff_trans: any("difftrans", 1.0, r)?,
     })))
+}
+
+impl Disney {
+    /// Whether some hit may have a BSSRDF: not thin, and a `scatterdistance` that is
+    /// not the constant 0.
+    pub fn may_scatter_below(&self) -> bool {
+        !self.thin && self.scatter_distance != TexValue::Const(Vec3::ZERO)
+    }
+}
+
+/// The BSSRDF under the boundary at a hit, and the boundary's index: `None` where
+/// pbrt-v3 makes none (thin, no `scatterdistance` there, or no diffuse weight).
+pub fn bssrdf(d: &Disney, i: &Inputs<impl Fn() -> TexCtx>) -> Option<(Profile, f32)> {
+    if d.thin {
+        return None;
+    }
+    let sd = i.rgb(d.scatter_distance);
+    let diffuse_weight = (1.0 - i.float(d.metallic)) * (1.0 - i.float(d.spec_trans));
+    if sd == Vec3::ZERO || diffuse_weight <= 0.0 {
+        return None;
+    }
+    let c = i.rgb(d.color).max(Vec3::ZERO);
+    let r = i.lanes_unbounded(diffuse_weight * c);
+    Some((Profile::Burley(Burley::new(r, i.lanes_unbounded(sd))), i.float(d.eta)))
 }
 
 /// The colours the lobes are made of, in RGB (then put in the path's lanes).

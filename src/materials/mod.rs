@@ -28,6 +28,7 @@ pub mod diffuse;
 pub mod diffusetransmission;
 pub mod disney;
 pub mod disneybsdf;
+pub mod disneybssrdf;
 pub mod fibre;
 pub mod fourier;
 pub mod fourierbsdf;
@@ -256,6 +257,16 @@ pub struct MaterialDesc {
 }
 
 impl MaterialKind {
+    /// Whether light that crosses this material's boundary may enter a BSSRDF: always
+    /// for `subsurface`, for `disney` where a `scatterdistance` is given.
+    pub fn may_have_bssrdf(&self) -> bool {
+        match self {
+            MaterialKind::Subsurface(_) => true,
+            MaterialKind::Disney(d) => d.may_scatter_below(),
+            _ => false,
+        }
+    }
+
     /// Whether its index varies with the wavelength (a glass or coat whose `eta` is a
     /// spectrum).
     pub fn disperses(&self) -> bool {
@@ -397,11 +408,14 @@ impl Material {
         }
     }
 
-    /// A subsurface material's BSSRDF profile at a hit and the boundary's index (`None`
-    /// for other materials).
+    /// The BSSRDF profile at a hit and the boundary's index, for a `subsurface`
+    /// material, or a `disney` one with a `scatterdistance` (`None` elsewhere).
     pub fn bssrdf(&self, at: Shading<'_, impl Fn() -> TexCtx>) -> Option<(bssrdf::Profile, f32)> {
-        let MaterialKind::Subsurface(s) = &self.kind else { return None };
-        Some((subsurface::profile(s, &self.inputs(at)), s.eta))
+        match &self.kind {
+            MaterialKind::Subsurface(s) => Some((subsurface::profile(s, &self.inputs(at)), s.eta)),
+            MaterialKind::Disney(d) => disney::bssrdf(d, &self.inputs(at)),
+            _ => None,
+        }
     }
 
     fn inputs<'t, C: Fn() -> TexCtx>(&self, at: Shading<'t, C>) -> Inputs<'t, C> {

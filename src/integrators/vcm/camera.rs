@@ -28,6 +28,9 @@ use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash};
 use crate::spectrum::Rgb;
 use glam::{DVec3, Vec3};
 
+/// A BSSRDF under a boundary: its profile, the boundary's index and the material.
+type Bssrdf = (crate::materials::bssrdf::Profile, f32, u32);
+
 /// What the camera subpaths of a pass share.
 pub struct Cameras<'a> {
     pub pass: &'a Pass<'a>,
@@ -142,6 +145,9 @@ impl<'a> Vertex<'a> {
     /// f and both densities toward `wi`, the forward one the camera walk's and the
     /// reverse one a light walk's (each its guided mixture's, where it has one).
     fn eval(&self, wi: Vec3) -> crate::materials::BsdfEval {
+        if self.place.crosses_into_bssrdf(self.wo, wi) {
+            return crate::materials::BsdfEval::NONE;
+        }
         let mut e = self.at.eval(self.wo, wi, TransportMode::Radiance);
         if let Some(m) = &self.guide {
             e.pdf = m.pdf(e.pdf, wi);
@@ -352,24 +358,26 @@ impl Cameras<'_> {
         let eta_before = *eta_scale;
         let sc = scatter(self.pass, v, (beta, eta_scale), s)?;
         let (wi, pdf, partial, specular) = (sc.wi, sc.pdf, sc.partial, sc.specular);
-        if !self.crosses_into_bssrdf(v, surf, wi) {
+        let below = self.bssrdf_below(v, surf, wi);
+        let Some(bssrdf) = below else {
             return Some(Leave { beta: sc.beta, wi, pdf, partial, from: v.place, specular, through_bssrdf: false });
-        }
+        };
         // Refraction's η⁻² is paid back where the light leaves (`Lobe::NormalizedFresnel`).
         *eta_scale = eta_before;
-        let (hit, si) = surf?;
-        let (sc, from) = self.through_bssrdf(v, (hit, si), (sc.beta, eta_scale), light_path, out, s)?;
+        let (sc, from) = self.through_bssrdf(v, bssrdf, (sc.beta, eta_scale), light_path, out, s)?;
         let (beta, wi, pdf, partial) = (sc.beta, sc.wi, sc.pdf, sc.partial);
         Some(Leave { beta, wi, pdf, partial, from, specular: false, through_bssrdf: true })
     }
 
-    /// Whether the direction `wi` sampled at `v` crosses into a BSSRDF
-    /// ([`crate::render::RenderScene::subsurface`]).
-    fn crosses_into_bssrdf(&self, v: &Vertex, surf: Option<&(Hit, SurfaceInteraction)>, wi: Vec3) -> bool {
-        let scene = self.pass.scene;
-        scene.subsurface
-            && surf.is_some_and(|(hit, _)| scene.has_bssrdf(hit))
-            && v.wo.dot(v.place.ng) * wi.dot(v.place.ng) < 0.0
+    /// The BSSRDF the direction `wi` sampled at `v` crosses into, if any
+    /// ([`crate::render::RenderScene::subsurface`]): its profile, the boundary's index
+    /// and the material.
+    fn bssrdf_below(&self, v: &Vertex, surf: Option<&(Hit, SurfaceInteraction)>, wi: Vec3) -> Option<Bssrdf> {
+        if !v.place.crosses_into_bssrdf(v.wo, wi) {
+            return None;
+        }
+        let (hit, si) = surf?;
+        self.pass.scene.bssrdf(hit, si)
     }
 
     /// A camera subpath that refracted into a subsurface material at `v` (throughput
@@ -381,14 +389,13 @@ impl Cameras<'_> {
     fn through_bssrdf(
         &self,
         v: &Vertex,
-        (hit, si): (&Hit, &SurfaceInteraction),
+        (profile, eta, material): Bssrdf,
         (beta, eta_scale): (Rgb, &mut f32),
         light_path: &[LightVertex],
         out: &mut PixelSample,
         s: &mut impl Sampler,
     ) -> Option<(Scattered, Place)> {
         let scene = self.pass.scene;
-        let (profile, eta, material) = scene.bssrdf(hit, si)?;
         let Scatterer::Surface(bsdf) = v.at else { return None };
         let (po, time) = (v.place.p, v.place.time);
         let entry = subsurface::Entry { profile, eta, material, po, frame: bsdf.frame(), time };

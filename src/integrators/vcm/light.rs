@@ -75,6 +75,9 @@ impl LightVertex {
     /// the light walk's, the reverse one a camera walk's (each its guided mixture's,
     /// where it has one).
     pub fn eval(&self, wi: Vec3, pass: &Pass) -> crate::materials::BsdfEval {
+        if self.place.crosses_into_bssrdf(self.wo, wi) {
+            return crate::materials::BsdfEval::NONE;
+        }
         let mut e = self.at.eval(self.wo, wi, TransportMode::Importance);
         if let Some(g) = &self.guide {
             e.pdf_rev = g.pdf(e.pdf_rev);
@@ -318,9 +321,6 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
     // The throughput as it left the last vertex, which Russian roulette compares with.
     let mut before = beta;
     let keep = pass.techniques.uses(Technique::Connect) || pass.techniques.uses(Technique::Merge);
-    // Whether the vertex is on a surface whose interior is a BSSRDF
-    // (`RenderScene::subsurface`): light subpaths end there when they refract in.
-    let mut bssrdf = false;
     loop {
         let hit = scene.intersect(&ray);
         let (place, at, wo) = match vertex::flight(scene, &ray, (hit.as_ref(), medium), &mut beta, s) {
@@ -336,7 +336,6 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
                     Surface::Abandon => break,
                 };
                 scene.terminate_if_dispersed(&hit, &mut beta, &mut terminated);
-                bssrdf = scene.has_bssrdf(&hit);
                 (Place::on_surface(scene, &hit, &si, medium), Scatterer::Surface(bsdf), -ray.d.0.normalize())
             }
         };
@@ -374,7 +373,7 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
         }
         let Some((next, b, p, specular)) = scatter(pass, &v, before, s) else { break };
         // What crosses into a BSSRDF is found by camera subpaths alone (`subsurface`).
-        if std::mem::take(&mut bssrdf) && v.wo.dot(v.place.ng) * next.d.0.dot(v.place.ng) < 0.0 {
+        if v.place.crosses_into_bssrdf(v.wo, next.d.0) {
             break;
         }
         medium = v.place.toward(next.d.0);

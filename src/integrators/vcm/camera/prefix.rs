@@ -160,7 +160,7 @@ impl Cameras<'_> {
             let Some(sc) = scatter(pass, &v, (beta, &mut eta_scale), s) else { break };
             let (b, dir, p) = (sc.beta, sc.wi, sc.partial);
             // Light through a BSSRDF leaves at a diffuse vertex: the prefix ends.
-            if self.crosses_into_bssrdf(&v, surf.as_ref(), dir) {
+            if self.bssrdf_below(&v, surf.as_ref(), dir).is_some() {
                 break;
             }
             (beta, partial, prev) = (b, p, place.p);
