@@ -364,6 +364,35 @@ fn named_materials_are_scoped_like_v3_and_resolve_forward_like_v4() {
     assert_eq!(s.materials.len(), 4, "only used materials are built");
 }
 
+/// pbrt-v3 forgets a named texture at the end of its `AttributeBegin` block (a later
+/// reference gets the parameter's default, with an error); we use the definition and
+/// say so. pbrt-v4's names are global: no warning there.
+#[test]
+fn a_v3_texture_used_after_its_attribute_block_is_named_in_a_warning() {
+    let body = |film: &str, open: &str, close: &str| {
+        let material = match film.contains("rgb") {
+            true => "Material \"diffuse\" \"texture reflectance\" \"t\"",
+            false => "Material \"matte\" \"texture Kd\" \"t\"",
+        };
+        format!(
+            "{film}\nWorldBegin\n{open}\nTexture \"t\" \"spectrum\" \"constant\" \"rgb value\" [1 0 0]\n{close}\n\
+             {material}\nShape \"sphere\"\nWorldEnd"
+        )
+    };
+    let out_of_scope =
+        |w: &Vec<String>| w.iter().filter(|m| m.contains("inside an AttributeBegin that has ended")).count();
+    let v3 = scene(&body("Film \"image\"", "AttributeBegin", "AttributeEnd"));
+    let w = warnings(&v3);
+    assert_eq!(out_of_scope(&w), 1, "{w:?}");
+    assert!(w.iter().any(|m| m.contains("texture \"t\"") && m.contains(":4:")), "names the definition: {w:?}");
+    for (film, open, close) in
+        [("Film \"image\"", "TransformBegin", "TransformEnd"), ("Film \"rgb\"", "AttributeBegin", "AttributeEnd")]
+    {
+        let w = warnings(&scene(&body(film, open, close)));
+        assert_eq!(out_of_scope(&w), 0, "{film} {open}: {w:?}");
+    }
+}
+
 #[test]
 fn textures_are_built_only_when_a_used_material_needs_them() {
     let s = scene(

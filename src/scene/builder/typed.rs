@@ -304,6 +304,7 @@ impl Resolver for Scoped<'_> {
             (&self.scope.spectrum_textures, &self.scope.float_textures)
         };
         let kind = if float { 0 } else { 1 };
+        let in_scope = mine.get(name).or_else(|| other.get(name)).is_some();
         let found = mine
             .get(name)
             .or_else(|| self.b.global_textures[kind].get(name))
@@ -312,6 +313,16 @@ impl Resolver for Scoped<'_> {
             .copied();
         let want = if float { "float" } else { "spectrum" };
         let i = found.ok_or_else(|| Diagnostic::error(at, format!("{want} texture \"{name}\" is not defined")))?;
+        // DEVIATION(pbrt): input leniency. pbrt-v3 forgets a texture at the end of its
+        // block (an error, then the parameter's default); its definition is used, named.
+        if !in_scope && self.b.syntax() == Syntax::V3 {
+            let defined = self.b.textures[i as usize].span;
+            let msg = format!(
+                "texture \"{name}\" was defined inside an AttributeBegin that has ended ({}); pbrt-v3 does not find it here and uses the parameter's default, this renderer uses that definition",
+                self.b.reader.sources.location(defined)
+            );
+            self.b.warnings.push(Diagnostic::warning(at, msg));
+        }
         self.b.build_texture(i, self.depth, at)
     }
 
