@@ -5,7 +5,8 @@
 //! radii and looked up with Catmull-Rom splines. Both pbrt versions share the method
 //! and its constants; the `subsurface` materials ([`super::subsurface`]) make the
 //! coefficients, and the integrators' probe rays ([`crate::integrators::subsurface`])
-//! find where the light leaves.
+//! find where the light leaves. [`Profile`] is either this table's or the `disney`
+//! material's closed form ([`super::disneybssrdf`]); the probes take both alike.
 
 use super::disneybssrdf::Burley;
 use crate::math::catmull_rom;
