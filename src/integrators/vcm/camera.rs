@@ -590,7 +590,13 @@ impl Cameras<'_> {
         if ls.pdf <= 0.0 || ls.li == Vec3::ZERO || scene.emission_masked(light, ls.surface.as_ref()) {
             return Vec3::ZERO;
         }
-        let e = v.eval(ls.wi);
+        // Light that reaches the far side of a BSSRDF's boundary straight through its
+        // transmission lobes: this estimate is the only technique that finds it.
+        let crossing = v.place.crosses_into_bssrdf(v.wo, ls.wi);
+        let e = match crossing {
+            true => v.at.eval(v.wo, ls.wi, TransportMode::Radiance),
+            false => v.eval(ls.wi),
+        };
         if e.f == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -604,7 +610,10 @@ impl Cameras<'_> {
             cos_light,
         };
         let only_direct = self.pass.techniques == Techniques::Direct;
-        let w = self.pass.techniques.weight(mis::direct(v.partial, pdfs, v.len == 1 || only_direct));
+        let w = match crossing {
+            true => crossing_weight(scene.syntax, ls.delta, pdfs),
+            false => self.pass.techniques.weight(mis::direct(v.partial, pdfs, v.len == 1 || only_direct)),
+        };
         let c = e.f * v.at.cos(ls.wi) * scene.emission_of(k, ls.li) * (w / (pick * ls.pdf));
         if !c.is_finite() || c == Vec3::ZERO {
             return Vec3::ZERO;
@@ -697,6 +706,19 @@ impl Cameras<'_> {
         let kernel = if in_medium { disc * pass.radius as f64 * (4.0 / 3.0) } else { disc };
         let norm = pass.scene.photon_scale / (kernel * pass.light_paths as f64);
         sum.map(|s| (s * norm).as_vec3())
+    }
+}
+
+/// The weight of a next-event estimate whose direction crosses into a BSSRDF
+/// (`Place::crosses_into_bssrdf`). A BSDF sample that way enters the BSSRDF in pbrt's
+/// path tracers, so no other technique finds this light. pbrt-v3's direct-light
+/// estimate still counts it in full (its own BSDF-sampled half traces toward the light).
+/// pbrt-v4's weighs it by the balance heuristic against its BSDF density and drops
+/// the rest, which its BSDF sample never finds.
+fn crossing_weight(syntax: crate::parser::Syntax, delta: bool, p: DirectPdfs) -> f32 {
+    match syntax == crate::parser::Syntax::V4 && !delta {
+        true => (p.direct / (p.direct + p.bsdf)) as f32,
+        false => 1.0,
     }
 }
 

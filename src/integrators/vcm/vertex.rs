@@ -38,10 +38,10 @@ pub struct Place {
     pub sides: MediumInterface,
     /// The path's time (motion blur): rays leaving here carry it.
     pub time: f32,
-    /// A BSSRDF lies under the surface here ([`RenderScene::subsurface`]): light that
-    /// crosses it goes through the BSSRDF, never straight through its transmission
+    /// A BSSRDF lies under the surface here ([`RenderScene::subsurface`]): a subpath
+    /// that crosses it goes through the BSSRDF, never straight through its transmission
     /// lobes, so connections and merges across it carry nothing
-    /// ([`Place::crosses_into_bssrdf`]).
+    /// ([`Place::crosses_into_bssrdf`]); only next-event estimates do, as in pbrt.
     pub over_bssrdf: bool,
 }
 
@@ -61,12 +61,13 @@ impl Place {
         Place { p: si.p.0, p_error: si.p_error, ng: si.n.0, sides, time: si.time, over_bssrdf }
     }
 
-    /// Whether going from `wo` to `wi` here would cross into a BSSRDF.
-    // DEVIATION(pbrt): estimator. pbrt's path tracers send what their BSDF samples
-    // across such a boundary into the BSSRDF, yet their next-event estimate still
-    // evaluates the rough transmission lobe toward a light on the far side (an open
-    // surface, a light inside). Here no technique crosses straight, so every one
-    // converges to the same image; closed objects lit from outside are unchanged.
+    /// Whether going from `wo` to `wi` here would cross into a BSSRDF. pbrt's path
+    /// tracers send what their BSDF samples across such a boundary into the BSSRDF,
+    /// yet their next-event estimate still takes light from the far side through the
+    /// transmission lobes: a light behind an open surface, or light seen from inside
+    /// by a path that got in where there was no BSSRDF (a `disney` `scatterdistance`
+    /// black in places, with `spectrans`). So the camera's next-event estimate alone
+    /// counts such pairs (`Cameras::direct_from`); no other technique can.
     pub fn crosses_into_bssrdf(&self, wo: Vec3, wi: Vec3) -> bool {
         self.over_bssrdf && wo.dot(self.ng) * wi.dot(self.ng) < 0.0
     }
