@@ -20,6 +20,7 @@ use super::inputs::{Inputs, Lobes};
 use super::lobes::Lobe;
 use super::microfacet::{Fresnel, TrowbridgeReitz};
 use super::params::{Resolver, RoughnessRemap, TexValue, float, remap_v3, remap_v4, roughness, spectrum, uv_roughness};
+use crate::fixes::Fix;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
@@ -124,12 +125,21 @@ pub fn lobes<const N: usize>(
     let raw = roughness.map(|r| i.float(r));
     let alpha = if raw == [0.0; 2] { raw } else { raw.map(|r| remap.alpha(r)) };
     let alpha = if alpha.iter().all(|a| *a < 1e-3) { [0.0; 2] } else { alpha };
-    glass(eta.at(i), i.refl(kr), i.refl(kt), alpha, convention, out)
+    let facing_only = i.fixes.has(Fix::RoughTransmission);
+    glass(eta.at(i), i.refl(kr), i.refl(kt), alpha, (convention, facing_only), out)
 }
 
 /// Smooth glass is one Fresnel-weighted lobe; rough glass is pbrt-v3's pair of
-/// microfacet reflection and transmission lobes, or pbrt-v4's single lobe.
-fn glass<const N: usize>(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], c: Convention, out: &mut Lobes<N>) {
+/// microfacet reflection and transmission lobes (`facing_only`: see
+/// [`Lobe::MicrofacetTransmission`]), or pbrt-v4's single lobe.
+fn glass<const N: usize>(
+    eta: f32,
+    r: Rgb,
+    t: Rgb,
+    alpha: [f32; 2],
+    (c, facing_only): (Convention, bool),
+    out: &mut Lobes<N>,
+) {
     if r == Vec3::ZERO && t == Vec3::ZERO {
         return;
     }
@@ -143,7 +153,7 @@ fn glass<const N: usize>(eta: f32, r: Rgb, t: Rgb, alpha: [f32; 2], c: Conventio
         return;
     }
     out.push_nonzero(r, |r| Lobe::MicrofacetReflection { r, dist, fresnel: Fresnel::Dielectric { eta } });
-    out.push_nonzero(t, |t| Lobe::MicrofacetTransmission { t, dist, eta });
+    out.push_nonzero(t, |t| Lobe::MicrofacetTransmission { t, dist, eta, facing_only });
 }
 
 pub fn mitsuba([eta, kr, kt]: [TexValue; 3], roughness: &[TexValue; 2], e: &mut dyn MaterialExport) -> MaterialOut {

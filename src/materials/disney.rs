@@ -26,6 +26,7 @@ use super::inputs::{Inputs, Lobes};
 use super::lobes::Lobe;
 use super::microfacet::{Fresnel, TrowbridgeReitz};
 use super::params::{Resolver, TexValue, float, spectrum};
+use crate::fixes::Fix;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
@@ -155,7 +156,8 @@ pub fn lobes<const N: usize>(d: &Disney, i: &Inputs<impl Fn() -> TexCtx>, out: &
             true => TrowbridgeReitz::new(alpha((0.65 * e - 0.35) * rough)),
             false => dist,
         };
-        out.push(Lobe::MicrofacetTransmission { t, dist, eta: e });
+        let facing_only = i.fixes.has(Fix::RoughTransmission);
+        out.push(Lobe::MicrofacetTransmission { t, dist, eta: e, facing_only });
     }
     if d.thin {
         out.push(Lobe::LambertTransmission(lanes(dt * k.c)));

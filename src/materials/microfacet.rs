@@ -213,6 +213,15 @@ impl TrowbridgeReitz {
         let wh = if wh.z * wo.z < 0.0 { -wh } else { wh };
         self.g1(wo) / wo.z.abs() * self.d(wh) * wo.dot(wh).max(0.0)
     }
+
+    /// pbrt-v3's `MicrofacetDistribution::Pdf`: [`TrowbridgeReitz::pdf_wh`] with |ωo·ωh|,
+    /// so facets facing away from ωo, which are never sampled, have a density too.
+    pub fn pdf_wh_either_side(&self, wo: Vec3, wh: Vec3) -> f32 {
+        if wo.z == 0.0 {
+            return 0.0;
+        }
+        self.g1(wo) / wo.z.abs() * self.d(wh) * wo.dot(wh).abs()
+    }
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@ use super::inputs::{Inputs, Lobes};
 use super::lobes::Lobe;
 use super::microfacet::{Fresnel, TrowbridgeReitz};
 use super::params::{Resolver, RoughnessRemap, TexValue, float, remap_v3, spectrum};
+use crate::fixes::Fix;
 use crate::mitsuba::{MaterialExport, MaterialOut};
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
@@ -45,7 +46,8 @@ pub fn lobes<const N: usize>(
     let (dist, eta) = (TrowbridgeReitz::new([a, a]), 1.5);
     let fresnel = Fresnel::Dielectric { eta };
     out.push_nonzero(r * ks, |r| Lobe::MicrofacetReflection { r, dist, fresnel });
-    out.push_nonzero(t * ks, |t| Lobe::MicrofacetTransmission { t, dist, eta });
+    let facing_only = i.fixes.has(Fix::RoughTransmission);
+    out.push_nonzero(t * ks, |t| Lobe::MicrofacetTransmission { t, dist, eta, facing_only });
 }
 
 pub fn mitsuba(kd: TexValue, e: &mut dyn MaterialExport) -> MaterialOut {

@@ -71,6 +71,24 @@ fn check_names_each_bug_at_the_statement_that_triggers_it() {
 }
 
 #[test]
+fn check_names_rough_transmission_where_a_v3_material_has_it() {
+    // Rough glass, translucent and disney's spectrans do; smooth glass, rough glass that
+    // passes nothing, and disney without spectrans do not.
+    let v3 = "WorldBegin\nMaterial \"glass\" \"float uroughness\" 0.1 \"float vroughness\" 0.1\nShape \"sphere\"\n\
+              Material \"glass\"\nShape \"sphere\"\n\
+              Material \"glass\" \"float uroughness\" 0.1 \"color Kt\" [0 0 0]\nShape \"sphere\"\n\
+              Material \"translucent\"\nShape \"sphere\"\n\
+              Material \"disney\"\nShape \"sphere\"\n\
+              Material \"disney\" \"float spectrans\" 0.5\nShape \"sphere\"\nWorldEnd\n";
+    let got: Vec<(String, u64)> = bugs(v3).into_iter().map(|b| (b.0, b.1)).collect();
+    let want = [2, 8, 12].map(|line| ("rough-transmission".to_string(), line));
+    assert_eq!(got, want);
+    // pbrt-v4's rough dielectric leaves those facets out already.
+    let v4 = "WorldBegin\nMaterial \"dielectric\" \"float roughness\" 0.1\nShape \"sphere\"\n";
+    assert!(bugs(v4).is_empty(), "{:?}", bugs(v4));
+}
+
+#[test]
 fn check_says_which_bugs_the_run_fixes() {
     let text = "WorldBegin\nMaterial \"plastic\"\nShape \"sphere\"\nWorldEnd\n";
     let s = scene_with(text, Fixes::NONE.with(Fix::PlasticFresnel));

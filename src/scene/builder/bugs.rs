@@ -28,6 +28,9 @@ impl Builder {
                 MaterialKind::Subsurface(_) if self.takes_bssrdf(syntax) => found.push((at, Fix::SubsurfaceWalk)),
                 _ => {}
             }
+            if syntax == Syntax::V3 && rough_transmission(&self.built_materials[b as usize].kind) {
+                found.push((at, Fix::RoughTransmission));
+            }
         }
         for t in &self.textures {
             let Some(Some(b)) = t.built else { continue };
@@ -165,6 +168,18 @@ fn glossy(k: &MaterialKind) -> bool {
 }
 
 /// Whether a coat's roughness may be above pbrt-v4's smoothness threshold.
+/// Whether a v3 material's lobes may include pbrt-v3's `MicrofacetTransmission`.
+fn rough_transmission(kind: &MaterialKind) -> bool {
+    let on = |v: &TexValue| !matches!(v, TexValue::Const(c) if *c == glam::Vec3::ZERO);
+    match kind {
+        MaterialKind::Dielectric { kt, roughness, .. } => on(kt) && rough(roughness),
+        MaterialKind::Subsurface(s) => on(&s.kt) && rough(&s.roughness),
+        MaterialKind::Translucent { ks, transmit, .. } => on(ks) && on(transmit),
+        MaterialKind::Disney(d) => on(&d.spec_trans),
+        _ => false,
+    }
+}
+
 fn rough(r: &[TexValue; 2]) -> bool {
     r.iter().any(|v| !matches!(v, TexValue::Const(c) if c.x <= 0.0))
 }
