@@ -243,6 +243,9 @@ struct Builder {
     area_lights_used: Vec<u32>,
     materials: Vec<PendingMaterial>,
     global_materials: HashMap<String, u32>,
+    /// `NamedMaterial` statements of a v3 file already warned about (pbrt-v3 did not
+    /// find the name there): one warning per statement, not per shape.
+    named_out_of_scope: Vec<Span>,
     built_materials: Vec<MaterialDesc>,
     textures: Vec<PendingTexture>,
     global_textures: [HashMap<String, u32>; 2],
@@ -321,6 +324,7 @@ impl Builder {
             area_lights_used: Vec::new(),
             materials: vec![default_material],
             global_materials: HashMap::new(),
+            named_out_of_scope: Vec::new(),
             built_materials: Vec::new(),
             textures: Vec::new(),
             global_textures: [HashMap::new(), HashMap::new()],
@@ -1211,12 +1215,32 @@ impl Builder {
     fn resolve_material(&mut self, r: &MaterialRef) -> Res<u32> {
         let idx = match r {
             MaterialRef::Pending(i) => *i,
-            MaterialRef::Named(name, span) => *self
-                .global_materials
-                .get(name)
-                .ok_or_else(|| Diagnostic::error(*span, format!("named material \"{name}\" is not defined")))?,
+            MaterialRef::Named(name, span) => {
+                let i = *self
+                    .global_materials
+                    .get(name)
+                    .ok_or_else(|| Diagnostic::error(*span, format!("named material \"{name}\" is not defined")))?;
+                self.warn_named_out_of_scope(name, *span, i);
+                i
+            }
         };
         self.build_material(idx)
+    }
+
+    /// A v3 `NamedMaterial` whose name was not in scope at the statement: defined in an
+    /// `AttributeBegin` block that has ended, or later in the file. pbrt-v3 reports an
+    /// error there and keeps the current material; we use the definition, and say so.
+    fn warn_named_out_of_scope(&mut self, name: &str, at: Span, material: u32) {
+        if self.syntax() != Syntax::V3 || self.named_out_of_scope.contains(&at) {
+            return;
+        }
+        self.named_out_of_scope.push(at);
+        let defined = self.materials[material as usize].span.map(|d| self.reader.sources.location(d).to_string());
+        let msg = format!(
+            "named material \"{name}\" is not in scope here (defined at {}, inside an AttributeBegin that has ended or later in the file); pbrt-v3 reports an error and keeps the current material, this renderer uses that definition",
+            defined.unwrap_or_default()
+        );
+        self.warnings.push(Diagnostic::warning(at, msg));
     }
 
     // ---- the end ----------------------------------------------------------------

@@ -393,6 +393,39 @@ fn a_v3_texture_used_after_its_attribute_block_is_named_in_a_warning() {
     }
 }
 
+/// pbrt-v3 forgets a named material at the end of its `AttributeBegin` block and has no
+/// forward references: `NamedMaterial` is then an error there and the current material
+/// stays. We use the definition and say so, once per statement; pbrt-v4's names are
+/// global.
+#[test]
+fn a_v3_named_material_out_of_scope_is_named_in_a_warning() {
+    let body = |film: &str, ty: &str| {
+        format!(
+            "{film}\nWorldBegin\nAttributeBegin\nMakeNamedMaterial \"red\" \"string type\" \"{ty}\"\nAttributeEnd\n\
+             NamedMaterial \"red\"\nShape \"sphere\"\nShape \"sphere\" \"float radius\" 2\n\
+             NamedMaterial \"blue\"\nShape \"sphere\"\n\
+             MakeNamedMaterial \"blue\" \"string type\" \"{ty}\"\nWorldEnd"
+        )
+    };
+    let flagged =
+        |w: &Vec<String>| w.iter().filter(|m| m.contains("is not in scope here")).cloned().collect::<Vec<_>>();
+    let v3 = scene(&body("Film \"image\"", "matte"));
+    assert_eq!(v3.shapes.len(), 3);
+    let w = flagged(&warnings(&v3));
+    assert_eq!(w.len(), 2, "one per statement: {w:?}");
+    assert!(w[0].contains("\"red\"") && w[0].contains(":4:"), "names the definition: {w:?}");
+    assert!(w[1].contains("\"blue\"") && w[1].contains(":11:"), "a forward reference: {w:?}");
+    let v4 = scene(&body("Film \"rgb\"", "diffuse"));
+    assert!(flagged(&warnings(&v4)).is_empty(), "{:?}", warnings(&v4));
+    // A v3 mix naming materials out of scope (pbrt-v3 takes matte for each).
+    let mix = "WorldBegin\nAttributeBegin\nMakeNamedMaterial \"a\" \"string type\" \"matte\"\n\
+               MakeNamedMaterial \"b\" \"string type\" \"plastic\"\nAttributeEnd\n\
+               Material \"mix\" \"string namedmaterial1\" \"a\" \"string namedmaterial2\" \"b\"\nShape \"sphere\"\nWorldEnd";
+    let w = flagged(&warnings(&scene(mix)));
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(w.iter().all(|m| m.contains("mix uses matte")), "{w:?}");
+}
+
 #[test]
 fn textures_are_built_only_when_a_used_material_needs_them() {
     let s = scene(

@@ -339,8 +339,19 @@ impl Resolver for Scoped<'_> {
     }
 
     fn named_material(&mut self, name: &str, at: Span) -> Res<u32> {
-        let found = self.scope.materials.get(name).or_else(|| self.b.global_materials.get(name)).copied();
+        let in_scope = self.scope.materials.get(name).copied();
+        let found = in_scope.or_else(|| self.b.global_materials.get(name).copied());
         let i = found.ok_or_else(|| Diagnostic::error(at, format!("named material \"{name}\" is not defined")))?;
+        // DEVIATION(pbrt): input leniency. pbrt-v3's mix takes matte for a name out of
+        // scope (with an error); its definition is used, named.
+        if in_scope.is_none() && self.b.syntax() == Syntax::V3 {
+            let defined = self.b.materials[i as usize].span.map(|d| self.b.reader.sources.location(d).to_string());
+            let msg = format!(
+                "named material \"{name}\" is not in scope here (defined at {}); pbrt-v3's mix uses matte in its place, this renderer uses that definition",
+                defined.unwrap_or_default()
+            );
+            self.b.warnings.push(Diagnostic::warning(at, msg));
+        }
         if self.b.materials[i as usize].building {
             return Err(Diagnostic::error(at, format!("material \"{name}\" mixes itself")));
         }
