@@ -126,7 +126,7 @@ pub fn lobes<const N: usize>(
     let alpha = if raw == [0.0; 2] { raw } else { raw.map(|r| remap.alpha(r)) };
     let alpha = if alpha.iter().all(|a| *a < 1e-3) { [0.0; 2] } else { alpha };
     let facing_only = i.fixes.has(Fix::RoughTransmission);
-    glass(eta.at(i), i.refl(kr), i.refl(kt), alpha, (convention, facing_only), out)
+    glass(eta.at(i), i.refl(kr), i.refl(kt), alpha, convention, facing_only, out)
 }
 
 /// Smooth glass is one Fresnel-weighted lobe; rough glass is pbrt-v3's pair of
@@ -137,7 +137,8 @@ fn glass<const N: usize>(
     r: Rgb,
     t: Rgb,
     alpha: [f32; 2],
-    (c, facing_only): (Convention, bool),
+    c: Convention,
+    facing_only: bool,
     out: &mut Lobes<N>,
 ) {
     if r == Vec3::ZERO && t == Vec3::ZERO {
