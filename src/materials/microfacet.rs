@@ -207,11 +207,12 @@ impl TrowbridgeReitz {
     /// G1(ωo) · D(ωh) · max(0, ωo·ωh) / |cos θo|, with ωh taken on ωo's side (either
     /// orientation is the same facet). Facets facing away from ωo are never sampled.
     pub fn pdf_wh(&self, wo: Vec3, wh: Vec3) -> f32 {
-        if wo.z == 0.0 {
+        let wh = if wh.z * wo.z < 0.0 { -wh } else { wh };
+        // A facet facing away (or a NaN) has no density.
+        if wo.dot(wh).max(0.0) == 0.0 {
             return 0.0;
         }
-        let wh = if wh.z * wo.z < 0.0 { -wh } else { wh };
-        self.g1(wo) / wo.z.abs() * self.d(wh) * wo.dot(wh).max(0.0)
+        self.pdf_wh_either_side(wo, wh)
     }
 
     /// pbrt-v3's `MicrofacetDistribution::Pdf`: [`TrowbridgeReitz::pdf_wh`] with |ωo·ωh|,

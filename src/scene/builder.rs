@@ -1229,15 +1229,22 @@ impl Builder {
 
     /// A v3 `NamedMaterial` whose name was not in scope at the statement: defined in an
     /// `AttributeBegin` block that has ended, or later in the file. pbrt-v3 reports an
-    /// error there and keeps the current material; we use the definition, and say so.
+    /// error there and keeps the current material; we use the definition, and say so
+    /// once per statement.
     fn warn_named_out_of_scope(&mut self, name: &str, at: Span, material: u32) {
         if self.syntax() != Syntax::V3 || self.named_out_of_scope.contains(&at) {
             return;
         }
         self.named_out_of_scope.push(at);
+        self.warn_material_out_of_scope(name, at, material, "pbrt-v3 reports an error and keeps the current material");
+    }
+
+    /// The warning for a v3 reference to named material `material` that pbrt-v3 does
+    /// not find at `at`; `pbrt` says what pbrt-v3 does instead.
+    pub(super) fn warn_material_out_of_scope(&mut self, name: &str, at: Span, material: u32, pbrt: &str) {
         let defined = self.materials[material as usize].span.map(|d| self.reader.sources.location(d).to_string());
         let msg = format!(
-            "named material \"{name}\" is not in scope here (defined at {}, inside an AttributeBegin that has ended or later in the file); pbrt-v3 reports an error and keeps the current material, this renderer uses that definition",
+            "named material \"{name}\" is not in scope here (defined at {}, inside an AttributeBegin that has ended or later in the file); {pbrt}, this renderer uses that definition",
             defined.unwrap_or_default()
         );
         self.warnings.push(Diagnostic::warning(at, msg));

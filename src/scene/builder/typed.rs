@@ -345,12 +345,7 @@ impl Resolver for Scoped<'_> {
         // DEVIATION(pbrt): input leniency. pbrt-v3's mix takes matte for a name out of
         // scope (with an error); its definition is used, named.
         if in_scope.is_none() && self.b.syntax() == Syntax::V3 {
-            let defined = self.b.materials[i as usize].span.map(|d| self.b.reader.sources.location(d).to_string());
-            let msg = format!(
-                "named material \"{name}\" is not in scope here (defined at {}); pbrt-v3's mix uses matte in its place, this renderer uses that definition",
-                defined.unwrap_or_default()
-            );
-            self.b.warnings.push(Diagnostic::warning(at, msg));
+            self.b.warn_material_out_of_scope(name, at, i, "pbrt-v3's mix uses matte in its place");
         }
         if self.b.materials[i as usize].building {
             return Err(Diagnostic::error(at, format!("material \"{name}\" mixes itself")));
