@@ -365,6 +365,12 @@ fn frosted_glass_transmits_as_in_pbrt_v3s_bdpt() {
     let (a, b) = (ball_mean(&ours), ball_mean(&reference));
     eprintln!("v3-rough-transmission, the ball: ours {a}, pbrt-v3's bdpt {b}");
     assert!((a / b - 1.0).abs() < 0.015, "the ball: ours {a}, pbrt-v3's bdpt {b}");
+    // Tile by tile, against gross errors (a missing light, a misplaced highlight): the
+    // 4×4 grid's worst tile at 256 samples is noise-bound, 3.0%, 1.5%, 7.4% (seeds 0–2,
+    // the dim top row), where the ball's mean above is not.
+    let (w, h) = (ours.width, ours.height);
+    let (worst, at, _) = metrics::worst_mean_deviation(&ours.pixels, &reference.pixels, w, h, 4, 0.05);
+    assert!(worst < 0.10, "worst tile {:.2}% at {at}", 100.0 * worst);
 }
 
 #[test]
