@@ -56,10 +56,18 @@ pub fn ply(data: &[u8]) {
     }
 }
 
-/// The image readers: the first byte picks PNG (odd) or EXR (even).
+/// The image readers: the first byte picks the format, below 128 PNG (odd) or EXR
+/// (even) as before the other formats were read, from 128 on one of the others, its
+/// lowest bit 8-bit values sRGB-decoded or raw.
 pub fn image(data: &[u8]) {
+    use crate::imageio::{EightBit, Format};
     let Some((&first, rest)) = data.split_first() else { return };
-    let _ = crate::imageio::decode_image(rest, first % 2 == 1, limits().texture_pixels);
+    let format = match first {
+        0..128 => [Format::Exr, Format::Png][first as usize % 2],
+        _ => [Format::Tga, Format::Pfm, Format::Hdr, Format::Jpeg, Format::Bmp][(first as usize / 2) % 5],
+    };
+    let eight_bit = if first % 2 == 1 { EightBit::Srgb } else { EightBit::Raw };
+    let _ = crate::imageio::decode_image(rest, format, eight_bit, limits().texture_pixels);
 }
 
 /// The Ptex reader and both of its filters, at each face's corners and centre, with

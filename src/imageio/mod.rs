@@ -1,13 +1,16 @@
 //! Image files: EXR (32-bit float R, G, B, ZIP scanlines; data window = crop window;
 //! pbrt's metadata keys) and 8-bit sRGB PNG previews. Writes go to a temporary file in
 //! the same folder and are renamed into place, so a crash never leaves half an image.
-//! Reading accepts half and float EXRs (pbrt-v3 writes half, pbrt-v4 float) and PNGs.
+//! Reading accepts half and float EXRs (pbrt-v3 writes half, pbrt-v4 float), and the
+//! other formats scenes name ([`formats`]).
 
+pub mod formats;
 pub mod lookup;
 pub mod metrics;
 pub mod tev;
 pub mod texels;
 
+pub use formats::Format;
 pub use lookup::{TexelSource, Wrap, lookup};
 pub use texels::Texels;
 
@@ -289,46 +292,70 @@ pub fn write_png(path: &Path, img: &RgbImage) -> Res<()> {
     atomically(path, |tmp| buf.save_with_format(tmp, image::ImageFormat::Png).map_err(|e| ImageError::write(path, e)))
 }
 
+/// How an 8-bit image's values become floats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EightBit {
+    /// sRGB-decoded (textures, and every image of a pbrt-v4 file).
+    Srgb,
+    /// Each byte over 255, as pbrt-v3's `ReadImage` gives them to its lights.
+    Raw,
+}
+
 /// Reads an image for a scene: a regular file within `limits.file_bytes`, whose size
 /// (from its header, before decoding) is within `limits.texture_pixels`.
-pub fn read_image_within(path: &Path, files: &crate::limits::Files) -> Res<RgbImage> {
-    let bytes = files.read(path).map_err(ImageError::Input)?;
-    decode_image(&bytes, is_png(path), files.limits.texture_pixels)
-        .map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
+pub fn read_image_within(path: &Path, files: &crate::limits::Files, eight_bit: EightBit) -> Res<RgbImage> {
+    let within = || {
+        let format = format_of(path)?;
+        let bytes = files.read(path).map_err(ImageError::Input)?;
+        decode_image(&bytes, format, eight_bit, files.limits.texture_pixels)
+    };
+    within().map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
 }
 
-/// Decodes an EXR or PNG held in memory, refusing (from the header alone) images of
-/// more than `max_pixels` pixels.
-pub fn decode_image(bytes: &[u8], png: bool, max_pixels: u64) -> Res<RgbImage> {
-    check_pixels(bytes, png, max_pixels)?;
-    if png { decode_png(bytes) } else { decode_exr(bytes) }
+/// The format of a scene's image, by its name.
+fn format_of(path: &Path) -> Res<Format> {
+    Format::of(path)
+        .ok_or_else(|| ImageError::decode(format!("no image format is named so (known: {})", formats::KNOWN)))
 }
 
-/// [`read_image_within`] for textures and normal maps: an 8-bit PNG is kept as its
-/// bytes ([`Texels`]).
+/// Decodes an image held in memory, refusing (from the header alone) images of more
+/// than `max_pixels` pixels.
+pub fn decode_image(bytes: &[u8], format: Format, eight_bit: EightBit, max_pixels: u64) -> Res<RgbImage> {
+    check_pixels(bytes, format, max_pixels)?;
+    match format {
+        Format::Exr => decode_exr(bytes),
+        Format::Pfm => formats::decode_pfm(bytes),
+        _ => decode_codec(bytes, format, eight_bit),
+    }
+}
+
+/// [`read_image_within`] for textures and normal maps: an 8-bit image is kept as its
+/// bytes ([`Texels`]), sRGB-decoded when read.
 pub fn read_texels_within(path: &Path, files: &crate::limits::Files) -> Res<Texels> {
-    let bytes = files.read(path).map_err(ImageError::Input)?;
-    let png = is_png(path);
-    let texels = check_pixels(&bytes, png, files.limits.texture_pixels).and_then(|()| match png {
-        true => decode_png_texels(&bytes),
-        false => decode_exr(&bytes).map(Texels::from_image),
-    });
-    texels.map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
+    let within = || {
+        let format = format_of(path)?;
+        let bytes = files.read(path).map_err(ImageError::Input)?;
+        check_pixels(&bytes, format, files.limits.texture_pixels)?;
+        match format {
+            Format::Exr => decode_exr(&bytes).map(Texels::from_image),
+            Format::Pfm => formats::decode_pfm(&bytes).map(Texels::from_image),
+            _ => decode_codec_texels(&bytes, format),
+        }
+    };
+    within().map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
 }
 
 /// Refuses, from the header alone, an image of more than `max_pixels` pixels.
-fn check_pixels(bytes: &[u8], png: bool, max_pixels: u64) -> Res<()> {
-    let (w, h) = if png {
-        let (w, h) = image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Png)
-            .into_dimensions()
-            .map_err(|e| ImageError::decode(format!("not a readable PNG: {e}")))?;
-        (w as u64, h as u64)
-    } else {
-        let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
-            .map_err(|e| ImageError::decode(format!("not a readable EXR: {e}")))?;
-        let header =
-            meta.headers.first().ok_or_else(|| ImageError::decode("not a readable EXR: no image in the file"))?;
-        (header.layer_size.width() as u64, header.layer_size.height() as u64)
+fn check_pixels(bytes: &[u8], format: Format, max_pixels: u64) -> Res<()> {
+    let (w, h) = match format {
+        Format::Exr => {
+            let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+                .map_err(|e| ImageError::decode(format!("not a readable EXR: {e}")))?;
+            let header =
+                meta.headers.first().ok_or_else(|| ImageError::decode("not a readable EXR: no image in the file"))?;
+            (header.layer_size.width() as u64, header.layer_size.height() as u64)
+        }
+        _ => formats::dimensions(bytes, format)?,
     };
     if w.saturating_mul(h) > max_pixels {
         let what = format!("the image's {w}x{h} pixels");
@@ -337,15 +364,19 @@ fn check_pixels(bytes: &[u8], png: bool, max_pixels: u64) -> Res<()> {
     Ok(())
 }
 
-fn is_png(path: &Path) -> bool {
-    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png"))
-}
-
-/// Reads the first RGB(A) layer of an EXR (half or float), or a PNG (linearised).
+/// Reads the first RGB(A) layer of an EXR (half or float), or another format by its
+/// name (8-bit ones linearised); a name of no known format is read as EXR.
 pub fn read_image(path: &Path) -> Res<RgbImage> {
-    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-        Some("png") => read_png(path),
-        _ => read_exr(path),
+    match Format::of(path).unwrap_or(Format::Exr) {
+        Format::Exr => read_exr(path),
+        format => {
+            let bytes = std::fs::read(path).map_err(|e| ImageError::read(path, e))?;
+            let image = match format {
+                Format::Pfm => formats::decode_pfm(&bytes),
+                _ => decode_codec(&bytes, format, EightBit::Srgb),
+            };
+            image.map_err(|e| ImageError::read(path, e))
+        }
     }
 }
 
@@ -394,10 +425,10 @@ fn decode_exr(bytes: &[u8]) -> Res<RgbImage> {
     })
 }
 
-/// `from_srgb` of each 8-bit value as `image` converts it to f32 from `img`'s colour
+/// `decode` of each 8-bit value as `image` converts it to f32 from `img`'s colour
 /// type (grey converts to slightly other values than colour): the values the general
 /// path gives, bit for bit. `None` for other than 8-bit grey or colour.
-fn srgb8_table(img: &image::DynamicImage) -> Option<[f32; 256]> {
+fn eight_bit_table(img: &image::DynamicImage, decode: impl Fn(f32) -> f32) -> Option<[f32; 256]> {
     use image::DynamicImage as D;
     let values = || (0..=255u8).flat_map(|b| [b, b, b]);
     let row = match img {
@@ -412,51 +443,58 @@ fn srgb8_table(img: &image::DynamicImage) -> Option<[f32; 256]> {
         _ => return None,
     }
     .to_rgb32f();
-    Some(std::array::from_fn(|b| from_srgb(row.get_pixel(b as u32, 0).0[0])))
+    Some(std::array::from_fn(|b| decode(row.get_pixel(b as u32, 0).0[0])))
 }
 
-pub fn read_png(path: &Path) -> Res<RgbImage> {
-    let bytes = std::fs::read(path).map_err(|e| ImageError::read(path, e))?;
-    decode_png(&bytes).map_err(|e| ImageError::read(path, e))
+impl EightBit {
+    fn decode(self, v: f32) -> f32 {
+        match self {
+            EightBit::Srgb => from_srgb(v),
+            EightBit::Raw => v,
+        }
+    }
 }
 
-/// A PNG as [`Texels`]: 8-bit ones as their bytes and the table of
-/// [`srgb8_table`], so that each texel reads as [`decode_png`] would give it.
-fn decode_png_texels(bytes: &[u8]) -> Res<Texels> {
-    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(ImageError::decode)?;
+/// An image `image` decodes as [`Texels`]: 8-bit ones as their bytes and the table of
+/// [`eight_bit_table`], so that each texel reads as [`decode_codec`] would give it.
+fn decode_codec_texels(bytes: &[u8], format: Format) -> Res<Texels> {
+    let img = formats::decode_codec(bytes, format)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
-    Ok(match srgb8_table(&img) {
+    Ok(match eight_bit_table(&img, from_srgb) {
         Some(values) => Texels::from_bytes(w, h, img.into_rgb8().into_raw(), values),
-        None => Texels::from_image(decode_wide_png(img)),
+        None => Texels::from_image(decode_wide(img, format, EightBit::Srgb)),
     })
 }
 
-fn decode_png(bytes: &[u8]) -> Res<RgbImage> {
-    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(ImageError::decode)?;
+fn decode_codec(bytes: &[u8], format: Format, eight_bit: EightBit) -> Res<RgbImage> {
+    let img = formats::decode_codec(bytes, format)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     // Eight bits a channel: 256 values, decoded once each (a power per value was a
     // tenth of loading a scene of four 1024² textures).
-    Ok(match srgb8_table(&img) {
+    Ok(match eight_bit_table(&img, |v| eight_bit.decode(v)) {
         Some(decoded) => {
             RgbImage::from_pixels(w, h, img.to_rgb8().pixels().map(|p| p.0.map(|b| decoded[b as usize])).collect())
         }
-        None => decode_wide_png(img),
+        None => decode_wide(img, format, eight_bit),
     })
 }
 
-/// A PNG of other than 8-bit grey or colour, sRGB-decoded channel by channel.
-fn decode_wide_png(img: image::DynamicImage) -> RgbImage {
+/// An image of other than 8-bit grey or colour: a 16-bit PNG decoded channel by
+/// channel, or HDR's floats as they are.
+fn decode_wide(img: image::DynamicImage, format: Format, eight_bit: EightBit) -> RgbImage {
     let (w, h) = (img.width() as usize, img.height() as usize);
-    RgbImage::from_pixels(w, h, img.to_rgb32f().pixels().map(|p| p.0.map(from_srgb)).collect())
+    let decode = |v: f32| if format.eight_bit() { eight_bit.decode(v) } else { v };
+    RgbImage::from_pixels(w, h, img.to_rgb32f().pixels().map(|p| p.0.map(decode)).collect())
 }
 
-/// `image` with the values its file stores: PNGs are read sRGB-decoded, so they are
-/// encoded back (for linear image textures and normal maps).
-pub fn stored_values(name: &str, image: Arc<Texels>) -> Arc<Texels> {
-    if !name.to_ascii_lowercase().ends_with(".png") {
-        return image;
+/// `image` with the values its file stores, where the scene's encoding reaches them
+/// ([`Format::encoding_is_the_files`]): 8-bit images are read sRGB-decoded, so they
+/// are encoded back (for linear image textures and normal maps).
+pub fn stored_values(name: &str, image: Arc<Texels>, v3: bool) -> Arc<Texels> {
+    match Format::of(Path::new(name)) {
+        Some(f) if f.encoding_is_the_files(v3) => Arc::new(image.map_values(to_srgb)),
+        _ => image,
     }
-    Arc::new(image.map_values(to_srgb))
 }
 
 #[cfg(test)]
@@ -481,7 +519,7 @@ mod tests {
         for img in [colour, grey, grey_alpha, colour_alpha] {
             let mut png = Vec::new();
             img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).expect("encode");
-            let got = decode_png(&png).expect("decode");
+            let got = decode_codec(&png, Format::Png, EightBit::Srgb).expect("decode");
             let want: Vec<[f32; 3]> = img.to_rgb32f().pixels().map(|p| p.0.map(from_srgb)).collect();
             let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&got.pixels), bits(&want));

@@ -125,7 +125,7 @@ pub fn normal_map(ty: &str, p: &ParamList, r: &mut dyn Resolver) -> Res<Option<A
     let Some(file) = p.string("normalmap")? else { return Ok(None) };
     let at = p.named("normalmap").map_or_else(Span::default, |x| x.value_span);
     match r.image(&file) {
-        Ok(img) => Ok(Some(crate::imageio::stored_values(&file, img))),
+        Ok(img) => Ok(Some(crate::imageio::stored_values(&file, img, r.syntax() == crate::parser::Syntax::V3))),
         Err(e) => {
             r.approximate(at, format!("\"normalmap\" of material \"{ty}\" ({e})"), Approx::MissingImage);
             Ok(None)

@@ -718,7 +718,7 @@ impl Builder {
         }
         let at = e.params.named("aperture").map_or(e.name_span, |p| p.value_span);
         let path = self.reader.resolve_path(&name);
-        let image = crate::imageio::read_image_within(&path, &self.reader.files)
+        let image = crate::imageio::read_image_within(&path, &self.reader.files, crate::imageio::EightBit::Srgb)
             .map_err(|why| Diagnostic::error(at, format!("aperture \"{name}\": {}", as_named(why, &path, &name))))?;
         let mean = image.pixels.iter().map(|p| (p[0] + p[1] + p[2]) / 3.0).collect();
         Aperture::from_rows(image.width, image.height, mean)

@@ -1,12 +1,15 @@
-//! `Texture "name" "float|spectrum" "imagemap"`: an EXR or PNG image, looked up
-//! bilinearly with t = 0 at the bottom row (as pbrt).
+//! `Texture "name" "float|spectrum" "imagemap"`: an image of a format the file's pbrt
+//! reads ([`crate::imageio::formats`]), looked up bilinearly with t = 0 at the bottom
+//! row (as pbrt).
 //!
 //! ```text
 //! Texture "img" "spectrum" "imagemap" "string filename" "wood.png" "string wrap" "clamp"
 //! Texture "raw" "spectrum" "imagemap" "string filename" "n.png" "bool gamma" false   # v3
 //! Texture "raw" "spectrum" "imagemap" "string filename" "n.png" "string encoding" "linear"   # v4
 //! ```
-//! Images are sRGB-decoded unless `gamma false` or `encoding "linear"`; `wrap` is
+//! 8-bit images are sRGB-decoded unless `gamma false` or `encoding "linear"` (pbrt-v4
+//! takes TGA, JPEG and BMP as sRGB whatever `encoding` says); a v3 `gamma true` decodes
+//! EXR, PFM and HDR texels too, as pbrt-v3 does; `wrap` is
 //! repeat, clamp or black; `scale` and `invert` apply after the lookup. An image that
 //! cannot be read is, as in pbrt-v3, one grey texel of 0.5 times `scale` (noted);
 //! pbrt-v4 aborts. Filtering hints have no effect: SPPM's many samples per pixel filter.
@@ -14,13 +17,14 @@
 use super::mapping::{self, Mapping2D, map_2d};
 use super::{Input, TexCtx, TextureKind, TextureSite};
 use crate::approx::Approx;
-use crate::imageio::{Texels, Wrap, lookup};
+use crate::imageio::{Format, Texels, Wrap, lookup};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::spectrum::Rgb;
 use crate::values::{self, Range, Res, TexValue};
 use glam::Vec3;
+use std::path::Path;
 use std::sync::Arc;
 
 pub const NAME: &str = "imagemap";
@@ -51,9 +55,13 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
             return Ok(Some(TextureKind::Constant(TexValue::Const(Vec3::splat(scale * grey)))));
         }
     };
+    let v3 = i.r.syntax() == crate::parser::Syntax::V3;
     let linear = gamma == Some(false) || encoding.as_deref() == Some("linear");
     if linear {
-        image = crate::imageio::stored_values(&name, image);
+        image = crate::imageio::stored_values(&name, image, v3);
+    } else if v3 && gamma == Some(true) && Format::of(Path::new(&name)).is_some_and(|f| !f.eight_bit()) {
+        // pbrt-v3 decodes every texel of a texture that asks for `gamma`, floats too.
+        image = Arc::new(image.map_values(crate::imageio::from_srgb));
     }
     Ok(Some(TextureKind::Image { image, map, wrap, scale, invert }))
 }

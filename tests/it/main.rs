@@ -11,6 +11,7 @@ mod fixes;
 mod fuzz_regressions;
 mod guiding;
 mod hostile;
+mod image_formats;
 mod imgtool;
 mod instancing;
 mod interfaces;

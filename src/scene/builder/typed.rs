@@ -5,7 +5,7 @@
 
 use super::{Builder, Res, Scope};
 use crate::approx::Approx;
-use crate::imageio::{RgbImage, Texels};
+use crate::imageio::{EightBit, Format, RgbImage, Texels};
 use crate::lights::{self, LightContext, LightDesc};
 use crate::materials::params::{bump_map, normal_map};
 use crate::materials::{self, MaterialDesc, MaterialKind, Resolver, TexValue};
@@ -57,15 +57,30 @@ impl Builder {
     /// checked before decoding.
     pub(super) fn image(&mut self, name: &str) -> Result<Arc<Texels>, String> {
         let path = self.reader.resolve_path(name);
+        self.readable(&path)?;
         let files = &self.reader.files;
         read_once(&mut self.images, path, |p| crate::imageio::read_texels_within(p, files))
     }
 
-    /// [`Builder::image`] for lights, which keep every value as `f32`.
+    /// [`Builder::image`] for lights, which keep every value as `f32`. pbrt-v3's lights
+    /// take an 8-bit image's values as stored; pbrt-v4's decode sRGB.
     fn light_image(&mut self, name: &str) -> Result<Arc<RgbImage>, String> {
         let path = self.reader.resolve_path(name);
+        self.readable(&path)?;
         let files = &self.reader.files;
-        read_once(&mut self.light_images, path, |p| crate::imageio::read_image_within(p, files))
+        let eight_bit = if self.syntax() == Syntax::V3 { EightBit::Raw } else { EightBit::Srgb };
+        read_once(&mut self.light_images, path, |p| crate::imageio::read_image_within(p, files, eight_bit))
+    }
+
+    /// Refuses an image format the file's pbrt cannot read, as that pbrt does (pbrt-v3
+    /// reads EXR, PNG, TGA and PFM).
+    fn readable(&self, path: &Path) -> Result<(), String> {
+        match Format::of(path) {
+            Some(f) if self.syntax() == Syntax::V3 && !f.read_by_pbrt_v3() => {
+                Err(format!("\"{}\": pbrt-v3 does not read {} images", path.display(), f.name()))
+            }
+            _ => Ok(()),
+        }
     }
 
     /// Every `LightSource` of a supported type, typed.

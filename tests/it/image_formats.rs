@@ -1,0 +1,95 @@
+//! The image formats scenes name (`pbrt-scenes/verify/textures/fmt*`, written by
+//! `tools/make_image_formats.py`): each decodes to the picture its PNG holds, and each
+//! pbrt version reads the formats it reads. The images rendered with them are compared
+//! with pbrt in `pbrt_refs.rs`.
+
+use crate::common::{root, scene, scratch, warnings};
+use pbrt_sppm::imageio::read_image;
+
+fn texture(name: &str) -> Vec<[f32; 3]> {
+    read_image(&root().join("pbrt-scenes/verify/textures").join(name)).expect(name).pixels
+}
+
+/// The largest difference of any channel of any pixel.
+fn largest_difference(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max)
+}
+
+#[test]
+fn every_format_decodes_to_the_same_picture_the_right_way_up() {
+    let png = texture("fmt.png");
+    // The white block is in the top left corner: the first row's first texels.
+    assert_eq!(png[0], [1.0; 3]);
+    assert!(png[16 * 7 + 15][2] < 0.9, "the bottom right corner is no block");
+    for (name, tolerance) in [
+        ("fmt-bottomup.tga", 0.0),
+        ("fmt-rle.tga", 0.0),
+        ("fmt.bmp", 0.0),
+        // Stored halved, with scale -2.
+        ("fmt.pfm", 1e-6),
+        // RGBE keeps 8 bits of mantissa.
+        ("fmt.hdr", 0.005),
+        // Lossy.
+        ("fmt.jpg", 0.08),
+    ] {
+        let got = texture(name);
+        let worst = largest_difference(&got, &png);
+        assert!(worst <= tolerance, "{name}: off by {worst} (tolerance {tolerance})");
+        assert!(got[0][0] > 0.8 && got[16 * 7][0] < 0.2, "{name} is flipped");
+    }
+}
+
+fn textured(syntax_v4: bool, file: &str) -> String {
+    let base = root().join("pbrt-scenes/verify/textures").join(file);
+    let path = base.display();
+    if syntax_v4 {
+        format!(
+            "WorldBegin Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{path}\" \
+             Material \"diffuse\" \"texture reflectance\" \"t\" Shape \"sphere\""
+        )
+    } else {
+        format!(
+            "Film \"image\" WorldBegin Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{path}\" \
+             Material \"matte\" \"texture Kd\" \"t\" Shape \"sphere\" WorldEnd"
+        )
+    }
+}
+
+/// pbrt-v3 reads EXR, PNG, TGA and PFM; the others are its grey texel there, named in
+/// a warning, and read in a pbrt-v4 file.
+#[test]
+fn each_version_reads_the_formats_its_pbrt_reads() {
+    for file in ["fmt-bottomup.tga", "fmt.pfm", "fmt.png"] {
+        for v4 in [false, true] {
+            let w = warnings(&scene(&textured(v4, file)));
+            assert!(w.is_empty(), "{file} (v4 {v4}): {w:?}");
+        }
+    }
+    for (file, format) in [("fmt.jpg", "JPEG"), ("fmt.hdr", "HDR"), ("fmt.bmp", "BMP")] {
+        let w = warnings(&scene(&textured(false, file)));
+        let expected = format!("pbrt-v3 does not read {format} images");
+        assert!(w.len() == 1 && w[0].contains(&expected), "{file}: {w:?}");
+        let w = warnings(&scene(&textured(true, file)));
+        assert!(w.is_empty(), "{file} (v4): {w:?}");
+    }
+}
+
+/// A name of no format we read, and a damaged file of a known one, are located
+/// warnings (the grey texel), never a panic.
+#[test]
+fn unknown_and_damaged_images_are_named() {
+    let d =
+        scratch("formats", "damaged", &[("bad.tga", "not a targa"), ("bad.pfm", "PF\n2 2\n-1\n\0\0"), ("x.tiff", "")]);
+    for (file, why) in
+        [("bad.tga", "not a readable TGA"), ("bad.pfm", "the pixels end early"), ("x.tiff", "no image format")]
+    {
+        let text = format!(
+            "WorldBegin Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{}\" \
+             Material \"diffuse\" \"texture reflectance\" \"t\" Shape \"sphere\"",
+            d.join(file).display()
+        );
+        let w = warnings(&scene(&text));
+        assert!(w.len() == 1 && w[0].contains(why), "{file}: {w:?}");
+    }
+}

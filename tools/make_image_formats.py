@@ -1,0 +1,152 @@
+#!/usr/bin/env python3
+"""Writes the image-format test textures of pbrt-scenes/verify/textures.
+
+    python3 tools/make_image_formats.py [OUT_DIR]     # default pbrt-scenes/verify
+
+Every texture is the same 16 x 8 picture (a red gradient left to right, a green one
+top to bottom, a white block in the top left corner, so that a flipped or mirrored
+read shows), stored as:
+
+- fmt-bottomup.tga: uncompressed 24-bit TGA, rows bottom to top (TGA's default);
+- fmt-rle.tga: run-length encoded 32-bit TGA, rows top to bottom;
+- fmt.pfm: little-endian PFM (rows bottom to top, as PFM stores them), the values
+  linear (the sRGB decoding of the 8-bit picture), scale -2 so the values are halved;
+- fmt.hdr: Radiance RGBE, flat scanlines, the values linear;
+- fmt.bmp: 24-bit BMP, rows bottom to top;
+- fmt.jpg: JPEG, quality 95 (needs Pillow);
+- fmt.png: 8-bit PNG;
+- fmt-sky.png: a 16 x 8 environment map, a sky of 8-bit value 128 over a ground of 64;
+- fmt-sky-square.png: an 8 x 8 one for pbrt-v4 (equal-area squares only), 128 but for
+  one quarter of 64.
+
+Standard library only, except the JPEG.
+"""
+import math
+import os
+import struct
+import sys
+import zlib
+
+W, H = 16, 8
+
+
+def picture():
+    """Rows top to bottom of (r, g, b) bytes."""
+    rows = []
+    for y in range(H):
+        row = []
+        for x in range(W):
+            if x < 3 and y < 2:
+                row.append((255, 255, 255))
+            else:
+                row.append((40 + 14 * x, 30 + 30 * y, 90))
+        rows.append(row)
+    return rows
+
+
+def linear(b):
+    v = b / 255.0
+    return v / 12.92 if v <= 0.04045 else ((v + 0.055) / 1.055) ** 2.4
+
+
+def png(path, rows):
+    raw = b"".join(b"\x00" + bytes(c for px in row for c in px) for row in rows)
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    header = struct.pack(">IIBBBBB", len(rows[0]), len(rows), 8, 2, 0, 0, 0)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def tga_bottom_up(path, rows):
+    header = struct.pack("<BBBHHBHHHHBB", 0, 0, 2, 0, 0, 0, 0, 0, W, H, 24, 0)
+    data = b"".join(bytes((b, g, r)) for row in reversed(rows) for (r, g, b) in row)
+    with open(path, "wb") as f:
+        f.write(header + data)
+
+
+def tga_rle_top_down(path, rows):
+    header = struct.pack("<BBBHHBHHHHBB", 0, 0, 10, 0, 0, 0, 0, 0, W, H, 32, 0x28)
+    out = bytearray()
+    for row in rows:
+        x = 0
+        while x < W:
+            n = 1
+            while x + n < W and n < 128 and row[x + n] == row[x]:
+                n += 1
+            r, g, b = row[x]
+            if n > 1:
+                out += bytes((0x80 | (n - 1), b, g, r, 255))
+                x += n
+            else:
+                out += bytes((0, b, g, r, 255))
+                x += 1
+    with open(path, "wb") as f:
+        f.write(header + bytes(out))
+
+
+def pfm(path, rows):
+    with open(path, "wb") as f:
+        f.write(b"PF\n%d %d\n-2.0\n" % (W, H))
+        for row in reversed(rows):
+            for px in row:
+                f.write(struct.pack("<3f", *(linear(c) / 2.0 for c in px)))
+
+
+def rgbe(rgb):
+    m = max(rgb)
+    if m < 1e-32:
+        return bytes(4)
+    mantissa, exponent = math.frexp(m)
+    scale = mantissa * 256.0 / m
+    return bytes([int(c * scale) for c in rgb] + [exponent + 128])
+
+
+def hdr(path, rows):
+    with open(path, "wb") as f:
+        f.write(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (H, W))
+        for row in rows:
+            for px in row:
+                f.write(rgbe([linear(c) for c in px]))
+
+
+def bmp(path, rows):
+    stride = (3 * W + 3) & ~3
+    data = b"".join(
+        bytes(c for (r, g, b) in row for c in (b, g, r)) + bytes(stride - 3 * W) for row in reversed(rows)
+    )
+    header = b"BM" + struct.pack("<IHHI", 54 + len(data), 0, 0, 54)
+    info = struct.pack("<IiiHHIIiiII", 40, W, H, 1, 24, 0, len(data), 2835, 2835, 0, 0)
+    with open(path, "wb") as f:
+        f.write(header + info + data)
+
+
+def jpeg(path, rows):
+    from PIL import Image
+
+    img = Image.new("RGB", (W, H))
+    img.putdata([px for row in rows for px in row])
+    img.save(path, quality=95, subsampling=0)
+
+
+def main():
+    out = os.path.join(sys.argv[1] if len(sys.argv) > 1 else "pbrt-scenes/verify", "textures")
+    os.makedirs(out, exist_ok=True)
+    rows = picture()
+    png(os.path.join(out, "fmt.png"), rows)
+    tga_bottom_up(os.path.join(out, "fmt-bottomup.tga"), rows)
+    tga_rle_top_down(os.path.join(out, "fmt-rle.tga"), rows)
+    pfm(os.path.join(out, "fmt.pfm"), rows)
+    hdr(os.path.join(out, "fmt.hdr"), rows)
+    bmp(os.path.join(out, "fmt.bmp"), rows)
+    jpeg(os.path.join(out, "fmt.jpg"), rows)
+    sky = [[(128, 128, 128)] * W for _ in range(H // 2)] + [[(64, 64, 64)] * W for _ in range(H // 2)]
+    png(os.path.join(out, "fmt-sky.png"), sky)
+    square = [[(128, 128, 128) if x < 4 or y < 4 else (64, 64, 64) for x in range(8)] for y in range(8)]
+    png(os.path.join(out, "fmt-sky-square.png"), square)
+
+
+if __name__ == "__main__":
+    main()
