@@ -326,6 +326,8 @@ pub trait Resolver {
     fn spectra(&self) -> SpectrumContext<'_>;
     /// An image for `imagemap` (cached); errors are plain messages.
     fn image(&mut self, name: &str) -> Result<Arc<crate::imageio::Texels>, String>;
+    /// A grey image for a float `imagemap` (cached by name and `grey`).
+    fn grey_image(&mut self, name: &str, grey: crate::imageio::Grey) -> Result<Arc<crate::imageio::Texels>, String>;
 }
 
 /// A spectrum input: constant (non-negative) or a spectrum texture.

@@ -15,6 +15,8 @@ read shows), stored as:
 - fmt.bmp: 24-bit BMP, rows bottom to top;
 - fmt.jpg: JPEG, quality 95 (needs Pillow);
 - fmt.png: 8-bit PNG;
+- fmt-alpha.png: the picture with an alpha channel (opaque in a disc, half clear in a
+  band across the middle, clear elsewhere), for pbrt-v4's float textures, which take it;
 - fmt-sky.png: a 16 x 8 environment map, a sky of 8-bit value 128 over a ground of 64;
 - fmt-sky-square.png: an 8 x 8 one for pbrt-v4 (equal-area squares only), 128 but for
   one quarter of 64.
@@ -50,12 +52,14 @@ def linear(b):
 
 
 def png(path, rows):
+    """8-bit RGB, or RGBA where the pixels have four values."""
     raw = b"".join(b"\x00" + bytes(c for px in row for c in px) for row in rows)
 
     def chunk(kind, data):
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
 
-    header = struct.pack(">IIBBBBB", len(rows[0]), len(rows), 8, 2, 0, 0, 0)
+    colour = 6 if len(rows[0][0]) == 4 else 2
+    header = struct.pack(">IIBBBBB", len(rows[0]), len(rows), 8, colour, 0, 0, 0)
     with open(path, "wb") as f:
         f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
@@ -144,6 +148,12 @@ def main():
     jpeg(os.path.join(out, "fmt.jpg"), rows)
     sky = [[(128, 128, 128)] * W for _ in range(H // 2)] + [[(64, 64, 64)] * W for _ in range(H // 2)]
     png(os.path.join(out, "fmt-sky.png"), sky)
+    # Opaque in a disc, clear outside it, half clear in a band across the middle.
+    alpha = [
+        [px + (255 if (x - 7.5) ** 2 + (y - 3.5) ** 2 * 4 < 30 else 128 if y in (3, 4) else 0,) for x, px in enumerate(row)]
+        for y, row in enumerate(rows)
+    ]
+    png(os.path.join(out, "fmt-alpha.png"), alpha)
     square = [[(128, 128, 128) if x < 4 or y < 4 else (64, 64, 64) for x in range(8)] for y in range(8)]
     png(os.path.join(out, "fmt-sky-square.png"), square)
 

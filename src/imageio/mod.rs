@@ -5,12 +5,14 @@
 //! other formats scenes name ([`formats`]).
 
 pub mod formats;
+pub mod grey;
 pub mod lookup;
 pub mod metrics;
 pub mod tev;
 pub mod texels;
 
 pub use formats::Format;
+pub use grey::Grey;
 pub use lookup::{TexelSource, Wrap, lookup};
 pub use texels::Texels;
 
@@ -341,6 +343,17 @@ pub fn read_texels_within(path: &Path, files: &crate::limits::Files) -> Res<Texe
             Format::Pfm => formats::decode_pfm(&bytes).map(Texels::from_image),
             _ => decode_codec_texels(&bytes, format),
         }
+    };
+    within().map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
+}
+
+/// [`read_texels_within`] for float textures: one value a texel, made as `grey` says.
+pub fn read_grey_texels_within(path: &Path, files: &crate::limits::Files, grey: Grey) -> Res<Texels> {
+    let within = || {
+        let format = format_of(path)?;
+        let bytes = files.read(path).map_err(ImageError::Input)?;
+        check_pixels(&bytes, format, files.limits.texture_pixels)?;
+        grey::decode_grey(&bytes, format, grey)
     };
     within().map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
 }

@@ -254,6 +254,7 @@ struct Builder {
     texture_lookups: Vec<u64>,
     images: HashMap<PathBuf, Arc<crate::imageio::Texels>>,
     light_images: HashMap<PathBuf, Arc<RgbImage>>,
+    grey_images: HashMap<(PathBuf, crate::imageio::Grey), Arc<crate::imageio::Texels>>,
     /// Decided when the whole file is read.
     syntax: Option<Syntax>,
     approximated: Vec<(Span, String, Approx)>,
@@ -332,6 +333,7 @@ impl Builder {
             texture_lookups: Vec::new(),
             images: HashMap::new(),
             light_images: HashMap::new(),
+            grey_images: HashMap::new(),
             syntax: None,
             approximated: Vec::new(),
             attributes: Vec::new(),

@@ -9,7 +9,9 @@
 //! ```
 //! 8-bit images are sRGB-decoded unless `gamma false` or `encoding "linear"` (pbrt-v4
 //! takes TGA, JPEG and BMP as sRGB whatever `encoding` says); a v3 `gamma true` decodes
-//! EXR, PFM and HDR texels too, as pbrt-v3 does; `wrap` is
+//! EXR, PFM and HDR texels too, as pbrt-v3 does. A float texture takes one value a
+//! texel as its pbrt does ([`crate::imageio::grey`]: pbrt-v3's luminance, pbrt-v4's
+//! alpha or mean); `wrap` is
 //! repeat, clamp or black; `scale` and `invert` apply after the lookup. An image that
 //! cannot be read is, as in pbrt-v3, one grey texel of 0.5 times `scale` (noted);
 //! pbrt-v4 aborts. Filtering hints have no effect: SPPM's many samples per pixel filter.
@@ -17,7 +19,7 @@
 use super::mapping::{self, Mapping2D, map_2d};
 use super::{Input, TexCtx, TextureKind, TextureSite};
 use crate::approx::Approx;
-use crate::imageio::{Format, Texels, Wrap, lookup};
+use crate::imageio::{Format, Grey, Texels, Wrap, lookup};
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
@@ -45,7 +47,14 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
     let gamma = p.bool("gamma")?;
     let encoding = p.string("encoding")?;
     values::no_effect(p, &["maxanisotropy", "trilinear", "filter"]);
-    let mut image = match i.r.image(&name) {
+    let v3 = i.r.syntax() == crate::parser::Syntax::V3;
+    let eight_bit = Format::of(Path::new(&name)).is_some_and(Format::eight_bit);
+    let read = match i.is_float {
+        true if v3 => i.r.grey_image(&name, Grey::V3 { decode: gamma.unwrap_or(eight_bit) }),
+        true => i.r.grey_image(&name, Grey::V4 { linear: encoding.as_deref() == Some("linear") }),
+        false => i.r.image(&name),
+    };
+    let mut image = match read {
         Ok(img) => img,
         Err(e) => {
             i.r.approximate(name_at, format!("imagemap ({e})"), Approx::MissingImage);
@@ -55,13 +64,14 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
             return Ok(Some(TextureKind::Constant(TexValue::Const(Vec3::splat(scale * grey)))));
         }
     };
-    let v3 = i.r.syntax() == crate::parser::Syntax::V3;
-    let linear = gamma == Some(false) || encoding.as_deref() == Some("linear");
-    if linear {
-        image = crate::imageio::stored_values(&name, image, v3);
-    } else if v3 && gamma == Some(true) && Format::of(Path::new(&name)).is_some_and(|f| !f.eight_bit()) {
-        // pbrt-v3 decodes every texel of a texture that asks for `gamma`, floats too.
-        image = Arc::new(image.map_values(crate::imageio::from_srgb));
+    if !i.is_float {
+        let linear = gamma == Some(false) || encoding.as_deref() == Some("linear");
+        if linear {
+            image = crate::imageio::stored_values(&name, image, v3);
+        } else if v3 && gamma == Some(true) && !eight_bit {
+            // pbrt-v3 decodes every texel of a texture that asks for `gamma`, floats too.
+            image = Arc::new(image.map_values(crate::imageio::from_srgb));
+        }
     }
     Ok(Some(TextureKind::Image { image, map, wrap, scale, invert }))
 }

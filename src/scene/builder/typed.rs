@@ -5,7 +5,7 @@
 
 use super::{Builder, Res, Scope};
 use crate::approx::Approx;
-use crate::imageio::{EightBit, Format, RgbImage, Texels};
+use crate::imageio::{EightBit, Format, Grey, RgbImage, Texels};
 use crate::lights::{self, LightContext, LightDesc};
 use crate::materials::params::{bump_map, normal_map};
 use crate::materials::{self, MaterialDesc, MaterialKind, Resolver, TexValue};
@@ -22,7 +22,7 @@ use crate::textures::{self, TextureDesc, TextureKind, TextureSite};
 use crate::values::SpectrumContext;
 use glam::Vec3;
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::rc::Rc;
 use std::sync::Arc;
 
@@ -59,7 +59,16 @@ impl Builder {
         let path = self.reader.resolve_path(name);
         self.readable(&path)?;
         let files = &self.reader.files;
-        read_once(&mut self.images, path, |p| crate::imageio::read_texels_within(p, files))
+        read_once(&mut self.images, path.clone(), &path, |p| crate::imageio::read_texels_within(p, files))
+    }
+
+    /// [`Builder::image`] for float textures: one value a texel, as `grey` says.
+    pub(super) fn grey_image(&mut self, name: &str, grey: Grey) -> Result<Arc<Texels>, String> {
+        let path = self.reader.resolve_path(name);
+        self.readable(&path)?;
+        let files = &self.reader.files;
+        let read = |p: &Path| crate::imageio::read_grey_texels_within(p, files, grey);
+        read_once(&mut self.grey_images, (path.clone(), grey), &path, read)
     }
 
     /// [`Builder::image`] for lights, which keep every value as `f32`. pbrt-v3's lights
@@ -69,7 +78,9 @@ impl Builder {
         self.readable(&path)?;
         let files = &self.reader.files;
         let eight_bit = if self.syntax() == Syntax::V3 { EightBit::Raw } else { EightBit::Srgb };
-        read_once(&mut self.light_images, path, |p| crate::imageio::read_image_within(p, files, eight_bit))
+        read_once(&mut self.light_images, path.clone(), &path, |p| {
+            crate::imageio::read_image_within(p, files, eight_bit)
+        })
     }
 
     /// Refuses an image format the file's pbrt cannot read, as that pbrt does (pbrt-v3
@@ -379,18 +390,23 @@ impl Resolver for Scoped<'_> {
     fn image(&mut self, name: &str) -> Result<Arc<Texels>, String> {
         self.b.image(name)
     }
+
+    fn grey_image(&mut self, name: &str, grey: Grey) -> Result<Arc<Texels>, String> {
+        self.b.grey_image(name, grey)
+    }
 }
 
-/// The image at `path` from `cache`, or read by `read` and kept there.
-fn read_once<T, E: std::fmt::Display>(
-    cache: &mut HashMap<PathBuf, Arc<T>>,
-    path: PathBuf,
+/// The image at `path` from `cache` (under `key`), or read by `read` and kept there.
+fn read_once<K: std::hash::Hash + Eq, T, E: std::fmt::Display>(
+    cache: &mut HashMap<K, Arc<T>>,
+    key: K,
+    path: &Path,
     read: impl FnOnce(&Path) -> Result<T, E>,
 ) -> Result<Arc<T>, String> {
-    if let Some(img) = cache.get(&path) {
+    if let Some(img) = cache.get(&key) {
         return Ok(img.clone());
     }
-    let img = Arc::new(read(&path).map_err(|e| e.to_string())?);
-    cache.insert(path, img.clone());
+    let img = Arc::new(read(path).map_err(|e| e.to_string())?);
+    cache.insert(key, img.clone());
     Ok(img)
 }
