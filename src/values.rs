@@ -21,6 +21,8 @@ use glam::Vec3;
 use std::path::Path;
 use std::sync::Arc;
 
+pub use crate::imageio::ColorEncoding;
+
 pub type Res<T> = Result<T, Diagnostic>;
 
 /// What range a number must lie in.
@@ -292,6 +294,25 @@ pub fn no_effect(p: &ParamList, names: &[&str]) {
 }
 
 /// The span of a parameter if present (for notes about it).
+/// The `encoding` parameter, `default` where it is not given; a located error where it
+/// names no encoding (pbrt-v4 refuses it too).
+pub fn encoding(p: &ParamList, default: ColorEncoding, at: Span) -> Res<ColorEncoding> {
+    let Some(e) = p.string("encoding")? else { return Ok(default) };
+    let at = span_of(p, "encoding").unwrap_or(at);
+    match e.split_whitespace().collect::<Vec<_>>()[..] {
+        ["linear"] => Ok(ColorEncoding::Linear),
+        ["sRGB"] => Ok(ColorEncoding::Srgb),
+        ["gamma", g] => match g.parse::<f32>() {
+            Ok(g) if g != 0.0 && g.is_finite() => Ok(ColorEncoding::Gamma(g.to_bits())),
+            _ => Err(Diagnostic::error(at, format!("\"{g}\" is not a gamma value for \"encoding\""))),
+        },
+        _ => Err(Diagnostic::error(
+            at,
+            format!("\"{e}\" is not a colour encoding (\"linear\", \"sRGB\" or \"gamma <value>\")"),
+        )),
+    }
+}
+
 pub fn span_of(p: &ParamList, name: &str) -> Option<Span> {
     p.named(name).map(|x| x.span)
 }

@@ -15,15 +15,15 @@
 //! alpha). EXR alpha is not read: such an image gives the mean of its colours.
 
 use super::formats::{self, Format};
-use super::{ImageError, Res, RgbImage, Texels, from_srgb};
+use super::{ColorEncoding, ImageError, Res, RgbImage, Texels, from_srgb};
 
 /// How a float texture makes one value of a texel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Grey {
     /// pbrt-v3: the luminance of the stored values, sRGB-decoded if `decode`.
     V3 { decode: bool },
-    /// pbrt-v4: alpha or the mean, a PNG's values taken as linear if `linear`.
-    V4 { linear: bool },
+    /// pbrt-v4: alpha or the mean, a PNG's values made linear by its `encoding`.
+    V4 { png: ColorEncoding },
 }
 
 /// pbrt-v3's luminance weights (its `RGBSpectrum::y`).
@@ -65,9 +65,12 @@ fn codec_values(img: &image::DynamicImage, format: Format, grey: Grey) -> Vec<f3
     let rgba = img.to_rgba32f();
     match grey {
         Grey::V3 { decode } => rgba.pixels().map(|p| stored_luminance([p[0], p[1], p[2]], decode)).collect(),
-        Grey::V4 { linear } => {
-            let decoded = format.eight_bit() && !(linear && format == Format::Png);
-            let d = |v: f32| if decoded { from_srgb(v) } else { v };
+        Grey::V4 { png } => {
+            let d = |v: f32| match format {
+                Format::Png => png.to_linear(v),
+                f if f.eight_bit() => from_srgb(v),
+                _ => v,
+            };
             let colour_alpha = matches!(img.color(), image::ColorType::Rgba8 | image::ColorType::Rgba16);
             let alpha = format == Format::Png && colour_alpha && rgba.pixels().any(|p| p[3] != 1.0);
             match alpha {
@@ -102,9 +105,12 @@ mod tests {
         let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
         assert!(close(first(&bytes, Grey::V3 { decode: false }), luminance(c)));
         assert!(close(first(&bytes, Grey::V3 { decode: true }), from_srgb(luminance(c))));
-        assert!(close(first(&bytes, Grey::V4 { linear: true }), (c[0] + c[1] + c[2]) / 3.0));
+        assert!(close(first(&bytes, Grey::V4 { png: ColorEncoding::Linear }), (c[0] + c[1] + c[2]) / 3.0));
         let mean = c.map(from_srgb).iter().sum::<f32>() / 3.0;
-        assert!(close(first(&bytes, Grey::V4 { linear: false }), mean));
+        assert!(close(first(&bytes, Grey::V4 { png: ColorEncoding::Srgb }), mean));
+        let gamma = ColorEncoding::Gamma(1.6f32.to_bits());
+        let powered = c.map(|v| v.powf(1.6)).iter().sum::<f32>() / 3.0;
+        assert!(close(first(&bytes, Grey::V4 { png: gamma }), powered));
     }
 
     /// pbrt-v4 takes a PNG's alpha, decoded as its colours are, where it is not all
@@ -117,9 +123,9 @@ mod tests {
             })))
         };
         let cut = rgba(64);
-        assert!((first(&cut, Grey::V4 { linear: true }) - 64.0 / 255.0).abs() < 1e-6);
-        assert!((first(&cut, Grey::V4 { linear: false }) - from_srgb(64.0 / 255.0)).abs() < 1e-6);
+        assert!((first(&cut, Grey::V4 { png: ColorEncoding::Linear }) - 64.0 / 255.0).abs() < 1e-6);
+        assert!((first(&cut, Grey::V4 { png: ColorEncoding::Srgb }) - from_srgb(64.0 / 255.0)).abs() < 1e-6);
         assert!((first(&cut, Grey::V3 { decode: false }) - 1.0).abs() < 1e-5);
-        assert!((first(&rgba(255), Grey::V4 { linear: false }) - 1.0).abs() < 1e-6);
+        assert!((first(&rgba(255), Grey::V4 { png: ColorEncoding::Srgb }) - 1.0).abs() < 1e-6);
     }
 }

@@ -283,6 +283,26 @@ pub fn to_srgb(v: f32) -> f32 {
     if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
 }
 
+/// pbrt-v4's `encoding` of 8-bit values: `"sRGB"`, `"linear"` or `"gamma g"`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ColorEncoding {
+    Srgb,
+    Linear,
+    /// x^g, g kept as its bits (so the encoding can key a cache).
+    Gamma(u32),
+}
+
+impl ColorEncoding {
+    /// An 8-bit value over 255, made linear.
+    pub fn to_linear(self, x: f32) -> f32 {
+        match self {
+            ColorEncoding::Srgb => from_srgb(x),
+            ColorEncoding::Linear => x,
+            ColorEncoding::Gamma(g) => x.powf(f32::from_bits(g)),
+        }
+    }
+}
+
 pub fn from_srgb(v: f32) -> f32 {
     if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
 }

@@ -6,9 +6,10 @@
 //! Texture "img" "spectrum" "imagemap" "string filename" "wood.png" "string wrap" "clamp"
 //! Texture "raw" "spectrum" "imagemap" "string filename" "n.png" "bool gamma" false   # v3
 //! Texture "raw" "spectrum" "imagemap" "string filename" "n.png" "string encoding" "linear"   # v4
+//! Texture "g" "spectrum" "imagemap" "string filename" "n.png" "string encoding" "gamma 2.2"   # v4
 //! ```
-//! 8-bit images are sRGB-decoded unless `gamma false` or `encoding "linear"` (pbrt-v4
-//! takes TGA, JPEG and BMP as sRGB whatever `encoding` says); a v3 `gamma true` decodes
+//! 8-bit images are sRGB-decoded unless `gamma false` (v3) or `encoding` (v4: `linear`,
+//! `gamma g`; pbrt-v4 takes TGA, JPEG and BMP as sRGB whatever `encoding` says); a v3 `gamma true` decodes
 //! EXR, PFM and HDR texels too, as pbrt-v3 does. A float texture takes one value a
 //! texel as its pbrt does ([`crate::imageio::grey`]: pbrt-v3's luminance, pbrt-v4's
 //! alpha or mean); `wrap` is
@@ -24,7 +25,7 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::spectrum::Rgb;
-use crate::values::{self, Range, Res, TexValue};
+use crate::values::{self, ColorEncoding, Range, Res, TexValue};
 use glam::Vec3;
 use std::path::Path;
 use std::sync::Arc;
@@ -44,14 +45,17 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
     };
     let scale = values::float(p, "scale", 1.0, Range::Any)?;
     let invert = p.bool("invert")?.unwrap_or(false);
-    let gamma = p.bool("gamma")?;
-    let encoding = p.string("encoding")?;
-    values::no_effect(p, &["maxanisotropy", "trilinear", "filter"]);
     let v3 = i.r.syntax() == crate::parser::Syntax::V3;
+    // pbrt-v3 reads `gamma`, pbrt-v4 `encoding` (which reaches PNG values only).
+    let (gamma, encoding) = match v3 {
+        true => (p.bool("gamma")?, ColorEncoding::Srgb),
+        false => (None, values::encoding(p, ColorEncoding::Srgb, at)?),
+    };
+    values::no_effect(p, &["maxanisotropy", "trilinear", "filter"]);
     let eight_bit = Format::of(Path::new(&name)).is_some_and(Format::eight_bit);
     let read = match i.is_float {
         true if v3 => i.r.grey_image(&name, Grey::V3 { decode: gamma.unwrap_or(eight_bit) }),
-        true => i.r.grey_image(&name, Grey::V4 { linear: encoding.as_deref() == Some("linear") }),
+        true => i.r.grey_image(&name, Grey::V4 { png: encoding }),
         false => i.r.image(&name),
     };
     let mut image = match read {
@@ -65,9 +69,13 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
         }
     };
     if !i.is_float {
-        let linear = gamma == Some(false) || encoding.as_deref() == Some("linear");
-        if linear {
+        if gamma == Some(false) || encoding == ColorEncoding::Linear {
             image = crate::imageio::stored_values(&name, image, v3);
+        } else if let ColorEncoding::Gamma(_) = encoding {
+            let stored = crate::imageio::stored_values(&name, image.clone(), v3);
+            if !Arc::ptr_eq(&stored, &image) {
+                image = Arc::new(stored.map_values(|v| encoding.to_linear(v)));
+            }
         } else if v3 && gamma == Some(true) && !eight_bit {
             // pbrt-v3 decodes every texel of a texture that asks for `gamma`, floats too.
             image = Arc::new(image.map_values(crate::imageio::from_srgb));

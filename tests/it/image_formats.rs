@@ -75,6 +75,29 @@ fn each_version_reads_the_formats_its_pbrt_reads() {
     }
 }
 
+/// pbrt-v4's `encoding` names `linear`, `sRGB` or `gamma g`; anything else is an
+/// error at the parameter, as in pbrt-v4.
+#[test]
+fn an_unknown_encoding_is_a_located_error() {
+    let png = root().join("pbrt-scenes/verify/textures/fmt.png");
+    for (encoding, why) in [("gamma two", "is not a gamma value"), ("srgb8", "is not a colour encoding")] {
+        let text = format!(
+            "WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{}\" \"string encoding\" \"{encoding}\" \
+             Material \"diffuse\" \"texture reflectance\" \"t\" Shape \"sphere\"",
+            png.display()
+        );
+        let Err(err) = crate::common::load(&text) else { panic!("{encoding}: loaded") };
+        let err = err.to_string();
+        assert!(err.contains("inline.pbrt:2:") && err.contains(why), "{encoding}: {err}");
+    }
+    let text = format!(
+        "WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{}\" \"string encoding\" \"gamma 2.2\" \
+         Material \"diffuse\" \"texture reflectance\" \"t\" Shape \"sphere\"",
+        png.display()
+    );
+    assert!(crate::common::load(&text).is_ok());
+}
+
 /// A name of no format we read, and a damaged file of a known one, are located
 /// warnings (the grey texel), never a panic.
 #[test]

@@ -27,7 +27,7 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::spectrum::Rgb;
-use crate::values::{self, Range, Res, TexValue};
+use crate::values::{self, ColorEncoding, Range, Res, TexValue};
 use file::PtexFile;
 use glam::Vec3;
 use std::sync::Arc;
@@ -99,23 +99,13 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
     Ok(Some(TextureKind::Ptex(Arc::new(tex))))
 }
 
-/// pbrt-v4's `encoding` (a located error where it names none).
+/// pbrt-v4's `encoding` (default "gamma 2.2"; a located error where it names none).
 fn encoding(p: &ParamList, at: Span) -> Res<Decode> {
-    let e = p.string("encoding")?.unwrap_or_else(|| "gamma 2.2".into());
-    let at = values::span_of(p, "encoding").unwrap_or(at);
-    let words: Vec<&str> = e.split_whitespace().collect();
-    match words[..] {
-        ["linear"] => Ok(Decode::Linear),
-        ["sRGB"] => Ok(Decode::Srgb8),
-        ["gamma", g] => match g.parse::<f32>() {
-            Ok(g) if g != 0.0 && g.is_finite() => Ok(Decode::Gamma8(g)),
-            _ => Err(Diagnostic::error(at, format!("\"{g}\" is not a gamma value for \"encoding\""))),
-        },
-        _ => Err(Diagnostic::error(
-            at,
-            format!("\"{e}\" is not a colour encoding (\"linear\", \"sRGB\" or \"gamma <value>\")"),
-        )),
-    }
+    Ok(match values::encoding(p, ColorEncoding::Gamma(2.2f32.to_bits()), at)? {
+        ColorEncoding::Linear => Decode::Linear,
+        ColorEncoding::Srgb => Decode::Srgb8,
+        ColorEncoding::Gamma(g) => Decode::Gamma8(f32::from_bits(g)),
+    })
 }
 
 /// What pbrt renders for a Ptex file it cannot use: black, with the reason noted.
