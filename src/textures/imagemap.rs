@@ -8,14 +8,14 @@
 //! Texture "raw" "spectrum" "imagemap" "string filename" "n.png" "string encoding" "linear"   # v4
 //! Texture "g" "spectrum" "imagemap" "string filename" "n.png" "string encoding" "gamma 2.2"   # v4
 //! ```
-//! 8-bit images are sRGB-decoded unless `gamma false` (v3) or `encoding` (v4: `linear`,
-//! `gamma g`; pbrt-v4 takes TGA, JPEG and BMP as sRGB whatever `encoding` says); a v3 `gamma true` decodes
-//! EXR, PFM and HDR texels too, as pbrt-v3 does. A float texture takes one value a
-//! texel as its pbrt does ([`crate::imageio::grey`]: pbrt-v3's luminance, pbrt-v4's
-//! alpha or mean); `wrap` is
-//! repeat, clamp or black; `scale` and `invert` apply after the lookup. An image that
-//! cannot be read is, as in pbrt-v3, one grey texel of 0.5 times `scale` (noted);
-//! pbrt-v4 aborts. Filtering hints have no effect: SPPM's many samples per pixel filter.
+//! 8-bit images are sRGB-decoded unless `gamma false` (v3) or another `encoding` (v4:
+//! `linear`, `gamma g`; it reaches PNG values only, as pbrt-v4 reads TGA, JPEG and BMP
+//! as sRGB); a v3 `gamma true` decodes EXR, PFM and HDR texels too, as pbrt-v3 does. A
+//! float texture takes one value a texel as its pbrt does ([`crate::imageio::grey`]:
+//! pbrt-v3's luminance, pbrt-v4's alpha or mean). `wrap` is repeat, clamp or black;
+//! `scale` and `invert` apply after the lookup. An image that cannot be read is, as in
+//! pbrt-v3, one grey texel of 0.5 times `scale` (noted); pbrt-v4 aborts. Filtering
+//! hints have no effect: SPPM's many samples per pixel filter.
 
 use super::mapping::{self, Mapping2D, map_2d};
 use super::{Input, TexCtx, TextureKind, TextureSite};
@@ -58,8 +58,9 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
         true => i.r.grey_image(&name, Grey::V4 { png: encoding }),
         false => i.r.image(&name),
     };
-    let mut image = match read {
-        Ok(img) => img,
+    let image = match read {
+        Ok(img) if i.is_float => img,
+        Ok(img) => encoded(&name, img, v3, gamma, encoding),
         Err(e) => {
             i.r.approximate(name_at, format!("imagemap ({e})"), Approx::MissingImage);
             let lower = name.to_ascii_lowercase();
@@ -68,20 +69,31 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
             return Ok(Some(TextureKind::Constant(TexValue::Const(Vec3::splat(scale * grey)))));
         }
     };
-    if !i.is_float {
-        if gamma == Some(false) || encoding == ColorEncoding::Linear {
-            image = crate::imageio::stored_values(&name, image, v3);
-        } else if let ColorEncoding::Gamma(_) = encoding {
-            let stored = crate::imageio::stored_values(&name, image.clone(), v3);
-            if !Arc::ptr_eq(&stored, &image) {
-                image = Arc::new(stored.map_values(|v| encoding.to_linear(v)));
-            }
-        } else if v3 && gamma == Some(true) && !eight_bit {
-            // pbrt-v3 decodes every texel of a texture that asks for `gamma`, floats too.
-            image = Arc::new(image.map_values(crate::imageio::from_srgb));
-        }
-    }
     Ok(Some(TextureKind::Image { image, map, wrap, scale, invert }))
+}
+
+/// A colour texture's texels (read sRGB-decoded) as `gamma` (v3) or `encoding` (v4)
+/// asks.
+fn encoded(name: &str, image: Arc<Texels>, v3: bool, gamma: Option<bool>, encoding: ColorEncoding) -> Arc<Texels> {
+    let float_format = Format::of(Path::new(name)).is_some_and(|f| !f.eight_bit());
+    match encoding {
+        _ if gamma == Some(false) => crate::imageio::stored_values(name, image, v3),
+        ColorEncoding::Linear => crate::imageio::stored_values(name, image, v3),
+        ColorEncoding::Gamma(_) => {
+            // Only where the file's encoding reaches the values (a PNG) are they
+            // stored ones to raise to the power.
+            let stored = crate::imageio::stored_values(name, image.clone(), v3);
+            match Arc::ptr_eq(&stored, &image) {
+                true => image,
+                false => Arc::new(stored.map_values(|v| encoding.to_linear(v))),
+            }
+        }
+        // pbrt-v3 decodes every texel of a texture that asks for `gamma`, floats too.
+        ColorEncoding::Srgb if v3 && gamma == Some(true) && float_format => {
+            Arc::new(image.map_values(crate::imageio::from_srgb))
+        }
+        ColorEncoding::Srgb => image,
+    }
 }
 
 #[inline]
