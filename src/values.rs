@@ -293,7 +293,6 @@ pub fn no_effect(p: &ParamList, names: &[&str]) {
     p.params.iter().filter(|x| names.contains(&x.name.as_str())).for_each(Param::mark_used);
 }
 
-/// The span of a parameter if present (for notes about it).
 /// The `encoding` parameter, `default` where it is not given; a located error where it
 /// names no encoding (pbrt-v4 refuses it too).
 pub fn encoding(p: &ParamList, default: ColorEncoding, at: Span) -> Res<ColorEncoding> {
@@ -313,6 +312,7 @@ pub fn encoding(p: &ParamList, default: ColorEncoding, at: Span) -> Res<ColorEnc
     }
 }
 
+/// The span of a parameter if present (for notes about it).
 pub fn span_of(p: &ParamList, name: &str) -> Option<Span> {
     p.named(name).map(|x| x.span)
 }
