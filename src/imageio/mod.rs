@@ -326,24 +326,35 @@ pub enum EightBit {
 /// Reads an image for a scene: a regular file within `limits.file_bytes`, whose size
 /// (from its header, before decoding) is within `limits.texture_pixels`.
 pub fn read_image_within(path: &Path, files: &crate::limits::Files, eight_bit: EightBit) -> Res<RgbImage> {
-    let within = || {
-        let format = format_of(path)?;
-        let bytes = files.read(path).map_err(ImageError::Input)?;
-        decode_image(&bytes, format, eight_bit, files.limits.texture_pixels)
-    };
-    within().map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
+    read_scene_image(path, files, |bytes, format| decode_any(bytes, format, eight_bit))
 }
 
-/// The format of a scene's image, by its name.
-fn format_of(path: &Path) -> Res<Format> {
-    Format::of(path)
-        .ok_or_else(|| ImageError::decode(format!("no image format is named so (known: {})", formats::KNOWN)))
+/// A scene's image by `decode`: its format named by its extension, its file within
+/// `limits.file_bytes` and its size (from the header) within `limits.texture_pixels`;
+/// errors name the file.
+fn read_scene_image<T>(
+    path: &Path,
+    files: &crate::limits::Files,
+    decode: impl FnOnce(&[u8], Format) -> Res<T>,
+) -> Res<T> {
+    let within = || {
+        let format = Format::of(path)
+            .ok_or_else(|| ImageError::decode(format!("no image format is named so (known: {})", formats::KNOWN)))?;
+        let bytes = files.read(path).map_err(ImageError::Input)?;
+        check_pixels(&bytes, format, files.limits.texture_pixels)?;
+        decode(&bytes, format)
+    };
+    within().map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
 }
 
 /// Decodes an image held in memory, refusing (from the header alone) images of more
 /// than `max_pixels` pixels.
 pub fn decode_image(bytes: &[u8], format: Format, eight_bit: EightBit, max_pixels: u64) -> Res<RgbImage> {
     check_pixels(bytes, format, max_pixels)?;
+    decode_any(bytes, format, eight_bit)
+}
+
+fn decode_any(bytes: &[u8], format: Format, eight_bit: EightBit) -> Res<RgbImage> {
     match format {
         Format::Exr => decode_exr(bytes),
         Format::Pfm => formats::decode_pfm(bytes),
@@ -354,28 +365,16 @@ pub fn decode_image(bytes: &[u8], format: Format, eight_bit: EightBit, max_pixel
 /// [`read_image_within`] for textures and normal maps: an 8-bit image is kept as its
 /// bytes ([`Texels`]), sRGB-decoded when read.
 pub fn read_texels_within(path: &Path, files: &crate::limits::Files) -> Res<Texels> {
-    let within = || {
-        let format = format_of(path)?;
-        let bytes = files.read(path).map_err(ImageError::Input)?;
-        check_pixels(&bytes, format, files.limits.texture_pixels)?;
-        match format {
-            Format::Exr => decode_exr(&bytes).map(Texels::from_image),
-            Format::Pfm => formats::decode_pfm(&bytes).map(Texels::from_image),
-            _ => decode_codec_texels(&bytes, format),
-        }
-    };
-    within().map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
+    read_scene_image(path, files, |bytes, format| match format {
+        Format::Exr => decode_exr(bytes).map(Texels::from_image),
+        Format::Pfm => formats::decode_pfm(bytes).map(Texels::from_image),
+        _ => decode_codec_texels(bytes, format),
+    })
 }
 
 /// [`read_texels_within`] for float textures: one value a texel, made as `grey` says.
 pub fn read_grey_texels_within(path: &Path, files: &crate::limits::Files, grey: Grey) -> Res<Texels> {
-    let within = || {
-        let format = format_of(path)?;
-        let bytes = files.read(path).map_err(ImageError::Input)?;
-        check_pixels(&bytes, format, files.limits.texture_pixels)?;
-        grey::decode_grey(&bytes, format, grey)
-    };
-    within().map_err(|e| ImageError::In { path: path.to_path_buf(), source: Box::new(e) })
+    read_scene_image(path, files, |bytes, format| grey::decode_grey(bytes, format, grey))
 }
 
 /// Refuses, from the header alone, an image of more than `max_pixels` pixels.
@@ -404,11 +403,7 @@ pub fn read_image(path: &Path) -> Res<RgbImage> {
         Format::Exr => read_exr(path),
         format => {
             let bytes = std::fs::read(path).map_err(|e| ImageError::read(path, e))?;
-            let image = match format {
-                Format::Pfm => formats::decode_pfm(&bytes),
-                _ => decode_codec(&bytes, format, EightBit::Srgb),
-            };
-            image.map_err(|e| ImageError::read(path, e))
+            decode_any(&bytes, format, EightBit::Srgb).map_err(|e| ImageError::read(path, e))
         }
     }
 }
