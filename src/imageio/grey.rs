@@ -9,10 +9,10 @@
 //!
 //! pbrt-v3 takes the luminance of the values the file holds (an 8-bit image's bytes
 //! over 255, alpha dropped) and then applies `gamma`. pbrt-v4's bilinear lookup takes
-//! a PNG's alpha where it has one that is not all opaque, else the mean of the colour
-//! channels (a grey image's one channel); a PNG's values, alpha included, are decoded
-//! by its `encoding`, the other 8-bit formats' always as sRGB (stb_image, which drops
-//! alpha). EXR alpha is not read: such an image gives the mean of its colours.
+//! a PNG's or an EXR's alpha where it has one that is not all opaque, else the mean of
+//! the colour channels (a grey image's one channel: an EXR's `Y`, or its only channel,
+//! [`super::exr_read`]); a PNG's values, alpha included, are decoded by its
+//! `encoding`, the other 8-bit formats' always as sRGB (stb_image, which drops alpha).
 
 use super::formats::{self, Format};
 use super::{ColorEncoding, ImageError, Res, RgbImage, Texels, from_srgb};
@@ -35,12 +35,20 @@ fn luminance(c: [f32; 3]) -> f32 {
 pub(super) fn decode_grey(bytes: &[u8], format: Format, grey: Grey) -> Res<Texels> {
     let (width, height, values): (usize, usize, Vec<f32>) = match format {
         Format::Exr | Format::Pfm => {
-            let img = if format == Format::Exr { super::decode_exr(bytes)? } else { formats::decode_pfm(bytes)? };
+            let v4 = matches!(grey, Grey::V4 { .. });
+            let (img, alpha) = match format {
+                Format::Exr => {
+                    let e = super::exr_read::decode_exr_alpha(bytes, v4)?;
+                    (e.image, e.alpha.filter(|a| a.iter().any(|&v| v != 1.0)))
+                }
+                _ => (formats::decode_pfm(bytes)?, None),
+            };
             let f = |c: [f32; 3]| match grey {
                 Grey::V3 { decode } => stored_luminance(c, decode),
                 Grey::V4 { .. } => (c[0] + c[1] + c[2]) / 3.0,
             };
-            (img.width, img.height, img.pixels.iter().map(|&c| f(c)).collect())
+            let values = alpha.unwrap_or_else(|| img.pixels.iter().map(|&c| f(c)).collect());
+            (img.width, img.height, values)
         }
         _ => {
             let img = formats::decode_codec(bytes, format)?;
@@ -127,5 +135,22 @@ mod tests {
         assert!((first(&cut, Grey::V4 { png: ColorEncoding::Srgb }) - from_srgb(64.0 / 255.0)).abs() < 1e-6);
         assert!((first(&cut, Grey::V3 { decode: false }) - 1.0).abs() < 1e-5);
         assert!((first(&rgba(255), Grey::V4 { png: ColorEncoding::Srgb }) - 1.0).abs() < 1e-6);
+    }
+
+    /// The same rule for an EXR's alpha, and a grey EXR's one channel for either pbrt.
+    #[test]
+    fn pbrt_v4_takes_an_exrs_alpha_where_it_cuts() {
+        use crate::imageio::exr_read::tests::exr_of;
+        let value = |alpha: f32| move |c: usize, x: usize| if c == 3 { [alpha, 1.0][x] } else { [0.2, 0.4, 0.9][c] };
+        let exr = exr_of(&["R", "G", "B", "A"], value(0.25));
+        let texel = |bytes: &[u8], grey| decode_grey(bytes, Format::Exr, grey).expect("decodes").texel(0)[0];
+        let v4 = Grey::V4 { png: ColorEncoding::Srgb };
+        assert_eq!(texel(&exr, v4), 0.25);
+        assert!((texel(&exr, Grey::V3 { decode: false }) - luminance([0.2, 0.4, 0.9])).abs() < 1e-6);
+        let opaque = exr_of(&["R", "G", "B", "A"], value(1.0));
+        assert!((texel(&opaque, v4) - 0.5).abs() < 1e-6);
+        let grey = exr_of(&["Y"], |_, _| 0.3);
+        assert!((texel(&grey, v4) - 0.3).abs() < 1e-6);
+        assert!((texel(&grey, Grey::V3 { decode: false }) - 0.3).abs() < 1e-6);
     }
 }

@@ -4,6 +4,7 @@
 //! Reading accepts half and float EXRs (pbrt-v3 writes half, pbrt-v4 float), and the
 //! other formats scenes name ([`formats`]).
 
+mod exr_read;
 pub mod formats;
 pub mod grey;
 pub mod lookup;
@@ -17,6 +18,7 @@ pub use lookup::{TexelSource, Wrap, lookup};
 pub use texels::Texels;
 
 use exr::prelude::*;
+use exr_read::decode_exr;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -411,46 +413,6 @@ pub fn read_image(path: &Path) -> Res<RgbImage> {
 pub fn read_exr(path: &Path) -> Res<RgbImage> {
     let bytes = std::fs::read(path).map_err(|e| ImageError::read(path, e))?;
     decode_exr(&bytes).map_err(|e| ImageError::read(path, e))
-}
-
-fn decode_exr(bytes: &[u8]) -> Res<RgbImage> {
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
-            |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * *w + pos.x()] = [r, g, b],
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(std::io::Cursor::new(bytes))
-        .map_err(ImageError::decode)?;
-    let layer = &image.layer_data;
-    let a = &layer.attributes;
-    let get_f32 = |k: &str| match a.other.get(&Text::from(k)) {
-        Some(AttributeValue::F32(v)) => Some(*v),
-        _ => None,
-    };
-    let get_i32 = |k: &str| match a.other.get(&Text::from(k)) {
-        Some(AttributeValue::I32(v)) => Some(*v),
-        _ => None,
-    };
-    let display = image.attributes.display_window;
-    Ok(RgbImage {
-        width: layer.size.width(),
-        height: layer.size.height(),
-        pixels: layer.channel_data.pixels.1.clone(),
-        bands: None,
-        origin: (a.layer_position.x() - display.position.x(), a.layer_position.y() - display.position.y()),
-        full: (display.size.width(), display.size.height()),
-        meta: ImageMeta {
-            render_time_seconds: get_f32("renderTimeSeconds"),
-            samples_per_pixel: get_i32("samplesPerPixel"),
-            photons_per_iteration: get_i32("photonsPerIteration").map(i64::from),
-            world_to_camera: a.world_to_camera,
-            software: a.software_name.as_ref().map(|t| t.to_string()),
-        },
-    })
 }
 
 /// `decode` of each 8-bit value as `image` converts it to f32 from `img`'s colour
