@@ -60,6 +60,13 @@ enum Emission {
     Temperature { kelvin: SampledGrid<f32>, offset: f32, scale: f32, le_scale: SampledGrid<f32>, table: Blackbody },
 }
 
+impl DensityGrid {
+    /// σt per unit density at its largest (over wavelengths, or the tracked channel).
+    fn sigma_t_bound(&self) -> f32 {
+        self.first_channel.unwrap_or_else(|| sigma_t_bound(&self.sigma_a, &self.sigma_s))
+    }
+}
+
 impl Field for DensityGrid {
     fn at(&self, u: Vec3, emission: bool, lanes: Lanes) -> Props {
         let d = self.density.lookup(u);
@@ -73,8 +80,11 @@ impl Field for DensityGrid {
     }
 
     fn majorant(&self, lo: Vec3, hi: Vec3) -> f32 {
-        let st = self.first_channel.unwrap_or_else(|| sigma_t_bound(&self.sigma_a, &self.sigma_s));
-        self.density.max_over(lo, hi, |d| d) * st
+        self.density.max_over(lo, hi, |d| d) * self.sigma_t_bound()
+    }
+
+    fn fine_majorant(&self, lo: Vec3, hi: Vec3) -> f32 {
+        self.density.max_within(lo, hi, |d| d.max(0.0)) * self.sigma_t_bound()
     }
 
     fn emissive(&self) -> bool {

@@ -69,6 +69,47 @@ impl<T: Copy> SampledGrid<T> {
         lerp(d.z, lerp(d.y, d00, d10), lerp(d.y, d01, d11))
     }
 
+    /// A bound of `size(lookup(u))` over the box `lo`–`hi`, tighter than
+    /// [`Self::max_over`] for a box of a few cells of the samples: within a cell the
+    /// interpolation is multilinear, so its value anywhere in the part of the box there
+    /// is a convex combination of its values at that part's corners, and a convex
+    /// `size` is at most their largest (raised a little for rounding). The corners are
+    /// the box's own and where it meets the planes of samples.
+    pub fn max_within(&self, lo: Vec3, hi: Vec3, size: impl Fn(T) -> f32) -> f32
+    where
+        T: Default + Add<Output = T> + Mul<f32, Output = T>,
+    {
+        // Per axis: the box's ends and the sample planes between them, at most 4.
+        let mut stops = [[0f32; 4]; 3];
+        let mut count = [0usize; 3];
+        for a in 0..3 {
+            let n = self.n[a] as f32;
+            let (first, last) = ((lo[a] * n - 0.5).floor(), (hi[a] * n - 0.5).floor());
+            if last - first > 2.0 || (last - first).is_nan() {
+                return self.max_over(lo, hi, size);
+            }
+            stops[a][0] = lo[a];
+            count[a] = 1;
+            let mut k = first + 1.0;
+            while k <= last {
+                stops[a][count[a]] = (k + 0.5) / n;
+                count[a] += 1;
+                k += 1.0;
+            }
+            stops[a][count[a]] = hi[a];
+            count[a] += 1;
+        }
+        let mut m = 0f32;
+        for &z in &stops[2][..count[2]] {
+            for &y in &stops[1][..count[1]] {
+                for &x in &stops[0][..count[0]] {
+                    m = m.max(size(self.lookup_by(Vec3::new(x, y, z), |v| *v)));
+                }
+            }
+        }
+        m * (1.0 + 1e-5)
+    }
+
     /// The largest `size(v)` over the samples whose interpolation reaches the box
     /// `lo`–`hi` of the unit cube (0 where none does): a bound of `size(lookup(u))` in
     /// the box for any `size` that is convex and 0 at the default value.
@@ -121,5 +162,30 @@ mod tests {
                 assert!(g.lookup(u) <= bound + 1e-4, "box {b}: {} > {bound}", g.lookup(u));
             }
         }
+    }
+
+    /// The corner bound holds at every point of small boxes anywhere (within a cell,
+    /// across cell planes, past the outer samples), is no looser than the sample
+    /// maximum, and is tight where the values vary little over the box.
+    #[test]
+    fn max_within_bounds_every_lookup_and_is_tighter() {
+        let values: Vec<f32> = (0..4 * 3 * 5).map(|i| ((i * 37) % 11) as f32).collect();
+        let g = SampledGrid::new([4, 3, 5], values);
+        let mut rng = crate::sampling::Rng::new(5);
+        use crate::sampling::Sampler;
+        let mut tighter = 0;
+        for _ in 0..2000 {
+            let size = 0.4 * rng.get1d().powi(3);
+            let lo = Vec3::new(rng.get1d(), rng.get1d(), rng.get1d()) * (1.0 - size);
+            let hi = lo + size;
+            let (within, over) = (g.max_within(lo, hi, |v| v), g.max_over(lo, hi, |v| v));
+            assert!(within <= over * (1.0 + 1e-5), "{within} looser than {over}");
+            tighter += (within < 0.9 * over) as u32;
+            for _ in 0..20 {
+                let u = lo + Vec3::new(rng.get1d(), rng.get1d(), rng.get1d()) * size;
+                assert!(g.lookup(u) <= within + 1e-4, "{} > {within} in {lo}..{hi}", g.lookup(u));
+            }
+        }
+        assert!(tighter > 1000, "tighter in only {tighter} boxes of 2000");
     }
 }
