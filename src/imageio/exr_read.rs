@@ -29,8 +29,8 @@ pub(super) fn decode_exr(bytes: &[u8]) -> Res<RgbImage> {
 pub(super) fn decode_exr_alpha(bytes: &[u8], with_alpha: bool) -> Res<ExrPixels> {
     match rgb_layer(bytes, with_alpha) {
         Ok(pixels) => Ok(pixels),
-        // Not R, G and B: perhaps a grey image. A damaged file fails here too, with
-        // the first reader's reason.
+        // Not R, G and B: perhaps a grey image. A damaged file fails the second
+        // reading too, and that reason is given.
         Err(rgb_error) => match grey_layer(bytes) {
             Ok(Some(image)) => Ok(ExrPixels { image, alpha: None }),
             Ok(None) => Err(ImageError::decode(format!(
@@ -76,14 +76,8 @@ fn rgb_layer(bytes: &[u8], with_alpha: bool) -> std::result::Result<ExrPixels, E
 /// The first layer's grey channel as R = G = B: its `Y`, or its only channel.
 /// `None` when the layer has neither (the caller reports why R, G, B were not found).
 fn grey_layer(bytes: &[u8]) -> Res<Option<RgbImage>> {
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(std::io::Cursor::new(bytes))
-        .map_err(ImageError::decode)?;
+    // Its size was checked against the limits before.
+    let image = super::decode_all_channels(bytes, "image", u64::MAX).map_err(ImageError::decode)?;
     let layer = &image.layer_data;
     let channels = &layer.channel_data.list;
     let grey = channels.iter().find(|c| c.name == *"Y").or(match channels.as_slice() {
