@@ -29,11 +29,11 @@ use std::sync::Arc;
 /// Tracking steps one ray segment may take before it stops (Tr = 0, no scattering).
 const MAX_STEPS: u32 = 1 << 20;
 
-/// Tentative collisions a piece of a walk may expect at its majorant before it is
-/// halved and each half tracked at the bound of its own box.
+/// Tentative collisions a voxel's piece of a walk may expect at its majorant before
+/// it is walked in shorter pieces, each at the bound of its own box.
 const SPLIT_ABOVE: f32 = 256.0;
 
-/// How far (in the unit cube) a half's box reaches past its ends, so that rounding in
+/// How far (in the unit cube) a piece's box reaches past its ends, so that rounding in
 /// the points a walk looks up never leaves the box its bound was taken over.
 const BOX_MARGIN: f32 = 1e-6;
 
@@ -242,8 +242,8 @@ impl Tracked {
         }
     }
 
-    /// Tentative collisions along the span, at each voxel's majorant: `hit(t, μ,
-    /// sampler)` for each until it returns false.
+    /// Tentative collisions along the span, at each voxel's majorant (or its pieces',
+    /// [`Self::refined`]): `hit(t, μ, sampler)` for each until it returns false.
     fn walk<S: Sampler>(
         &self,
         s: &Segment,
@@ -340,19 +340,7 @@ impl Tracked {
             if pieces > MAX_STEPS {
                 return track(a, tb, mu, Piece::Exhausted);
             }
-            let mut b = (a + len.max(shortest)).min(tb);
-            let bound = loop {
-                let (pa, pb) = (s.o + s.d * a, s.o + s.d * b);
-                let m = self.field.fine_majorant(pa.min(pb) - BOX_MARGIN, pa.max(pb) + BOX_MARGIN).min(mu);
-                if m * (b - a) <= SPLIT_ABOVE {
-                    break Some(m);
-                }
-                let shorter = a + (0.5 * (b - a)).min(SPLIT_ABOVE / m);
-                if shorter - a < shortest || shorter >= b {
-                    break None;
-                }
-                b = shorter;
-            };
+            let (b, bound) = self.piece((s, a), (a + len.max(shortest)).min(tb), mu, shortest);
             let going = match bound {
                 Some(m) => track(a, b, m, Piece::Tracked),
                 None => {
@@ -371,6 +359,25 @@ impl Tracked {
             a = b;
         }
         true
+    }
+
+    /// The piece of a walk from `a`: up to `b`, or shorter where its box's bound
+    /// would expect more than [`SPLIT_ABOVE`] tentative collisions, with that bound
+    /// (at most `mu`); `None` for a piece that reached `shortest` with its bound still
+    /// that large.
+    fn piece(&self, (s, a): (&Segment, f32), mut b: f32, mu: f32, shortest: f32) -> (f32, Option<f32>) {
+        loop {
+            let (pa, pb) = (s.o + s.d * a, s.o + s.d * b);
+            let m = self.field.fine_majorant(pa.min(pb) - BOX_MARGIN, pa.max(pb) + BOX_MARGIN).min(mu);
+            if m * (b - a) <= SPLIT_ABOVE {
+                return (b, Some(m));
+            }
+            let shorter = a + (0.5 * (b - a)).min(SPLIT_ABOVE / m);
+            if shorter - a < shortest || shorter >= b {
+                return (b, None);
+            }
+            b = shorter;
+        }
     }
 
     /// Spectral tracking along a segment of parameter length `t_max` of a ray
