@@ -19,7 +19,12 @@ read shows), stored as:
   band across the middle, clear elsewhere), for pbrt-v4's float textures, which take it;
 - fmt-sky.png: a 16 x 8 environment map, a sky of 8-bit value 128 over a ground of 64;
 - fmt-sky-square.png: an 8 x 8 one for pbrt-v4 (equal-area squares only), 128 but for
-  one quarter of 64.
+  one quarter of 64;
+- fmt-grey.exr: a luminance-only EXR (one channel, `Y`, 32-bit float), a ramp across
+  and down with a bright block in the top left corner, as roughness and mask maps are
+  often saved;
+- fmt-rgba.exr: the picture's linear values as R, G and B with fmt-alpha.png's alpha
+  as A (32-bit float), for pbrt-v4's float textures, which take the alpha.
 
 Standard library only, except the JPEG.
 """
@@ -135,6 +140,40 @@ def jpeg(path, rows):
     img.save(path, quality=95, subsampling=0)
 
 
+def exr(path, channels):
+    """An uncompressed scanline EXR of 32-bit float channels: {name: rows of values}."""
+    names = sorted(channels)  # EXR stores channels in alphabetical order
+
+    def attribute(name, kind, value):
+        return name.encode() + b"\x00" + kind.encode() + b"\x00" + struct.pack("<i", len(value)) + value
+
+    chlist = b"".join(n.encode() + b"\x00" + struct.pack("<iB3xii", 2, 0, 1, 1) for n in names) + b"\x00"
+    window = struct.pack("<4i", 0, 0, W - 1, H - 1)
+    header = (
+        attribute("channels", "chlist", chlist)
+        + attribute("compression", "compression", b"\x00")
+        + attribute("dataWindow", "box2i", window)
+        + attribute("displayWindow", "box2i", window)
+        + attribute("lineOrder", "lineOrder", b"\x00")
+        + attribute("pixelAspectRatio", "float", struct.pack("<f", 1.0))
+        + attribute("screenWindowCenter", "v2f", struct.pack("<2f", 0.0, 0.0))
+        + attribute("screenWindowWidth", "float", struct.pack("<f", 1.0))
+        + b"\x00"
+    )
+    start = 8 + len(header) + 8 * H
+    lines = []
+    for y in range(H):
+        data = b"".join(struct.pack("<%df" % W, *channels[n][y]) for n in names)
+        lines.append(struct.pack("<ii", y, len(data)) + data)
+    offsets, at = [], start
+    for line in lines:
+        offsets.append(at)
+        at += len(line)
+    with open(path, "wb") as f:
+        f.write(b"\x76\x2f\x31\x01" + struct.pack("<i", 2) + header)
+        f.write(struct.pack("<%dQ" % H, *offsets) + b"".join(lines))
+
+
 def main():
     out = os.path.join(sys.argv[1] if len(sys.argv) > 1 else "pbrt-scenes/verify", "textures")
     os.makedirs(out, exist_ok=True)
@@ -156,6 +195,17 @@ def main():
     png(os.path.join(out, "fmt-alpha.png"), alpha)
     square = [[(128, 128, 128) if x < 4 or y < 4 else (64, 64, 64) for x in range(8)] for y in range(8)]
     png(os.path.join(out, "fmt-sky-square.png"), square)
+    grey = [[0.9 if x < 3 and y < 2 else 0.05 + 0.04 * x + 0.05 * y for x in range(W)] for y in range(H)]
+    exr(os.path.join(out, "fmt-grey.exr"), {"Y": grey})
+    exr(
+        os.path.join(out, "fmt-rgba.exr"),
+        {
+            "R": [[linear(px[0]) for px in row] for row in rows],
+            "G": [[linear(px[1]) for px in row] for row in rows],
+            "B": [[linear(px[2]) for px in row] for row in rows],
+            "A": [[px[3] / 255.0 for px in row] for row in alpha],
+        },
+    )
 
 
 if __name__ == "__main__":

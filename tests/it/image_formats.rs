@@ -32,12 +32,19 @@ fn every_format_decodes_to_the_same_picture_the_right_way_up() {
         ("fmt.hdr", 0.005),
         // Lossy.
         ("fmt.jpg", 0.08),
+        // Linear floats, with an alpha channel beside them.
+        ("fmt-rgba.exr", 1e-6),
     ] {
         let got = texture(name);
         let worst = largest_difference(&got, &png);
         assert!(worst <= tolerance, "{name}: off by {worst} (tolerance {tolerance})");
         assert!(got[0][0] > 0.8 && got[16 * 7][0] < 0.2, "{name} is flipped");
     }
+    // A luminance-only EXR reads as grey: its block in the top left, a ramp beside it.
+    let grey = texture("fmt-grey.exr");
+    assert!(grey.iter().all(|p| p[0] == p[1] && p[1] == p[2]), "fmt-grey.exr is not grey");
+    assert!((grey[0][0] - 0.9).abs() < 1e-6 && (grey[16 * 7 + 15][0] - 1.0).abs() < 1e-6);
+    assert!((grey[16 * 7][0] - 0.4).abs() < 1e-6, "fmt-grey.exr is flipped");
 }
 
 fn textured(syntax_v4: bool, file: &str) -> String {

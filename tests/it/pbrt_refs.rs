@@ -610,6 +610,20 @@ fn textures_and_skies_of_every_image_format_read_as_in_pbrt_v3_and_v4() {
 }
 
 #[test]
+fn grey_and_rgba_exr_textures_read_as_in_pbrt_v3_and_v4() {
+    // A luminance-only EXR (channel Y) as a colour, a mix amount and (v3) with gamma
+    // on; an RGBA EXR as a colour and as float textures: pbrt-v3 takes the colour's
+    // luminance, pbrt-v4 the alpha (also cutting a tile). pbrt-v3's own 64-iteration
+    // image: 0.21% (the reference's first iterations); ours 0.56%, 0.66% (seeds 0, 1).
+    // With the grey EXR unread (its stand-in texel, as before grey EXRs were read): 15%.
+    assert_matches_pbrt("v3-exr-channels", 0.02);
+    // pbrt-v4's own 64-sample images (seeds 1, 2): 1.55%, 1.40%; ours 0.99%, 1.27%,
+    // 0.72% (seeds 0–2). With the RGBA file's alpha unread (its colours' mean, as
+    // before): 21%.
+    assert_matches_pbrt("v4-exr-channels", v4_bound(0.0148));
+}
+
+#[test]
 fn the_environment_camera_sees_every_direction_as_pbrt_v3() {
     // A room seen whole, latitude by longitude. pbrt-v3's own 64-iteration image:
     // worst tile 1.16%; ours 1.1–1.7% over three seeds. As the perspective camera it
