@@ -32,6 +32,7 @@ pub enum Fix {
     MapIlluminance,
     SubsurfaceWalk,
     RoughTransmission,
+    PortalPhotons,
 }
 
 /// Name, the pbrt versions that have the bug, and what fixing it changes.
@@ -43,7 +44,7 @@ pub struct FixInfo {
 }
 
 /// Every fix, in the order `--fix help` lists them.
-pub const FIXES: [FixInfo; 16] = [
+pub const FIXES: [FixInfo; 17] = [
     FixInfo {
         fix: Fix::PlasticFresnel,
         name: "plastic-fresnel",
@@ -166,6 +167,15 @@ pub const FIXES: [FixInfo; 16] = [
                  that face both ways, as in pbrt-v4; pbrt-v3 also transmits through those facing away, which \
                  only next-event estimation finds and its MIS weights count in part, so each integrator keeps \
                  a different share of that light (a frosted glass ball about 2% brighter than fixed)",
+    },
+    FixInfo {
+        fix: Fix::PortalPhotons,
+        name: "portal-photons",
+        versions: "v4",
+        effect: "SPPM's photons from an infinite light with a portal enter through the portal; pbrt-v4 \
+                 sends them from the portal's half of the sky across the whole scene, so its sky also \
+                 lights what is outside and comes in through other openings, where the light itself \
+                 shows black and gives no direct light",
     },
 ];
 

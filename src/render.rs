@@ -578,16 +578,17 @@ impl RenderScene {
         Some((info, info.first_light + hit.local.prim()))
     }
 
-    /// What light `idx` sends back along a ray in direction `wi` that found `hit` (or
-    /// escaped): its emission where the ray hit that very light, the sky's where it
-    /// escaped; 0 where it found anything else. For MIS with the light's density.
-    pub fn chosen_light_along(&self, hit: Option<&Hit>, idx: usize, wi: Vec3) -> Rgb {
+    /// What light `idx` sends back along `ray` that found `hit` (or escaped): its
+    /// emission where the ray hit that very light, the sky's where it escaped; 0 where
+    /// it found anything else. For MIS with the light's density.
+    pub fn chosen_light_along(&self, hit: Option<&Hit>, idx: usize, ray: &Ray) -> Rgb {
+        let wi = ray.d.0;
         match hit {
             Some(hit) => match self.emitter(hit) {
                 Some((_, l)) if l as usize == idx => self.emitted(hit, &self.geometry.interaction(hit), -wi),
                 _ => Vec3::ZERO,
             },
-            None => self.emission_of(idx, self.lights[idx].le_escaped(wi)),
+            None => self.emission_of(idx, self.lights[idx].le_escaped(ray.o.0, wi)),
         }
     }
 

@@ -715,7 +715,7 @@ fn camera_path(
         let Some(hit) = hit else {
             if depth == 0 || specular_bounce || sky_always {
                 for (k, l) in scene.lights.iter().enumerate() {
-                    ld += beta * scene.emission_of(k, l.le_escaped(ray.d.0));
+                    ld += beta * scene.emission_of(k, l.le_escaped(ray.o.0, ray.d.0));
                 }
             }
             break;
@@ -961,14 +961,14 @@ fn bsdf_strategy(
     // trace draws numbers, which the path after it must find in their places.)
     let li = if !scene.media.is_empty() {
         let (hit, tr) = trace_lit(scene, &ray, || here.medium_toward(scene, si, s.wi), sampler);
-        tr * scene.chosen_light_along(hit.as_ref(), idx, s.wi)
+        tr * scene.chosen_light_along(hit.as_ref(), idx, &ray)
     } else if !matches!(light, Light::Area(_)) {
         match scene.hits_anything(&ray) {
             true => Vec3::ZERO,
-            false => scene.chosen_light_along(None, idx, s.wi),
+            false => scene.chosen_light_along(None, idx, &ray),
         }
     } else if scene.may_reach_light(idx, &ray) {
-        scene.chosen_light_along(scene.intersect(&ray).as_ref(), idx, s.wi)
+        scene.chosen_light_along(scene.intersect(&ray).as_ref(), idx, &ray)
     } else {
         Vec3::ZERO
     };
@@ -992,10 +992,11 @@ fn emitted_along(
     here: Here,
     sampler: &mut impl Sampler,
 ) -> Rgb {
-    let (hit, tr) = trace_lit(scene, &si.spawn_ray(Vector3(wi)), || here.medium_toward(scene, si, wi), sampler);
+    let ray = si.spawn_ray(Vector3(wi));
+    let (hit, tr) = trace_lit(scene, &ray, || here.medium_toward(scene, si, wi), sampler);
     tr * match hit {
         Some(hit) => scene.emitted(&hit, &scene.geometry.interaction(&hit), -wi),
-        None => scene.lights.iter().enumerate().map(|(k, l)| scene.emission_of(k, l.le_escaped(wi))).sum(),
+        None => scene.lights.iter().enumerate().map(|(k, l)| scene.emission_of(k, l.le_escaped(ray.o.0, wi))).sum(),
     }
 }
 
@@ -1150,7 +1151,13 @@ fn emit_photon(scene: &RenderScene, sampler: &mut impl Sampler, time: Option<f32
     }
     let light: &Light = &scene.lights[li];
     let (u1, u2) = (sampler.get2d(), sampler.get2d());
-    let e = light.sample_le(&scene.geometry.shapes, scene.world, u1, u2)?;
+    let e = match light {
+        // DEVIATION(pbrt): appearance, `--fix portal-photons`: through the portal only.
+        Light::Infinite(sky) if scene.fixes.has(Fix::PortalPhotons) => {
+            sky.sample_le_through_portal(scene.world, u1, u2)?
+        }
+        _ => light.sample_le(&scene.geometry.shapes, scene.world, u1, u2)?,
+    };
     if scene.emission_masked(light, e.surface.as_ref()) || e.pdf_pos <= 0.0 || e.pdf_dir <= 0.0 || e.le == Vec3::ZERO {
         return None;
     }

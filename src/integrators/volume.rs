@@ -140,7 +140,7 @@ pub fn direct_light(scene: &RenderScene, mp: &MediumPoint, sampler: &mut impl Sa
         let s = mp.phase.sample(mp.wo, u_phase);
         let ray = Ray::new(Point3(mp.p), crate::math::Vector3(s.wi)).at_time(mp.time);
         let (hit, tr) = trace(scene, &ray, Some(mp.medium), sampler);
-        let li = scene.chosen_light_along(hit.as_ref(), idx, s.wi);
+        let li = scene.chosen_light_along(hit.as_ref(), idx, &ray);
         if li != Vec3::ZERO {
             let light_pdf = light.pdf_li(&scene.geometry.shapes, mp.p, s.wi);
             if light_pdf > 0.0 {

@@ -6,7 +6,10 @@
 //! LightSource "infinite" "rgb L" [.1 .1 .1]
 //! LightSource "infinite" "string mapname" "sky.exr"            # v3: latitude-longitude
 //! LightSource "infinite" "string filename" "sky.exr" "float illuminance" 1000   # v4: equal-area
+//! LightSource "infinite" "string filename" "sky.exr" "point3 portal" [...]      # v4: a window
 //! ```
+//! A v4 `portal` (four world-space corners) lets the sky in through that rectangle
+//! alone ([`super::portal`]); without a map, the portal's sky is a 1×1 map of `L`.
 //! (`mapname` in a v4 file, which pbrt-v4 does not know, is read as pbrt-v3 reads it.)
 //! v4's `illuminance` scales the light so that an upward-facing surface (light-space
 //! +z) receives that many lux, computed as pbrt-v4 computes it (for a map, with half
@@ -18,6 +21,7 @@
 
 use super::envmap::{EnvMap, Mapping};
 use super::params::{LightContext, emission, finite_image, illuminance, in_range};
+use super::portal::{Portal, PortalMap};
 use super::{Emission, LightKind, LightSample, WorldSphere};
 use crate::fixes::{Fix, Fixes};
 use crate::imageio::RgbImage;
@@ -58,22 +62,65 @@ pub struct Infinite {
     /// `l` was scaled to an `illuminance` by pbrt-v4's measure of an equal-area map,
     /// which `--fix map-illuminance` corrects.
     pub pbrt_map_illuminance: bool,
+    /// A v4 portal, with the light's orientation (its map's, or the CTM's without one).
+    pub portal: Option<Box<(Portal, DMat3)>>,
 }
 
 pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res<LightKind> {
-    values::ignored(p, &["portal"], "portals are not supported; the whole map is sampled", ctx.warnings);
+    let portal = match ctx.syntax {
+        Syntax::V4 => portal(p, ctx.warnings)?,
+        Syntax::V3 => {
+            values::ignored(p, &["portal"], "pbrt-v3 has no portals", ctx.warnings);
+            None
+        }
+    };
     let mut l = emission(p, "L", &ctx.spectra, span)?;
     let map = map(p, m, ctx)?;
     let mut pbrt_map_illuminance = false;
     if let Some(e) = illuminance(p)? {
-        pbrt_map_illuminance = map.as_ref().is_some_and(|env| env.mapping == Mapping::EqualArea);
+        // A portal without a map has pbrt-v4's 1×1 map of L.
+        let one_texel = || RgbImage::from_pixels(1, 1, vec![[1.0; 3]]);
+        pbrt_map_illuminance = portal.is_some() || map.as_ref().is_some_and(|env| env.mapping == Mapping::EqualArea);
         let up = match &map {
+            None if portal.is_some() => upper_hemisphere_illuminance(&one_texel(), Mapping::EqualArea) * luminance(l),
             None => PI * luminance(l),
             Some(env) => upper_hemisphere_illuminance(&env.image, env.mapping) * luminance(l),
         };
         l = in_range(p, "L", l * (e / up.max(1e-9)), span)?;
     }
-    Ok(LightKind::Infinite(Infinite { l, map, pbrt_map_illuminance }))
+    // A latitude-longitude map (v3's `mapname` in a v4 file) has no portal in pbrt-v4.
+    let portal = match &map {
+        Some(env) if env.mapping == Mapping::Equirect && portal.is_some() => {
+            let at = p.named("portal").map_or(span, |q| q.span);
+            let msg = "infinite: a portal needs pbrt-v4's equal-area map (\"filename\"); it is ignored";
+            ctx.warnings.push(Diagnostic::warning(at, msg));
+            None
+        }
+        _ => portal.map(|portal| Box::new((portal, DMat3::from_mat4(*m)))),
+    };
+    Ok(LightKind::Infinite(Infinite { l, map, pbrt_map_illuminance, portal }))
+}
+
+/// A v4 `point3 portal`: four corners making a rectangle, as pbrt-v4 requires (it
+/// warns where they do not, and renders).
+fn portal(p: &ParamList, warnings: &mut Vec<Diagnostic>) -> Res<Option<Portal>> {
+    let Some(param) = p.array("portal", crate::parser::params::ParamType::Point3)? else { return Ok(None) };
+    let v = param.floats();
+    if v.len() != 12 {
+        let msg = format!("infinite: a portal needs 4 corners, found {}", v.len() / 3);
+        return Err(Diagnostic::error(param.value_span, msg));
+    }
+    let corner = |i: usize| DVec3::new(v[3 * i] as f64, v[3 * i + 1] as f64, v[3 * i + 2] as f64);
+    let Some(portal) =
+        Portal::new([corner(0), corner(1), corner(2), corner(3)]).filter(|_| v.iter().all(|x| x.is_finite()))
+    else {
+        return Err(Diagnostic::error(param.value_span, "infinite: the portal's corners make no rectangle"));
+    };
+    if !portal.is_rectangle() {
+        let msg = "infinite: the portal is not a planar rectangle (pbrt-v4 warns too, and renders)";
+        warnings.push(Diagnostic::warning(param.value_span, msg));
+    }
+    Ok(Some(portal))
 }
 
 /// The map `mapname` (v3) or `filename` (v4) names, if it can be read.
@@ -147,6 +194,10 @@ impl Infinite {
     /// (atan2(x, −z)/2π, acos(y)/π) where pbrt reads (atan2(y, x)/2π, acos(z)/π): its
     /// axes are ours through a reflection, (x, y, z)_mitsuba = (y, z, −x)_pbrt.
     pub fn mitsuba(&self, world_from_light: &DMat4, notes: &mut Vec<Unsupported>) -> LightOut {
+        if self.portal.is_some() {
+            let why = "Mitsuba has no portals: the whole sky lights the scene there";
+            notes.push(Unsupported::new("", "infinite light portal", why));
+        }
         let (l, Some(map)) = (self.l, &self.map) else { return LightOut::Constant { radiance: self.l.to_array() } };
         let path = std::path::absolute(&map.path).unwrap_or_else(|_| map.path.clone());
         if map.mapping == Mapping::EqualArea {
@@ -173,6 +224,8 @@ impl Infinite {
 pub struct InfiniteLight {
     pub l: Rgb,
     pub map: Option<Arc<EnvMap>>,
+    /// Where a portal is given, the sky seen through it (the map is then unused).
+    pub portal: Option<Arc<PortalMap>>,
 }
 
 impl InfiniteLight {
@@ -180,12 +233,25 @@ impl InfiniteLight {
         // DEVIATION(pbrt): appearance, `--fix map-illuminance`: the texels' true solid
         // angle, 4π/(w·h), where pbrt-v4 counts 2π/(w·h) and so doubles the light.
         let l = if d.pbrt_map_illuminance && fixes.has(Fix::MapIlluminance) { d.l * 0.5 } else { d.l };
-        let map = d.map.as_ref().map(|m| Arc::new(EnvMap::new(m.image.clone(), l, m.world_from_light, m.mapping)));
-        InfiniteLight { l, map }
+        let portal = d.portal.as_deref().map(|&(portal, world_from_light)| {
+            let map = match &d.map {
+                Some(m) => PortalMap::new(&m.image.pixels, m.image.width, l, m.world_from_light, portal),
+                None => PortalMap::new(&[[1.0; 3]], 1, l, world_from_light, portal),
+            };
+            Arc::new(map)
+        });
+        let map = match portal {
+            Some(_) => None,
+            None => d.map.as_ref().map(|m| Arc::new(EnvMap::new(m.image.clone(), l, m.world_from_light, m.mapping))),
+        };
+        InfiniteLight { l, map, portal }
     }
 
     #[inline]
     pub fn power(&self, world: WorldSphere) -> f64 {
+        if let Some(portal) = &self.portal {
+            return portal.power;
+        }
         let r2 = (world.radius as f64).powi(2);
         let lum = match &self.map {
             None => luminance(self.l),
@@ -194,11 +260,13 @@ impl InfiniteLight {
         lum as f64 * std::f64::consts::PI * r2
     }
 
+    /// Incident light at `p` (only a portal's depends on `p`).
     #[inline]
-    pub fn sample_li(&self, u: [f32; 2]) -> Option<LightSample> {
-        let (wi, li, pdf) = match &self.map {
-            None => (uniform_sphere(u), self.l, 1.0 / (4.0 * PI)),
-            Some(env) => {
+    pub fn sample_li(&self, p: Vec3, u: [f32; 2]) -> Option<LightSample> {
+        let (wi, li, pdf) = match (&self.portal, &self.map) {
+            (Some(portal), _) => portal.sample_li(p, u)?,
+            (None, None) => (uniform_sphere(u), self.l, 1.0 / (4.0 * PI)),
+            (None, Some(env)) => {
                 let (wi, pdf) = env.sample(u)?;
                 (wi, env.le(wi), pdf)
             }
@@ -206,12 +274,13 @@ impl InfiniteLight {
         (pdf > 0.0).then_some(LightSample { wi, li, pdf, p_light: None, delta: false, surface: None })
     }
 
-    /// The solid-angle density `sample_li` gives direction `wi`.
+    /// The solid-angle density `sample_li` gives direction `wi` at `p`.
     #[inline]
-    pub fn pdf_li(&self, wi: Vec3) -> f32 {
-        match &self.map {
-            None => 1.0 / (4.0 * PI),
-            Some(env) => env.pdf(wi),
+    pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
+        match (&self.portal, &self.map) {
+            (Some(portal), _) => portal.pdf_li(p, wi),
+            (None, None) => 1.0 / (4.0 * PI),
+            (None, Some(env)) => env.pdf(wi),
         }
     }
 
@@ -220,9 +289,13 @@ impl InfiniteLight {
     #[inline]
     pub fn sample_le(&self, world: WorldSphere, u1: [f32; 2], u2: [f32; 2]) -> Option<Emission> {
         // w points toward the environment; photons travel along d = −w.
-        let (w, pdf_dir, le) = match &self.map {
-            None => (uniform_sphere(u1), 1.0 / (4.0 * PI), self.l),
-            Some(env) => {
+        let (w, pdf_dir, le) = match (&self.portal, &self.map) {
+            (Some(portal), _) => {
+                let (w, le, pdf) = portal.sample_direction(u1)?;
+                (w, pdf, le)
+            }
+            (None, None) => (uniform_sphere(u1), 1.0 / (4.0 * PI), self.l),
+            (None, Some(env)) => {
                 let (w, pdf) = env.sample(u1)?;
                 (w, pdf, env.le(w))
             }
@@ -235,18 +308,35 @@ impl InfiniteLight {
         Some(Emission { ray, n: d, pdf_pos: 1.0 / (PI * r * r), pdf_dir, le, surface: None })
     }
 
-    /// (position, direction) densities of an emission travelling along `d`.
-    #[inline]
-    pub fn pdf_le(&self, world: WorldSphere, d: Vec3) -> (f32, f32) {
-        (1.0 / (PI * world.radius * world.radius), self.pdf_li(-d))
+    /// An emission for bidirectional methods: through the portal where there is one
+    /// ([`PortalMap::sample_through`]), else as [`Self::sample_le`].
+    pub fn sample_le_through_portal(&self, world: WorldSphere, u1: [f32; 2], u2: [f32; 2]) -> Option<Emission> {
+        let Some(portal) = &self.portal else { return self.sample_le(world, u1, u2) };
+        let reach = 2.0 * world.radius as f64 + world.center.as_dvec3().length();
+        let (o, d, le, pdf_pos, pdf_dir) = portal.sample_through(u1, u2, reach)?;
+        Some(Emission { ray: Ray::new(Point3(o), Vector3(d)), n: d, pdf_pos, pdf_dir, le, surface: None })
     }
 
-    /// Radiance along a ray that escapes in direction `d`.
+    /// (position, direction) densities of an emission travelling along `d`: as
+    /// [`Self::sample_le_through_portal`] draws it, which vcm and bdpt use.
     #[inline]
-    pub fn le(&self, d: Vec3) -> Rgb {
-        match &self.map {
-            None => self.l,
-            Some(env) => env.le(d.normalize()),
+    pub fn pdf_le(&self, world: WorldSphere, d: Vec3) -> (f32, f32) {
+        let pdf_dir = match (&self.portal, &self.map) {
+            (Some(portal), _) => return (portal.pdf_position(d), portal.pdf_direction(-d)),
+            (None, None) => 1.0 / (4.0 * PI),
+            (None, Some(env)) => env.pdf(-d),
+        };
+        (1.0 / (PI * world.radius * world.radius), pdf_dir)
+    }
+
+    /// Radiance along a ray from `o` that escapes in direction `d` (only a portal's
+    /// depends on `o`).
+    #[inline]
+    pub fn le(&self, o: Vec3, d: Vec3) -> Rgb {
+        match (&self.portal, &self.map) {
+            (Some(portal), _) => portal.le(o, d.normalize()),
+            (None, None) => self.l,
+            (None, Some(env)) => env.le(d.normalize()),
         }
     }
 }

@@ -33,6 +33,7 @@ pub mod goniometric;
 pub mod infinite;
 pub mod params;
 pub mod point;
+pub mod portal;
 pub mod projection;
 pub mod spot;
 
@@ -243,7 +244,7 @@ impl Light {
             Light::Goniometric(l) => l.sample_li(p),
             Light::Projection(l) => l.sample_li(p),
             Light::Distant(l) => Some(l.sample_li()),
-            Light::Infinite(l) => l.sample_li(u),
+            Light::Infinite(l) => l.sample_li(p, u),
             Light::Area(l) => l.sample_li(shapes, p, u),
         }
     }
@@ -253,7 +254,7 @@ impl Light {
     #[inline]
     pub fn pdf_li(&self, shapes: &ShapeSet, p: Vec3, wi: Vec3) -> f32 {
         match self {
-            Light::Infinite(l) => l.pdf_li(wi),
+            Light::Infinite(l) => l.pdf_li(p, wi),
             Light::Area(l) => l.pdf_li(shapes, p, wi),
             Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Projection(_) | Light::Distant(_) => 0.0,
         }
@@ -315,10 +316,11 @@ impl Light {
         }
     }
 
-    /// Radiance from an infinite light along a ray that escapes.
-    pub fn le_escaped(&self, d: Vec3) -> Rgb {
+    /// Radiance from an infinite light along a ray from `o` that escapes in direction
+    /// `d`.
+    pub fn le_escaped(&self, o: Vec3, d: Vec3) -> Rgb {
         match self {
-            Light::Infinite(l) => l.le(d),
+            Light::Infinite(l) => l.le(o, d),
             _ => Vec3::ZERO,
         }
     }

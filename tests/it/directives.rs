@@ -700,3 +700,25 @@ fn pbrt_v4_lights_emit_their_spectrum_at_luminance_one_and_v3_lights_as_given() 
     let v3 = point_intensity("WorldBegin LightSource \"point\" \"spectrum I\" [300 5 800 5] WorldEnd");
     assert!((luminance(v3) - 5.0).abs() < 0.05, "{v3}");
 }
+
+/// A v4 `portal` must be a rectangle (pbrt-v4 warns where it is not, and renders); a
+/// v3 file's is unknown to pbrt-v3; a latitude-longitude map (`mapname`) has none.
+#[test]
+fn infinite_light_portals_are_read_as_each_pbrt_reads_them() {
+    let light = |film: &str, extra: &str, corners: &str| {
+        format!(
+            "{film}\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1] {extra}\n  \"point3 portal\" [{corners}]\n\
+             Shape \"sphere\"\nWorldEnd"
+        )
+    };
+    let square = "0 0 0  0 1 0  1 1 0  1 0 0";
+    let portal_warnings = |w: Vec<String>| w.into_iter().filter(|m| m.contains("portal")).collect::<Vec<_>>();
+    assert!(portal_warnings(warnings(&scene(&light("Film \"rgb\"", "", square)))).is_empty());
+    let skewed = portal_warnings(warnings(&scene(&light("Film \"rgb\"", "", "0 0 0  0 1 0  1.5 1 0  1 0 0"))));
+    assert!(skewed.len() == 1 && skewed[0].contains("not a planar rectangle"), "{skewed:?}");
+    let v3 = portal_warnings(warnings(&scene(&light("Film \"image\"", "", square).replace("rgb L", "color L"))));
+    assert!(v3.len() == 1 && v3[0].contains("pbrt-v3 has no portals"), "{v3:?}");
+    let map = "\"string mapname\" \"../../../pbrt-scenes/verify/textures/gonio-latlong.exr\"";
+    let latlong = portal_warnings(warnings(&scene(&light("Film \"rgb\"", map, square))));
+    assert!(latlong.len() == 1 && latlong[0].contains("equal-area map"), "{latlong:?}");
+}

@@ -543,7 +543,7 @@ impl Cameras<'_> {
         let scene = self.pass.scene;
         let mut sum = Vec3::ZERO;
         for (k, light) in scene.lights.iter().enumerate() {
-            let le = scene.emission_of(k, light.le_escaped(d));
+            let le = scene.emission_of(k, light.le_escaped(prev, d));
             if le == Vec3::ZERO {
                 continue;
             }

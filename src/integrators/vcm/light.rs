@@ -270,7 +270,10 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let (u1, u2) = (s.get2d(), s.get2d());
     let e = match &pass.cones[li] {
         Some(cone) => super::aim::emit(light, cone, u1),
-        None => light.sample_le(&scene.geometry.shapes, scene.world, u1, u2)?,
+        None => match light {
+            Light::Infinite(sky) => sky.sample_le_through_portal(scene.world, u1, u2)?,
+            _ => light.sample_le(&scene.geometry.shapes, scene.world, u1, u2)?,
+        },
     };
     if scene.emission_masked(light, e.surface.as_ref()) || e.pdf_pos <= 0.0 || e.pdf_dir <= 0.0 || e.le == Vec3::ZERO {
         return None;
@@ -278,12 +281,12 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let d = e.ray.d.0.normalize();
     let (pick, cos) = (pick as f64, e.n.dot(d).abs() as f64);
     let emission = pick * e.pdf_pos as f64 * e.pdf_dir as f64;
-    // Next-event estimation's density of the same emission point: an area light's is
-    // found at the first hit (it may depend on the point lit).
+    // Next-event estimation's density of the same emission point: an area light's
+    // and a portal's are found at the first hit (they depend on the point lit).
     let nee = pass.nee_pick(li);
     let direct = match light {
+        _ if density_at_first_hit(light) => 1.0,
         Light::Infinite(_) => nee * e.pdf_dir as f64,
-        Light::Area(_) => 1.0,
         _ => nee,
     };
     let cos_used = if is_finite(light) { cos } else { 1.0 };
@@ -295,6 +298,16 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let time = pass.time.unwrap_or_else(|| scene.camera.time(s.get1d()));
     let ray = Ray::new(e.ray.o, Vector3(d)).at_time(time);
     Some(Start { ray, beta, partial, light, pick: nee, cos, medium })
+}
+
+/// Whether next-event estimation's density of a light subpath's first direction
+/// depends on the point it reaches: an area light's, a portal's.
+fn density_at_first_hit(light: &Light) -> bool {
+    match light {
+        Light::Area(_) => true,
+        Light::Infinite(sky) => sky.portal.is_some(),
+        _ => false,
+    }
 }
 
 /// Whether a light has a position (distances to it count).
@@ -342,11 +355,12 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
         len += 1;
         n.vertices += 1;
         let dist2 = (place.p - prev).length_squared() as f64;
-        if len == 1 && matches!(light, Light::Area(_)) {
+        if len == 1 && density_at_first_hit(light) {
             // Measured from the point offset off the surface, as light samples are.
             let from = place.origin_toward(wo);
             let pdf = light.pdf_li(&scene.geometry.shapes, from.0, wo) as f64;
-            partial.vcm *= mis::mis(pick * pdf * cos / dist2);
+            let per_area = if is_finite(light) { cos / dist2 } else { 1.0 };
+            partial.vcm *= mis::mis(pick * pdf * per_area);
         }
         partial.arrive((len > 1 || is_finite(light)).then_some(dist2), at.measure(wo, place.ng));
         if !at.in_medium() && wo.dot(place.ng) == 0.0 {

@@ -63,6 +63,9 @@ impl Builder {
         if syntax == Syntax::V4 {
             found.extend(self.unnormalized_emitters().map(|at| (at, Fix::MediumEmission)));
             found.extend(self.illuminated_maps().map(|at| (at, Fix::MapIlluminance)));
+            if self.photon_statement().is_some() {
+                found.extend(self.portals().map(|at| (at, Fix::PortalPhotons)));
+            }
         }
         if syntax == Syntax::V3
             && let Some(at) = self.first_motion
@@ -86,6 +89,12 @@ impl Builder {
             let lux = crate::lights::params::illuminance(&e.params).ok().flatten().is_some();
             (map && lux).then(|| e.params.named("illuminance").map_or(e.name_span, |p| p.span))
         })
+    }
+
+    /// `portal-photons`: v4 infinite lights with a portal, at the `portal` parameter.
+    fn portals(&self) -> impl Iterator<Item = Span> + '_ {
+        let infinite = self.pending_lights.iter().map(|(e, _)| e).filter(|e| e.name == crate::lights::infinite::NAME);
+        infinite.filter_map(|e| e.params.named("portal").map(|p| p.span))
     }
 
     /// `mesh-power` and `area-alpha` for one emitting world shape, at its
