@@ -76,6 +76,16 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
     };
     let mut l = emission(p, "L", &ctx.spectra, span)?;
     let map = map(p, m, ctx)?;
+    // A latitude-longitude map (v3's `mapname` in a v4 file) has no portal in pbrt-v4.
+    let portal = match &map {
+        Some(env) if env.mapping == Mapping::Equirect && portal.is_some() => {
+            let at = p.named("portal").map_or(span, |q| q.span);
+            let msg = "infinite: a portal needs pbrt-v4's equal-area map (\"filename\"); it is ignored";
+            ctx.warnings.push(Diagnostic::warning(at, msg));
+            None
+        }
+        _ => portal.map(|portal| Box::new((portal, DMat3::from_mat4(*m)))),
+    };
     let mut pbrt_map_illuminance = false;
     if let Some(e) = illuminance(p)? {
         // A portal without a map has pbrt-v4's 1×1 map of L.
@@ -88,16 +98,6 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
         };
         l = in_range(p, "L", l * (e / up.max(1e-9)), span)?;
     }
-    // A latitude-longitude map (v3's `mapname` in a v4 file) has no portal in pbrt-v4.
-    let portal = match &map {
-        Some(env) if env.mapping == Mapping::Equirect && portal.is_some() => {
-            let at = p.named("portal").map_or(span, |q| q.span);
-            let msg = "infinite: a portal needs pbrt-v4's equal-area map (\"filename\"); it is ignored";
-            ctx.warnings.push(Diagnostic::warning(at, msg));
-            None
-        }
-        _ => portal.map(|portal| Box::new((portal, DMat3::from_mat4(*m)))),
-    };
     Ok(LightKind::Infinite(Infinite { l, map, pbrt_map_illuminance, portal }))
 }
 

@@ -302,7 +302,9 @@ impl Light {
     /// The (position, direction) densities `sample_le` has for an emission it did not
     /// necessarily draw: a ray leaving `ray.o` (on an area light, where its oriented
     /// normal is `n`) along the unit direction `ray.d` (pbrt's `PDF_Le`). Delta
-    /// positions and directions have density 0 here, as in pbrt.
+    /// positions and directions have density 0 here, as in pbrt. A portal sky's are
+    /// those of its emission through the portal, which vcm and bdpt draw
+    /// ([`infinite::InfiniteLight::sample_le_through_portal`]), not SPPM's photons'.
     #[inline]
     pub fn pdf_le(&self, shapes: &ShapeSet, world: WorldSphere, ray: &Ray, n: Vec3) -> (f32, f32) {
         match self {
