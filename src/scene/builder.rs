@@ -1103,12 +1103,9 @@ impl Builder {
 
     // ---- lights -----------------------------------------------------------------
 
+    /// A `LightSource`. Inside an object definition too, as both pbrts take it: one
+    /// light, placed by the CTM there, whether or how often the object is instanced.
     fn light(&mut self, e: Entity) -> Res<()> {
-        if self.current_object.is_some() {
-            let what = format!("LightSource \"{}\"", e.name);
-            self.skip(e.name_span, what, "lights inside object definitions are not supported".into());
-            return Ok(());
-        }
         if let Some(p) = e.params.named("mapname") {
             self.reader.note_evidence(Syntax::V3, p.span, "\"mapname\"");
         }

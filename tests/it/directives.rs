@@ -722,3 +722,21 @@ fn infinite_light_portals_are_read_as_each_pbrt_reads_them() {
     let latlong = portal_warnings(warnings(&scene(&light("Film \"rgb\"", map, square))));
     assert!(latlong.len() == 1 && latlong[0].contains("equal-area map"), "{latlong:?}");
 }
+
+/// A `LightSource` inside an object definition is one light, placed by the CTM there,
+/// as both pbrts create it: not dropped, and not copied by the object's instances.
+#[test]
+fn a_light_in_an_object_definition_is_one_light_where_it_is_defined() {
+    for (film, world_end) in [("Film \"image\"", "WorldEnd"), ("Film \"rgb\"", "")] {
+        let s = scene(&format!(
+            "{film}\nWorldBegin\nAttributeBegin\nTranslate 0 2 0\nObjectBegin \"lamp\"\n\
+             LightSource \"point\" \"rgb I\" [5 5 5]\nShape \"sphere\" \"float radius\" 0.1\nObjectEnd\n\
+             AttributeEnd\nAttributeBegin\nTranslate 3 0 0\nObjectInstance \"lamp\"\nAttributeEnd\n\
+             ObjectInstance \"lamp\"\nShape \"sphere\"\n{world_end}"
+        ));
+        assert_eq!(s.lights.len(), 1, "{film}");
+        let pbrt_sppm::lights::LightKind::Point(p) = &s.lights[0].kind else { panic!("not a point light") };
+        assert_eq!(p.position, glam::DVec3::new(0.0, 2.0, 0.0), "{film}");
+        assert!(!warnings(&s).iter().any(|w| w.contains("LightSource")), "{film}: {:?}", warnings(&s));
+    }
+}
