@@ -236,7 +236,7 @@ struct Builder {
     transform_times: [f64; 2],
     /// The first statement that makes something move (a shape, an instance, the camera).
     first_motion: Option<Span>,
-    /// `LightSource` statements (outside object definitions) and the CTM at each.
+    /// `LightSource` statements (inside object definitions too) and the CTM at each.
     pending_lights: Vec<(Entity, DMat4)>,
     area_light_entities: Vec<(Entity, Option<u32>)>,
     /// Indices into `area_light_entities` of the area lights shapes use, by built index.
