@@ -1,7 +1,7 @@
 //! Light sources, one module per type, each owning its parameters (defaults per
 //! version, located errors), its sampling and evaluation, and its Mitsuba export:
 //! [`point`], [`spot`], [`goniometric`], [`projection`], [`distant`], [`infinite`] (with
-//! [`envmap`]) and the area light
+//! [`envmap`] and [`portal`]) and the area light
 //! [`diffuse`]. [`REGISTRY`] is the one list of `LightSource` types.
 //!
 //! ```text

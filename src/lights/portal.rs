@@ -292,11 +292,13 @@ impl PortalMap {
     /// as [`Self::sample_direction`], a point uniform on the portal, and the ray
     /// arriving there from `reach` beyond it. Returns (origin, direction of travel,
     /// radiance, position density across the direction, direction density).
-    // DEVIATION(pbrt): noise only. pbrt-v4 starts every portal light's emission on a
-    // disk across the scene (its SPPM's photons, which we keep), so light also enters
-    // through openings that are not the portal, where the light's radiance is 0: its
-    // bdpt is biased there (pbrt's own comment says so). vcm and bdpt need emission
-    // and radiance to agree, so their light subpaths enter through the portal.
+    // DEVIATION(pbrt): appearance, always on for vcm and bdpt. pbrt-v4 starts every
+    // portal light's emission on a disk across the scene (its SPPM's photons, which
+    // we keep), so light also enters through openings that are not the portal, where
+    // the light's radiance is 0: its bdpt disagrees with its path tracer there
+    // (pbrt's own comment says so). A bidirectional estimate needs emission and
+    // radiance to agree, so our light subpaths enter through the portal, and vcm and
+    // bdpt render pbrt-v4's `path` image.
     pub fn sample_through(&self, u1: [f32; 2], u2: [f32; 2], reach: f64) -> Option<(Vec3, Vec3, Rgb, f32, f32)> {
         let (w, le, pdf_dir) = self.sample_direction(u1)?;
         let c = &self.portal.corners;
