@@ -119,7 +119,10 @@ mod tests {
     #[test]
     fn each_light_keeps_a_stratified_rest() {
         let shapes = ShapeSet::default();
-        let sky = Light::Infinite(crate::lights::infinite::InfiniteLight { l: Vec3::ONE, map: None, portal: None });
+        let sky = Light::Infinite(crate::lights::infinite::InfiniteLight {
+            l: Vec3::ONE,
+            sky: crate::lights::infinite::Sky::Uniform,
+        });
         let lights = [point(Vec3::new(0.0, 0.0, 1.0), 1.0), sky, point(Vec3::new(0.0, 0.0, 3.0), 1.0)];
         let choice = LightChoice::new(&lights, &shapes).expect("few lights");
         let n = 6_000;

@@ -219,13 +219,22 @@ impl Infinite {
     }
 }
 
+/// What an infinite light shows in each direction.
+#[derive(Clone, Debug)]
+pub enum Sky {
+    /// Its `L` everywhere.
+    Uniform,
+    /// An environment map (scaled by `L`).
+    Map(Arc<EnvMap>),
+    /// A v4 map (or `L`) seen only through a portal.
+    Portal(Arc<PortalMap>),
+}
+
 /// An infinite light ready to sample.
 #[derive(Clone, Debug)]
 pub struct InfiniteLight {
     pub l: Rgb,
-    pub map: Option<Arc<EnvMap>>,
-    /// Where a portal is given, the sky seen through it (the map is then unused).
-    pub portal: Option<Arc<PortalMap>>,
+    pub sky: Sky,
 }
 
 impl InfiniteLight {
@@ -233,40 +242,36 @@ impl InfiniteLight {
         // DEVIATION(pbrt): appearance, `--fix map-illuminance`: the texels' true solid
         // angle, 4π/(w·h), where pbrt-v4 counts 2π/(w·h) and so doubles the light.
         let l = if d.pbrt_map_illuminance && fixes.has(Fix::MapIlluminance) { d.l * 0.5 } else { d.l };
-        let portal = d.portal.as_deref().map(|&(portal, world_from_light)| {
-            let map = match &d.map {
-                Some(m) => PortalMap::new(&m.image.pixels, m.image.width, l, m.world_from_light, portal),
-                None => PortalMap::new(&[[1.0; 3]], 1, l, world_from_light, portal),
-            };
-            Arc::new(map)
-        });
-        let map = match portal {
-            Some(_) => None,
-            None => d.map.as_ref().map(|m| Arc::new(EnvMap::new(m.image.clone(), l, m.world_from_light, m.mapping))),
+        let sky = match (d.portal.as_deref(), &d.map) {
+            (Some(&(portal, _)), Some(m)) => {
+                Sky::Portal(Arc::new(PortalMap::new(&m.image.pixels, m.image.width, l, m.world_from_light, portal)))
+            }
+            (Some(&(portal, world_from_light)), None) => {
+                Sky::Portal(Arc::new(PortalMap::new(&[[1.0; 3]], 1, l, world_from_light, portal)))
+            }
+            (None, Some(m)) => Sky::Map(Arc::new(EnvMap::new(m.image.clone(), l, m.world_from_light, m.mapping))),
+            (None, None) => Sky::Uniform,
         };
-        InfiniteLight { l, map, portal }
+        InfiniteLight { l, sky }
     }
 
     #[inline]
     pub fn power(&self, world: WorldSphere) -> f64 {
-        if let Some(portal) = &self.portal {
-            return portal.power;
-        }
-        let r2 = (world.radius as f64).powi(2);
-        let lum = match &self.map {
-            None => luminance(self.l),
-            Some(env) => env.average_luminance,
+        let lum = match &self.sky {
+            Sky::Portal(portal) => return portal.power,
+            Sky::Uniform => luminance(self.l),
+            Sky::Map(env) => env.average_luminance,
         };
-        lum as f64 * std::f64::consts::PI * r2
+        lum as f64 * std::f64::consts::PI * (world.radius as f64).powi(2)
     }
 
     /// Incident light at `p` (only a portal's depends on `p`).
     #[inline]
     pub fn sample_li(&self, p: Vec3, u: [f32; 2]) -> Option<LightSample> {
-        let (wi, li, pdf) = match (&self.portal, &self.map) {
-            (Some(portal), _) => portal.sample_li(p, u)?,
-            (None, None) => (uniform_sphere(u), self.l, 1.0 / (4.0 * PI)),
-            (None, Some(env)) => {
+        let (wi, li, pdf) = match &self.sky {
+            Sky::Portal(portal) => portal.sample_li(p, u)?,
+            Sky::Uniform => (uniform_sphere(u), self.l, 1.0 / (4.0 * PI)),
+            Sky::Map(env) => {
                 let (wi, pdf) = env.sample(u)?;
                 (wi, env.le(wi), pdf)
             }
@@ -277,10 +282,10 @@ impl InfiniteLight {
     /// The solid-angle density `sample_li` gives direction `wi` at `p`.
     #[inline]
     pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
-        match (&self.portal, &self.map) {
-            (Some(portal), _) => portal.pdf_li(p, wi),
-            (None, None) => 1.0 / (4.0 * PI),
-            (None, Some(env)) => env.pdf(wi),
+        match &self.sky {
+            Sky::Portal(portal) => portal.pdf_li(p, wi),
+            Sky::Uniform => 1.0 / (4.0 * PI),
+            Sky::Map(env) => env.pdf(wi),
         }
     }
 
@@ -289,15 +294,12 @@ impl InfiniteLight {
     #[inline]
     pub fn sample_le(&self, world: WorldSphere, u1: [f32; 2], u2: [f32; 2]) -> Option<Emission> {
         // w points toward the environment; photons travel along d = −w.
-        let (w, pdf_dir, le) = match (&self.portal, &self.map) {
-            (Some(portal), _) => {
-                let (w, le, pdf) = portal.sample_direction(u1)?;
-                (w, pdf, le)
-            }
-            (None, None) => (uniform_sphere(u1), 1.0 / (4.0 * PI), self.l),
-            (None, Some(env)) => {
+        let (w, le, pdf_dir) = match &self.sky {
+            Sky::Portal(portal) => portal.sample_direction(u1)?,
+            Sky::Uniform => (uniform_sphere(u1), self.l, 1.0 / (4.0 * PI)),
+            Sky::Map(env) => {
                 let (w, pdf) = env.sample(u1)?;
-                (w, pdf, env.le(w))
+                (w, env.le(w), pdf)
             }
         };
         let (d, r) = (-w, world.radius);
@@ -311,7 +313,7 @@ impl InfiniteLight {
     /// An emission for bidirectional methods: through the portal where there is one
     /// ([`PortalMap::sample_through`]), else as [`Self::sample_le`].
     pub fn sample_le_through_portal(&self, world: WorldSphere, u1: [f32; 2], u2: [f32; 2]) -> Option<Emission> {
-        let Some(portal) = &self.portal else { return self.sample_le(world, u1, u2) };
+        let Sky::Portal(portal) = &self.sky else { return self.sample_le(world, u1, u2) };
         let reach = 2.0 * world.radius as f64 + world.center.as_dvec3().length();
         let (o, d, le, pdf_pos, pdf_dir) = portal.sample_through(u1, u2, reach)?;
         Some(Emission { ray: Ray::new(Point3(o), Vector3(d)), n: d, pdf_pos, pdf_dir, le, surface: None })
@@ -321,10 +323,10 @@ impl InfiniteLight {
     /// [`Self::sample_le_through_portal`] draws it, which vcm and bdpt use.
     #[inline]
     pub fn pdf_le(&self, world: WorldSphere, d: Vec3) -> (f32, f32) {
-        let pdf_dir = match (&self.portal, &self.map) {
-            (Some(portal), _) => return (portal.pdf_position(d), portal.pdf_direction(-d)),
-            (None, None) => 1.0 / (4.0 * PI),
-            (None, Some(env)) => env.pdf(-d),
+        let pdf_dir = match &self.sky {
+            Sky::Portal(portal) => return (portal.pdf_position(d), portal.pdf_direction(-d)),
+            Sky::Uniform => 1.0 / (4.0 * PI),
+            Sky::Map(env) => env.pdf(-d),
         };
         (1.0 / (PI * world.radius * world.radius), pdf_dir)
     }
@@ -333,10 +335,10 @@ impl InfiniteLight {
     /// depends on `o`).
     #[inline]
     pub fn le(&self, o: Vec3, d: Vec3) -> Rgb {
-        match (&self.portal, &self.map) {
-            (Some(portal), _) => portal.le(o, d.normalize()),
-            (None, None) => self.l,
-            (None, Some(env)) => env.le(d.normalize()),
+        match &self.sky {
+            Sky::Portal(portal) => portal.le(o, d.normalize()),
+            Sky::Uniform => self.l,
+            Sky::Map(env) => env.le(d.normalize()),
         }
     }
 }

@@ -26,6 +26,9 @@ use glam::{DMat3, DVec3, Vec3};
 use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 
+/// The whole (u, v) square, as a window: every direction on the sky's side.
+const WHOLE: [f64; 4] = [0.0, 0.0, 1.0, 1.0];
+
 /// The four corners of a portal (world space), and its frame.
 #[derive(Clone, Copy, Debug)]
 pub struct Portal {
@@ -263,29 +266,34 @@ impl PortalMap {
 
     /// A direction from `p` through the portal: (direction, radiance, solid-angle pdf).
     pub fn sample_li(&self, p: Vec3, u: [f32; 2]) -> Option<(Vec3, Rgb, f32)> {
-        let window = self.portal.window(p.as_dvec3())?;
+        self.sample_within(u, self.portal.window(p.as_dvec3())?)
+    }
+
+    /// The solid-angle density [`Self::sample_li`] gives `wi` from `p`.
+    pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
+        self.portal.window(p.as_dvec3()).map_or(0.0, |window| self.pdf_within(wi, window))
+    }
+
+    /// A direction toward the sky for a photon, from the whole half-sphere:
+    /// (direction, radiance, solid-angle pdf).
+    pub fn sample_direction(&self, u: [f32; 2]) -> Option<(Vec3, Rgb, f32)> {
+        self.sample_within(u, WHOLE)
+    }
+
+    /// A direction whose (u, v) lies in `window`: (direction, radiance, solid-angle pdf).
+    fn sample_within(&self, u: [f32; 2], window: [f64; 4]) -> Option<(Vec3, Rgb, f32)> {
         let (uv, pdf_uv) = self.distribution.sample([u[0] as f64, u[1] as f64], window)?;
         let (w, jacobian) = self.portal.direction_of(uv);
         let pdf = pdf_uv / jacobian;
         (jacobian > 0.0 && pdf.is_finite()).then(|| (w.as_vec3(), self.lookup(uv), pdf as f32))
     }
 
-    /// The solid-angle density [`Self::sample_li`] gives `wi` from `p`.
-    pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
-        let (Some((uv, jacobian)), Some(window)) = (self.portal.uv_of(wi.as_dvec3()), self.portal.window(p.as_dvec3()))
-        else {
-            return 0.0;
-        };
-        if jacobian <= 0.0 { 0.0 } else { (self.distribution.pdf(uv, window) / jacobian) as f32 }
-    }
-
-    /// A direction toward the sky for a photon, from the whole half-sphere:
-    /// (direction, radiance, solid-angle pdf).
-    pub fn sample_direction(&self, u: [f32; 2]) -> Option<(Vec3, Rgb, f32)> {
-        let (uv, pdf_uv) = self.distribution.sample([u[0] as f64, u[1] as f64], [0.0, 0.0, 1.0, 1.0])?;
-        let (w, jacobian) = self.portal.direction_of(uv);
-        let pdf = pdf_uv / jacobian;
-        (jacobian > 0.0 && pdf.is_finite()).then(|| (w.as_vec3(), self.lookup(uv), pdf as f32))
+    /// The solid-angle density [`Self::sample_within`] gives the direction `w`.
+    fn pdf_within(&self, w: Vec3, window: [f64; 4]) -> f32 {
+        match self.portal.uv_of(w.as_dvec3()) {
+            Some((uv, jacobian)) if jacobian > 0.0 => (self.distribution.pdf(uv, window) / jacobian) as f32,
+            _ => 0.0,
+        }
     }
 
     /// A light subpath's start through the portal: a direction toward the sky drawn
@@ -318,12 +326,7 @@ impl PortalMap {
 
     /// The density [`Self::sample_direction`] gives the direction `w` toward the sky.
     pub fn pdf_direction(&self, w: Vec3) -> f32 {
-        match self.portal.uv_of(w.as_dvec3()) {
-            Some((uv, jacobian)) if jacobian > 0.0 => {
-                (self.distribution.pdf(uv, [0.0, 0.0, 1.0, 1.0]) / jacobian) as f32
-            }
-            _ => 0.0,
-        }
+        self.pdf_within(w, WHOLE)
     }
 }
 

@@ -305,7 +305,7 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
 fn density_at_first_hit(light: &Light) -> bool {
     match light {
         Light::Area(_) => true,
-        Light::Infinite(sky) => sky.portal.is_some(),
+        Light::Infinite(sky) => matches!(sky.sky, crate::lights::infinite::Sky::Portal(_)),
         _ => false,
     }
 }
