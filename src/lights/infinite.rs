@@ -10,6 +10,8 @@
 //! ```
 //! A v4 `portal` (four world-space corners) lets the sky in through that rectangle
 //! alone ([`super::portal`]); without a map, the portal's sky is a 1×1 map of `L`.
+//! As in pbrt-v4, a v4 map and `L` together are an error, except with a portal, where
+//! `L` is ignored with a warning (pbrt-v3 multiplies its `mapname` by `L`).
 //! (`mapname` in a v4 file, which pbrt-v4 does not know, is read as pbrt-v3 reads it.)
 //! v4's `illuminance` scales the light so that an upward-facing surface (light-space
 //! +z) receives that many lux, computed as pbrt-v4 computes it (for a map, with half
@@ -20,7 +22,7 @@
 //! scene's bounding sphere.
 
 use super::envmap::{EnvMap, Mapping};
-use super::params::{LightContext, emission, finite_image, illuminance, in_range};
+use super::params::{LightContext, emission, finite_image, illuminance, in_range, scale};
 use super::portal::{Portal, PortalMap};
 use super::{Emission, LightKind, LightSample, WorldSphere};
 use crate::fixes::{Fix, Fixes};
@@ -86,6 +88,9 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
         }
         _ => portal.map(|portal| Box::new((portal, DMat3::from_mat4(*m)))),
     };
+    if let Some(scale_only) = l_beside_map(p, &map, portal.is_some(), ctx)? {
+        l = scale_only;
+    }
     let mut pbrt_map_illuminance = false;
     if let Some(e) = illuminance(p)? {
         // A portal without a map has pbrt-v4's 1×1 map of L.
@@ -99,6 +104,27 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
         l = in_range(p, "L", l * (e / up.max(1e-9)), span)?;
     }
     Ok(LightKind::Infinite(Infinite { l, map, pbrt_map_illuminance, portal }))
+}
+
+/// Whether a v4 file's equal-area map takes the place of its `L` (with a portal).
+pub fn map_replaces_l(p: &ParamList) -> bool {
+    p.named("portal").is_some() && p.named("filename").is_some() && p.named("mapname").is_none()
+}
+
+/// pbrt-v4 refuses `L` beside an equal-area map, and with a portal reads the map and
+/// leaves `L` out: then the emission is `scale` alone (`Some`). pbrt-v3 multiplies
+/// its `mapname` by `L`, as we do in v3 files.
+fn l_beside_map(p: &ParamList, map: &Option<EnvMapDesc>, portal: bool, ctx: &mut LightContext) -> Res<Option<Rgb>> {
+    let equal_area = map.as_ref().is_some_and(|env| env.mapping == Mapping::EqualArea);
+    let Some(l) = p.named("L").filter(|_| equal_area && ctx.syntax == Syntax::V4) else { return Ok(None) };
+    if !portal {
+        let msg = "infinite: pbrt-v4 takes either \"L\" or \"filename\", not both";
+        return Err(Diagnostic::error(l.span, msg));
+    }
+    l.mark_used();
+    let msg = "infinite: \"L\" is ignored beside a portal's map, as pbrt-v4 ignores it";
+    ctx.warnings.push(Diagnostic::warning(l.span, msg));
+    Ok(Some(scale(p, &ctx.spectra)?))
 }
 
 /// A v4 `point3 portal`: four corners making a rectangle, as pbrt-v4 requires (it

@@ -77,6 +77,9 @@ pub fn emission_spectrum(
     ctx: &values::SpectrumContext,
 ) -> Res<Option<std::sync::Arc<EmissionSpectrum>>> {
     let Some(name) = REGISTRY.iter().find(|t| t.name == ty).and_then(|t| t.emits) else { return Ok(None) };
+    if ty == infinite::NAME && infinite::map_replaces_l(p) {
+        return Ok(None);
+    }
     Ok(values::emission_spectrum(p, name, ctx)?.map(std::sync::Arc::new))
 }
 

@@ -26,12 +26,15 @@ pub struct LightContext<'a> {
 /// spectrum).
 pub fn emission(p: &ParamList, name: &str, spectra: &SpectrumContext, at: Span) -> Res<Rgb> {
     let l = values::rgb(p, name, spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE);
-    let scale = if values::given(p, "scale", &[ParamType::Float]) {
-        Vec3::splat(values::float(p, "scale", 1.0, Range::NonNegative)?)
-    } else {
-        values::rgb(p, "scale", spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE)
-    };
-    in_range(p, name, l * scale, at)
+    in_range(p, name, l * scale(p, spectra)?, at)
+}
+
+/// A light's `scale`: a float, or in v3 a spectrum (default 1; finite, as read).
+pub fn scale(p: &ParamList, spectra: &SpectrumContext) -> Res<Rgb> {
+    Ok(match values::given(p, "scale", &[ParamType::Float]) {
+        true => Vec3::splat(values::float(p, "scale", 1.0, Range::NonNegative)?),
+        false => values::rgb(p, "scale", spectra, Range::NonNegative)?.unwrap_or(Vec3::ONE),
+    })
 }
 
 /// A light's emission after its `scale`, `power` or `illuminance`, which must stay

@@ -721,6 +721,14 @@ fn infinite_light_portals_are_read_as_each_pbrt_reads_them() {
     let map = "\"string mapname\" \"../../../pbrt-scenes/verify/textures/gonio-latlong.exr\"";
     let latlong = portal_warnings(warnings(&scene(&light("Film \"rgb\"", map, square))));
     assert!(latlong.len() == 1 && latlong[0].contains("equal-area map"), "{latlong:?}");
+    // Beside a portal, pbrt-v4 reads the map and leaves `L` out (without one, `L` and a
+    // map are an error: tests/data/bad/infinite-l-and-map.pbrt).
+    let map = "\"string filename\" \"../../../pbrt-scenes/verify/textures/sky-equalarea.exr\" \"float scale\" 2";
+    let s = scene(&light("Film \"rgb\"", map, square).replace("[1 1 1]", "[3 5 7]"));
+    let ignored: Vec<String> = warnings(&s).into_iter().filter(|m| m.contains("\"L\" is ignored")).collect();
+    assert_eq!(ignored.len(), 1, "{:?}", warnings(&s));
+    let pbrt_sppm::lights::LightKind::Infinite(sky) = &s.lights[0].kind else { panic!("not an infinite light") };
+    assert_eq!(sky.l, glam::Vec3::splat(2.0));
 }
 
 /// A `LightSource` inside an object definition is one light, placed by the CTM there,
