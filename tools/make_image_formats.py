@@ -24,9 +24,13 @@ read shows), stored as:
   and down with a bright block in the top left corner, as roughness and mask maps are
   often saved;
 - fmt-rgba.exr: the picture's linear values as R, G and B with fmt-alpha.png's alpha
-  as A (32-bit float), for pbrt-v4's float textures, which take the alpha.
+  as A (32-bit float), for pbrt-v4's float textures, which take the alpha;
+- fmt.gif: GIF with the picture's own palette (needs Pillow);
+- fmt.ppm: binary PPM (P6); fmt-grey.pgm: binary PGM (P5) of the picture's green;
+- fmt.qoi: QOI, RGB, sRGB; fmt-linear.qoi: the same bytes marked linear;
+  fmt-alpha.qoi: RGBA with fmt-alpha.png's alpha, sRGB.
 
-Standard library only, except the JPEG.
+Standard library only, except the JPEG and the GIF.
 """
 import math
 import os
@@ -140,6 +144,34 @@ def jpeg(path, rows):
     img.save(path, quality=95, subsampling=0)
 
 
+def gif(path, rows):
+    from PIL import Image
+
+    colours = sorted({px for row in rows for px in row})
+    img = Image.new("P", (W, H))
+    img.putpalette([c for px in colours for c in px])
+    img.putdata([colours.index(px) for row in rows for px in row])
+    img.save(path)
+
+
+def pnm(path, rows, grey=False):
+    """Binary PPM (P6), or with `grey` a PGM (P5) of the green channel."""
+    data = bytes(px[1] if grey else c for row in rows for px in row for c in ((0,) if grey else px))
+    with open(path, "wb") as f:
+        f.write(b"%s\n%d %d\n255\n" % (b"P5" if grey else b"P6", W, H) + data)
+
+
+def qoi(path, rows, linear_values=False):
+    """QOI, every pixel a literal (QOI_OP_RGB or QOI_OP_RGBA), sRGB unless marked linear."""
+    channels = len(rows[0][0])
+    out = bytearray(b"qoif" + struct.pack(">IIBB", W, H, channels, 1 if linear_values else 0))
+    for row in rows:
+        for px in row:
+            out += bytes((0xFE if channels == 3 else 0xFF,) + tuple(px))
+    with open(path, "wb") as f:
+        f.write(bytes(out) + b"\x00" * 7 + b"\x01")
+
+
 def exr(path, channels):
     """An uncompressed scanline EXR of 32-bit float channels: {name: rows of values}."""
     names = sorted(channels)  # EXR stores channels in alphabetical order
@@ -193,6 +225,12 @@ def main():
         for y, row in enumerate(rows)
     ]
     png(os.path.join(out, "fmt-alpha.png"), alpha)
+    gif(os.path.join(out, "fmt.gif"), rows)
+    pnm(os.path.join(out, "fmt.ppm"), rows)
+    pnm(os.path.join(out, "fmt-grey.pgm"), rows, grey=True)
+    qoi(os.path.join(out, "fmt.qoi"), rows)
+    qoi(os.path.join(out, "fmt-linear.qoi"), rows, linear_values=True)
+    qoi(os.path.join(out, "fmt-alpha.qoi"), alpha)
     square = [[(128, 128, 128) if x < 4 or y < 4 else (64, 64, 64) for x in range(8)] for y in range(8)]
     png(os.path.join(out, "fmt-sky-square.png"), square)
     grey = [[0.9 if x < 3 and y < 2 else 0.05 + 0.04 * x + 0.05 * y for x in range(W)] for y in range(H)]

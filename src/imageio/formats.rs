@@ -7,9 +7,11 @@
 //! Texture "tile" "spectrum" "imagemap" "string filename" "tile.jpg"    # v4
 //! ```
 //!
-//! pbrt-v3 reads EXR, PNG, TGA and PFM; pbrt-v4 reads those and, through stb_image,
-//! HDR, JPEG and BMP as well. The 8-bit formats store sRGB-encoded values; EXR, PFM and
-//! HDR store linear floats. PFM is read here, as pbrt reads it: rows bottom to top, the
+//! pbrt-v3 reads EXR, PNG, TGA and PFM; pbrt-v4 reads those, QOI with its own reader,
+//! and, through stb_image, HDR, JPEG, BMP, GIF (its first frame) and binary PGM and PPM
+//! (`P5`, `P6`) as well. The 8-bit formats store sRGB-encoded values (a QOI file may
+//! mark its own as linear, which pbrt-v4 honours); EXR, PFM and HDR store linear floats.
+//! stb_image's formats lose their alpha in pbrt-v4; PNG and QOI keep it. PFM is read here, as pbrt reads it: rows bottom to top, the
 //! header's scale giving the byte order by its sign and multiplying every value by its
 //! magnitude.
 
@@ -26,10 +28,14 @@ pub enum Format {
     Hdr,
     Jpeg,
     Bmp,
+    Gif,
+    Pnm,
+    Qoi,
 }
 
 /// The names [`Format::of`] knows, for messages.
-pub const KNOWN: &str = ".exr, .png, .tga, .pfm (pbrt-v3 and pbrt-v4), .hdr, .jpg, .jpeg, .bmp (pbrt-v4)";
+pub const KNOWN: &str =
+    ".exr, .png, .tga, .pfm (pbrt-v3 and pbrt-v4), .hdr, .jpg, .jpeg, .bmp, .gif, .ppm, .pgm, .pnm, .qoi (pbrt-v4)";
 
 impl Format {
     /// The format a file name's extension names (any case), if one we read.
@@ -43,13 +49,28 @@ impl Format {
             "hdr" => Format::Hdr,
             "jpg" | "jpeg" => Format::Jpeg,
             "bmp" => Format::Bmp,
+            "gif" => Format::Gif,
+            "ppm" | "pgm" | "pnm" => Format::Pnm,
+            "qoi" => Format::Qoi,
             _ => return None,
         })
     }
 
     /// 8 bits a channel, sRGB-encoded (read decoded unless a scene asks otherwise).
     pub fn eight_bit(self) -> bool {
-        matches!(self, Format::Png | Format::Tga | Format::Jpeg | Format::Bmp)
+        matches!(self, Format::Png | Format::Tga | Format::Jpeg | Format::Bmp | Format::Gif | Format::Pnm | Format::Qoi)
+    }
+
+    /// Whether pbrt-v4 keeps the file's alpha, for float textures to take (it reads
+    /// the other 8-bit formats through stb_image and keeps their colour alone).
+    pub fn keeps_alpha(self) -> bool {
+        matches!(self, Format::Png | Format::Qoi)
+    }
+
+    /// Whether the 8-bit values in `bytes` are sRGB-encoded: all but those of a QOI
+    /// file whose header marks them linear (pbrt-v4 reads them so).
+    pub fn srgb_bytes(self, bytes: &[u8]) -> bool {
+        !(self == Format::Qoi && bytes.get(13) == Some(&1))
     }
 
     /// Whether pbrt-v3's `ReadImage` reads it (pbrt-v4 reads every format here).
@@ -71,6 +92,9 @@ impl Format {
             Format::Hdr => image::ImageFormat::Hdr,
             Format::Jpeg => image::ImageFormat::Jpeg,
             Format::Bmp => image::ImageFormat::Bmp,
+            Format::Gif => image::ImageFormat::Gif,
+            Format::Pnm => image::ImageFormat::Pnm,
+            Format::Qoi => image::ImageFormat::Qoi,
             Format::Exr | Format::Pfm => return None,
         })
     }
@@ -84,6 +108,9 @@ impl Format {
             Format::Hdr => "HDR",
             Format::Jpeg => "JPEG",
             Format::Bmp => "BMP",
+            Format::Gif => "GIF",
+            Format::Pnm => "PNM",
+            Format::Qoi => "QOI",
         }
     }
 }
@@ -91,6 +118,7 @@ impl Format {
 /// Width and height from the header alone (EXR is [`super`]'s).
 pub(super) fn dimensions(bytes: &[u8], format: Format) -> Res<(u64, u64)> {
     let unreadable = |e: &dyn std::fmt::Display| ImageError::decode(format!("not a readable {}: {e}", format.name()));
+    binary_pnm(bytes, format)?;
     match format.codec() {
         Some(codec) => {
             let (w, h) = image::ImageReader::with_format(std::io::Cursor::new(bytes), codec)
@@ -102,8 +130,18 @@ pub(super) fn dimensions(bytes: &[u8], format: Format) -> Res<(u64, u64)> {
     }
 }
 
+/// pbrt-v4's stb_image reads binary PGM and PPM alone (`P5`, `P6`), not the text
+/// (`P1`–`P3`), bitmap (`P4`) or PAM (`P7`) kinds `image` would read too.
+fn binary_pnm(bytes: &[u8], format: Format) -> Res<()> {
+    match format == Format::Pnm && !(bytes.starts_with(b"P5") || bytes.starts_with(b"P6")) {
+        true => Err(ImageError::decode("pbrt-v4 reads binary PGM and PPM (P5, P6) only")),
+        false => Ok(()),
+    }
+}
+
 /// An image of a format `image` decodes, as that crate gives it.
 pub(super) fn decode_codec(bytes: &[u8], format: Format) -> Res<image::DynamicImage> {
+    binary_pnm(bytes, format)?;
     let codec = format.codec().ok_or_else(|| ImageError::decode(format!("no codec for {}", format.name())))?;
     image::load_from_memory_with_format(bytes, codec)
         .map_err(|e| ImageError::decode(format!("not a readable {}: {e}", format.name())))

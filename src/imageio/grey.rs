@@ -9,10 +9,11 @@
 //!
 //! pbrt-v3 takes the luminance of the values the file holds (an 8-bit image's bytes
 //! over 255, alpha dropped) and then applies `gamma`. pbrt-v4's bilinear lookup takes
-//! a PNG's or an EXR's alpha where it has one that is not all opaque, else the mean of
-//! the colour channels (a grey image's one channel: an EXR's `Y`, or its only channel,
-//! [`super::exr_read`]); a PNG's values, alpha included, are decoded by its
-//! `encoding`, the other 8-bit formats' always as sRGB (stb_image, which drops alpha).
+//! a PNG's, a QOI's or an EXR's alpha where it has one that is not all opaque, else the
+//! mean of the colour channels (a grey image's one channel: an EXR's `Y`, or its only
+//! channel, [`super::exr_read`]); a PNG's values, alpha included, are decoded by its
+//! `encoding`, a QOI's as its header says, the other 8-bit formats' always as sRGB
+//! (stb_image, which drops alpha).
 
 use super::formats::{self, Format};
 use super::{ColorEncoding, ImageError, Res, RgbImage, Texels, from_srgb};
@@ -53,7 +54,7 @@ pub(super) fn decode_grey(bytes: &[u8], format: Format, grey: Grey) -> Res<Texel
         _ => {
             let img = formats::decode_codec(bytes, format)?;
             let (w, h) = (img.width() as usize, img.height() as usize);
-            (w, h, codec_values(&img, format, grey))
+            (w, h, codec_values(&img, format, format.srgb_bytes(bytes), grey))
         }
     };
     if values.len() != width * height {
@@ -69,18 +70,18 @@ fn stored_luminance(c: [f32; 3], decode: bool) -> f32 {
 
 /// The values of an image `image` decoded: `to_rgba32f` gives 8- and 16-bit values
 /// over their largest, as pbrt divides them.
-fn codec_values(img: &image::DynamicImage, format: Format, grey: Grey) -> Vec<f32> {
+fn codec_values(img: &image::DynamicImage, format: Format, srgb: bool, grey: Grey) -> Vec<f32> {
     let rgba = img.to_rgba32f();
     match grey {
         Grey::V3 { decode } => rgba.pixels().map(|p| stored_luminance([p[0], p[1], p[2]], decode)).collect(),
         Grey::V4 { png } => {
             let d = |v: f32| match format {
                 Format::Png => png.to_linear(v),
-                f if f.eight_bit() => from_srgb(v),
+                f if f.eight_bit() && srgb => from_srgb(v),
                 _ => v,
             };
             let colour_alpha = matches!(img.color(), image::ColorType::Rgba8 | image::ColorType::Rgba16);
-            let alpha = format == Format::Png && colour_alpha && rgba.pixels().any(|p| p[3] != 1.0);
+            let alpha = format.keeps_alpha() && colour_alpha && rgba.pixels().any(|p| p[3] != 1.0);
             match alpha {
                 true => rgba.pixels().map(|p| d(p[3])).collect(),
                 false => rgba.pixels().map(|p| (d(p[0]) + d(p[1]) + d(p[2])) / 3.0).collect(),

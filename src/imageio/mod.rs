@@ -450,7 +450,8 @@ impl EightBit {
 fn decode_codec_texels(bytes: &[u8], format: Format) -> Res<Texels> {
     let img = formats::decode_codec(bytes, format)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
-    Ok(match eight_bit_table(&img, from_srgb) {
+    let decode: fn(f32) -> f32 = if format.srgb_bytes(bytes) { from_srgb } else { |v| v };
+    Ok(match eight_bit_table(&img, decode) {
         Some(values) => Texels::from_bytes(w, h, img.into_rgb8().into_raw(), values),
         None => Texels::from_image(decode_wide(img, format, EightBit::Srgb)),
     })
@@ -458,6 +459,7 @@ fn decode_codec_texels(bytes: &[u8], format: Format) -> Res<Texels> {
 
 fn decode_codec(bytes: &[u8], format: Format, eight_bit: EightBit) -> Res<RgbImage> {
     let img = formats::decode_codec(bytes, format)?;
+    let eight_bit = if format.srgb_bytes(bytes) { eight_bit } else { EightBit::Raw };
     let (w, h) = (img.width() as usize, img.height() as usize);
     // Eight bits a channel: 256 values, decoded once each (a power per value was a
     // tenth of loading a scene of four 1024² textures).

@@ -34,6 +34,10 @@ fn every_format_decodes_to_the_same_picture_the_right_way_up() {
         ("fmt.jpg", 0.08),
         // Linear floats, with an alpha channel beside them.
         ("fmt-rgba.exr", 1e-6),
+        ("fmt.gif", 0.0),
+        ("fmt.ppm", 0.0),
+        ("fmt.qoi", 0.0),
+        ("fmt-alpha.qoi", 0.0),
     ] {
         let got = texture(name);
         let worst = largest_difference(&got, &png);
@@ -45,6 +49,15 @@ fn every_format_decodes_to_the_same_picture_the_right_way_up() {
     assert!(grey.iter().all(|p| p[0] == p[1] && p[1] == p[2]), "fmt-grey.exr is not grey");
     assert!((grey[0][0] - 0.9).abs() < 1e-6 && (grey[16 * 7 + 15][0] - 1.0).abs() < 1e-6);
     assert!((grey[16 * 7][0] - 0.4).abs() < 1e-6, "fmt-grey.exr is flipped");
+    // A QOI file marked linear keeps its bytes over 255 (the bottom right texel is
+    // (250, 240, 90)); a PGM is grey, the picture's green.
+    let linear = texture("fmt-linear.qoi");
+    let expected = [250.0 / 255.0, 240.0 / 255.0, 90.0 / 255.0];
+    assert!(linear[16 * 7 + 15].iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-6), "{:?}", linear[16 * 7 + 15]);
+    let pgm = texture("fmt-grey.pgm");
+    let green: Vec<[f32; 3]> = png.iter().map(|c| [c[1]; 3]).collect();
+    let worst = largest_difference(&pgm, &green);
+    assert!(worst < 1e-6, "fmt-grey.pgm is off the picture's green by {worst}");
 }
 
 fn textured(syntax_v4: bool, file: &str) -> String {
@@ -73,7 +86,14 @@ fn each_version_reads_the_formats_its_pbrt_reads() {
             assert!(w.is_empty(), "{file} (v4 {v4}): {w:?}");
         }
     }
-    for (file, format) in [("fmt.jpg", "JPEG"), ("fmt.hdr", "HDR"), ("fmt.bmp", "BMP")] {
+    for (file, format) in [
+        ("fmt.jpg", "JPEG"),
+        ("fmt.hdr", "HDR"),
+        ("fmt.bmp", "BMP"),
+        ("fmt.gif", "GIF"),
+        ("fmt.ppm", "PNM"),
+        ("fmt.qoi", "QOI"),
+    ] {
         let w = warnings(&scene(&textured(false, file)));
         let expected = format!("pbrt-v3 does not read {format} images");
         assert!(w.len() == 1 && w[0].contains(&expected), "{file}: {w:?}");
@@ -109,11 +129,22 @@ fn an_unknown_encoding_is_a_located_error() {
 /// warnings (the grey texel), never a panic.
 #[test]
 fn unknown_and_damaged_images_are_named() {
-    let d =
-        scratch("formats", "damaged", &[("bad.tga", "not a targa"), ("bad.pfm", "PF\n2 2\n-1\n\0\0"), ("x.tiff", "")]);
-    for (file, why) in
-        [("bad.tga", "not a readable TGA"), ("bad.pfm", "the pixels end early"), ("x.tiff", "no image format")]
-    {
+    let files = [
+        ("bad.tga", "not a targa"),
+        ("bad.pfm", "PF\n2 2\n-1\n\0\0"),
+        ("x.tiff", ""),
+        ("bad.qoi", "qoif"),
+        ("text.ppm", "P3\n1 1\n255\n0 0 0\n"),
+    ];
+    let d = scratch("formats", "damaged", &files);
+    for (file, why) in [
+        ("bad.tga", "not a readable TGA"),
+        ("bad.pfm", "the pixels end early"),
+        ("x.tiff", "no image format"),
+        ("bad.qoi", "not a readable QOI"),
+        // pbrt-v4's stb_image reads binary PNM alone.
+        ("text.ppm", "binary PGM and PPM (P5, P6) only"),
+    ] {
         let text = format!(
             "WorldBegin Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{}\" \
              Material \"diffuse\" \"texture reflectance\" \"t\" Shape \"sphere\"",
