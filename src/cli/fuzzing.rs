@@ -64,7 +64,10 @@ pub fn image(data: &[u8]) {
     let Some((&first, rest)) = data.split_first() else { return };
     let format = match first {
         0..128 => [Format::Exr, Format::Png][first as usize % 2],
-        _ => [Format::Tga, Format::Pfm, Format::Hdr, Format::Jpeg, Format::Bmp][(first as usize / 2) % 5],
+        _ => {
+            use Format::*;
+            [Tga, Pfm, Hdr, Jpeg, Bmp, Gif, Pnm, Qoi][(first as usize / 2) % 8]
+        }
     };
     let eight_bit = if first % 2 == 1 { EightBit::Srgb } else { EightBit::Raw };
     let _ = crate::imageio::decode_image(rest, format, eight_bit, limits().texture_pixels);

@@ -379,7 +379,7 @@ pub fn read_grey_texels_within(path: &Path, files: &crate::limits::Files, grey: 
     read_scene_image(path, files, |bytes, format| grey::decode_grey(bytes, format, grey))
 }
 
-/// Refuses, from the header alone, an image of more than `max_pixels` pixels.
+/// Refuses, from the header alone, an image without pixels or of more than `max_pixels`.
 fn check_pixels(bytes: &[u8], format: Format, max_pixels: u64) -> Res<()> {
     let (w, h) = match format {
         Format::Exr => {
@@ -391,6 +391,9 @@ fn check_pixels(bytes: &[u8], format: Format, max_pixels: u64) -> Res<()> {
         }
         _ => formats::dimensions(bytes, format)?,
     };
+    if w == 0 || h == 0 {
+        return Err(ImageError::decode(format!("the image is {w}x{h}: it has no pixels")));
+    }
     if w.saturating_mul(h) > max_pixels {
         let what = format!("the image's {w}x{h} pixels");
         return Err(ImageError::Input(crate::limits::Limits::over(what, "texture-pixels", max_pixels)));

@@ -135,6 +135,7 @@ fn unknown_and_damaged_images_are_named() {
         ("x.tiff", ""),
         ("bad.qoi", "qoif"),
         ("text.ppm", "P3\n1 1\n255\n0 0 0\n"),
+        ("empty.ppm", "P6\n0 0\n255\n"),
     ];
     let d = scratch("formats", "damaged", &files);
     for (file, why) in [
@@ -144,6 +145,7 @@ fn unknown_and_damaged_images_are_named() {
         ("bad.qoi", "not a readable QOI"),
         // pbrt-v4's stb_image reads binary PNM alone.
         ("text.ppm", "binary PGM and PPM (P5, P6) only"),
+        ("empty.ppm", "it has no pixels"),
     ] {
         let text = format!(
             "WorldBegin Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{}\" \
