@@ -11,9 +11,9 @@
 //! and, through stb_image, HDR, JPEG, BMP, GIF (its first frame) and binary PGM and PPM
 //! (`P5`, `P6`) as well. The 8-bit formats store sRGB-encoded values (a QOI file may
 //! mark its own as linear, which pbrt-v4 honours); EXR, PFM and HDR store linear floats.
-//! stb_image's formats lose their alpha in pbrt-v4; PNG and QOI keep it. PFM is read here, as pbrt reads it: rows bottom to top, the
-//! header's scale giving the byte order by its sign and multiplying every value by its
-//! magnitude.
+//! stb_image's formats lose their alpha in pbrt-v4; PNG and QOI keep it. PFM is read
+//! here, as pbrt reads it: rows bottom to top, the header's scale giving the byte order
+//! by its sign and multiplying every value by its magnitude.
 
 use super::{ImageError, Res, RgbImage};
 use std::path::Path;
