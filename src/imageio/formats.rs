@@ -68,7 +68,8 @@ impl Format {
     }
 
     /// Whether the 8-bit values in `bytes` are sRGB-encoded: all but those of a QOI
-    /// file whose header marks them linear (pbrt-v4 reads them so).
+    /// file whose header marks them linear (its 14th byte, the colour space, is 1;
+    /// pbrt-v4 reads them so).
     pub fn srgb_bytes(self, bytes: &[u8]) -> bool {
         !(self == Format::Qoi && bytes.get(13) == Some(&1))
     }
@@ -118,7 +119,6 @@ impl Format {
 /// Width and height from the header alone (EXR is [`super`]'s).
 pub(super) fn dimensions(bytes: &[u8], format: Format) -> Res<(u64, u64)> {
     let unreadable = |e: &dyn std::fmt::Display| ImageError::decode(format!("not a readable {}: {e}", format.name()));
-    binary_pnm(bytes, format)?;
     match format.codec() {
         Some(codec) => {
             let (w, h) = image::ImageReader::with_format(std::io::Cursor::new(bytes), codec)

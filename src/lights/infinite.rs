@@ -88,7 +88,7 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
         }
         _ => portal.map(|portal| Box::new((portal, DMat3::from_mat4(*m)))),
     };
-    if let Some(scale_only) = l_beside_map(p, &map, portal.is_some(), ctx)? {
+    if let Some(scale_only) = l_beside_map(p, &map, ctx)? {
         l = scale_only;
     }
     let mut pbrt_map_illuminance = false;
@@ -106,7 +106,8 @@ pub fn read(p: &ParamList, m: &DMat4, span: Span, ctx: &mut LightContext) -> Res
     Ok(LightKind::Infinite(Infinite { l, map, pbrt_map_illuminance, portal }))
 }
 
-/// Whether a v4 file's equal-area map takes the place of its `L` (with a portal).
+/// Whether a v4 file's equal-area map takes the place of its `L` (with a portal); the
+/// one test both the light's colour and its emission spectrum go by.
 pub fn map_replaces_l(p: &ParamList) -> bool {
     p.named("portal").is_some() && p.named("filename").is_some() && p.named("mapname").is_none()
 }
@@ -114,10 +115,10 @@ pub fn map_replaces_l(p: &ParamList) -> bool {
 /// pbrt-v4 refuses `L` beside an equal-area map, and with a portal reads the map and
 /// leaves `L` out: then the emission is `scale` alone (`Some`). pbrt-v3 multiplies
 /// its `mapname` by `L`, as we do in v3 files.
-fn l_beside_map(p: &ParamList, map: &Option<EnvMapDesc>, portal: bool, ctx: &mut LightContext) -> Res<Option<Rgb>> {
+fn l_beside_map(p: &ParamList, map: &Option<EnvMapDesc>, ctx: &mut LightContext) -> Res<Option<Rgb>> {
     let equal_area = map.as_ref().is_some_and(|env| env.mapping == Mapping::EqualArea);
     let Some(l) = p.named("L").filter(|_| equal_area && ctx.syntax == Syntax::V4) else { return Ok(None) };
-    if !portal {
+    if !map_replaces_l(p) {
         let msg = "infinite: pbrt-v4 takes either \"L\" or \"filename\", not both";
         return Err(Diagnostic::error(l.span, msg));
     }
