@@ -4,6 +4,7 @@
 
 use crate::accel::{Geometry, Hit};
 use crate::camera::Camera;
+use crate::camera::clamp::Clamp;
 use crate::fixes::{Fix, Fixes};
 use crate::interaction::{Footprint, SurfaceInteraction};
 use crate::lights::choice::LightChoice;
@@ -136,6 +137,9 @@ pub struct RenderScene {
     object_shape_media: Vec<Vec<MediumInterface>>,
     /// Per light of the scene's `LightSource`s (the first of `lights`): its medium.
     light_media: Vec<Option<u32>>,
+    /// The film's bound on each camera sample and light-tracing splat
+    /// ([`crate::camera::clamp`]), where it has one. SPPM does not apply it, as in pbrt.
+    pub clamp: Option<Clamp>,
     /// The pass's wavelengths when paths carry them (`spectrum::transport`); `None`
     /// renders in RGB.
     spectral: Option<PassCell>,
@@ -297,10 +301,8 @@ impl RenderScene {
             world_shape_media,
             object_shape_media,
             light_media,
-            spectral: scene.spectral.then(|| {
-                let draw = scene.film.buckets.map_or(Draw::Visible, |b| b.draw());
-                PassCell::new(scene.color_space, scene.film.sensor.clone(), draw)
-            }),
+            clamp: film_clamp(scene),
+            spectral: pass_cell(scene),
             dispersive: scene.spectral && scene.materials.iter().any(|m| m.kind.disperses()),
             subsurface: bssrdf.contains(&true),
             bssrdf_materials: bssrdf,
@@ -662,6 +664,23 @@ impl RenderScene {
         }
     }
 
+    /// What a camera sample or splat whose film RGB ([`Self::film_rgb`]) is `rgb` is
+    /// multiplied by: the film's bound over it where it is over, otherwise 1.
+    #[inline]
+    pub fn clamp_factor(&self, rgb: DVec3) -> f64 {
+        self.clamp.map_or(1.0, |c| c.factor(rgb))
+    }
+
+    /// A camera sample or splat `v` as the film records it: scaled down to the film's
+    /// bound where it is over.
+    #[inline]
+    pub fn clamped(&self, v: Rgb) -> Rgb {
+        match self.clamp {
+            Some(c) => v * c.factor(self.film_rgb(v)) as f32,
+            None => v,
+        }
+    }
+
     /// [`Self::film_rgb`] of a value summed in f64.
     #[inline]
     pub fn film_rgb_f64(&self, v: DVec3) -> DVec3 {
@@ -869,6 +888,21 @@ fn medium_region(scene: &SceneDescription, m: u32) -> Option<[glam::DVec3; 2]> {
 }
 
 /// The power of two nearest `total` (1 for no light).
+/// Where the passes' wavelengths are kept, when paths carry them.
+fn pass_cell(scene: &SceneDescription) -> Option<PassCell> {
+    let draw = scene.film.buckets.map_or(Draw::Visible, |b| b.draw());
+    scene.spectral.then(|| PassCell::new(scene.color_space, scene.film.sensor.clone(), draw))
+}
+
+/// The film's sample clamp as it applies to the film RGB of the render's paths: through
+/// a named camera's curves where paths carry wavelengths (with RGB paths a camera is
+/// seen as the CIE observer).
+fn film_clamp(scene: &SceneDescription) -> Option<Clamp> {
+    let film = &scene.film;
+    let sensor = film.sensor.as_ref().filter(|_| scene.spectral).map(|s| &s.xyz_from_sensor);
+    film.clamp.map(|rule| Clamp::new(rule, film.scale as f64, scene.color_space, sensor))
+}
+
 fn photon_scale(total: f64) -> f64 {
     if total > 0.0 && total.is_finite() { total.log2().round().clamp(-1000.0, 1000.0).exp2() } else { 1.0 }
 }

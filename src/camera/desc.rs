@@ -6,6 +6,7 @@
 //! Film "rgb" "integer xresolution" 1280 "integer yresolution" 720 "float iso" 100
 //! ```
 
+use super::clamp::SampleClamp;
 use crate::filters::PixelFilter;
 use crate::spectrum::buckets::Buckets;
 use crate::spectrum::sensor::CameraSensor;
@@ -104,6 +105,8 @@ pub struct Film {
     /// A `spectral` film's wavelength buckets, written beside R, G, B (paths that
     /// carry wavelengths, rendered by vcm or bdpt).
     pub buckets: Option<Buckets>,
+    /// The bound on each camera sample and splat (not applied by SPPM, as in pbrt).
+    pub clamp: Option<SampleClamp>,
 }
 
 impl Film {

@@ -24,6 +24,7 @@
 //! spherical ones (pbrt has no importance for them either), so light paths never end
 //! on them.
 
+pub mod clamp;
 pub mod desc;
 pub mod realistic;
 

@@ -127,9 +127,11 @@ fn film(f: &crate::scene::Film) -> Value {
         "pixelbounds": f.pixel_bounds,
         "scale": f32_json(f.scale),
         // Extensions: the named camera whose curves film the wavelengths, the
-        // pixel filter camera rays follow, and a spectral film's buckets when they
-        // are written (pbrt-v4; null: none).
+        // pixel filter camera rays follow, the sample clamp, and a spectral film's
+        // buckets when they are written (pbrt-v4; null: none).
         "sensor": f.sensor.as_ref().map(|s| s.name),
+        // The bound on each sample, by the parameter that sets it (null: none).
+        "clamp": f.clamp.map(|c| json!({ c.param().0: c.param().1 })),
         "filter": f.filter.as_ref().map(|p| p.name.clone()),
         "buckets": f.buckets.map(|b| json!({
             "nbuckets": b.count,
@@ -274,7 +276,8 @@ pub fn summary(s: &SceneDescription) -> String {
     let sensor = f.sensor.as_ref().map(|c| format!(", sensor {}", c.name)).unwrap_or_default();
     let filter = f.filter.as_ref().map(|p| format!(", filter {}", p.name)).unwrap_or_default();
     let buckets = f.buckets.map(|b| format!(", {} buckets {}–{} nm", b.count, b.lambda_min, b.lambda_max));
-    let filter = filter + &buckets.unwrap_or_default();
+    let clamp = f.clamp.map(|c| format!(", {} {} (not in SPPM)", c.param().0, c.param().1));
+    let filter = filter + &buckets.unwrap_or_default() + &clamp.unwrap_or_default();
     let _ = writeln!(out, "film        {}x{} -> {}{sensor}{filter}", f.x_resolution, f.y_resolution, f.filename);
     let i = &s.integrator;
     let method = crate::integrators::Algorithm::by_default(i).name();

@@ -13,6 +13,7 @@
 //! ```
 
 use crate::approx::Approx;
+use crate::camera::clamp::SampleClamp;
 pub use crate::camera::desc::{Camera, CameraKind, Film, SphericalMapping};
 use crate::camera::realistic::{LensDesc, Weighting};
 use crate::filters::PixelFilter;
@@ -101,7 +102,7 @@ impl RenderOptions {
         warn: &mut Vec<Diagnostic>,
         notes: &mut Notes,
     ) -> Res<Resolved> {
-        let (film, exposure_scale) = self.film(syntax, limits, warn, notes)?;
+        let (film, exposure_scale) = self.film(syntax, limits, notes)?;
         let camera = self.camera(&film, syntax)?;
         let mut film = film;
         if syntax == Syntax::V4 {
@@ -116,7 +117,7 @@ impl RenderOptions {
         Ok(Resolved { camera, film, integrator })
     }
 
-    fn film(&self, syntax: Syntax, limits: &Limits, warn: &mut Vec<Diagnostic>, notes: &mut Notes) -> Res<(Film, f32)> {
+    fn film(&self, syntax: Syntax, limits: &Limits, notes: &mut Notes) -> Res<(Film, f32)> {
         let empty = Entity::default_named(if syntax == Syntax::V3 { "image" } else { "rgb" });
         let e = self.film.as_ref().unwrap_or(&empty);
         let p = &e.params;
@@ -170,8 +171,7 @@ impl RenderOptions {
         // Output format and spectral-film details: nothing in the pixel values changes.
         let diagonal_mm = values::float(p, "diagonal", 35.0, Range::Positive)?;
         values::no_effect(p, &["savefp16", "coordinatesystem"]);
-        let why = "pixel values are not clamped";
-        values::ignored(p, &["maxsampleluminance", "maxcomponentvalue"], why, warn);
+        let clamp = sample_clamp(p, syntax)?;
         let space = self.color_space.unwrap_or(ColorSpaceName::Srgb);
         let (white_balance, sensor) = if syntax == Syntax::V4 { self.sensor(e, space, notes)? } else { (None, None) };
         let buckets = self.film_type(e, notes, (pixels, limits.pixels))?;
@@ -189,6 +189,7 @@ impl RenderOptions {
             sensor,
             filter: if syntax == Syntax::V4 { self.pixel_filter()? } else { None },
             buckets,
+            clamp,
         };
         Ok((film, iso / 100.0))
     }
@@ -521,6 +522,19 @@ fn name_of_limit(param: &str) -> &'static str {
 
 fn err_at(p: Option<&crate::parser::params::Param>, e: &Entity, msg: String) -> Diagnostic {
     Diagnostic::error(p.map_or(e.name_span, |p| p.value_span), msg)
+}
+
+/// The film's bound on each sample: pbrt-v3's `maxsampleluminance`, pbrt-v4's
+/// `maxcomponentvalue` (the other version's name stays unread, as in its pbrt).
+// DEVIATION(pbrt): robustness. pbrt takes a negative bound, which negates every
+// sample over it; we refuse it.
+fn sample_clamp(p: &crate::parser::params::ParamList, syntax: Syntax) -> Res<Option<SampleClamp>> {
+    let (name, rule): (_, fn(f64) -> SampleClamp) = match syntax {
+        Syntax::V3 => ("maxsampleluminance", SampleClamp::Luminance),
+        Syntax::V4 => ("maxcomponentvalue", SampleClamp::SensorComponent),
+    };
+    let max = values::float(p, name, f32::INFINITY, Range::NonNegative)?;
+    Ok(max.is_finite().then(|| rule(max as f64)))
 }
 
 /// A `spectral` film's `nbuckets`, `lambdamin` and `lambdamax`, checked as pbrt-v4

@@ -7,6 +7,7 @@ mod checkpoint;
 mod common;
 mod converge;
 mod directives;
+mod film_clamp;
 mod fixes;
 mod fuzz_regressions;
 mod guiding;

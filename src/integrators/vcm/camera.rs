@@ -63,6 +63,15 @@ impl PixelSample {
     pub fn total(&self) -> Rgb {
         self.traced + self.merged.iter().sum::<Rgb>()
     }
+
+    /// Scales each part lane by lane so that the total is `total` (a lane whose total
+    /// is 0 stays as it is).
+    fn rescale(&mut self, total: Rgb) {
+        let now = self.total();
+        let f = Rgb::select(now.cmpne(Rgb::ZERO), total / now, Rgb::ONE);
+        self.traced *= f;
+        self.merged.iter_mut().for_each(|m| *m *= f);
+    }
 }
 
 /// Work done, counted in whole units so that sums are the same in any order.
@@ -255,11 +264,25 @@ impl Cameras<'_> {
             }
         };
         let rays = self.prefix_rays(i);
-        let mut sum = prefix;
+        let scene = self.pass.scene;
+        // Each ray with the rest of the path is one of pbrt's camera samples, which
+        // its film clamps one by one (`camera::clamp`).
+        // DEVIATION(pbrt): appearance, with vcm's estimator. A clamp takes off what
+        // the estimator's samples have over the bound; ours spread a highlight over
+        // more, smaller samples than pbrt's path tracer (README, "Other differences").
+        let rest = out.total();
+        let (mut sum, mut clamped) = (prefix, scene.clamped(prefix + rest));
         for stream in 1..rays {
-            sum += self.extra_prefix(pixel, stream as u64, &mut out.work);
+            let extra = self.extra_prefix(pixel, stream as u64, &mut out.work);
+            sum += extra;
+            if scene.clamp.is_some() {
+                clamped += scene.clamped(extra + rest);
+            }
         }
         out.traced += sum / rays as f32;
+        if scene.clamp.is_some() {
+            out.rescale(clamped / rays as f32);
+        }
         out
     }
 

@@ -451,6 +451,14 @@ fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Ve
     if c == Vec3::ZERO || !c.is_finite() {
         return;
     }
+    // pbrt's film clamps each splat: what one light subpath brings, pbrt's light
+    // tracing sending one a pixel sample.
+    let c = match scene.clamp {
+        Some(_) => {
+            c * scene.clamp_factor(scene.film_rgb(c) * (scene.photon_scale * light_paths / pass.film_pixels)) as f32
+        }
+        None => c,
+    };
     let c = c * vertex::visible(scene, &v.place, cs.p_lens, s);
     if c == Vec3::ZERO {
         return;
