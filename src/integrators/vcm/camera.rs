@@ -270,6 +270,8 @@ impl Cameras<'_> {
         // DEVIATION(pbrt): appearance, with vcm's estimator. A clamp takes off what
         // the estimator's samples have over the bound; ours spread a highlight over
         // more, smaller samples than pbrt's path tracer (README, "Other differences").
+        // A spectral film's buckets take the RGB's factor (pbrt-v4 clamps them apart,
+        // by the largest wavelength's radiance).
         let rest = out.total();
         let (mut sum, mut clamped) = (prefix, scene.clamped(prefix + rest));
         for stream in 1..rays {
