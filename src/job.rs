@@ -74,8 +74,9 @@ pub enum JobError {
     Checkpoint { path: PathBuf, source: CheckpointError },
     #[error("{}: error: cannot resume: {source}", path.display())]
     Resume { path: PathBuf, source: Mismatch },
-    #[error("{}: error: {source}", scene.display())]
-    Render { scene: PathBuf, source: RenderError },
+    /// `at`: the scene file, or the statement the error is about.
+    #[error("{at}: error: {source}")]
+    Render { at: String, source: RenderError },
 }
 
 /// Why an output cannot be written where it was asked for.
@@ -118,7 +119,7 @@ impl Job {
             Some(p) => Some(read_image(p).map_err(JobError::Reference)?),
             None => None,
         };
-        let render_error = |source| JobError::Render { scene: request.scene.clone(), source };
+        let render_error = |source| JobError::Render { at: request.scene.display().to_string(), source };
         let plan = Plan::new(&scene.integrator, || crate::render::world_sphere(scene).radius, &request.settings)
             .map_err(render_error)?;
         let fingerprint = fingerprint(scene, &request.scene, &plan);
@@ -157,8 +158,10 @@ impl Job {
 
     /// Renders (on the caller's thread pool), continuing `resume` when given.
     pub fn run(&self, resume: Option<Checkpoint>) -> Result<RenderOutput, JobError> {
-        run::run(&self.scene, &self.plan, &self.monitor, resume)
-            .map_err(|source| JobError::Render { scene: self.request.scene.clone(), source })
+        run::run(&self.scene, &self.plan, &self.monitor, resume).map_err(|source| {
+            let film = self.scene.film.location.clone().filter(|_| matches!(source, RenderError::NotFinite { .. }));
+            JobError::Render { at: film.unwrap_or_else(|| self.request.scene.display().to_string()), source }
+        })
     }
 
     /// Writes the image, the part and `ERRORS.csv` that were asked for.

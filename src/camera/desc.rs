@@ -86,6 +86,9 @@ pub struct Film {
     pub filename: String,
     /// Where the scene gives `filename` (`file:line:col`), for errors about it.
     pub filename_location: Option<String>,
+    /// Where the scene's `Film` statement is (`file:line:col`), for errors about what
+    /// it records; none when the file has none.
+    pub location: Option<String>,
     /// [x0, x1, y0, y1] in NDC, clamped to [0, 1] and sorted.
     pub crop_window: [f32; 4],
     /// [x0, x1, y0, y1] pixels, half open.

@@ -1284,6 +1284,7 @@ impl Builder {
         let mut film = r.film;
         let filename_param = self.render.film.as_ref().and_then(|e| e.params.named("filename"));
         film.filename_location = filename_param.map(|p| sources.location(p.value_span).to_string());
+        film.location = self.render.film.as_ref().map(|e| sources.location(e.name_span).to_string());
         let evidence = self
             .reader
             .evidence

@@ -181,6 +181,7 @@ impl RenderOptions {
             y_resolution: yres,
             filename,
             filename_location: None,
+            location: None,
             crop_window,
             pixel_bounds: bounds,
             scale,

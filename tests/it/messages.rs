@@ -156,3 +156,24 @@ fn a_time_limit_alone_renders_until_the_limit() {
     assert!(image.meta.samples_per_pixel.unwrap() > 2, "{}", stderr(&out));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_pixel_past_f32_is_an_error_at_the_film_that_records_it() {
+    // A sky of 1e38 on a surface that reflects more than it receives (pbrt-v3's marble
+    // leaves its palette): a pixel past f32's range, found after rendering. The error
+    // names the Film statement (whose "scale" is one of the two things to lower), and
+    // no image is written.
+    let text = "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\"\n\
+        Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16\n\
+        Integrator \"sppm\" \"integer numiterations\" 1 \"integer photonsperiteration\" 100 \"integer maxdepth\" 1\n\
+        WorldBegin\nLightSource \"infinite\" \"color L\" [1 3e38 1]\n\
+        Material \"matte\" \"color Kd\" [2 2 2]\n\
+        Shape \"trianglemesh\" \"point P\" [-2 -2 0 2 -2 0 2 2 0 -2 2 0] \"integer indices\" [0 1 2 0 2 3]\nWorldEnd\n";
+    let dir = crate::common::scratch("msg", "overflow", &[("inf.pbrt", text)]);
+    let out = cli(&[dir.join("inf.pbrt").to_str().unwrap(), "--outfile", dir.join("x.exr").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(err.contains("inf.pbrt:3:6: error: pixel ("), "{err}");
+    assert!(err.contains("beyond the range of 32-bit floats: lower the lights or the Film's \"scale\""), "{err}");
+    assert!(!dir.join("x.exr").exists(), "an image was written");
+}

@@ -130,6 +130,12 @@ impl Builder {
             self.skipped.push((Some(at), format!("MakeNamedMedium \"{}\" (\"{ty}\")", e.name), why.into()));
             return Ok(None);
         }
+        if ty != "homogeneous" && !invertible(&medium_to_world) {
+            // DEVIATION(pbrt): robustness. pbrt-v4 fills such a transform's inverse
+            // with NaN and renders garbage; our tracking then took 2^20 steps a ray.
+            let msg = format!("medium \"{}\": its transform cannot be inverted (scaled to nothing?)", e.name);
+            return Err(Diagnostic::error(e.name_span, msg));
+        }
         let (files, base) = (self.reader.files.clone(), self.reader.base_dir().to_path_buf());
         let fixes = self.opts.fixes;
         let mut warnings = Vec::new();
@@ -214,4 +220,10 @@ fn medium_type(e: &Entity) -> Option<String> {
 pub(super) fn resolve(pair: MediaPair, remap: &[Option<u32>]) -> MediumInterface {
     let get = |s: Option<u32>| s.and_then(|s| remap[s as usize]);
     MediumInterface { inside: get(pair.0), outside: get(pair.1) }
+}
+
+/// Whether a grid's placement can be undone: rays are taken into the grid's space.
+fn invertible(m: &DMat4) -> bool {
+    let det = m.determinant();
+    det.is_normal() && m.inverse().is_finite()
 }
