@@ -887,7 +887,6 @@ fn medium_region(scene: &SceneDescription, m: u32) -> Option<[glam::DVec3; 2]> {
     }
 }
 
-/// The power of two nearest `total` (1 for no light).
 /// Where the passes' wavelengths are kept, when paths carry them.
 fn pass_cell(scene: &SceneDescription) -> Option<PassCell> {
     let draw = scene.film.buckets.map_or(Draw::Visible, |b| b.draw());
@@ -903,6 +902,7 @@ fn film_clamp(scene: &SceneDescription) -> Option<Clamp> {
     film.clamp.map(|rule| Clamp::new(rule, film.scale as f64, scene.color_space, sensor))
 }
 
+/// The power of two nearest `total` (1 for no light).
 fn photon_scale(total: f64) -> f64 {
     if total > 0.0 && total.is_finite() { total.log2().round().clamp(-1000.0, 1000.0).exp2() } else { 1.0 }
 }
