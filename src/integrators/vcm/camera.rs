@@ -271,7 +271,8 @@ impl Cameras<'_> {
         // the estimator's samples have over the bound; ours spread a highlight over
         // more, smaller samples than pbrt's path tracer (README, "Other differences").
         // A spectral film's buckets take the RGB's factor (pbrt-v4 clamps them apart,
-        // by the largest wavelength's radiance).
+        // by the largest wavelength's radiance), and the clamp sees the pixel filter's
+        // sample weight, which pbrt applies after it (about ±1 for pbrt-v4's filters).
         let rest = out.total();
         let (mut sum, mut clamped) = (prefix, scene.clamped(prefix + rest));
         for stream in 1..rays {
