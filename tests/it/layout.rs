@@ -176,3 +176,26 @@ fn the_binary_is_the_command_line_only() {
         assert!(!lib.contains(&format!("pub mod {command};")), "lib.rs exports `{command}` at its top level");
     }
 }
+
+/// `tools/pgo-build.sh` is opt-in, so nothing else runs it: it must at least parse,
+/// refuse an unknown argument before building anything, and train on scene folders
+/// that exist (a renamed folder would silently train on nothing).
+#[test]
+fn the_pgo_script_parses_and_trains_on_existing_scenes() {
+    let script = root().join("tools/pgo-build.sh");
+    let Ok(out) = std::process::Command::new("bash").arg("-n").arg(&script).output() else {
+        crate::common::cannot_run("bash", "the_pgo_script_parses", "no `bash` on PATH");
+        return;
+    };
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = std::process::Command::new("bash").arg(&script).arg("--bogus").output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("usage"));
+    let text = std::fs::read_to_string(&script).unwrap();
+    let scenes: Vec<&str> = text.split_whitespace().filter(|w| w.starts_with("pbrt-scenes/")).collect();
+    assert!(scenes.len() >= 5, "{scenes:?}");
+    for scene in scenes {
+        let dir = scene.trim_end_matches(';').trim_end_matches("*.pbrt");
+        assert!(root().join(dir).exists(), "tools/pgo-build.sh trains on {scene}, which is absent");
+    }
+}
