@@ -127,8 +127,26 @@ pub struct Geometry {
     avx: Option<Avx>,
 }
 
-fn shape_ref(s: &ShapeDesc, quadrics: &mut Vec<QuadricShape>, curves: &mut Vec<CurveShape>, v4: bool) -> ShapeRef {
-    let flags = MeshFlags { reverse_orientation: s.reverse_orientation, swaps_handedness: s.swaps_handedness() };
+/// How the shapes of one scene are set up: its syntax, and whether meshes may leave
+/// out the normal derivatives that only bump maps read.
+#[derive(Clone, Copy)]
+struct ShapeSetup {
+    v4: bool,
+    skip_normal_derivatives: bool,
+}
+
+fn shape_ref(
+    s: &ShapeDesc,
+    quadrics: &mut Vec<QuadricShape>,
+    curves: &mut Vec<CurveShape>,
+    setup: ShapeSetup,
+) -> ShapeRef {
+    let ShapeSetup { v4, skip_normal_derivatives } = setup;
+    let flags = MeshFlags {
+        reverse_orientation: s.reverse_orientation,
+        swaps_handedness: s.swaps_handedness(),
+        skip_normal_derivatives,
+    };
     match &s.geometry {
         ShapeGeometry::Quadric(q) => {
             quadrics.push(QuadricShape::new(q.clone(), s.object_to_world, s.reverse_orientation));
@@ -525,8 +543,11 @@ impl Geometry {
     /// until the BVHs reorder their triangles into copies of their own).
     pub fn new(scene: &SceneDescription) -> Geometry {
         let mut set = ShapeSet { meshes: scene.meshes.clone(), patches: scene.patches.clone(), ..Default::default() };
-        let v4 = scene.syntax == crate::parser::Syntax::V4;
-        let mut refs = |s: &ShapeDesc| shape_ref(s, &mut set.quadrics, &mut set.curves, v4);
+        let setup = ShapeSetup {
+            v4: scene.syntax == crate::parser::Syntax::V4,
+            skip_normal_derivatives: !scene.materials.iter().any(|m| m.bump.is_some()),
+        };
+        let mut refs = |s: &ShapeDesc| shape_ref(s, &mut set.quadrics, &mut set.curves, setup);
         let world_shapes: Vec<ShapeRef> = scene.shapes.iter().map(&mut refs).collect();
         let object_shapes: Vec<Vec<ShapeRef>> =
             scene.objects.iter().map(|o| o.shapes.iter().map(&mut refs).collect()).collect();

@@ -514,7 +514,7 @@ mod tests {
     #[test]
     fn vertex_normals_and_orientation_decide_the_front() {
         let mut m = saddle();
-        let flags = MeshFlags { reverse_orientation: true, swaps_handedness: false };
+        let flags = MeshFlags { reverse_orientation: true, ..MeshFlags::default() };
         let ray = Ray::new(Point3(Vec3::new(0.5, 0.5, 5.0)), Vector3(Vec3::new(0.0, 0.0, -1.0)));
         let hit = m.intersect(0, &ray, f32::INFINITY).expect("hit");
         assert!(m.interaction(0, &hit, flags).n.0.z < 0.0);
