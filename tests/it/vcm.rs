@@ -423,6 +423,11 @@ fn vcm_stats_name_its_own_phases_and_counts() {
     assert!(o.status.success(), "{err}");
     assert!(err.contains("stats: light subpaths"), "{err}");
     assert!(err.contains("1000 light subpaths, "), "{err}");
+    // How long the render took to start, in its two parts, as numbers of seconds.
+    let load = err.lines().find_map(|l| l.strip_prefix("stats: scene read ")).expect("a load line");
+    let seconds: Vec<f64> = load.split(" s").filter_map(|w| w.rsplit(' ').next()?.parse().ok()).collect();
+    assert!(load.contains(" s, set up to render ") && seconds.len() == 2, "{load}");
+    assert!(seconds.iter().all(|s| s.is_finite() && *s >= 0.0), "{load}");
     assert!(err.contains("(500 light subpaths each)"), "{err}");
     // SPPM's photon figures mean nothing here: no uniform-photon waste line.
     assert!(!err.contains("uniform photon paths"), "{err}");

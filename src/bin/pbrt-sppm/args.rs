@@ -154,7 +154,7 @@ pub struct RenderArgs {
     /// Divide the iteration count by 16 (at least 1 remains), as pbrt-v3 does.
     #[arg(long)]
     pub quick: bool,
-    /// Print the time per phase, the paths traced and the peak memory.
+    /// Print the time to read and set up the scene, the time per phase, the paths traced and the peak memory.
     #[arg(long)]
     pub stats: bool,
     /// Photons per iteration (at least 1), overriding `photonsperiteration`; for vcm and

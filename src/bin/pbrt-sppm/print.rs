@@ -47,8 +47,16 @@ pub fn before_render(scene: &SceneDescription, args: &RenderArgs) {
     }
 }
 
+/// How long a render took to start: reading the scene (parsing, meshes, image files),
+/// then setting it up to render (acceleration structures, lights, the film).
+#[derive(Clone, Copy)]
+pub struct LoadTimes {
+    pub read_seconds: f64,
+    pub set_up_seconds: f64,
+}
+
 /// The summary after a render; exit code 130 when it was interrupted.
-pub fn rendered(job: &Job, out: &RenderOutput, args: &RenderArgs) -> ExitCode {
+pub fn rendered(job: &Job, out: &RenderOutput, args: &RenderArgs, load: LoadTimes) -> ExitCode {
     let code = if out.interrupted { ExitCode::from(130) } else { ExitCode::SUCCESS };
     if args.common.quiet {
         return code;
@@ -63,6 +71,7 @@ pub fn rendered(job: &Job, out: &RenderOutput, args: &RenderArgs) -> ExitCode {
         );
     }
     if args.stats {
+        say!("stats: scene read {:.3} s, set up to render {:.3} s", load.read_seconds, load.set_up_seconds);
         stats(out);
     }
     let what = if out.interrupted { "interrupted after" } else { "rendered" };
@@ -88,7 +97,7 @@ pub fn rendered(job: &Job, out: &RenderOutput, args: &RenderArgs) -> ExitCode {
     code
 }
 
-/// `--stats`: the time per phase, the paths traced and the peak memory.
+/// `--stats` after the load line: the time per phase, the paths traced and the peak memory.
 fn stats(out: &RenderOutput) {
     let s = &out.stats;
     let peak = std::fs::read_to_string("/proc/self/status")

@@ -16,8 +16,9 @@ use std::process::ExitCode;
 
 /// The whole render command.
 pub fn command(args: &RenderArgs) -> ExitCode {
+    let start = std::time::Instant::now();
     match early_checks(args).and_then(|()| loading(args)) {
-        Ok(scene) => render(scene, args),
+        Ok(scene) => render(scene, args, start.elapsed().as_secs_f64()),
         Err(code) => code,
     }
 }
@@ -51,8 +52,9 @@ fn loading(args: &RenderArgs) -> Result<SceneDescription, ExitCode> {
 
 /// Renders a loaded scene and writes the image, the part and `ERRORS.csv`. The render
 /// runs on a worker thread so that a second interrupt can write the completed
-/// iterations while an iteration is still under way (see [`signals`]).
-fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
+/// iterations while an iteration is still under way (see [`signals`]). `read_seconds`:
+/// how long reading the scene took, for `--stats`.
+fn render(scene: SceneDescription, args: &RenderArgs, read_seconds: f64) -> ExitCode {
     let quiet = args.common.quiet;
     let signals = signals::install(quiet);
     let request = match args.request(signals.stop.clone(), signals.completed.clone()) {
@@ -66,9 +68,11 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         Ok(p) => p,
         Err(e) => return fail(Path::new("--nthreads"), e),
     };
+    let set_up = std::time::Instant::now();
     let job = pool.install(|| Job::plan(&scene, request));
     // The render scene holds what it needs; the description's meshes go now.
     drop(scene);
+    let load = print::LoadTimes { read_seconds, set_up_seconds: set_up.elapsed().as_secs_f64() };
     let job = match job {
         Ok(job) => job,
         Err(e) => {
@@ -94,7 +98,7 @@ fn render(scene: SceneDescription, args: &RenderArgs) -> ExitCode {
         worker.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
     });
     match done {
-        Ok(out) => print::rendered(&job, &out, args),
+        Ok(out) => print::rendered(&job, &out, args, load),
         Err(e) => {
             say!("{e}");
             ExitCode::FAILURE
