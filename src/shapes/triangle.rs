@@ -148,8 +148,8 @@ pub struct MeshFlags {
     pub reverse_orientation: bool,
     pub swaps_handedness: bool,
     /// Leave the shading normal's derivatives (∂n/∂u, ∂n/∂v) at zero: only bump maps
-    /// read them, and in a scene without one their sums were 2.6% of a caustic-glass
-    /// render's time.
+    /// read them, and in a scene without one their sums were about 2% of a
+    /// caustic-glass render's time.
     pub skip_normal_derivatives: bool,
 }
 

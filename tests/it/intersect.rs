@@ -864,7 +864,7 @@ fn a_ray_through_an_edge_beside_an_edge_on_triangle_hits_one_of_them() {
 
 /// A mesh with vertex normals has its shading normal's ∂n/∂u and ∂n/∂v where a bump
 /// map reads them, and leaves them at zero where no material has one (their sums were
-/// 2.6% of a caustic-glass render's time).
+/// about 2% of a caustic-glass render's time).
 #[test]
 fn normal_derivatives_are_there_for_bump_maps_and_left_out_otherwise() {
     let mesh = "Shape \"trianglemesh\" \"point P\" [0 0 0  1 0 0  0 1 0] \"integer indices\" [0 1 2] \

@@ -16,8 +16,11 @@ use std::process::ExitCode;
 
 /// The whole render command.
 pub fn command(args: &RenderArgs) -> ExitCode {
+    if let Err(code) = early_checks(args) {
+        return code;
+    }
     let start = std::time::Instant::now();
-    match early_checks(args).and_then(|()| loading(args)) {
+    match loading(args) {
         Ok(scene) => render(scene, args, start.elapsed().as_secs_f64()),
         Err(code) => code,
     }
