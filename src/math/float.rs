@@ -26,6 +26,44 @@ pub const fn gamma64(n: i32) -> f64 {
     (n as f64 * e) / (1.0 - n as f64 * e)
 }
 
+/// The next float up and down, with the results of `next_up` and `next_down` for every
+/// input (NaN, infinities and zeros too), written as selects on the bits rather than
+/// the standard library's chain of branches: interval arithmetic steps both ends of
+/// every sum and product outward, about forty steps in a sphere test.
+trait UlpStep: Sized {
+    fn step_up(self) -> Self;
+    fn step_down(self) -> Self;
+}
+
+macro_rules! ulp_step {
+    ($f:ty, $bits:ty) => {
+        impl UlpStep for $f {
+            #[inline(always)]
+            fn step_up(self) -> $f {
+                const SIGN: $bits = 1 << (<$bits>::BITS - 1);
+                let (b, inf) = (self.to_bits(), <$f>::INFINITY.to_bits());
+                let abs = b & !SIGN;
+                let stepped = if b == abs { b.wrapping_add(1) } else { b.wrapping_sub(1) };
+                let stepped = if abs == 0 { 1 } else { stepped };
+                <$f>::from_bits(if abs > inf || b == inf { b } else { stepped })
+            }
+
+            #[inline(always)]
+            fn step_down(self) -> $f {
+                const SIGN: $bits = 1 << (<$bits>::BITS - 1);
+                let (b, inf) = (self.to_bits(), <$f>::INFINITY.to_bits());
+                let abs = b & !SIGN;
+                let stepped = if b == abs { b.wrapping_sub(1) } else { b.wrapping_add(1) };
+                let stepped = if abs == 0 { SIGN | 1 } else { stepped };
+                <$f>::from_bits(if abs > inf || b == (SIGN | inf) { b } else { stepped })
+            }
+        }
+    };
+}
+
+ulp_step!(f32, u32);
+ulp_step!(f64, u64);
+
 macro_rules! efloat {
     ($name:ident, $f:ty) => {
         /// A value with conservative bounds `[low, high]` on its error.
@@ -42,7 +80,7 @@ macro_rules! efloat {
                 if err == 0.0 {
                     $name { v, low: v, high: v }
                 } else {
-                    $name { v, low: (v - err).next_down(), high: (v + err).next_up() }
+                    $name { v, low: (v - err).step_down(), high: (v + err).step_up() }
                 }
             }
             pub fn value(self) -> $f {
@@ -59,7 +97,7 @@ macro_rules! efloat {
                 (self.high - self.low) * 0.5
             }
             pub fn sqrt(self) -> $name {
-                $name { v: self.v.sqrt(), low: self.low.max(0.0).sqrt().next_down(), high: self.high.sqrt().next_up() }
+                $name { v: self.v.sqrt(), low: self.low.max(0.0).sqrt().step_down(), high: self.high.sqrt().step_up() }
             }
             pub fn abs(self) -> $name {
                 if self.low >= 0.0 {
@@ -96,14 +134,14 @@ macro_rules! efloat {
         impl std::ops::Add for $name {
             type Output = $name;
             fn add(self, o: $name) -> $name {
-                $name { v: self.v + o.v, low: (self.low + o.low).next_down(), high: (self.high + o.high).next_up() }
+                $name { v: self.v + o.v, low: (self.low + o.low).step_down(), high: (self.high + o.high).step_up() }
             }
         }
 
         impl std::ops::Sub for $name {
             type Output = $name;
             fn sub(self, o: $name) -> $name {
-                $name { v: self.v - o.v, low: (self.low - o.high).next_down(), high: (self.high - o.low).next_up() }
+                $name { v: self.v - o.v, low: (self.low - o.high).step_down(), high: (self.high - o.low).step_up() }
             }
         }
 
@@ -113,7 +151,7 @@ macro_rules! efloat {
                 let p = [self.low * o.low, self.high * o.low, self.low * o.high, self.high * o.high];
                 let low = p[0].min(p[1]).min(p[2].min(p[3]));
                 let high = p[0].max(p[1]).max(p[2].max(p[3]));
-                $name { v: self.v * o.v, low: low.next_down(), high: high.next_up() }
+                $name { v: self.v * o.v, low: low.step_down(), high: high.step_up() }
             }
         }
 
@@ -134,7 +172,7 @@ macro_rules! efloat {
                 let q = [self.low / o.low, self.high / o.low, self.low / o.high, self.high / o.high];
                 let low = q[0].min(q[1]).min(q[2].min(q[3]));
                 let high = q[0].max(q[1]).max(q[2].max(q[3]));
-                $name { v: self.v / o.v, low: low.next_down(), high: high.next_up() }
+                $name { v: self.v / o.v, low: low.step_down(), high: high.step_up() }
             }
         }
 
@@ -200,5 +238,26 @@ mod tests {
         assert!((gamma(3) - 3.0 * MACHINE_EPSILON).abs() < 1e-12);
         assert_eq!((-0.0f32).next_up(), f32::from_bits(1));
         assert!(gamma64(5) < 1e-15);
+    }
+
+    /// The select-based steps give `next_up`'s and `next_down`'s bits for zeros,
+    /// subnormals, the largest finite values, infinities, NaNs and random bit patterns.
+    #[test]
+    fn ulp_steps_are_the_standard_librarys() {
+        let mut rng = crate::sampling::Rng::new(5);
+        let special = [0u64, 1, 0x000f_ffff_ffff_ffff, 0x0010_0000_0000_0000, 0x7fef_ffff_ffff_ffff];
+        let special = special.into_iter().chain([0x7ff0_0000_0000_0000, 0x7ff8_0000_0000_0000, 0x7ff0_0000_0000_0001]);
+        let randoms = (0..100_000).map(|_| (rng.next_u32() as u64) << 32 | rng.next_u32() as u64);
+        for b in special.flat_map(|b| [b, b | 1 << 63]).chain(randoms) {
+            let x = f64::from_bits(b);
+            assert_eq!(x.step_up().to_bits(), x.next_up().to_bits(), "up from {b:#x}");
+            assert_eq!(x.step_down().to_bits(), x.next_down().to_bits(), "down from {b:#x}");
+            let y = f32::from_bits(b as u32);
+            assert_eq!(y.step_up().to_bits(), y.next_up().to_bits(), "up from {:#x}", b as u32);
+            assert_eq!(y.step_down().to_bits(), y.next_down().to_bits(), "down from {:#x}", b as u32);
+            let z = f32::from_bits((b >> 32) as u32);
+            assert_eq!(z.step_up().to_bits(), z.next_up().to_bits(), "up from {:#x}", z.to_bits());
+            assert_eq!(z.step_down().to_bits(), z.next_down().to_bits(), "down from {:#x}", z.to_bits());
+        }
     }
 }
