@@ -30,9 +30,14 @@ pub const fn gamma64(n: i32) -> f64 {
 /// input (NaN, infinities and zeros too), written as selects on the bits rather than
 /// the standard library's chain of branches: interval arithmetic steps both ends of
 /// every sum and product outward, about forty steps in a sphere test.
-trait UlpStep: Sized {
+trait UlpStep: Sized + std::ops::Neg<Output = Self> {
     fn step_up(self) -> Self;
-    fn step_down(self) -> Self;
+
+    /// The mirror image of a step up (negation only flips the sign bit).
+    #[inline(always)]
+    fn step_down(self) -> Self {
+        -(-self).step_up()
+    }
 }
 
 macro_rules! ulp_step {
@@ -46,16 +51,6 @@ macro_rules! ulp_step {
                 let stepped = if b == abs { b.wrapping_add(1) } else { b.wrapping_sub(1) };
                 let stepped = if abs == 0 { 1 } else { stepped };
                 <$f>::from_bits(if abs > inf || b == inf { b } else { stepped })
-            }
-
-            #[inline(always)]
-            fn step_down(self) -> $f {
-                const SIGN: $bits = 1 << (<$bits>::BITS - 1);
-                let (b, inf) = (self.to_bits(), <$f>::INFINITY.to_bits());
-                let abs = b & !SIGN;
-                let stepped = if b == abs { b.wrapping_sub(1) } else { b.wrapping_add(1) };
-                let stepped = if abs == 0 { SIGN | 1 } else { stepped };
-                <$f>::from_bits(if abs > inf || b == (SIGN | inf) { b } else { stepped })
             }
         }
     };
