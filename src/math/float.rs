@@ -236,23 +236,25 @@ mod tests {
     }
 
     /// The select-based steps give `next_up`'s and `next_down`'s bits for zeros,
-    /// subnormals, the largest finite values, infinities, NaNs and random bit patterns.
+    /// subnormals, the largest finite values, infinities, NaNs (each with either sign)
+    /// and random bit patterns.
     #[test]
     fn ulp_steps_are_the_standard_librarys() {
         let mut rng = crate::sampling::Rng::new(5);
-        let special = [0u64, 1, 0x000f_ffff_ffff_ffff, 0x0010_0000_0000_0000, 0x7fef_ffff_ffff_ffff];
-        let special = special.into_iter().chain([0x7ff0_0000_0000_0000, 0x7ff8_0000_0000_0000, 0x7ff0_0000_0000_0001]);
-        let randoms = (0..100_000).map(|_| (rng.next_u32() as u64) << 32 | rng.next_u32() as u64);
-        for b in special.flat_map(|b| [b, b | 1 << 63]).chain(randoms) {
-            let x = f64::from_bits(b);
-            assert_eq!(x.step_up().to_bits(), x.next_up().to_bits(), "up from {b:#x}");
-            assert_eq!(x.step_down().to_bits(), x.next_down().to_bits(), "down from {b:#x}");
-            let y = f32::from_bits(b as u32);
-            assert_eq!(y.step_up().to_bits(), y.next_up().to_bits(), "up from {:#x}", b as u32);
-            assert_eq!(y.step_down().to_bits(), y.next_down().to_bits(), "down from {:#x}", b as u32);
-            let z = f32::from_bits((b >> 32) as u32);
-            assert_eq!(z.step_up().to_bits(), z.next_up().to_bits(), "up from {:#x}", z.to_bits());
-            assert_eq!(z.step_down().to_bits(), z.next_down().to_bits(), "down from {:#x}", z.to_bits());
+        let f64_special = [0u64, 1, 0x000f_ffff_ffff_ffff, 0x0010_0000_0000_0000, 0x7fef_ffff_ffff_ffff];
+        let f64_special =
+            f64_special.into_iter().chain([0x7ff0_0000_0000_0000, 0x7ff8_0000_0000_0000, 1 | 0x7ff0 << 48]);
+        let f32_special = [0u32, 1, 0x007f_ffff, 0x0080_0000, 0x7f7f_ffff, 0x7f80_0000, 0x7fc0_0000, 0x7f80_0001];
+        let randoms: Vec<u64> = (0..100_000).map(|_| (rng.next_u32() as u64) << 32 | rng.next_u32() as u64).collect();
+        let doubles = f64_special.flat_map(|b| [b, b | 1 << 63]).chain(randoms.iter().copied());
+        for x in doubles.map(f64::from_bits) {
+            assert_eq!(x.step_up().to_bits(), x.next_up().to_bits(), "up from {:#x}", x.to_bits());
+            assert_eq!(x.step_down().to_bits(), x.next_down().to_bits(), "down from {:#x}", x.to_bits());
+        }
+        let singles = f32_special.into_iter().flat_map(|b| [b, b | 1 << 31]);
+        for y in singles.chain(randoms.iter().flat_map(|&b| [b as u32, (b >> 32) as u32])).map(f32::from_bits) {
+            assert_eq!(y.step_up().to_bits(), y.next_up().to_bits(), "up from {:#x}", y.to_bits());
+            assert_eq!(y.step_down().to_bits(), y.next_down().to_bits(), "down from {:#x}", y.to_bits());
         }
     }
 }
