@@ -6,6 +6,7 @@
 //! the side the ray goes to, then one more ulp away, so a ray never re-hits the surface
 //! it leaves.
 
+use crate::math::float::UlpStep;
 use crate::math::ray::RayDifferential;
 use crate::math::{Normal3, Point3, Ray, Vector3};
 use glam::Vec3;
@@ -54,9 +55,9 @@ pub fn offset_ray_origin(p: Point3, p_error: Vec3, n: Normal3, w: Vector3) -> Po
     let mut po = p.0 + offset;
     for i in 0..3 {
         if offset[i] > 0.0 {
-            po[i] = po[i].next_up();
+            po[i] = po[i].step_up();
         } else if offset[i] < 0.0 {
-            po[i] = po[i].next_down();
+            po[i] = po[i].step_down();
         }
     }
     Point3(po)

@@ -29,8 +29,9 @@ pub const fn gamma64(n: i32) -> f64 {
 /// The next float up and down, with the results of `next_up` and `next_down` for every
 /// input (NaN, infinities and zeros too), written as selects on the bits rather than
 /// the standard library's chain of branches: interval arithmetic steps both ends of
-/// every sum and product outward, about forty steps in a sphere test.
-trait UlpStep: Sized + std::ops::Neg<Output = Self> {
+/// every sum and product outward, about forty steps in a sphere test, and every spawned
+/// ray's origin is stepped off its surface.
+pub trait UlpStep: Sized + std::ops::Neg<Output = Self> {
     fn step_up(self) -> Self;
 
     /// The mirror image of a step up (negation only flips the sign bit).
