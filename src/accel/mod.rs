@@ -54,27 +54,42 @@ struct Blas {
     blocks: LeafBlocks,
 }
 
-/// A placed object.
+/// A placed object, as rays need it (104 bytes: a million instances are common).
 #[derive(Clone, Debug)]
 pub struct Instance {
     /// Instance-from-render as a 3 x 4 matrix: mapping rays uses only the top three
     /// rows of the 4 x 4 one (the same operations, so the same bits).
     instance_from_render: DAffine3,
     object: u32,
-    /// The `check --shapes` index of the object's first shape for this instance.
-    first_shape_index: u32,
     /// The instance's position among the scene's `ObjectInstance`s, where its
-    /// render-from-instance map and its motion are (they are not needed per ray).
-    pub index: u32,
-    /// Whether its transform is animated (then the map above is its start).
-    moving: bool,
+    /// render-from-instance map, its motion and its first shape's number are (they
+    /// are not needed per ray); [`MOVING`] set when its transform is animated (then
+    /// the map above is its start).
+    placement: u32,
+}
+
+/// The bit of [`Instance::placement`] that marks a moving instance: positions are
+/// below it ([`crate::scene::instances::MAX_INSTANCES`]).
+const MOVING: u32 = 1 << 31;
+const _: () = assert!(crate::scene::instances::MAX_INSTANCES <= MOVING as usize);
+const _: () = assert!(std::mem::size_of::<Instance>() == 104);
+
+impl Instance {
+    fn moving(&self) -> bool {
+        self.placement & MOVING != 0
+    }
+
+    /// Its position among the scene's instances, in file order.
+    fn index(&self) -> usize {
+        (self.placement & !MOVING) as usize
+    }
 }
 
 impl Geometry {
     /// Instance-from-render of instance `inst` at `time`.
     /// (Per ray and instance: the scene's record is read only for a moving one.)
     fn instance_from_render_at<'a>(&self, inst: &'a Instance, time: f32) -> std::borrow::Cow<'a, DAffine3> {
-        let motion = if inst.moving { self.placement(inst).motion() } else { None };
+        let motion = if inst.moving() { self.placement(inst).motion() } else { None };
         match motion {
             None => std::borrow::Cow::Borrowed(&inst.instance_from_render),
             Some(m) => std::borrow::Cow::Owned(DAffine3::from_mat4(m.at(time as f64).inverse())),
@@ -91,8 +106,13 @@ impl Geometry {
     }
 
     /// The scene's record of an instance.
-    fn placement(&self, inst: &Instance) -> &crate::scene::InstanceDesc {
-        &self.placements[inst.index as usize]
+    fn placement(&self, inst: &Instance) -> crate::scene::Placed<'_> {
+        self.placements.get(inst.index())
+    }
+
+    /// The `check --shapes` index of the first shape of instance `inst`'s object.
+    fn first_shape_index(&self, inst: &Instance) -> u32 {
+        self.first_shapes[inst.index()]
     }
 }
 
@@ -116,7 +136,10 @@ pub struct Geometry {
     /// In the instances' BVH order.
     pub instances: Vec<Instance>,
     /// The scene's instances (shared, not copied), in file order.
-    placements: Arc<Vec<crate::scene::InstanceDesc>>,
+    placements: Arc<crate::scene::Instances>,
+    /// Per instance, in file order: the `check --shapes` index of its object's first
+    /// shape (shapes are numbered world shapes first, then instance by instance).
+    first_shapes: Vec<u32>,
     world: Blas,
     objects: Vec<Blas>,
     tlas: Bvh,
@@ -576,10 +599,10 @@ impl Geometry {
             rayon::join(|| blas.bvh.advise_huge_pages(), || blas.blocks.advise_huge_pages());
         }
         // Each instance's shapes are numbered after the world's and the instances' before.
-        let firsts: Vec<u32> = (scene.instances.iter())
+        let first_shapes: Vec<u32> = (scene.instances.iter())
             .scan(scene.shapes.len() as u32, |next, i| {
                 let first = *next;
-                *next += objects[i.object as usize].shapes.len() as u32;
+                *next += objects[i.object() as usize].shapes.len() as u32;
                 Some(first)
             })
             .collect();
@@ -587,7 +610,7 @@ impl Geometry {
             .instances
             .par_iter()
             .map(|i| {
-                let b = objects[i.object as usize].bvh.bounds();
+                let b = objects[i.object() as usize].bvh.bounds();
                 i.motion().map_or_else(|| instance_bounds(&i.world_from_instance(), b), |m| m.motion_bounds(b))
             })
             .collect();
@@ -597,20 +620,28 @@ impl Geometry {
         let instances: Vec<Instance> = order
             .par_iter()
             .map(|&k| {
-                let i = &scene.instances[k as usize];
+                let i = scene.instances.get(k as usize);
                 Instance {
                     // The 4 x 4 inverse's top rows, as before (an affine inverse rounds
                     // differently).
                     instance_from_render: DAffine3::from_mat4(i.world_from_instance().inverse()),
-                    object: i.object,
-                    first_shape_index: firsts[k as usize],
-                    index: k,
-                    moving: i.motion().is_some(),
+                    object: i.object(),
+                    placement: k | if i.motion().is_some() { MOVING } else { 0 },
                 }
             })
             .collect();
         let placements = scene.instances.clone();
-        Geometry { shapes: set, instances, placements, world, objects, tlas, triangle_ids, avx: Avx::detect() }
+        Geometry {
+            shapes: set,
+            instances,
+            placements,
+            first_shapes,
+            world,
+            objects,
+            tlas,
+            triangle_ids,
+            avx: Avx::detect(),
+        }
     }
 
     /// The world BVH's SAH cost ([`Bvh::sah_cost`]), to compare builds by.
@@ -648,7 +679,7 @@ impl Geometry {
             let (r, dt) = instance_ray(&self.instance_from_render_at(inst, ray.time), ray);
             let (t, shape, local) = self.objects[inst.object as usize].intersect(self, &r, t_max - dt)?;
             let t = t + dt;
-            let shape_index = inst.first_shape_index + shape;
+            let shape_index = self.first_shape_index(inst) + shape;
             best = Some(Hit { t, local, shape_index, instance: Some(k as u32), time: ray.time });
             Some(t)
         });
@@ -686,7 +717,7 @@ impl Geometry {
             None => (None, hit.shape_index),
             Some(k) => {
                 let inst = &self.instances[k as usize];
-                (Some(inst.object), hit.shape_index - inst.first_shape_index)
+                (Some(inst.object), hit.shape_index - self.first_shape_index(inst))
             }
         }
     }

@@ -173,8 +173,8 @@ pub fn mitsuba(scene: &SceneDescription, source: &str) -> Export {
         .iter()
         .map(|i| {
             let out =
-                InstanceOut { object: i.object, to_world: row_major(&i.world_from_instance()), first_shape_index };
-            first_shape_index += scene.objects[i.object as usize].shapes.len() as u32;
+                InstanceOut { object: i.object(), to_world: row_major(&i.world_from_instance()), first_shape_index };
+            first_shape_index += scene.objects[i.object() as usize].shapes.len() as u32;
             out
         })
         .collect();

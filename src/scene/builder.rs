@@ -27,7 +27,7 @@ use super::entities;
 use super::names::Family;
 use super::options::RenderOptions;
 use super::shapes::{AlphaParams, alpha_params};
-use super::{Approximated, Geometry, InstanceDesc, ObjectDesc, SceneDescription, ShapeDesc, Skipped};
+use super::{Approximated, Geometry, Instances, ObjectDesc, SceneDescription, ShapeDesc, Skipped};
 use crate::approx::Approx;
 use crate::imageio::RgbImage;
 use crate::limits::{FileBytes, Files, Limits};
@@ -619,7 +619,7 @@ impl Builder {
         if self.gs.ctm[0] != self.gs.ctm[1] {
             self.first_motion.get_or_insert(span);
         }
-        self.need_memory(span, |n| n.instances += 1)?;
+        self.one_more_instance(span)?;
         self.instance_uses.push(name, span, self.gs.ctm);
         Ok(())
     }
@@ -901,6 +901,7 @@ impl Builder {
         let idx = self.objects.len() as u32;
         let name = format!("moving {} {idx}", pending.entity.name);
         self.objects.push(PendingObject { name, span, shapes: vec![pending], used: true });
+        self.one_more_instance(span)?;
         self.moving_shapes.push((idx, self.gs.ctm));
         Ok(())
     }
@@ -1053,6 +1054,16 @@ impl Builder {
 
     /// Adds to what the scene needs in memory; an error at `at` once that is over the
     /// limit.
+    /// Counts an instance (an `ObjectInstance`, or a moving shape, which is rendered as
+    /// one) against the memory budget and the most a scene can hold.
+    fn one_more_instance(&mut self, at: Span) -> Res<()> {
+        if self.instance_uses.len() + self.moving_shapes.len() >= super::instances::MAX_INSTANCES {
+            let most = super::instances::MAX_INSTANCES;
+            return Err(Diagnostic::error(at, format!("a scene holds at most {most} instances")));
+        }
+        self.need_memory(at, |n| n.instances += 1)
+    }
+
     fn need_memory(&mut self, at: Span, add: impl FnOnce(&mut MemoryNeed)) -> Res<()> {
         self.memory.add(add).map_err(|e| Diagnostic::error(at, e))
     }
@@ -1391,15 +1402,15 @@ impl Builder {
 
     /// The instances the file names, then the moving world shapes' (as pbrt wraps
     /// them), objects numbered as built (`remap`); `frame` is the motion frame.
-    fn instances(&mut self, object_of_name: &[u32], remap: &[u32], frame: DMat4) -> Vec<InstanceDesc> {
+    fn instances(&mut self, object_of_name: &[u32], remap: &[u32], frame: DMat4) -> Instances {
         let times = self.transform_times;
         let mut instances = std::mem::take(&mut self.instance_uses).resolve(object_of_name, remap, frame, times);
         // Moving world shapes come after the instances the file names.
-        instances.extend(std::mem::take(&mut self.moving_shapes).into_iter().map(|(obj, [m0, m1])| {
+        for (obj, [m0, m1]) in std::mem::take(&mut self.moving_shapes) {
             // pbrt-v4 interpolates a shape from its own space in rendering space.
             let motion = (m0 != m1).then(|| AnimatedTransform::framed(m0, m1, times, frame, DMat4::IDENTITY));
-            InstanceDesc::new(remap[obj as usize], m0, motion)
-        }));
+            instances.push(remap[obj as usize], m0, motion);
+        }
         instances
     }
 

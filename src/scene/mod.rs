@@ -8,22 +8,23 @@
 
 pub mod builder;
 pub mod entities;
+pub mod instances;
 pub mod names;
 pub mod options;
 pub mod shapes;
 
-use crate::math::animated::AnimatedTransform;
 use crate::math::bounds::transform_bounds;
 use crate::parser::Syntax;
 use crate::parser::error::Located;
 use crate::shapes::{PatchMesh, Quadric, TriangleMesh};
-use glam::{DAffine3, DMat4, DVec3, DVec4};
+use glam::{DMat4, DVec3};
 
 pub use crate::approx::Approx;
 pub use crate::lights::{AreaLightDesc, EnvMapDesc, LightDesc, LightKind};
 pub use crate::materials::{CoatBase, Coated, MaterialDesc, MaterialKind, Metal, MixRule, RoughnessRemap, TexValue};
 pub use crate::textures::{Mapping2D, Octaves, TextureDesc, TextureKind, TextureSite, UvMapping, Wrap};
 pub use builder::{LoadOptions, load_scene, load_scene_from_bytes};
+pub use instances::{Instances, Placed};
 pub use options::{Camera, CameraKind, Film, Integrator};
 
 /// A shape's geometry: a quadric, a triangle mesh stored in [`SceneDescription::meshes`]
@@ -113,61 +114,6 @@ pub struct ObjectDesc {
     pub shapes: Vec<ShapeDesc>,
 }
 
-/// An `ObjectInstance`: world-from-instance and the object it places (112 bytes: a
-/// million instances are a million of these).
-#[derive(Clone, Debug, PartialEq)]
-pub struct InstanceDesc {
-    pub object: u32,
-    /// The top three rows of world-from-instance.
-    affine: DAffine3,
-    /// What few instances have: a bottom row other than exactly (0 0 0 1), or motion.
-    rare: Option<Box<InstanceRare>>,
-}
-
-#[derive(Clone, Debug, PartialEq)]
-struct InstanceRare {
-    bottom: Option<DVec4>,
-    motion: Option<AnimatedTransform>,
-}
-
-impl InstanceDesc {
-    /// An instance of `object` placed by `world_from_instance` (its start transform
-    /// when it moves): stored so that [`InstanceDesc::world_from_instance`] gives it
-    /// back bit for bit.
-    pub fn new(object: u32, world_from_instance: DMat4, motion: Option<AnimatedTransform>) -> InstanceDesc {
-        let bottom = world_from_instance.row(3);
-        let plain = bottom.to_array().map(f64::to_bits) == DVec4::W.to_array().map(f64::to_bits);
-        let bottom = (!plain).then_some(bottom);
-        let rare = (bottom.is_some() || motion.is_some()).then(|| Box::new(InstanceRare { bottom, motion }));
-        InstanceDesc { object, affine: DAffine3::from_mat4(world_from_instance), rare }
-    }
-
-    /// World-from-instance (the start transform of a moving instance).
-    pub fn world_from_instance(&self) -> DMat4 {
-        let mut m = DMat4::from(self.affine);
-        if let Some(bottom) = self.rare.as_ref().and_then(|r| r.bottom) {
-            (m.x_axis.w, m.y_axis.w, m.z_axis.w, m.w_axis.w) = bottom.into();
-        }
-        m
-    }
-
-    /// The top three rows of [`InstanceDesc::world_from_instance`].
-    pub fn world_from_instance_affine(&self) -> DAffine3 {
-        self.affine
-    }
-
-    /// Its motion between the `TransformTimes`, when its transform is animated.
-    pub fn motion(&self) -> Option<&AnimatedTransform> {
-        self.rare.as_ref().and_then(|r| r.motion.as_ref())
-    }
-
-    /// Animates it by `motion`.
-    pub fn set_motion(&mut self, motion: AnimatedTransform) {
-        let bottom = self.rare.take().and_then(|r| r.bottom);
-        self.rare = Some(Box::new(InstanceRare { bottom, motion: Some(motion) }));
-    }
-}
-
 /// Something the scene asked for that is not built, and why.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Skipped {
@@ -207,7 +153,7 @@ pub struct SceneDescription {
     pub shapes: Vec<ShapeDesc>,
     pub objects: Vec<ObjectDesc>,
     /// Shared with the accelerator, which keeps only what rays need beside it.
-    pub instances: std::sync::Arc<Vec<InstanceDesc>>,
+    pub instances: std::sync::Arc<Instances>,
     /// Shared with the render scene, which reads them and keeps its own reordered
     /// copies of the triangle meshes.
     pub meshes: Vec<std::sync::Arc<TriangleMesh>>,
@@ -253,7 +199,7 @@ impl SceneDescription {
         let world =
             self.shapes.iter().map(|s| PlacedShape { shape: s, object_to_world: s.object_to_world, instance: None });
         let inst = self.instances.iter().enumerate().flat_map(move |(i, inst)| {
-            self.objects[inst.object as usize].shapes.iter().map(move |s| PlacedShape {
+            self.objects[inst.object() as usize].shapes.iter().map(move |s| PlacedShape {
                 shape: s,
                 object_to_world: inst.world_from_instance() * s.object_to_world,
                 instance: Some(i as u32),
@@ -293,7 +239,7 @@ impl SceneDescription {
         let local = self.local_bounds(p.shape)?;
         match p.instance {
             None => Some(local),
-            Some(i) => Some(transform_bounds(&self.instances[i as usize].world_from_instance(), local)),
+            Some(i) => Some(transform_bounds(&self.instances.get(i as usize).world_from_instance(), local)),
         }
     }
 
@@ -311,7 +257,7 @@ impl SceneDescription {
         let inst = self
             .instances
             .par_iter()
-            .filter_map(|i| object_bounds[i.object as usize].map(|b| transform_bounds(&i.world_from_instance(), b)));
+            .filter_map(|i| object_bounds[i.object() as usize].map(|b| transform_bounds(&i.world_from_instance(), b)));
         world.chain(inst).reduce_with(union)
     }
 
@@ -339,45 +285,4 @@ impl SceneDescription {
 /// The box holding both boxes.
 pub fn union(a: [DVec3; 2], b: [DVec3; 2]) -> [DVec3; 2] {
     [a[0].min(b[0]), a[1].max(b[1])]
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn round_trip(m: DMat4) -> DMat4 {
-        InstanceDesc::new(0, m, None).world_from_instance()
-    }
-
-    fn bits(m: DMat4) -> [u64; 16] {
-        m.to_cols_array().map(f64::to_bits)
-    }
-
-    #[test]
-    fn instances_give_back_their_matrix_bit_for_bit() {
-        let plain = DMat4::from_scale_rotation_translation(
-            DVec3::new(1.5, 2.0, 0.25),
-            glam::DQuat::from_rotation_y(0.3),
-            DVec3::new(-4.0, 0.5, 7.0),
-        );
-        let mut negative_zero = plain;
-        negative_zero.x_axis.w = -0.0;
-        let mut projective = plain;
-        projective.z_axis.w = 0.5;
-        projective.w_axis.w = 2.0;
-        for m in [plain, negative_zero, projective] {
-            assert_eq!(bits(round_trip(m)), bits(m));
-        }
-        assert!(InstanceDesc::new(0, plain, None).rare.is_none(), "a plain matrix needs no box");
-    }
-
-    #[test]
-    fn motion_keeps_the_bottom_row() {
-        let mut m = DMat4::IDENTITY;
-        m.y_axis.w = 0.125;
-        let mut inst = InstanceDesc::new(3, m, None);
-        inst.set_motion(AnimatedTransform::new(DMat4::IDENTITY, DMat4::IDENTITY, [0.0, 1.0]));
-        assert!(inst.motion().is_some());
-        assert_eq!(bits(inst.world_from_instance()), bits(m));
-    }
 }

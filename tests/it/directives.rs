@@ -73,9 +73,9 @@ fn active_transform_and_transform_times() {
         "TransformTimes 0 2\nWorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\nShape \"sphere\"\n",
     );
     assert!(s.shapes.is_empty(), "the moving sphere is not a world shape");
-    let i = &s.instances[0];
+    let i = s.instances.get(0);
     assert_eq!(i.world_from_instance(), glam::DMat4::IDENTITY, "placed at its start transform");
-    assert_eq!(s.objects[i.object as usize].shapes[0].object_to_world, glam::DMat4::IDENTITY);
+    assert_eq!(s.objects[i.object() as usize].shapes[0].object_to_world, glam::DMat4::IDENTITY);
     let motion = i.motion().expect("it moves");
     assert_eq!(motion.times, [0.0, 2.0]);
     assert!((motion.at(1.0).w_axis.x - 0.5).abs() < 1e-12, "halfway through TransformTimes, halfway there");
@@ -85,11 +85,11 @@ fn active_transform_and_transform_times() {
         "WorldBegin\nObjectBegin \"o\"\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\nShape \"sphere\"\nObjectEnd\nObjectInstance \"o\"\n",
     );
     assert!(warnings(&s).iter().any(|w| w.contains("keeps its start transform")), "{:?}", warnings(&s));
-    assert!(s.instances[0].motion().is_none());
+    assert!(s.instances.get(0).motion().is_none());
     // StartTime alone changes only the start: the shape moves back to where it was.
     let s = scene("WorldBegin\nActiveTransform StartTime Translate 2 0 0\nActiveTransform All\nShape \"sphere\"\n");
-    assert_eq!(s.instances[0].world_from_instance().w_axis.x, 2.0);
-    assert_eq!(s.instances[0].motion().map(|m| m.end.w_axis.x), Some(0.0));
+    assert_eq!(s.instances.get(0).world_from_instance().w_axis.x, 2.0);
+    assert_eq!(s.instances.get(0).motion().map(|m| m.end.w_axis.x), Some(0.0));
 }
 
 #[test]

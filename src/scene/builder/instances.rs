@@ -11,17 +11,16 @@
 //! statement then, no second list and no copy (that copy's fresh pages were a tenth of
 //! a million-instance file's load).
 
-use super::super::InstanceDesc;
+use super::super::Instances;
 use crate::math::animated::AnimatedTransform;
 use crate::parser::error::Diagnostic;
 use crate::parser::source::Span;
 use glam::DMat4;
-use rayon::prelude::*;
 use std::collections::HashMap;
 
 #[derive(Default)]
 pub(super) struct InstanceUses {
-    records: Vec<InstanceDesc>,
+    records: Instances,
     /// Per name index: the name, and its first use's position and statement.
     names: Vec<(String, usize, Span)>,
     ids: HashMap<String, u32>,
@@ -45,7 +44,12 @@ impl InstanceUses {
         if end != start {
             self.ends.push((at, end));
         }
-        crate::hugepages::push(&mut self.records, InstanceDesc::new(id, start, None));
+        self.records.push(id, start, None);
+    }
+
+    /// The instances recorded so far.
+    pub fn len(&self) -> usize {
+        self.records.len()
     }
 
     /// The names instances use, each once, in order of first use.
@@ -63,13 +67,13 @@ impl InstanceUses {
     /// The records with their objects resolved: name index `i` stands for object
     /// `remap[object_of_name[i]]`. A moving instance interpolates between its
     /// transforms in rendering space (`frame`), as pbrt-v4 does.
-    pub fn resolve(self, object_of_name: &[u32], remap: &[u32], frame: DMat4, times: [f64; 2]) -> Vec<InstanceDesc> {
+    pub fn resolve(self, object_of_name: &[u32], remap: &[u32], frame: DMat4, times: [f64; 2]) -> Instances {
         let mut records = self.records;
-        records.par_iter_mut().for_each(|r| r.object = remap[object_of_name[r.object as usize] as usize]);
+        records.remap_objects(|name| remap[object_of_name[name as usize] as usize]);
         let inner = frame.inverse();
         for (at, end) in self.ends {
-            let r = &mut records[at];
-            r.set_motion(AnimatedTransform::framed(r.world_from_instance(), end, times, frame, inner));
+            let start = records.get(at).world_from_instance();
+            records.set_motion(at, AnimatedTransform::framed(start, end, times, frame, inner));
         }
         records
     }
