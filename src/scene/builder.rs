@@ -898,10 +898,10 @@ impl Builder {
         }
         pending.ctm = DMat4::IDENTITY;
         self.first_motion.get_or_insert(span);
+        self.one_more_instance(span)?;
         let idx = self.objects.len() as u32;
         let name = format!("moving {} {idx}", pending.entity.name);
         self.objects.push(PendingObject { name, span, shapes: vec![pending], used: true });
-        self.one_more_instance(span)?;
         self.moving_shapes.push((idx, self.gs.ctm));
         Ok(())
     }
@@ -1052,8 +1052,6 @@ impl Builder {
         Ok(())
     }
 
-    /// Adds to what the scene needs in memory; an error at `at` once that is over the
-    /// limit.
     /// Counts an instance (an `ObjectInstance`, or a moving shape, which is rendered as
     /// one) against the memory budget and the most a scene can hold.
     fn one_more_instance(&mut self, at: Span) -> Res<()> {
@@ -1064,6 +1062,8 @@ impl Builder {
         self.need_memory(at, |n| n.instances += 1)
     }
 
+    /// Adds to what the scene needs in memory; an error at `at` once that is over the
+    /// limit.
     fn need_memory(&mut self, at: Span, add: impl FnOnce(&mut MemoryNeed)) -> Res<()> {
         self.memory.add(add).map_err(|e| Diagnostic::error(at, e))
     }
