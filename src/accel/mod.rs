@@ -679,10 +679,14 @@ impl Geometry {
             let (r, dt) = instance_ray(&self.instance_from_render_at(inst, ray.time), ray);
             let (t, shape, local) = self.objects[inst.object as usize].intersect(self, &r, t_max - dt)?;
             let t = t + dt;
-            let shape_index = self.first_shape_index(inst) + shape;
-            best = Some(Hit { t, local, shape_index, instance: Some(k as u32), time: ray.time });
+            // The object's shape index for now: the instance's first is added once the
+            // closest hit is known (a read of a list by position, once per ray).
+            best = Some(Hit { t, local, shape_index: shape, instance: Some(k as u32), time: ray.time });
             Some(t)
         });
+        if let Some(Hit { instance: Some(k), shape_index, .. }) = &mut best {
+            *shape_index += self.first_shape_index(&self.instances[*k as usize]);
+        }
         best
     }
 
