@@ -111,8 +111,8 @@ pub struct Job {
 
 impl Job {
     /// Checks every output and option, then builds the render scene and the plan.
-    pub fn plan(scene: &SceneDescription, request: Request) -> Result<Job, JobError> {
-        let image = image_output(scene, &request);
+    pub fn plan(scene: SceneDescription, request: Request) -> Result<Job, JobError> {
+        let image = image_output(&scene, &request);
         check_outputs(&request, image.as_ref())?;
         check_overrides(&scene.limits, &request.settings)?;
         let reference = match &request.reference {
@@ -120,9 +120,9 @@ impl Job {
             None => None,
         };
         let render_error = |source| JobError::Render { at: request.scene.display().to_string(), source };
-        let plan = Plan::new(&scene.integrator, || crate::render::world_sphere(scene).radius, &request.settings)
+        let plan = Plan::new(&scene.integrator, || crate::render::world_sphere(&scene).radius, &request.settings)
             .map_err(render_error)?;
-        let fingerprint = fingerprint(scene, &request.scene, &plan);
+        let fingerprint = fingerprint(&scene, &request.scene, &plan);
         let display = match request.display_server.as_deref() {
             Some(a) => {
                 let title = request.scene.file_name().map_or("pbrt-sppm".into(), |n| n.to_string_lossy().into_owned());
@@ -143,7 +143,7 @@ impl Job {
             display,
             observer: None,
         };
-        let scene = RenderScene::for_integrator(scene, plan.algorithm != crate::integrators::Algorithm::Sppm);
+        let scene = RenderScene::from_description(scene, plan.algorithm != crate::integrators::Algorithm::Sppm);
         Ok(Job { request, scene, plan, fingerprint, image, monitor })
     }
 

@@ -18,11 +18,12 @@ use crate::sampling::{Distribution1D, Pick};
 use crate::scene::{
     AlphaRule, AreaLightDesc, Film, Integrator, MaterialKind, MixRule, SceneDescription, ShapeAlpha, TexValue,
 };
-use crate::shapes::ShapeSample;
+use crate::shapes::{ShapeSample, TriangleMesh};
 use crate::spectrum::sampled::Draw;
 use crate::spectrum::transport::{PassCell, PassSpectrum};
 use crate::spectrum::{EmissionSpectrum, Rgb};
 use glam::{DVec3, Vec3};
+use std::sync::Arc;
 
 /// An emitting world shape: which side emits and where its lights start (each
 /// primitive's light holds its radiance).
@@ -33,15 +34,40 @@ pub struct EmitterInfo {
     pub first_light: u32,
 }
 
-/// The scene's BVHs. A spectral scene's colours need its colour space's RGB-to-spectrum
-/// table, 40 ms to unpack on first use: it is unpacked meanwhile, on another thread.
-fn build_geometry(scene: &SceneDescription) -> Geometry {
+/// The scene's BVHs over its shapes and `meshes` ([`Geometry::with_meshes`]). A
+/// spectral scene's colours need its colour space's RGB-to-spectrum table, 40 ms to
+/// unpack on first use: it is unpacked meanwhile, on another thread.
+fn build_geometry(scene: &SceneDescription, meshes: Vec<Arc<TriangleMesh>>) -> Geometry {
+    let geometry = || Geometry::with_meshes(scene, meshes);
     match scene.spectral {
-        true => {
-            rayon::join(|| Geometry::new(scene), || crate::spectrum::sigmoid::RgbToSpectrumTable::of(scene.color_space))
-                .0
+        true => rayon::join(geometry, || crate::spectrum::sigmoid::RgbToSpectrumTable::of(scene.color_space)).0,
+        false => geometry(),
+    }
+}
+
+/// The description a render scene is made from: lent, or given up so that its meshes
+/// move into the BVHs, which free each one as soon as its reordered copy is made
+/// (the load benchmark's peak: 1,004 MiB, was 1,105).
+enum Description<'a> {
+    Lent(&'a SceneDescription),
+    Given(Box<SceneDescription>),
+}
+
+impl Description<'_> {
+    fn get(&self) -> &SceneDescription {
+        match self {
+            Description::Lent(s) => s,
+            Description::Given(s) => s,
         }
-        false => Geometry::new(scene),
+    }
+
+    /// The meshes for the BVHs: shares of a lent description's, or a given one's own,
+    /// which it holds no longer.
+    fn meshes(&mut self) -> Vec<Arc<TriangleMesh>> {
+        match self {
+            Description::Lent(s) => s.meshes.clone(),
+            Description::Given(s) => std::mem::take(&mut s.meshes),
+        }
     }
 }
 
@@ -231,6 +257,22 @@ impl RenderScene {
     // sampling (`--fix shape-sampling`) is not, and mixed with emitters found by rays
     // it gives neither pbrt's image nor the right one. SPPM keeps pbrt's by default.
     pub fn for_integrator(scene: &SceneDescription, bidirectional: bool) -> RenderScene {
+        RenderScene::assemble(Description::Lent(scene), bidirectional)
+    }
+
+    /// As [`Self::for_integrator`], from a description no longer needed: its meshes
+    /// move into the BVHs.
+    pub fn from_description(scene: SceneDescription, bidirectional: bool) -> RenderScene {
+        RenderScene::assemble(Description::Given(Box::new(scene)), bidirectional)
+    }
+
+    fn assemble(mut source: Description, bidirectional: bool) -> RenderScene {
+        // What reads the scene's meshes comes first: they may move into the BVHs.
+        let world = world_sphere(source.get());
+        let Interiors { media, world_shape_media, object_shape_media, bssrdf } = interiors(source.get(), bidirectional);
+        let medium_emitters = medium_emitters(&media, source.get());
+        let meshes = source.meshes();
+        let scene = source.get();
         let camera = Camera::new(&scene.camera, &scene.film);
         let textures = Textures::new(&scene.textures, scene.fixes);
         let needs_differentials = textures.use_footprint() || scene.materials.iter().any(|m| m.bump.is_some());
@@ -246,19 +288,16 @@ impl RenderScene {
         let object_shape_alpha: Vec<Vec<_>> =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.alpha).collect()).collect();
         let has_alpha = world_shape_alpha.iter().chain(object_shape_alpha.iter().flatten()).any(|a| a.is_some());
-        let world = world_sphere(scene);
         let mut lights: Vec<Light> = scene.lights.iter().map(|l| Light::from_desc(l, scene.fixes)).collect();
         let shape_area_lights: Vec<Option<u32>> = scene.shapes.iter().map(|s| s.area_light).collect();
         let area_params = scene.area_lights.clone();
         let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
-        let geometry = build_geometry(scene);
+        let geometry = build_geometry(scene, meshes);
         let alpha_rules = AlphaEmission::new(scene.syntax, scene.fixes);
         let rules = EmitterRules::new(scene, bidirectional, alpha_rules);
         let emitters = area_lights(&geometry, &shape_area_lights, &world_shape_alpha, &area_params, rules, &mut lights);
-        let Interiors { media, world_shape_media, object_shape_media, bssrdf } = interiors(scene, bidirectional);
         let light_media = scene.lights.iter().map(|l| l.medium).collect();
         let powers: Vec<f64> = lights.iter().map(|l| l.power(world)).collect();
-        let medium_emitters = medium_emitters(&media, scene);
         let sources: Vec<f64> = powers.iter().copied().chain(medium_emitters.iter().map(|e| e.1.power)).collect();
         let photon_scale = photon_scale(sources.iter().sum());
         let light_power = Distribution1D::new(&powers);

@@ -370,19 +370,16 @@ impl Blas {
                 p.tri = next;
             }
         }
-        let shapes = &self.shapes;
-        let reordered: Vec<(usize, Arc<TriangleMesh>, Vec<u32>)> = orders
-            .into_par_iter()
-            .enumerate()
-            .filter_map(|(shape, order)| match shapes[shape] {
-                ShapeRef::Mesh { mesh, .. } => Some((mesh as usize, order)),
-                _ => None,
-            })
-            .map(|(mesh, order)| (mesh, Arc::new(meshes[mesh].reordered(&order)), order))
-            .collect();
-        for (mesh, m, order) in reordered {
-            (meshes[mesh], ids[mesh]) = (m, order);
-        }
+        let jobs = orders.into_iter().enumerate().filter_map(|(shape, order)| match self.shapes[shape] {
+            ShapeRef::Mesh { mesh, .. } => Some((mesh as usize, order)),
+            _ => None,
+        });
+        // Each copy takes its original's place at once, which frees the original
+        // unless the scene still holds it.
+        (mesh_slots(meshes, ids, jobs.collect()).into_par_iter()).for_each(|(mesh, id, order)| {
+            *mesh = Arc::new(mesh.reordered(&order));
+            *id = order;
+        });
         if !self.block_meshes.is_empty() {
             let (prims, block_meshes) = (&self.prims, &self.block_meshes);
             // A leaf's triangles are one mesh's (`build_grouped`), numbered one after
@@ -394,11 +391,13 @@ impl Blas {
                     LeafTriangles { mesh, shape, first: tri as usize, count }
                 })
                 .collect();
+            // Gone before the blocks are made: 8 bytes a triangle off the load's peak.
+            self.prims = Vec::new();
             let (mut blocks, refs) = LeafBlocks::of_leaves(&leaves);
             let mut refs = refs.into_iter();
             self.bvh.relabel_leaves(|_, _| refs.next().expect("a block for every leaf"));
             blocks.shrink_to_fit();
-            (self.blocks, self.prims) = (blocks, Vec::new());
+            self.blocks = blocks;
         }
     }
 
@@ -543,6 +542,31 @@ fn hit_candidates<const KX: usize, const KY: usize, const KZ: usize, const ANY: 
 /// A render-space ray in instance space: mapped in f64, rounded once to f32, and its
 /// origin moved forward by that rounding (pbrt's rule). Returns the ray and the shift
 /// `dt` (instance t + dt = render t).
+/// Each job's mesh and triangle numbers, to replace, with its order: the slots of
+/// `meshes` and `ids` that the jobs name (by mesh index), taken apart so that they
+/// can be filled on all threads. Where two jobs name one mesh, the later one's.
+type MeshSlot<'a> = (&'a mut Arc<TriangleMesh>, &'a mut Vec<u32>, Vec<u32>);
+fn mesh_slots<'a>(
+    meshes: &'a mut [Arc<TriangleMesh>],
+    ids: &'a mut [Vec<u32>],
+    mut jobs: Vec<(usize, Vec<u32>)>,
+) -> Vec<MeshSlot<'a>> {
+    // Reversed, then sorted stably and deduplicated: the later of two jobs stays.
+    jobs.reverse();
+    jobs.sort_by_key(|j| j.0);
+    jobs.dedup_by_key(|j| j.0);
+    let (mut m_rest, mut i_rest, mut at) = (meshes, ids, 0);
+    let mut slots = Vec::with_capacity(jobs.len());
+    for (mesh, order) in jobs {
+        let (m, i);
+        (m, m_rest) = std::mem::take(&mut m_rest)[mesh - at..].split_first_mut().expect("a mesh of the scene");
+        (i, i_rest) = std::mem::take(&mut i_rest)[mesh - at..].split_first_mut().expect("a mesh of the scene");
+        at = mesh + 1;
+        slots.push((m, i, order));
+    }
+    slots
+}
+
 fn instance_ray(instance_from_render: &DAffine3, r: &Ray) -> (Ray, f32) {
     let o = instance_from_render.transform_point3(r.o.0.as_dvec3());
     let d = (instance_from_render.matrix3 * r.d.0.as_dvec3()).as_vec3();
@@ -565,7 +589,15 @@ impl Geometry {
     /// Builds the acceleration structures over the scene's shapes (sharing its meshes
     /// until the BVHs reorder their triangles into copies of their own).
     pub fn new(scene: &SceneDescription) -> Geometry {
-        let mut set = ShapeSet { meshes: scene.meshes.clone(), patches: scene.patches.clone(), ..Default::default() };
+        Geometry::with_meshes(scene, scene.meshes.clone())
+    }
+
+    /// As [`Geometry::new`], with `meshes` in place of the scene's own, which it may
+    /// no longer hold (everything else comes from `scene`). A mesh no one else holds is
+    /// freed as soon as its reordered copy is made: the load's peak then holds one of
+    /// the two, and the copies reuse the freed pages.
+    pub fn with_meshes(scene: &SceneDescription, meshes: Vec<Arc<TriangleMesh>>) -> Geometry {
+        let mut set = ShapeSet { meshes, patches: scene.patches.clone(), ..Default::default() };
         let setup = ShapeSetup {
             v4: scene.syntax == crate::parser::Syntax::V4,
             skip_normal_derivatives: !scene.materials.iter().any(|m| m.bump.is_some()),

@@ -72,9 +72,8 @@ fn render(scene: SceneDescription, args: &RenderArgs, read_seconds: f64) -> Exit
         Err(e) => return fail(Path::new("--nthreads"), e),
     };
     let set_up = std::time::Instant::now();
-    let job = pool.install(|| Job::plan(&scene, request));
-    // The render scene holds what it needs; the description's meshes go now.
-    drop(scene);
+    // The render scene keeps what it needs of the description, which goes.
+    let job = pool.install(|| Job::plan(scene, request));
     let load = print::LoadTimes { read_seconds, set_up_seconds: set_up.elapsed().as_secs_f64() };
     let job = match job {
         Ok(job) => job,
