@@ -276,11 +276,9 @@ impl RenderScene {
         let camera = Camera::new(&scene.camera, &scene.film);
         let textures = Textures::new(&scene.textures, scene.fixes);
         let needs_differentials = textures.use_footprint() || scene.materials.iter().any(|m| m.bump.is_some());
-        let material = |m| match Material::from_desc(m, scene.fixes) {
-            m if bidirectional => m.bidirectional(),
-            m => m,
-        };
-        let materials: Vec<Material> = scene.materials.iter().map(material).collect();
+        let materials: Vec<Material> = (scene.materials.iter().map(|m| Material::from_desc(m, scene.fixes)))
+            .map(|m| if bidirectional { m.bidirectional() } else { m })
+            .collect();
         let world_shape_material = scene.shapes.iter().map(|s| s.material).collect();
         let object_shape_material =
             scene.objects.iter().map(|o| o.shapes.iter().map(|s| s.material).collect()).collect();
@@ -291,7 +289,6 @@ impl RenderScene {
         let mut lights: Vec<Light> = scene.lights.iter().map(|l| Light::from_desc(l, scene.fixes)).collect();
         let shape_area_lights: Vec<Option<u32>> = scene.shapes.iter().map(|s| s.area_light).collect();
         let area_params = scene.area_lights.clone();
-        let m = crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32);
         let geometry = build_geometry(scene, meshes);
         let alpha_rules = AlphaEmission::new(scene.syntax, scene.fixes);
         let rules = EmitterRules::new(scene, bidirectional, alpha_rules);
@@ -334,7 +331,7 @@ impl RenderScene {
             medium_emitters,
             photon_scale,
             world,
-            world_to_camera: m,
+            world_to_camera: crate::math::transform::row_major(&scene.camera.camera_from_world).map(|x| x as f32),
             media,
             camera_medium: scene.camera_medium,
             world_shape_media,
