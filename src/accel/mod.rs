@@ -539,13 +539,12 @@ fn hit_candidates<const KX: usize, const KY: usize, const KZ: usize, const ANY: 
     best
 }
 
-/// A render-space ray in instance space: mapped in f64, rounded once to f32, and its
-/// origin moved forward by that rounding (pbrt's rule). Returns the ray and the shift
-/// `dt` (instance t + dt = render t).
+/// A mesh and its triangle numbers, to replace, with the order to copy it in.
+type MeshSlot<'a> = (&'a mut Arc<TriangleMesh>, &'a mut Vec<u32>, Vec<u32>);
+
 /// Each job's mesh and triangle numbers, to replace, with its order: the slots of
 /// `meshes` and `ids` that the jobs name (by mesh index), taken apart so that they
 /// can be filled on all threads. Where two jobs name one mesh, the later one's.
-type MeshSlot<'a> = (&'a mut Arc<TriangleMesh>, &'a mut Vec<u32>, Vec<u32>);
 fn mesh_slots<'a>(
     meshes: &'a mut [Arc<TriangleMesh>],
     ids: &'a mut [Vec<u32>],
@@ -567,6 +566,9 @@ fn mesh_slots<'a>(
     slots
 }
 
+/// A render-space ray in instance space: mapped in f64, rounded once to f32, and its
+/// origin moved forward by that rounding (pbrt's rule). Returns the ray and the shift
+/// `dt` (instance t + dt = render t).
 fn instance_ray(instance_from_render: &DAffine3, r: &Ray) -> (Ray, f32) {
     let o = instance_from_render.transform_point3(r.o.0.as_dvec3());
     let d = (instance_from_render.matrix3 * r.d.0.as_dvec3()).as_vec3();
