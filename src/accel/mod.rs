@@ -248,6 +248,8 @@ struct PrimRuns<'a> {
     starts: Vec<usize>,
     /// Per run, the primitives it keeps.
     counts: Vec<usize>,
+    /// Per run, the shape of its first primitive; then the last primitive's.
+    run_shapes: Vec<usize>,
 }
 
 impl<'a> PrimRuns<'a> {
@@ -258,10 +260,14 @@ impl<'a> PrimRuns<'a> {
                 Some(*n)
             }))
             .collect();
-        let mut runs = PrimRuns { shapes, set, starts, counts: Vec::new() };
-        let counts = (0..runs.all().div_ceil(PARALLEL_PRIMS)).into_par_iter().map(|r| {
+        let all = starts[shapes.len()];
+        let shape_of = |g: usize| starts.partition_point(|&s| s <= g).max(1) - 1;
+        let run_shapes = (0..=all.div_ceil(PARALLEL_PRIMS)).map(|r| shape_of((r * PARALLEL_PRIMS).min(all.max(1) - 1)));
+        let run_shapes = run_shapes.collect();
+        let mut runs = PrimRuns { shapes, set, starts, counts: Vec::new(), run_shapes };
+        let counts = (0..all.div_ceil(PARALLEL_PRIMS)).into_par_iter().map(|r| {
             let mut n = 0;
-            runs.visit(r, &mut |_, _| n += 1);
+            runs.visit(r, &mut |_, _, _| n += 1);
             n
         });
         runs.counts = counts.collect();
@@ -278,49 +284,55 @@ impl<'a> PrimRuns<'a> {
         self.counts.iter().sum()
     }
 
-    /// Calls `kept` with each primitive of run `r` that has a box, in order.
-    fn visit(&self, r: usize, kept: &mut dyn FnMut(Prim, Bounds3)) {
+    /// Calls `kept` with each primitive of run `r` that has a box, in order: its
+    /// shape, its number among all the shapes' primitives, and its box.
+    fn visit(&self, r: usize, kept: &mut dyn FnMut(usize, usize, Bounds3)) {
         let run = r * PARALLEL_PRIMS..self.all().min((r + 1) * PARALLEL_PRIMS);
-        let mut shape = self.starts.partition_point(|&s| s <= run.start) - 1;
+        let mut shape = self.run_shapes[r];
         for g in run {
             while self.starts[shape + 1] <= g {
                 shape += 1;
             }
-            let k = g - self.starts[shape];
-            if let Some(b) = self.set.prim_bounds(self.shapes[shape], k) {
-                kept(Prim { shape: shape as u32, tri: k as u32 }, b);
+            if let Some(b) = self.set.prim_bounds(self.shapes[shape], g - self.starts[shape]) {
+                kept(shape, g, b);
             }
         }
     }
 
-    /// The kept primitives and their build records (record i for primitive i, costing
-    /// `cost(its shape)`), written straight from their boxes: a list of boxes to
-    /// convert was 24 bytes a primitive of fresh pages more.
-    fn fill(&self, cost: impl Fn(&ShapeRef) -> f32 + Sync) -> (Vec<Prim>, Vec<bvh::PrimInfo>) {
+    /// Primitive `g` of all the shapes' (zero-area ones counted), found among the
+    /// shapes of its run: the build asks for each primitive's twice.
+    fn prim(&self, g: usize) -> Prim {
+        let r = g / PARALLEL_PRIMS;
+        let (first, last) = (self.run_shapes[r], self.run_shapes[r + 1]);
+        let shape = first + self.starts[first + 1..=last].partition_point(|&s| s <= g);
+        Prim { shape: shape as u32, tri: (g - self.starts[shape]) as u32 }
+    }
+
+    /// The kept primitives' build records, each costing `cost(its shape)` and holding
+    /// the primitive's number among all ([`PrimRuns::prim`] tells which it is),
+    /// written straight from their boxes in their final places: a list of boxes to
+    /// convert was 24 bytes a primitive of fresh pages more, and a list of the
+    /// primitives beside the records 8 (100 MB of the load benchmark's peak).
+    fn fill(&self, cost: impl Fn(&ShapeRef) -> f32 + Sync) -> Vec<bvh::PrimInfo> {
         let total = self.kept();
         // Filled on all threads first: the first touch of fresh pages is most of the cost.
-        let (mut prims, mut records) = (Vec::with_capacity(total), Vec::with_capacity(total));
-        prims.par_extend(rayon::iter::repeat_n(Prim { shape: 0, tri: 0 }, total));
+        let mut records = Vec::with_capacity(total);
         records.par_extend(rayon::iter::repeat_n(bvh::PrimInfo::default(), total));
-        let (mut p_rest, mut b_rest) = (prims.as_mut_slice(), records.as_mut_slice());
+        let mut rest = records.as_mut_slice();
         let mut slots = Vec::with_capacity(self.counts.len());
-        let mut first = 0;
         for &n in &self.counts {
-            let (p, b);
-            (p, p_rest) = std::mem::take(&mut p_rest).split_at_mut(n);
-            (b, b_rest) = std::mem::take(&mut b_rest).split_at_mut(n);
-            slots.push((first, p, b));
-            first += n;
+            let run;
+            (run, rest) = std::mem::take(&mut rest).split_at_mut(n);
+            slots.push(run);
         }
-        slots.into_par_iter().enumerate().for_each(|(r, (first, p, b))| {
+        slots.into_par_iter().enumerate().for_each(|(r, run)| {
             let mut i = 0;
-            self.visit(r, &mut |q, c| {
-                let cost = cost(&self.shapes[q.shape as usize]);
-                (p[i], b[i]) = (q, bvh::PrimInfo::new(&c, cost, (first + i) as u32));
+            self.visit(r, &mut |shape, g, b| {
+                run[i] = bvh::PrimInfo::new(&b, cost(&self.shapes[shape]), g as u32);
                 i += 1;
             });
         });
-        (prims, records)
+        records
     }
 }
 
@@ -338,19 +350,14 @@ impl Blas {
             block_meshes.clear();
         }
         // Leaves of one mesh each, so that a block names one mesh.
-        let (bvh, order, prims) = match block_meshes.is_empty() {
+        let (bvh, order) = match block_meshes.is_empty() {
             false => {
-                let (prims, records) = runs.fill(|_| BLOCK_TRIANGLE_COST);
-                let (bvh, order) = Bvh::build_records(records, leaves::MAX_LEAF, |i| prims[i].shape);
-                (bvh, order, prims)
+                let records = runs.fill(|_| BLOCK_TRIANGLE_COST);
+                Bvh::build_records(records, leaves::MAX_LEAF, |g| runs.prim(g).shape)
             }
-            true => {
-                let (prims, records) = runs.fill(|&s| ShapeSet::prim_cost(s));
-                let (bvh, order) = Bvh::build_records(records, bvh::MAX_LEAF, |_| 0);
-                (bvh, order, prims)
-            }
+            true => Bvh::build_records(runs.fill(|&s| ShapeSet::prim_cost(s)), bvh::MAX_LEAF, |_| 0),
         };
-        let prims = order.par_iter().map(|&i| prims[i as usize]).collect();
+        let prims = order.par_iter().map(|&g| runs.prim(g as usize)).collect();
         Blas { bvh, prims, shapes, block_meshes, blocks: LeafBlocks::default() }
     }
 
@@ -777,5 +784,41 @@ impl Geometry {
             |b: &Blas| b.bvh.heap_bytes() + b.prims.capacity() * std::mem::size_of::<Prim>() + b.blocks.heap_bytes();
         let ids: usize = self.triangle_ids.iter().map(|v| v.capacity() * 4).sum();
         blas(&self.world) + self.objects.iter().map(blas).sum::<usize>() + self.tlas.heap_bytes() + ids
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A strip of `n` triangles, every seventh of zero area.
+    fn strip(n: usize) -> Arc<TriangleMesh> {
+        let p = (0..n + 2).map(|i| [i as f32, (i % 2) as f32, 0.0]).collect();
+        let indices = (0..n as u32).flat_map(|t| if t % 7 == 3 { [t, t, t + 1] } else { [t, t + 1, t + 2] }).collect();
+        Arc::new(TriangleMesh { p, indices, ..Default::default() })
+    }
+
+    /// The build records name primitives by their number among all the shapes'; each
+    /// number must lead back to its shape and triangle across runs and past shapes
+    /// with no triangles (as a scan over every shape's start finds them).
+    #[test]
+    fn primitive_numbers_lead_back_to_shape_and_triangle() {
+        let sizes = [0, 0, 3, 0, 3 * PARALLEL_PRIMS + 5, 1, 0, PARALLEL_PRIMS, 2, 0];
+        let set = ShapeSet { meshes: sizes.iter().map(|&n| strip(n)).collect(), ..Default::default() };
+        let shapes: Vec<ShapeRef> =
+            (0..sizes.len() as u32).map(|mesh| ShapeRef::Mesh { mesh, flags: MeshFlags::default() }).collect();
+        let runs = PrimRuns::count(&shapes, &set);
+        let mut expected = Vec::new();
+        for (shape, &n) in sizes.iter().enumerate() {
+            expected.extend((0..n as u32).map(|tri| Prim { shape: shape as u32, tri }));
+        }
+        assert_eq!(runs.all(), expected.len());
+        assert!((0..expected.len()).all(|g| runs.prim(g) == expected[g]));
+        // The records of the kept ones, by number, as the build's leaf order gives them.
+        let kept: Vec<u32> = (0..expected.len() as u32).filter(|&g| expected[g as usize].tri % 7 != 3).collect();
+        assert_eq!(runs.kept(), kept.len());
+        let (_, mut order) = Bvh::build_records(runs.fill(|_| 1.0), leaves::MAX_LEAF, |g| runs.prim(g).shape);
+        order.sort_unstable();
+        assert!(order == kept);
     }
 }
