@@ -22,6 +22,14 @@ use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
 
+/// Whether a [`Geometry`] keeps the map from its meshes' stored triangles back to
+/// the file's numbers.
+#[derive(Clone, Copy, PartialEq)]
+enum TriangleIds {
+    Kept,
+    Dropped,
+}
+
 /// An instance's, for the top-level SAH: a ray transform and a whole traversal.
 const INSTANCE_COST: f32 = 16.0;
 /// A triangle's in a leaf block, relative to a node visit: its leaf's memory is one
@@ -573,6 +581,19 @@ fn mesh_slots<'a>(
     slots
 }
 
+/// See [`crate::hugepages`]. Folding mesh pages into huge ones copies them: on all
+/// threads. Nodes and blocks were written to huge pages already; folding them again
+/// costs nothing then, and catches those the kernel could not give at the first write.
+fn advise_huge_pages<'a>(meshes: &[Arc<TriangleMesh>], blases: impl Iterator<Item = &'a Blas>) {
+    meshes.par_iter().for_each(|m| {
+        crate::hugepages::advise(&m.p);
+        crate::hugepages::advise(&m.indices);
+    });
+    for blas in blases {
+        rayon::join(|| blas.bvh.advise_huge_pages(), || blas.blocks.advise_huge_pages());
+    }
+}
+
 /// A render-space ray in instance space: mapped in f64, rounded once to f32, and its
 /// origin moved forward by that rounding (pbrt's rule). Returns the ray and the shift
 /// `dt` (instance t + dt = render t).
@@ -598,14 +619,20 @@ impl Geometry {
     /// Builds the acceleration structures over the scene's shapes (sharing its meshes
     /// until the BVHs reorder their triangles into copies of their own).
     pub fn new(scene: &SceneDescription) -> Geometry {
-        Geometry::with_meshes(scene, scene.meshes.clone())
+        Geometry::build(scene, scene.meshes.clone(), TriangleIds::Kept)
     }
 
-    /// As [`Geometry::new`], with `meshes` in place of the scene's own, which it may
-    /// no longer hold (everything else comes from `scene`). A mesh no one else holds is
-    /// freed as soon as its reordered copy is made: the load's peak then holds one of
-    /// the two, and the copies reuse the freed pages.
+    /// As [`Geometry::new`], for rendering: with `meshes` in place of the scene's own,
+    /// which it may no longer hold (everything else comes from `scene`). A mesh no one
+    /// else holds is freed as soon as its reordered copy is made: the load's peak then
+    /// holds one of the two, and the copies reuse the freed pages. The map back to the
+    /// file's triangle numbers, which only `trace` reports, is not kept (4 bytes a
+    /// triangle).
     pub fn with_meshes(scene: &SceneDescription, meshes: Vec<Arc<TriangleMesh>>) -> Geometry {
+        Geometry::build(scene, meshes, TriangleIds::Dropped)
+    }
+
+    fn build(scene: &SceneDescription, meshes: Vec<Arc<TriangleMesh>>, keep: TriangleIds) -> Geometry {
         let mut set = ShapeSet { meshes, patches: scene.patches.clone(), ..Default::default() };
         let setup = ShapeSetup {
             v4: scene.syntax == crate::parser::Syntax::V4,
@@ -629,16 +656,10 @@ impl Geometry {
         for blas in std::iter::once(&mut world).chain(objects.iter_mut()) {
             blas.localize(&mut set.meshes, &mut triangle_ids);
         }
-        // Folding mesh pages into huge ones copies them: on all threads. Nodes and
-        // blocks were written to huge pages already; folding them again costs nothing
-        // then, and catches those the kernel could not give at the first write.
-        set.meshes.par_iter().for_each(|m| {
-            crate::hugepages::advise(&m.p);
-            crate::hugepages::advise(&m.indices);
-        });
-        for blas in std::iter::once(&world).chain(objects.iter()) {
-            rayon::join(|| blas.bvh.advise_huge_pages(), || blas.blocks.advise_huge_pages());
+        if keep == TriangleIds::Dropped {
+            triangle_ids = Vec::new();
         }
+        advise_huge_pages(&set.meshes, std::iter::once(&world).chain(objects.iter()));
         // Each instance's shapes are numbered after the world's and the instances' before.
         let first_shapes: Vec<u32> = (scene.instances.iter())
             .scan(scene.shapes.len() as u32, |next, i| {
@@ -772,7 +793,8 @@ impl Geometry {
         self.world.shapes[index]
     }
 
-    /// The file's number of stored triangle `tri` of mesh `mesh`.
+    /// The file's number of stored triangle `tri` of mesh `mesh` (`tri` itself where
+    /// the map was not kept: [`Geometry::with_meshes`]).
     pub fn triangle_id(&self, mesh: u32, tri: u32) -> u32 {
         self.triangle_ids.get(mesh as usize).and_then(|ids| ids.get(tri as usize)).copied().unwrap_or(tri)
     }
