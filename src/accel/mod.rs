@@ -843,4 +843,20 @@ mod tests {
         order.sort_unstable();
         assert!(order == kept);
     }
+
+    /// The slots come in mesh order, each the mesh's own, and where two jobs name one
+    /// mesh the later job's order is the one kept.
+    #[test]
+    fn mesh_slots_keep_the_later_of_two_jobs() {
+        let mut meshes: Vec<Arc<TriangleMesh>> = (1..=4).map(strip).collect();
+        let mut ids = vec![Vec::new(); 4];
+        let jobs = vec![(2, vec![1, 0]), (0, vec![5]), (2, vec![7]), (3, vec![9])];
+        let slots = mesh_slots(&mut meshes, &mut ids, jobs);
+        let seen: Vec<(usize, Vec<u32>)> = slots.iter().map(|(m, _, o)| (m.triangle_count(), o.clone())).collect();
+        assert_eq!(seen, [(1, vec![5]), (3, vec![7]), (4, vec![9])]);
+        for (_, id, order) in slots {
+            *id = order;
+        }
+        assert_eq!(ids, [vec![5], vec![], vec![7], vec![9]]);
+    }
 }
