@@ -307,8 +307,9 @@ impl<'a> PrimRuns<'a> {
         }
     }
 
-    /// Primitive `g` of all the shapes' (zero-area ones counted), found among the
-    /// shapes of its run: the build asks for each primitive's twice.
+    /// Primitive `g` of all the shapes' (zero-area ones counted), found by a binary
+    /// search among the shapes of its run only: the build looks up every kept
+    /// primitive's shape, and the leaf order its triangle.
     fn prim(&self, g: usize) -> Prim {
         let r = g / PARALLEL_PRIMS;
         let (first, last) = (self.run_shapes[r], self.run_shapes[r + 1]);
@@ -318,9 +319,9 @@ impl<'a> PrimRuns<'a> {
 
     /// The kept primitives' build records, each costing `cost(its shape)` and holding
     /// the primitive's number among all ([`PrimRuns::prim`] tells which it is),
-    /// written straight from their boxes in their final places: a list of boxes to
-    /// convert was 24 bytes a primitive of fresh pages more, and a list of the
-    /// primitives beside the records 8 (100 MB of the load benchmark's peak).
+    /// written straight from their boxes in their final places. A list of boxes to
+    /// convert cost 24 bytes a primitive of fresh pages more, and a list of the
+    /// primitives beside the records 8 more (100 MB at the load benchmark's peak).
     fn fill(&self, cost: impl Fn(&ShapeRef) -> f32 + Sync) -> Vec<bvh::PrimInfo> {
         let total = self.kept();
         // Filled on all threads first: the first touch of fresh pages is most of the cost.
@@ -632,6 +633,7 @@ impl Geometry {
         Geometry::build(scene, meshes, TriangleIds::Dropped)
     }
 
+    /// The BVHs over `scene`'s shapes and `meshes`, with or without the triangle map.
     fn build(scene: &SceneDescription, meshes: Vec<Arc<TriangleMesh>>, keep: TriangleIds) -> Geometry {
         let mut set = ShapeSet { meshes, patches: scene.patches.clone(), ..Default::default() };
         let setup = ShapeSetup {
