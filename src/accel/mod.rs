@@ -269,9 +269,10 @@ impl<'a> PrimRuns<'a> {
             }))
             .collect();
         let all = starts[shapes.len()];
-        let shape_of = |g: usize| starts.partition_point(|&s| s <= g).max(1) - 1;
-        let run_shapes = (0..=all.div_ceil(PARALLEL_PRIMS)).map(|r| shape_of((r * PARALLEL_PRIMS).min(all.max(1) - 1)));
-        let run_shapes = run_shapes.collect();
+        // The shape holding each run's first primitive (starts[0] is 0: never empty).
+        let shape_of = |g: usize| starts.partition_point(|&s| s <= g) - 1;
+        let last = all.saturating_sub(1);
+        let run_shapes = (0..=all.div_ceil(PARALLEL_PRIMS)).map(|r| shape_of((r * PARALLEL_PRIMS).min(last))).collect();
         let mut runs = PrimRuns { shapes, set, starts, counts: Vec::new(), run_shapes };
         let counts = (0..all.div_ceil(PARALLEL_PRIMS)).into_par_iter().map(|r| {
             let mut n = 0;
