@@ -109,6 +109,14 @@ pub enum Fresnel {
 }
 
 impl Fresnel {
+    /// Whether F is zero at every angle: a dielectric interface between equal indices
+    /// (`uber`'s `index` 1). pbrt's formula leaves rounding there: at most 5·10⁻⁸
+    /// where |cos θ| is above 0.01, more below, and 1 below 2·10⁻⁴ (sin θ rounds to 1,
+    /// so it reflects totally): a microfacet seen within 0.01° of edge-on.
+    pub fn joins_equal_indices(self) -> bool {
+        matches!(self, Fresnel::Dielectric { eta } | Fresnel::Coat { eta } | Fresnel::SwappedCoat { eta } if eta == 1.0)
+    }
+
     /// F for the cosine between the incident direction and the (micro)normal.
     pub fn eval(self, cos_i: f32) -> Rgb {
         match self {
