@@ -2,6 +2,7 @@
 //! propagation, bounds with pbrt's conservative slab test, rays and frames.
 
 pub mod animated;
+pub mod bounded;
 pub mod bounds;
 pub mod catmull_rom;
 pub mod equal_area;

@@ -5,7 +5,8 @@
 use super::Quadric;
 use super::params::{f, positive};
 use super::phi_max_radians;
-use super::quadric::{E, Local, QuadricSurface, newton};
+use super::quadric::{Local, QuadricSurface, newton};
+use crate::math::bounded::Interval;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
@@ -48,10 +49,10 @@ impl Cone {
 
 impl QuadricSurface for Cone {
     /// F = x² + y² − k(z − h)², k = (r/h)².
-    fn coefficients(&self, [ox, oy, oz]: [E; 3], [dx, dy, dz]: [E; 3]) -> (E, E, E) {
-        let k = E::from(self.radius as f64 / self.height as f64);
+    fn coefficients<N: Interval>(&self, [ox, oy, oz]: [N; 3], [dx, dy, dz]: [N; 3]) -> (N, N, N) {
+        let k = N::from(self.radius as f64 / self.height as f64);
         let k = k * k;
-        let oz_h = oz - E::from(self.height as f64);
+        let oz_h = oz - N::from(self.height as f64);
         (
             dx * dx + dy * dy - k * dz * dz,
             (dx * ox + dy * oy - k * dz * oz_h) * 2.0,

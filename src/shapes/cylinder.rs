@@ -5,7 +5,8 @@
 use super::Quadric;
 use super::params::{f, positive};
 use super::phi_max_radians;
-use super::quadric::{E, Local, QuadricSurface};
+use super::quadric::{Local, QuadricSurface};
+use crate::math::bounded::Interval;
 use crate::math::transform::row_major;
 use crate::mitsuba::GeometryOut;
 use crate::parser::params::ParamList;
@@ -48,9 +49,9 @@ impl Cylinder {
 }
 
 impl QuadricSurface for Cylinder {
-    fn coefficients(&self, [ox, oy, _]: [E; 3], [dx, dy, _]: [E; 3]) -> (E, E, E) {
+    fn coefficients<N: Interval>(&self, [ox, oy, _]: [N; 3], [dx, dy, _]: [N; 3]) -> (N, N, N) {
         let r = self.radius as f64;
-        (dx * dx + dy * dy, (dx * ox + dy * oy) * 2.0, ox * ox + oy * oy - E::from(r * r))
+        (dx * dx + dy * dy, (dx * ox + dy * oy) * 2.0, ox * ox + oy * oy - N::from(r * r))
     }
 
     fn implicit(&self, p: DVec3) -> (f64, DVec3) {

@@ -6,6 +6,7 @@ use super::Quadric;
 use super::params::{f, positive};
 use super::phi_max_radians;
 use super::quadric::{E, Local, QuadricSurface, at};
+use crate::math::bounded::Interval;
 use crate::math::transform::row_major;
 use crate::mitsuba::GeometryOut;
 use crate::parser::error::Diagnostic;
@@ -52,8 +53,8 @@ impl Disk {
 
 impl QuadricSurface for Disk {
     /// F = z − h is linear (a = 0); [`Disk::hit`] solves it directly.
-    fn coefficients(&self, [_, _, oz]: [E; 3], [_, _, dz]: [E; 3]) -> (E, E, E) {
-        (E::from(0.0), dz, oz - E::from(self.height as f64))
+    fn coefficients<N: Interval>(&self, [_, _, oz]: [N; 3], [_, _, dz]: [N; 3]) -> (N, N, N) {
+        (N::from(0.0), dz, oz - N::from(self.height as f64))
     }
 
     fn implicit(&self, p: DVec3) -> (f64, DVec3) {

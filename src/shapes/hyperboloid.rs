@@ -11,8 +11,9 @@
 
 use super::Quadric;
 use super::params::f;
-use super::quadric::{E, Local, QuadricSurface, phi_of};
+use super::quadric::{Local, QuadricSurface, phi_of};
 use super::{integrate_unit_interval, phi_max_radians};
+use crate::math::bounded::Interval;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
@@ -148,19 +149,19 @@ pub fn fit_differs(h: &Hyperboloid) -> bool {
 // segment's closest approach to the axis is at z = 0 (pbrt-v3 #168), and elsewhere
 // pbrt's (u, v), normals and area describe a surface other than the one it hits.
 impl QuadricSurface for Hyperboloid {
-    fn coefficients(&self, [ox, oy, oz]: [E; 3], [dx, dy, dz]: [E; 3]) -> (E, E, E) {
+    fn coefficients<N: Interval>(&self, [ox, oy, oz]: [N; 3], [dx, dy, dz]: [N; 3]) -> (N, N, N) {
         if self.implicit_fit {
-            let (ah, ch) = (E::from(self.ah as f64), E::from(self.ch as f64));
+            let (ah, ch) = (N::from(self.ah as f64), N::from(self.ch as f64));
             return (
                 ah * (dx * dx + dy * dy) - ch * dz * dz,
                 (ah * (dx * ox + dy * oy) - ch * dz * oz) * 2.0,
-                ah * (ox * ox + oy * oy) - ch * oz * oz - E::from(1.0),
+                ah * (ox * ox + oy * oy) - ch * oz * oz - N::from(1.0),
             );
         }
         let (al, be, ga, z1, dzl) = self.sweep();
-        let (al, be, ga) = (E::from(al), E::from(be), E::from(ga));
-        let v0 = (oz - E::from(z1)) / E::from(dzl);
-        let vd = dz / E::from(dzl);
+        let (al, be, ga) = (N::from(al), N::from(be), N::from(ga));
+        let v0 = (oz - N::from(z1)) / N::from(dzl);
+        let vd = dz / N::from(dzl);
         (
             dx * dx + dy * dy - al * vd * vd,
             (dx * ox + dy * oy - al * v0 * vd) * 2.0 - be * vd,

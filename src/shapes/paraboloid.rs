@@ -6,7 +6,8 @@
 use super::Quadric;
 use super::params::{f, positive};
 use super::phi_max_radians;
-use super::quadric::{E, Local, QuadricSurface};
+use super::quadric::{Local, QuadricSurface};
+use crate::math::bounded::Interval;
 use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
@@ -57,9 +58,9 @@ impl Paraboloid {
 
 impl QuadricSurface for Paraboloid {
     /// F = k(x² + y²) − z, k = zmax/r².
-    fn coefficients(&self, [ox, oy, oz]: [E; 3], [dx, dy, dz]: [E; 3]) -> (E, E, E) {
+    fn coefficients<N: Interval>(&self, [ox, oy, oz]: [N; 3], [dx, dy, dz]: [N; 3]) -> (N, N, N) {
         let r = self.radius as f64;
-        let k = E::from(self.z_max as f64) / E::from(r * r);
+        let k = N::from(self.z_max as f64) / N::from(r * r);
         (k * (dx * dx + dy * dy), k * (dx * ox + dy * oy) * 2.0 - dz, k * (ox * ox + oy * oy) - oz)
     }
 

@@ -23,6 +23,7 @@
 
 use super::Quadric;
 use crate::interaction::{Shading, SurfaceInteraction};
+use crate::math::bounded::{Bounded64, Interval};
 use crate::math::float::{gamma, gamma64};
 use crate::math::{Bounds3, EFloat64, Normal3, Point3, Ray, Vector3};
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -254,8 +255,9 @@ pub(super) fn phi_of(x: f64, y: f64) -> f64 {
 /// with rounding bounds, move each root onto the surface by Newton steps on the
 /// implicit function, and keep the first that lies in the z range and under φmax.
 pub trait QuadricSurface {
-    /// a t² + b t + c = F(o + t d), F the implicit function, with rounding bounds.
-    fn coefficients(&self, o: [E; 3], d: [E; 3]) -> (E, E, E);
+    /// a t² + b t + c = F(o + t d), F the implicit function, with rounding bounds
+    /// (exact interval ends, or a bound on them: [`Interval`]).
+    fn coefficients<N: Interval>(&self, o: [N; 3], d: [N; 3]) -> (N, N, N);
 
     /// F(p) and ∇F(p); F = 0 on the surface.
     fn implicit(&self, p: DVec3) -> (f64, DVec3);
@@ -315,25 +317,117 @@ pub trait QuadricSurface {
         Some((t0 + m, t1 + m))
     }
 
-    /// The first hit (t, object-space point, φ) with 0 < t < t_max.
+    /// The first hit (t, object-space point, φ) with 0 < t < t_max. Decided from the
+    /// roots' values and a bound on their intervals ([`quick_roots`]) where that bound
+    /// leaves no doubt, from the intervals otherwise: the same decisions either way.
     fn hit(&self, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3, f64)> {
-        let (t0, t1) = self.roots(o, d)?;
-        if t0.upper() > t_max || t1.lower() <= 0.0 {
-            return None;
+        match quick_roots(self, o, d) {
+            Some(None) => return None,
+            Some(Some(roots)) => {
+                if let Some(hit) = first_hit(self, roots, o, d, t_max) {
+                    return hit;
+                }
+            }
+            None => {}
         }
-        let try_root = |t: E| {
-            let p = self.refine(at(o, d, t.value()));
-            self.accept(p).map(|phi| (t.value(), p, phi))
-        };
-        if t0.lower() > 0.0
-            && let Some(hit) = try_root(t0)
-        {
-            return Some(hit);
-        }
-        if t1.upper() > t_max {
-            return None;
-        }
-        try_root(t1)
+        interval_hit(self, o, d, t_max)
+    }
+}
+
+/// [`QuadricSurface::hit`] decided from the roots' intervals alone.
+fn interval_hit<S: QuadricSurface + ?Sized>(s: &S, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3, f64)> {
+    let (t0, t1) = s.roots(o, d)?;
+    first_hit(s, (RootEnds::exact(t0), RootEnds::exact(t1)), o, d, t_max).flatten()
+}
+
+/// The first of the roots (t0 ≤ t1) in (0, t_max) that lies on the shape, as
+/// pbrt-v3 decides it from their intervals; `None` when the ends known cannot
+/// settle one of its comparisons (never for exact ends).
+fn first_hit<S: QuadricSurface + ?Sized>(
+    s: &S,
+    (t0, t1): (RootEnds, RootEnds),
+    o: [E; 3],
+    d: [E; 3],
+    t_max: f64,
+) -> Option<Option<(f64, DVec3, f64)>> {
+    match (settled(t0.high, |h| h > t_max), settled(t1.low, |l| l <= 0.0)) {
+        (Some(true), _) | (_, Some(true)) => return Some(None),
+        (Some(false), Some(false)) => {}
+        _ => return None,
+    }
+    let try_root = |t: f64| {
+        let p = s.refine(at(o, d, t));
+        s.accept(p).map(|phi| (t, p, phi))
+    };
+    if settled(t0.low, |l| l > 0.0)?
+        && let Some(hit) = try_root(t0.v)
+    {
+        return Some(Some(hit));
+    }
+    if settled(t1.high, |h| h > t_max)? {
+        return Some(None);
+    }
+    Some(try_root(t1.v))
+}
+
+/// What a hit test knows of a root: its value, and the least and most each end of its
+/// interval can be (both the end itself for an interval root).
+#[derive(Clone, Copy, Debug)]
+struct RootEnds {
+    v: f64,
+    low: [f64; 2],
+    high: [f64; 2],
+}
+
+impl RootEnds {
+    fn exact(t: E) -> RootEnds {
+        RootEnds { v: t.value(), low: [t.lower(); 2], high: [t.upper(); 2] }
+    }
+
+    fn bounded(t: Bounded64) -> RootEnds {
+        RootEnds { v: t.v, low: [t.low_least(), t.v], high: [t.v, t.high_most()] }
+    }
+}
+
+/// `test` of an interval end known to lie in `end` (least, most), where the two give
+/// the same answer: `test` compares with a fixed value, so the end's answer is theirs.
+/// Exact ends always settle, as the comparison itself (NaN included).
+fn settled(end: [f64; 2], test: impl Fn(f64) -> bool) -> Option<bool> {
+    let (least, most) = (test(end[0]), test(end[1]));
+    (least == most).then_some(least)
+}
+
+/// The roots as [`QuadricSurface::roots`] gives them (ordered by their low ends), from
+/// the plain values and a bound on the ends: `Some(None)` for a clear miss (a negative
+/// discriminant whose interval is surely below 0), `None` where the bound cannot settle
+/// the order or the miss, or a radius is unknown.
+#[inline]
+fn quick_roots<S: QuadricSurface + ?Sized>(s: &S, o: [E; 3], d: [E; 3]) -> Option<Option<(RootEnds, RootEnds)>> {
+    let (a, b, c) = s.coefficients(o.map(Bounded64::of), d.map(Bounded64::of));
+    let disc = b.v * b.v - 4.0 * a.v * c.v;
+    if disc.is_nan() {
+        return None;
+    }
+    if disc < 0.0 {
+        let wide = b * b - a * c * 4.0;
+        return (wide.is_known() && wide.high_most() < 0.0).then_some(None);
+    }
+    // As `EFloat64::quadratic`: the root of the discriminant within half an ulp.
+    let root = disc.sqrt();
+    let float_root = Bounded64::of(E::new(root, (f64::EPSILON * 0.5) * root));
+    let q = if b.v < 0.0 { (b - float_root) * -0.5 } else { (b + float_root) * -0.5 };
+    let (t0, t1) = (q / a, c / q);
+    if !(t0.is_known() && t1.is_known()) {
+        return None;
+    }
+    let (t0, t1) = (RootEnds::bounded(t0), RootEnds::bounded(t1));
+    // Swapped where t0's low end is surely above t1's, kept where surely not.
+    if t0.low[0] > t1.low[1] {
+        Some(Some((t1, t0)))
+    } else if t0.low[1] <= t1.low[0] {
+        Some(Some((t0, t1)))
+    } else {
+        None
     }
 }
 
@@ -350,4 +444,86 @@ fn weingarten(l: &Local) -> (DVec3, DVec3) {
     let dndu = (f2 * f1 - e2 * g1) * inv * l.dpdu + (e2 * f1 - f2 * e1) * inv * l.dpdv;
     let dndv = (g2 * f1 - f2 * g1) * inv * l.dpdu + (f2 * f1 - g2 * e1) * inv * l.dpdv;
     (dndu, dndv)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{Rng, uniform_sphere};
+    use crate::shapes::sphere::Sphere;
+    use crate::shapes::{Cone, Cylinder, Hyperboloid, Paraboloid};
+    use glam::Vec3;
+
+    /// A ray toward `s`'s surface that starts on it, near it, inside or far off, and
+    /// grazes it or ends at or near its hit: where a decision comes closest to a
+    /// bound's doubt. Returns the ray's interval origin and direction and its t_max.
+    fn ray_at<S: QuadricSurface>(s: &S, rng: &mut Rng, scale: f64) -> ([E; 3], [E; 3], f64) {
+        let on = s.refine(uniform_sphere(rng.uniform2()).as_dvec3() * scale);
+        let d = uniform_sphere(rng.uniform2()).as_dvec3();
+        let kind = (rng.uniform() * 4.0) as u32;
+        let o = match kind {
+            0 => on,
+            1 => on + d * 1e-9 * scale * (rng.uniform() as f64 - 0.5),
+            2 => on * (0.2 + rng.uniform() as f64),
+            _ => on - d * scale * 10.0 * rng.uniform() as f64,
+        };
+        // Grazing: the direction turned into the tangent plane at `on`.
+        let (_, g) = s.implicit(on);
+        let d = if rng.uniform() < 0.25 && g.length() > 0.0 {
+            let n = g.normalize();
+            (d - n * d.dot(n) + n * 1e-12 * (rng.uniform() as f64 - 0.5)).normalize()
+        } else {
+            d
+        };
+        let err = |v: f64| E::new(v, gamma64(4) * v.abs());
+        let (o, d) = (o.to_array().map(err), d.to_array().map(|v| E::new(v, gamma64(3) * v.abs())));
+        let t_hit = interval_hit(s, o, d, f64::INFINITY).map_or(1.0, |h| h.0);
+        let t_max = match (rng.uniform() * 3.0) as u32 {
+            0 => f64::INFINITY,
+            1 => t_hit * (1.0 + 1e-15 * (rng.uniform() as f64 - 0.5)),
+            _ => t_hit * 2.0 * rng.uniform() as f64,
+        };
+        (o, d, t_max)
+    }
+
+    /// The quick decisions are the intervals' on every kind of quadric and ray, with
+    /// the same hit bit for bit, and they settle nearly every test.
+    fn same_hits<S: QuadricSurface>(s: &S, scale: f64) {
+        let (mut rng, mut quick) = (Rng::new(5), 0);
+        let n = 200_000;
+        for _ in 0..n {
+            let (o, d, t_max) = ray_at(s, &mut rng, scale);
+            let exact = interval_hit(s, o, d, t_max);
+            let fast = match quick_roots(s, o, d) {
+                Some(None) => Some(None),
+                Some(Some(roots)) => first_hit(s, roots, o, d, t_max),
+                None => None,
+            };
+            if let Some(fast) = fast {
+                quick += 1;
+                let bits = |h: Option<(f64, DVec3, f64)>| {
+                    h.map(|(t, p, phi)| (t.to_bits(), p.to_array().map(f64::to_bits), phi.to_bits()))
+                };
+                assert_eq!(bits(fast), bits(exact), "o {o:?} d {d:?} t_max {t_max}");
+            }
+            assert_eq!(s.hit(o, d, t_max).map(|h| h.0.to_bits()), exact.map(|h| h.0.to_bits()));
+        }
+        eprintln!("settled quickly: {quick} of {n}");
+        assert!(quick > n / 2, "settled quickly: {quick} of {n}");
+    }
+
+    #[test]
+    fn quick_decisions_are_the_intervals() {
+        same_hits(&Sphere::new(1.3, -0.9, 1.1, 300.0), 1.3);
+        same_hits(&Sphere::new(2e3, -2e3, 2e3, 360.0), 2e3);
+        same_hits(&Cylinder::new(0.7, -1.0, 2.0, 360.0), 1.0);
+        same_hits(&Cone::new(1.5, 0.8, 270.0), 1.0);
+        same_hits(&Paraboloid::new(1.0, 0.1, 2.0, 360.0), 1.0);
+        let mut h =
+            Hyperboloid::new(Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.5, 0.8, 1.0), 360.0).expect("a hyperboloid");
+        for fit in [true, false] {
+            h.implicit_fit = fit;
+            same_hits(&h, 1.0);
+        }
+    }
 }

@@ -6,7 +6,8 @@
 use super::Quadric;
 use super::params::{f, positive};
 use super::phi_max_radians;
-use super::quadric::{E, Local, QuadricSurface};
+use super::quadric::{Local, QuadricSurface};
+use crate::math::bounded::Interval;
 use crate::mitsuba::GeometryOut;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
@@ -74,9 +75,9 @@ impl Sphere {
 }
 
 impl QuadricSurface for Sphere {
-    fn coefficients(&self, [ox, oy, oz]: [E; 3], [dx, dy, dz]: [E; 3]) -> (E, E, E) {
+    fn coefficients<N: Interval>(&self, [ox, oy, oz]: [N; 3], [dx, dy, dz]: [N; 3]) -> (N, N, N) {
         let r = self.radius as f64;
-        (dx * dx + dy * dy + dz * dz, (dx * ox + dy * oy + dz * oz) * 2.0, ox * ox + oy * oy + oz * oz - E::from(r * r))
+        (dx * dx + dy * dy + dz * dz, (dx * ox + dy * oy + dz * oz) * 2.0, ox * ox + oy * oy + oz * oz - N::from(r * r))
     }
 
     fn implicit(&self, p: DVec3) -> (f64, DVec3) {
