@@ -158,35 +158,30 @@ impl Neg for Bounded64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::Rng;
 
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        /// A value of random sign and magnitude (10⁻⁶ to 10⁶), with a random error
-        /// bound, often 0.
-        fn operand(&mut self) -> EFloat64 {
-            let mag = 10f64.powf(self.next() * 12.0 - 6.0);
-            let v = if self.next() < 0.5 { -mag } else { mag };
-            let err = if self.next() < 0.3 { 0.0 } else { v.abs() * 10f64.powf(-16.0 + 15.0 * self.next()) };
-            EFloat64::new(v, err)
-        }
+    /// A value of random sign and magnitude (10⁻⁶ to 10⁶), with a random error bound,
+    /// often 0.
+    fn operand(rng: &mut Rng) -> EFloat64 {
+        let mut next = || rng.uniform() as f64;
+        let mag = 10f64.powf(next() * 12.0 - 6.0);
+        let v = if next() < 0.5 { -mag } else { mag };
+        let err = if next() < 0.3 { 0.0 } else { v.abs() * 10f64.powf(-16.0 + 15.0 * next()) };
+        EFloat64::new(v, err)
     }
 
     /// Chains of random operations on both types give the same values bit for bit,
     /// and the radius holds the interval's ends at every step.
     #[test]
     fn the_radius_holds_every_interval_end() {
-        let mut rng = Lcg(11);
+        let mut rng = Rng::new(11);
         for _ in 0..20_000 {
-            let mut e = rng.operand();
+            let mut e = operand(&mut rng);
             let mut b = Bounded64::of(e);
             for _ in 0..6 {
-                let x = rng.operand();
+                let x = operand(&mut rng);
                 let (ex, bx) = (x, Bounded64::of(x));
-                (e, b) = match (rng.next() * 5.0) as usize {
+                (e, b) = match (rng.uniform() * 5.0) as usize {
                     0 => (e + ex, b + bx),
                     1 => (e - ex, b - bx),
                     2 => (e * ex, b * bx),
