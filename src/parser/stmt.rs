@@ -229,6 +229,14 @@ impl StatementReader {
         })
     }
 
+    /// How often `ObjectInstance` occurs in the rest of the file being read (comments
+    /// and strings too): room to reserve, at least the instances that follow there.
+    pub fn instance_words_ahead(&self) -> usize {
+        let Some(frame) = self.stack.last() else { return 0 };
+        let rest = frame.text.get(frame.pos..).unwrap_or_default();
+        memchr::memmem::find_iter(rest, b"ObjectInstance").count()
+    }
+
     /// Resolves a file name from the scene against the top-level file's directory
     /// (pbrt-v4 falls back to the name as written when the joined path does not exist).
     /// The top-level file's directory: the base of relative file names.

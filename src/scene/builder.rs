@@ -620,6 +620,10 @@ impl Builder {
             self.first_motion.get_or_insert(span);
         }
         self.one_more_instance(span)?;
+        if self.instance_uses.wants_room() {
+            // This statement's and those ahead (the reader is past this one's word).
+            self.instance_uses.reserve(1 + self.reader.instance_words_ahead());
+        }
         self.instance_uses.push(name, span, self.gs.ctm);
         Ok(())
     }

@@ -66,6 +66,26 @@ impl Instances {
         crate::hugepages::push(&mut self.list, desc);
     }
 
+    /// How many the list has room for.
+    pub fn capacity(&self) -> usize {
+        self.list.capacity()
+    }
+
+    /// Whether the list has no room left.
+    pub fn is_full(&self) -> bool {
+        self.list.len() == self.list.capacity()
+    }
+
+    /// Makes room for `additional` more, in one step (marked for huge pages, as
+    /// [`crate::hugepages::push`] grows it).
+    pub fn reserve(&mut self, additional: usize) {
+        if self.list.capacity() - self.list.len() < additional {
+            let mut grown = crate::hugepages::with_capacity(self.list.len() + additional);
+            grown.append(&mut self.list);
+            self.list = grown;
+        }
+    }
+
     fn add_rare(&mut self, rare: InstanceRare) -> u32 {
         self.rare.push(rare);
         (self.rare.len() - 1) as u32

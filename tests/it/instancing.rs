@@ -67,6 +67,30 @@ fn write_grid_ply(path: &std::path::Path, n: usize) {
     std::fs::write(path, b).unwrap();
 }
 
+/// Past a few thousand instances, room for the rest of the file's is reserved at once
+/// (counted from the `ObjectInstance` words ahead, a comment's too) rather than grown
+/// by doubling, which copied every record into fresh pages; every record is kept.
+#[test]
+fn instance_records_are_reserved_once() {
+    let dir = crate::common::Scratch::new("inst-room");
+    let mut scene = String::from("WorldBegin\nObjectBegin \"s\"\nShape \"sphere\"\nObjectEnd\n");
+    let n = 10_000;
+    for k in 0..n {
+        scene.push_str(&format!("AttributeBegin Translate {k} 0 0 ObjectInstance \"s\" AttributeEnd\n"));
+    }
+    scene.push_str("# ObjectInstance \"s\" (a comment)\n");
+    let path = dir.join("room.pbrt");
+    std::fs::write(&path, &scene).unwrap();
+    let s = load_scene(&path, &LoadOptions::default()).expect("loads");
+    assert_eq!(s.instances.len(), n);
+    // At the 4,096th the rest (and the comment's word) are counted; doubling would
+    // leave room for 16,384.
+    assert_eq!(s.instances.capacity(), n + 1, "the instances ahead and the comment's word");
+    for k in [0, 4095, 4096, 4097, n - 1] {
+        assert_eq!(s.instances.get(k).world_from_instance().w_axis.x, k as f64);
+    }
+}
+
 #[test]
 fn many_instances_cost_about_one_copy() {
     let dir = crate::common::Scratch::new("inst");

@@ -18,6 +18,12 @@ use crate::parser::source::Span;
 use glam::DMat4;
 use std::collections::HashMap;
 
+/// Room is counted ahead only once this many records are full.
+const ROOM_COUNTED_FROM: usize = 4096;
+/// The most records one count reserves room for (416 MiB of address space; doubling
+/// goes on past it).
+const MOST_RESERVED: usize = 1 << 22;
+
 #[derive(Default)]
 pub(super) struct InstanceUses {
     records: Instances,
@@ -45,6 +51,21 @@ impl InstanceUses {
             self.ends.push((at, end));
         }
         self.records.push(id, start, None);
+    }
+
+    /// Whether the records are full and many: then room for the statements ahead is
+    /// worth counting ([`InstanceUses::reserve`]).
+    pub fn wants_room(&self) -> bool {
+        self.records.is_full() && self.records.len() >= ROOM_COUNTED_FROM
+    }
+
+    /// Makes room for `n` more records at once, up to [`MOST_RESERVED`], and at least
+    /// for as many again as there are (so that instances spread over many small files,
+    /// each counted alone, still grow the list by doubling). Grown by doubling alone, a
+    /// million records were copied about once over, into fresh pages: 40% of reading a
+    /// million-instance file.
+    pub fn reserve(&mut self, n: usize) {
+        self.records.reserve(n.min(MOST_RESERVED).max(self.records.len()));
     }
 
     /// The instances recorded so far.
@@ -76,5 +97,24 @@ impl InstanceUses {
             records.set_motion(at, AnimatedTransform::framed(start, end, times, frame, inner));
         }
         records
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// However few instances a count finds ahead, room grows at least by doubling.
+    #[test]
+    fn room_grows_at_least_by_doubling() {
+        let mut uses = InstanceUses::default();
+        while !uses.wants_room() {
+            uses.push("o".into(), Span::default(), [DMat4::IDENTITY; 2]);
+        }
+        let full = uses.len();
+        uses.reserve(1);
+        assert!(uses.records.capacity() >= 2 * full, "room for {} after {full}", uses.records.capacity());
+        uses.reserve(3 * full);
+        assert!(uses.records.capacity() >= 4 * full);
     }
 }
