@@ -37,11 +37,19 @@ pub fn with_capacity<T>(n: usize) -> Vec<T> {
 /// copied at each growth, where `realloc` would have moved the pages.
 pub fn push<T>(v: &mut Vec<T>, value: T) {
     if v.len() == v.capacity() {
-        let mut grown = with_capacity(v.capacity().max(64) * 2);
+        reserve(v, v.capacity().max(64) * 2 - v.len());
+    }
+    v.push(value);
+}
+
+/// Makes room for `additional` more values in one step, into room marked as with
+/// [`with_capacity`] (the values are copied there).
+pub fn reserve<T>(v: &mut Vec<T>, additional: usize) {
+    if v.capacity() - v.len() < additional {
+        let mut grown = with_capacity(v.len() + additional);
         grown.append(v);
         *v = grown;
     }
-    v.push(value);
 }
 
 /// `MADV_HUGEPAGE` on the 2 MiB-aligned middle of the `bytes` bytes at `start` (an

@@ -79,11 +79,7 @@ impl Instances {
     /// Makes room for `additional` more, in one step (marked for huge pages, as
     /// [`crate::hugepages::push`] grows it).
     pub fn reserve(&mut self, additional: usize) {
-        if self.list.capacity() - self.list.len() < additional {
-            let mut grown = crate::hugepages::with_capacity(self.list.len() + additional);
-            grown.append(&mut self.list);
-            self.list = grown;
-        }
+        crate::hugepages::reserve(&mut self.list, additional);
     }
 
     fn add_rare(&mut self, rare: InstanceRare) -> u32 {
