@@ -71,7 +71,7 @@ impl QuadricSurface for Disk {
 
     /// The plane z = h, then the annulus test; the point is put exactly on the plane
     /// before the shared range test.
-    fn hit(&self, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3, f64)> {
+    fn hit(&self, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3)> {
         let h = self.height as f64;
         if d[2].value() == 0.0 {
             return None;
@@ -87,7 +87,7 @@ impl QuadricSurface for Disk {
             return None;
         }
         p.z = h;
-        self.accept(p).map(|phi| (t.value(), p, phi))
+        self.accept(p).then_some((t.value(), p))
     }
 
     fn local(&self, p: DVec3, phi: f64) -> Local {

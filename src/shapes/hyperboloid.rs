@@ -11,7 +11,7 @@
 
 use super::Quadric;
 use super::params::f;
-use super::quadric::{Local, QuadricSurface, phi_of};
+use super::quadric::{Local, QuadricSurface};
 use super::{integrate_unit_interval, phi_max_radians};
 use crate::math::bounded::Interval;
 use crate::parser::error::Diagnostic;
@@ -186,14 +186,9 @@ impl QuadricSurface for Hyperboloid {
     }
 
     /// φ is measured from the profile point p_r(v) at the hit's height.
-    fn accept(&self, p: DVec3) -> Option<f64> {
-        let (z0, z1, phi_max) = self.ranges();
-        if p.z < z0 || p.z > z1 {
-            return None;
-        }
+    fn phi_frame(&self, p: DVec3) -> (f64, f64) {
         let pr = self.profile((p.z - self.p1.z as f64) / (self.p2.z as f64 - self.p1.z as f64));
-        let phi = phi_of(pr.x * p.x + pr.y * p.y, pr.x * p.y - pr.y * p.x);
-        (phi <= phi_max).then_some(phi)
+        (pr.x * p.x + pr.y * p.y, pr.x * p.y - pr.y * p.x)
     }
 
     fn local(&self, p: DVec3, phi: f64) -> Local {

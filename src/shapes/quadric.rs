@@ -47,7 +47,6 @@ pub struct QuadricShape {
 pub struct QuadricHit {
     pub t: f32,
     pub p_obj: DVec3,
-    pub phi: f64,
 }
 
 /// Object-space derivatives at a hit: (u, v), ∂p/∂u, ∂p/∂v and the second derivatives
@@ -100,8 +99,8 @@ impl QuadricShape {
     pub fn intersect_t(&self, r: &Ray, t_max: f32) -> Option<QuadricHit> {
         let (o, d) = self.object_ray(r);
         let t_max = t_max as f64;
-        let (t, p_obj, phi) = dispatch_quadric!(&self.quadric, s => s.hit(o, d, t_max))?;
-        Some(QuadricHit { t: t as f32, p_obj, phi })
+        let (t, p_obj) = dispatch_quadric!(&self.quadric, s => s.hit(o, d, t_max))?;
+        Some(QuadricHit { t: t as f32, p_obj })
     }
 
     /// Any hit before t_max (shadow rays).
@@ -111,7 +110,7 @@ impl QuadricShape {
 
     /// (u, v) of a hit in f64 (the interaction stores them rounded to f32).
     pub fn uv_of(&self, hit: &QuadricHit) -> [f64; 2] {
-        dispatch_quadric!(&self.quadric, s => s.local(hit.p_obj, hit.phi).uv)
+        dispatch_quadric!(&self.quadric, s => s.local(hit.p_obj, s.phi(hit.p_obj)).uv)
     }
 
     /// (u, v) of an object-space point on the surface.
@@ -126,14 +125,15 @@ impl QuadricShape {
     // DEVIATION(pbrt): robustness. pbrt moves only the sphere's pole hits (x = 1e-5 r); its cone,
     // paraboloid and disk give a NaN normal there.
     fn local_at(&self, hit: &QuadricHit) -> Local {
-        let l = dispatch_quadric!(&self.quadric, s => s.local(hit.p_obj, hit.phi));
+        let phi = dispatch_quadric!(&self.quadric, s => s.phi(hit.p_obj));
+        let l = dispatch_quadric!(&self.quadric, s => s.local(hit.p_obj, phi));
         let n = l.dpdu.cross(l.dpdv);
         if n.is_finite() && n.length_squared() > 0.0 {
             return l;
         }
         let [u, v] = l.uv;
         let near = self.quadric.point(u, if v > 0.5 { v - 2f64.powi(-20) } else { v + 2f64.powi(-20) });
-        let moved = dispatch_quadric!(&self.quadric, s => s.local(near, hit.phi));
+        let moved = dispatch_quadric!(&self.quadric, s => s.local(near, phi));
         Local { uv: l.uv, ..moved }
     }
 
@@ -282,14 +282,30 @@ pub trait QuadricSurface {
         if g > 0.0 { 2.0 * f.abs() / g } else { 0.0 }
     }
 
-    /// φ if the (refined) point lies in the z range and the φ range.
-    fn accept(&self, p: DVec3) -> Option<f64> {
+    /// The (x, y) whose angle is a point's φ (its own x and y about the axis).
+    fn phi_frame(&self, p: DVec3) -> (f64, f64) {
+        (p.x, p.y)
+    }
+
+    /// φ at a point, in [0, 2π].
+    fn phi(&self, p: DVec3) -> f64 {
+        let (x, y) = self.phi_frame(p);
+        phi_of(x, y)
+    }
+
+    /// Whether the (refined) point lies in the z range and the φ range.
+    fn accept(&self, p: DVec3) -> bool {
         let (z0, z1, phi_max) = self.ranges();
         if p.z < z0 || p.z > z1 {
-            return None;
+            return false;
         }
-        let phi = phi_of(p.x, p.y);
-        (phi <= phi_max).then_some(phi)
+        let (x, y) = self.phi_frame(p);
+        // A full turn takes every φ (at most 2π) but NaN's, and the arctangent waits
+        // for the hit that is kept: a sphere's candidates cost an atan2 each.
+        if phi_max >= TAU {
+            return !(x.is_nan() || y.is_nan());
+        }
+        phi_of(x, y) <= phi_max
     }
 
     /// The roots of F(o + t d) = 0. A negative discriminant that rounding could have
@@ -317,10 +333,10 @@ pub trait QuadricSurface {
         Some((t0 + m, t1 + m))
     }
 
-    /// The first hit (t, object-space point, φ) with 0 < t < t_max. Decided from the
+    /// The first hit (t, object-space point) with 0 < t < t_max. Decided from the
     /// roots' values and a bound on their intervals ([`quick_roots`]) where that bound
     /// leaves no doubt, from the intervals otherwise: the same decisions either way.
-    fn hit(&self, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3, f64)> {
+    fn hit(&self, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3)> {
         match quick_roots(self, o, d) {
             Some(None) => return None,
             Some(Some(roots)) => {
@@ -335,7 +351,7 @@ pub trait QuadricSurface {
 }
 
 /// [`QuadricSurface::hit`] decided from the roots' intervals alone.
-fn interval_hit<S: QuadricSurface + ?Sized>(s: &S, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3, f64)> {
+fn interval_hit<S: QuadricSurface + ?Sized>(s: &S, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3)> {
     let (t0, t1) = s.roots(o, d)?;
     first_hit(s, (RootEnds::exact(t0), RootEnds::exact(t1)), o, d, t_max).flatten()
 }
@@ -349,7 +365,7 @@ fn first_hit<S: QuadricSurface + ?Sized>(
     o: [E; 3],
     d: [E; 3],
     t_max: f64,
-) -> Option<Option<(f64, DVec3, f64)>> {
+) -> Option<Option<(f64, DVec3)>> {
     match (settled(t0.high, |h| h > t_max), settled(t1.low, |l| l <= 0.0)) {
         (Some(true), _) | (_, Some(true)) => return Some(None),
         (Some(false), Some(false)) => {}
@@ -357,7 +373,7 @@ fn first_hit<S: QuadricSurface + ?Sized>(
     }
     let try_root = |t: f64| {
         let p = s.refine(at(o, d, t));
-        s.accept(p).map(|phi| (t, p, phi))
+        s.accept(p).then_some((t, p))
     };
     if settled(t0.low, |l| l > 0.0)?
         && let Some(hit) = try_root(t0.v)
@@ -501,15 +517,50 @@ mod tests {
             };
             if let Some(fast) = fast {
                 quick += 1;
-                let bits = |h: Option<(f64, DVec3, f64)>| {
-                    h.map(|(t, p, phi)| (t.to_bits(), p.to_array().map(f64::to_bits), phi.to_bits()))
-                };
+                let bits = |h: Option<(f64, DVec3)>| h.map(|(t, p)| (t.to_bits(), p.to_array().map(f64::to_bits)));
                 assert_eq!(bits(fast), bits(exact), "o {o:?} d {d:?} t_max {t_max}");
             }
             assert_eq!(s.hit(o, d, t_max).map(|h| h.0.to_bits()), exact.map(|h| h.0.to_bits()));
         }
         eprintln!("settled quickly: {quick} of {n}");
         assert!(quick > n / 2, "settled quickly: {quick} of {n}");
+    }
+
+    /// What `accept` decided when it computed φ at every candidate: the z range, then
+    /// φ ≤ φmax (false for a NaN φ).
+    fn accepted_by_phi<S: QuadricSurface>(s: &S, p: DVec3) -> bool {
+        let (z0, z1, phi_max) = s.ranges();
+        !(p.z < z0 || p.z > z1) && s.phi(p) <= phi_max
+    }
+
+    /// A full turn skips the arctangent, and accepts exactly the points it accepted:
+    /// on and off the surface, on the axis, at the z limits, and with NaN or infinite
+    /// coordinates.
+    fn same_acceptance<S: QuadricSurface>(s: &S) {
+        let mut rng = Rng::new(11);
+        let odd = [0.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e-300];
+        let (z0, z1, _) = s.ranges();
+        for k in 0..20_000 {
+            let mut p = s.refine(uniform_sphere(rng.uniform2()).as_dvec3() * 2.0);
+            match k % 4 {
+                0 => p[(rng.uniform() * 3.0) as usize % 3] = odd[(rng.uniform() * 6.0) as usize % 6],
+                1 => p.z = if rng.uniform() < 0.5 { z0 } else { z1 },
+                2 => (p.x, p.y) = (0.0, 0.0),
+                _ => {}
+            }
+            assert_eq!(s.accept(p), accepted_by_phi(s, p), "{p:?}");
+        }
+    }
+
+    #[test]
+    fn full_turns_accept_what_phi_accepts() {
+        same_acceptance(&Sphere::new(1.0, -1.0, 1.0, 360.0));
+        same_acceptance(&Sphere::new(1.0, -0.5, 0.7, 250.0));
+        same_acceptance(&Cylinder::new(0.7, -1.0, 2.0, 360.0));
+        same_acceptance(&Cone::new(1.5, 0.8, 360.0));
+        same_acceptance(&Paraboloid::new(1.0, 0.1, 2.0, 360.0));
+        let h = Hyperboloid::new(Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.5, 0.8, 1.0), 360.0).expect("a hyperboloid");
+        same_acceptance(&h);
     }
 
     #[test]
