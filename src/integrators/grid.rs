@@ -169,7 +169,9 @@ impl Grid {
 
     fn cell(&self, p: Vec3) -> [u64; 3] {
         let c = (p - self.lo) * self.inv_cell;
-        [0, 1, 2].map(|a| (c[a].max(0.0) as u64).min(self.res[a] - 1))
+        // Through u32, which holds every resolution (at most 2^20): a float's
+        // conversion to u64 takes a dozen instructions on x86-64, to u32 one.
+        [0, 1, 2].map(|a| (c[a].max(0.0) as u32).min(self.res[a] as u32 - 1) as u64)
     }
 
     fn key(&self, c: [u64; 3]) -> u64 {

@@ -513,8 +513,9 @@ impl<'a> Sppm<'a> {
         let k = self.iteration.max(1) as f64;
         let np = self.photons_per_iteration.max(1) as f64;
         let film = &self.scene.film;
+        // On all threads: one thread took 45 ms of f16-9a's 700,000 pixels.
         self.pixels
-            .iter()
+            .par_iter()
             .map(|p| {
                 let l = p.ld / k + p.tau / (k * np * std::f64::consts::PI * p.radius * p.radius);
                 film.respond(l).as_vec3().to_array()
