@@ -546,8 +546,16 @@ impl Bvh {
                     // The entry keeps the nearest's t: its slot bit is what is cleared.
                     // (Writing +∞ into the lane in memory and copying the lanes at once
                     // stalled each push on the store: 15% of a small scene's traversal.)
-                    let nearest = ts.first::<I, NEAREST>(hits);
-                    stack.push(Pending { ts, node: child, slots: hits & !(1 << nearest) });
+                    // A lone hit child needs no search, and leaves nothing to wait
+                    // (an empty entry cost a store, and a load to drop it).
+                    let nearest = match hits & (hits - 1) {
+                        0 => hits.trailing_zeros() as usize,
+                        _ => ts.first::<I, NEAREST>(hits),
+                    };
+                    let rest = hits & !(1 << nearest);
+                    if rest != 0 {
+                        stack.push(Pending { ts, node: child, slots: rest });
+                    }
                     (child, count, tag) = node.slot(nearest);
                     continue;
                 }

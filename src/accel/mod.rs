@@ -469,17 +469,18 @@ impl Blas {
         let &(mesh, flags) = self.block_meshes.get(shape as usize)?;
         let mut best = None;
         let groups = block.count().div_ceil(4);
-        let mut g = 0;
-        while g < groups {
-            let (candidates, step) = block.edge_candidates::<I, KX, KY, KZ>(isa, g, wr);
-            let triangle = |k| (block.corners(4 * g + k), block.triangle(4 * g + k));
+        let mut at = 0;
+        while at < groups {
+            let (candidates, step) = block.edge_candidates::<I, KX, KY, KZ>(isa, at, wr);
+            let triangle = |k| (block.corners(4 * at + k), block.triangle(4 * at + k));
             if let Some((tri, hit)) = hit_candidates::<KX, KY, KZ, ANY>(candidates, triangle, wr, &mut t_max) {
-                best = Some((hit.t, shape, LocalHit::Triangle { mesh, tri, flags, hit }));
                 if ANY {
-                    break;
+                    return Some((hit.t, shape, LocalHit::Triangle { mesh, tri, flags, hit }));
                 }
+                g.shapes.meshes[mesh as usize].prefetch_indices(tri as usize);
+                best = Some((hit.t, shape, LocalHit::Triangle { mesh, tri, flags, hit }));
             }
-            g += step;
+            at += step;
         }
         best
     }

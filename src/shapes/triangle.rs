@@ -426,6 +426,15 @@ impl TriangleMesh {
         }
     }
 
+    /// Asks the cache for triangle `tri`'s vertex indices, which its interaction reads
+    /// (for normals and uv) as soon as the ray's closest hit is known.
+    #[inline(always)]
+    pub fn prefetch_indices(&self, tri: usize) {
+        if let Some(first) = self.indices.get(3 * tri) {
+            crate::memory::prefetch(first);
+        }
+    }
+
     /// Differential geometry at a hit (pbrt-v3's triangle interaction).
     pub fn interaction(&self, tri: usize, hit: &TriangleHit, flags: MeshFlags) -> SurfaceInteraction {
         let [p0, p1, p2] = hit.p;
