@@ -154,7 +154,8 @@ impl Grid {
             .par_chunks(CHUNK)
             .enumerate()
             .map(|(c, chunk)| {
-                let mut out = Vec::new();
+                // One entry a site when centre-binned: room for all at once.
+                let mut out = Vec::with_capacity(if binning == Binning::Centre { chunk.len() } else { 0 });
                 for (k, s) in chunk.iter().enumerate() {
                     if let Some(s) = s {
                         grid.overlapped_cells(s, |key| out.push(Entry::new(key, *s, (c * CHUNK + k) as u32)));
@@ -373,7 +374,10 @@ fn bounds(sites: &[Option<Site>]) -> Option<(Vec3, Vec3, f32)> {
 /// The second level: each super bucket gathers its pairs from the chunks in order and
 /// sorts them by bucket into its own slice of the table. Returns (offsets, entries).
 fn sort_by_bucket(chunks: &[Grouped<Entry>], total: usize, buckets: usize) -> (Vec<u32>, Vec<Entry>) {
-    let mut entries = vec![Entry::default(); total];
+    // Filled on all threads: `vec!` writes a struct's copies on one (and takes the
+    // fresh pages' faults there), a fifth of a 700,000-site build.
+    let mut entries = Vec::with_capacity(total);
+    entries.par_extend(rayon::iter::repeat_n(Entry::default(), total));
     let mut offsets = vec![0u32; buckets + 1];
     offsets[buckets] = total as u32;
     let mut slices = Vec::with_capacity(SUPER);
