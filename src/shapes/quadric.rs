@@ -115,7 +115,7 @@ impl QuadricShape {
 
     /// (u, v) of an object-space point on the surface.
     pub fn uv_of_object_point(&self, p_obj: DVec3) -> [f64; 2] {
-        dispatch_quadric!(&self.quadric, s => s.local(p_obj, phi_of(p_obj.x, p_obj.y)).uv)
+        dispatch_quadric!(&self.quadric, s => s.local(p_obj, s.phi(p_obj)).uv)
     }
 
     /// The object-space derivatives at a hit. On the axis ∂p/∂u vanishes (a sphere's
@@ -561,6 +561,19 @@ mod tests {
         same_acceptance(&Paraboloid::new(1.0, 0.1, 2.0, 360.0));
         let h = Hyperboloid::new(Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.5, 0.8, 1.0), 360.0).expect("a hyperboloid");
         same_acceptance(&h);
+    }
+
+    /// A sampled point's (u, v) are those of the surface's parametrisation, as a hit's
+    /// are: the hyperboloid's φ is measured from its profile point (pbrt-v3's hit), not
+    /// from the x axis, which put a sampled point's u up to 0.19 away on this one.
+    #[test]
+    fn sampled_points_have_their_parameters() {
+        let h = Hyperboloid::new(Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.5, 0.8, 1.0), 300.0).expect("a hyperboloid");
+        let shape = QuadricShape::new(Quadric::Hyperboloid(h.clone()), DMat4::IDENTITY, false);
+        for (u, v) in [(0.1, 0.2), (0.5, 0.9), (0.8, 0.5), (0.3, 1.0)] {
+            let [su, sv] = shape.uv_of_object_point(h.point(u, v));
+            assert!((su - u).abs() < 1e-9 && (sv - v).abs() < 1e-9, "({u}, {v}) gave ({su}, {sv})");
+        }
     }
 
     #[test]
