@@ -690,7 +690,11 @@ impl Stack {
                 self.drop_top();
                 continue;
             }
-            let slot = top.ts.first::<I, NEAREST>(live);
+            // One live slot needs no search (as in `Bvh::traverse`).
+            let slot = match live & (live - 1) {
+                0 => live.trailing_zeros() as usize,
+                _ => top.ts.first::<I, NEAREST>(live),
+            };
             top.slots = live & !(1 << slot);
             let node = &nodes[top.node as usize];
             if top.slots == 0 {
