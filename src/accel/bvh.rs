@@ -546,12 +546,9 @@ impl Bvh {
                     // The entry keeps the nearest's t: its slot bit is what is cleared.
                     // (Writing +∞ into the lane in memory and copying the lanes at once
                     // stalled each push on the store: 15% of a small scene's traversal.)
-                    // A lone hit child needs no search, and leaves nothing to wait
-                    // (an empty entry cost a store, and a load to drop it).
-                    let nearest = match hits & (hits - 1) {
-                        0 => hits.trailing_zeros() as usize,
-                        _ => ts.first::<I, NEAREST>(hits),
-                    };
+                    // A lone hit child leaves nothing to wait (an empty entry cost
+                    // a store, and a load to drop it).
+                    let nearest = ts.first::<I, NEAREST>(hits);
                     let rest = hits & !(1 << nearest);
                     if rest != 0 {
                         stack.push(Pending { ts, node: child, slots: rest });
@@ -591,10 +588,13 @@ impl Lanes {
     }
 
     /// The slot to visit first among `slots`: the nearest, or (for any-hit queries,
-    /// which need no order) the lowest.
+    /// which need no order) the lowest. A lone slot is its own nearest: no search.
     #[inline(always)]
     fn first<I: Isa, const NEAREST: bool>(&self, slots: u32) -> usize {
-        if NEAREST { self.nearest::<I>(slots) } else { slots.trailing_zeros() as usize & (WIDTH - 1) }
+        match NEAREST && slots & slots.wrapping_sub(1) != 0 {
+            true => self.nearest::<I>(slots),
+            false => slots.trailing_zeros() as usize & (WIDTH - 1),
+        }
     }
 
     /// The slot with the smallest value among `slots` (a nonempty bit set), the lower
@@ -690,11 +690,7 @@ impl Stack {
                 self.drop_top();
                 continue;
             }
-            // One live slot needs no search (as in `Bvh::traverse`).
-            let slot = match live & (live - 1) {
-                0 => live.trailing_zeros() as usize,
-                _ => top.ts.first::<I, NEAREST>(live),
-            };
+            let slot = top.ts.first::<I, NEAREST>(live);
             top.slots = live & !(1 << slot);
             let node = &nodes[top.node as usize];
             if top.slots == 0 {
