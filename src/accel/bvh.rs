@@ -287,11 +287,12 @@ impl Bins {
     }
 
     fn fill(prims: &[PrimInfo], bin_of: impl Fn(Vec4) -> usize) -> Bins {
-        let mut sets = [Bins::EMPTY; Bins::SETS];
         if prims.len() <= Bins::MANY_SETS {
-            prims.iter().for_each(|p| sets[0].add(p, bin_of(p.centroid2())));
-            return sets[0];
+            let mut bins = Bins::EMPTY;
+            prims.iter().for_each(|p| bins.add(p, bin_of(p.centroid2())));
+            return bins;
         }
+        let mut sets = [Bins::EMPTY; Bins::SETS];
         let mut runs = prims.chunks_exact(Bins::SETS);
         for run in &mut runs {
             let bins: [usize; Bins::SETS] = std::array::from_fn(|k| bin_of(run[k].centroid2()));
