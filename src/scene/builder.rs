@@ -212,6 +212,9 @@ struct Builder {
     world_ended: bool,
     /// Type names neither pbrt knows, read before the file's version was settled.
     unknown_names: Vec<(Family, String, Span)>,
+    /// `LookAt` statements whose up vector lies along the view, read before the
+    /// file's version was settled.
+    up_along_view: Vec<Span>,
     render: RenderOptions,
     shapes: Vec<ShapeDesc>,
     /// Per world shape: its `Shape` statement's type name.
@@ -304,6 +307,7 @@ impl Builder {
             world_begin: None,
             world_ended: false,
             unknown_names: Vec::new(),
+            up_along_view: Vec::new(),
             render: RenderOptions::default(),
             shapes: Vec::new(),
             shape_spans: Vec::new(),
@@ -518,10 +522,17 @@ impl Builder {
     }
 
     fn look_at(&mut self, v: &[f64; 9], span: Span) -> Res<()> {
-        let m = look_at(v).ok_or_else(|| {
-            Diagnostic::error(span, "LookAt: the up vector and the viewing direction are parallel (or eye = look)")
-        })?;
-        self.concat(span, m)
+        match look_at(v) {
+            Ok(m) => self.concat(span, m),
+            // pbrt-v3 goes on with the identity, pbrt-v4 stops: decided with the version.
+            Err(LookAtError::UpAlongView) => self.up_along_view(span),
+            // DEVIATION(pbrt): robustness. pbrt builds the camera from NaNs here (a
+            // NaN image); an error says why.
+            Err(LookAtError::EyeAtLook) => {
+                Err(Diagnostic::error(span, "LookAt: the eye and the look-at point are the same"))
+            }
+            Err(LookAtError::ZeroUp) => Err(Diagnostic::error(span, "LookAt: the up vector is zero")),
+        }
     }
 
     fn coord_sys_transform(&mut self, name: &str, span: Span) -> Res<()> {
@@ -1271,6 +1282,7 @@ impl Builder {
         self.syntax = Some(syntax);
         self.build_deferred_shapes(true)?;
         self.settle_unknown_names(syntax)?;
+        self.settle_up_along_view(syntax)?;
         self.build_deferred_shapes(false)?;
         self.materials[0].ty =
             if syntax == Syntax::V3 { crate::materials::matte::NAME } else { crate::materials::diffuse::NAME }.into();
@@ -1482,12 +1494,24 @@ fn as_named(why: impl ToString, path: &std::path::Path, name: &str) -> String {
     why.to_string().replace(&path.display().to_string(), name)
 }
 
-/// pbrt's LookAt: camera-from-world for eye, look and up (`None` when degenerate).
-pub fn look_at(v: &[f64; 9]) -> Option<DMat4> {
+/// Why `LookAt` has no camera frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LookAtError {
+    /// The eye is the look-at point: no viewing direction.
+    EyeAtLook,
+    /// The up vector is zero.
+    ZeroUp,
+    /// The up vector lies along the viewing direction.
+    UpAlongView,
+}
+
+/// pbrt's LookAt: camera-from-world for eye, look and up, or why there is none.
+pub fn look_at(v: &[f64; 9]) -> Result<DMat4, LookAtError> {
     let (eye, look, up) = (DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5]), DVec3::new(v[6], v[7], v[8]));
-    let dir = (look - eye).try_normalize()?;
-    let right = up.try_normalize()?.cross(dir).try_normalize()?;
+    let dir = (look - eye).try_normalize().ok_or(LookAtError::EyeAtLook)?;
+    let up = up.try_normalize().ok_or(LookAtError::ZeroUp)?;
+    let right = up.cross(dir).try_normalize().ok_or(LookAtError::UpAlongView)?;
     let new_up = dir.cross(right);
     let world_from_camera = DMat4::from_cols(right.extend(0.0), new_up.extend(0.0), dir.extend(0.0), eye.extend(1.0));
-    Some(world_from_camera.inverse())
+    Ok(world_from_camera.inverse())
 }

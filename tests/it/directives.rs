@@ -53,6 +53,25 @@ fn look_at_follows_pbrt_handedness() {
 }
 
 #[test]
+fn look_at_with_up_along_the_view_is_the_identity_in_v3_and_an_error_in_v4() {
+    // pbrt-v3 says so and goes on with the CTM unchanged; the version is settled by a
+    // v3-only statement after the LookAt, so the decision waits for it.
+    let v3 = "Translate 1 2 3\nLookAt 0 0 0  0 0 1  0 0 2\nCamera \"perspective\"\nWorldBegin\nMaterial \"uber\"\n";
+    let s = scene(v3);
+    assert!(warnings(&s).iter().any(|w| w.contains("parallel") && w.contains("left unchanged")), "{:?}", warnings(&s));
+    let cfw = matrix(&pbrt_sppm::cli::check::report(&s, false)["camera"]["camera_from_world"]);
+    assert!(approx(cfw, [1., 0., 0., 1., 0., 1., 0., 2., 0., 0., 1., 3., 0., 0., 0., 1.]), "{cfw:?}");
+    let v4 = v3.replace("uber", "coateddiffuse");
+    let e = load(&v4).expect_err("pbrt-v4 stops at the LookAt").to_string();
+    assert!(e.contains(":2:1: error: LookAt: the up vector and the viewing direction are parallel"), "{e}");
+    // No viewing direction, or no up vector: an error for both (pbrt's camera is NaN).
+    for bad in ["LookAt 1 1 1  1 1 1  0 1 0", "LookAt 0 0 0  0 0 1  0 0 0"] {
+        let e = load(&format!("{bad}\nCamera \"perspective\"\nWorldBegin\nMaterial \"uber\"\n")).err();
+        assert!(e.is_some_and(|e| e.to_string().contains(":1:1: error: LookAt: the")), "{bad}");
+    }
+}
+
+#[test]
 fn named_coordinate_systems_including_camera_and_world() {
     assert_eq!(m(r#"Translate 1 2 3 CoordinateSystem "a" Identity CoordSysTransform "a" Shape "sphere""#)[3], 1.0);
     let r = report(

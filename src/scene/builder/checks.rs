@@ -1,10 +1,12 @@
 //! Checks of a whole file that need its version settled: type names neither pbrt knows
-//! ([`Family`]), and a file that never reaches `WorldBegin`.
+//! ([`Family`]), a `LookAt` with its up vector along the view, and a file that never
+//! reaches `WorldBegin`.
 //!
 //! ```text
 //! Shape "sphre"      # v4: error, unknown shape type "sphre" (did you mean "sphere"?)
 //!                    # v3: warning, left out as pbrt-v3 leaves it out
 //! Camera "pinhole"   # an error for both: pbrt renders nothing without a camera
+//! LookAt 0 0 0  0 0 1  0 0 1   # v4: error; v3: warning, the CTM left unchanged
 //! ```
 
 use super::{Builder, Res};
@@ -78,6 +80,37 @@ impl Builder {
             }
         }
         Ok(())
+    }
+
+    /// A `LookAt` whose up vector lies along the view: pbrt-v3 says so and leaves the
+    /// CTM unchanged (its identity), pbrt-v4 stops. Until the version is known the CTM
+    /// is left unchanged and [`Builder::settle_up_along_view`] decides.
+    pub(super) fn up_along_view(&mut self, at: Span) -> Res<()> {
+        match self.known_syntax() {
+            Some(syntax) => self.up_along_view_in(syntax, at),
+            None => {
+                self.up_along_view.push(at);
+                Ok(())
+            }
+        }
+    }
+
+    /// With the version settled: the `LookAt` statements [`Builder::up_along_view`]
+    /// left waiting.
+    pub(super) fn settle_up_along_view(&mut self, syntax: Syntax) -> Res<()> {
+        std::mem::take(&mut self.up_along_view).into_iter().try_for_each(|at| self.up_along_view_in(syntax, at))
+    }
+
+    fn up_along_view_in(&mut self, syntax: Syntax, at: Span) -> Res<()> {
+        const WHAT: &str = "LookAt: the up vector and the viewing direction are parallel";
+        match syntax {
+            Syntax::V4 => Err(Diagnostic::error(at, format!("{WHAT} (pbrt-v4 stops here too)"))),
+            Syntax::V3 => {
+                let msg = format!("{WHAT}; the transformation is left unchanged, as pbrt-v3 leaves it");
+                self.warnings.push(Diagnostic::warning(at, msg));
+                Ok(())
+            }
+        }
     }
 
     /// A file (with its includes) that ends before `WorldBegin` has nothing to render:
