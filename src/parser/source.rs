@@ -15,7 +15,7 @@ use crate::limits::FileBytes;
 pub struct FileId(pub u32);
 
 /// A byte range `[start, end)` in one source file.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub struct Span {
     pub file: FileId,
     pub start: u32,

@@ -122,7 +122,9 @@ struct Scope {
 #[derive(Clone, Debug)]
 enum MaterialRef {
     Pending(u32),
-    Named(String, Span),
+    /// A `NamedMaterial` not in scope at its statement, with the material current
+    /// before it (what pbrt-v3 keeps when the name is defined nowhere).
+    Named(String, Span, Box<MaterialRef>),
 }
 
 #[derive(Clone)]
@@ -248,7 +250,7 @@ struct Builder {
     global_materials: HashMap<String, u32>,
     /// `NamedMaterial` statements of a v3 file already warned about (pbrt-v3 did not
     /// find the name there): one warning per statement, not per shape.
-    named_out_of_scope: Vec<Span>,
+    named_out_of_scope: std::collections::HashSet<Span>,
     built_materials: Vec<MaterialDesc>,
     textures: Vec<PendingTexture>,
     global_textures: [HashMap<String, u32>; 2],
@@ -329,7 +331,7 @@ impl Builder {
             area_lights_used: Vec::new(),
             materials: vec![default_material],
             global_materials: HashMap::new(),
-            named_out_of_scope: Vec::new(),
+            named_out_of_scope: Default::default(),
             built_materials: Vec::new(),
             textures: Vec::new(),
             global_textures: [HashMap::new(), HashMap::new()],
@@ -649,7 +651,7 @@ impl Builder {
     fn named_material(&mut self, name: String, span: Span) -> Res<()> {
         self.gs.material = match self.gs.scope.materials.get(&name) {
             Some(&i) => MaterialRef::Pending(i),
-            None => MaterialRef::Named(name, span),
+            None => MaterialRef::Named(name, span, Box::new(self.gs.material.clone())),
         };
         Ok(())
     }
@@ -1240,16 +1242,29 @@ impl Builder {
     fn resolve_material(&mut self, r: &MaterialRef) -> Res<u32> {
         let idx = match r {
             MaterialRef::Pending(i) => *i,
-            MaterialRef::Named(name, span) => {
-                let i = *self
-                    .global_materials
-                    .get(name)
-                    .ok_or_else(|| Diagnostic::error(*span, format!("named material \"{name}\" is not defined")))?;
-                self.warn_named_out_of_scope(name, *span, i);
-                i
-            }
+            MaterialRef::Named(name, span, before) => match self.global_materials.get(name) {
+                Some(&i) => {
+                    self.warn_named_out_of_scope(name, *span, i);
+                    i
+                }
+                None if self.syntax() == Syntax::V3 => {
+                    self.warn_named_undefined(name, *span);
+                    return self.resolve_material(before);
+                }
+                None => return Err(Diagnostic::error(*span, format!("named material \"{name}\" is not defined"))),
+            },
         };
         self.build_material(idx)
+    }
+
+    /// A v3 `NamedMaterial` whose name no `MakeNamedMaterial` defines: pbrt-v3 reports
+    /// an error and keeps the current material, as we do; a warning once per statement.
+    fn warn_named_undefined(&mut self, name: &str, at: Span) {
+        if self.named_out_of_scope.insert(at) {
+            let msg =
+                format!("named material \"{name}\" is not defined; the current material is kept, as pbrt-v3 keeps it");
+            self.warnings.push(Diagnostic::warning(at, msg));
+        }
     }
 
     /// A v3 `NamedMaterial` whose name was not in scope at the statement: defined in an
@@ -1257,10 +1272,9 @@ impl Builder {
     /// error there and keeps the current material; we use the definition, and say so
     /// once per statement.
     fn warn_named_out_of_scope(&mut self, name: &str, at: Span, material: u32) {
-        if self.syntax() != Syntax::V3 || self.named_out_of_scope.contains(&at) {
+        if self.syntax() != Syntax::V3 || !self.named_out_of_scope.insert(at) {
             return;
         }
-        self.named_out_of_scope.push(at);
         self.warn_material_out_of_scope(name, at, material, "pbrt-v3 reports an error and keeps the current material");
     }
 

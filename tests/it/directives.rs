@@ -446,6 +446,25 @@ fn a_v3_named_material_out_of_scope_is_named_in_a_warning() {
 }
 
 #[test]
+fn a_v3_named_material_defined_nowhere_keeps_the_current_material() {
+    // pbrt-v3 reports an error and keeps the current material; pbrt-v4 stops.
+    let body = |film: &str| {
+        format!(
+            "{film}\nWorldBegin\nMaterial \"plastic\"\nNamedMaterial \"nope\"\nShape \"sphere\"\n\
+             NamedMaterial \"nope\"\nNamedMaterial \"gone\"\nShape \"sphere\"\nShape \"disk\"\nWorldEnd"
+        )
+    };
+    let v3 = scene(&body("Film \"image\""));
+    let tys: Vec<&str> = v3.shapes.iter().map(|s| v3.materials[s.material as usize].ty.as_str()).collect();
+    assert_eq!(tys, ["plastic"; 3]);
+    let w: Vec<String> = warnings(&v3).into_iter().filter(|m| m.contains("is not defined")).collect();
+    assert_eq!(w.len(), 3, "one per statement: {w:?}");
+    assert!(w[0].contains("\"nope\"") && w[0].contains("current material is kept"), "{w:?}");
+    let e = load(&body("Film \"rgb\"")).expect_err("pbrt-v4 stops").to_string();
+    assert!(e.contains(":4:1: error: named material \"nope\" is not defined"), "{e}");
+}
+
+#[test]
 fn textures_are_built_only_when_a_used_material_needs_them() {
     let s = scene(
         r#"WorldBegin
