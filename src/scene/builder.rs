@@ -1300,7 +1300,7 @@ impl Builder {
         self.build_deferred_shapes(false)?;
         self.materials[0].ty =
             if syntax == Syntax::V3 { crate::materials::matte::NAME } else { crate::materials::diffuse::NAME }.into();
-        let object_of_name = self.resolve_instances()?;
+        let object_of_name = self.resolve_instances(syntax)?;
         let (mut objects, remap) = self.build_objects()?;
         let frame = self.motion_frame(syntax);
         let instances = self.instances(&object_of_name, &remap, frame);
@@ -1447,8 +1447,12 @@ impl Builder {
     /// The object each name instances use stands for (the last defined by that name),
     /// by name index, and marks them used. Objects may be defined after their
     /// instances (v4); a name never defined is an error at its first use.
-    fn resolve_instances(&mut self) -> Res<Vec<u32>> {
-        let found: Vec<Option<u32>> = self.instance_uses.names().map(|n| self.object_names.get(n).copied()).collect();
+    fn resolve_instances(&mut self, syntax: Syntax) -> Res<Vec<u32>> {
+        let mut found: Vec<Option<u32>> =
+            self.instance_uses.names().map(|n| self.object_names.get(n).copied()).collect();
+        if syntax == Syntax::V3 {
+            self.stand_in_for_undefined_objects(&mut found);
+        }
         if let Some(e) = self.instance_uses.first_undefined(&found) {
             return Err(e);
         }
@@ -1457,6 +1461,24 @@ impl Builder {
             self.objects[obj as usize].used = true;
         }
         Ok(objects)
+    }
+
+    /// pbrt-v3 reports an error at an `ObjectInstance` of a name no `ObjectBegin`
+    /// defines and goes on without it: each such name stands for an empty object here,
+    /// with a warning at its first use.
+    fn stand_in_for_undefined_objects(&mut self, found: &mut [Option<u32>]) {
+        let missing: Vec<(String, Span)> =
+            self.instance_uses.undefined(found).map(|(name, _, span)| (name.clone(), *span)).collect();
+        let mut stand_ins = missing.into_iter().map(|(name, span)| {
+            let why =
+                format!("object \"{name}\" is not defined; its instances are left out, as pbrt-v3 leaves them out");
+            self.warnings.push(Diagnostic::warning(span, why));
+            self.objects.push(PendingObject { name, span, shapes: Vec::new(), used: true });
+            self.objects.len() as u32 - 1
+        });
+        for slot in found.iter_mut().filter(|f| f.is_none()) {
+            *slot = stand_ins.next();
+        }
     }
 
     /// Builds the objects that are instanced (opening their mesh files); returns them

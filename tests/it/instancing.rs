@@ -124,3 +124,26 @@ fn many_instances_cost_about_one_copy() {
     let counts = &pbrt_sppm::cli::check::report(&s, false)["counts"];
     assert_eq!(counts["triangles"], 30_258u64 * 25_000);
 }
+
+/// pbrt-v3 reports an instance of an undefined object and goes on without it;
+/// pbrt-v4 stops. The defined object's instances still place it.
+#[test]
+fn a_v3_instance_of_an_undefined_object_is_left_out_with_a_warning() {
+    let body = |film: &str| {
+        format!(
+            "{film}\nWorldBegin\nObjectInstance \"zz\"\nObjectBegin \"ball\"\nShape \"sphere\"\nObjectEnd\n\
+             Translate 5 0 0\nObjectInstance \"ball\"\nObjectInstance \"zz\"\nWorldEnd\n"
+        )
+    };
+    let s = crate::common::scene(&body("Film \"image\""));
+    let w: Vec<String> = crate::common::warnings(&s).into_iter().filter(|m| m.contains("\"zz\"")).collect();
+    assert_eq!(w.len(), 1, "one warning a name: {w:?}");
+    assert!(w[0].contains("left out"), "{w:?}");
+    let placed: Vec<(usize, f64)> = (0..s.instances.len())
+        .map(|k| s.instances.get(k))
+        .map(|p| (s.objects[p.object() as usize].shapes.len(), p.world_from_instance().w_axis.x))
+        .collect();
+    assert_eq!(placed.iter().filter(|(n, _)| *n > 0).collect::<Vec<_>>(), [&(1, 5.0)], "{placed:?}");
+    let e = crate::common::load(&body("Film \"rgb\"")).expect_err("pbrt-v4 stops").to_string();
+    assert!(e.contains(":3:1: error: object \"zz\" is not defined"), "{e}");
+}

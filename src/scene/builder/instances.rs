@@ -80,9 +80,13 @@ impl InstanceUses {
 
     /// The error for the first instance, in file order, whose name `found` lacks.
     pub fn first_undefined(&self, found: &[Option<u32>]) -> Option<Diagnostic> {
-        let missing = self.names.iter().zip(found).filter(|(_, f)| f.is_none()).map(|(n, _)| n);
-        let (name, _, span) = missing.min_by_key(|(_, at, _)| *at)?;
+        let (name, _, span) = self.undefined(found).min_by_key(|(_, at, _)| *at)?;
         Some(Diagnostic::error(*span, format!("object \"{name}\" is not defined")))
+    }
+
+    /// Per name that `found` lacks: its index, the name and its first use.
+    pub fn undefined<'a>(&'a self, found: &'a [Option<u32>]) -> impl Iterator<Item = &'a (String, usize, Span)> {
+        self.names.iter().zip(found).filter(|(_, f)| f.is_none()).map(|(n, _)| n)
     }
 
     /// The records with their objects resolved: name index `i` stands for object
