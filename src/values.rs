@@ -333,8 +333,9 @@ pub enum TexValue {
 /// What reading materials and textures needs from the scene builder.
 pub trait Resolver {
     /// The float or spectrum texture `name`, built on first use; `at` is the span of
-    /// the parameter naming it.
-    fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<u32>;
+    /// the parameter naming it. `None`: a v3 file names a texture defined nowhere, and
+    /// the parameter takes its default (as in pbrt-v3, with a warning).
+    fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<Option<u32>>;
     fn approximate(&mut self, at: Span, what: String, how: super::approx::Approx);
     /// A located warning (what pbrt warns about and renders anyway).
     fn warn(&mut self, at: Span, message: String);
@@ -357,7 +358,10 @@ pub fn spectrum_input(p: &ParamList, name: &str, default: f32, r: &mut dyn Resol
     Ok(match found {
         None => TexValue::Const(Vec3::splat(default)),
         Some((SpectrumOrTexture::Rgb(c), _)) => TexValue::Const(c),
-        Some((SpectrumOrTexture::Texture(t), at)) => TexValue::Texture(r.texture(&t, false, at)?),
+        Some((SpectrumOrTexture::Texture(t), at)) => match r.texture(&t, false, at)? {
+            Some(i) => TexValue::Texture(i),
+            None => TexValue::Const(Vec3::splat(default)),
+        },
     })
 }
 
@@ -366,6 +370,9 @@ pub fn float_input(p: &ParamList, name: &str, default: f32, range: Range, r: &mu
     Ok(match float_or_texture(p, name, range)? {
         None => TexValue::Const(Vec3::splat(default)),
         Some((FloatValue::Const(v), _)) => TexValue::Const(Vec3::splat(v)),
-        Some((FloatValue::Texture(t), at)) => TexValue::Texture(r.texture(&t, true, at)?),
+        Some((FloatValue::Texture(t), at)) => match r.texture(&t, true, at)? {
+            Some(i) => TexValue::Texture(i),
+            None => TexValue::Const(Vec3::splat(default)),
+        },
     })
 }

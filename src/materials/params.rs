@@ -141,6 +141,6 @@ pub fn bump_map(p: &ParamList, r: &mut dyn Resolver) -> Res<Option<TexValue>> {
         None => None,
         // A constant displacement moves the whole surface and tilts nothing.
         Some((FloatValue::Const(_), _)) => None,
-        Some((FloatValue::Texture(t), at)) => Some(TexValue::Texture(r.texture(&t, true, at)?)),
+        Some((FloatValue::Texture(t), at)) => r.texture(&t, true, at)?.map(TexValue::Texture),
     })
 }

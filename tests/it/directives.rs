@@ -465,6 +465,35 @@ fn a_v3_named_material_defined_nowhere_keeps_the_current_material() {
 }
 
 #[test]
+fn a_v3_texture_defined_nowhere_leaves_the_parameter_its_default() {
+    // pbrt-v3 reports it and uses the parameter's default (matte's Kd 0.5); pbrt-v4 stops.
+    let body = |film: &str, material: &str| {
+        format!(
+            "LookAt 0 0 -4  0 0 0  0 1 0\nCamera \"perspective\"\n{film} \"integer xresolution\" 8 \"integer yresolution\" 8\n\
+             Integrator \"sppm\" \"integer numiterations\" 1\nWorldBegin\n\
+             AttributeBegin\nTranslate 0 3 0\nRotate 90 1 0 0\nAreaLightSource \"diffuse\" \"rgb L\" [4 4 4]\nShape \"disk\"\nAttributeEnd\n\
+             {material}\nShape \"sphere\"\nWorldEnd\n"
+        )
+    };
+    let named = scene(&body("Film \"image\"", "Material \"matte\" \"texture Kd\" \"nowhere\""));
+    let w: Vec<String> = warnings(&named).into_iter().filter(|m| m.contains("\"nowhere\" is not defined")).collect();
+    assert!(w.len() == 1 && w[0].contains("takes its default"), "{w:?}");
+    let plain = scene(&body("Film \"image\"", "Material \"matte\""));
+    let settings = pbrt_sppm::integrators::RenderSettings { photons: Some(2000), ..Default::default() };
+    let image = |s: &pbrt_sppm::scene::SceneDescription| {
+        let rs = pbrt_sppm::render::RenderScene::new(s);
+        pbrt_sppm::integrators::render(&rs, &settings).expect("renders").image.pixels
+    };
+    let (a, b) = (image(&named), image(&plain));
+    assert!(a.iter().flatten().any(|&c| c > 0.0), "the scene is lit");
+    assert_eq!(a, b, "the default Kd, as with no Kd at all");
+    let e = load(&body("Film \"rgb\"", "Material \"diffuse\" \"texture reflectance\" \"nowhere\""))
+        .expect_err("pbrt-v4 stops")
+        .to_string();
+    assert!(e.contains("error: spectrum texture \"nowhere\" is not defined"), "{e}");
+}
+
+#[test]
 fn textures_are_built_only_when_a_used_material_needs_them() {
     let s = scene(
         r#"WorldBegin
@@ -483,7 +512,7 @@ fn textures_are_built_only_when_a_used_material_needs_them() {
     let what: Vec<&str> = s.skipped.iter().map(|k| k.what.as_str()).collect();
     assert_eq!(what, ["Texture \"lonely\""]);
     assert!(s.approximated.is_empty());
-    let e = crate::common::load("WorldBegin Material \"matte\" \"texture Kd\" \"missing\" Shape \"sphere\"")
+    let e = crate::common::load("WorldBegin Material \"diffuse\" \"texture reflectance\" \"missing\" Shape \"sphere\"")
         .unwrap_err()
         .one_line();
     assert!(e.ends_with("error: spectrum texture \"missing\" is not defined"), "{e}");

@@ -270,7 +270,7 @@ impl Builder {
         let mut value = |v: &Option<(FloatValue, Span)>| -> Res<Option<TexValue>> {
             Ok(match v {
                 None => None,
-                Some((FloatValue::Texture(name), at)) => Some(TexValue::Texture(r.texture(name, true, *at)?)),
+                Some((FloatValue::Texture(name), at)) => r.texture(name, true, *at)?.map(TexValue::Texture),
                 // A constant that never cuts is no mask at all.
                 Some((FloatValue::Const(c), _)) => match rule {
                     AlphaRule::ZeroCuts => (*c == 0.0).then_some(TexValue::Const(Vec3::ZERO)),
@@ -308,6 +308,9 @@ impl Builder {
     /// camera's position): so do we, for 3D textures to land where pbrt-v4's do.
     pub(super) fn displace(&mut self, d: shapes::Displaced, scope: Rc<Scope>, ctm: &glam::DMat4) -> Res<shapes::Built> {
         let texture = Scoped { b: self, scope, depth: 0 }.texture(&d.texture, true, d.at)?;
+        // pbrt-v4 has no displaced meshes in v3 files: the texture is always there.
+        let texture = texture
+            .ok_or_else(|| Diagnostic::error(d.at, format!("float texture \"{}\" is not defined", d.texture)))?;
         let textures = textures::Textures::new(&self.built_textures, self.opts.fixes);
         let camera = self.render.camera.as_ref().map_or(glam::DMat4::IDENTITY, |c| c.1);
         let eye = camera.inverse().w_axis.truncate().as_vec3();
@@ -323,7 +326,7 @@ impl Builder {
 }
 
 impl Resolver for Scoped<'_> {
-    fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<u32> {
+    fn texture(&mut self, name: &str, float: bool, at: Span) -> Res<Option<u32>> {
         let (mine, other) = if float {
             (&self.scope.float_textures, &self.scope.spectrum_textures)
         } else {
@@ -338,7 +341,15 @@ impl Resolver for Scoped<'_> {
             .or_else(|| self.b.global_textures[1 - kind].get(name))
             .copied();
         let want = if float { "float" } else { "spectrum" };
-        let i = found.ok_or_else(|| Diagnostic::error(at, format!("{want} texture \"{name}\" is not defined")))?;
+        let Some(i) = found else {
+            let undefined = format!("{want} texture \"{name}\" is not defined");
+            if self.b.syntax() == Syntax::V4 {
+                return Err(Diagnostic::error(at, undefined));
+            }
+            let msg = format!("{undefined}; the parameter takes its default, as pbrt-v3 takes it");
+            self.b.warnings.push(Diagnostic::warning(at, msg));
+            return Ok(None);
+        };
         // DEVIATION(pbrt): input leniency. pbrt-v3 forgets a texture at the end of its
         // block (an error, then the parameter's default); its definition is used, named.
         if !in_scope && self.b.syntax() == Syntax::V3 {
@@ -349,7 +360,7 @@ impl Resolver for Scoped<'_> {
             );
             self.b.warnings.push(Diagnostic::warning(at, msg));
         }
-        self.b.build_texture(i, self.depth, at)
+        self.b.build_texture(i, self.depth, at).map(Some)
     }
 
     fn approximate(&mut self, at: Span, what: String, how: Approx) {
