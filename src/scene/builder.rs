@@ -374,8 +374,10 @@ impl Builder {
 
     fn read_statements(&mut self) -> Res<()> {
         while let Some(stmt) = self.reader.next_stmt()? {
+            if !self.check_placement(&stmt)? {
+                continue;
+            }
             if matches!(stmt.kind, StmtKind::WorldEnd) {
-                self.check_placement(&stmt)?;
                 self.world_ended = true;
                 if let Some(next) = self.reader.next_stmt()? {
                     let msg = "statements after WorldEnd are ignored (only the first frame of a file is rendered)";
@@ -383,13 +385,15 @@ impl Builder {
                 }
                 break;
             }
-            self.check_placement(&stmt)?;
             self.apply(stmt)?;
         }
         Ok(())
     }
 
-    fn check_placement(&self, stmt: &Stmt) -> Res<()> {
+    /// Whether a statement is where its pbrt takes it (before or after `WorldBegin`):
+    /// `true` to apply it. Misplaced, it is an error, but in a v3 file, where pbrt-v3
+    /// says so and ignores it: a warning, and `false`.
+    fn check_placement(&mut self, stmt: &Stmt) -> Res<bool> {
         use StmtKind as K;
         let options_only = matches!(
             stmt.kind,
@@ -423,15 +427,23 @@ impl Builder {
                 | K::ImportBegin(_)
                 | K::WorldEnd
         );
-        let misplaced = |when| {
-            let word = self.reader.sources.snippet(stmt.span);
-            Err(Diagnostic::error(stmt.span, format!("{word} is allowed only {when} WorldBegin")))
+        let when = match (options_only && self.in_world, world_only && !self.in_world) {
+            (true, _) => "before",
+            (_, true) => "after",
+            _ => return Ok(true),
         };
-        match (options_only && self.in_world, world_only && !self.in_world) {
-            (true, _) => misplaced("before"),
-            (_, true) => misplaced("after"),
-            _ => Ok(()),
+        let word = self.reader.sources.snippet(stmt.span);
+        let what = match stmt.kind {
+            K::WorldBegin => "WorldBegin is allowed only once".to_string(),
+            _ => format!("{word} is allowed only {when} WorldBegin"),
+        };
+        // A file whose version is not yet known gets the error: ignoring the statement
+        // could turn a v4 file's error into a later, puzzling one.
+        if self.known_syntax() != Some(Syntax::V3) {
+            return Err(Diagnostic::error(stmt.span, what));
         }
+        self.warnings.push(Diagnostic::warning(stmt.span, format!("{what}; ignored, as pbrt-v3 ignores it")));
+        Ok(false)
     }
 
     pub(super) fn evidence(&mut self, directive: &str, ty: &str, span: Span) {

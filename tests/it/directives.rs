@@ -494,6 +494,23 @@ fn a_v3_texture_defined_nowhere_leaves_the_parameter_its_default() {
 }
 
 #[test]
+fn a_v3_statement_on_the_wrong_side_of_world_begin_is_ignored_with_a_warning() {
+    // pbrt-v3: "must be inside world block" / "Options cannot be set inside world
+    // block", each statement ignored. A file not yet known as v3 gets the error.
+    let text = "Film \"image\" \"integer xresolution\" 8\nMaterial \"plastic\"\nWorldEnd\nWorldBegin\n\
+                Camera \"orthographic\"\nWorldBegin\nShape \"sphere\"\nWorldEnd\n";
+    let s = scene(text);
+    let w: Vec<String> = warnings(&s).into_iter().filter(|m| m.contains("ignored, as pbrt-v3")).collect();
+    assert_eq!(w.len(), 4, "{w:?}");
+    assert!(w[0].contains("Material is allowed only after WorldBegin") && w[3].contains("allowed only once"), "{w:?}");
+    assert_eq!(s.materials[s.shapes[0].material as usize].ty, "matte", "the Material was ignored");
+    assert_eq!(report(text)["camera"]["type"], "perspective", "so was the Camera");
+    assert_eq!(s.shapes.len(), 1);
+    let e = load(&text.replace("Film \"image\" \"integer xresolution\" 8\n", "")).expect_err("not known as v3");
+    assert!(e.to_string().contains(":1:1: error: Material is allowed only after WorldBegin"), "{e}");
+}
+
+#[test]
 fn textures_are_built_only_when_a_used_material_needs_them() {
     let s = scene(
         r#"WorldBegin
