@@ -11,11 +11,11 @@ use std::sync::{Arc, Mutex};
 use crate::limits::FileBytes;
 
 /// Index of a file in a [`SourceMap`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct FileId(pub u32);
 
 /// A byte range `[start, end)` in one source file.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct Span {
     pub file: FileId,
     pub start: u32,

@@ -119,12 +119,22 @@ struct Scope {
     spectrum_textures: HashMap<String, u32>,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Copy, Debug)]
 enum MaterialRef {
     Pending(u32),
-    /// A `NamedMaterial` not in scope at its statement, with the material current
-    /// before it (what pbrt-v3 keeps when the name is defined nowhere).
-    Named(String, Span, Box<MaterialRef>),
+    /// A `NamedMaterial` not in scope at its statement: its index in `named_refs`.
+    Named(u32),
+}
+
+/// A `NamedMaterial` statement whose name was not in scope there.
+struct NamedRef {
+    name: String,
+    span: Span,
+    /// The material current before it: what pbrt-v3 keeps when the name is defined
+    /// nowhere.
+    before: MaterialRef,
+    /// The definition it stands for, once resolved.
+    resolved: Option<u32>,
 }
 
 #[derive(Clone)]
@@ -248,9 +258,9 @@ struct Builder {
     area_lights_used: Vec<u32>,
     materials: Vec<PendingMaterial>,
     global_materials: HashMap<String, u32>,
-    /// `NamedMaterial` statements of a v3 file already warned about (pbrt-v3 did not
-    /// find the name there): one warning per statement, not per shape.
-    named_out_of_scope: std::collections::HashSet<Span>,
+    /// `NamedMaterial` statements whose name was not in scope there, each resolved
+    /// (and warned about) once.
+    named_refs: Vec<NamedRef>,
     built_materials: Vec<MaterialDesc>,
     textures: Vec<PendingTexture>,
     global_textures: [HashMap<String, u32>; 2],
@@ -331,7 +341,7 @@ impl Builder {
             area_lights_used: Vec::new(),
             materials: vec![default_material],
             global_materials: HashMap::new(),
-            named_out_of_scope: Default::default(),
+            named_refs: Vec::new(),
             built_materials: Vec::new(),
             textures: Vec::new(),
             global_textures: [HashMap::new(), HashMap::new()],
@@ -663,7 +673,10 @@ impl Builder {
     fn named_material(&mut self, name: String, span: Span) -> Res<()> {
         self.gs.material = match self.gs.scope.materials.get(&name) {
             Some(&i) => MaterialRef::Pending(i),
-            None => MaterialRef::Named(name, span, Box::new(self.gs.material.clone())),
+            None => {
+                self.named_refs.push(NamedRef { name, span, before: self.gs.material, resolved: None });
+                MaterialRef::Named(self.named_refs.len() as u32 - 1)
+            }
         };
         Ok(())
     }
@@ -860,7 +873,7 @@ impl Builder {
             entity: e,
             ctm: self.gs.ctm[0],
             reverse_orientation: self.gs.reverse_orientation,
-            material: self.gs.material.clone(),
+            material: self.gs.material,
             scope: self.gs.scope.clone(),
             media: self.gs.media,
         };
@@ -893,7 +906,7 @@ impl Builder {
                 for (shape, alpha) in self.build_shape(&mut pending, area_light)? {
                     self.shapes.push(shape);
                     self.shape_spans.push(pending.entity.name_span);
-                    self.shape_materials.push(pending.material.clone());
+                    self.shape_materials.push(pending.material);
                     self.shape_alphas.push(alpha.map(|a| (a, pending.scope.clone())));
                 }
             }
@@ -983,7 +996,7 @@ impl Builder {
             for (k, (shape, alpha)) in shapes.into_iter().enumerate() {
                 self.shapes.insert(d.at + k, shape);
                 self.shape_spans.insert(d.at + k, d.pending.entity.name_span);
-                self.shape_materials.insert(d.at + k, d.pending.material.clone());
+                self.shape_materials.insert(d.at + k, d.pending.material);
                 self.shape_alphas.insert(d.at + k, alpha.map(|a| (a, d.pending.scope.clone())));
             }
         }
@@ -1252,42 +1265,45 @@ impl Builder {
     // references; pbrt-v4 has forward references and no scoping. Real scenes of each version need their rule, so a name
     // is looked up in scope first and then among all definitions.
     fn resolve_material(&mut self, r: &MaterialRef) -> Res<u32> {
-        let idx = match r {
-            MaterialRef::Pending(i) => *i,
-            MaterialRef::Named(name, span, before) => match self.global_materials.get(name) {
-                Some(&i) => {
-                    self.warn_named_out_of_scope(name, *span, i);
-                    i
-                }
-                None if self.syntax() == Syntax::V3 => {
-                    self.warn_named_undefined(name, *span);
-                    return self.resolve_material(before);
-                }
-                None => return Err(Diagnostic::error(*span, format!("named material \"{name}\" is not defined"))),
-            },
-        };
+        let idx = self.material_definition(*r)?;
         self.build_material(idx)
     }
 
-    /// A v3 `NamedMaterial` whose name no `MakeNamedMaterial` defines: pbrt-v3 reports
-    /// an error and keeps the current material, as we do; a warning once per statement.
-    fn warn_named_undefined(&mut self, name: &str, at: Span) {
-        if self.named_out_of_scope.insert(at) {
-            let msg =
-                format!("named material \"{name}\" is not defined; the current material is kept, as pbrt-v3 keeps it");
-            self.warnings.push(Diagnostic::warning(at, msg));
-        }
-    }
-
-    /// A v3 `NamedMaterial` whose name was not in scope at the statement: defined in an
-    /// `AttributeBegin` block that has ended, or later in the file. pbrt-v3 reports an
-    /// error there and keeps the current material; we use the definition, and say so
-    /// once per statement.
-    fn warn_named_out_of_scope(&mut self, name: &str, at: Span, material: u32) {
-        if self.syntax() != Syntax::V3 || !self.named_out_of_scope.insert(at) {
-            return;
-        }
-        self.warn_material_out_of_scope(name, at, material, "pbrt-v3 reports an error and keeps the current material");
+    /// The material definition a reference stands for. A v3 name defined nowhere
+    /// stands for the material before its statement (pbrt-v3 reports an error and
+    /// keeps that one). Each statement is resolved and warned about once, so a run of
+    /// such statements costs its length, not its length per shape.
+    fn material_definition(&mut self, r: MaterialRef) -> Res<u32> {
+        let (mut at, mut walked) = (r, Vec::new());
+        let idx = loop {
+            let k = match at {
+                MaterialRef::Pending(i) => break i,
+                MaterialRef::Named(k) => k as usize,
+            };
+            if let Some(i) = self.named_refs[k].resolved {
+                break i;
+            }
+            walked.push(k);
+            let NamedRef { ref name, span, before, .. } = self.named_refs[k];
+            match self.global_materials.get(name).copied() {
+                Some(i) => {
+                    if self.syntax() == Syntax::V3 {
+                        let (name, pbrt) = (name.clone(), "pbrt-v3 reports an error and keeps the current material");
+                        self.warn_material_out_of_scope(&name, span, i, pbrt);
+                    }
+                    break i;
+                }
+                None if self.syntax() == Syntax::V3 => {
+                    let why = "is not defined; the current material is kept, as pbrt-v3 keeps it";
+                    let msg = format!("named material \"{name}\" {why}");
+                    self.warnings.push(Diagnostic::warning(span, msg));
+                    at = before;
+                }
+                None => return Err(Diagnostic::error(span, format!("named material \"{name}\" is not defined"))),
+            }
+        };
+        walked.into_iter().for_each(|k| self.named_refs[k].resolved = Some(idx));
+        Ok(idx)
     }
 
     /// The warning for a v3 reference to named material `material` that pbrt-v3 does

@@ -536,3 +536,19 @@ fn zero_area_triangles_are_dropped_and_the_rest_keep_their_file_numbers() {
     let rs = pbrt_sppm::render::RenderScene::new(&crate::common::scene(text));
     assert_eq!(rs.lights.len(), 2, "one light per kept triangle");
 }
+
+/// A v3 run of `NamedMaterial` statements naming nothing, then as many shapes: each
+/// statement is resolved once (a walk of the run per shape was quadratic: 10¹⁰ steps
+/// here), and every shape keeps the material before the run, as in pbrt-v3.
+#[test]
+fn a_long_run_of_undefined_named_materials_resolves_once_per_statement() {
+    const N: usize = 100_000;
+    let mut text = String::from("Film \"image\"\nWorldBegin\nMaterial \"plastic\"\n");
+    (0..N).for_each(|k| text.push_str(&format!("NamedMaterial \"m{k}\"\n")));
+    (0..N).for_each(|_| text.push_str("Shape \"sphere\"\n"));
+    let s = crate::common::scene(&text);
+    assert_eq!(s.shapes.len(), N);
+    assert!(s.shapes.iter().all(|sh| s.materials[sh.material as usize].ty == "plastic"));
+    let undefined = s.warnings.iter().filter(|w| w.message.contains("is not defined; the current material")).count();
+    assert_eq!(undefined, N, "one warning per statement");
+}
