@@ -449,10 +449,7 @@ impl Builder {
         };
         // A file whose version is not yet known gets the error: ignoring the statement
         // could turn a v4 file's error into a later, puzzling one.
-        if self.known_syntax() != Some(Syntax::V3) {
-            return Err(Diagnostic::error(stmt.span, what));
-        }
-        self.warnings.push(Diagnostic::warning(stmt.span, format!("{what}; ignored, as pbrt-v3 ignores it")));
+        self.v3_goes_on(self.known_syntax(), stmt.span, what, "ignored, as pbrt-v3 ignores it")?;
         Ok(false)
     }
 
@@ -1293,13 +1290,12 @@ impl Builder {
                     }
                     break i;
                 }
-                None if self.syntax() == Syntax::V3 => {
-                    let why = "is not defined; the current material is kept, as pbrt-v3 keeps it";
-                    let msg = format!("named material \"{name}\" {why}");
-                    self.warnings.push(Diagnostic::warning(span, msg));
+                None => {
+                    let what = format!("named material \"{name}\" is not defined");
+                    let v3_does = "the current material is kept, as pbrt-v3 keeps it";
+                    self.v3_goes_on(Some(self.syntax()), span, what, v3_does)?;
                     at = before;
                 }
-                None => return Err(Diagnostic::error(span, format!("named material \"{name}\" is not defined"))),
             }
         };
         walked.into_iter().for_each(|k| self.named_refs[k].resolved = Some(idx));
@@ -1474,7 +1470,8 @@ impl Builder {
 
     /// The object each name instances use stands for (the last defined by that name),
     /// by name index, and marks them used. Objects may be defined after their
-    /// instances (v4); a name never defined is an error at its first use.
+    /// instances (v4); a name never defined is an error at its first use (in a v3
+    /// file, an empty object and a warning).
     fn resolve_instances(&mut self, syntax: Syntax) -> Res<Vec<u32>> {
         let mut found: Vec<Option<u32>> =
             self.instance_uses.names().map(|n| self.object_names.get(n).copied()).collect();

@@ -82,6 +82,17 @@ impl Builder {
         Ok(())
     }
 
+    /// What pbrt-v3 reports and goes on past, where pbrt-v4 stops: an error (`what`),
+    /// but in a file known as v3 (`syntax`) a warning that adds what pbrt-v3 does
+    /// instead (`v3_does`), and `Ok` for the caller to do the same.
+    pub(super) fn v3_goes_on(&mut self, syntax: Option<Syntax>, at: Span, what: String, v3_does: &str) -> Res<()> {
+        if syntax != Some(Syntax::V3) {
+            return Err(Diagnostic::error(at, what));
+        }
+        self.warnings.push(Diagnostic::warning(at, format!("{what}; {v3_does}")));
+        Ok(())
+    }
+
     /// A `LookAt` whose up vector lies along the view: pbrt-v3 says so and leaves the
     /// CTM unchanged (its identity), pbrt-v4 stops. Until the version is known the CTM
     /// is left unchanged and [`Builder::settle_up_along_view`] decides.

@@ -308,7 +308,7 @@ impl Builder {
     /// camera's position): so do we, for 3D textures to land where pbrt-v4's do.
     pub(super) fn displace(&mut self, d: shapes::Displaced, scope: Rc<Scope>, ctm: &glam::DMat4) -> Res<shapes::Built> {
         let texture = Scoped { b: self, scope, depth: 0 }.texture(&d.texture, true, d.at)?;
-        // pbrt-v4 has no displaced meshes in v3 files: the texture is always there.
+        // Displacement is pbrt-v4's: a texture defined nowhere stays an error, v3 file or not.
         let texture = texture
             .ok_or_else(|| Diagnostic::error(d.at, format!("float texture \"{}\" is not defined", d.texture)))?;
         let textures = textures::Textures::new(&self.built_textures, self.opts.fixes);
@@ -342,13 +342,9 @@ impl Resolver for Scoped<'_> {
             .copied();
         let want = if float { "float" } else { "spectrum" };
         let Some(i) = found else {
-            let undefined = format!("{want} texture \"{name}\" is not defined");
-            if self.b.syntax() == Syntax::V4 {
-                return Err(Diagnostic::error(at, undefined));
-            }
-            let msg = format!("{undefined}; the parameter takes its default, as pbrt-v3 takes it");
-            self.b.warnings.push(Diagnostic::warning(at, msg));
-            return Ok(None);
+            let what = format!("{want} texture \"{name}\" is not defined");
+            let v3_does = "the parameter takes its default, as pbrt-v3 takes it";
+            return self.b.v3_goes_on(Some(self.b.syntax()), at, what, v3_does).map(|()| None);
         };
         // DEVIATION(pbrt): input leniency. pbrt-v3 forgets a texture at the end of its
         // block (an error, then the parameter's default); its definition is used, named.
