@@ -646,7 +646,8 @@ impl Builder {
 
     fn object_instance(&mut self, name: String, span: Span) -> Res<()> {
         if self.current_object.is_some() {
-            return Err(Diagnostic::error(span, "ObjectInstance is not allowed inside an object definition"));
+            let what = "ObjectInstance is not allowed inside an object definition".to_string();
+            return self.v3_goes_on(self.known_syntax(), span, what, "ignored, as pbrt-v3 ignores it");
         }
         if self.gs.ctm[0] != self.gs.ctm[1] {
             self.first_motion.get_or_insert(span);
@@ -787,7 +788,9 @@ impl Builder {
             return Ok(());
         };
         if top != kind && kind != PushKind::Import {
-            if top == PushKind::Import || top == PushKind::Object {
+            // An ObjectBegin whose definition has ended (by a v3 file's nested
+            // ObjectBegin) is an attribute block like any other.
+            if top == PushKind::Import || (top == PushKind::Object && self.current_object.is_some()) {
                 let word = self.reader.sources.snippet(span);
                 let msg = format!("{word} closes a block opened outside the current {}", name(top));
                 return Err(Diagnostic::error(span, msg));
@@ -866,13 +869,14 @@ impl Builder {
         self.warn_motion(span);
         let params = self.with_attributes("shape", e.params);
         let e = Entity { params, ..e };
+        let media = self.media_here(e.name_span);
         let mut pending = PendingShape {
             entity: e,
             ctm: self.gs.ctm[0],
             reverse_orientation: self.gs.reverse_orientation,
             material: self.gs.material,
             scope: self.gs.scope.clone(),
-            media: self.gs.media,
+            media,
         };
         if self.current_object.is_none() && self.gs.ctm[0] != self.gs.ctm[1] {
             return self.moving_shape(pending, span);
@@ -1026,6 +1030,9 @@ impl Builder {
             self.skip(at, what, checks::why_left_out(Family::Shape, &s.entity.name));
             return Ok(Vec::new());
         };
+        if matches!(&built, Built::Several(parts) if parts.is_empty()) {
+            return Ok(Vec::new()); // a v3 file's PLY file that cannot be read (warned)
+        }
         let alpha = alpha_params(p)?;
         typed::finish_params(p, &mut self.warnings)?;
         let area_light = match built {
@@ -1124,7 +1131,9 @@ impl Builder {
 
     fn object_begin(&mut self, name: String, span: Span) -> Res<()> {
         if self.current_object.is_some() {
-            return Err(Diagnostic::error(span, "ObjectBegin inside another object definition"));
+            // pbrt-v3 goes on: the first definition gets nothing more, this one begins.
+            let what = "ObjectBegin inside another object definition".to_string();
+            self.v3_goes_on(self.known_syntax(), span, what, "that definition ends here, as in pbrt-v3")?;
         }
         self.push(PushKind::Object, span)?;
         let idx = self.objects.len() as u32;
@@ -1141,7 +1150,13 @@ impl Builder {
 
     fn object_end(&mut self, span: Span) -> Res<()> {
         if self.current_object.is_none() {
-            return Err(Diagnostic::error(span, "ObjectEnd without ObjectBegin"));
+            // pbrt-v3 goes on to the AttributeEnd its ObjectEnd includes.
+            let what = "ObjectEnd without ObjectBegin".to_string();
+            if self.stack.is_empty() {
+                return self.v3_goes_on(self.known_syntax(), span, what, "ignored, as pbrt-v3 ignores it");
+            }
+            self.v3_goes_on(self.known_syntax(), span, what, "it ends an attribute block, as in pbrt-v3")?;
+            return self.pop(PushKind::Object, span);
         }
         if self.stack.last().map(|s| s.0) != Some(PushKind::Object) {
             return Err(Diagnostic::error(span, "ObjectEnd inside an unclosed AttributeBegin or TransformBegin"));
@@ -1165,7 +1180,8 @@ impl Builder {
         }
         let params = self.with_attributes("light", e.params);
         self.pending_lights.push((Entity { params, ..e }, self.gs.ctm[0]));
-        self.pending_light_media.push(self.gs.media.1);
+        let medium = self.media_here(e.name_span).1;
+        self.pending_light_media.push(medium);
         Ok(())
     }
 
@@ -1212,9 +1228,16 @@ impl Builder {
     }
 
     fn make_named_material(&mut self, e: Entity) -> Res<()> {
-        let ty = e.params.string("type")?.ok_or_else(|| {
-            Diagnostic::error(e.name_span, format!("MakeNamedMaterial \"{}\" needs a \"string type\"", e.name))
-        })?;
+        let ty = match e.params.string("type")? {
+            Some(ty) => ty,
+            None => {
+                // pbrt-v3 says so and makes a material of type "", which it takes as "none".
+                let what = format!("MakeNamedMaterial \"{}\" needs a \"string type\"", e.name);
+                let v3_does = "what uses it has no surface (material \"none\"), as in pbrt-v3";
+                self.v3_goes_on(self.known_syntax(), e.name_span, what, v3_does)?;
+                String::new()
+            }
+        };
         self.evidence("MakeNamedMaterial", &ty, e.name_span);
         if self.global_materials.contains_key(&e.name) {
             self.warnings.push(Diagnostic::warning(e.name_span, format!("named material \"{}\" is redefined", e.name)));
@@ -1234,10 +1257,11 @@ impl Builder {
                 1
             }
             other => {
-                return Err(Diagnostic::error(
-                    class.name_span,
-                    format!("texture type \"{other}\" is not \"float\" or \"spectrum\""),
-                ));
+                // pbrt-v3 says so and defines no texture.
+                let what = format!("texture type \"{other}\" is not \"float\" or \"spectrum\"");
+                class.params.mark_all_used();
+                let v3_does = "no texture is defined, as in pbrt-v3";
+                return self.v3_goes_on(self.known_syntax(), class.name_span, what, v3_does);
             }
         };
         let params = self.with_attributes("texture", class.params);

@@ -599,6 +599,9 @@ fn read_value<const BIG: bool>(b: &mut Bytes<'_, BIG>, ty: &PropertyType, list: 
 
 pub const NAME: &str = "plymesh";
 
+/// How the file readers' messages for a file that cannot be opened or read begin.
+const CANNOT_READ: &str = "cannot read";
+
 /// `Shape "plymesh" "string filename" "mesh.ply"`: the file's triangles, and its quads
 /// as the file's version reads them (a file of both is two shapes, as in pbrt-v4).
 /// With pbrt-v4's `"texture displacement"` its quads are split and the scene displaces
@@ -612,10 +615,20 @@ pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     }
     let (name, at, path) = super::mesh_file(ctx, NAME, p, span)?;
     let quads = if displaced { Quads::Split } else { ctx.quads };
-    let m = ctx.ahead.take(&path, quads).unwrap_or_else(|| load(&path, quads, ctx.files)).map_err(|e| {
+    let m = match ctx.ahead.take(&path, quads).unwrap_or_else(|| load(&path, quads, ctx.files)) {
+        Ok(m) => m,
+        // pbrt-v3 (whose quads are split) reports a file it cannot open and goes on
+        // without the shape; pbrt-v4 stops.
+        Err(e) if e.starts_with(CANNOT_READ) && ctx.quads == Quads::Split => {
+            p.mark_all_used();
+            ctx.warn.push(Diagnostic::warning(at, format!("{e}; the shape is left out, as pbrt-v3 leaves it out")));
+            return Ok(Built::Several(Vec::new()));
+        }
         // Read errors name the file already; format errors get its name first.
-        Diagnostic::error(at, if e.starts_with("cannot read") { e } else { format!("{name}: {e}") })
-    })?;
+        Err(e) => {
+            return Err(Diagnostic::error(at, if e.starts_with(CANNOT_READ) { e } else { format!("{name}: {e}") }));
+        }
+    };
     if displaced {
         return super::displaced(m.triangles, NAME, name, p);
     }

@@ -832,3 +832,43 @@ fn a_light_in_an_object_definition_is_one_light_where_it_is_defined() {
         assert!(!warnings(&s).iter().any(|w| w.contains("LightSource")), "{film}: {:?}", warnings(&s));
     }
 }
+
+#[test]
+fn v3_materials_and_textures_pbrt_v3_cannot_make_fall_back_as_pbrt_v3_does() {
+    // pbrt-v3 reports each and goes on; pbrt-v4 stops at each.
+    let v3 = |world: &str| scene(&format!("Film \"image\"\nWorldBegin\n{world}\nShape \"sphere\"\nWorldEnd\n"));
+    let v4 = |world: &str| load(&format!("Film \"rgb\"\nWorldBegin\n{world}\nShape \"sphere\"\n")).expect_err(world);
+    let kind = |s: &pbrt_sppm::scene::SceneDescription| s.materials[s.shapes[0].material as usize].kind.clone();
+    let flagged = |s: &pbrt_sppm::scene::SceneDescription, what: &str| {
+        warnings(s).into_iter().filter(|m| m.contains(what)).collect::<Vec<_>>()
+    };
+    // A mix naming a material defined nowhere mixes in pbrt-v3's default matte.
+    let s = v3("MakeNamedMaterial \"red\" \"string type\" \"plastic\"\n\
+                Material \"mix\" \"string namedmaterial1\" \"red\" \"string namedmaterial2\" \"nope\"");
+    let pbrt_sppm::materials::MaterialKind::Mix { materials: [a, b], .. } = kind(&s) else { panic!("{:?}", kind(&s)) };
+    let tys = [a, b].map(|m| s.materials[m as usize].ty.as_str());
+    assert_eq!(tys, ["plastic", "matte"]);
+    assert_eq!(s.materials[b as usize].kind, scene("Film \"image\" WorldBegin Shape \"sphere\"").materials[0].kind);
+    assert_eq!(flagged(&s, "\"nope\" is not defined; pbrt-v3's mix uses matte").len(), 1);
+    let e = v4("MakeNamedMaterial \"red\" \"string type\" \"diffuse\"\n\
+                Material \"mix\" \"string materials\" [\"red\" \"nope\"]");
+    assert!(e.to_string().contains(":4:35: error: named material \"nope\" is not defined"), "{e}");
+    // A named material without a type: pbrt-v3's material "", which it takes as "none".
+    let s = v3("MakeNamedMaterial \"m\" \"rgb Kd\" [1 0 0]\nNamedMaterial \"m\"");
+    assert_eq!(kind(&s), pbrt_sppm::materials::MaterialKind::Interface);
+    assert_eq!(flagged(&s, "needs a \"string type\"; what uses it has no surface").len(), 1);
+    let e = v4("MakeNamedMaterial \"m\" \"rgb reflectance\" [1 0 0]\nNamedMaterial \"m\"");
+    assert!(e.to_string().contains(":3:19: error: MakeNamedMaterial \"m\" needs a \"string type\""), "{e}");
+    // A texture of an unknown class or type is not defined: Ks takes its default.
+    let plain = kind(&v3("Material \"plastic\""));
+    for (texture, what) in [
+        ("Texture \"t\" \"spectrum\" \"plaid\" \"rgb tex1\" [1 0 0]", "has unknown texture class \"plaid\""),
+        ("Texture \"t\" \"vector\" \"constant\" \"rgb value\" [1 0 0]", "texture type \"vector\" is not"),
+    ] {
+        let s = v3(&format!("{texture}\nMaterial \"plastic\" \"texture Ks\" \"t\""));
+        assert_eq!(kind(&s), plain, "{texture}");
+        assert_eq!(flagged(&s, what).len(), 1, "{texture}: {:?}", warnings(&s));
+        let e = v4(&format!("{texture}\nMaterial \"coateddiffuse\" \"texture reflectance\" \"t\""));
+        assert!(e.to_string().contains(":3:"), "{texture}: {e}");
+    }
+}

@@ -147,3 +147,46 @@ fn a_v3_instance_of_an_undefined_object_is_left_out_with_a_warning() {
     let e = crate::common::load(&body("Film \"rgb\"")).expect_err("pbrt-v4 stops").to_string();
     assert!(e.contains(":3:1: error: object \"zz\" is not defined"), "{e}");
 }
+
+/// pbrt-v3 reports object statements out of place and goes on: an `ObjectInstance`
+/// inside a definition is ignored, a nested `ObjectBegin` ends the definition before
+/// it (what follows its `ObjectEnd` is world geometry), and an `ObjectEnd` outside
+/// one ends an attribute block (or nothing). pbrt-v4 stops at each.
+#[test]
+fn v3_object_statements_out_of_place_go_on_as_pbrt_v3_goes_on() {
+    let body = |film: &str| {
+        format!(
+            "{film}\nWorldBegin\nObjectBegin \"a\"\nShape \"sphere\" \"float radius\" 1\nObjectInstance \"a\"\n\
+             ObjectBegin \"b\"\nShape \"sphere\" \"float radius\" 2\nObjectEnd\nShape \"sphere\" \"float radius\" 3\n\
+             ObjectEnd\nObjectEnd\nAttributeBegin\nTranslate 5 0 0\nObjectEnd\nObjectEnd\nObjectInstance \"a\"\n\
+             ObjectInstance \"b\"\nWorldEnd\n"
+        )
+    };
+    let s = crate::common::scene(&body("Film \"image\""));
+    let radius = |d: &pbrt_sppm::scene::ShapeDesc| match &d.geometry {
+        pbrt_sppm::scene::Geometry::Quadric(pbrt_sppm::shapes::Quadric::Sphere(s)) => s.radius,
+        other => panic!("{other:?}"),
+    };
+    let objects: Vec<(&str, Vec<f32>)> =
+        s.objects.iter().map(|o| (o.name.as_str(), o.shapes.iter().map(radius).collect())).collect();
+    assert_eq!(objects, [("a", vec![1.0]), ("b", vec![2.0])]);
+    assert_eq!(s.shapes.iter().map(radius).collect::<Vec<_>>(), [3.0], "after b's ObjectEnd: the world");
+    // The AttributeBegin's Translate ended at the ObjectEnd: both instances at the origin.
+    let at: Vec<f64> = (0..s.instances.len()).map(|k| s.instances.get(k).world_from_instance().w_axis.x).collect();
+    assert_eq!(at, [0.0, 0.0]);
+    let w: Vec<String> = crate::common::warnings(&s).into_iter().filter(|m| m.contains("pbrt-v3")).collect();
+    let expected = [
+        "ObjectInstance is not allowed inside an object definition; ignored",
+        "ObjectBegin inside another object definition; that definition ends here",
+        "ObjectEnd without ObjectBegin; it ends an attribute block", // a's ObjectBegin
+        "ObjectEnd without ObjectBegin; ignored",
+        "ObjectEnd without ObjectBegin; it ends an attribute block", // the AttributeBegin
+        "ObjectEnd without ObjectBegin; ignored",
+    ];
+    assert_eq!(w.len(), expected.len(), "{w:?}");
+    for (w, want) in w.iter().zip(expected) {
+        assert!(w.contains(want), "{w} lacks {want}");
+    }
+    let e = crate::common::load(&body("Film \"rgb\"")).expect_err("pbrt-v4 stops").to_string();
+    assert!(e.contains(":5:1: error: ObjectInstance is not allowed inside an object definition"), "{e}");
+}

@@ -78,9 +78,10 @@ fn bad_media_are_located_errors() {
             "Film \"rgb\" MakeNamedMedium \"m\" \"string type\" \"heterogeneous\" WorldBegin".into(),
             "pbrt-v4 has no medium type \"heterogeneous\"",
         ),
-        (grid("\"integer nx\" 2 \"float density\" [1 2 3]"), "3 values; nx·ny·nz = 2·1·1 = 2"),
         (grid("\"integer nx\" 0 \"float density\" []"), "nx·ny·nz = 0·1·1"),
-        (grid(""), "needs \"float density\" values"),
+        // pbrt-v3 leaves these two out (below); pbrt-v4 stops.
+        (v4_grid("uniformgrid", "\"integer nx\" 2 \"float density\" [1 2 3]"), "3 values; nx·ny·nz = 2·1·1 = 2"),
+        (v4_grid("uniformgrid", ""), "needs \"float density\" values"),
         (grid("\"float density\" [-1]"), "at least 0, not -1"),
         (grid("\"float density\" [1] \"point p0\" [0 0 0] \"point p1\" [1 0 1]"), "must exceed \"p0\""),
         (v4_grid("uniformgrid", "\"float density\" [1] \"rgb Le\" [1 1 1] \"float temperature\" [900]"), "not both"),
@@ -469,4 +470,41 @@ fn beams_give_the_same_image_with_a_preview_and_without() {
     assert!(watched == alone, "a preview changed the image");
     let (beams, points) = (mean(&alone), mean(&render(VolumeGather::Points, false)));
     assert!((beams[1] / points[1] - 1.0).abs() < 0.1, "beams {beams:?}, points {points:?}");
+}
+
+/// pbrt-v3 looks a medium's name up when a shape is made, and where it finds none
+/// (never defined, defined later, or a definition it could not make) it says so and
+/// goes on in vacuum; pbrt-v4 stops at each.
+#[test]
+fn v3_media_pbrt_v3_cannot_find_are_vacuum_and_v4_stops() {
+    let sphere = "MediumInterface \"m\" \"\" Shape \"sphere\"";
+    let defined = |params: &str| format!("MakeNamedMedium \"m\" {params}");
+    for (before, why) in [
+        (String::new(), "is not defined (MakeNamedMedium)"),
+        (defined("\"rgb sigma_a\" [1 1 1]"), "no \"string type\""),
+        (defined("\"string type\" \"plasma\""), "unknown medium type \"plasma\""),
+        (defined("\"string type\" \"heterogeneous\""), "a grid without \"float density\" values"),
+        (defined("\"string type\" \"heterogeneous\" \"integer nx\" 2 \"float density\" [1 2 3]"), "3 density values"),
+    ] {
+        let v3 = scene(&format!("{V3} WorldBegin {before} {sphere}"));
+        assert!(v3.media.is_empty() && v3.shapes[0].media.inside.is_none(), "{before}: vacuum");
+        let w: Vec<String> = warnings(&v3).into_iter().filter(|m| m.contains("vacuum")).collect();
+        assert!(w.len() == 1 && w[0].contains(why), "{before}: {w:?}");
+        let e = load(&format!("{V4} WorldBegin {before} {sphere}")).expect_err(&before).to_string();
+        assert!(e.contains(":1:"), "{before}: located: {e}");
+    }
+    // A name used before its definition: vacuum there in v3, the definition in v4.
+    let early = |film: &str| {
+        format!(
+            "{film} WorldBegin {sphere} Shape \"disk\" MakeNamedMedium \"m\" \"string type\" \"homogeneous\" \
+             Shape \"cylinder\" {sphere}"
+        )
+    };
+    let inside = |s: &pbrt_sppm::scene::SceneDescription| s.shapes.iter().map(|s| s.media.inside).collect::<Vec<_>>();
+    let v3 = scene(&early(V3));
+    assert_eq!(inside(&v3), [None, None, Some(0), Some(0)]);
+    let early_uses: Vec<_> = v3.warnings.iter().filter(|w| w.message.contains("before its MakeNamedMedium")).collect();
+    let first_shape = early(V3).find("\"sphere\"").expect("a shape") as u32 + 1;
+    assert!(early_uses.len() == 1 && early_uses[0].column == first_shape, "{early_uses:?}");
+    assert_eq!(inside(&scene(&early(V4))), [Some(0); 4]);
 }

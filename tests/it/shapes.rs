@@ -447,3 +447,25 @@ fn bilinear_mesh_inputs_are_checked_as_pbrt_v4_checks_them() {
         assert!(e.contains(wanted) && e.contains(&format!(":2:{col}:")), "{e}");
     }
 }
+
+/// pbrt-v3 reports a PLY file it cannot open and renders without the shape (world or
+/// instanced, emitting or not); pbrt-v4 stops.
+#[test]
+fn a_v3_ply_file_that_cannot_be_read_is_left_out_with_a_warning() {
+    let body = |film: &str| {
+        format!(
+            "{film}\nWorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\"\n\
+             Shape \"plymesh\" \"string filename\" \"nowhere.ply\"\nAttributeEnd\n\
+             ObjectBegin \"o\"\nShape \"plymesh\" \"string filename\" \"nowhere.ply\"\nObjectEnd\n\
+             ObjectInstance \"o\"\nShape \"sphere\"\n"
+        )
+    };
+    let s = crate::common::scene(&body("Film \"image\""));
+    assert_eq!((s.shapes.len(), s.area_lights.len()), (1, 0), "the sphere alone, no light");
+    assert!(s.objects.iter().all(|o| o.shapes.is_empty()));
+    let w: Vec<String> = crate::common::warnings(&s).into_iter().filter(|m| m.contains("nowhere.ply")).collect();
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(w.iter().all(|m| m.contains("left out, as pbrt-v3")), "{w:?}");
+    let e = crate::common::load(&body("Film \"rgb\"")).expect_err("pbrt-v4 stops").to_string();
+    assert!(e.contains(":5:35: error: cannot read"), "{e}");
+}

@@ -10,12 +10,19 @@
 //! A name may be used before its definition (pbrt-v4 resolves names at the end too);
 //! one never defined is an error at its first use. Types that are not rendered are
 //! skipped with a warning, and what refers to them is in vacuum.
+//!
+//! pbrt-v3 looks a name up when a shape or light is made, and where it finds nothing
+//! it says so and goes on in vacuum: a v3 file's shapes and lights made before the
+//! name's definition, or with no definition at all, are in vacuum (with a warning), as
+//! are uses of a definition pbrt-v3 could not make (no type, an unknown type, a grid
+//! without its density values). pbrt-v4 stops at each.
 
 use super::{Builder, Res};
 use crate::fixes::Fix;
 use crate::media::{self, MediumContext, MediumDesc, MediumInterface};
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
+use crate::parser::params::ParamType;
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::spectrum::transport::Colour;
@@ -27,6 +34,11 @@ pub(super) struct MediumSlot {
     name: String,
     definition: Option<(Entity, DMat4)>,
     first_use: Option<Span>,
+    /// For a stand-in: the slot whose name a shape or light used before any
+    /// definition of it was read (pbrt-v4 takes the definition, pbrt-v3 vacuum).
+    early_use_of: Option<u32>,
+    /// The stand-in for this slot's uses before its definition.
+    early: Option<u32>,
 }
 
 /// Slots of the media on either side of what comes next (`None`: vacuum).
@@ -37,10 +49,37 @@ impl Builder {
         if let Some(&i) = self.medium_names.get(name) {
             return i;
         }
-        self.medium_slots.push(MediumSlot { name: name.to_string(), definition: None, first_use: None });
-        let i = self.medium_slots.len() as u32 - 1;
+        let i = self.new_slot(name, None);
         self.medium_names.insert(name.to_string(), i);
         i
+    }
+
+    fn new_slot(&mut self, name: &str, early_use_of: Option<u32>) -> u32 {
+        let (definition, first_use, early) = (None, None, None);
+        self.medium_slots.push(MediumSlot { name: name.to_string(), definition, first_use, early_use_of, early });
+        self.medium_slots.len() as u32 - 1
+    }
+
+    /// The media of a shape or light made here (at `at`): the graphics state's, with a
+    /// name not yet defined replaced by its stand-in, which the version settles.
+    pub(super) fn media_here(&mut self, at: Span) -> MediaPair {
+        let (inside, outside) = self.gs.media;
+        (inside.map(|s| self.defined_by_now(s, at)), outside.map(|s| self.defined_by_now(s, at)))
+    }
+
+    fn defined_by_now(&mut self, slot: u32, at: Span) -> u32 {
+        let s = &self.medium_slots[slot as usize];
+        if s.definition.is_some() {
+            return slot;
+        }
+        if let Some(early) = s.early {
+            return early;
+        }
+        let name = s.name.clone();
+        let early = self.new_slot(&name, Some(slot));
+        self.medium_slots[early as usize].first_use = Some(at);
+        self.medium_slots[slot as usize].early = Some(early);
+        early
     }
 
     pub(super) fn named_medium(&mut self, e: Entity) -> Res<()> {
@@ -92,16 +131,32 @@ impl Builder {
     pub(super) fn build_media(&mut self) -> Res<(Vec<MediumDesc>, Vec<Option<u32>>)> {
         let mut built = Vec::new();
         let (mut remap, syntax) = (Vec::new(), self.syntax());
+        let mut defined = Vec::with_capacity(self.medium_slots.len());
         for i in 0..self.medium_slots.len() {
             let slot = &mut self.medium_slots[i];
+            defined.push(slot.definition.is_some());
+            if let Some(of) = slot.early_use_of {
+                // Its slot comes first: `remap` and `defined` hold it already.
+                let (of, at) = (of as usize, slot.first_use.unwrap_or_default());
+                remap.push(self.early_use(of, at, defined[of], syntax, &remap));
+                continue;
+            }
             // The medium's own transform (the CTM at its statement) matters to grids only.
             let Some((e, ctm)) = slot.definition.take() else {
+                let what = format!("medium \"{}\" is not defined (MakeNamedMedium)", slot.name);
                 let at = slot.first_use.unwrap_or_default();
-                return Err(Diagnostic::error(
-                    at,
-                    format!("medium \"{}\" is not defined (MakeNamedMedium)", slot.name),
-                ));
+                self.v3_goes_on(Some(syntax), at, what, "what it names is vacuum, as in pbrt-v3")?;
+                remap.push(None);
+                continue;
             };
+            if syntax == Syntax::V3
+                && let Some((at, why)) = left_out_by_v3(&e)?
+            {
+                let what = format!("MakeNamedMedium \"{}\": {why}", e.name);
+                self.v3_goes_on(Some(syntax), at, what, "pbrt-v3 leaves it out: what it names is vacuum")?;
+                remap.push(None);
+                continue;
+            }
             checked_type(&e, syntax)?;
             // Never named by a MediumInterface: nothing is in it (listed, not built).
             if slot.first_use.is_none() {
@@ -117,6 +172,21 @@ impl Builder {
             }));
         }
         Ok((built, remap))
+    }
+
+    /// What a shape or light made before slot `of` had a definition (first at `at`)
+    /// is in: pbrt-v4 takes the definition; pbrt-v3 vacuum, with a warning where a
+    /// definition comes later (where none does, the slot's own warning says so).
+    fn early_use(&mut self, of: usize, at: Span, defined: bool, syntax: Syntax, remap: &[Option<u32>]) -> Option<u32> {
+        if syntax == Syntax::V4 {
+            return remap[of];
+        }
+        if defined {
+            let name = &self.medium_slots[of].name;
+            let msg = format!("medium \"{name}\" is used before its MakeNamedMedium; here it is vacuum, as in pbrt-v3");
+            self.warnings.push(Diagnostic::warning(at, msg));
+        }
+        None
     }
 
     fn build_medium(&mut self, e: &Entity, medium_to_world: DMat4) -> Res<Option<media::Medium>> {
@@ -171,8 +241,7 @@ fn checked_type(e: &Entity, syntax: Syntax) -> Res<(String, Span)> {
     if ty.is_empty() {
         return Err(Diagnostic::error(e.name_span, "MakeNamedMedium needs a \"string type\""));
     }
-    // DEVIATION(pbrt): input leniency. pbrt-v3 warns and leaves the medium undefined
-    // (its uses then fall back to vacuum); an error names the typo instead.
+    // pbrt-v3 leaves the medium out instead (`left_out_by_v3`, checked first).
     if !media::known(&ty) {
         return Err(Diagnostic::error(at, crate::scene::names::Family::Medium.unknown(&ty)));
     }
@@ -183,6 +252,33 @@ fn checked_type(e: &Entity, syntax: Syntax) -> Res<(String, Span)> {
         ));
     }
     Ok((ty, at))
+}
+
+/// Why pbrt-v3 makes no medium of a definition (it says so and goes on; what names
+/// the medium is then in vacuum): no type, a type it does not know, or a grid whose
+/// density values are missing or do not fill nx·ny·nz. `None`: it makes one.
+fn left_out_by_v3(e: &Entity) -> Res<Option<(Span, String)>> {
+    let Some(ty) = e.params.string("type")?.filter(|t| !t.is_empty()) else {
+        return Ok(Some((e.name_span, "no \"string type\"".into())));
+    };
+    let at = crate::values::span_of(&e.params, "type").unwrap_or(e.name_span);
+    if !media::known(&ty) {
+        return Ok(Some((at, crate::scene::names::Family::Medium.unknown(&ty))));
+    }
+    if ty != "heterogeneous" {
+        return Ok(None);
+    }
+    let Some((values_at, values)) = media::grid::grid_values(&e.params, "density", ParamType::Float)? else {
+        return Ok(Some((e.name_span, "a grid without \"float density\" values".into())));
+    };
+    let n = [e.params.int("nx")?, e.params.int("ny")?, e.params.int("nz")?].map(|k| i128::from(k.unwrap_or(1)));
+    let want: i128 = n.iter().product();
+    // A zero or negative count stays an error (pbrt-v3 would index a grid of nothing).
+    if n.iter().all(|&k| k >= 1) && want != values.len() as i128 {
+        let why = format!("the grid has {} density values, not nx·ny·nz = {want}", values.len());
+        return Ok(Some((values_at, why)));
+    }
+    Ok(None)
 }
 
 impl Builder {

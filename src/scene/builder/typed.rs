@@ -346,6 +346,14 @@ impl Resolver for Scoped<'_> {
             let v3_does = "the parameter takes its default, as pbrt-v3 takes it";
             return self.b.v3_goes_on(Some(self.b.syntax()), at, what, v3_does).map(|()| None);
         };
+        let class = &self.b.textures[i as usize].class;
+        if self.b.syntax() == Syntax::V3 && !Family::Texture.knows(class) {
+            // pbrt-v3 makes no texture of a class it does not know.
+            self.b.textures[i as usize].params.mark_all_used();
+            let what = format!("{want} texture \"{name}\" has {}", Family::Texture.unknown(class));
+            let v3_does = "it is not defined and the parameter takes its default, as in pbrt-v3";
+            return self.b.v3_goes_on(Some(Syntax::V3), at, what, v3_does).map(|()| None);
+        }
         // DEVIATION(pbrt): input leniency. pbrt-v3 forgets a texture at the end of its
         // block (an error, then the parameter's default); its definition is used, named.
         if !in_scope && self.b.syntax() == Syntax::V3 {
@@ -374,7 +382,14 @@ impl Resolver for Scoped<'_> {
     fn named_material(&mut self, name: &str, at: Span) -> Res<u32> {
         let in_scope = self.scope.materials.get(name).copied();
         let found = in_scope.or_else(|| self.b.global_materials.get(name).copied());
-        let i = found.ok_or_else(|| Diagnostic::error(at, format!("named material \"{name}\" is not defined")))?;
+        let Some(i) = found else {
+            // pbrt-v3 mixes in a matte for it; the default material (index 0) is
+            // pbrt-v3's matte. DEVIATION(pbrt): appearance, too small for a fix: pbrt-v3's
+            // matte takes the mix's own Kd, sigma and bumpmap, which a mix rarely has.
+            let what = format!("named material \"{name}\" is not defined");
+            self.b.v3_goes_on(Some(self.b.syntax()), at, what, "pbrt-v3's mix uses matte in its place")?;
+            return self.b.build_material(0);
+        };
         // DEVIATION(pbrt): input leniency. pbrt-v3's mix takes matte for a name out of
         // scope (with an error); its definition is used, named.
         if in_scope.is_none() && self.b.syntax() == Syntax::V3 {
