@@ -1021,7 +1021,8 @@ impl Builder {
         };
         let mut warn = Vec::new();
         let (files, ahead) = (&self.reader.files, &self.read_ahead);
-        let mut ctx = ShapeContext { resolve: &resolve, quads, files, ahead, warn: &mut warn };
+        let syntax = self.known_syntax();
+        let mut ctx = ShapeContext { resolve: &resolve, quads, files, ahead, warn: &mut warn, syntax };
         let built = shapes::read(&s.entity.name, &mut s.entity.params, at, &mut ctx);
         self.warnings.append(&mut warn);
         let p = &s.entity.params;
@@ -1030,8 +1031,8 @@ impl Builder {
             self.skip(at, what, checks::why_left_out(Family::Shape, &s.entity.name));
             return Ok(Vec::new());
         };
-        if matches!(&built, Built::Several(parts) if parts.is_empty()) {
-            return Ok(Vec::new()); // a v3 file's PLY file that cannot be read (warned)
+        if built.is_nothing() {
+            return Ok(Vec::new()); // left out as pbrt-v3 leaves it out (warned)
         }
         let alpha = alpha_params(p)?;
         typed::finish_params(p, &mut self.warnings)?;

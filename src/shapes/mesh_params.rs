@@ -221,6 +221,19 @@ fn check_face_indices(
     Ok(idx.len())
 }
 
+/// The first of a mesh's face indices (`arity` a face) at or past its vertex count,
+/// if none is negative: what pbrt-v3 leaves a mesh out for. Only read on the way to an
+/// error: reading the mesh finds the first bad index without it.
+pub fn index_past_the_end(p: &ParamList, arity: usize) -> Option<i32> {
+    let n_p = p.find("P", &[ParamType::Point3])?.floats().len() / 3;
+    let idx = p.find("indices", &[ParamType::Integer])?.ints();
+    let idx = &idx[..idx.len() / arity * arity];
+    if idx.iter().any(|&i| i < 0) {
+        return None;
+    }
+    idx.iter().copied().find(|&i| i as usize >= n_p)
+}
+
 /// `f` of each value, on all threads for long arrays (a small mesh would wait longer
 /// for the pool than for its copy).
 fn map_values<T: Copy + Sync, U: Send>(values: &[T], f: impl Fn(T) -> U + Sync) -> Vec<U> {

@@ -223,7 +223,8 @@ pub enum Built {
         kind: &'static str,
         filename: Option<String>,
     },
-    /// A pbrt-v4 PLY file of triangles and quads: two shapes, as in pbrt-v4.
+    /// A pbrt-v4 PLY file of triangles and quads: two shapes, as in pbrt-v4. None at
+    /// all ([`Built::NOTHING`]): a shape pbrt-v3 leaves out.
     Several(Vec<Built>),
     /// A mesh file (a v4 `plymesh`, its quads split, or an `objmesh`) that a float
     /// texture displaces: the scene resolves the texture and calls
@@ -231,6 +232,14 @@ pub enum Built {
     Displaced(Box<Displaced>),
     /// Bézier curves, in object space.
     Curves(curve::Curves),
+}
+
+impl Built {
+    pub const NOTHING: Built = Built::Several(Vec::new());
+
+    pub fn is_nothing(&self) -> bool {
+        matches!(self, Built::Several(parts) if parts.is_empty())
+    }
 }
 
 /// A mesh to displace, as read: `texture` named at `at`, refined to `edge_length`.
@@ -252,6 +261,21 @@ pub struct ShapeContext<'a> {
     /// PLY files already being read (see [`read_ahead`]).
     pub ahead: &'a read_ahead::ReadAhead,
     pub warn: &'a mut Vec<Diagnostic>,
+    /// The file's pbrt version, where known by now.
+    pub syntax: Option<crate::parser::Syntax>,
+}
+
+impl ShapeContext<'_> {
+    /// A shape pbrt-v3 reports (`what`, at `at`) and leaves out, where pbrt-v4 stops:
+    /// in a file known as v3 a warning and nothing to build, else the error.
+    pub fn left_out_by_v3(&mut self, p: &ParamList, at: Span, what: String) -> Res<Built> {
+        if self.syntax != Some(crate::parser::Syntax::V3) {
+            return Err(Diagnostic::error(at, what));
+        }
+        p.mark_all_used();
+        self.warn.push(Diagnostic::warning(at, format!("{what}; the shape is left out, as pbrt-v3 leaves it out")));
+        Ok(Built::NOTHING)
+    }
 }
 
 /// A `Shape` type: the name scenes use and its reader.

@@ -617,13 +617,8 @@ pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     let quads = if displaced { Quads::Split } else { ctx.quads };
     let m = match ctx.ahead.take(&path, quads).unwrap_or_else(|| load(&path, quads, ctx.files)) {
         Ok(m) => m,
-        // pbrt-v3 (whose quads are split) reports a file it cannot open and goes on
-        // without the shape; pbrt-v4 stops.
-        Err(e) if e.starts_with(CANNOT_READ) && ctx.quads == Quads::Split => {
-            p.mark_all_used();
-            ctx.warn.push(Diagnostic::warning(at, format!("{e}; the shape is left out, as pbrt-v3 leaves it out")));
-            return Ok(Built::Several(Vec::new()));
-        }
+        // pbrt-v3 reports a file it cannot open and goes on without the shape.
+        Err(e) if e.starts_with(CANNOT_READ) => return ctx.left_out_by_v3(p, at, e),
         // Read errors name the file already; format errors get its name first.
         Err(e) => {
             return Err(Diagnostic::error(at, if e.starts_with(CANNOT_READ) { e } else { format!("{name}: {e}") }));

@@ -137,7 +137,8 @@ use crate::interaction::{Shading, SurfaceInteraction};
 use crate::math::float::gamma;
 use crate::math::frame::coordinate_system;
 use crate::math::{Bounds3, Normal3, Point3, Ray, Vector3};
-use crate::parser::params::ParamList;
+use crate::parser::Syntax;
+use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::values::Res;
 use glam::{Mat4, Vec3, Vec4};
@@ -540,6 +541,20 @@ impl TriangleMesh {
 pub const NAME: &str = "trianglemesh";
 
 pub fn read(ctx: &mut ShapeContext, p: &mut ParamList, span: Span) -> Res<Built> {
-    let mesh = super::mesh_params::from_params(p, NAME, span, ctx.warn)?;
-    Ok(Built::Mesh { mesh, kind: NAME, filename: None })
+    // pbrt-v3 reports a mesh without `P` or `indices` (a single triangle too) and
+    // leaves it out; pbrt-v4 stops, or takes the three points as one triangle.
+    let has = |name: &str, ty: ParamType| p.find(name, &[ty]).is_some();
+    if ctx.syntax == Some(Syntax::V3) && !(has("P", ParamType::Point3) && has("indices", ParamType::Integer)) {
+        let missing = if has("P", ParamType::Point3) { "integer indices" } else { "point3 P" };
+        return ctx.left_out_by_v3(p, span, format!("{NAME} needs \"{missing}\""));
+    }
+    match super::mesh_params::from_params(p, NAME, span, ctx.warn) {
+        Ok(mesh) => Ok(Built::Mesh { mesh, kind: NAME, filename: None }),
+        // As is an index past the last vertex (a negative one stays an error: pbrt-v3
+        // reads memory before its array).
+        Err(e) if super::mesh_params::index_past_the_end(p, 3).is_some() => {
+            ctx.left_out_by_v3(p, e.span.unwrap_or(span), e.message)
+        }
+        Err(e) => Err(e),
+    }
 }

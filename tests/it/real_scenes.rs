@@ -16,13 +16,12 @@ fn shared() -> Option<PathBuf> {
 }
 
 /// Files that are not meant to load: include fragments, or scenes whose data is absent.
-const EXPECTED_FAILURES: [(&str, &str); 5] = [
+const EXPECTED_FAILURES: [(&str, &str); 4] = [
     // A v3 fragment (its "float st"): the Shape is ignored, as pbrt-v3 ignores it.
     ("pbrt-v3-rs/scenes/geometry/cube.pbrt", "the file ends before WorldBegin"),
     ("pbrt-v3-scenes/buddha-fractal/geometry.pbrt", "AttributeBegin is allowed only after WorldBegin"),
     ("pbrt-v4-scenes/killeroos/geometry/killeroo.pbrt", "Shape is allowed only after WorldBegin"),
     ("pbrt-v3-rs/scenes/shapes/loopsubdiv.pbrt", "killeroo.pbrt\": No such file"),
-    ("pbrt-v3-rs/scenes/shapes/plymesh.pbrt", "ganesha.ply\": No such file"),
 ];
 
 fn walk(dir: &std::path::Path, out: &mut Vec<PathBuf>) {
@@ -52,7 +51,12 @@ fn every_shared_scene_in_the_subset_loads() {
                 assert!(e.one_line().contains(why), "{rel}: {}", e.one_line());
             }
             None => {
-                result.unwrap_or_else(|e| panic!("{rel}: {e}"));
+                let s = result.unwrap_or_else(|e| panic!("{rel}: {e}"));
+                if rel == "pbrt-v3-rs/scenes/shapes/plymesh.pbrt" {
+                    // Its PLY file is not in the subset: left out, as pbrt-v3 leaves it.
+                    let w = s.warnings.iter().filter(|w| w.message.contains("ganesha.ply\": No such file")).count();
+                    assert_eq!(w, 1, "{rel}: {:?}", s.warnings);
+                }
                 loaded += 1;
             }
         }

@@ -107,7 +107,7 @@ fn triangle_mesh_arrays_and_checks() {
         Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 1 1 0 0 1 0] "integer indices" [0 1 2 0 2 3 0]
           "normal N" [0 0 1 0 0 1 0 0 1 0 0 1] "vector3 S" [1 0 0] "point2 uv" [0 0 1 0 1 1 0 1 5 5]
           "integer faceIndices" [7 8]
-        Shape "trianglemesh" "point P" [0 0 0 1 0 0 0 1 0] "float st" [0 0 1 0]
+        Shape "trianglemesh" "point P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 2] "float st" [0 0 1 0]
         WorldEnd"#,
     );
     let m = &s.meshes[0];
@@ -116,7 +116,6 @@ fn triangle_mesh_arrays_and_checks() {
     assert_eq!(m.uv.as_ref().map(Vec::len), Some(4), "extra uv dropped");
     assert_eq!(m.face_indices, Some(vec![7, 8]));
     let second = &s.meshes[1];
-    assert_eq!(second.indices, [0, 1, 2], "three points need no indices");
     assert!(second.uv.is_none(), "too few uv are ignored");
     let msgs: Vec<&str> = s.warnings.iter().map(|w| w.message.as_str()).collect();
     assert_eq!(msgs.len(), 4, "{msgs:?}");
@@ -468,4 +467,32 @@ fn a_v3_ply_file_that_cannot_be_read_is_left_out_with_a_warning() {
     assert!(w.iter().all(|m| m.contains("left out, as pbrt-v3")), "{w:?}");
     let e = crate::common::load(&body("Film \"rgb\"")).expect_err("pbrt-v4 stops").to_string();
     assert!(e.contains(":5:35: error: cannot read"), "{e}");
+}
+
+/// pbrt-v3 reports a `trianglemesh` without `P` or `indices` (even a single
+/// triangle) or with an index past its last vertex, and leaves it out; pbrt-v4 stops,
+/// or takes three points as one triangle.
+#[test]
+fn a_v3_trianglemesh_pbrt_v3_cannot_make_is_left_out_with_a_warning() {
+    let quad = "\"point P\" [-1 -1 0 1 -1 0 1 1 0 -1 1 0]";
+    let v3 =
+        |mesh: &str| scene(&format!("Film \"image\"\nWorldBegin\nShape \"trianglemesh\" {mesh}\nShape \"sphere\"\n"));
+    let v4 = |mesh: &str| load(&format!("Film \"rgb\"\nWorldBegin\nShape \"trianglemesh\" {mesh}\nShape \"sphere\"\n"));
+    for (mesh, why) in [
+        (quad.to_string(), "needs \"integer indices\""),
+        ("\"point P\" [0 0 0 1 0 0 0 1 0]".to_string(), "needs \"integer indices\""),
+        ("\"integer indices\" [0 1 2]".to_string(), "needs \"point3 P\""),
+        (format!("{quad} \"integer indices\" [0 1 2 0 2 4]"), "vertex index 4 is out of range"),
+    ] {
+        let s = v3(&mesh);
+        assert_eq!(s.shapes.len(), 1, "{mesh}: the sphere alone");
+        let w: Vec<String> = crate::common::warnings(&s).into_iter().filter(|m| m.contains("left out")).collect();
+        assert!(w.len() == 1 && w[0].contains(why), "{mesh}: {w:?}");
+    }
+    let e = load(&format!("Film \"image\"\nWorldBegin\nShape \"trianglemesh\" {quad} \"integer indices\" [0 -1 2]"));
+    assert!(e.expect_err("negative").to_string().contains(":3:"), "a negative index stays an error");
+    assert_eq!(v4("\"point P\" [0 0 0 1 0 0 0 1 0]").expect("one triangle").shapes.len(), 2);
+    for mesh in [quad.to_string(), format!("{quad} \"integer indices\" [0 1 2 0 2 4]")] {
+        assert!(v4(&mesh).expect_err(&mesh).to_string().contains(":3:"), "{mesh}");
+    }
 }
