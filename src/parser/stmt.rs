@@ -490,7 +490,18 @@ impl StatementReader {
     fn include(&mut self, kw: Span, kind: FrameKind) -> Result<String, Diagnostic> {
         let what = if kind == FrameKind::Include { "Include" } else { "Import" };
         let (name, span) = self.string(kw, what)?;
-        self.push_file(&name, span, kind)?;
+        match self.push_file(&name, span, kind) {
+            // pbrt-v3 reports an Include it cannot open and reads on (pbrt-v4 stops):
+            // so does a file already known as v3.
+            Err(e)
+                if e.message.starts_with("cannot read")
+                    && self.evidence.as_ref().is_some_and(|e| e.0 == Syntax::V3) =>
+            {
+                let msg = format!("{}; the Include is skipped, as pbrt-v3 skips it", e.message);
+                self.warnings.push(Diagnostic::warning(span, msg));
+            }
+            done => done?,
+        }
         Ok(name)
     }
 

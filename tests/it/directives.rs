@@ -872,3 +872,18 @@ fn v3_materials_and_textures_pbrt_v3_cannot_make_fall_back_as_pbrt_v3_does() {
         assert!(e.to_string().contains(":3:"), "{texture}: {e}");
     }
 }
+
+#[test]
+fn a_v3_include_that_cannot_be_read_is_skipped_with_a_warning() {
+    // pbrt-v3 reports it and reads on; pbrt-v4 stops, and so does a file whose
+    // version is not known by the Include.
+    let body = |film: &str| format!("{film}\nWorldBegin\nInclude \"nowhere.pbrt\"\nShape \"sphere\"\n");
+    let s = scene(&format!("{}WorldEnd\n", body("Film \"image\"")));
+    assert_eq!(s.shapes.len(), 1);
+    let w: Vec<String> = warnings(&s).into_iter().filter(|m| m.contains("nowhere.pbrt")).collect();
+    assert!(w.len() == 1 && w[0].contains("skipped, as pbrt-v3 skips it"), "{w:?}");
+    for film in ["Film \"rgb\"", ""] {
+        let e = load(&body(film)).expect_err(film).to_string();
+        assert!(e.contains(":3:9: error: cannot read") && e.contains("nowhere.pbrt"), "{film}: {e}");
+    }
+}
