@@ -431,9 +431,14 @@ pub fn triangle_count(base: usize, levels: u32) -> Option<u64> {
 pub const NAME: &str = "loopsubdiv";
 
 pub fn read(ctx: &mut super::ShapeContext, p: &ParamList, span: Span) -> Res<super::Built> {
-    let need = |what: &str| Diagnostic::error(span, format!("loopsubdiv needs {what}"));
-    let positions = p.array("P", ParamType::Point3)?.ok_or_else(|| need("\"point3 P\""))?;
-    let indices = p.array("indices", ParamType::Integer)?.ok_or_else(|| need("\"integer indices\""))?;
+    // pbrt-v3 reports a missing array and leaves the shape out; pbrt-v4 stops.
+    let need = |what: &str| format!("loopsubdiv needs {what}");
+    let Some(positions) = p.array("P", ParamType::Point3)? else {
+        return ctx.left_out_by_v3(p, span, need("\"point3 P\""));
+    };
+    let Some(indices) = p.array("indices", ParamType::Integer)? else {
+        return ctx.left_out_by_v3(p, span, need("\"integer indices\""));
+    };
     let n_p = positions.values.len() / 3;
     let indices = super::mesh_params::check_indices(indices.ints(), n_p, indices.value_span, ctx.warn)?;
     // v3 also reads "nlevels"; both default to 3.

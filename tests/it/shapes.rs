@@ -1,7 +1,7 @@
 //! Every shape's parameters: defaults, clamps, swaps, validity checks, mesh sources,
 //! world-space areas and bounds.
 
-use crate::common::{close, load, num, report, root, scene, world_shapes};
+use crate::common::{close, load, num, report, root, scene, warnings, world_shapes};
 use serde_json::{Value, json};
 use std::f64::consts::PI;
 
@@ -462,7 +462,7 @@ fn a_v3_ply_file_that_cannot_be_read_is_left_out_with_a_warning() {
     let s = crate::common::scene(&body("Film \"image\""));
     assert_eq!((s.shapes.len(), s.area_lights.len()), (1, 0), "the sphere alone, no light");
     assert!(s.objects.iter().all(|o| o.shapes.is_empty()));
-    let w: Vec<String> = crate::common::warnings(&s).into_iter().filter(|m| m.contains("nowhere.ply")).collect();
+    let w: Vec<String> = warnings(&s).into_iter().filter(|m| m.contains("nowhere.ply")).collect();
     assert_eq!(w.len(), 2, "{w:?}");
     assert!(w.iter().all(|m| m.contains("left out, as pbrt-v3")), "{w:?}");
     let e = crate::common::load(&body("Film \"rgb\"")).expect_err("pbrt-v4 stops").to_string();
@@ -485,8 +485,14 @@ fn a_v3_trianglemesh_pbrt_v3_cannot_make_is_left_out_with_a_warning() {
         (format!("{quad} \"integer indices\" [0 1 2 0 2 4]"), "vertex index 4 is out of range"),
     ] {
         let s = v3(&mesh);
+        if !mesh.contains("[0 1 2 0 2 4]") {
+            // So is a loopsubdiv without either array (pbrt-v3 checks no index).
+            let loop_mesh = scene(&format!("Film \"image\"\nWorldBegin\nShape \"loopsubdiv\" {mesh}\n"));
+            assert!(loop_mesh.shapes.is_empty(), "{mesh}");
+            assert!(warnings(&loop_mesh).iter().any(|m| m.contains("loopsubdiv needs")), "{mesh}");
+        }
         assert_eq!(s.shapes.len(), 1, "{mesh}: the sphere alone");
-        let w: Vec<String> = crate::common::warnings(&s).into_iter().filter(|m| m.contains("left out")).collect();
+        let w: Vec<String> = warnings(&s).into_iter().filter(|m| m.contains("left out")).collect();
         assert!(w.len() == 1 && w[0].contains(why), "{mesh}: {w:?}");
     }
     let e = load(&format!("Film \"image\"\nWorldBegin\nShape \"trianglemesh\" {quad} \"integer indices\" [0 -1 2]"));
