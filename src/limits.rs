@@ -196,20 +196,29 @@ impl Limits {
     }
 }
 
+/// How [`read_file`]'s message for a file that cannot be opened or read begins.
+const CANNOT_READ: &str = "cannot read";
+
+/// Whether a file reader's message says the file could not be opened or read (missing,
+/// not a regular file, an I/O error), as opposed to a limit or its contents.
+pub fn is_unreadable(message: &str) -> bool {
+    message.starts_with(CANNOT_READ)
+}
+
 /// Reads a whole input file: a regular file of at most `limits.file_bytes`, gunzipped
 /// (to at most as many bytes) when it starts with the gzip magic; `note` sees the bytes
 /// as stored (before gunzip).
 fn read_file(path: &Path, limits: &Limits, note: impl FnOnce(&FileBytes)) -> Result<FileBytes, String> {
     let shown = path.display();
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
+    let meta = std::fs::metadata(path).map_err(|e| format!("{CANNOT_READ} \"{shown}\": {e}"))?;
     if !meta.is_file() {
-        return Err(format!("cannot read \"{shown}\": not a regular file"));
+        return Err(format!("{CANNOT_READ} \"{shown}\": not a regular file"));
     }
     if meta.len() > limits.file_bytes {
         let what = format!("\"{shown}\" has {} bytes, which", meta.len());
         return Err(Limits::over(what, "file-bytes", limits.file_bytes));
     }
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
+    let file = std::fs::File::open(path).map_err(|e| format!("{CANNOT_READ} \"{shown}\": {e}"))?;
     let raw = match FileBytes::map(&file, meta.len()) {
         Some(mapped) => mapped,
         None => FileBytes::Owned(read_all(file, meta.len(), path, limits)?),
@@ -229,7 +238,7 @@ fn read_all(file: std::fs::File, len: u64, path: &Path, limits: &Limits) -> Resu
     let shown = path.display();
     // Room for the whole file at once: a growing buffer would copy it several times.
     let mut raw = Vec::with_capacity(len.min(limits.file_bytes).saturating_add(1) as usize);
-    file.take(limits.file_bytes + 1).read_to_end(&mut raw).map_err(|e| format!("cannot read \"{shown}\": {e}"))?;
+    file.take(limits.file_bytes + 1).read_to_end(&mut raw).map_err(|e| format!("{CANNOT_READ} \"{shown}\": {e}"))?;
     if raw.len() as u64 > limits.file_bytes {
         return Err(Limits::over(format!("\"{shown}\" grew while being read and"), "file-bytes", limits.file_bytes));
     }

@@ -494,7 +494,7 @@ impl StatementReader {
             // pbrt-v3 reports an Include it cannot open and reads on (pbrt-v4 stops):
             // so does a file already known as v3.
             Err(e)
-                if e.message.starts_with("cannot read")
+                if crate::limits::is_unreadable(&e.message)
                     && self.evidence.as_ref().is_some_and(|e| e.0 == Syntax::V3) =>
             {
                 let msg = format!("{}; the Include is skipped, as pbrt-v3 skips it", e.message);

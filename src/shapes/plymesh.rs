@@ -599,9 +599,6 @@ fn read_value<const BIG: bool>(b: &mut Bytes<'_, BIG>, ty: &PropertyType, list: 
 
 pub const NAME: &str = "plymesh";
 
-/// How the file readers' messages for a file that cannot be opened or read begin.
-const CANNOT_READ: &str = "cannot read";
-
 /// `Shape "plymesh" "string filename" "mesh.ply"`: the file's triangles, and its quads
 /// as the file's version reads them (a file of both is two shapes, as in pbrt-v4).
 /// With pbrt-v4's `"texture displacement"` its quads are split and the scene displaces
@@ -618,11 +615,9 @@ pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
     let m = match ctx.ahead.take(&path, quads).unwrap_or_else(|| load(&path, quads, ctx.files)) {
         Ok(m) => m,
         // pbrt-v3 reports a file it cannot open and goes on without the shape.
-        Err(e) if e.starts_with(CANNOT_READ) => return ctx.left_out_by_v3(p, at, e),
         // Read errors name the file already; format errors get its name first.
-        Err(e) => {
-            return Err(Diagnostic::error(at, if e.starts_with(CANNOT_READ) { e } else { format!("{name}: {e}") }));
-        }
+        Err(e) if crate::limits::is_unreadable(&e) => return ctx.left_out_by_v3(p, at, e),
+        Err(e) => return Err(Diagnostic::error(at, format!("{name}: {e}"))),
     };
     if displaced {
         return super::displaced(m.triangles, NAME, name, p);

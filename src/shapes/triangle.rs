@@ -543,9 +543,12 @@ pub const NAME: &str = "trianglemesh";
 pub fn read(ctx: &mut ShapeContext, p: &mut ParamList, span: Span) -> Res<Built> {
     // pbrt-v3 reports a mesh without `P` or `indices` (a single triangle too) and
     // leaves it out; pbrt-v4 stops, or takes the three points as one triangle.
-    let has = |name: &str, ty: ParamType| p.find(name, &[ty]).is_some();
-    if ctx.syntax == Some(Syntax::V3) && !(has("P", ParamType::Point3) && has("indices", ParamType::Integer)) {
-        let missing = if has("P", ParamType::Point3) { "integer indices" } else { "point3 P" };
+    let missing = match (p.find("P", &[ParamType::Point3]), p.find("indices", &[ParamType::Integer])) {
+        (None, _) => Some("point3 P"),
+        (_, None) => Some("integer indices"),
+        _ => None,
+    };
+    if let Some(missing) = missing.filter(|_| ctx.syntax == Some(Syntax::V3)) {
         return ctx.left_out_by_v3(p, span, format!("{NAME} needs \"{missing}\""));
     }
     match super::mesh_params::from_params(p, NAME, span, ctx.warn) {
