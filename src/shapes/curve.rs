@@ -425,40 +425,34 @@ pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
         let msg = format!("curve: {name} must be a number from 0 to {MAX_COORDINATE:e}");
         return Err(Diagnostic::error(at(&name), msg));
     }
+    // pbrt-v3 reports these and leaves the curve out; pbrt-v4 stops.
     let degree = p.int("degree")?.unwrap_or(3);
     if degree != 2 && degree != 3 {
-        return Err(Diagnostic::error(at("degree"), format!("curve: degree {degree}; only 2 and 3 are supported")));
+        return ctx.left_out_by_v3(p, at("degree"), format!("curve: degree {degree}; only 2 and 3 are supported"));
     }
     let degree = degree as usize;
     let basis = p.string("basis")?.unwrap_or_else(|| "bezier".into());
     if basis != "bezier" && basis != "bspline" {
-        return Err(Diagnostic::error(
-            at("basis"),
-            format!("curve: basis \"{basis}\"; expected \"bezier\" or \"bspline\""),
-        ));
+        let msg = format!("curve: basis \"{basis}\"; expected \"bezier\" or \"bspline\"");
+        return ctx.left_out_by_v3(p, at("basis"), msg);
     }
-    let points = p.array("P", ParamType::Point3)?.ok_or_else(|| Diagnostic::error(span, "curve needs \"point3 P\""))?;
+    let Some(points) = p.array("P", ParamType::Point3)? else {
+        return ctx.left_out_by_v3(p, span, "curve needs \"point3 P\"".into());
+    };
     let cp: Vec<Vec3> = points.floats().chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
     if !cp.iter().all(|p| p.is_finite() && p.abs().max_element() <= MAX_COORDINATE) {
         let msg = format!("curve: control points must be finite and within ±{MAX_COORDINATE:e}");
         return Err(Diagnostic::error(points.value_span, msg));
     }
-    let count = if basis == "bezier" {
-        (cp.len() > degree && (cp.len() - 1).is_multiple_of(degree)).then(|| (cp.len() - 1) / degree)
-    } else {
-        (cp.len() > degree).then(|| cp.len() - degree)
-    };
-    let Some(count) = count else {
-        let need = if basis == "bezier" {
-            format!("{} + n·{degree}", degree + 1)
-        } else {
-            format!("at least {}", degree + 1)
-        };
-        let msg = format!("curve: {} control points; the degree-{degree} {basis} basis needs {need}", cp.len());
-        return Err(Diagnostic::error(points.value_span, msg));
+    let count = match segment_count(cp.len(), &basis, degree) {
+        Ok(count) => count,
+        Err(msg) => return ctx.left_out_by_v3(p, points.value_span, msg),
     };
     let kind = curve_type(ctx, p, at("type"))?;
-    let normals = ribbon_normals(ctx, p, span, kind, count)?;
+    if let Some((at, msg)) = ribbon_mismatch(p, span, kind, count)? {
+        return ctx.left_out_by_v3(p, at, msg);
+    }
+    let normals = ribbon_normals(ctx, p, kind)?;
     let split = split_depth(p, at("splitdepth"))?;
     let pieces_per = 1u64 << split;
     let total = count as u64 * pieces_per;
@@ -497,24 +491,44 @@ fn curve_type(ctx: &mut ShapeContext, p: &ParamList, at: Span) -> Res<CurveType>
     })
 }
 
-/// A ribbon's normals, one per segment end; ignored with a warning on other types.
-fn ribbon_normals(
-    ctx: &mut ShapeContext,
-    p: &ParamList,
-    span: Span,
-    kind: CurveType,
-    count: usize,
-) -> Res<Option<Vec<Vec3>>> {
+/// The number of segments `n` control points make in `basis`, or why they make none.
+fn segment_count(n: usize, basis: &str, degree: usize) -> Result<usize, String> {
+    let count = if basis == "bezier" {
+        (n > degree && (n - 1).is_multiple_of(degree)).then(|| (n - 1) / degree)
+    } else {
+        (n > degree).then(|| n - degree)
+    };
+    count.ok_or_else(|| {
+        let need = if basis == "bezier" {
+            format!("{} + n·{degree}", degree + 1)
+        } else {
+            format!("at least {}", degree + 1)
+        };
+        format!("curve: {n} control points; the degree-{degree} {basis} basis needs {need}")
+    })
+}
+
+/// Where and why a ribbon's normals do not fit its `count` segments (missing, or not
+/// one per segment end); `None` when they do or the curve is not a ribbon.
+fn ribbon_mismatch(p: &ParamList, span: Span, kind: CurveType, count: usize) -> Res<Option<(Span, String)>> {
+    if kind != CurveType::Ribbon {
+        return Ok(None);
+    }
+    Ok(match p.array("N", ParamType::Normal3)? {
+        None => Some((span, "curve: a ribbon needs \"normal N\" at its segment ends".into())),
+        Some(n) if n.floats().len() != 3 * (count + 1) => {
+            let given = n.floats().len() / 3;
+            Some((n.value_span, format!("curve: {given} normals; a ribbon of {count} segments needs {}", count + 1)))
+        }
+        Some(_) => None,
+    })
+}
+
+/// A ribbon's normals, one per segment end ([`ribbon_mismatch`] has checked their
+/// count); ignored with a warning on other types.
+fn ribbon_normals(ctx: &mut ShapeContext, p: &ParamList, kind: CurveType) -> Res<Option<Vec<Vec3>>> {
     let n = p.array("N", ParamType::Normal3)?;
     match (kind, n) {
-        (CurveType::Ribbon, None) => {
-            Err(Diagnostic::error(span, "curve: a ribbon needs \"normal N\" at its segment ends"))
-        }
-        (CurveType::Ribbon, Some(n)) if n.floats().len() != 3 * (count + 1) => {
-            let msg =
-                format!("curve: {} normals; a ribbon of {count} segments needs {}", n.floats().len() / 3, count + 1);
-            Err(Diagnostic::error(n.value_span, msg))
-        }
         (CurveType::Ribbon, Some(n)) => {
             let normals: Vec<Vec3> = n.floats().chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
             // pbrt normalises them blindly: NaN widths and normals for a zero normal.

@@ -502,3 +502,31 @@ fn a_v3_trianglemesh_pbrt_v3_cannot_make_is_left_out_with_a_warning() {
         assert!(v4(&mesh).expect_err(&mesh).to_string().contains(":3:"), "{mesh}");
     }
 }
+
+/// pbrt-v3 reports a curve it cannot make (a degree or basis it lacks, control points
+/// that make no segment or none at all, a ribbon without one normal per segment end)
+/// and leaves it out; pbrt-v4 stops. Both images checked against pbrt-v3: the scene
+/// without the curve.
+#[test]
+fn a_v3_curve_pbrt_v3_cannot_make_is_left_out_with_a_warning() {
+    let four = "\"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]";
+    let curve =
+        |film: &str, curve: &str| format!("Film \"{film}\"\nWorldBegin\nShape \"curve\" {curve}\nShape \"sphere\"\n");
+    for (c, why) in [
+        (format!("{four} \"integer degree\" 4"), "degree 4"),
+        (format!("{four} \"string basis\" \"hermite\""), "basis \"hermite\""),
+        ("\"point P\" [0 0 0 1 0 0 2 0 0 3 0 0 4 0 0]".to_string(), "5 control points"),
+        ("\"float width\" 0.1".to_string(), "curve needs \"point3 P\""),
+        (format!("{four} \"string type\" \"ribbon\""), "a ribbon needs \"normal N\""),
+        (format!("{four} \"string type\" \"ribbon\" \"normal N\" [0 0 1]"), "1 normals"),
+    ] {
+        let s = scene(&curve("image", &c));
+        assert_eq!(s.shapes.len(), 1, "{c}: the sphere alone");
+        let w: Vec<String> = warnings(&s).into_iter().filter(|m| m.contains("left out")).collect();
+        assert!(w.len() == 1 && w[0].contains(why), "{c}: {w:?}");
+        assert!(!warnings(&s).iter().any(|m| m.contains("not used")), "{c}: its parameters are not reported unused");
+        let e = load(&curve("rgb", &c)).expect_err("pbrt-v4 stops").to_string();
+        assert!(e.contains(":3:") && e.contains(why), "{c}: {e}");
+    }
+    assert_eq!(scene(&curve("image", four)).shapes.len(), 2, "a curve pbrt-v3 makes");
+}
