@@ -795,8 +795,9 @@ impl Builder {
                 let msg = format!("{word} closes a block opened outside the current {}", name(top));
                 return Err(Diagnostic::error(span, msg));
             }
-            let word = self.reader.sources.snippet(span);
-            self.warnings.push(Diagnostic::warning(span, format!("{word} closes a {}", name(top))));
+            let (word, opened) = (self.reader.sources.snippet(span), name(top));
+            let article = if top == PushKind::Transform { "a" } else { "an" };
+            self.warnings.push(Diagnostic::warning(span, format!("{word} closes {article} {opened}")));
         }
         let Some((top, saved, _)) = self.stack.last_mut() else { return Ok(()) };
         if *top == PushKind::Transform {
@@ -1160,7 +1161,13 @@ impl Builder {
             return self.pop(PushKind::Object, span);
         }
         if self.stack.last().map(|s| s.0) != Some(PushKind::Object) {
-            return Err(Diagnostic::error(span, "ObjectEnd inside an unclosed AttributeBegin or TransformBegin"));
+            // pbrt-v3 ends the definition and pops the open block as its ObjectEnd's
+            // AttributeEnd; the ObjectBegin's entry stays, for a later AttributeEnd.
+            let what = "ObjectEnd inside an unclosed AttributeBegin or TransformBegin".to_string();
+            let v3_does = "the definition ends and the block is closed, as in pbrt-v3";
+            self.v3_goes_on(self.known_syntax(), span, what, v3_does)?;
+            self.current_object = None;
+            return self.pop(PushKind::Attribute, span);
         }
         self.pop(PushKind::Object, span)?;
         self.current_object = None;

@@ -293,7 +293,7 @@ fn unbalanced_blocks_warn() {
     let s = scene("WorldBegin\nAttributeEnd\nAttributeBegin\nTransformEnd\nAttributeBegin\n");
     let w = warnings(&s);
     assert!(w[0].contains("without a matching AttributeBegin"), "{w:?}");
-    assert!(w[1].contains("closes a AttributeBegin"), "{w:?}");
+    assert!(w[1].contains("closes an AttributeBegin"), "{w:?}");
     assert!(w[2].contains("never closed"), "{w:?}");
 }
 

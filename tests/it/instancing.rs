@@ -190,3 +190,41 @@ fn v3_object_statements_out_of_place_go_on_as_pbrt_v3_goes_on() {
     let e = crate::common::load(&body("Film \"rgb\"")).expect_err("pbrt-v4 stops").to_string();
     assert!(e.contains(":5:1: error: ObjectInstance is not allowed inside an object definition"), "{e}");
 }
+
+/// pbrt-v3's `ObjectEnd` inside an `AttributeBegin` of the definition ends the
+/// definition and closes that block (its `ObjectEnd` includes an `AttributeEnd`); the
+/// next `AttributeEnd` closes the `ObjectBegin`'s. Measured against pbrt-v3: the same
+/// image as the file with the statements in their places. pbrt-v4 stops.
+#[test]
+fn a_v3_object_end_inside_an_attribute_block_closes_that_block_as_pbrt_v3_does() {
+    let body = |film: &str| {
+        format!(
+            "{film}\nWorldBegin\nObjectBegin \"a\"\nMaterial \"mirror\"\nAttributeBegin\nTranslate 1 0 0\n\
+             Shape \"sphere\" \"float radius\" 1\nObjectEnd\nShape \"sphere\" \"float radius\" 2\nAttributeEnd\n\
+             Shape \"sphere\" \"float radius\" 3\nObjectInstance \"a\"\n"
+        )
+    };
+    let s = crate::common::scene(&body("Film \"image\""));
+    let radius = |d: &pbrt_sppm::scene::ShapeDesc| match &d.geometry {
+        pbrt_sppm::scene::Geometry::Quadric(pbrt_sppm::shapes::Quadric::Sphere(s)) => s.radius,
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(s.objects.len(), 1);
+    assert_eq!(s.objects[0].shapes.iter().map(radius).collect::<Vec<_>>(), [1.0]);
+    assert_eq!(s.objects[0].shapes[0].object_to_world.w_axis.x, 1.0, "the block's Translate");
+    assert_eq!(s.shapes.iter().map(radius).collect::<Vec<_>>(), [2.0, 3.0], "after ObjectEnd: the world");
+    // Radius 2: the definition's state before its AttributeBegin (the mirror, no
+    // Translate); radius 3: the state before ObjectBegin.
+    let (two, three) = (&s.shapes[0], &s.shapes[1]);
+    assert_eq!(two.object_to_world.w_axis.x, 0.0);
+    assert_eq!(s.materials[two.material as usize].ty, "mirror");
+    assert_eq!(s.materials[three.material as usize].ty, "matte");
+    assert_eq!(s.instances.len(), 1);
+    let w = crate::common::warnings(&s);
+    assert!(
+        w.iter().any(|m| m.contains("ObjectEnd inside an unclosed AttributeBegin") && m.contains("pbrt-v3")),
+        "{w:?}"
+    );
+    let e = crate::common::load(&body("Film \"rgb\"")).expect_err("pbrt-v4 stops").to_string();
+    assert!(e.contains(":8:1: error: ObjectEnd inside an unclosed AttributeBegin"), "{e}");
+}
