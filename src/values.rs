@@ -257,18 +257,66 @@ fn spd_file(p: &Param, name: &str, ctx: &SpectrumContext) -> Res<Vec<(f32, f32)>
         .files
         .read(&path)
         .map_err(|e| at(format!("\"{name}\" is neither a named spectrum nor a readable SPD file: {e}")))?;
-    let text = String::from_utf8_lossy(&bytes);
-    let mut values = Vec::new();
-    for line in text.lines() {
-        for word in line.split('#').next().unwrap_or("").split_whitespace() {
-            let v: f32 = word.parse().map_err(|_| at(format!("{name}: \"{word}\" is not a number")))?;
-            values.push(v);
-        }
-    }
+    let values = spd_numbers(&bytes, name).map_err(at)?;
     if values.is_empty() || values.len() % 2 != 0 {
         return Err(at(format!("{name}: an SPD file needs (wavelength, value) pairs, found {} numbers", values.len())));
     }
     Ok(values.chunks_exact(2).map(|c| (c[0], c[1])).collect())
+}
+
+/// The numbers of SPD file `name` (its bytes): whitespace-separated, `#` comments.
+pub fn spd_numbers(bytes: &[u8], name: &str) -> Result<Vec<f32>, String> {
+    let text = String::from_utf8_lossy(bytes);
+    let mut values = Vec::new();
+    for line in text.lines() {
+        for word in line.split('#').next().unwrap_or("").split_whitespace() {
+            values.push(word.parse().map_err(|_| format!("{name}: \"{word}\" is not a number"))?);
+        }
+    }
+    Ok(values)
+}
+
+/// An SPD file as pbrt-v3's `ReadFloatFile` scans it.
+pub struct FloatFileV3 {
+    pub values: Vec<f32>,
+    /// Characters outside numbers, comments and whitespace: skipped, each with a
+    /// warning.
+    pub skipped: usize,
+    /// The file ends inside a number, which is then lost.
+    pub cut_off: bool,
+}
+
+/// Scans `bytes` as pbrt-v3 scans a float file. A number starts at a digit, `.`, `-`
+/// or `+` and runs over digits, `.`, `e`, `-` and `+`; the character that ends it is
+/// consumed with it; it is read as C's `atof` reads it (its longest numeric prefix,
+/// else 0). `#` starts a comment to the line's end.
+pub fn pbrt_v3_float_file(bytes: &[u8]) -> FloatFileV3 {
+    let mut out = FloatFileV3 { values: Vec::new(), skipped: 0, cut_off: false };
+    let (mut number, mut comment) = (None::<usize>, false);
+    for (i, &c) in bytes.iter().enumerate() {
+        if let Some(start) = number {
+            if !(c.is_ascii_digit() || b".e-+".contains(&c)) {
+                out.values.push(atof_prefix(&bytes[start..i]) as f32);
+                number = None;
+            }
+        } else if comment {
+            comment = c != b'\n';
+        } else if c.is_ascii_digit() || b".-+".contains(&c) {
+            number = Some(i);
+        } else if c == b'#' {
+            comment = true;
+        } else if !c.is_ascii_whitespace() {
+            out.skipped += 1;
+        }
+    }
+    out.cut_off = number.is_some();
+    out
+}
+
+/// C's `atof` on ASCII text: the longest prefix that is a decimal number, else 0.
+fn atof_prefix(text: &[u8]) -> f64 {
+    let text = std::str::from_utf8(text).unwrap_or("");
+    (1..=text.len()).rev().find_map(|n| text[..n].parse::<f64>().ok()).unwrap_or(0.0)
 }
 
 /// A string from a fixed set of choices.
@@ -375,4 +423,25 @@ pub fn float_input(p: &ParamList, name: &str, default: f32, range: Range, r: &mu
             None => TexValue::Const(Vec3::splat(default)),
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// pbrt-v3's scanner, case by case: the character that ends a number goes with it
+    /// (so a `#` right after a number starts no comment), `atof` reads a prefix, other
+    /// characters are skipped one by one, and a number the file ends in is lost.
+    #[test]
+    fn float_files_scan_as_pbrt_v3_scans_them() {
+        let scan = |t: &str| {
+            let f = pbrt_v3_float_file(t.as_bytes());
+            (f.values, f.skipped, f.cut_off)
+        };
+        assert_eq!(scan("400 0.5\n# a comment 7\n700 .25\n"), (vec![400.0, 0.5, 700.0, 0.25], 0, false));
+        assert_eq!(scan("1e 2.5.1 -+ 3e-1x\n"), (vec![1.0, 2.5, 0.0, 0.3], 0, false));
+        assert_eq!(scan("1#x 2 ab\n"), (vec![1.0, 2.0], 3, false));
+        assert_eq!(scan("400 0.5\n700 1"), (vec![400.0, 0.5, 700.0], 0, true));
+        assert_eq!(scan(""), (vec![], 0, false));
+    }
 }

@@ -87,6 +87,30 @@ pub enum StmtKind {
     ImportEnd,
 }
 
+impl StmtKind {
+    /// The parameter list of a statement that has one.
+    pub fn params_mut(&mut self) -> Option<&mut ParamList> {
+        use StmtKind as K;
+        match self {
+            K::Camera(e)
+            | K::Sampler(e)
+            | K::Film(e)
+            | K::PixelFilter(e)
+            | K::Integrator(e)
+            | K::Accelerator(e)
+            | K::MakeNamedMedium(e)
+            | K::Attribute(e)
+            | K::Shape(e)
+            | K::LightSource(e)
+            | K::AreaLightSource(e)
+            | K::Material(e)
+            | K::MakeNamedMaterial(e) => Some(&mut e.params),
+            K::Texture { class, .. } => Some(&mut class.params),
+            _ => None,
+        }
+    }
+}
+
 /// `ActiveTransform` argument.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ActiveTransform {

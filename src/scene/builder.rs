@@ -464,10 +464,11 @@ impl Builder {
         self.skipped.push((Some(span), what, why));
     }
 
-    fn apply(&mut self, stmt: Stmt) -> Res<()> {
+    fn apply(&mut self, mut stmt: Stmt) -> Res<()> {
         use StmtKind as K;
         let span = stmt.span;
         self.check_type_name(&stmt.kind)?;
+        self.v3_spectrum_files(&mut stmt.kind);
         match stmt.kind {
             K::Identity => self.transform(span, |_| DMat4::IDENTITY),
             K::Translate(d) => self.concat(span, DMat4::from_translation(DVec3::from(d))),

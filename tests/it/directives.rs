@@ -887,3 +887,48 @@ fn a_v3_include_that_cannot_be_read_is_skipped_with_a_warning() {
         assert!(e.contains(":3:9: error: cannot read") && e.contains("nowhere.pbrt"), "{film}: {e}");
     }
 }
+
+/// pbrt-v3 reads a `spectrum` parameter's SPD file with a lenient scanner: a file it
+/// cannot open is black, characters that are not numbers are skipped, a number the
+/// file ends in without a line end is lost, and an odd count loses its last number.
+/// Each is a located warning in a v3 file, with the spectrum pbrt-v3 makes (checked
+/// against pbrt-v3's images); pbrt-v4 stops, and so does a file of unknown version.
+#[test]
+fn v3_spectrum_files_are_read_as_pbrt_v3_reads_them() {
+    let files = [
+        ("odd.spd", "400 0.5\n700 0.25 0.9\n"),
+        ("junk.spd", "400 0.5 abc\n700 0.25\n"),
+        ("cut.spd", "400 0.5\n700 0.25\n800 1"),
+        ("good.spd", "# fine\n400 0.5\n700 0.25\n"),
+    ];
+    let dir = crate::common::scratch("spd", "v3", &files);
+    let load = |film: &str, kds: &[&str]| {
+        let mut text = format!("{film}WorldBegin\n");
+        for kd in kds {
+            text += &format!("Material \"matte\" \"spectrum Kd\" {kd}\nShape \"sphere\"\n");
+        }
+        text += if film.contains("image") { "WorldEnd\n" } else { "" };
+        std::fs::write(dir.join("scene.pbrt"), text).unwrap();
+        crate::common::load_file(&dir.join("scene.pbrt"))
+    };
+    let named = ["\"nope.spd\"", "\"odd.spd\"", "\"junk.spd\"", "\"cut.spd\"", "\"good.spd\""];
+    let s = load("Film \"image\"\n", &named).unwrap_or_else(|e| panic!("{e}"));
+    let pairs = "[400 0.5 700 0.25]";
+    let inline = load("Film \"image\"\n", &["[360 0 830 0]", pairs, pairs, pairs, pairs]).expect("inline");
+    for (k, (a, b)) in s.shapes.iter().zip(&inline.shapes).enumerate() {
+        assert_eq!(s.materials[a.material as usize].kind, inline.materials[b.material as usize].kind, "{}", named[k]);
+    }
+    let w: Vec<_> = s.warnings.iter().filter(|w| w.message.contains("pbrt-v3")).collect();
+    let lines: Vec<u32> = w.iter().map(|w| w.line).collect();
+    assert_eq!(lines, [3, 5, 7, 9], "{w:?}");
+    for (w, why) in w.iter().zip(["cannot read", "odd count", "3 characters", "no line end"]) {
+        assert!(w.message.contains(why), "{w:?} lacks {why}");
+    }
+    for kd in &named[..3] {
+        let e = load("Film \"rgb\"\n", &[kd]).expect_err("pbrt-v4 stops").to_string();
+        assert!(e.contains("scene.pbrt:3:"), "{kd}: {e}");
+        assert!(load("", &[kd]).is_err(), "{kd}: version not known");
+    }
+    // Outside pbrt-v3's scanner the last number is read: three pairs, no warning.
+    assert!(load("Film \"rgb\"\n", &[named[3]]).expect("three pairs").warnings.is_empty());
+}

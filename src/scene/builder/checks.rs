@@ -12,9 +12,15 @@
 use super::{Builder, Res};
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
+use crate::parser::params::{ParamType, Values};
 use crate::parser::source::{FileId, Span};
 use crate::parser::stmt::StmtKind;
 use crate::scene::names::Family;
+
+/// The wavelengths (nm) of the black spectrum pbrt-v3 uses for an SPD file it cannot
+/// read: two zero samples span the visible range.
+const BLACK_FROM: f32 = 360.0;
+const BLACK_TO: f32 = 830.0;
 
 /// Why a statement of a type we do not render is left out: a name pbrt knows and we
 /// do not render, or an unknown one (with the nearest known name).
@@ -80,6 +86,60 @@ impl Builder {
             }
         }
         Ok(())
+    }
+
+    /// pbrt-v3 reads a `spectrum` parameter's SPD file as it parses the statement. One
+    /// it cannot read, or whose text is not numbers, is black with a warning, and one
+    /// with an odd count loses its last number; the render goes on. pbrt-v4 stops. In a
+    /// file known as v3 such a parameter's value becomes those pairs here; elsewhere the
+    /// parameter's reader reports the error.
+    pub(super) fn v3_spectrum_files(&mut self, kind: &mut StmtKind) {
+        if self.known_syntax() != Some(Syntax::V3) {
+            return;
+        }
+        let Some(params) = kind.params_mut() else { return };
+        for p in params.params.iter_mut().filter(|p| p.ty == ParamType::Spectrum) {
+            let Values::Strings(names) = &p.values else { continue };
+            let [name] = names.as_slice() else { continue };
+            let Some((values, why)) = self.v3_spd_slip(name) else { continue };
+            let msg = format!("\"spectrum {}\" \"{name}\": {why}", p.name);
+            self.warnings.push(Diagnostic::warning(p.value_span, msg));
+            p.values = Values::Floats(if values.is_empty() { vec![BLACK_FROM, 0.0, BLACK_TO, 0.0] } else { values });
+        }
+    }
+
+    /// For spectrum `name`, a file pbrt-v3 does not take whole: the numbers it keeps
+    /// (none: black) and why. `None` for a named spectrum or a well-formed file.
+    fn v3_spd_slip(&self, name: &str) -> Option<(Vec<f32>, String)> {
+        if crate::spectrum::named_spectrum(name).is_some() {
+            return None;
+        }
+        let path = crate::parser::stmt::resolve_relative(self.reader.base_dir(), name);
+        let bytes = match self.reader.files.read(&path) {
+            Ok(bytes) => bytes,
+            Err(e) => return Some((Vec::new(), format!("{e}; black, as pbrt-v3 renders it"))),
+        };
+        let well_formed = crate::values::spd_numbers(&bytes, name).is_ok_and(|v| !v.is_empty() && v.len() % 2 == 0);
+        let v3 = crate::values::pbrt_v3_float_file(&bytes);
+        if well_formed && !v3.cut_off {
+            return None;
+        }
+        let mut why = vec![];
+        if v3.skipped > 0 {
+            why.push(format!("{} characters that are not numbers skipped", v3.skipped));
+        }
+        if v3.cut_off {
+            why.push("the number at its end, with no line end after it, lost".to_string());
+        }
+        let mut values = v3.values;
+        if values.len() % 2 == 1 {
+            values.pop();
+            why.push("an odd count: the last number dropped".to_string());
+        }
+        if values.is_empty() {
+            why.push("no pairs: black".to_string());
+        }
+        Some((values, format!("read as pbrt-v3 reads it ({})", why.join("; "))))
     }
 
     /// What pbrt-v3 reports and goes on past, where pbrt-v4 stops: an error (`what`),
