@@ -20,7 +20,7 @@ use crate::filters::PixelFilter;
 use crate::limits::Limits;
 use crate::parser::Syntax;
 use crate::parser::error::Diagnostic;
-use crate::parser::params::ParamType;
+use crate::parser::params::{ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::parser::stmt::Entity;
 use crate::spectrum::buckets::Buckets;
@@ -94,6 +94,18 @@ type Res<T> = Result<T, Diagnostic>;
 /// Approximations found while resolving: where, what, how.
 pub type Notes = Vec<(Span, String, Approx)>;
 
+/// A camera's `screenwindow`; one of other than four values is ignored with a warning,
+/// as both pbrts report it and go on with the default window.
+fn screen_window(p: &ParamList, warn: &mut Vec<Diagnostic>) -> Res<Option<[f32; 4]>> {
+    if let Some(q) = p.named("screenwindow").filter(|q| q.ty == ParamType::Float && q.values.len() != 4) {
+        q.mark_used();
+        let msg = format!("\"screenwindow\" needs 4 values, found {}; ignored, as pbrt ignores it", q.values.len());
+        warn.push(Diagnostic::warning(q.value_span, msg));
+        return Ok(None);
+    }
+    p.fixed::<4>("screenwindow", &[ParamType::Float])
+}
+
 impl RenderOptions {
     pub fn resolve(
         &self,
@@ -103,7 +115,7 @@ impl RenderOptions {
         notes: &mut Notes,
     ) -> Res<Resolved> {
         let (film, exposure_scale) = self.film(syntax, limits, notes)?;
-        let camera = self.camera(&film, syntax)?;
+        let camera = self.camera(&film, syntax, warn)?;
         let mut film = film;
         if syntax == Syntax::V4 {
             self.check_shutter_opens()?;
@@ -308,7 +320,7 @@ impl RenderOptions {
         Ok(Some(std::sync::Arc::new(desc)))
     }
 
-    fn camera(&self, film: &Film, syntax: Syntax) -> Res<Camera> {
+    fn camera(&self, film: &Film, syntax: Syntax, warn: &mut Vec<Diagnostic>) -> Res<Camera> {
         let default = (Entity::default_named("perspective"), DMat4::IDENTITY);
         let (e, camera_from_world) = self.camera.as_ref().unwrap_or(&default);
         let p = &e.params;
@@ -337,7 +349,7 @@ impl RenderOptions {
         };
         let default_window =
             if frame > 1.0 { [-frame, frame, -1.0, 1.0] } else { [-1.0, 1.0, -1.0 / frame, 1.0 / frame] };
-        let screen_window = p.fixed::<4>("screenwindow", &[ParamType::Float])?.unwrap_or(default_window);
+        let screen_window = screen_window(p, warn)?.unwrap_or(default_window);
         if let Some(x) = screen_window.iter().find(|x| !x.is_finite()) {
             let at = p.named("screenwindow").map_or(e.name_span, |c| c.value_span);
             return Err(Diagnostic::error(at, format!("\"screenwindow\" must be finite, not {x}")));

@@ -35,7 +35,10 @@ struct Direction {
     range: [f32; 2],
 }
 
-pub fn read(_: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
+pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
+    if let Some((at, why)) = missing_or_miscounted(p, span)? {
+        return ctx.left_out_by_v3(p, at, why);
+    }
     let (u, v) = (direction(p, span, "u")?, direction(p, span, "v")?);
     let cp = control_points(p, span, u.count * v.count)?;
     let mut mesh = TriangleMesh { indices: grid_indices(DICE, DICE), ..Default::default() };
@@ -84,6 +87,38 @@ fn mend_normals(n: &mut [Vec3]) {
 
 fn lerp(t: f32, a: f32, b: f32) -> f32 {
     (1.0 - t) * a + t * b
+}
+
+/// Where and why pbrt-v3 reports a patch and leaves it out, in its order: a count,
+/// order or knot vector missing, or knots other than count + order in number, in u
+/// and then in v; no control points, or not count_u · count_v of them. (What it cannot
+/// survive, [`direction`] and [`control_points`] report as errors.)
+fn missing_or_miscounted(p: &ParamList, span: Span) -> Res<Option<(Span, String)>> {
+    let mut points = 1i64;
+    for d in ["u", "v"] {
+        let (count, order) = (p.int(&format!("n{d}"))?, p.int(&format!("{d}order"))?);
+        let knots = p.array(&format!("{d}knots"), ParamType::Float)?;
+        let (count, order, knots) = match (count, order, knots) {
+            (None, ..) => return Ok(Some((span, format!("nurbs needs \"integer n{d}\"")))),
+            (_, None, _) => return Ok(Some((span, format!("nurbs needs \"integer {d}order\"")))),
+            (.., None) => return Ok(Some((span, format!("nurbs needs \"float {d}knots\"")))),
+            (Some(c), Some(o), Some(k)) => (c as i64, o as i64, k),
+        };
+        if knots.floats().len() as i64 != count + order {
+            let msg = format!("nurbs: {} {d} knots; n{d} + {d}order = {}", knots.floats().len(), count + order);
+            return Ok(Some((knots.value_span, msg)));
+        }
+        points *= count;
+    }
+    let (values, at, arity) = match (p.array("P", ParamType::Point3)?, p.array("Pw", ParamType::Float)?) {
+        (Some(q), _) => (q.floats().len(), q.value_span, 3),
+        (None, Some(q)) => (q.floats().len(), q.value_span, 4),
+        (None, None) => {
+            return Ok(Some((span, "nurbs needs its control points as \"point P\" or \"float Pw\"".into())));
+        }
+    };
+    Ok((values % arity != 0 || (values / arity) as i64 != points)
+        .then(|| (at, format!("nurbs: {values} values for {points} control points of {arity} values"))))
 }
 
 /// `n{u,v}`, `{u,v}order`, `{u,v}knots` and `{u,v}0`/`{u,v}1`, checked.

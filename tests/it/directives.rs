@@ -932,3 +932,20 @@ fn v3_spectrum_files_are_read_as_pbrt_v3_reads_them() {
     // Outside pbrt-v3's scanner the last number is read: three pairs, no warning.
     assert!(load("Film \"rgb\"\n", &[named[3]]).expect("three pairs").warnings.is_empty());
 }
+
+/// A `screenwindow` of other than four values: both pbrts report it and render with
+/// the default window (checked against both), so it is a warning in either version.
+/// A non-finite one stays an error.
+#[test]
+fn a_screenwindow_of_three_values_is_ignored_with_a_warning_as_pbrt_ignores_it() {
+    for film in ["Film \"image\"", "Film \"rgb\""] {
+        let s = scene(&format!(
+            "{film} \"integer xresolution\" 200 \"integer yresolution\" 100\nCamera \"perspective\" \"float screenwindow\" [-1 1 -1]\nWorldBegin\n"
+        ));
+        assert_eq!(s.camera.screen_window, [-2.0, 2.0, -1.0, 1.0], "{film}: the default window");
+        let w = warnings(&s);
+        assert!(w.iter().any(|m| m.contains("\"screenwindow\" needs 4 values, found 3; ignored")), "{film}: {w:?}");
+    }
+    let e = crate::common::load("Camera \"perspective\" \"float screenwindow\" [-1 inf -1 1]\nWorldBegin\n");
+    assert!(e.expect_err("not finite").to_string().contains("must be finite"));
+}

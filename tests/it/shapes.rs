@@ -530,3 +530,36 @@ fn a_v3_curve_pbrt_v3_cannot_make_is_left_out_with_a_warning() {
     }
     assert_eq!(scene(&curve("image", four)).shapes.len(), 2, "a curve pbrt-v3 makes");
 }
+
+/// pbrt-v3 reports a NURBS patch with a count, order or knot vector missing, knots
+/// other than count + order in number, or control points missing or miscounted, and
+/// leaves it out (checked against its image: the scene without the patch). `nurbs` is
+/// pbrt-v3's alone, so its files are v3 files. What pbrt-v3 cannot survive (order 1,
+/// decreasing knots) stays an error.
+#[test]
+fn a_nurbs_patch_pbrt_v3_cannot_make_is_left_out_with_a_warning() {
+    let patch = |u_knots: &str, points: &str| {
+        format!(
+            "Shape \"nurbs\" \"integer nu\" 2 \"integer nv\" 2 \"integer uorder\" 2 \"integer vorder\" 2 \
+             \"float uknots\" {u_knots} \"float vknots\" [0 0 1 1] {points}"
+        )
+    };
+    let four = "\"point P\" [0 0 0 1 0 0 0 1 0 1 1 0]";
+    let loaded = |shape: &str| scene(&format!("WorldBegin\n{shape}\nShape \"sphere\"\n"));
+    for (shape, why) in [
+        ("Shape \"nurbs\" \"integer nv\" 2".to_string(), "needs \"integer nu\""),
+        (patch("[0 0 1]", four), "3 u knots; nu + uorder = 4"),
+        (patch("[0 0 1 1]", ""), "needs its control points"),
+        (patch("[0 0 1 1]", "\"point P\" [0 0 0 1 0 0 0 1 0]"), "9 values for 4 control points"),
+        (patch("[0 0 1 1]", "\"float Pw\" [0 0 0 1 1 0 0 1 0 1 0 1 1 1 0]"), "15 values for 4 control points"),
+    ] {
+        let s = loaded(&shape);
+        assert_eq!(s.shapes.len(), 1, "{shape}: the sphere alone");
+        let w: Vec<String> = warnings(&s).into_iter().filter(|m| m.contains("left out")).collect();
+        assert!(w.len() == 1 && w[0].contains(why), "{shape}: {w:?}");
+    }
+    assert_eq!(loaded(&patch("[0 0 1 1]", four)).shapes.len(), 2, "a patch pbrt-v3 makes");
+    let order_1 = patch("[0 1 1]", four).replace("\"integer uorder\" 2", "\"integer uorder\" 1");
+    let e = load(&format!("WorldBegin\n{order_1}\n")).expect_err("order 1").to_string();
+    assert!(e.contains("the order must be at least 2"), "order 1 stays an error: {e}");
+}
