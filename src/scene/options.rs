@@ -94,6 +94,62 @@ type Res<T> = Result<T, Diagnostic>;
 /// Approximations found while resolving: where, what, how.
 pub type Notes = Vec<(Span, String, Approx)>;
 
+/// A film's crop window (as fractions) and pixel bounds, from `cropwindow` and
+/// `pixelbounds` over the resolution `res`.
+fn film_window(
+    e: &Entity,
+    [xres, yres]: [u32; 2],
+    syntax: Syntax,
+    warn: &mut Vec<Diagnostic>,
+) -> Res<([f32; 4], [u32; 4])> {
+    let p = &e.params;
+    let crop = match v4_ignores_miscounted(p, "cropwindow", ParamType::Float, syntax, warn) {
+        true => None,
+        false => p.fixed::<4>("cropwindow", &[ParamType::Float])?,
+    };
+    if let Some(c) = crop
+        && let Some(x) = c.iter().find(|x| !x.is_finite())
+    {
+        let at = p.named("cropwindow").map_or(e.name_span, |c| c.value_span);
+        return Err(Diagnostic::error(at, format!("\"cropwindow\" must be finite, not {x}")));
+    }
+    let crop_window = crop.map_or([0.0, 1.0, 0.0, 1.0], |c| {
+        let [a, b, c0, d] = c.map(|v| v.clamp(0.0, 1.0));
+        [a.min(b), a.max(b), c0.min(d), c0.max(d)]
+    });
+    let pixel_bounds = match v4_ignores_miscounted(p, "pixelbounds", ParamType::Integer, syntax, warn) {
+        true => None,
+        false => p.find("pixelbounds", &[ParamType::Integer]),
+    };
+    let bounds = match pixel_bounds {
+        Some(pb) => match pb.ints() {
+            &[x0, x1, y0, y1] => {
+                let c = |v: i32, hi: u32| v.clamp(0, hi as i32) as u32;
+                [c(x0.min(x1), xres), c(x0.max(x1), xres), c(y0.min(y1), yres), c(y0.max(y1), yres)]
+            }
+            _ => return Err(Diagnostic::error(pb.span, "\"pixelbounds\" needs 4 integers")),
+        },
+        None => {
+            let c = |f: f32, n: u32| (n as f32 * f).ceil() as u32;
+            [c(crop_window[0], xres), c(crop_window[1], xres), c(crop_window[2], yres), c(crop_window[3], yres)]
+        }
+    };
+    Ok((crop_window, bounds))
+}
+
+/// Whether a v4 film's `name` (`cropwindow`, `pixelbounds`) has other than four
+/// values: pbrt-v4 reports it and renders the whole film, and so do we, with a warning.
+/// (pbrt-v3 leaves its crop window unset there and renders nothing: an error.)
+fn v4_ignores_miscounted(p: &ParamList, name: &str, ty: ParamType, syntax: Syntax, warn: &mut Vec<Diagnostic>) -> bool {
+    let Some(q) = p.named(name).filter(|q| syntax == Syntax::V4 && q.ty == ty && q.values.len() != 4) else {
+        return false;
+    };
+    q.mark_used();
+    let msg = format!("\"{name}\" needs 4 values, found {}; ignored, as pbrt-v4 ignores it", q.values.len());
+    warn.push(Diagnostic::warning(q.value_span, msg));
+    true
+}
+
 /// A camera's `screenwindow`; one of other than four values is ignored with a warning,
 /// as both pbrts report it and go on with the default window.
 fn screen_window(p: &ParamList, warn: &mut Vec<Diagnostic>) -> Res<Option<[f32; 4]>> {
@@ -114,7 +170,7 @@ impl RenderOptions {
         warn: &mut Vec<Diagnostic>,
         notes: &mut Notes,
     ) -> Res<Resolved> {
-        let (film, exposure_scale) = self.film(syntax, limits, notes)?;
+        let (film, exposure_scale) = self.film(syntax, limits, (warn, notes))?;
         let camera = self.camera(&film, syntax, warn)?;
         let mut film = film;
         if syntax == Syntax::V4 {
@@ -129,7 +185,12 @@ impl RenderOptions {
         Ok(Resolved { camera, film, integrator })
     }
 
-    fn film(&self, syntax: Syntax, limits: &Limits, notes: &mut Notes) -> Res<(Film, f32)> {
+    fn film(
+        &self,
+        syntax: Syntax,
+        limits: &Limits,
+        (warn, notes): (&mut Vec<Diagnostic>, &mut Notes),
+    ) -> Res<(Film, f32)> {
         let empty = Entity::default_named(if syntax == Syntax::V3 { "image" } else { "rgb" });
         let e = self.film.as_ref().unwrap_or(&empty);
         let p = &e.params;
@@ -146,30 +207,7 @@ impl RenderOptions {
         };
         let (xres, yres) = (res("xresolution", 1280)?, res("yresolution", 720)?);
         let filename = p.string("filename")?.filter(|f| !f.is_empty()).unwrap_or_else(|| "pbrt.exr".into());
-        let crop = p.fixed::<4>("cropwindow", &[ParamType::Float])?;
-        if let Some(c) = crop
-            && let Some(x) = c.iter().find(|x| !x.is_finite())
-        {
-            let at = p.named("cropwindow").map_or(e.name_span, |c| c.value_span);
-            return Err(Diagnostic::error(at, format!("\"cropwindow\" must be finite, not {x}")));
-        }
-        let crop_window = crop.map_or([0.0, 1.0, 0.0, 1.0], |c| {
-            let [a, b, c0, d] = c.map(|v| v.clamp(0.0, 1.0));
-            [a.min(b), a.max(b), c0.min(d), c0.max(d)]
-        });
-        let bounds = match p.find("pixelbounds", &[ParamType::Integer]) {
-            Some(pb) => match pb.ints() {
-                &[x0, x1, y0, y1] => {
-                    let c = |v: i32, hi: u32| v.clamp(0, hi as i32) as u32;
-                    [c(x0.min(x1), xres), c(x0.max(x1), xres), c(y0.min(y1), yres), c(y0.max(y1), yres)]
-                }
-                _ => return Err(Diagnostic::error(pb.span, "\"pixelbounds\" needs 4 integers")),
-            },
-            None => {
-                let c = |f: f32, n: u32| (n as f32 * f).ceil() as u32;
-                [c(crop_window[0], xres), c(crop_window[1], xres), c(crop_window[2], yres), c(crop_window[3], yres)]
-            }
-        };
+        let (crop_window, bounds) = film_window(e, [xres, yres], syntax, warn)?;
         if bounds[0] >= bounds[1] || bounds[2] >= bounds[3] {
             return Err(Diagnostic::error(e.name_span, format!("the crop window selects no pixels ({bounds:?})")));
         }

@@ -17,7 +17,7 @@ pub const NAME: &str = "bilerp";
 pub fn read(i: &mut Input, p: &ParamList, _at: Span, site: &TextureSite) -> Res<Option<TextureKind>> {
     let mut corner = |n: &str, d: f32| i.constant(p, n, d);
     let v = [corner("v00", 0.0)?, corner("v10", 0.0)?, corner("v01", 1.0)?, corner("v11", 1.0)?];
-    Ok(Some(TextureKind::Bilerp { v, map: mapping::read(p, site)? }))
+    Ok(Some(TextureKind::Bilerp { v, map: mapping::read(p, site, i.r)? }))
 }
 
 #[inline]

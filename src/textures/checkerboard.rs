@@ -24,7 +24,7 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
     values::no_effect(p, &["aamode"]);
     let (tex1, tex2) = (i.input(p, "tex1", 1.0)?, i.input(p, "tex2", 0.0)?);
     match dimension {
-        2 => Ok(Some(TextureKind::Checkerboard { tex1, tex2, map: mapping::read(p, site)? })),
+        2 => Ok(Some(TextureKind::Checkerboard { tex1, tex2, map: mapping::read(p, site, i.r)? })),
         3 => Ok(Some(TextureKind::Checkerboard3D { tex1, tex2, map: site.map3d() })),
         d => {
             let at = values::span_of(p, "dimension").unwrap_or(at);

@@ -20,7 +20,7 @@ pub const NAME: &str = "dots";
 
 pub fn read(i: &mut Input, p: &ParamList, _at: Span, site: &TextureSite) -> Res<Option<TextureKind>> {
     Ok(Some(TextureKind::Dots {
-        map: mapping::read(p, site)?,
+        map: mapping::read(p, site, i.r)?,
         background: i.input(p, "inside", 1.0)?,
         dot: i.input(p, "outside", 0.0)?,
     }))

@@ -32,12 +32,15 @@ use std::sync::Arc;
 
 pub const NAME: &str = "imagemap";
 
+/// pbrt-v4's `filter` names (`ParseFilter`).
+const FILTERS: [&str; 5] = ["ewa", "EWA", "trilinear", "bilinear", "point"];
+
 pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<Option<TextureKind>> {
     let name = p
         .string("filename")?
         .ok_or_else(|| p.wrong_type().unwrap_or_else(|| Diagnostic::error(at, "imagemap needs \"string filename\"")))?;
     let name_at = p.named("filename").map_or(at, |f| f.value_span);
-    let map = mapping::read(p, site)?;
+    let map = mapping::read(p, site, i.r)?;
     let wrap = match values::choice(p, "wrap", "repeat", &["repeat", "clamp", "black", "octahedralsphere"])? {
         "clamp" => Wrap::Clamp,
         "black" => Wrap::Black,
@@ -52,6 +55,10 @@ pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<O
         false => (None, values::encoding(p, ColorEncoding::Srgb, at)?),
     };
     values::no_effect(p, &["maxanisotropy", "trilinear", "filter"]);
+    if let Some(f) = p.string("filter")?.filter(|f| !v3 && !FILTERS.contains(&f.as_str())) {
+        let at = values::span_of(p, "filter").unwrap_or(at);
+        i.r.warn(at, format!("imagemap: unknown filter \"{f}\"; the default one, as pbrt-v4 takes it"));
+    }
     let eight_bit = Format::of(Path::new(&name)).is_some_and(Format::eight_bit);
     let read = match i.is_float {
         true if v3 => i.r.grey_image(&name, Grey::V3 { decode: gamma.unwrap_or(eight_bit) }),

@@ -15,7 +15,7 @@
 use super::TexCtx;
 use crate::parser::Syntax;
 use crate::parser::params::{ParamList, ParamType};
-use crate::values::{self, Range, Res};
+use crate::values::{self, Range, Res, Resolver};
 use glam::{DMat4, Mat4, Vec3};
 use std::f32::consts::PI;
 
@@ -68,12 +68,18 @@ impl TextureSite {
     }
 }
 
-/// `"string mapping"` and its parameters.
-pub fn read(p: &ParamList, site: &TextureSite) -> Res<Mapping2D> {
-    let kind = values::choice(p, "mapping", "uv", &["uv", "spherical", "cylindrical", "planar"])?;
+/// `"string mapping"` and its parameters. An unknown mapping is (u, v) unscaled, with a
+/// warning: both pbrts report it and render so.
+pub fn read(p: &ParamList, site: &TextureSite, r: &mut dyn Resolver) -> Res<Mapping2D> {
+    let kind = p.string("mapping")?.unwrap_or_else(|| "uv".into());
+    if !["uv", "spherical", "cylindrical", "planar"].contains(&kind.as_str()) {
+        let at = values::span_of(p, "mapping").unwrap_or_default();
+        r.warn(at, format!("unknown texture mapping \"{kind}\"; (u, v) unscaled, as pbrt maps it"));
+        return Ok(Mapping2D::Uv(UvMapping { su: 1.0, sv: 1.0, du: 0.0, dv: 0.0 }));
+    }
     let f = |name: &str, d: f32| values::float(p, name, d, Range::Any);
     let texture_from_world = site.world_from_texture.inverse().as_mat4();
-    Ok(match kind {
+    Ok(match kind.as_str() {
         "spherical" => Mapping2D::Spherical { texture_from_world },
         "cylindrical" => Mapping2D::Cylindrical { texture_from_world },
         "planar" => {

@@ -19,7 +19,7 @@ pub fn read(i: &mut Input, p: &ParamList, _at: Span, site: &TextureSite) -> Res<
     if i.is_float {
         return Ok(None);
     }
-    Ok(Some(TextureKind::Uv { map: mapping::read(p, site)? }))
+    Ok(Some(TextureKind::Uv { map: mapping::read(p, site, i.r)? }))
 }
 
 #[inline]

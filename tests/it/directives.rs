@@ -949,3 +949,43 @@ fn a_screenwindow_of_three_values_is_ignored_with_a_warning_as_pbrt_ignores_it()
     let e = crate::common::load("Camera \"perspective\" \"float screenwindow\" [-1 inf -1 1]\nWorldBegin\n");
     assert!(e.expect_err("not finite").to_string().contains("must be finite"));
 }
+
+/// Parameters both pbrts report and render past: a texture mapping of another name is
+/// (u, v) unscaled in either version; a v4 film's `cropwindow` or `pixelbounds` of
+/// other than four values is ignored (pbrt-v4 renders the whole film; pbrt-v3 leaves
+/// its crop window unset and renders nothing, so a v3 film's stays an error); an
+/// unknown v4 `imagemap` filter is the default one. Each checked against its pbrt.
+#[test]
+fn slips_both_pbrts_render_past_are_warnings() {
+    use pbrt_sppm::textures::TextureKind;
+    for (film, kd) in
+        [("Film \"image\"", "\"matte\" \"texture Kd\""), ("Film \"rgb\"", "\"diffuse\" \"texture reflectance\"")]
+    {
+        let s = scene(&format!(
+            "{film}\nWorldBegin\nTexture \"t\" \"spectrum\" \"checkerboard\" \"string mapping\" \"toroidal\" \
+             \"float uscale\" 4\nTexture \"u\" \"spectrum\" \"checkerboard\"\nMaterial {kd} \"t\" Shape \"sphere\"\n\
+             Material {kd} \"u\" Shape \"sphere\"\n"
+        ));
+        let [a, b] = [&s.textures[0].kind, &s.textures[1].kind];
+        let map = |k: &TextureKind| match k {
+            TextureKind::Checkerboard { map, .. } => *map,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(map(a), map(b), "{film}: unscaled (u, v)");
+        assert!(warnings(&s).iter().any(|w| w.contains("unknown texture mapping \"toroidal\"")), "{film}");
+    }
+    for (param, value) in [("float cropwindow", "[0 0.5 0]"), ("integer pixelbounds", "[0 16 0]")] {
+        let s = scene(&format!(
+            "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32 \"{param}\" {value}\nWorldBegin\n"
+        ));
+        assert_eq!(s.film.pixel_bounds, [0, 32, 0, 32], "{param}: the whole film");
+        assert!(warnings(&s).iter().any(|w| w.contains("needs 4 values, found 3; ignored")), "{param}");
+        let v3 = crate::common::load(&format!("Film \"image\" \"{param}\" {value}\nWorldBegin\n"));
+        assert!(v3.expect_err("pbrt-v3 renders nothing").to_string().contains("4"), "{param}");
+    }
+    let s = scene(
+        "Film \"rgb\"\nWorldBegin\nTexture \"i\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\" \"string filter\" \"gauss\"\n\
+         Material \"diffuse\" \"texture reflectance\" \"i\" Shape \"sphere\"\n",
+    );
+    assert!(warnings(&s).iter().any(|w| w.contains("unknown filter \"gauss\"")), "{:?}", warnings(&s));
+}
