@@ -170,7 +170,7 @@ impl RenderOptions {
         warn: &mut Vec<Diagnostic>,
         notes: &mut Notes,
     ) -> Res<Resolved> {
-        let (film, exposure_scale) = self.film(syntax, limits, (warn, notes))?;
+        let (film, exposure_scale) = self.film(syntax, limits, warn, notes)?;
         let camera = self.camera(&film, syntax, warn)?;
         let mut film = film;
         if syntax == Syntax::V4 {
@@ -185,12 +185,7 @@ impl RenderOptions {
         Ok(Resolved { camera, film, integrator })
     }
 
-    fn film(
-        &self,
-        syntax: Syntax,
-        limits: &Limits,
-        (warn, notes): (&mut Vec<Diagnostic>, &mut Notes),
-    ) -> Res<(Film, f32)> {
+    fn film(&self, syntax: Syntax, limits: &Limits, warn: &mut Vec<Diagnostic>, notes: &mut Notes) -> Res<(Film, f32)> {
         let empty = Entity::default_named(if syntax == Syntax::V3 { "image" } else { "rgb" });
         let e = self.film.as_ref().unwrap_or(&empty);
         let p = &e.params;
