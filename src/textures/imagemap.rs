@@ -25,7 +25,7 @@ use crate::parser::error::Diagnostic;
 use crate::parser::params::ParamList;
 use crate::parser::source::Span;
 use crate::spectrum::Rgb;
-use crate::values::{self, ColorEncoding, Range, Res, TexValue};
+use crate::values::{self, ColorEncoding, Range, Res, Resolver, TexValue};
 use glam::Vec3;
 use std::path::Path;
 use std::sync::Arc;
@@ -35,17 +35,31 @@ pub const NAME: &str = "imagemap";
 /// pbrt-v4's `filter` names (`ParseFilter`).
 const FILTERS: [&str; 5] = ["ewa", "EWA", "trilinear", "bilinear", "point"];
 
+/// `wrap`: repeat, clamp or black (pbrt-v4's octahedralsphere is read as repeat).
+/// pbrt-v3 takes any other name as repeat without a word, and pbrt-v4 stops: in a v3
+/// file it is repeat, with a warning.
+fn wrap_mode(r: &mut dyn Resolver, p: &ParamList) -> Res<Wrap> {
+    const MODES: [&str; 4] = ["repeat", "clamp", "black", "octahedralsphere"];
+    let v3 = r.syntax() == crate::parser::Syntax::V3;
+    if let Some(w) = p.string("wrap")?.filter(|w| v3 && !MODES.contains(&w.as_str())) {
+        let at = values::span_of(p, "wrap").unwrap_or_default();
+        r.warn(at, format!("imagemap: unknown wrap mode \"{w}\"; repeat, as pbrt-v3 takes it"));
+        return Ok(Wrap::Repeat);
+    }
+    Ok(match values::choice(p, "wrap", "repeat", &MODES)? {
+        "clamp" => Wrap::Clamp,
+        "black" => Wrap::Black,
+        _ => Wrap::Repeat,
+    })
+}
+
 pub fn read(i: &mut Input, p: &ParamList, at: Span, site: &TextureSite) -> Res<Option<TextureKind>> {
     let name = p
         .string("filename")?
         .ok_or_else(|| p.wrong_type().unwrap_or_else(|| Diagnostic::error(at, "imagemap needs \"string filename\"")))?;
     let name_at = p.named("filename").map_or(at, |f| f.value_span);
     let map = mapping::read(p, site, i.r)?;
-    let wrap = match values::choice(p, "wrap", "repeat", &["repeat", "clamp", "black", "octahedralsphere"])? {
-        "clamp" => Wrap::Clamp,
-        "black" => Wrap::Black,
-        _ => Wrap::Repeat,
-    };
+    let wrap = wrap_mode(i.r, p)?;
     let scale = values::float(p, "scale", 1.0, Range::Any)?;
     let invert = p.bool("invert")?.unwrap_or(false);
     let v3 = i.r.syntax() == crate::parser::Syntax::V3;

@@ -989,3 +989,23 @@ fn slips_both_pbrts_render_past_are_warnings() {
     );
     assert!(warnings(&s).iter().any(|w| w.contains("unknown filter \"gauss\"")), "{:?}", warnings(&s));
 }
+
+/// An imagemap `wrap` of another name: pbrt-v3 repeats without a word (its image of
+/// `"mirror"` equals its image of the default, checked), pbrt-v4 stops. A v3 file gets
+/// repeat and a warning; a v4 file the error.
+#[test]
+fn a_v3_imagemap_wrap_of_another_name_repeats_as_pbrt_v3_does() {
+    let body = |film: &str, kd: &str, wrap: &str| {
+        format!(
+            "{film}\nWorldBegin\nTexture \"i\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\" {wrap}\n\
+             Material {kd} \"i\" Shape \"sphere\"\n"
+        )
+    };
+    let v3 = |wrap: &str| scene(&body("Film \"image\"", "\"matte\" \"texture Kd\"", wrap));
+    let (mirror, plain) = (v3("\"string wrap\" \"mirror\""), v3(""));
+    assert_eq!(mirror.textures, plain.textures, "repeat, the default");
+    assert!(warnings(&mirror).iter().any(|w| w.contains("unknown wrap mode \"mirror\"; repeat")));
+    let v4 =
+        crate::common::load(&body("Film \"rgb\"", "\"diffuse\" \"texture reflectance\"", "\"string wrap\" \"mirror\""));
+    assert!(v4.expect_err("pbrt-v4 stops").to_string().contains("\"wrap\" must be one of"));
+}
