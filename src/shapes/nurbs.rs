@@ -17,7 +17,7 @@
 use super::heightfield::grid_indices;
 use super::{Built, ShapeContext, TriangleMesh};
 use crate::parser::error::Diagnostic;
-use crate::parser::params::{ParamList, ParamType};
+use crate::parser::params::{Param, ParamList, ParamType};
 use crate::parser::source::Span;
 use crate::values::Res;
 use glam::{Vec3, Vec4};
@@ -36,11 +36,12 @@ struct Direction {
 }
 
 pub fn read(ctx: &mut ShapeContext, p: &ParamList, span: Span) -> Res<Built> {
-    if let Some((at, why)) = missing_or_miscounted(p, span)? {
-        return ctx.left_out_by_v3(p, at, why);
-    }
-    let (u, v) = (direction(p, span, "u")?, direction(p, span, "v")?);
-    let cp = control_points(p, span, u.count * v.count)?;
+    let Arrays { u, v, points, arity } = match arrays(p, span)? {
+        Ok(arrays) => arrays,
+        Err((at, why)) => return ctx.left_out_by_v3(p, at, why),
+    };
+    let (u, v) = (direction(p, "u", u)?, direction(p, "v", v)?);
+    let cp = control_points(points, arity);
     let mut mesh = TriangleMesh { indices: grid_indices(DICE, DICE), ..Default::default() };
     let (mut n, mut uv) = (Vec::new(), Vec::new());
     let at = |d: &Direction, i: u32| lerp(i as f32 / (DICE - 1) as f32, d.range[0], d.range[1]);
@@ -89,55 +90,69 @@ fn lerp(t: f32, a: f32, b: f32) -> f32 {
     (1.0 - t) * a + t * b
 }
 
-/// Where and why pbrt-v3 reports a patch and leaves it out, in its order: a count,
-/// order or knot vector missing, or knots other than count + order in number, in u
-/// and then in v; no control points, or not count_u · count_v of them. (What it cannot
-/// survive, [`direction`] and [`control_points`] report as errors.)
-fn missing_or_miscounted(p: &ParamList, span: Span) -> Res<Option<(Span, String)>> {
-    let mut points = 1i64;
+/// One direction's `n`, `order` and `knots`, as given.
+#[derive(Clone, Copy)]
+struct Given<'a> {
+    count: i32,
+    order: i32,
+    knots: &'a Param,
+}
+
+/// The arrays a patch needs, each present and of its count: each direction's, and the
+/// control points' values with their arity (3 for `P`, 4 for `Pw`).
+struct Arrays<'a> {
+    u: Given<'a>,
+    v: Given<'a>,
+    points: &'a [f32],
+    arity: usize,
+}
+
+/// The patch's arrays; or where and why pbrt-v3 reports it and leaves it out, in its
+/// order: a count, order or knot vector missing, or knots other than count + order in
+/// number, in u and then in v; no control points, or not count_u · count_v of them.
+/// (What it cannot survive, [`direction`] reports as errors.)
+fn arrays(p: &ParamList, span: Span) -> Res<Result<Arrays<'_>, (Span, String)>> {
+    let mut given = Vec::with_capacity(2);
     for d in ["u", "v"] {
         let (count, order) = (p.int(&format!("n{d}"))?, p.int(&format!("{d}order"))?);
         let knots = p.array(&format!("{d}knots"), ParamType::Float)?;
         let (count, order, knots) = match (count, order, knots) {
-            (None, ..) => return Ok(Some((span, format!("nurbs needs \"integer n{d}\"")))),
-            (_, None, _) => return Ok(Some((span, format!("nurbs needs \"integer {d}order\"")))),
-            (.., None) => return Ok(Some((span, format!("nurbs needs \"float {d}knots\"")))),
-            (Some(c), Some(o), Some(k)) => (c as i64, o as i64, k),
+            (None, ..) => return Ok(Err((span, format!("nurbs needs \"integer n{d}\"")))),
+            (_, None, _) => return Ok(Err((span, format!("nurbs needs \"integer {d}order\"")))),
+            (.., None) => return Ok(Err((span, format!("nurbs needs \"float {d}knots\"")))),
+            (Some(c), Some(o), Some(k)) => (c, o, k),
         };
-        if knots.floats().len() as i64 != count + order {
-            let msg = format!("nurbs: {} {d} knots; n{d} + {d}order = {}", knots.floats().len(), count + order);
-            return Ok(Some((knots.value_span, msg)));
+        let sum = count as i64 + order as i64;
+        if knots.floats().len() as i64 != sum {
+            return Ok(Err((
+                knots.value_span,
+                format!("nurbs: {} {d} knots; n{d} + {d}order = {sum}", knots.floats().len()),
+            )));
         }
-        points *= count;
+        given.push(Given { count, order, knots });
     }
     let (values, at, arity) = match (p.array("P", ParamType::Point3)?, p.array("Pw", ParamType::Float)?) {
-        (Some(q), _) => (q.floats().len(), q.value_span, 3),
-        (None, Some(q)) => (q.floats().len(), q.value_span, 4),
-        (None, None) => {
-            return Ok(Some((span, "nurbs needs its control points as \"point P\" or \"float Pw\"".into())));
-        }
+        (Some(q), _) => (q.floats(), q.value_span, 3),
+        (None, Some(q)) => (q.floats(), q.value_span, 4),
+        (None, None) => return Ok(Err((span, "nurbs needs its control points as \"point P\" or \"float Pw\"".into()))),
     };
-    Ok((values % arity != 0 || (values / arity) as i64 != points)
-        .then(|| (at, format!("nurbs: {values} values for {points} control points of {arity} values"))))
+    let points = given.iter().map(|g| g.count as i64).product::<i64>();
+    if values.len() % arity != 0 || (values.len() / arity) as i64 != points {
+        let msg = format!("nurbs: {} values for {points} control points of {arity} values", values.len());
+        return Ok(Err((at, msg)));
+    }
+    Ok(Ok(Arrays { u: given[0], v: given[1], points: values, arity }))
 }
 
-/// `n{u,v}`, `{u,v}order`, `{u,v}knots` and `{u,v}0`/`{u,v}1`, checked.
-fn direction(p: &ParamList, span: Span, d: &str) -> Res<Direction> {
-    let need = |what: String| Diagnostic::error(span, format!("nurbs needs \"{what}\""));
-    let located = |name: &str| p.named(name).map_or(span, |q| q.value_span);
-    let count = p.int(&format!("n{d}"))?.ok_or_else(|| need(format!("integer n{d}")))?;
-    let order = p.int(&format!("{d}order"))?.ok_or_else(|| need(format!("integer {d}order")))?;
-    let knots = p.array(&format!("{d}knots"), ParamType::Float)?.ok_or_else(|| need(format!("float {d}knots")))?;
+/// Direction `d`'s arrays checked, and its `{d}0`/`{d}1`.
+fn direction(p: &ParamList, d: &str, Given { count, order, knots }: Given) -> Res<Direction> {
+    let located = |name: &str| p.named(name).map_or(knots.value_span, |q| q.value_span);
     if order < 2 || count < order {
         let msg = format!("nurbs: {d}order {order} with n{d} {count}; the order must be at least 2 and at most n{d}");
         return Err(Diagnostic::error(located(&format!("{d}order")), msg));
     }
     let (count, order) = (count as usize, order as usize);
     let k = knots.floats().to_vec();
-    if k.len() != count + order {
-        let msg = format!("nurbs: {} {d} knots; n{d} + {d}order = {}", k.len(), count + order);
-        return Err(Diagnostic::error(knots.value_span, msg));
-    }
     if k.iter().any(|x| !x.is_finite()) || !k.is_sorted() {
         return Err(Diagnostic::error(knots.value_span, format!("nurbs: the {d} knots decrease or are not finite")));
     }
@@ -154,19 +169,8 @@ fn direction(p: &ParamList, span: Span, d: &str) -> Res<Direction> {
 }
 
 /// The control points as homogeneous points: `P` with weight 1, or `Pw` as given.
-fn control_points(p: &ParamList, span: Span, expected: usize) -> Res<Vec<Vec4>> {
-    let (values, at, arity) = if let Some(q) = p.array("P", ParamType::Point3)? {
-        (q.floats(), q.value_span, 3)
-    } else if let Some(q) = p.array("Pw", ParamType::Float)? {
-        (q.floats(), q.value_span, 4)
-    } else {
-        return Err(Diagnostic::error(span, "nurbs needs its control points as \"point P\" or \"float Pw\""));
-    };
-    if values.len() % arity != 0 || values.len() / arity != expected {
-        let msg = format!("nurbs: {} values for {expected} control points of {arity} values", values.len());
-        return Err(Diagnostic::error(at, msg));
-    }
-    Ok(values.chunks_exact(arity).map(|c| Vec4::new(c[0], c[1], c[2], if arity == 4 { c[3] } else { 1.0 })).collect())
+fn control_points(values: &[f32], arity: usize) -> Vec<Vec4> {
+    values.chunks_exact(arity).map(|c| Vec4::new(c[0], c[1], c[2], if arity == 4 { c[3] } else { 1.0 })).collect()
 }
 
 /// The first knot span holding `t` (pbrt-v3's `KnotOffset`).
