@@ -103,7 +103,10 @@ fn film_window(
     warn: &mut Vec<Diagnostic>,
 ) -> Res<([f32; 4], [u32; 4])> {
     let p = &e.params;
-    let crop = match v4_ignores_miscounted(p, "cropwindow", ParamType::Float, syntax, warn) {
+    // pbrt-v4 renders the whole film past a miscounted crop window or pixel bounds;
+    // pbrt-v3 leaves its crop window unset there and renders nothing: an error.
+    let v4 = syntax == Syntax::V4;
+    let crop = match v4 && ignored_if_not_four(p, "cropwindow", ParamType::Float, "pbrt-v4", warn) {
         true => None,
         false => p.fixed::<4>("cropwindow", &[ParamType::Float])?,
     };
@@ -117,7 +120,7 @@ fn film_window(
         let [a, b, c0, d] = c.map(|v| v.clamp(0.0, 1.0));
         [a.min(b), a.max(b), c0.min(d), c0.max(d)]
     });
-    let pixel_bounds = match v4_ignores_miscounted(p, "pixelbounds", ParamType::Integer, syntax, warn) {
+    let pixel_bounds = match v4 && ignored_if_not_four(p, "pixelbounds", ParamType::Integer, "pbrt-v4", warn) {
         true => None,
         false => p.find("pixelbounds", &[ParamType::Integer]),
     };
@@ -137,29 +140,14 @@ fn film_window(
     Ok((crop_window, bounds))
 }
 
-/// Whether a v4 film's `name` (`cropwindow`, `pixelbounds`) has other than four
-/// values: pbrt-v4 reports it and renders the whole film, and so do we, with a warning.
-/// (pbrt-v3 leaves its crop window unset there and renders nothing: an error.)
-fn v4_ignores_miscounted(p: &ParamList, name: &str, ty: ParamType, syntax: Syntax, warn: &mut Vec<Diagnostic>) -> bool {
-    let Some(q) = p.named(name).filter(|q| syntax == Syntax::V4 && q.ty == ty && q.values.len() != 4) else {
-        return false;
-    };
+/// Whether `name` is of type `ty` with other than four values, which `ignorer` (the
+/// pbrt that reports it and renders on) ignores: then it is marked used, with a warning.
+fn ignored_if_not_four(p: &ParamList, name: &str, ty: ParamType, ignorer: &str, warn: &mut Vec<Diagnostic>) -> bool {
+    let Some(q) = p.named(name).filter(|q| q.ty == ty && q.values.len() != 4) else { return false };
     q.mark_used();
-    let msg = format!("\"{name}\" needs 4 values, found {}; ignored, as pbrt-v4 ignores it", q.values.len());
+    let msg = format!("\"{name}\" needs 4 values, found {}; ignored, as {ignorer} ignores it", q.values.len());
     warn.push(Diagnostic::warning(q.value_span, msg));
     true
-}
-
-/// A camera's `screenwindow`; one of other than four values is ignored with a warning,
-/// as both pbrts report it and go on with the default window.
-fn screen_window(p: &ParamList, warn: &mut Vec<Diagnostic>) -> Res<Option<[f32; 4]>> {
-    if let Some(q) = p.named("screenwindow").filter(|q| q.ty == ParamType::Float && q.values.len() != 4) {
-        q.mark_used();
-        let msg = format!("\"screenwindow\" needs 4 values, found {}; ignored, as pbrt ignores it", q.values.len());
-        warn.push(Diagnostic::warning(q.value_span, msg));
-        return Ok(None);
-    }
-    p.fixed::<4>("screenwindow", &[ParamType::Float])
 }
 
 impl RenderOptions {
@@ -382,7 +370,12 @@ impl RenderOptions {
         };
         let default_window =
             if frame > 1.0 { [-frame, frame, -1.0, 1.0] } else { [-1.0, 1.0, -1.0 / frame, 1.0 / frame] };
-        let screen_window = screen_window(p, warn)?.unwrap_or(default_window);
+        // Both pbrts report a miscounted window and render with the default one.
+        let screen_window = match ignored_if_not_four(p, "screenwindow", ParamType::Float, "pbrt", warn) {
+            true => None,
+            false => p.fixed::<4>("screenwindow", &[ParamType::Float])?,
+        };
+        let screen_window = screen_window.unwrap_or(default_window);
         if let Some(x) = screen_window.iter().find(|x| !x.is_finite()) {
             let at = p.named("screenwindow").map_or(e.name_span, |c| c.value_span);
             return Err(Diagnostic::error(at, format!("\"screenwindow\" must be finite, not {x}")));
