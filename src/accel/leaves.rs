@@ -23,6 +23,7 @@ use super::bvh::{Isa, Leaf};
 use crate::shapes::edge_candidates8;
 use crate::shapes::{TriangleMesh, WatertightRay, corner_lanes_of, edge_candidates};
 use glam::{UVec4, Vec3, Vec4};
+use std::mem::MaybeUninit;
 
 /// The most triangles in a leaf with a block; their at most 48 vertices fit the
 /// node's byte-sized tag and [`all_bytes_below`].
@@ -127,18 +128,23 @@ impl LocalVertices {
         n
     }
 
-    /// Writes the leaf's block into `out`, which is [`block_len`] words long.
-    fn write(&self, leaf: &LeafTriangles, out: &mut [u32]) {
+    /// Writes the leaf's block into `out`, which is [`block_len`] words long: every
+    /// word of it (the two head words, three corner words per group of four triangles,
+    /// three per vertex), so that fresh room needs no zeros first.
+    fn write(&self, leaf: &LeafTriangles, out: &mut [MaybeUninit<u32>]) {
         let groups = leaf.count.div_ceil(4);
         let (head, rest) = out.split_at_mut(2);
-        head.copy_from_slice(&[leaf.first as u32, leaf.shape]);
+        head[0].write(leaf.first as u32);
+        head[1].write(leaf.shape);
         let (corners, verts) = rest.split_at_mut(3 * groups);
         // Native byte order, so that the bytes lie in memory in this order.
         for (w, b) in corners.iter_mut().zip(self.corners.chunks_exact(4)) {
-            *w = u32::from_ne_bytes([b[0], b[1], b[2], b[3]]);
+            w.write(u32::from_ne_bytes([b[0], b[1], b[2], b[3]]));
         }
         for (w, &v) in verts.chunks_exact_mut(3).zip(&self.verts[..self.count]) {
-            w.copy_from_slice(&leaf.mesh.p[v as usize].map(f32::to_bits));
+            for (word, x) in w.iter_mut().zip(leaf.mesh.p[v as usize]) {
+                word.write(x.to_bits());
+            }
         }
     }
 }
@@ -162,8 +168,11 @@ impl LeafBlocks {
         self.words.pop(); // the previous block's spare word
         let at = self.words.len();
         let n = block_len(count, local.count);
-        self.words.resize(at + n + 1, 0);
-        local.write(&leaf, &mut self.words[at..at + n]);
+        self.words.reserve(n + 1);
+        local.write(&leaf, &mut self.words.spare_capacity_mut()[..n]);
+        // SAFETY: `write` wrote all n words past the end.
+        unsafe { self.words.set_len(at + n) };
+        self.words.push(0);
         (at as u32, local.count as u8)
     }
 
@@ -196,11 +205,12 @@ impl LeafBlocks {
                 (at, tag)
             })
             .collect();
-        // Zeroed on all threads first (the kernel clears the fresh pages on both),
-        // then each run of blocks is written into its own part.
+        // Each run of blocks written straight into its own part of fresh room, on all
+        // threads (the kernel clears the fresh pages on both): no pass of zeros first.
         let mut words = crate::hugepages::with_capacity(next + 1);
-        words.par_extend(rayon::iter::repeat_n(0u32, next + 1));
-        let mut rest = &mut words[..next];
+        let room = &mut words.spare_capacity_mut()[..next + 1];
+        room[next].write(0);
+        let mut rest = &mut room[..next];
         let mut parts = Vec::with_capacity(runs.len());
         for (k, run) in refs.chunks(RUN).enumerate() {
             let end = refs.get((k + 1) * RUN).map_or(next, |r| r.0 as usize);
@@ -217,7 +227,11 @@ impl LeafBlocks {
                 (block, part) = std::mem::take(&mut part).split_at_mut(block_len(l.count, local.count));
                 local.write(l, block);
             }
+            assert!(part.is_empty(), "a run's blocks fill its part");
         });
+        // SAFETY: the parts cover the first `next` words, each filled by its run's
+        // blocks (checked above), each block written whole; the spare word is 0.
+        unsafe { words.set_len(next + 1) };
         (LeafBlocks { words }, refs)
     }
 

@@ -325,10 +325,10 @@ impl<'a> PrimRuns<'a> {
     /// primitives beside the records 8 more (100 MB at the load benchmark's peak).
     fn fill(&self, cost: impl Fn(&ShapeRef) -> f32 + Sync) -> Vec<bvh::PrimInfo> {
         let total = self.kept();
-        // Filled on all threads first: the first touch of fresh pages is most of the cost.
+        // Each run written straight into its part of fresh room, on all threads (the
+        // first touch of fresh pages is most of the cost): no pass of zeros before it.
         let mut records = Vec::with_capacity(total);
-        records.par_extend(rayon::iter::repeat_n(bvh::PrimInfo::default(), total));
-        let mut rest = records.as_mut_slice();
+        let mut rest = &mut records.spare_capacity_mut()[..total];
         let mut slots = Vec::with_capacity(self.counts.len());
         for &n in &self.counts {
             let run;
@@ -338,10 +338,15 @@ impl<'a> PrimRuns<'a> {
         slots.into_par_iter().enumerate().for_each(|(r, run)| {
             let mut i = 0;
             self.visit(r, &mut |shape, g, b| {
-                run[i] = bvh::PrimInfo::new(&b, cost(&self.shapes[shape]), g as u32);
+                run[i].write(bvh::PrimInfo::new(&b, cost(&self.shapes[shape]), g as u32));
                 i += 1;
             });
+            // `count` visited the same primitives.
+            assert_eq!(i, run.len(), "a run's primitives, counted twice");
         });
+        // SAFETY: every run wrote each of its slots (checked above), and the runs
+        // cover the first `total` places.
+        unsafe { records.set_len(total) };
         records
     }
 }
