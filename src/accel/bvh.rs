@@ -1,6 +1,6 @@
 //! A bounding volume hierarchy: binned SAH build (parallel for large subtrees, and the
-//! bins of large nodes filled on all threads), each node handed its primitives' boxes
-//! by its parent's bins, written as 8-wide nodes a wide node at a time (the binary
+//! bins of large nodes filled on all threads from a sample of their primitives), each
+//! node handed its primitives' boxes by its parent's bins or partition, written as 8-wide nodes a wide node at a time (the binary
 //! tree is decided as it is written, never stored), with closure-based closest-hit
 //! and any-hit traversal using pbrt's conservative slab test: on all eight boxes at
 //! once with AVX where the processor has AVX2 (detected at run time, as Embree does),
