@@ -1,11 +1,12 @@
 //! A bounding volume hierarchy: binned SAH build (parallel for large subtrees, and the
 //! bins of large nodes filled on all threads from a sample of their primitives), each
-//! node handed its primitives' boxes by its parent's bins or partition, written as 8-wide nodes a wide node at a time (the binary
-//! tree is decided as it is written, never stored), with closure-based closest-hit
-//! and any-hit traversal using pbrt's conservative slab test: on all eight boxes at
-//! once with AVX where the processor has AVX2 (detected at run time, as Embree does),
-//! else four at a time with SSE through glam. Both do the same operations in the same
-//! order and give the same bits; the caller picks with an [`Isa`] value.
+//! node handed its primitives' boxes by its parent's bins or partition, written as
+//! 8-wide nodes a wide node at a time (the binary tree is decided as it is written,
+//! never stored), with closure-based closest-hit and any-hit traversal using pbrt's
+//! conservative slab test: on all eight boxes at once with AVX where the processor has
+//! AVX2 (detected at run time, as Embree does), else four at a time with SSE through
+//! glam. Both do the same operations in the same order and give the same bits; the
+//! caller picks with an [`Isa`] value.
 //!
 //! DEVIATION(pbrt): no image difference. pbrt and the issue use flat 32-byte binary nodes.
 //! Incoherent rays on large meshes wait on one dependent cache miss per node they

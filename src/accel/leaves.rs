@@ -132,6 +132,8 @@ impl LocalVertices {
     /// word of it (the two head words, three corner words per group of four triangles,
     /// three per vertex), so that fresh room needs no zeros first.
     fn write(&self, leaf: &LeafTriangles, out: &mut [MaybeUninit<u32>]) {
+        // The callers mark `out` written after this: it must be exactly the block.
+        assert_eq!(out.len(), block_len(leaf.count, self.count), "a block's room");
         let groups = leaf.count.div_ceil(4);
         let (head, rest) = out.split_at_mut(2);
         head[0].write(leaf.first as u32);
