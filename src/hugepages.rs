@@ -6,9 +6,9 @@
 //! each TLB miss is a page walk (a two-dimensional one under a hypervisor); 2 MiB
 //! pages cut most of those walks away. Embree does the same.
 //!
-//! Arrays made once at their final size (leaf blocks, long number lists, and a large
-//! build's BVH nodes, its subtrees appended there once written) are marked before
-//! they are written, so their pages are huge from the first write. Folding pages
+//! Arrays made once at their final size (leaf blocks, long number lists, a large
+//! build's records and its BVH nodes, its subtrees appended there once written) are
+//! marked before they are written, so their pages are huge from the first write. Folding pages
 //! already written (`MADV_COLLAPSE`) makes the kernel copy them: 0.7 s for the 290 MB
 //! of a 12.6M-triangle scene's nodes and blocks on our test machine, against 0.1–0.4
 //! s for writing them to fresh huge pages.
