@@ -279,12 +279,20 @@ impl Bins {
         self.extent[b] = self.extent[b].with(p);
     }
 
-    fn merge(mut self, o: &Bins) -> Bins {
+    /// Adds `o`'s primitives, in place (a copy of the 864 bytes in and out per merge
+    /// was a tenth of the split decisions' time in small nodes).
+    fn merge(&mut self, o: &Bins) {
         for b in 0..BINS {
             self.cost[b] += o.cost[b];
             self.extent[b] = self.extent[b].union(o.extent[b]);
         }
-        self
+    }
+
+    /// The first set with the others merged into it.
+    fn merged(sets: &mut [Bins]) -> &Bins {
+        let (first, rest) = sets.split_first_mut().expect("at least one set of bins");
+        rest.iter().for_each(|set| first.merge(set));
+        first
     }
 
     fn fill(prims: &[PrimInfo], bin_of: impl Fn(Vec4) -> usize) -> Bins {
@@ -302,7 +310,7 @@ impl Bins {
             }
         }
         runs.remainder().iter().for_each(|p| sets[0].add(p, bin_of(p.centroid2())));
-        sets[1..].iter().fold(sets[0], |all, set| all.merge(set))
+        *Bins::merged(&mut sets)
     }
 
     /// Fills the bins from every `SAMPLE_STEP`-th primitive, on all threads.
@@ -312,10 +320,10 @@ impl Bins {
             for (k, p) in run.iter().step_by(SAMPLE_STEP).enumerate() {
                 sets[k % Bins::SETS].add(p, bin_of(p.centroid2()));
             }
-            sets[1..].iter().fold(sets[0], |all, set| all.merge(set))
+            *Bins::merged(&mut sets)
         };
-        let runs: Vec<Bins> = prims.par_chunks(BIN_RUN).map(fill).collect();
-        runs.iter().fold(Bins::EMPTY, |all, run| all.merge(run))
+        let mut runs: Vec<Bins> = prims.par_chunks(BIN_RUN).map(fill).collect();
+        *Bins::merged(&mut runs)
     }
 
     /// Fills the bins from runs of `BIN_RUN` primitives, on all threads.
@@ -323,8 +331,8 @@ impl Bins {
         if prims.len() <= BIN_RUN {
             return Bins::fill(prims, bin_of);
         }
-        let runs: Vec<Bins> = prims.par_chunks(BIN_RUN).map(|c| Bins::fill(c, &bin_of)).collect();
-        runs.iter().fold(Bins::EMPTY, |all, run| all.merge(run))
+        let mut runs: Vec<Bins> = prims.par_chunks(BIN_RUN).map(|c| Bins::fill(c, &bin_of)).collect();
+        *Bins::merged(&mut runs)
     }
 }
 
