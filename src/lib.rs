@@ -11,6 +11,7 @@ pub mod cli;
 pub mod filters;
 pub mod fixes;
 pub mod guiding;
+pub mod heap;
 pub mod hugepages;
 pub mod imageio;
 pub mod integrators;

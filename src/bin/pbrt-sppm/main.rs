@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    pbrt_sppm::heap::for_loading();
     if args::asks_fix_help(std::env::args_os().skip(1)) {
         return print(&Fixes::help());
     }

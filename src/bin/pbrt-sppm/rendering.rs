@@ -76,7 +76,10 @@ fn render(scene: SceneDescription, args: &RenderArgs, read_seconds: f64) -> Exit
     let job = pool.install(|| Job::plan(scene, request));
     let load = print::LoadTimes { read_seconds, set_up_seconds: set_up.elapsed().as_secs_f64() };
     let job = match job {
-        Ok(job) => job,
+        Ok(job) => {
+            pbrt_sppm::heap::for_rendering();
+            job
+        }
         Err(e) => {
             say!("{e}");
             return ExitCode::FAILURE;
