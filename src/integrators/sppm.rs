@@ -24,7 +24,7 @@ use super::volume::{self, MediumPoint};
 use crate::fixes::Fix;
 use crate::interaction::Footprint;
 use crate::lights::Light;
-use crate::materials::{Bsdf, TransportMode};
+use crate::materials::{Bsdf, KeptBsdf, TransportMode};
 use crate::math::{Point3, Vector3};
 use crate::media::HenyeyGreenstein;
 use crate::memory::{DEPOSITS_HELD, prefetch};
@@ -68,7 +68,7 @@ pub struct VisiblePoint {
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 pub enum Scatterer {
-    Surface(Bsdf),
+    Surface(KeptBsdf),
     /// A point in a medium: photons that scatter in a medium within the radius count,
     /// by volume (Jensen and Christensen 1998), weighted by the phase function.
     Medium(HenyeyGreenstein),
@@ -743,7 +743,7 @@ fn camera_path(
         if visible_point {
             return (
                 ld,
-                Some(VisiblePoint { p: si.p.0, wo, ng: si.n.0, at: Scatterer::Surface(bsdf), beta, terminated }),
+                Some(VisiblePoint { p: si.p.0, wo, ng: si.n.0, at: Scatterer::Surface(bsdf.into()), beta, terminated }),
             );
         }
         if depth + 1 >= max_depth {

@@ -54,7 +54,7 @@ mod transport;
 pub mod uber;
 
 pub use crate::textures::{TexCtx, Textures};
-pub use bsdf::{Bsdf, BsdfEval, BsdfSample, Convention};
+pub use bsdf::{Bsdf, BsdfEval, BsdfSample, Convention, KeptBsdf};
 pub use coated::{CoatBase, Coated};
 pub use inputs::LobeList;
 pub use mix::MixRule;
