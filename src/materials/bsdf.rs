@@ -109,13 +109,7 @@ impl KeptBsdf {
     /// f(ωo, ωi) for radiance, as [`Bsdf::f`] of the BSDF kept.
     pub fn f(&self, wo: Vec3, wi: Vec3) -> Rgb {
         match (&self.bsdf.lobes, &self.second) {
-            (Lobes::One(first), Some(second)) => {
-                // As `f` sums `Lobes::Many`: from zero, lobe by lobe.
-                let b = &self.bsdf;
-                let (o, i, counts) = (b.local(wo), b.local(wi), b.counting(wo, wi));
-                let v3 = b.convention() == Convention::PbrtV3;
-                [first, second].into_iter().filter(|l| counts(l)).map(|l| l.f(o, i, TransportMode::Radiance, !v3)).sum()
-            }
+            (Lobes::One(first), Some(second)) => self.bsdf.sum_f([first, second], wo, wi, TransportMode::Radiance),
             _ => self.bsdf.f(wo, wi),
         }
     }
@@ -264,23 +258,28 @@ impl Bsdf {
 
     /// The sum of the lobes, combined by the [`Convention`].
     fn f_mode(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
-        let (o, i) = (self.local(wo), self.local(wi));
-        let counts = self.counting(wo, wi);
-        let v3 = self.convention() == Convention::PbrtV3;
         match &self.lobes {
-            Lobes::None => Vec3::ZERO,
-            Lobes::One(l) if counts(l) => l.f(o, i, mode, !v3),
-            Lobes::One(_) => Vec3::ZERO,
-            Lobes::Many(ls) => ls.iter().filter(|l| counts(l)).map(|l| l.f(o, i, mode, !v3)).sum(),
-            Lobes::Layered(l) => {
-                if o.z == 0.0 {
-                    Vec3::ZERO
-                } else {
-                    l.f(o, i, mode)
-                }
+            Lobes::None | Lobes::Many(_) => self.sum_f(self.lobes(), wo, wi, mode),
+            // One lobe's f as it comes, not added to zero.
+            Lobes::One(l) if self.counting(wo, wi)(l) => {
+                l.f(self.local(wo), self.local(wi), mode, self.convention() == Convention::PbrtV4)
             }
-            Lobes::Hair(h) => h.f_mode(o, i, mode),
+            Lobes::One(_) => Vec3::ZERO,
+            Lobes::Layered(l) => {
+                let (o, i) = (self.local(wo), self.local(wi));
+                if o.z == 0.0 { Vec3::ZERO } else { l.f(o, i, mode) }
+            }
+            Lobes::Hair(h) => h.f_mode(self.local(wo), self.local(wi), mode),
         }
+    }
+
+    /// The sum of `lobes` in this BSDF's frame, from zero, lobe by lobe, of those the
+    /// [`Convention`] counts for the pair of directions.
+    #[inline(always)]
+    fn sum_f<'a>(&self, lobes: impl IntoIterator<Item = &'a Lobe>, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
+        let (o, i, counts) = (self.local(wo), self.local(wi), self.counting(wo, wi));
+        let v4 = self.convention() == Convention::PbrtV4;
+        lobes.into_iter().filter(|l| counts(l)).map(|l| l.f(o, i, mode, v4)).sum()
     }
 
     /// Which lobes count for a pair of directions under the [`Convention`]: under
