@@ -178,8 +178,8 @@ fn refract(wi: DVec3, n: DVec3, eta: f64) -> Option<DVec3> {
 }
 
 /// The hit of a ray (lens space) with a spherical interface centred on the axis at
-/// `z_center`: its t and the normal facing back along the ray.
-fn intersect_spherical(radius: f64, z_center: f64, o: DVec3, d: DVec3) -> Option<(f64, DVec3)> {
+/// `z_center`: its t (`None` for a miss or behind the origin).
+fn intersect_spherical(radius: f64, z_center: f64, o: DVec3, d: DVec3) -> Option<f64> {
     let oc = o - DVec3::new(0.0, 0.0, z_center);
     let (a, b, c) = (d.dot(d), 2.0 * d.dot(oc), oc.dot(oc) - radius * radius);
     let disc = b * b - 4.0 * a * c;
@@ -193,11 +193,13 @@ fn intersect_spherical(radius: f64, z_center: f64, o: DVec3, d: DVec3) -> Option
     }
     let closer = (d.z > 0.0) ^ (radius < 0.0);
     let t = if closer { t0 } else { t1 };
-    if t.is_nan() || t < 0.0 {
-        return None;
-    }
-    let n = (oc + t * d).normalize();
-    Some((t, if n.dot(-d) < 0.0 { -n } else { n }))
+    (!t.is_nan() && t >= 0.0).then_some(t)
+}
+
+/// The normal of that interface at the hit `t`, facing back along the ray.
+fn spherical_normal(z_center: f64, o: DVec3, d: DVec3, t: f64) -> DVec3 {
+    let n = (o - DVec3::new(0.0, 0.0, z_center) + t * d).normalize();
+    if n.dot(-d) < 0.0 { -n } else { n }
 }
 
 impl Element {
@@ -208,10 +210,11 @@ impl Element {
     /// Moves a lens-space ray to this interface (at `z`) and through it into `eta_t`
     /// from `eta_i`; `None` when it misses, is stopped or reflects totally.
     fn pass(&self, z: f64, (o, d): (DVec3, DVec3), eta_i: f64, eta_t: f64) -> Option<(DVec3, DVec3)> {
-        let (t, n) = if self.is_stop() {
-            (d.z != 0.0).then_some(((z - o.z) / d.z, DVec3::ZERO))?
+        let z_center = z + self.curvature_radius;
+        let t = if self.is_stop() {
+            (d.z != 0.0).then_some((z - o.z) / d.z)?
         } else {
-            intersect_spherical(self.curvature_radius, z + self.curvature_radius, o, d)?
+            intersect_spherical(self.curvature_radius, z_center, o, d)?
         };
         if t.is_nan() || t < 0.0 {
             return None;
@@ -220,8 +223,13 @@ impl Element {
         if p.x * p.x + p.y * p.y > self.aperture_radius * self.aperture_radius {
             return None;
         }
-        let d = if self.is_stop() { d } else { refract((-d).normalize(), n, eta_i / eta_t)? };
-        Some((p, d))
+        if self.is_stop() {
+            return Some((p, d));
+        }
+        // The normal only for rays the aperture lets by: most rays the exit pupils'
+        // search traces stop at the rear element's rim.
+        let n = spherical_normal(z_center, o, d, t);
+        Some((p, refract((-d).normalize(), n, eta_i / eta_t)?))
     }
 }
 
@@ -318,29 +326,48 @@ fn focus_thick_lens(elements: &[Element], diagonal: f64, focus_distance: f64) ->
     Ok(rear_z(elements) + 0.5 * (pz1 - z + pz0 - c.sqrt()))
 }
 
+/// Samples per exit pupil band, as pbrt takes them.
+const PUPIL_SAMPLES: usize = 1024 * 1024;
+
+/// The points on the rear element's plane that every band's pupil is sampled at, as
+/// pbrt places them: (2, 3) radical inverses over a square 1.5 times the rear element.
+/// Made once for all 64 bands (each band drew them again: a quarter of the bands' time).
+fn pupil_samples(elements: &[Element]) -> Vec<[f64; 2]> {
+    let r = 1.5 * rear_radius(elements);
+    let at = |i: usize| {
+        let (u, v) = (radical_inverse(2, i as u64), radical_inverse(3, i as u64));
+        [-r + 2.0 * r * u, -r + 2.0 * r * v]
+    };
+    (0..PUPIL_SAMPLES).into_par_iter().map(at).collect()
+}
+
 /// The bounds on the rear element's plane of the rays from film points between x0 and
-/// x1 (on the x axis) that get through, as pbrt finds them: 1024² points on a square
-/// 1.5 times the rear element, widened by two sample spacings.
-fn bound_exit_pupil(elements: &[Element], aperture: Option<&Aperture>, x0: f64, x1: f64) -> [f64; 4] {
-    const N: usize = 1024 * 1024;
+/// x1 (on the x axis) that get through, as pbrt finds them: at the `samples` (film
+/// points spread from x0 to x1 in their order), widened by two sample spacings.
+fn bound_exit_pupil(
+    elements: &[Element],
+    aperture: Option<&Aperture>,
+    samples: &[[f64; 2]],
+    (x0, x1): (f64, f64),
+) -> [f64; 4] {
+    let n = samples.len() as f64;
     let r = 1.5 * rear_radius(elements);
     let z = rear_z(elements);
     let inside = |b: &[f64; 4], x: f64, y: f64| x >= b[0] && x <= b[2] && y >= b[1] && y <= b[3];
     let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
     let mut any = false;
-    for i in 0..N {
-        let film = DVec3::new(x0 + (x1 - x0) * (i as f64 + 0.5) / N as f64, 0.0, 0.0);
-        let (u, v) = (radical_inverse(2, i as u64), radical_inverse(3, i as u64));
-        let rear = DVec3::new(-r + 2.0 * r * u, -r + 2.0 * r * v, z);
-        if inside(&b, rear.x, rear.y) || trace_from_film(elements, aperture, film, rear - film).is_some() {
-            b = [b[0].min(rear.x), b[1].min(rear.y), b[2].max(rear.x), b[3].max(rear.y)];
+    for (i, &[x, y]) in samples.iter().enumerate() {
+        let film = DVec3::new(x0 + (x1 - x0) * (i as f64 + 0.5) / n, 0.0, 0.0);
+        let rear = DVec3::new(x, y, z);
+        if inside(&b, x, y) || trace_from_film(elements, aperture, film, rear - film).is_some() {
+            b = [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)];
             any = true;
         }
     }
     if !any {
         return [-r, -r, r, r];
     }
-    let grow = 2.0 * (2.0 * r * std::f64::consts::SQRT_2) / (N as f64).sqrt();
+    let grow = 2.0 * (2.0 * r * std::f64::consts::SQRT_2) / n.sqrt();
     [b[0] - grow, b[1] - grow, b[2] + grow, b[3] + grow]
 }
 
@@ -381,11 +408,12 @@ impl Lens {
         }
         let aspect = resolution[1] as f64 / resolution[0] as f64;
         let x = (diagonal * diagonal / (1.0 + aspect * aspect)).sqrt();
+        let samples = pupil_samples(&elements);
         let pupils = (0..64)
             .into_par_iter()
             .map(|i| {
-                let (r0, r1) = (i as f64 / 64.0 * diagonal / 2.0, (i + 1) as f64 / 64.0 * diagonal / 2.0);
-                bound_exit_pupil(&elements, desc.aperture.as_ref(), r0, r1)
+                let band = (i as f64 / 64.0 * diagonal / 2.0, (i + 1) as f64 / 64.0 * diagonal / 2.0);
+                bound_exit_pupil(&elements, desc.aperture.as_ref(), &samples, band)
             })
             .collect();
         let aperture = desc.aperture.clone();
