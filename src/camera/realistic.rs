@@ -331,7 +331,7 @@ const PUPIL_SAMPLES: usize = 1024 * 1024;
 
 /// The points on the rear element's plane that every band's pupil is sampled at, as
 /// pbrt places them: (2, 3) radical inverses over a square 1.5 times the rear element.
-/// Made once for all 64 bands (each band drew them again: a quarter of the bands' time).
+/// Made once for all 64 bands: drawn per band, they took a quarter of the bands' time.
 fn pupil_samples(elements: &[Element]) -> Vec<[f64; 2]> {
     let r = 1.5 * rear_radius(elements);
     let at = |i: usize| {
@@ -372,9 +372,8 @@ fn bound_exit_pupil(
 }
 
 /// The radical inverse of `i` in `base`, as pbrt computes it: the reversed digits as an
-/// integer, then one product (in base 2, the reversed bits: exact, as the running sum
-/// this was). That sum's chain of divisions per digit took a fifth of the time of the
-/// exit pupils' 64 × 1024² samples.
+/// integer, then one product (in base 2, the reversed bits, exactly). A sum digit by
+/// digit needs a chain of divisions: a fifth of the exit pupils' time.
 fn radical_inverse(base: u64, mut i: u64) -> f64 {
     let value = if base == 2 {
         i.reverse_bits() as f64 * 2f64.powi(-64)
@@ -498,7 +497,7 @@ mod tests {
     }
 
     /// `simple()` focused for a 64 × 64 film of 35 mm, made once for the tests that
-    /// share it (its exit pupils take 3 s on 2 cores).
+    /// share it (its exit pupils take 2 s on 2 cores).
     fn simple_lens() -> &'static Lens {
         static LENS: std::sync::OnceLock<Lens> = std::sync::OnceLock::new();
         LENS.get_or_init(|| Lens::new(&simple(), [64, 64], 35.0).unwrap())
