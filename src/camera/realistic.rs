@@ -17,6 +17,7 @@
 //! area (pbrt-v3's `simpleweighting`, its default) or over the rear element's distance
 //! squared (pbrt-v4, and pbrt-v3 without it, times the shutter's length).
 
+use crate::sampling::radical_inverse;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -371,26 +372,6 @@ fn bound_exit_pupil(
     [b[0] - grow, b[1] - grow, b[2] + grow, b[3] + grow]
 }
 
-/// The radical inverse of `i` in `base`, as pbrt computes it: the reversed digits as an
-/// integer, then one product (in base 2, the reversed bits, exactly). A sum digit by
-/// digit needs a chain of divisions: a fifth of the exit pupils' time.
-fn radical_inverse(base: u64, mut i: u64) -> f64 {
-    let value = if base == 2 {
-        i.reverse_bits() as f64 * 2f64.powi(-64)
-    } else {
-        let (mut reversed, mut scale) = (0u64, 1.0);
-        let inv_base = 1.0 / base as f64;
-        while i > 0 {
-            let next = i / base;
-            reversed = reversed * base + (i - next * base);
-            scale *= inv_base;
-            i = next;
-        }
-        reversed as f64 * scale
-    };
-    value.min(1.0 - f64::EPSILON / 2.0)
-}
-
 fn area(b: &[f64; 4]) -> f64 {
     (b[2] - b[0]) * (b[3] - b[1])
 }
@@ -501,16 +482,6 @@ mod tests {
     fn simple_lens() -> &'static Lens {
         static LENS: std::sync::OnceLock<Lens> = std::sync::OnceLock::new();
         LENS.get_or_init(|| Lens::new(&simple(), [64, 64], 35.0).unwrap())
-    }
-
-    #[test]
-    fn radical_inverses_are_the_reversed_digits() {
-        assert_eq!(radical_inverse(2, 6), 0.375);
-        assert_eq!(radical_inverse(2, 0), 0.0);
-        // 5 = 12 in base 3, read backwards 21 = 7, over 3²; 7 = 12 in base 5 → 11/25.
-        assert!((radical_inverse(3, 5) - 7.0 / 9.0).abs() < 1e-15);
-        assert!((radical_inverse(5, 7) - 11.0 / 25.0).abs() < 1e-15);
-        assert!(radical_inverse(2, u64::MAX) < 1.0);
     }
 
     #[test]

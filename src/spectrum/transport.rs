@@ -160,7 +160,7 @@ pub fn pass_wavelengths(draw: Draw, pass: u32) -> SampledWavelengths {
 
 /// The van der Corput sequence: `i`'s bits mirrored about the binary point.
 pub fn radical_inverse_2(i: u32) -> f32 {
-    (i.reverse_bits() as f64 / 4_294_967_296.0) as f32
+    crate::sampling::radical_inverse(2, i as u64) as f32
 }
 
 /// The pass under way, readable by every thread that traces for it. One pass renders
