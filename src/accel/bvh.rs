@@ -160,6 +160,8 @@ impl Leaf {
 pub struct Bvh {
     nodes: Vec<Node>,
     bounds: Bounds3,
+    /// The node visit's cost the build weighed (for [`Bvh::sah_cost`]).
+    traversal_cost: f32,
 }
 
 /// A primitive during the build, 32 bytes: its box, with its intersection cost (in
@@ -359,6 +361,9 @@ struct Settings<'a> {
     /// Nodes over more primitives than this bin a sample of them ([`SAMPLED_BINNING`];
     /// tests set it past any node to compare with binning them all).
     sample_above: usize,
+    /// A node visit's cost in triangle tests ([`traversal_cost`] of the whole tree's
+    /// primitive count).
+    traversal_cost: f32,
 }
 
 const BINS: usize = 12;
@@ -379,6 +384,25 @@ const TRIM_PRIMS: usize = 1 << 16;
 /// gave 35) at the same speed on large meshes and small ones. Quadrics cost more
 /// (`shapes::set::QUADRIC_COST`), so they still get leaves of their own.
 const TRAVERSAL_COST: f32 = 4.0;
+/// A BVH over at most this many primitives stays in the L2 cache whatever its leaves
+/// (about 250 KiB at 1 below), so a node visit costs about a triangle test, as pbrt's
+/// SAH takes it: [`SMALL_TRAVERSAL_COST`]. Rooms of a few large triangles need it.
+/// Under 4, a leaf's box spans walls on both sides of the room, and every ray tests
+/// them all: `doorway` spent 29% of its time in leaf tests, and rendered in 0.88 of
+/// the time with 1 (sppm-bench 0.98, f16-9a's 1.0 as before). Large meshes keep 4:
+/// at 1 a million triangles took 63 bytes of BVH each against 18.
+const SMALL_TREE: usize = 4096;
+const SMALL_TRAVERSAL_COST: f32 = 1.0;
+/// A small tree's most primitives in a leaf, pbrt's. SAH weighs each split with its
+/// sides as leaves, so where three walls meet (a floor, a ceiling and the wall that
+/// joins them: every split leaves a side as large as the whole) it would keep all
+/// three in one leaf; a node over more than this splits all the same.
+const SMALL_MAX_LEAF: usize = 4;
+
+/// The node visit's cost in triangle tests for SAH, in a BVH over `n` primitives.
+fn traversal_cost(n: usize) -> f32 {
+    if n <= SMALL_TREE { SMALL_TRAVERSAL_COST } else { TRAVERSAL_COST }
+}
 /// The most primitives in a leaf, unless the caller asks for another limit.
 pub const MAX_LEAF: usize = 8;
 const PARALLEL_THRESHOLD: usize = 4096;
@@ -424,11 +448,13 @@ impl Bvh {
         if info.is_empty() {
             return (Bvh::default(), Vec::new());
         }
+        let small = info.len() <= SMALL_TREE;
         let settings = Settings {
-            max_leaf: max_leaf.clamp(1, u8::MAX as usize),
+            max_leaf: max_leaf.clamp(1, if small { SMALL_MAX_LEAF } else { u8::MAX as usize }),
             group: &group,
             parallel_collapse: PARALLEL_COLLAPSE,
             sample_above: SAMPLED_BINNING,
+            traversal_cost: traversal_cost(info.len()),
         };
         let (bvh, order) = build_with(info, &settings);
         if order.len() >= TRIM_PRIMS {
@@ -480,21 +506,21 @@ impl Bvh {
             let d = [0, 1, 2].map(|a| (node.bounds[1][a].0[slot] - node.bounds[0][a].0[slot]).max(0.0) as f64);
             2.0 * (d[0] * d[1] + d[0] * d[2] + d[1] * d[2])
         };
-        let mut cost = TRAVERSAL_COST as f64 * root;
+        let (mut nodes, mut leaves) = (root, 0.0);
         let mut stack = vec![0usize];
         while let Some(i) = stack.pop() {
             let node = &self.nodes[i];
             for slot in (0..WIDTH).filter(|&slot| node.valid & 1 << slot != 0) {
                 match node.count[slot] {
                     0 => {
-                        cost += TRAVERSAL_COST as f64 * area(node, slot);
+                        nodes += area(node, slot);
                         stack.push(node.child[slot] as usize);
                     }
-                    n => cost += n as f64 * area(node, slot),
+                    n => leaves += n as f64 * area(node, slot),
                 }
             }
         }
-        cost / root
+        (self.traversal_cost as f64 * nodes + leaves) / root
     }
 
     pub fn heap_bytes(&self) -> usize {
@@ -867,14 +893,14 @@ fn build_with(mut info: Vec<PrimInfo>, settings: &Settings) -> (Bvh, Vec<u32>) {
         let mut nodes = Vec::new();
         write_wide(&mut info, 0, root, settings, &mut nodes);
         nodes.shrink_to_fit();
-        return (Bvh { nodes, bounds }, order(&info));
+        return (Bvh { nodes, bounds, traversal_cost: settings.traversal_cost }, order(&info));
     }
     let pieces = write_pieces(&mut info, 0, root, settings);
     // The records go before the nodes' final array is made: not both at the peak
     // (32 MB of a million instances' 66 MB of nodes).
     let order = order(&info);
     drop(info);
-    (Bvh { nodes: join_pieces(pieces), bounds }, order)
+    (Bvh { nodes: join_pieces(pieces), bounds, traversal_cost: settings.traversal_cost }, order)
 }
 
 /// Returns the heap's free pages to the system: the build's records, once freed, may
@@ -1124,7 +1150,7 @@ fn sah_split<const AXIS: usize>(
     for i in 0..BINS - 1 {
         left = left.union(bins.extent[i]);
         left_cost += bins.cost[i] as f32;
-        let split = TRAVERSAL_COST + (left_cost * area(&left) + right_cost[i + 1] * right_area[i + 1]) / total;
+        let split = settings.traversal_cost + (left_cost * area(&left) + right_cost[i + 1] * right_area[i + 1]) / total;
         if split < best_cost {
             (best, best_cost) = (i, split);
         }
@@ -1233,7 +1259,16 @@ mod tests {
         let group = |_: usize| 0;
         let build = |parallel_collapse: usize| {
             let sample_above = SAMPLED_BINNING;
-            build_with(info.clone(), &Settings { max_leaf: MAX_LEAF, group: &group, parallel_collapse, sample_above })
+            build_with(
+                info.clone(),
+                &Settings {
+                    max_leaf: MAX_LEAF,
+                    group: &group,
+                    parallel_collapse,
+                    sample_above,
+                    traversal_cost: TRAVERSAL_COST,
+                },
+            )
         };
         let (serial, serial_order) = build(usize::MAX);
         let (pieces, order) = build(64);
@@ -1259,8 +1294,13 @@ mod tests {
             .collect();
         let group = |_: usize| 0;
         let build = |sample_above: usize| {
-            let settings =
-                Settings { max_leaf: MAX_LEAF, group: &group, parallel_collapse: PARALLEL_COLLAPSE, sample_above };
+            let settings = Settings {
+                max_leaf: MAX_LEAF,
+                group: &group,
+                parallel_collapse: PARALLEL_COLLAPSE,
+                sample_above,
+                traversal_cost: TRAVERSAL_COST,
+            };
             build_with(info.clone(), &settings).0
         };
         let (sampled, all) = (build(SAMPLED_BINNING), build(usize::MAX));
@@ -1395,8 +1435,22 @@ mod tests {
         assert!(hits > 10_000 && nan_lanes > 100, "the cases must include hits and NaN slabs ({hits}, {nan_lanes})");
     }
 
-    /// Four unit boxes a box apart: cheap primitives share one leaf, costly ones
-    /// (quadrics) get a leaf each, so a ray through one box tests one primitive.
+    /// [`Bvh::build_with_max_leaf`], weighing a node visit as a large tree does
+    /// whatever the count: what the tests of leaf sizes below were written for.
+    fn build_large(boxes: &[Bounds3], cost: f32, max_leaf: usize) -> (Bvh, Vec<u32>) {
+        let info = boxes.iter().enumerate().map(|(i, b)| PrimInfo::new(b, cost, i as u32)).collect();
+        let settings = Settings {
+            max_leaf,
+            group: &|_| 0,
+            parallel_collapse: PARALLEL_COLLAPSE,
+            sample_above: SAMPLED_BINNING,
+            traversal_cost: TRAVERSAL_COST,
+        };
+        build_with(info, &settings)
+    }
+
+    /// Four unit boxes a box apart, in a large tree: cheap primitives share one leaf,
+    /// costly ones (quadrics) get a leaf each, so a ray through one box tests one.
     #[test]
     fn costly_primitives_get_leaves_of_their_own() {
         let boxes: Vec<Bounds3> = (0..4)
@@ -1404,7 +1458,7 @@ mod tests {
             .collect();
         let ray = Ray::new(Point3(Vec3::new(0.5, 0.5, -1.0)), Vector3(Vec3::Z));
         let tested = |cost: f32| {
-            let (bvh, _) = Bvh::build(boxes.clone(), |_| cost);
+            let (bvh, _) = build_large(&boxes, cost, MAX_LEAF);
             let mut n = 0;
             bvh.intersect_p(&ray, f32::INFINITY, |_, _| {
                 n += 1;
@@ -1414,6 +1468,31 @@ mod tests {
         };
         assert_eq!(tested(1.0), 4);
         assert_eq!(tested(8.0), 1);
+    }
+
+    /// A small BVH weighs a node visit as pbrt does, so the six walls of a room (two
+    /// triangles each, both with the wall's box) get leaves of their own: no leaf's box
+    /// spans two walls. At a large tree's weight opposite walls share leaves, and every
+    /// ray in the room tests them all.
+    #[test]
+    fn a_small_trees_walls_get_leaves_of_their_own() {
+        let (lo, hi) = (Vec3::new(-2.0, 0.0, 0.0), Vec3::new(2.0, 2.5, 7.0));
+        let wall = |axis: usize, at: Vec3| {
+            let (mut a, mut b) = (lo, hi);
+            (a[axis], b[axis]) = (at[axis], at[axis]);
+            Bounds3::new(a, b)
+        };
+        let walls: Vec<Bounds3> = (0..3).flat_map(|axis| [wall(axis, lo), wall(axis, hi)]).collect();
+        let triangles: Vec<Bounds3> = walls.iter().flat_map(|&w| [w, w]).collect();
+        let flat_leaves = |(bvh, order): &(Bvh, Vec<u32>)| {
+            bvh.leaves().all(|(first, count)| {
+                let mut prims = order[first..first + count].iter().map(|&i| triangles[i as usize]);
+                let b = prims.next().map(|p| prims.fold(p, Bounds3::union));
+                b.is_some_and(|b| b.diagonal().min_element() == 0.0)
+            })
+        };
+        assert!(flat_leaves(&Bvh::build(triangles.clone(), |_| 1.0)));
+        assert!(!flat_leaves(&build_large(&triangles, 1.0, MAX_LEAF)));
     }
 
     /// A node of `WIDTH` leaves, slot s holding primitive s.
@@ -1485,15 +1564,18 @@ mod tests {
         }
     }
 
-    /// Two overlapping boxes of cost 1: one leaf of both (a node visit, 4, and 2 in the
-    /// root's box). Two far apart of cost 16: two leaves, each counted by its
-    /// primitives (4 + a + b over the root's area).
+    /// Weighed as a large tree: two overlapping boxes of cost 1 make one leaf of both
+    /// (a node visit, 4, and 2 in the root's box). Two far apart of cost 16: two
+    /// leaves, each counted by its primitives (4 + a + b over the root's area). A small
+    /// tree weighs the visit 1.
     #[test]
     fn sah_cost_counts_node_visits_and_leaf_primitives() {
         let unit = |x: f32| Bounds3::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0));
-        let (bvh, _) = Bvh::build(vec![unit(0.0), unit(0.5)], |_| 1.0);
+        let (bvh, _) = build_large(&[unit(0.0), unit(0.5)], 1.0, MAX_LEAF);
         assert_eq!(bvh.sah_cost(), 6.0);
-        let (bvh, _) = Bvh::build(vec![unit(0.0), unit(99.0)], |_| 16.0);
+        let (bvh, _) = Bvh::build(vec![unit(0.0), unit(0.5)], |_| 1.0);
+        assert_eq!(bvh.sah_cost(), 3.0);
+        let (bvh, _) = build_large(&[unit(0.0), unit(99.0)], 16.0, MAX_LEAF);
         let root = unit(0.0).union(unit(99.0)).surface_area() as f64;
         let want = 4.0 + 2.0 * unit(0.0).surface_area() as f64 / root;
         assert!((bvh.sah_cost() - want).abs() < 1e-9, "{} against {want}", bvh.sah_cost());
@@ -1542,7 +1624,7 @@ mod tests {
                 Bounds3::new(c, c + Vec3::splat(0.9))
             })
             .collect();
-        let (mut bvh, _) = Bvh::build_with_max_leaf(boxes.clone(), |_| 0.5, 16);
+        let (mut bvh, _) = build_large(&boxes, 0.5, 16);
         let mut covered = vec![0; boxes.len()];
         let mut leaves = Vec::new();
         bvh.relabel_leaves(|first, count| {
