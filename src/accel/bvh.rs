@@ -387,10 +387,10 @@ const TRAVERSAL_COST: f32 = 4.0;
 /// A BVH over at most this many primitives stays in the L2 cache whatever its leaves
 /// (about 250 KiB at 1 below), so a node visit costs about a triangle test, as pbrt's
 /// SAH takes it: [`SMALL_TRAVERSAL_COST`]. Rooms of a few large triangles need it.
-/// Under 4, a leaf's box spans walls on both sides of the room, and every ray tests
-/// them all: `doorway` spent 29% of its time in leaf tests, and rendered in 0.88 of
-/// the time with 1 (sppm-bench 0.98, f16-9a's 1.0 as before). Large meshes keep 4:
-/// at 1 a million triangles took 63 bytes of BVH each against 18.
+/// At 4, a leaf's box spans walls on both sides of the room, and every ray tests
+/// them all: `doorway` spent 29% of its time in leaf tests, and renders in 0.83 of
+/// the time with this and [`SMALL_MAX_LEAF`] (docs/accel.md). Large meshes keep 4:
+/// at 1 a million triangles took 63 bytes of BVH each against 29.6.
 const SMALL_TREE: usize = 4096;
 const SMALL_TRAVERSAL_COST: f32 = 1.0;
 /// A small tree's most primitives in a leaf, pbrt's. SAH weighs each split with its
