@@ -361,8 +361,7 @@ struct Settings<'a> {
     /// Nodes over more primitives than this bin a sample of them ([`SAMPLED_BINNING`];
     /// tests set it past any node to compare with binning them all).
     sample_above: usize,
-    /// A node visit's cost in triangle tests ([`traversal_cost`] of the whole tree's
-    /// primitive count).
+    /// A node visit's cost in triangle tests.
     traversal_cost: f32,
 }
 
@@ -384,13 +383,15 @@ const TRIM_PRIMS: usize = 1 << 16;
 /// gave 35) at the same speed on large meshes and small ones. Quadrics cost more
 /// (`shapes::set::QUADRIC_COST`), so they still get leaves of their own.
 const TRAVERSAL_COST: f32 = 4.0;
-/// A BVH over at most this many primitives stays in the L2 cache whatever its leaves
-/// (about 250 KiB at 1 below), so a node visit costs about a triangle test, as pbrt's
-/// SAH takes it: [`SMALL_TRAVERSAL_COST`]. Rooms of a few large triangles need it.
-/// At 4, a leaf's box spans walls on both sides of the room, and every ray tests
-/// them all: `doorway` spent 29% of its time in leaf tests, and renders in 0.83 of
-/// the time with this and [`SMALL_MAX_LEAF`] (docs/accel.md). Large meshes keep 4:
-/// at 1 a million triangles took 63 bytes of BVH each against 29.6.
+/// A mixed tree ([`Bvh::build_mixed`]) over at most this many primitives stays in the
+/// L2 cache whatever its leaves (about 250 KiB at 1 below), so a node visit costs
+/// about a triangle test, as pbrt's SAH takes it: [`SMALL_TRAVERSAL_COST`]. Rooms of a
+/// few large triangles beside a sphere need it. At 4, a leaf's box spans walls on
+/// both sides of the room, and every ray tests them all: `doorway` spent 29% of its
+/// time in leaf tests, and renders in 0.83 of the time with this and
+/// [`SMALL_MAX_LEAF`] (docs/accel.md). Trees of leaf blocks (meshes alone) keep 4:
+/// their leaves are fetched and tested together, and at 1 and 4 a leaf, 300 objects of
+/// 4,096 triangles took 137 MB and 0.35 s to render a pixel, against 91 MB and 0.22 s.
 const SMALL_TREE: usize = 4096;
 const SMALL_TRAVERSAL_COST: f32 = 1.0;
 /// A small tree's most primitives in a leaf, pbrt's. SAH weighs each split with its
@@ -398,11 +399,6 @@ const SMALL_TRAVERSAL_COST: f32 = 1.0;
 /// joins them: every split leaves a side as large as the whole) it would keep all
 /// three in one leaf; a node over more than this splits all the same.
 const SMALL_MAX_LEAF: usize = 4;
-
-/// The node visit's cost in triangle tests for SAH, in a BVH over `n` primitives.
-fn traversal_cost(n: usize) -> f32 {
-    if n <= SMALL_TREE { SMALL_TRAVERSAL_COST } else { TRAVERSAL_COST }
-}
 /// The most primitives in a leaf, unless the caller asks for another limit.
 pub const MAX_LEAF: usize = 8;
 const PARALLEL_THRESHOLD: usize = 4096;
@@ -445,16 +441,35 @@ impl Bvh {
 
     /// [`Bvh::build_grouped`] from the primitives' records, record i numbered i.
     pub fn build_records(info: Vec<PrimInfo>, max_leaf: usize, group: impl Fn(usize) -> u32 + Sync) -> (Bvh, Vec<u32>) {
+        Bvh::build_weighed(info, max_leaf, group, TRAVERSAL_COST)
+    }
+
+    /// A tree over primitives of several kinds (triangles beside quadrics, patches or
+    /// curves), whose leaves are tested a primitive or a run of four triangles at a
+    /// time: where it is small ([`SMALL_TREE`]), weighed and cut as pbrt's is.
+    pub fn build_mixed(info: Vec<PrimInfo>) -> (Bvh, Vec<u32>) {
+        match info.len() <= SMALL_TREE {
+            true => Bvh::build_weighed(info, SMALL_MAX_LEAF, |_| 0, SMALL_TRAVERSAL_COST),
+            false => Bvh::build_records(info, MAX_LEAF, |_| 0),
+        }
+    }
+
+    /// [`Bvh::build_records`] with a node visit weighed at `traversal_cost`.
+    fn build_weighed(
+        info: Vec<PrimInfo>,
+        max_leaf: usize,
+        group: impl Fn(usize) -> u32 + Sync,
+        traversal_cost: f32,
+    ) -> (Bvh, Vec<u32>) {
         if info.is_empty() {
             return (Bvh::default(), Vec::new());
         }
-        let small = info.len() <= SMALL_TREE;
         let settings = Settings {
-            max_leaf: max_leaf.clamp(1, if small { SMALL_MAX_LEAF } else { u8::MAX as usize }),
+            max_leaf: max_leaf.clamp(1, u8::MAX as usize),
             group: &group,
             parallel_collapse: PARALLEL_COLLAPSE,
             sample_above: SAMPLED_BINNING,
-            traversal_cost: traversal_cost(info.len()),
+            traversal_cost,
         };
         let (bvh, order) = build_with(info, &settings);
         if order.len() >= TRIM_PRIMS {
@@ -1435,22 +1450,13 @@ mod tests {
         assert!(hits > 10_000 && nan_lanes > 100, "the cases must include hits and NaN slabs ({hits}, {nan_lanes})");
     }
 
-    /// [`Bvh::build_with_max_leaf`], weighing a node visit as a large tree does
-    /// whatever the count: what the tests of leaf sizes below were written for.
-    fn build_large(boxes: &[Bounds3], cost: f32, max_leaf: usize) -> (Bvh, Vec<u32>) {
-        let info = boxes.iter().enumerate().map(|(i, b)| PrimInfo::new(b, cost, i as u32)).collect();
-        let settings = Settings {
-            max_leaf,
-            group: &|_| 0,
-            parallel_collapse: PARALLEL_COLLAPSE,
-            sample_above: SAMPLED_BINNING,
-            traversal_cost: TRAVERSAL_COST,
-        };
-        build_with(info, &settings)
+    /// The records of `boxes`, each costing `cost`, for [`Bvh::build_mixed`].
+    fn records(boxes: &[Bounds3], cost: f32) -> Vec<PrimInfo> {
+        boxes.iter().enumerate().map(|(i, b)| PrimInfo::new(b, cost, i as u32)).collect()
     }
 
-    /// Four unit boxes a box apart, in a large tree: cheap primitives share one leaf,
-    /// costly ones (quadrics) get a leaf each, so a ray through one box tests one.
+    /// Four unit boxes a box apart: cheap primitives share one leaf, costly ones
+    /// (quadrics) get a leaf each, so a ray through one box tests one primitive.
     #[test]
     fn costly_primitives_get_leaves_of_their_own() {
         let boxes: Vec<Bounds3> = (0..4)
@@ -1458,7 +1464,7 @@ mod tests {
             .collect();
         let ray = Ray::new(Point3(Vec3::new(0.5, 0.5, -1.0)), Vector3(Vec3::Z));
         let tested = |cost: f32| {
-            let (bvh, _) = build_large(&boxes, cost, MAX_LEAF);
+            let (bvh, _) = Bvh::build(boxes.clone(), |_| cost);
             let mut n = 0;
             bvh.intersect_p(&ray, f32::INFINITY, |_, _| {
                 n += 1;
@@ -1470,10 +1476,10 @@ mod tests {
         assert_eq!(tested(8.0), 1);
     }
 
-    /// A small BVH weighs a node visit as pbrt does, so the six walls of a room (two
-    /// triangles each, both with the wall's box) get leaves of their own: no leaf's box
-    /// spans two walls. At a large tree's weight opposite walls share leaves, and every
-    /// ray in the room tests them all.
+    /// A small mixed BVH weighs a node visit as pbrt does, so the six walls of a room
+    /// (two triangles each, both with the wall's box) get leaves of their own: no
+    /// leaf's box spans two walls. At the other trees' weight opposite walls share
+    /// leaves, and every ray in the room tests them all.
     #[test]
     fn a_small_trees_walls_get_leaves_of_their_own() {
         let (lo, hi) = (Vec3::new(-2.0, 0.0, 0.0), Vec3::new(2.0, 2.5, 7.0));
@@ -1491,8 +1497,8 @@ mod tests {
                 b.is_some_and(|b| b.diagonal().min_element() == 0.0)
             })
         };
-        assert!(flat_leaves(&Bvh::build(triangles.clone(), |_| 1.0)));
-        assert!(!flat_leaves(&build_large(&triangles, 1.0, MAX_LEAF)));
+        assert!(flat_leaves(&Bvh::build_mixed(records(&triangles, 1.0))));
+        assert!(!flat_leaves(&Bvh::build(triangles.clone(), |_| 1.0)));
     }
 
     /// A node of `WIDTH` leaves, slot s holding primitive s.
@@ -1564,18 +1570,18 @@ mod tests {
         }
     }
 
-    /// Weighed as a large tree: two overlapping boxes of cost 1 make one leaf of both
-    /// (a node visit, 4, and 2 in the root's box). Two far apart of cost 16: two
-    /// leaves, each counted by its primitives (4 + a + b over the root's area). A small
-    /// tree weighs the visit 1.
+    /// Two overlapping boxes of cost 1: one leaf of both (a node visit, 4, and 2 in the
+    /// root's box). Two far apart of cost 16: two leaves, each counted by its
+    /// primitives (4 + a + b over the root's area). A small mixed tree weighs the
+    /// visit 1.
     #[test]
     fn sah_cost_counts_node_visits_and_leaf_primitives() {
         let unit = |x: f32| Bounds3::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0));
-        let (bvh, _) = build_large(&[unit(0.0), unit(0.5)], 1.0, MAX_LEAF);
-        assert_eq!(bvh.sah_cost(), 6.0);
         let (bvh, _) = Bvh::build(vec![unit(0.0), unit(0.5)], |_| 1.0);
+        assert_eq!(bvh.sah_cost(), 6.0);
+        let (bvh, _) = Bvh::build_mixed(records(&[unit(0.0), unit(0.5)], 1.0));
         assert_eq!(bvh.sah_cost(), 3.0);
-        let (bvh, _) = build_large(&[unit(0.0), unit(99.0)], 16.0, MAX_LEAF);
+        let (bvh, _) = Bvh::build(vec![unit(0.0), unit(99.0)], |_| 16.0);
         let root = unit(0.0).union(unit(99.0)).surface_area() as f64;
         let want = 4.0 + 2.0 * unit(0.0).surface_area() as f64 / root;
         assert!((bvh.sah_cost() - want).abs() < 1e-9, "{} against {want}", bvh.sah_cost());
@@ -1624,7 +1630,7 @@ mod tests {
                 Bounds3::new(c, c + Vec3::splat(0.9))
             })
             .collect();
-        let (mut bvh, _) = build_large(&boxes, 0.5, 16);
+        let (mut bvh, _) = Bvh::build_with_max_leaf(boxes.clone(), |_| 0.5, 16);
         let mut covered = vec![0; boxes.len()];
         let mut leaves = Vec::new();
         bvh.relabel_leaves(|first, count| {

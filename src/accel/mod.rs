@@ -374,7 +374,7 @@ impl Blas {
                 let records = runs.fill(|_| BLOCK_TRIANGLE_COST);
                 Bvh::build_records(records, leaves::MAX_LEAF, |g| runs.prim(g).shape)
             }
-            true => Bvh::build_records(runs.fill(|&s| ShapeSet::prim_cost(s)), bvh::MAX_LEAF, |_| 0),
+            true => Bvh::build_mixed(runs.fill(|&s| ShapeSet::prim_cost(s))),
         };
         let prims = order.par_iter().map(|&g| runs.prim(g as usize)).collect();
         Blas { bvh, prims, shapes, block_meshes, blocks: LeafBlocks::default() }
