@@ -1481,7 +1481,7 @@ mod tests {
     /// leaf's box spans two walls. At the other trees' weight opposite walls share
     /// leaves, and every ray in the room tests them all.
     #[test]
-    fn a_small_trees_walls_get_leaves_of_their_own() {
+    fn a_small_mixed_trees_walls_get_leaves_of_their_own() {
         let (lo, hi) = (Vec3::new(-2.0, 0.0, 0.0), Vec3::new(2.0, 2.5, 7.0));
         let wall = |axis: usize, at: Vec3| {
             let (mut a, mut b) = (lo, hi);
