@@ -240,9 +240,49 @@ pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrato
     }
     let counts = chunks.iter().fold(Counts::default(), |a, c| a + c.counts);
     let splats = chunks.iter_mut().flat_map(|c| std::mem::take(&mut c.splats)).collect();
-    let vertices: Vec<LightVertex> = chunks.into_par_iter().flat_map_iter(|c| c.vertices).collect();
+    let vertices = concat(chunks.iter_mut().map(|c| std::mem::take(&mut c.vertices)).collect());
     let spots = vertices.par_iter().map(Spot::of).collect();
     LightPass { vertices, spots, starts, splats, counts }
+}
+
+/// `v`, moved to the end of `list` if it is kept there, else into `here`: a kept
+/// vertex is read from the list, not copied into it (280 bytes).
+fn hold<'a>(
+    v: LightVertex,
+    list: Option<&'a mut Vec<LightVertex>>,
+    here: &'a mut Option<LightVertex>,
+) -> &'a LightVertex {
+    match list {
+        Some(list) => {
+            list.push(v);
+            list.last().expect("the vertex just pushed")
+        }
+        None => here.insert(v),
+    }
+}
+
+/// The chunks' vertices in one list, each moved once, in parallel. (Collected through
+/// rayon's `flat_map_iter`, each was copied twice more, through a list per split:
+/// memmove was 4% of `doorway`'s vcm render.)
+fn concat(chunks: Vec<Vec<LightVertex>>) -> Vec<LightVertex> {
+    let total = chunks.iter().map(Vec::len).sum();
+    let mut all = Vec::with_capacity(total);
+    let mut rest = &mut all.spare_capacity_mut()[..total];
+    let mut runs = Vec::with_capacity(chunks.len());
+    for chunk in chunks {
+        let run;
+        (run, rest) = std::mem::take(&mut rest).split_at_mut(chunk.len());
+        runs.push((run, chunk));
+    }
+    runs.into_par_iter().for_each(|(run, chunk)| {
+        for (slot, v) in run.iter_mut().zip(chunk) {
+            slot.write(v);
+        }
+    });
+    // SAFETY: the runs cover the first `total` slots, and each run is as long as its
+    // chunk, whose every vertex was written into it above.
+    unsafe { all.set_len(total) };
+    all
 }
 
 /// A light subpath as it leaves the light.
@@ -372,20 +412,20 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
         let light_guide = pass.light_guided(place.p, wo, &at);
         let half = to.half;
         let v = LightVertex { place, wo, beta, at, partial, len, half, after_specular, terminated, guide, light_guide };
+        let stays = !v.at.is_delta() && keep && len < pass.max_len && (len > 1 || to.first);
         if !v.at.is_delta() {
             // Direct light is not light-traced (`mis`), unless light tracing is alone.
             let traced = len > 1 || pass.techniques == Techniques::Only(Technique::LightTrace);
             if pass.techniques.uses(Technique::LightTrace) && len < pass.max_len && traced {
                 to_camera(pass, &v, s, &mut splats[kind(v.half, v.after_specular)]);
             }
-            if keep && len < pass.max_len && (len > 1 || to.first) {
-                to.vertices.push(v.clone());
-            }
         }
+        let mut here = None;
+        let v = hold(v, stays.then_some(&mut *to.vertices), &mut here);
         if len + 2 > pass.max_len {
             break;
         }
-        let Some((next, b, p, specular)) = scatter(pass, &v, before, s) else { break };
+        let Some((next, b, p, specular)) = scatter(pass, v, before, s) else { break };
         // What crosses into a BSSRDF is found by camera subpaths alone (`subsurface`).
         if v.place.crosses_into_bssrdf(v.wo, next.d.0) {
             break;
