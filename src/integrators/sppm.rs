@@ -31,7 +31,7 @@ use crate::memory::{DEPOSITS_HELD, prefetch};
 use crate::parser::Syntax;
 use crate::render::RenderScene;
 use crate::sampling::power_heuristic;
-use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash};
+use crate::sampling::{Rng, Sampler, SamplerKind, SobolSample, hash, hash_more};
 use crate::spectrum::{Rgb, luminance, transport};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -433,6 +433,7 @@ impl<'a> Sppm<'a> {
         let total = self.photons_per_iteration;
         let time = scene.pass_time(self.iteration, false);
         let beams = self.volume == VolumeGather::Beams;
+        let pass_hash = hash(&[seed, iter]);
         let results: Vec<(Vec<Deposit>, Vec<VolumePhoton>, PhotonCounts)> = chunks
             .into_par_iter()
             .map(|c| {
@@ -441,7 +442,7 @@ impl<'a> Sppm<'a> {
                     // Independent numbers for photons under either sampler: Sobol'
                     // points, padded per iteration or as one five-dimensional sequence
                     // over the whole render, gained nothing measurable (docs/sampling.md).
-                    let mut rng = Rng::new(hash(&[seed, iter, k, 1]));
+                    let mut rng = Rng::new(hash_more(pass_hash, &[k, 1]));
                     let before = out.len() + volume.len();
                     let sink = (&mut out, beams.then_some(&mut volume));
                     let path = trace_photon(scene, (grid, pixels), &mut rng, max_depth, sink, time);

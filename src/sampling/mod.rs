@@ -45,7 +45,14 @@ pub struct Rng {
 
 /// A 64-bit mix of several words (splitmix64 finaliser chained).
 pub fn hash(words: &[u64]) -> u64 {
-    let mut h = 0x9e37_79b9_7f4a_7c15u64;
+    hash_more(0x9e37_79b9_7f4a_7c15, words)
+}
+
+/// [`hash`] of a list's first words, then `words`: `hash_more(hash(a), b)` is
+/// `hash(a ++ b)`. A loop whose words share a start hashes that start once (two of a
+/// photon's four rounds).
+#[inline]
+pub fn hash_more(mut h: u64, words: &[u64]) -> u64 {
     for &w in words {
         h ^= w.wrapping_add(0x9e37_79b9_7f4a_7c15).wrapping_add(h << 6).wrapping_add(h >> 2);
         h = mix64(h);
@@ -218,22 +225,34 @@ impl Distribution1D {
         self.total <= 0.0
     }
 
-    /// An index and its probability.
+    /// An index and its probability ([`Self::pick`] without the rest: a division less,
+    /// once per photon).
+    #[inline]
     pub fn sample(&self, u: f32) -> Option<(usize, f32)> {
-        self.pick(u).map(|p| (p.index, p.pmf))
+        let (index, _) = self.find(u)?;
+        Some((index, self.pmf(index)))
     }
 
     /// An index, its probability and where `u` fell within the index's share.
+    #[inline]
     pub fn pick(&self, u: f32) -> Option<Pick> {
-        if self.is_empty() {
-            return None;
-        }
-        let target = u as f64 * self.total;
-        let index = self.cdf.partition_point(|&c| c <= target).min(self.cdf.len() - 1);
+        let (index, target) = self.find(u)?;
         let lo = if index == 0 { 0.0 } else { self.cdf[index - 1] };
         Some(Pick { index, pmf: self.pmf(index), rest: rest_of(target - lo, self.cdf[index] - lo) })
     }
 
+    /// The index whose share holds `u`, and `u` scaled to the total.
+    #[inline]
+    fn find(&self, u: f32) -> Option<(usize, f64)> {
+        if self.is_empty() {
+            return None;
+        }
+        let target = u as f64 * self.total;
+        let index = self.cdf.partition_point(|&c| c <= target);
+        Some((index.min(self.cdf.len() - 1), target))
+    }
+
+    #[inline]
     pub fn pmf(&self, i: usize) -> f32 {
         let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
         ((self.cdf[i] - lo) / self.total) as f32
@@ -267,6 +286,31 @@ mod tests {
         assert!((radical_inverse(5, 7) - 11.0 / 25.0).abs() < 1e-15);
         assert_eq!(radical_inverse_5(7), 0.44);
         assert!(radical_inverse(2, u64::MAX) < 1.0);
+    }
+
+    /// A start hashed once goes on as the whole list would: photon streams depend on it.
+    #[test]
+    fn a_hash_goes_on_from_its_start() {
+        let words = [7u64, 3, 1 << 40, 1];
+        for cut in 0..=words.len() {
+            assert_eq!(hash_more(hash(&words[..cut]), &words[cut..]), hash(&words));
+        }
+        assert_ne!(hash(&words[..3]), hash(&words));
+    }
+
+    /// `sample` is `pick` without the rest, for few entries and many.
+    #[test]
+    fn a_sample_is_a_pick_without_its_rest() {
+        for n in [1usize, 3, 9, 40] {
+            let w: Vec<f64> = (0..n).map(|i| ((i * 7 + 1) % 5) as f64).collect();
+            let d = Distribution1D::new(&w);
+            for k in 0..1000 {
+                let u = (k as f32 + 0.5) / 1000.0;
+                let p = d.pick(u).expect("weights");
+                assert_eq!(d.sample(u), Some((p.index, p.pmf)));
+                assert!(w[p.index] > 0.0, "{n} {u}");
+            }
+        }
     }
 
     /// Stratified numbers picked by weight: each index gets its share, and the rests
