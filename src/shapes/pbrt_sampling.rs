@@ -51,7 +51,8 @@ impl QuadricShape {
         // 1.5% of `sppm-bench`'s render, which samples a disk light.
         let (p_obj, n_obj) = match &self.quadric {
             Quadric::Sphere(s) => {
-                let d = crate::sampling::uniform_sphere(u).as_dvec3();
+                // Unit in f64, so the point lies on the sphere (pbrt reprojects it).
+                let d = crate::sampling::uniform_sphere(u).as_dvec3().normalize();
                 (d * s.radius as f64, d)
             }
             Quadric::Disk(d) => {
