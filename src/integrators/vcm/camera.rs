@@ -708,7 +708,7 @@ impl Cameras<'_> {
             let near = d2 <= r2 || d2.is_nan(); // (as the test was: not beyond r)
             if near {
                 prefetch(&self.lights.spots[k as usize]);
-                prefetch(&self.lights.vertices[k as usize]);
+                prefetch(self.lights.vertex(k));
             }
             near
         };
@@ -719,7 +719,7 @@ impl Cameras<'_> {
             if spot.edges() + v.len > pass.max_len || spot.in_medium() != in_medium {
                 return;
             }
-            let lv = &self.lights.vertices[k as usize];
+            let lv = self.lights.vertex(k);
             let e = v.eval(lv.wo);
             if e.f == Vec3::ZERO {
                 return;

@@ -139,13 +139,17 @@ impl std::ops::Add for Counts {
 
 /// A pass's light subpaths: their vertices in subpath order, where each begins, and
 /// the lists of light-tracing splats (pixel, radiance), four per work item (list j
-/// holds kind j mod 4's, [`kind`]).
+/// holds kind j mod 4's, [`kind`]). The vertices stay in the lists their work items
+/// wrote (subpaths `CHUNK`·c onwards in list c): joined into one list they took their
+/// room twice at the join (`doorway`'s vcm render peaked at 126 MB against 95).
 #[derive(Default)]
 pub struct LightPass {
-    pub vertices: Vec<LightVertex>,
-    /// `vertices[i]`'s [`Spot`].
+    chunks: Vec<Vec<LightVertex>>,
+    /// The number of list c's first vertex, counting through the lists in order.
+    chunk_first: Vec<u32>,
+    /// Vertex i's [`Spot`].
     pub spots: Vec<Spot>,
-    /// Subpath k holds `vertices[starts[k]..starts[k + 1]]`.
+    /// Subpath k holds vertices `starts[k]..starts[k + 1]`.
     pub starts: Vec<u32>,
     pub splats: Vec<Vec<(u32, Rgb)>>,
     pub counts: Counts,
@@ -155,9 +159,26 @@ impl LightPass {
     /// The vertices of light subpath `k`, shortest first.
     pub fn path(&self, k: usize) -> &[LightVertex] {
         match (self.starts.get(k), self.starts.get(k + 1)) {
-            (Some(&a), Some(&b)) => &self.vertices[a as usize..b as usize],
+            (Some(&a), Some(&b)) => {
+                let c = k / CHUNK as usize;
+                let first = self.chunk_first[c];
+                &self.chunks[c][(a - first) as usize..(b - first) as usize]
+            }
             _ => &[],
         }
+    }
+
+    /// Vertex `i` (of all the pass's, in order).
+    pub fn vertex(&self, i: u32) -> &LightVertex {
+        // The last list starting at or before i: lists left empty share their start
+        // with the next one, which holds i.
+        let c = self.chunk_first.partition_point(|&f| f <= i) - 1;
+        &self.chunks[c][(i - self.chunk_first[c]) as usize]
+    }
+
+    /// The number of vertices kept.
+    pub fn stored(&self) -> usize {
+        self.spots.len()
     }
 }
 
@@ -194,6 +215,8 @@ impl Spot {
 
 #[derive(Default)]
 struct Chunk {
+    /// Its first subpath.
+    first: u64,
     vertices: Vec<LightVertex>,
     lens: Vec<u32>,
     splats: [Vec<(u32, Rgb)>; 4],
@@ -213,7 +236,7 @@ pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrato
     let mut chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
-            let mut out = Chunk::default();
+            let mut out = Chunk { first: c * CHUNK, ..Chunk::default() };
             for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 let before = out.vertices.len();
                 let to = Keep { half: half(k), first: k < pixels, vertices: &mut out.vertices };
@@ -240,9 +263,10 @@ pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrato
     }
     let counts = chunks.iter().fold(Counts::default(), |a, c| a + c.counts);
     let splats = chunks.iter_mut().flat_map(|c| std::mem::take(&mut c.splats)).collect();
-    let vertices = concat(chunks.iter_mut().map(|c| std::mem::take(&mut c.vertices)).collect());
-    let spots = vertices.par_iter().map(Spot::of).collect();
-    LightPass { vertices, spots, starts, splats, counts }
+    let chunk_first = chunks.iter().map(|c| starts[c.first as usize]).collect();
+    let chunks: Vec<Vec<LightVertex>> = chunks.into_iter().map(|c| c.vertices).collect();
+    let spots = chunks.par_iter().flat_map_iter(|c| c.iter().map(Spot::of)).collect();
+    LightPass { chunks, chunk_first, spots, starts, splats, counts }
 }
 
 /// `v`, moved to the end of `list` if it is kept there, else into `here`: a kept
@@ -259,30 +283,6 @@ fn hold<'a>(
         }
         None => here.insert(v),
     }
-}
-
-/// The chunks' vertices in one list, each moved once, in parallel. (Collected through
-/// rayon's `flat_map_iter`, each was copied twice more, through a list per split:
-/// memmove was 4% of `doorway`'s vcm render.)
-fn concat(chunks: Vec<Vec<LightVertex>>) -> Vec<LightVertex> {
-    let total = chunks.iter().map(Vec::len).sum();
-    let mut all = Vec::with_capacity(total);
-    let mut rest = &mut all.spare_capacity_mut()[..total];
-    let mut runs = Vec::with_capacity(chunks.len());
-    for chunk in chunks {
-        let run;
-        (run, rest) = std::mem::take(&mut rest).split_at_mut(chunk.len());
-        runs.push((run, chunk));
-    }
-    runs.into_par_iter().for_each(|(run, chunk)| {
-        for (slot, v) in run.iter_mut().zip(chunk) {
-            slot.write(v);
-        }
-    });
-    // SAFETY: the runs cover the first `total` slots, and each run is as long as its
-    // chunk, whose every vertex was written into it above.
-    unsafe { all.set_len(total) };
-    all
 }
 
 /// A light subpath as it leaves the light.

@@ -677,7 +677,7 @@ impl<'a> Vcm<'a> {
         if let Some(parts) = parts {
             halves.add_splats(parts, &lights.splats, scale);
         }
-        let (counts, stored) = (lights.counts, lights.vertices.len());
+        let (counts, stored) = (lights.counts, lights.stored());
         add_splats((sums, lanes.as_ref()), lights.splats, scale, scene);
         Done { counts, stored, camera: work, records, times: [t0, t1, t2, t3, Instant::now()] }
     }
