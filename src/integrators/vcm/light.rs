@@ -170,9 +170,7 @@ impl LightPass {
 
     /// Vertex `i` (of all the pass's, in order).
     pub fn vertex(&self, i: u32) -> &LightVertex {
-        // The last list starting at or before i: lists left empty share their start
-        // with the next one, which holds i.
-        let c = self.chunk_first.partition_point(|&f| f <= i) - 1;
+        let c = list_holding(&self.chunk_first, i);
         &self.chunks[c][(i - self.chunk_first[c]) as usize]
     }
 
@@ -180,6 +178,13 @@ impl LightPass {
     pub fn stored(&self) -> usize {
         self.spots.len()
     }
+}
+
+/// The list holding vertex `i`, given each list's first vertex number: the last list
+/// starting at or before i (a list left empty shares its start with the next one,
+/// which holds i).
+fn list_holding(first: &[u32], i: u32) -> usize {
+    first.partition_point(|&f| f <= i) - 1
 }
 
 /// What merging checks of a light vertex before it reads the vertex: 16 bytes, so a
@@ -215,8 +220,6 @@ impl Spot {
 
 #[derive(Default)]
 struct Chunk {
-    /// Its first subpath.
-    first: u64,
     vertices: Vec<LightVertex>,
     lens: Vec<u32>,
     splats: [Vec<(u32, Rgb)>; 4],
@@ -236,7 +239,7 @@ pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrato
     let mut chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
-            let mut out = Chunk { first: c * CHUNK, ..Chunk::default() };
+            let mut out = Chunk::default();
             for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 let before = out.vertices.len();
                 let to = Keep { half: half(k), first: k < pixels, vertices: &mut out.vertices };
@@ -263,7 +266,8 @@ pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrato
     }
     let counts = chunks.iter().fold(Counts::default(), |a, c| a + c.counts);
     let splats = chunks.iter_mut().flat_map(|c| std::mem::take(&mut c.splats)).collect();
-    let chunk_first = chunks.iter().map(|c| starts[c.first as usize]).collect();
+    // Chunk c's subpaths start at c·CHUNK.
+    let chunk_first = (0..chunks.len()).map(|c| starts[c * CHUNK as usize]).collect();
     let chunks: Vec<Vec<LightVertex>> = chunks.into_iter().map(|c| c.vertices).collect();
     let spots = chunks.par_iter().flat_map_iter(|c| c.iter().map(Spot::of)).collect();
     LightPass { chunks, chunk_first, spots, starts, splats, counts }
@@ -513,6 +517,14 @@ fn to_camera(pass: &Pass, v: &LightVertex, s: &mut impl Sampler, splats: &mut Ve
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_vertex_is_found_in_its_list_past_empty_ones() {
+        // Lists of 0, 3, 0, 0, 2 and 0 vertices.
+        let first = [0, 0, 3, 3, 3, 5];
+        let lists: Vec<usize> = (0..5).map(|i| list_holding(&first, i)).collect();
+        assert_eq!(lists, [1, 1, 1, 4, 4]);
+    }
 
     #[test]
     fn a_spot_keeps_the_edges_and_the_medium_apart() {
