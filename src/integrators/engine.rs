@@ -35,6 +35,7 @@ impl<'a> Engine<'a> {
                     techniques,
                     balance: p.balances(),
                     prefix_rays: true,
+                    emission: p.emission,
                     guiding: p.guiding,
                 };
                 Engine::Vcm(Box::new(Vcm::new(scene, p.iterations, p.range.start, settings)?))

@@ -26,6 +26,8 @@ pub enum RenderError {
          photons find what the camera sees with --photon-sampling adaptive (--guiding off)"
     )]
     GuidingSppm,
+    #[error("--emission is vcm's and bdpt's: SPPM's photons leave their lights as pbrt's do")]
+    EmissionSppm,
     #[error("--volume-gather is SPPM's; vcm and bdpt connect and merge in media as they do on surfaces")]
     VolumeGatherVcm,
     #[error("--volume-gather beams needs uniform photons (--photon-sampling uniform)")]

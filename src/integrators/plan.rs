@@ -6,6 +6,7 @@ use super::beams::VolumeGather;
 use super::error::RenderError;
 use super::passes::{DEFAULT_ALPHA, PassMode};
 use super::vcm::Techniques;
+use super::vcm::emission_map::EmissionSampling;
 use crate::guiding::Guiding;
 use crate::sampling::SamplerKind;
 use crate::scene::Integrator;
@@ -114,6 +115,9 @@ pub struct RenderSettings {
     pub pass_range: Option<Range<u32>>,
     /// Which of vcm's and bdpt's subpaths draw from a path guide (`--guiding`).
     pub guiding: Guiding,
+    /// How vcm's and bdpt's light subpaths draw their start (`--emission`; default
+    /// `auto`).
+    pub emission: Option<EmissionSampling>,
 }
 
 /// The settings a render runs with, the scene's defaults and the overrides combined.
@@ -137,6 +141,8 @@ pub struct Plan {
     pub time_limit: Option<f64>,
     /// Which subpaths draw from a path guide ([`crate::guiding`]).
     pub guiding: Guiding,
+    /// How light subpaths draw their start ([`super::vcm::emission_map`]).
+    pub emission: EmissionSampling,
 }
 
 impl Plan {
@@ -158,6 +164,8 @@ impl Plan {
         .chain((self.algorithm != Algorithm::Sppm).then(|| ("integrator", self.algorithm.name())))
         .chain(self.balances().then(|| ("light-subpaths", "balanced".to_string())))
         .chain((self.guiding != Guiding::Off).then(|| ("guiding", self.guiding.name().to_string())))
+        // Checkpoints made before it existed (without it) still resume.
+        .chain((self.emission != EmissionSampling::Auto).then(|| ("emission", self.emission.name().to_string())))
         // Checkpoints made before it existed (without it) still resume.
         .chain((self.algorithm == Algorithm::Sppm).then(|| ("volume-gather", self.volume_gather.name().into())))
         .map(|(k, v)| (k.to_string(), v))
@@ -216,6 +224,9 @@ impl Plan {
         if sppm && settings.guiding != Guiding::Off {
             return Err(RenderError::GuidingSppm);
         }
+        if sppm && settings.emission.is_some() {
+            return Err(RenderError::EmissionSppm);
+        }
         if !sppm && settings.volume_gather.is_some() {
             return Err(RenderError::VolumeGatherVcm);
         }
@@ -240,6 +251,7 @@ impl Plan {
             volume_gather,
             time_limit: settings.time_limit,
             guiding: settings.guiding,
+            emission: settings.emission.unwrap_or_default(),
         })
     }
 }

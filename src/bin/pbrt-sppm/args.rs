@@ -8,6 +8,7 @@ use pbrt_sppm::integrators::adaptive::PhotonSampling;
 use pbrt_sppm::integrators::beams::VolumeGather;
 use pbrt_sppm::integrators::checkpoint::Every;
 use pbrt_sppm::integrators::passes::PassMode;
+use pbrt_sppm::integrators::vcm::emission_map::EmissionSampling;
 use pbrt_sppm::integrators::{Algorithm, RenderSettings};
 use pbrt_sppm::job::Request;
 use pbrt_sppm::parser::Syntax;
@@ -135,6 +136,13 @@ pub struct RenderArgs {
     /// `off`. Default: `off`.
     #[arg(long, value_parser = str::parse::<Guiding>)]
     pub guiding: Option<Guiding>,
+    /// How vcm's and bdpt's light subpaths leave area and distant lights: `auto` (from
+    /// a map of what the camera sees, for a light whose subpaths rarely reach it, such
+    /// as the sun outside a room lit through a window), `own` (the light's own
+    /// sampling, as pbrt) or `seen` (the map wherever it sends subpaths elsewhere).
+    /// Default: `auto`.
+    #[arg(long, value_parser = str::parse::<EmissionSampling>)]
+    pub emission: Option<EmissionSampling>,
     /// How SPPM gathers photons in participating media: `beams` (every medium segment
     /// of a camera path gathers the photons near it) or `points` (a camera path
     /// scatters at a point and gathers photons in a ball there). Default: `beams`
@@ -384,6 +392,7 @@ impl RenderArgs {
             passes: self.pass_mode()?,
             pass_range: self.pass_range.clone(),
             guiding: self.guiding.unwrap_or_default(),
+            emission: self.emission,
         };
         Ok(Request {
             scene: self.scene.clone(),

@@ -9,6 +9,7 @@ mod prefix;
 
 pub use prefix::RAYS as PREFIX_RAYS;
 
+use super::emission_map;
 use super::light::{ByKind, LightPass, LightVertex};
 use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
 use super::vertex::{self, Place, Scatterer};
@@ -560,6 +561,7 @@ impl Cameras<'_> {
             self.pass.nee_pick(idx as usize) * light.pdf_li(&scene.geometry.shapes, prev, -v.wo) as f64 * cos / dist2;
         let out = Ray::new(si.p, Vector3(v.wo));
         let (pos, dir) = light.pdf_le(&scene.geometry.shapes, scene.world, &out, si.n.0);
+        let dir = self.pass.maps[idx as usize].as_ref().map_or(dir, |m| dir * m.factor(si.n.0, v.wo));
         let direct_light = v.len == 2 || self.pass.techniques == Techniques::Direct;
         le * self.pass.techniques.weight(mis::emitter_hit(v.partial, direct, pick * (pos * dir) as f64, direct_light))
     }
@@ -759,14 +761,20 @@ fn light_densities(pass: &Pass, k: usize, ls: &crate::lights::LightSample, p: Ve
     let (pos, dir) = light.pdf_le(&scene.geometry.shapes, scene.world, &Ray::new(Point3(from), Vector3(-ls.wi)), n);
     let (pos, dir) = (pos as f64, dir as f64);
     match light {
-        Light::Area(_) => (ls.pdf as f64, n.dot(ls.wi).abs() as f64, pos * dir),
+        Light::Area(_) => {
+            let dir = pass.maps[k].as_ref().map_or(dir, |m| dir * m.factor(n, -ls.wi) as f64);
+            (ls.pdf as f64, n.dot(ls.wi).abs() as f64, pos * dir)
+        }
         Light::Infinite(_) => (ls.pdf as f64, 1.0, pos * dir),
         // Delta positions and directions: their densities cancel (taken as 1).
         Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Projection(_) => {
             let dir = pass.cones[k].map_or(dir, |c| c.density(-ls.wi));
             ((from - p).length_squared() as f64, 1.0, dir)
         }
-        Light::Distant(_) => (1.0, 1.0, pos),
+        Light::Distant(l) => {
+            let q = pass.maps[k].as_ref().map_or(1.0, |m| emission_map::distant_factor(m, l.w, scene.world, p));
+            (1.0, 1.0, pos * q as f64)
+        }
     }
 }
 

@@ -3,6 +3,7 @@
 //! specular is kept (for connections and merging) and seen through the lens (light
 //! tracing).
 
+use super::emission_map;
 use super::mis::{self, Factors, Partial};
 use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique, Techniques};
@@ -312,9 +313,10 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let (li, pick) = scene.light_power.sample(s.get1d())?;
     let light = &scene.lights[li];
     let (u1, u2) = (s.get2d(), s.get2d());
-    let e = match &pass.cones[li] {
-        Some(cone) => super::aim::emit(light, cone, u1),
-        None => match light {
+    let e = match (&pass.cones[li], &pass.maps[li]) {
+        (Some(cone), _) => super::aim::emit(light, cone, u1),
+        (None, Some(map)) => mapped_emission(pass, light, map, (u1, u2))?,
+        (None, None) => match light {
             Light::Infinite(sky) => sky.sample_le_through_portal(scene.world, u1, u2)?,
             _ => light.sample_le(&scene.geometry.shapes, scene.world, u1, u2)?,
         },
@@ -342,6 +344,31 @@ fn emit<'a>(pass: &Pass<'a>, s: &mut impl Sampler) -> Option<Start<'a>> {
     let time = pass.time.unwrap_or_else(|| scene.camera.time(s.get1d()));
     let ray = Ray::new(e.ray.o, Vector3(d)).at_time(time);
     Some(Start { ray, beta, partial, light, pick: nee, cos, medium })
+}
+
+/// An emission with one of its points drawn from the light's map ([`emission_map`]).
+// DEVIATION(pbrt): always on where `--emission auto` maps a light, sampling only. pbrt's
+// bdpt draws over the light's own density; the image's mean is the same (README,
+// "Other differences").
+fn mapped_emission(
+    pass: &Pass,
+    light: &Light,
+    map: &emission_map::EmissionMap,
+    (u1, u2): ([f32; 2], [f32; 2]),
+) -> Option<crate::lights::Emission> {
+    let shapes = &pass.scene.geometry.shapes;
+    match emission_map::mapped(light)? {
+        emission_map::Mapped::Direction => {
+            let (u2, q) = map.draw(u2);
+            let e = light.sample_le(shapes, pass.scene.world, u1, u2)?;
+            Some(crate::lights::Emission { pdf_dir: e.pdf_dir * q, ..e })
+        }
+        emission_map::Mapped::Start => {
+            let (u1, q) = map.draw(u1);
+            let e = light.sample_le(shapes, pass.scene.world, u1, u2)?;
+            Some(crate::lights::Emission { pdf_pos: e.pdf_pos * q, ..e })
+        }
+    }
 }
 
 /// Whether next-event estimation's density of a light subpath's first direction

@@ -25,6 +25,7 @@ pub mod aim;
 pub mod balance;
 pub mod camera;
 pub use camera::PREFIX_RAYS;
+pub mod emission_map;
 pub mod light;
 pub mod mis;
 pub mod vertex;
@@ -195,6 +196,8 @@ pub struct Pass<'a> {
     pub nee_all: bool,
     /// Per light, the cone its subpaths are aimed in ([`aim`]).
     pub cones: std::sync::Arc<[Option<aim::Cone>]>,
+    /// Per light, the map its subpaths' emissions are drawn from too ([`emission_map`]).
+    pub maps: std::sync::Arc<[Option<emission_map::EmissionMap>]>,
     /// Light subpaths take the shading-normal correction on specular bounces too (as
     /// pbrt's bdpt; not for files asking for SPPM, whose photons cross them without it:
     /// [`light::LightVertex::leaving_cos`]).
@@ -311,6 +314,8 @@ pub struct VcmSettings {
     /// Which subpaths draw directions from a path guide too (`--guiding`,
     /// [`crate::guiding`]).
     pub guiding: Guiding,
+    /// How light subpaths draw their start (`--emission`, [`emission_map`]).
+    pub emission: emission_map::EmissionSampling,
 }
 
 /// The choice of light subpaths per pass under way: the pilot's measurements while it
@@ -339,6 +344,7 @@ pub struct Vcm<'a> {
     pub live: std::sync::Arc<super::report::Live>,
     balance: Option<Balance>,
     cones: std::sync::Arc<[Option<aim::Cone>]>,
+    maps: std::sync::Arc<[Option<emission_map::EmissionMap>]>,
     /// The pixels that trace more rays for what they see through perfect specular
     /// chains (`camera/prefix.rs`), drawn once before the first pass.
     prefix: Option<Vec<bool>>,
@@ -394,6 +400,15 @@ impl<'a> Vcm<'a> {
             live: Default::default(),
             balance,
             cones: aim::cones(scene).into(),
+            // Without light subpaths (`direct`, a camera technique alone) no density of
+            // emission is read.
+            maps: match [Technique::Connect, Technique::LightTrace, Technique::Merge]
+                .into_iter()
+                .any(|t| settings.techniques.uses(t))
+            {
+                true => emission_map::maps(scene, settings.seed, settings.emission).into(),
+                false => vec![None; scene.lights.len()].into(),
+            },
             prefix: None,
             buckets: bucket_sums(scene, w * h, (w, h))?,
             guide: guide(scene, &settings),
@@ -700,6 +715,7 @@ impl<'a> Vcm<'a> {
             time: scene.pass_time(iteration, true),
             nee_all: scene.lights.len() <= NEE_ALL_LIGHTS_MAX,
             cones: self.cones.clone(),
+            maps: self.maps.clone(),
             correct_specular: scene.integrator.requested != "sppm",
             guide: self.guide.as_ref().filter(|_| self.settings.guiding.camera()).map(|g| g.tree()),
             light_guide: self.guide.as_ref().and_then(|g| g.importance()),
