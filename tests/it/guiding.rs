@@ -96,13 +96,7 @@ fn assert_furnace(text: &str, width: usize, (techniques, guiding): (Techniques, 
 #[test]
 fn guiding_an_sppm_render_is_a_clear_error() {
     let d = crate::shards::dir("guided-sppm");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
-        .current_dir(&d)
-        .args(["render", "scene.pbrt", "--guiding", "on", "--outfile", "x.exr"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    let err = crate::shards::error(&d, &["render", "scene.pbrt", "--guiding", "on", "--outfile", "x.exr"]);
     assert!(err.contains("path guiding is for vcm and bdpt") && err.contains("--guiding off"), "{err}");
     assert!(!d.join("x.exr").exists());
     let _ = std::fs::remove_dir_all(&d);

@@ -39,7 +39,7 @@ fn ok(d: &Path, args: &[&str]) {
 }
 
 /// Exit code 1 and the message on stderr.
-fn error(d: &Path, args: &[&str]) -> String {
+pub fn error(d: &Path, args: &[&str]) -> String {
     let o = run(d, args);
     assert_eq!(o.status.code(), Some(1), "{args:?} should fail: {}", String::from_utf8_lossy(&o.stderr));
     String::from_utf8_lossy(&o.stderr).into_owned()

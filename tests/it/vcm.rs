@@ -745,13 +745,7 @@ fn lights_outside_a_window_draw_their_subpaths_toward_what_the_camera_sees() {
 #[test]
 fn choosing_how_an_sppm_render_emits_is_a_clear_error() {
     let d = crate::shards::dir("emission-sppm");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
-        .current_dir(&d)
-        .args(["render", "scene.pbrt", "--emission", "seen", "--outfile", "x.exr"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    let err = crate::shards::error(&d, &["render", "scene.pbrt", "--emission", "seen", "--outfile", "x.exr"]);
     assert!(err.contains("--emission is vcm's and bdpt's"), "{err}");
     assert!(!d.join("x.exr").exists());
 }
