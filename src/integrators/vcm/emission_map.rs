@@ -78,8 +78,9 @@ impl EmissionMap {
         Some(EmissionMap { cells: Distribution1D::new(weights), factor })
     }
 
-    /// The point of the square a light draws its direction from in place of `u`, and
-    /// the mixture's density there over the light's own.
+    /// The point of the square a light draws from in place of `u` (an area light's
+    /// direction, a distant light's start), and the mixture's density there over the
+    /// light's own.
     pub fn draw(&self, u: [f32; 2]) -> ([f32; 2], f32) {
         let v = if u[0] < GUIDED {
             match self.cells.pick(u[0] / GUIDED) {
@@ -99,10 +100,11 @@ impl EmissionMap {
     /// The mixture's density over the light's own for the unit direction `d` leaving
     /// a point whose emitting normal is `n` (1 behind it, where both are 0).
     pub fn factor(&self, n: Vec3, d: Vec3) -> f32 {
-        let (a, b) = crate::math::frame::coordinate_system(n);
         if n.dot(d) <= 0.0 {
             return 1.0;
         }
+        // The frame `sample_le` lifts the disk into.
+        let (a, b) = crate::math::frame::coordinate_system(n);
         self.factor_at(square_of_disk(Vec2::new(d.dot(a), d.dot(b))))
     }
 
