@@ -229,6 +229,16 @@ impl AreaLight {
         Some(Emission { ray: Ray::new(o, Vector3(d)), n, pdf_pos: s.pdf, pdf_dir, le, surface: Some(s) })
     }
 
+    /// The point of the unit square `sample_le` lifts to the unit direction `d` leaving
+    /// a point whose oriented normal is `n`: one-sided lights, in front of the surface.
+    pub fn direction_square(&self, n: Vec3, d: Vec3) -> Option<[f32; 2]> {
+        if self.two_sided || n.dot(d) <= 0.0 {
+            return None;
+        }
+        let (a, b) = coordinate_system(n);
+        Some(crate::sampling::invert_concentric_disk(glam::Vec2::new(d.dot(a), d.dot(b))))
+    }
+
     /// (position, direction) densities of an emission from the point `p` of this
     /// primitive, whose oriented normal there is `n`, along the unit direction `d`.
     #[inline]

@@ -76,6 +76,13 @@ impl DistantLight {
         Emission { ray, n: -w, pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0, le: self.l, surface: None }
     }
 
+    /// The point of the unit square `sample_le` starts the ray through `p` from.
+    pub fn start_square(&self, world: WorldSphere, p: Vec3) -> [f32; 2] {
+        let (a, b) = coordinate_system(self.w);
+        let rel = (p - world.center) / world.radius;
+        crate::sampling::invert_concentric_disk(glam::Vec2::new(rel.dot(a), rel.dot(b)))
+    }
+
     /// (position, direction) densities of an emission: uniform over the disk of the
     /// world's radius, the direction a delta (0, as pbrt's `Pdf_Le` reports it).
     #[inline]

@@ -273,9 +273,43 @@ pub fn concentric_disk(u: [f32; 2]) -> Vec2 {
     r * Vec2::new(theta.cos(), theta.sin())
 }
 
+/// The point of the unit square [`concentric_disk`] maps to `p` (pbrt-v4's
+/// `InvertUniformDiskConcentricSample`).
+pub fn invert_concentric_disk(p: Vec2) -> [f32; 2] {
+    use std::f32::consts::{FRAC_PI_4, PI};
+    let r = p.length();
+    if r == 0.0 {
+        return [0.5, 0.5];
+    }
+    let mut t = p.y.atan2(p.x);
+    if t < -FRAC_PI_4 {
+        t += 2.0 * PI;
+    }
+    let o = if t < FRAC_PI_4 {
+        Vec2::new(r, r * t / FRAC_PI_4)
+    } else if t < 3.0 * FRAC_PI_4 {
+        Vec2::new(r * (PI / 2.0 - t) / FRAC_PI_4, r)
+    } else if t < 5.0 * FRAC_PI_4 {
+        Vec2::new(-r, r * (PI - t) / FRAC_PI_4)
+    } else {
+        Vec2::new(r * (t - 1.5 * PI) / FRAC_PI_4, -r)
+    };
+    [(o.x + 1.0) * 0.5, (o.y + 1.0) * 0.5].map(|x| x.clamp(0.0, 1.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_concentric_map_inverts() {
+        let mut rng = Rng::new(7);
+        for _ in 0..20000 {
+            let u = [rng.uniform(), rng.uniform()];
+            let back = invert_concentric_disk(concentric_disk(u));
+            assert!((back[0] - u[0]).abs() < 1e-4 && (back[1] - u[1]).abs() < 1e-4, "{u:?} -> {back:?}");
+        }
+    }
 
     #[test]
     fn radical_inverses_are_the_reversed_digits() {

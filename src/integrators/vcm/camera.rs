@@ -9,7 +9,6 @@ mod prefix;
 
 pub use prefix::RAYS as PREFIX_RAYS;
 
-use super::emission_map;
 use super::light::{ByKind, LightPass, LightVertex};
 use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
 use super::vertex::{self, Place, Scatterer};
@@ -561,7 +560,9 @@ impl Cameras<'_> {
             self.pass.nee_pick(idx as usize) * light.pdf_li(&scene.geometry.shapes, prev, -v.wo) as f64 * cos / dist2;
         let out = Ray::new(si.p, Vector3(v.wo));
         let (pos, dir) = light.pdf_le(&scene.geometry.shapes, scene.world, &out, si.n.0);
-        let dir = self.pass.maps[idx as usize].as_ref().map_or(dir, |m| dir * m.factor(si.n.0, v.wo));
+        let dir = self.pass.maps[idx as usize]
+            .as_ref()
+            .map_or(dir, |m| dir * m.factor(light, scene.world, prev, (si.n.0, v.wo)));
         let direct_light = v.len == 2 || self.pass.techniques == Techniques::Direct;
         le * self.pass.techniques.weight(mis::emitter_hit(v.partial, direct, pick * (pos * dir) as f64, direct_light))
     }
@@ -759,22 +760,18 @@ fn light_densities(pass: &Pass, k: usize, ls: &crate::lights::LightSample, p: Ve
     let from = ls.p_light.unwrap_or(p + ls.wi);
     let n = ls.surface.map_or(-ls.wi, |s| s.n.0);
     let (pos, dir) = light.pdf_le(&scene.geometry.shapes, scene.world, &Ray::new(Point3(from), Vector3(-ls.wi)), n);
+    // Where a light's own emission is mapped, the mixture's density over it.
+    let q = pass.maps[k].as_ref().map_or(1.0, |m| m.factor(light, scene.world, p, (n, -ls.wi)) as f64);
     let (pos, dir) = (pos as f64, dir as f64);
     match light {
-        Light::Area(_) => {
-            let dir = pass.maps[k].as_ref().map_or(dir, |m| dir * m.factor(n, -ls.wi) as f64);
-            (ls.pdf as f64, n.dot(ls.wi).abs() as f64, pos * dir)
-        }
+        Light::Area(_) => (ls.pdf as f64, n.dot(ls.wi).abs() as f64, pos * (dir * q)),
         Light::Infinite(_) => (ls.pdf as f64, 1.0, pos * dir),
         // Delta positions and directions: their densities cancel (taken as 1).
         Light::Point(_) | Light::Spot(_) | Light::Goniometric(_) | Light::Projection(_) => {
             let dir = pass.cones[k].map_or(dir, |c| c.density(-ls.wi));
             ((from - p).length_squared() as f64, 1.0, dir)
         }
-        Light::Distant(l) => {
-            let q = pass.maps[k].as_ref().map_or(1.0, |m| emission_map::distant_factor(m, l.w, scene.world, p));
-            (1.0, 1.0, pos * q as f64)
-        }
+        Light::Distant(_) => (1.0, 1.0, pos * q),
     }
 }
 
