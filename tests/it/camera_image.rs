@@ -72,6 +72,44 @@ fn fov_spans_the_shorter_axis_and_orthographic_uses_the_screen_window() {
     assert_eq!((r.o.0.x, r.o.0.y, r.d.0.z), (-2.0, 2.0, 1.0), "top-left corner of the window");
 }
 
+/// A still pinhole's rays, set up once in world space, against pbrt's construction
+/// worked out here apart: LookAt's frame (right = up × dir, up' = dir × right) applied
+/// to the camera-space direction (sx·tan(fov/2), sy·tan(fov/2), 1) of the raster
+/// point's screen position, in a screen window that is not centred.
+#[test]
+fn pinhole_rays_follow_the_lookat_frame_and_the_screen_window() {
+    let s = scene(
+        "Film \"rgb\" \"integer xresolution\" 40 \"integer yresolution\" 30 \
+         LookAt 1 2 3  4 2.5 -1  0 1 0 \
+         Camera \"perspective\" \"float fov\" 50 \"float screenwindow\" [-1 0.5 -0.75 0.75] WorldBegin",
+    );
+    let cam = Camera::new(&s.camera, &s.film);
+    let (eye, look, up) = ([1.0f64, 2.0, 3.0], [4.0, 2.5, -1.0], [0.0, 1.0, 0.0]);
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross =
+        |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let unit = |a: [f64; 3]| {
+        let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        [a[0] / l, a[1] / l, a[2] / l]
+    };
+    let dir = unit(sub(look, eye));
+    let right = unit(cross(up, dir));
+    let new_up = cross(dir, right);
+    let t = (25f64).to_radians().tan();
+    for (x, y) in [(0.0, 0.0), (40.0, 30.0), (13.25, 7.5), (39.5, 0.5), (20.0, 15.0)] {
+        let (sx, sy) = (-1.0 + x / 40.0 * 1.5, 0.75 - y / 30.0 * 1.5);
+        let c = [sx * t, sy * t, 1.0];
+        let want = unit([0, 1, 2].map(|i| right[i] * c[0] + new_up[i] * c[1] + dir[i] * c[2]));
+        let r = cam.generate_ray([x as f32, y as f32], [0.5, 0.5]);
+        let got = [r.d.0.x as f64, r.d.0.y as f64, r.d.0.z as f64];
+        let o = [r.o.0.x as f64, r.o.0.y as f64, r.o.0.z as f64];
+        for i in 0..3 {
+            assert!((got[i] - want[i]).abs() < 1e-6, "({x}, {y}): direction {got:?} against {want:?}");
+            assert!((o[i] - eye[i]).abs() < 1e-6, "({x}, {y}): origin {o:?}");
+        }
+    }
+}
+
 #[test]
 fn thin_lens_rays_meet_at_the_focal_distance() {
     let s = scene(
