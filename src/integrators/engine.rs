@@ -37,6 +37,7 @@ impl<'a> Engine<'a> {
                     prefix_rays: true,
                     emission: p.emission,
                     guiding: p.guiding,
+                    connections: p.connections,
                 };
                 Engine::Vcm(Box::new(Vcm::new(scene, p.iterations, p.range.start, settings)?))
             }

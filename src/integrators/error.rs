@@ -28,6 +28,8 @@ pub enum RenderError {
     GuidingSppm,
     #[error("--emission is vcm's and bdpt's: SPPM's photons leave their lights as pbrt's do")]
     EmissionSppm,
+    #[error("--connections is vcm's and bdpt's: SPPM makes no connections")]
+    ConnectionsSppm,
     #[error("--volume-gather is SPPM's; vcm and bdpt connect and merge in media as they do on surfaces")]
     VolumeGatherVcm,
     #[error("--volume-gather beams needs uniform photons (--photon-sampling uniform)")]

@@ -7,6 +7,7 @@ use super::error::RenderError;
 use super::passes::{DEFAULT_ALPHA, PassMode};
 use super::vcm::Techniques;
 use super::vcm::emission_map::EmissionSampling;
+use super::vcm::links::Connections;
 use crate::guiding::Guiding;
 use crate::sampling::SamplerKind;
 use crate::scene::Integrator;
@@ -118,6 +119,9 @@ pub struct RenderSettings {
     /// How vcm's and bdpt's light subpaths draw their start (`--emission`; default
     /// `auto`).
     pub emission: Option<EmissionSampling>,
+    /// What vcm's and bdpt's camera vertices connect to (`--connections`; default
+    /// `paired`).
+    pub connections: Option<Connections>,
 }
 
 /// The settings a render runs with, the scene's defaults and the overrides combined.
@@ -143,6 +147,8 @@ pub struct Plan {
     pub guiding: Guiding,
     /// How light subpaths draw their start ([`super::vcm::emission_map`]).
     pub emission: EmissionSampling,
+    /// What camera vertices connect to ([`super::vcm::links`]).
+    pub connections: Connections,
 }
 
 impl Plan {
@@ -166,6 +172,7 @@ impl Plan {
         .chain((self.guiding != Guiding::Off).then(|| ("guiding", self.guiding.name().to_string())))
         // Checkpoints made before it existed (without it) still resume.
         .chain((self.emission != EmissionSampling::Auto).then(|| ("emission", self.emission.name().to_string())))
+        .chain((self.connections != Connections::Paired).then(|| ("connections", self.connections.name().into())))
         // Checkpoints made before it existed (without it) still resume.
         .chain((self.algorithm == Algorithm::Sppm).then(|| ("volume-gather", self.volume_gather.name().into())))
         .map(|(k, v)| (k.to_string(), v))
@@ -227,6 +234,9 @@ impl Plan {
         if sppm && settings.emission.is_some() {
             return Err(RenderError::EmissionSppm);
         }
+        if sppm && settings.connections.is_some() {
+            return Err(RenderError::ConnectionsSppm);
+        }
         if !sppm && settings.volume_gather.is_some() {
             return Err(RenderError::VolumeGatherVcm);
         }
@@ -252,6 +262,7 @@ impl Plan {
             time_limit: settings.time_limit,
             guiding: settings.guiding,
             emission: settings.emission.unwrap_or_default(),
+            connections: settings.connections.unwrap_or_default(),
         })
     }
 }

@@ -284,3 +284,21 @@ fn a_foggy_scene_resumed_from_a_checkpoint_matches_an_uninterrupted_one() {
     }
     assert!(images[0] != images[1], "beams and points rendered the same image");
 }
+
+/// vcm with cached connections resumes bit for bit: the table the pilot learnt is not
+/// in the checkpoint, so the resumed render plays the pilot again before the first
+/// pass that draws by it.
+#[test]
+fn cached_connections_resumed_from_a_checkpoint_match_an_uninterrupted_render() {
+    let d = dir("cached-connections");
+    let args = ["--integrator", "vcm", "--connections", "cached", "--spp", "6", "-q"];
+    let whole = run(&d, &[&args[..], &["--outfile", "whole.exr"]].concat());
+    assert!(whole.status.success(), "{}", String::from_utf8_lossy(&whole.stderr));
+    let common = [&args[..], &["--outfile", "part.exr", "--checkpoint", "c.ckpt"]].concat();
+    let first = run(&d, &[&common[..], &["--time-limit", "0.000001"]].concat());
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let rest = run(&d, &[&common[..], &["--resume", "c.ckpt"]].concat());
+    assert!(rest.status.success(), "{}", String::from_utf8_lossy(&rest.stderr));
+    assert!(pixels(&d.join("part.exr")) == pixels(&d.join("whole.exr")), "resumed differs");
+    let _ = std::fs::remove_dir_all(&d);
+}

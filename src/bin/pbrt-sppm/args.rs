@@ -9,6 +9,7 @@ use pbrt_sppm::integrators::beams::VolumeGather;
 use pbrt_sppm::integrators::checkpoint::Every;
 use pbrt_sppm::integrators::passes::PassMode;
 use pbrt_sppm::integrators::vcm::emission_map::EmissionSampling;
+use pbrt_sppm::integrators::vcm::links::Connections;
 use pbrt_sppm::integrators::{Algorithm, RenderSettings};
 use pbrt_sppm::job::Request;
 use pbrt_sppm::parser::Syntax;
@@ -143,6 +144,12 @@ pub struct RenderArgs {
     /// Default: `auto`.
     #[arg(long, value_parser = str::parse::<EmissionSampling>)]
     pub emission: Option<EmissionSampling>,
+    /// What vcm's and bdpt's camera vertices connect to: `paired` (every vertex of one
+    /// light subpath) or `cached` (vertices drawn from the whole pass, by a table of
+    /// where connections found light, learnt over the first four passes). Default:
+    /// `paired`.
+    #[arg(long, value_parser = str::parse::<Connections>)]
+    pub connections: Option<Connections>,
     /// How SPPM gathers photons in participating media: `beams` (every medium segment
     /// of a camera path gathers the photons near it) or `points` (a camera path
     /// scatters at a point and gathers photons in a ball there). Default: `beams`
@@ -393,6 +400,7 @@ impl RenderArgs {
             pass_range: self.pass_range.clone(),
             guiding: self.guiding.unwrap_or_default(),
             emission: self.emission,
+            connections: self.connections,
         };
         Ok(Request {
             scene: self.scene.clone(),

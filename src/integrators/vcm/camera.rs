@@ -10,6 +10,7 @@ mod prefix;
 pub use prefix::RAYS as PREFIX_RAYS;
 
 use super::light::{ByKind, LightPass, LightVertex};
+use super::links::{Links, MAX_DRAWS, Pool, Sample};
 use super::mis::{self, ConnectPdfs, DirectPdfs, Partial};
 use super::vertex::{self, Place, Scatterer};
 use super::{Pass, Technique, Techniques};
@@ -43,6 +44,9 @@ pub struct Cameras<'a> {
     /// The pixels that trace more rays for the light they see through perfect
     /// specular chains ([`prefix`]; `Cameras::prefix_marks`), if any.
     pub prefix: Option<&'a [bool]>,
+    /// The pass's light vertices by cell, where camera vertices draw their connections
+    /// from them all ([`super::links`]).
+    pub pool: Option<&'a Pool>,
 }
 
 /// What one camera subpath gives its pixel: the light of the techniques that trace
@@ -57,6 +61,9 @@ pub struct PixelSample {
     /// What the subpath found past its guidable vertices, for the guide's training
     /// (only when the pass trains, [`Pass::training`]).
     pub records: crate::guiding::Records,
+    /// The connections it made, for the table of cached connections (only when the
+    /// pass learns it, [`Pass::link_cells`]).
+    pub links: Vec<Sample>,
 }
 
 impl PixelSample {
@@ -345,7 +352,10 @@ impl Cameras<'_> {
                 }
                 scene.terminate_if_dispersed(hit, &mut beta, &mut terminated);
             }
-            let v = Vertex { terminated, ..v };
+            let mut v = Vertex { terminated, ..v };
+            if let Some(links) = pass.links.as_deref().filter(|_| len > 1) {
+                v.partial.count_edge(links.count(place.p, prev));
+            }
             in_prefix &= at.is_delta();
             if len >= pass.max_len || (surf.is_some() && wo.dot(place.ng) == 0.0) {
                 break;
@@ -497,7 +507,7 @@ impl Cameras<'_> {
         s: &mut impl Sampler,
         out: &mut PixelSample,
     ) {
-        let (traced, merged) = self.at_vertex(v, light_path, s, &mut out.work);
+        let (traced, merged) = self.at_vertex(v, light_path, s, (&mut out.work, &mut out.links));
         out.traced += beta * traced;
         for (m, add) in out.merged.iter_mut().zip(merged) {
             *m += beta * add;
@@ -512,7 +522,7 @@ impl Cameras<'_> {
         v: &Vertex,
         light_path: &[LightVertex],
         s: &mut impl Sampler,
-        work: &mut Work,
+        (work, learnt): (&mut Work, &mut Vec<Sample>),
     ) -> (Rgb, ByKind) {
         let t = self.pass.techniques;
         let mut c = Vec3::ZERO;
@@ -525,10 +535,14 @@ impl Cameras<'_> {
         // merging (as photon mapping does).
         if t.uses(Technique::Connect) {
             let first_only = t == Techniques::Only(Technique::Connect);
-            for lv in light_path.iter().take_while(|lv| lv.len + v.len < self.pass.max_len) {
-                if !first_only || lv.len == 1 {
-                    c += self.connect(v, lv, s);
-                    work.rays += 1;
+            if let (Some(pool), Some(links)) = (self.pool, self.pass.links.as_deref()) {
+                c += self.connect_drawn(v, (pool, links), s, work, first_only);
+            } else {
+                for lv in light_path.iter().take_while(|lv| lv.len + v.len < self.pass.max_len) {
+                    if !first_only || lv.len == 1 {
+                        c += self.connect(v, lv, s, None, learnt);
+                        work.rays += 1;
+                    }
                 }
             }
         }
@@ -656,8 +670,49 @@ impl Cameras<'_> {
         }
     }
 
-    /// A camera vertex connected to a light vertex.
-    fn connect(&self, v: &Vertex, lv: &LightVertex, s: &mut impl Sampler) -> Rgb {
+    /// Connections to [`Links::draws`] light vertices drawn from the whole pass
+    /// (`first_only`: of those one edge from their light).
+    fn connect_drawn(
+        &self,
+        v: &Vertex,
+        (pool, links): (&Pool, &Links),
+        s: &mut impl Sampler,
+        work: &mut Work,
+        first_only: bool,
+    ) -> Rgb {
+        let per = self.pass.light_paths as f64 * links.draws as f64;
+        // Drawn all first, so that the vertices' memory loads while the first is used.
+        let mut drawn = [(0u32, 0f64); MAX_DRAWS];
+        let mut n = 0;
+        for _ in 0..links.draws.min(MAX_DRAWS as u32) {
+            if let Some((i, q)) = pool.draw(links, v.place.p, s.get2d()) {
+                prefetch(self.lights.vertex(i));
+                drawn[n] = (i, q);
+                n += 1;
+            }
+        }
+        let mut c = Vec3::ZERO;
+        for &(i, q) in &drawn[..n] {
+            let lv = self.lights.vertex(i);
+            if lv.len + v.len < self.pass.max_len && (!first_only || lv.len == 1) {
+                c += self.connect(v, lv, s, Some(per * q), &mut Vec::new());
+                work.rays += 1;
+            }
+        }
+        c
+    }
+
+    /// A camera vertex connected to a light vertex: its pair's, or one drawn from the
+    /// whole pass with density `drawn` (per light subpath and draw). A pass that
+    /// learns the table of cached connections notes the connection in `learnt`.
+    fn connect(
+        &self,
+        v: &Vertex,
+        lv: &LightVertex,
+        s: &mut impl Sampler,
+        drawn: Option<f64>,
+        learnt: &mut Vec<Sample>,
+    ) -> Rgb {
         let pass = self.pass;
         let d = lv.place.p - v.place.p;
         let dist2 = d.length_squared();
@@ -680,14 +735,20 @@ impl Cameras<'_> {
         if v.exit {
             f.1.vm = 0.0; // no merging at the exit of a BSSRDF
         }
-        let w = pass.techniques.weight(mis::connect(lv.partial, v.partial, pdfs, lv.len, f, v.merges));
+        let count = pass.links.as_ref().map_or(1.0, |l| l.count(lv.place.p, v.place.p));
+        let w = mis::connect(lv.partial, v.partial, pdfs, lv.len, f, v.merges, count);
         let g = v.at.cos(dir) * lv.adjoint_cos(-dir) / dist2;
-        let c = (lv.beta * el.f * ec.f * (g * w * once(v, lv))).as_dvec3() * pass.scene.photon_scale;
-        let c = c.as_vec3();
+        let unweighted = (lv.beta * el.f * ec.f * (g * once(v, lv))).as_dvec3() * pass.scene.photon_scale;
+        let c = (unweighted * (pass.techniques.weight(w) as f64 / drawn.unwrap_or(1.0))).as_vec3();
         if c == Vec3::ZERO || !c.is_finite() {
             return Vec3::ZERO;
         }
-        c * vertex::visible_between(pass.scene, &v.place, &lv.place, s)
+        let seen = vertex::visible_between(pass.scene, &v.place, &lv.place, s);
+        if let Some(cells) = &pass.link_cells {
+            let value = crate::spectrum::luminance((unweighted.as_vec3() * seen).max(Vec3::ZERO));
+            learnt.push(Sample { camera: cells.of(v.place.p), light: cells.of(lv.place.p), value });
+        }
+        c * seen
     }
 
     /// Light vertices within the pass's radius merged at a camera vertex: their

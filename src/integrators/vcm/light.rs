@@ -235,8 +235,12 @@ pub fn trace_all(pass: &Pass, seed: u64, iteration: u32, live: &crate::integrato
     let n = pass.light_paths;
     let stream = hash(&[seed, iteration as u64, 3]);
     // Camera subpath i connects to light subpath i mod n: past the pixel count, no
-    // subpath's first vertex (used only by connections) is ever read.
-    let pixels = (pass.size.0 * pass.size.1) as u64;
+    // subpath's first vertex (used only by connections) is ever read, unless camera
+    // vertices draw from all of the pass's (`links`).
+    let pixels = match pass.links {
+        Some(_) => u64::MAX,
+        None => (pass.size.0 * pass.size.1) as u64,
+    };
     let mut chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
@@ -434,6 +438,9 @@ fn trace(pass: &Pass, s: &mut impl Sampler, to: Keep, splats: &mut [Vec<(u32, Rg
             partial.vcm *= mis::mis(pick * pdf * per_area);
         }
         partial.arrive((len > 1 || is_finite(light)).then_some(dist2), at.measure(wo, place.ng));
+        if let Some(links) = pass.links.as_deref().filter(|_| len > 1) {
+            partial.count_edge(links.count(prev, place.p));
+        }
         if !at.in_medium() && wo.dot(place.ng) == 0.0 {
             break;
         }

@@ -175,6 +175,14 @@ impl Partial {
         self.vm_merges /= c;
     }
 
+    /// The edge just arrived over, were a connection to make it, counts as `count`
+    /// samples where a pair counts 1 (connections drawn from the whole pass,
+    /// `links`). Not for an edge from a light's own point (next-event estimation
+    /// makes that one, once) nor one from the lens (light tracing).
+    pub fn count_edge(&mut self, count: f64) {
+        self.vcm *= mis(count);
+    }
+
     /// Leaving a vertex along a sampled direction: `cos_out` the geometric cosine there,
     /// `pdf` the solid-angle density of the sample, `pdf_rev` the density of the
     /// reverse walk choosing the direction the path came from. `merges`: whether
@@ -270,7 +278,7 @@ pub struct ConnectPdfs {
 /// `fl`, `fc`: the constants at the light and the camera vertex; `merges`: whether
 /// merging is a technique at the camera vertex, and so at the light subpath's vertices
 /// beyond it (not when the camera subpath has bounced specularly after a diffuse
-/// bounce).
+/// bounce); `count`: the samples this connection counts as ([`Partial::count_edge`]).
 pub fn connect(
     light: Partial,
     camera: Partial,
@@ -278,6 +286,7 @@ pub fn connect(
     light_len: u32,
     (fl, fc): (Factors, Factors),
     merges: bool,
+    count: f64,
 ) -> f64 {
     let (vm_l, vm_c, light_vc) = match merges {
         true => (if light_len > 1 { fl.vm } else { 0.0 }, fc.vm, light.vc),
@@ -285,7 +294,7 @@ pub fn connect(
     };
     let w_light = mis(p.camera_a) * (vm_l + light.vcm + light_vc * mis(p.light_rev));
     let w_camera = mis(p.light_a) * (vm_c + camera.vcm + camera.vc * mis(p.camera_rev));
-    1.0 / (w_light + 1.0 + w_camera)
+    1.0 / ((w_light + w_camera) / mis(count) + 1.0)
 }
 
 /// The weight of light tracing: a light vertex connected to the lens. `camera_a`: the

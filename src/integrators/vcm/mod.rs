@@ -27,6 +27,7 @@ pub mod camera;
 pub use camera::PREFIX_RAYS;
 pub mod emission_map;
 pub mod light;
+pub mod links;
 pub mod mis;
 pub mod vertex;
 
@@ -56,14 +57,17 @@ use std::time::Instant;
 /// triangle.
 pub const NEE_ALL_LIGHTS_MAX: usize = 8;
 
-/// What a band of camera subpaths gives besides the image: work, guide records.
-type Out = (camera::Work, Records);
+/// What a band of camera subpaths gives besides the image: work, guide records,
+/// connections for the table of cached connections.
+type Out = (camera::Work, Records, Vec<links::Sample>);
 
-/// Two neighbouring bands' [`Out`]: work sums in any order; records join in pixel
-/// order (the guide's sums then do not depend on the thread count).
-fn join((wa, mut ra): Out, (wb, rb): Out) -> Out {
+/// Two neighbouring bands' [`Out`]: work sums in any order; records and connections
+/// join in pixel order (the guide's and the table's sums then do not depend on the
+/// thread count).
+fn join((wa, mut ra, mut la): Out, (wb, rb, mut lb): Out) -> Out {
     ra.append(rb);
-    (wa + wb, ra)
+    la.append(&mut lb);
+    (wa + wb, ra, la)
 }
 
 /// Whether a vertex may be guided: on a surface whose BSDF can be
@@ -208,6 +212,12 @@ pub struct Pass<'a> {
     pub light_guide: Option<std::sync::Arc<STree>>,
     /// Camera subpaths record what they find for the guides' training.
     pub training: bool,
+    /// Camera vertices draw the light vertices they connect to from the whole pass
+    /// by this table ([`links`]), rather than take their pair's.
+    pub links: Option<std::sync::Arc<links::Links>>,
+    /// Camera subpaths record their connections for the table's learning, by these
+    /// cells (a pilot pass's).
+    pub link_cells: Option<std::sync::Arc<links::Cells>>,
 }
 
 impl Pass<'_> {
@@ -316,6 +326,8 @@ pub struct VcmSettings {
     pub guiding: Guiding,
     /// How light subpaths draw their start (`--emission`, [`emission_map`]).
     pub emission: emission_map::EmissionSampling,
+    /// What camera vertices connect to (`--connections`, [`links`]).
+    pub connections: links::Connections,
 }
 
 /// The choice of light subpaths per pass under way: the pilot's measurements while it
@@ -352,6 +364,8 @@ pub struct Vcm<'a> {
     buckets: Option<BucketSums>,
     /// The path guide, trained over the first passes ([`crate::guiding::training`]).
     guide: Option<Guide>,
+    /// The table cached connections draw by, learnt over the pilot ([`links`]).
+    links: Option<links::State>,
 }
 
 /// What a pass did besides adding to the sums.
@@ -361,6 +375,9 @@ struct Done {
     camera: camera::Work,
     /// The camera subpaths' records for the guide, in pixel order (a training pass's).
     records: Records,
+    /// The connections camera subpaths made, in pixel order, and where the stored
+    /// light vertices stand (a pass the table learns from).
+    links: Option<(Vec<links::Sample>, Vec<glam::Vec3>)>,
     times: [Instant; 5],
 }
 
@@ -412,6 +429,10 @@ impl<'a> Vcm<'a> {
             prefix: None,
             buckets: bucket_sums(scene, w * h, (w, h))?,
             guide: guide(scene, &settings),
+            links: match first {
+                0 => learning(scene, &settings),
+                _ => learning(scene, &settings).map(|_| links::State::Unknown),
+            },
         };
         vcm.prefix = vcm.prefix_marks();
         Ok(vcm)
@@ -444,6 +465,7 @@ impl<'a> Vcm<'a> {
             sampler: self.settings.sampler,
             differential_scale: self.differential_scale,
             prefix: self.prefix.as_deref(),
+            pool: None,
         }
     }
 
@@ -582,6 +604,14 @@ impl<'a> Vcm<'a> {
             g.add_pass(&done.records);
         }
         let n = self.light_paths(k);
+        if let (Some(links::State::Learning(l)), Some((samples, points))) = (&mut self.links, &done.links) {
+            l.add(samples, points.iter().copied(), n);
+        }
+        if k + 1 >= balance::PILOT_PASSES
+            && let Some(links::State::Learning(l)) = self.links.take_if(|s| matches!(s, links::State::Learning(_)))
+        {
+            self.links = Some(links::State::Learnt(std::sync::Arc::new(l.finish())));
+        }
         if let (Some(parts), Some(Balance::Measuring(pilot))) = (parts, &mut self.balance) {
             pilot.add(parts, n, done.counts, done.camera, done.stored as u64);
             if pilot.complete() {
@@ -596,13 +626,17 @@ impl<'a> Vcm<'a> {
     /// that the pass is the one a render from pass 0 renders.
     fn rehearse(&mut self) {
         let it = self.iteration;
-        let unknown = matches!(self.balance, Some(Balance::Unknown));
+        let links_unknown = matches!(self.links, Some(links::State::Unknown));
+        let unknown = matches!(self.balance, Some(Balance::Unknown)) || links_unknown;
         let pilot = unknown && it >= balance::PILOT_PASSES;
         if !pilot && !self.guide.as_ref().is_some_and(|g| g.behind(it)) {
             return;
         }
         if unknown {
             self.balance = Some(Balance::Measuring(Box::new(balance::Pilot::new(self.sums.len()))));
+            if links_unknown {
+                self.links = learning(self.scene, &self.settings);
+            }
         }
         let mut end = if pilot { balance::PILOT_PASSES } else { 0 };
         if let Some(g) = &mut self.guide {
@@ -636,23 +670,13 @@ impl<'a> Vcm<'a> {
             false => light::LightPass::default(),
         };
         let t1 = Instant::now();
-        let grid = match self.settings.techniques.uses(Technique::Merge) {
-            true => Grid::build(
-                &lights
-                    .spots
-                    .par_iter()
-                    // A first vertex is direct light, never merged (`mis`).
-                    .map(|s| (s.edges() >= 2).then_some(Site { p: s.p, radius: pass.radius }))
-                    .collect::<Vec<_>>(),
-                Binning::Centre,
-            ),
-            false => None,
-        };
+        let grid = self.settings.techniques.uses(Technique::Merge).then(|| merge_grid(&lights, pass.radius)).flatten();
+        let pool = pass.links.as_ref().map(|l| links::Pool::new(l.cells(), lights.spots.iter().map(|s| s.p)));
         let t2 = Instant::now();
-        let cams = self.cameras(&pass, &lights, grid.as_ref(), iteration);
+        let cams = camera::Cameras { pool: pool.as_ref(), ..self.cameras(&pass, &lights, grid.as_ref(), iteration) };
         let (width, live, scene) = (self.size.0, &self.live, self.scene);
         let tasks = crate::integrators::PIXELS_PER_TASK;
-        let (mut work, mut records) = (camera::Work::default(), Records::default());
+        let (mut work, mut records, mut connections) = (camera::Work::default(), Records::default(), Vec::new());
         let halves = balance::Halves::new(pass.light_paths);
         let lanes = buckets.map(|b| (b, b.lanes(iteration)));
         for band in super::preview::bands(sums.len(), 4 * tasks, usize::MAX, preview.is_some()) {
@@ -670,19 +694,23 @@ impl<'a> Vcm<'a> {
                 p
             };
             let band_sums = sums[band.clone()].par_iter_mut().enumerate().with_max_len(tasks);
-            let (w, r) = match parts.as_deref_mut() {
+            let (w, r, mut l) = match parts.as_deref_mut() {
                 Some(parts) => band_sums
                     .zip(parts[band.clone()].par_iter_mut())
                     .map(|((i, s), part)| {
                         let p = pixel(i, s);
                         *part = halves.part(&p);
-                        (p.work, p.records)
+                        (p.work, p.records, p.links)
                     })
                     .reduce(Default::default, join),
-                None => band_sums.map(|(i, s)| pixel(i, s)).map(|p| (p.work, p.records)).reduce(Default::default, join),
+                None => band_sums
+                    .map(|(i, s)| pixel(i, s))
+                    .map(|p| (p.work, p.records, p.links))
+                    .reduce(Default::default, join),
             };
             work = work + w;
             records.append(r);
+            connections.append(&mut l);
             if let Some(show) = preview.as_mut() {
                 show(&|| provisional(sums, self.passes_done(), &self.scene.film, band.end));
             }
@@ -694,7 +722,8 @@ impl<'a> Vcm<'a> {
         }
         let (counts, stored) = (lights.counts, lights.stored());
         add_splats((sums, lanes.as_ref()), lights.splats, scale, scene);
-        Done { counts, stored, camera: work, records, times: [t0, t1, t2, t3, Instant::now()] }
+        let links = pass.link_cells.is_some().then(|| (connections, lights.spots.iter().map(|s| s.p).collect()));
+        Done { counts, stored, camera: work, records, links, times: [t0, t1, t2, t3, Instant::now()] }
     }
 
     fn pass(&self, iteration: u32) -> Pass<'a> {
@@ -720,6 +749,16 @@ impl<'a> Vcm<'a> {
             guide: self.guide.as_ref().filter(|_| self.settings.guiding.camera()).map(|g| g.tree()),
             light_guide: self.guide.as_ref().and_then(|g| g.importance()),
             training: self.guide.as_ref().is_some_and(|g| g.trains_on(iteration)),
+            links: match &self.links {
+                Some(links::State::Learnt(l)) if iteration >= balance::PILOT_PASSES => Some(l.clone()),
+                _ => None,
+            },
+            link_cells: match &self.links {
+                Some(links::State::Learning(l)) if iteration < balance::PILOT_PASSES => {
+                    Some(std::sync::Arc::new(l.cells().clone()))
+                }
+                _ => None,
+            },
         }
     }
 
@@ -771,6 +810,25 @@ fn guide(scene: &RenderScene, settings: &VcmSettings) -> Option<Guide> {
     let b = scene.geometry.bounds()?;
     let g = settings.guiding;
     (g != Guiding::Off && settings.techniques.bidirectional()).then(|| Guide::new(b.min, b.max, g.light()))
+}
+
+/// The grid of a pass's light vertices that merging looks up.
+fn merge_grid(lights: &light::LightPass, radius: f32) -> Option<Grid> {
+    let sites = lights
+        .spots
+        .par_iter()
+        // A first vertex is direct light, never merged (`mis`).
+        .map(|s| (s.edges() >= 2).then_some(Site { p: s.p, radius }))
+        .collect::<Vec<_>>();
+    Grid::build(&sites, Binning::Centre)
+}
+
+/// The table of cached connections at its start, where the render asks for one and
+/// the pilot runs to learn it ([`links`]).
+fn learning(scene: &RenderScene, settings: &VcmSettings) -> Option<links::State> {
+    let cached = settings.connections == links::Connections::Cached && settings.balance;
+    let b = scene.geometry.bounds().filter(|_| cached && settings.techniques.uses(Technique::Connect))?;
+    Some(links::State::Learning(Box::new(links::Learning::new(links::Cells::new(b.min, b.max)))))
 }
 
 /// The image part way through a pass: the first `camera_done` pixels with this pass's

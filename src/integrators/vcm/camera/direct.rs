@@ -97,7 +97,7 @@ impl Cameras<'_> {
         out.work.vertices += 1;
         if !at.is_delta() {
             // Next-event estimation alone: the mode uses no other technique there.
-            let (nee, _) = self.at_vertex(&v, &[], s, &mut out.work);
+            let (nee, _) = self.at_vertex(&v, &[], s, (&mut out.work, &mut Vec::new()));
             out.traced += beta * nee;
             let found = self.bsdf_emitter(&v, s, out);
             out.traced += beta * found;

@@ -1,0 +1,298 @@
+//! Connections to light vertices chosen from the whole pass (`--connections cached`):
+//! probabilistic connections (Popov, Ramamoorthi, Durand and Drettakis 2015) over a
+//! light vertex cache (Davidovič, Georgiev and Slusallek 2014), with the choice learnt.
+//!
+//! ```text
+//! pbrt-sppm render room.pbrt --integrator vcm --connections cached
+//! ```
+//! By default a camera subpath connects to every vertex of one light subpath, its pair.
+//! Here each camera vertex draws [`Links::draws`] vertices from all the pass's stored
+//! light vertices instead. The scene's box is cut into cells ([`Cells`]); the pilot's
+//! passes ([`super::balance`]) learn, for each cell a camera vertex stands in, how much
+//! its connections got from light vertices in each other cell, visibility included
+//! ([`Learning`]). A draw picks a cell by that share (or, with probability
+//! [`UNIFORM`], any vertex of the pass) and then one of the cell's vertices.
+//!
+//! A connection is divided by N_L·M·q(y | x), for N_L light subpaths, M draws and q
+//! the chance of drawing y. In the weights the technique that connects an edge (y, x)
+//! then counts as N_L·M·q samples where a pair counts one ([`Links::count`]). The
+//! weights take q from the learnt table with each cell's expected vertex count, known
+//! before the pass, so that both subpaths give every edge the same count as they grow
+//! (`mis`); the estimate takes the q it drew with. Weights that sum to 1 for every
+//! path and an estimate divided by its own density keep the image unbiased.
+//!
+//! Learning is deterministic: the pilot's samples are summed in pixel order, and a
+//! shard or a resumed render plays the pilot again (`Vcm::rehearse`).
+
+use glam::Vec3;
+
+/// The chance a draw ignores the table and takes any vertex of the pass: every light
+/// vertex can be drawn, whatever the pilot saw. On `doorway` (32 passes, seeds 1–3)
+/// 0.1 left 5.28e-4, 0.25 5.39e-4 and 0.5 5.75e-4 (`docs/vcm.md`).
+pub const UNIFORM: f64 = 0.1;
+
+/// Draws per camera vertex for each vertex a light subpath stores: with its pair, a
+/// camera vertex connects once per stored vertex. On `doorway` twice as many draws
+/// (four) left 0.77 of the error for about 1.15 times the time, and eight 0.8 of
+/// four's error for 1.3 times its time (`docs/vcm.md`).
+pub const DRAWS_PER_VERTEX: f64 = 2.0;
+
+/// The most draws a camera vertex makes.
+pub const MAX_DRAWS: usize = 16;
+
+/// About this many cells over the scene's box. On `doorway` 128 cells left 1.05 of
+/// the error of 512, and 2,048 (a table of 4 million entries, sparsely learnt) 1.3.
+const CELLS: f64 = 512.0;
+
+/// A uniform grid of cells over a box.
+#[derive(Clone, Debug)]
+pub struct Cells {
+    min: Vec3,
+    per: Vec3,
+    dims: [u32; 3],
+}
+
+impl Cells {
+    /// About [`CELLS`] cubic cells over the box from `min` to `max`.
+    pub fn new(min: Vec3, max: Vec3) -> Cells {
+        let extent = (max - min).max(Vec3::splat(1e-6));
+        let side = ((extent.x as f64 * extent.y as f64 * extent.z as f64) / CELLS).cbrt().max(1e-9) as f32;
+        let dims = extent.to_array().map(|e| ((e / side).round() as u32).clamp(1, 64));
+        let per = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) / extent;
+        Cells { min, per, dims }
+    }
+
+    pub fn len(&self) -> usize {
+        self.dims.iter().map(|&d| d as usize).product()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The cell holding `p` (points outside fall in the nearest).
+    #[inline]
+    pub fn of(&self, p: Vec3) -> u32 {
+        let c = ((p - self.min) * self.per).to_array();
+        let i = |k: usize| (c[k].max(0.0) as u32).min(self.dims[k] - 1);
+        (i(2) * self.dims[1] + i(1)) * self.dims[0] + i(0)
+    }
+}
+
+/// One connection the pilot made: the camera vertex's cell, the light vertex's, and
+/// what it carried (luminance, unweighted, after visibility).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub camera: u32,
+    pub light: u32,
+    pub value: f32,
+}
+
+/// What the pilot's passes teach, summed as they end.
+#[derive(Clone, Debug)]
+pub struct Learning {
+    cells: Cells,
+    /// Row-major: camera cell × light cell.
+    got: Vec<f64>,
+    /// Light vertices stored per cell over the pilot.
+    vertices: Vec<u64>,
+    subpaths: u64,
+}
+
+impl Learning {
+    pub fn new(cells: Cells) -> Learning {
+        let n = cells.len();
+        Learning { cells, got: vec![0.0; n * n], vertices: vec![0; n], subpaths: 0 }
+    }
+
+    pub fn cells(&self) -> &Cells {
+        &self.cells
+    }
+
+    /// One pilot pass: its connections (in pixel order), where its stored light
+    /// vertices stand and how many light subpaths it traced.
+    pub fn add(&mut self, samples: &[Sample], vertices: impl Iterator<Item = Vec3>, subpaths: u64) {
+        let n = self.cells.len();
+        for s in samples.iter().filter(|s| s.value.is_finite() && s.value > 0.0) {
+            self.got[s.camera as usize * n + s.light as usize] += s.value as f64;
+        }
+        for p in vertices {
+            self.vertices[self.cells.of(p) as usize] += 1;
+        }
+        self.subpaths += subpaths;
+    }
+
+    /// The table the passes after the pilot draw from.
+    pub fn finish(self) -> Links {
+        let n = self.cells.len();
+        let per_path = |v: u64| v as f64 / self.subpaths.max(1) as f64;
+        let stored = per_path(self.vertices.iter().sum());
+        let nu: Vec<f64> = self.vertices.iter().map(|&v| per_path(v)).collect();
+        let rows = (0..n)
+            .map(|c| {
+                let row = &self.got[c * n..(c + 1) * n];
+                let mut cdf = Vec::with_capacity(n);
+                let mut sum = 0.0;
+                for (&g, &v) in row.iter().zip(&nu) {
+                    // A cell without stored vertices can give nothing to draw.
+                    sum += if v > 0.0 { g } else { 0.0 };
+                    cdf.push(sum);
+                }
+                (sum > 0.0).then(|| cdf.iter().map(|c| c / sum).collect::<Vec<f64>>())
+            })
+            .collect();
+        let draws = (DRAWS_PER_VERTEX * stored).round().clamp(1.0, MAX_DRAWS as f64) as u32;
+        Links { cells: self.cells, rows, nu, stored: stored.max(1e-9), draws }
+    }
+}
+
+/// The learnt choice of light vertices (see the module's docs).
+#[derive(Clone, Debug)]
+pub struct Links {
+    cells: Cells,
+    /// Per camera cell, the cumulative share of each light cell; `None` where the
+    /// pilot saw nothing (draws there are uniform).
+    rows: Vec<Option<Vec<f64>>>,
+    /// Stored light vertices per light subpath, per cell and in all.
+    nu: Vec<f64>,
+    stored: f64,
+    /// Draws per camera vertex: the pilot's stored vertices per light subpath, so a
+    /// camera vertex makes as many connections as with its pair.
+    pub draws: u32,
+}
+
+impl Links {
+    pub fn cells(&self) -> &Cells {
+        &self.cells
+    }
+
+    /// The share of light cell `l` in camera cell `c`'s row.
+    fn share(&self, c: u32, l: u32) -> f64 {
+        match &self.rows[c as usize] {
+            None => 0.0,
+            Some(cdf) => cdf[l as usize] - if l == 0 { 0.0 } else { cdf[l as usize - 1] },
+        }
+    }
+
+    fn uniform_share(&self, c: u32) -> f64 {
+        if self.rows[c as usize].is_some() { UNIFORM } else { 1.0 }
+    }
+
+    /// How many samples connecting the edge from light-side point `y` to camera-side
+    /// point `x` counts as in the weights, where a pair counts 1: N_L·M·q(y | x) with
+    /// each cell's expected vertex count.
+    pub fn count(&self, y: Vec3, x: Vec3) -> f64 {
+        let (c, l) = (self.cells.of(x), self.cells.of(y));
+        let u = self.uniform_share(c);
+        let table = match self.nu[l as usize] {
+            nu if nu > 0.0 => (1.0 - u) * self.share(c, l) / nu,
+            _ => 0.0,
+        };
+        self.draws as f64 * (u / self.stored + table)
+    }
+}
+
+/// A pass's stored light vertices sorted by cell.
+#[derive(Debug, Default)]
+pub struct Pool {
+    /// Cell c holds `order[starts[c]..starts[c + 1]]`.
+    starts: Vec<u32>,
+    order: Vec<u32>,
+    /// Each vertex's cell.
+    keys: Vec<u32>,
+}
+
+impl Pool {
+    /// The pool of vertices at `points` (in the pass's order).
+    pub fn new(cells: &Cells, points: impl ExactSizeIterator<Item = Vec3>) -> Pool {
+        let keys: Vec<u32> = points.map(|p| cells.of(p)).collect();
+        let mut starts = vec![0u32; cells.len() + 1];
+        for &k in &keys {
+            starts[k as usize + 1] += 1;
+        }
+        for c in 0..cells.len() {
+            starts[c + 1] += starts[c];
+        }
+        let mut next = starts.clone();
+        let mut order = vec![0u32; keys.len()];
+        for (i, &k) in keys.iter().enumerate() {
+            order[next[k as usize] as usize] = i as u32;
+            next[k as usize] += 1;
+        }
+        Pool { starts, order, keys }
+    }
+
+    fn in_cell(&self, c: u32) -> &[u32] {
+        &self.order[self.starts[c as usize] as usize..self.starts[c as usize + 1] as usize]
+    }
+
+    /// One draw for a camera vertex at `x` from `u`: the vertex's number and the chance
+    /// q of drawing it; `None` where the drawn cell is empty.
+    pub fn draw(&self, links: &Links, x: Vec3, u: [f32; 2]) -> Option<(u32, f64)> {
+        let total = self.order.len();
+        if total == 0 {
+            return None;
+        }
+        let c = links.cells.of(x);
+        let share = links.uniform_share(c);
+        let (u0, u1) = (u[0] as f64, u[1] as f64);
+        let i = if u0 < share {
+            let k = ((u0 / share * total as f64) as usize).min(total - 1);
+            self.order[k]
+        } else {
+            let cdf = links.rows[c as usize].as_ref()?;
+            let l = cdf.partition_point(|&v| v <= u1).min(cdf.len() - 1);
+            let here = self.in_cell(l as u32);
+            let k = ((u0 - share) / (1.0 - share) * here.len() as f64) as usize;
+            *here.get(k.min(here.len().checked_sub(1)?))?
+        };
+        Some((i, self.chance(links, c, i, total)))
+    }
+
+    /// The chance a draw from camera cell `c` takes vertex `i`.
+    fn chance(&self, links: &Links, c: u32, i: u32, total: usize) -> f64 {
+        let share = links.uniform_share(c);
+        let l = self.keys[i as usize];
+        let n = self.in_cell(l).len().max(1) as f64;
+        share / total as f64 + (1.0 - share) * links.share(c, l) / n
+    }
+}
+
+/// What a camera vertex connects to (`--connections`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Connections {
+    /// Every vertex of its pair, one light subpath (Georgiev et al.'s).
+    #[default]
+    Paired,
+    /// Vertices drawn from the whole pass by a table the pilot learns (the module).
+    Cached,
+}
+
+impl Connections {
+    /// The option's value that asks for it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Connections::Paired => "paired",
+            Connections::Cached => "cached",
+        }
+    }
+}
+
+impl std::str::FromStr for Connections {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Connections, String> {
+        [Connections::Paired, Connections::Cached]
+            .into_iter()
+            .find(|e| e.name() == s)
+            .ok_or_else(|| format!("expected paired or cached, not \"{s}\""))
+    }
+}
+
+/// The table under way: learning over the pilot, learnt, or to be learnt again
+/// before the first pass past the pilot (a render that did not start at pass 0).
+#[derive(Debug)]
+pub enum State {
+    Learning(Box<Learning>),
+    Learnt(std::sync::Arc<Links>),
+    Unknown,
+}
