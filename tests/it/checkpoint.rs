@@ -100,6 +100,9 @@ fn a_render_killed_at_random_moments_and_resumed_matches_an_uninterrupted_one() 
         ("vcm", &["--integrator", "vcm"][..], 3),
         // Both guides: the checkpoint saves the importance tree beside the light's.
         ("guided", &["--integrator", "vcm", "--guiding", "both"][..], 4),
+        // Cached connections: the table is not saved; a resumed run replays the pilot.
+        ("cached", &["--integrator", "vcm", "--connections", "cached"][..], 5),
+        ("cached-photons", &["--integrator", "vcm", "--connections", "cached", "--photons", "300"][..], 6),
     ];
     for (name, extra, seed) in cases {
         let d = dir(name);
@@ -285,20 +288,29 @@ fn a_foggy_scene_resumed_from_a_checkpoint_matches_an_uninterrupted_one() {
     assert!(images[0] != images[1], "beams and points rendered the same image");
 }
 
-/// vcm with cached connections resumes bit for bit: the table the pilot learnt is not
-/// in the checkpoint, so the resumed render plays the pilot again before the first
-/// pass that draws by it.
+/// vcm with cached connections resumes bit for bit when stopped during the pilot
+/// (the random kills above stop it past the pilot), with the pilot's choice of light
+/// subpaths and with `--photons` fixing them: the table the pilot learnt is not in the
+/// checkpoint, so the resumed render plays the pilot again before the first pass that
+/// draws by it.
 #[test]
 fn cached_connections_resumed_from_a_checkpoint_match_an_uninterrupted_render() {
     let d = dir("cached-connections");
-    let args = ["--integrator", "vcm", "--connections", "cached", "--spp", "6", "-q"];
-    let whole = run(&d, &[&args[..], &["--outfile", "whole.exr"]].concat());
-    assert!(whole.status.success(), "{}", String::from_utf8_lossy(&whole.stderr));
-    let common = [&args[..], &["--outfile", "part.exr", "--checkpoint", "c.ckpt"]].concat();
-    let first = run(&d, &[&common[..], &["--time-limit", "0.000001"]].concat());
-    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
-    let rest = run(&d, &[&common[..], &["--resume", "c.ckpt"]].concat());
-    assert!(rest.status.success(), "{}", String::from_utf8_lossy(&rest.stderr));
-    assert!(pixels(&d.join("part.exr")) == pixels(&d.join("whole.exr")), "resumed differs");
+    for photons in [&[][..], &["--photons", "300"]] {
+        let args = [&["--integrator", "vcm", "-q"], photons].concat();
+        let render_with = |connections: &str, extra: &[&str]| {
+            let out = run(&d, &[&args[..], &["--connections", connections], extra].concat());
+            assert!(out.status.success(), "{photons:?}: {}", String::from_utf8_lossy(&out.stderr));
+        };
+        let render = |extra: &[&str]| render_with("cached", extra);
+        render(&["--spp", "7", "--outfile", "whole.exr"]);
+        render_with("paired", &["--spp", "7", "--outfile", "paired.exr"]);
+        let whole = pixels(&d.join("whole.exr"));
+        assert!(whole != pixels(&d.join("paired.exr")), "{photons:?}: no connection was drawn from the cache");
+        let common = ["--spp", "7", "--outfile", "part.exr", "--checkpoint", "c.ckpt"];
+        render(&[&common[..], &["--time-limit", "0.000001"]].concat());
+        render(&[&common[..], &["--resume", "c.ckpt"]].concat());
+        assert!(pixels(&d.join("part.exr")) == whole, "{photons:?}: resumed differs");
+    }
     let _ = std::fs::remove_dir_all(&d);
 }

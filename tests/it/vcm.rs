@@ -410,10 +410,13 @@ fn any_split_of_a_vcm_render_merges_to_the_single_machine_render() {
 }
 
 /// Cached connections learn their table over the pilot's four passes: a shard that
-/// starts past them plays the pilot again and draws by the same table.
+/// starts past them plays the pilot again and draws by the same table, whether the
+/// pilot also chooses the light subpaths or `--photons` fixes them.
 #[test]
 fn a_split_past_the_pilot_draws_cached_connections_by_the_same_table() {
-    assert_split_merges("vcm-cached", &["--integrator", "vcm", "--connections", "cached"], ["0..5", "5..6"]);
+    let cached = ["--integrator", "vcm", "--connections", "cached"];
+    assert_split_merges("vcm-cached", &cached, ["0..5", "5..6"]);
+    assert_split_merges("vcm-cached-photons", &[&cached[..], &["--photons", "300"]].concat(), ["0..5", "5..6"]);
 }
 
 fn render_connecting(text: &str, connections: Connections, threads: usize) -> Vec<[f32; 3]> {

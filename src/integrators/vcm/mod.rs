@@ -517,6 +517,9 @@ impl<'a> Vcm<'a> {
         if self.balance.is_some() && iteration > 0 {
             self.balance = Some(Balance::Unknown);
         }
+        if self.links.is_some() && iteration > 0 {
+            self.links = Some(links::State::Unknown);
+        }
         if let Some(g) = &mut self.guide {
             g.reset();
         }
@@ -633,7 +636,9 @@ impl<'a> Vcm<'a> {
             return;
         }
         if unknown {
-            self.balance = Some(Balance::Measuring(Box::new(balance::Pilot::new(self.sums.len()))));
+            if self.balance.is_some() {
+                self.balance = Some(Balance::Measuring(Box::new(balance::Pilot::new(self.sums.len()))));
+            }
             if links_unknown {
                 self.links = learning(self.scene, &self.settings);
             }
@@ -826,7 +831,7 @@ fn merge_grid(lights: &light::LightPass, radius: f32) -> Option<Grid> {
 /// The table of cached connections at its start, where the render asks for one and
 /// the pilot runs to learn it ([`links`]).
 fn learning(scene: &RenderScene, settings: &VcmSettings) -> Option<links::State> {
-    let cached = settings.connections == links::Connections::Cached && settings.balance;
+    let cached = settings.connections == links::Connections::Cached;
     let b = scene.geometry.bounds().filter(|_| cached && settings.techniques.uses(Technique::Connect))?;
     Some(links::State::Learning(Box::new(links::Learning::new(links::Cells::new(b.min, b.max)))))
 }
