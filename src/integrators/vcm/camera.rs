@@ -738,13 +738,20 @@ impl Cameras<'_> {
         let count = pass.links.as_ref().map_or(1.0, |l| l.count(lv.place.p, v.place.p));
         let w = mis::connect(lv.partial, v.partial, pdfs, lv.len, f, v.merges, count);
         let g = v.at.cos(dir) * lv.adjoint_cos(-dir) / dist2;
-        let unweighted = (lv.beta * el.f * ec.f * (g * once(v, lv))).as_dvec3() * pass.scene.photon_scale;
-        let c = (unweighted * (pass.techniques.weight(w) as f64 / drawn.unwrap_or(1.0))).as_vec3();
+        // A pair's connection (`drawn` None) keeps the arithmetic it always had.
+        let w = match drawn {
+            None => pass.techniques.weight(w),
+            Some(density) => (pass.techniques.weight(w) as f64 / density) as f32,
+        };
+        let carried = lv.beta * el.f * ec.f;
+        let c = (carried * (g * w * once(v, lv))).as_dvec3() * pass.scene.photon_scale;
+        let c = c.as_vec3();
         if c == Vec3::ZERO || !c.is_finite() {
             return Vec3::ZERO;
         }
         let seen = vertex::visible_between(pass.scene, &v.place, &lv.place, s);
         if let Some(cells) = &pass.link_cells {
+            let unweighted = (carried * (g * once(v, lv))).as_dvec3() * pass.scene.photon_scale;
             let value = crate::spectrum::luminance((unweighted.as_vec3() * seen).max(Vec3::ZERO));
             learnt.push(Sample { camera: cells.of(v.place.p), light: cells.of(lv.place.p), value });
         }

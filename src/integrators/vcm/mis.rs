@@ -294,7 +294,9 @@ pub fn connect(
     };
     let w_light = mis(p.camera_a) * (vm_l + light.vcm + light_vc * mis(p.light_rev));
     let w_camera = mis(p.light_a) * (vm_c + camera.vcm + camera.vc * mis(p.camera_rev));
-    1.0 / ((w_light + w_camera) / mis(count) + 1.0)
+    // A pair's connection (count 1) keeps the sum in the order it always had.
+    let k = mis(count);
+    k / (w_light + k + w_camera)
 }
 
 /// The weight of light tracing: a light vertex connected to the lens. `camera_a`: the
