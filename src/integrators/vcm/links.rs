@@ -141,6 +141,8 @@ impl Learning {
                 (sum > 0.0).then(|| cdf.iter().map(|c| c / sum).collect::<Vec<f64>>())
             })
             .collect();
+        // At least one: a fraction of a draw (one more with the chance of the fraction)
+        // took `keyhole`'s error × time from 0.90 of paired's to 1.04 (`docs/vcm.md`).
         let draws = (DRAWS_PER_VERTEX * stored).round().clamp(1.0, MAX_DRAWS as f64) as u32;
         Links { cells: self.cells, rows, nu, stored: stored.max(1e-9), draws }
     }
