@@ -118,6 +118,10 @@ pub struct Stats {
     /// specular chains (`vcm/camera/prefix.rs`).
     #[serde(default)]
     pub prefix_pixels: u64,
+    /// With vcm's cached connections, once learnt: the draws a camera vertex makes
+    /// (`vcm/links.rs`); 0 otherwise.
+    #[serde(default)]
+    pub connection_draws: u32,
 }
 
 /// The progressive state of a render.

@@ -419,6 +419,27 @@ fn a_split_past_the_pilot_draws_cached_connections_by_the_same_table() {
     assert_split_merges("vcm-cached-photons", &[&cached[..], &["--photons", "300"]].concat(), ["0..5", "5..6"]);
 }
 
+/// `--stats` says how many connections a camera vertex draws once the pilot has learnt
+/// the table, and nothing before.
+#[test]
+fn stats_say_how_many_cached_connections_a_camera_vertex_draws() {
+    let d = crate::shards::dir("vcm-cached-stats");
+    for (passes, learnt) in [("3", false), ("6", true)] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_pbrt-sppm"))
+            .current_dir(&d)
+            .args(["render", "scene.pbrt", "--integrator", "vcm", "--connections", "cached", "--stats"])
+            .args(["--spp", passes])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        let line = err.lines().find_map(|l| l.strip_prefix("stats: cached connections: "));
+        let draws = line.and_then(|l| l.strip_suffix(" drawn a camera vertex")?.parse::<u32>().ok());
+        assert_eq!(draws.is_some_and(|n| (1..=16).contains(&n)), learnt, "{passes} passes: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 fn render_connecting(text: &str, connections: Connections, threads: usize) -> Vec<[f32; 3]> {
     let s = RenderSettings {
         algorithm: Some(Algorithm::Vcm(Techniques::All)),
@@ -494,6 +515,7 @@ fn vcm_stats_name_its_own_phases_and_counts() {
     assert!(load.contains(" s, set up to render ") && seconds.len() == 2, "{load}");
     assert!(seconds.iter().all(|s| s.is_finite() && *s >= 0.0), "{load}");
     assert!(err.contains("(500 light subpaths each)"), "{err}");
+    assert!(!err.contains("cached connections"), "{err}");
     // SPPM's photon figures mean nothing here: no uniform-photon waste line.
     assert!(!err.contains("uniform photon paths"), "{err}");
     // A technique of the camera subpaths alone traces no light subpaths (they were

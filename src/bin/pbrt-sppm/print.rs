@@ -125,6 +125,9 @@ fn stats(out: &RenderOutput) {
                 pbrt_sppm::integrators::vcm::PREFIX_RAYS
             );
         }
+        if s.connection_draws > 0 {
+            say!("stats: cached connections: {} drawn a camera vertex", s.connection_draws);
+        }
         return;
     }
     let beams =

@@ -791,6 +791,9 @@ impl<'a> Vcm<'a> {
         s.iterations = self.iteration;
         s.bidirectional = true;
         s.prefix_pixels = self.prefix.as_ref().map_or(0, |m| m.iter().filter(|&&p| p).count() as u64);
+        if let Some(links::State::Learnt(l)) = &self.links {
+            s.connection_draws = l.draws;
+        }
     }
 
     /// The current estimate: the mean of the passes, as the film records it.
