@@ -122,6 +122,11 @@ pub struct Stats {
     /// (`vcm/links.rs`); 0 otherwise.
     #[serde(default)]
     pub connection_draws: u32,
+    /// With vcm: connections that traced a shadow ray, and those it found clear.
+    #[serde(default)]
+    pub connections: u64,
+    #[serde(default)]
+    pub connections_clear: u64,
 }
 
 /// The progressive state of a render.

@@ -125,6 +125,10 @@ fn stats(out: &RenderOutput) {
                 pbrt_sppm::integrators::vcm::PREFIX_RAYS
             );
         }
+        if s.connections > 0 {
+            let clear = 100.0 * s.connections_clear as f64 / s.connections as f64;
+            say!("stats: {} connections, {clear:.0}% of them unoccluded", s.connections);
+        }
         if s.connection_draws > 0 {
             say!("stats: cached connections: {} drawn a camera vertex", s.connection_draws);
         }

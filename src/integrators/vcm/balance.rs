@@ -359,7 +359,7 @@ mod tests {
     #[test]
     fn the_pilot_splits_the_spread_between_the_parts() {
         let counts = Counts { paths: 1000, hits: 0, vertices: 0 };
-        let work = Work { rays: 1000, vertices: 0, candidates: 0 };
+        let work = Work { rays: 1000, ..Default::default() };
         let pilot = |values: [f32; 4], caustics_differ: f32, rest_differs: f32| {
             let mut p = Pilot::new(1);
             for x in values {

@@ -90,6 +90,9 @@ pub struct Work {
     pub vertices: u64,
     /// Light vertices a merge lookup looked at.
     pub candidates: u64,
+    /// Connections that traced their shadow ray, and those of them it found clear.
+    pub connections: u64,
+    pub connections_clear: u64,
 }
 
 impl std::ops::Add for Work {
@@ -99,6 +102,8 @@ impl std::ops::Add for Work {
             rays: self.rays + o.rays,
             vertices: self.vertices + o.vertices,
             candidates: self.candidates + o.candidates,
+            connections: self.connections + o.connections,
+            connections_clear: self.connections_clear + o.connections_clear,
         }
     }
 }
@@ -540,7 +545,7 @@ impl Cameras<'_> {
             } else {
                 for lv in light_path.iter().take_while(|lv| lv.len + v.len < self.pass.max_len) {
                     if !first_only || lv.len == 1 {
-                        c += self.connect(v, lv, s, None, learnt);
+                        c += self.connect(v, lv, s, None, (work, learnt));
                         work.rays += 1;
                     }
                 }
@@ -695,7 +700,7 @@ impl Cameras<'_> {
         for &(i, q) in &drawn[..n] {
             let lv = self.lights.vertex(i);
             if lv.len + v.len < self.pass.max_len && (!first_only || lv.len == 1) {
-                c += self.connect(v, lv, s, Some(per * q), &mut Vec::new());
+                c += self.connect(v, lv, s, Some(per * q), (work, &mut Vec::new()));
                 work.rays += 1;
             }
         }
@@ -704,14 +709,15 @@ impl Cameras<'_> {
 
     /// A camera vertex connected to a light vertex: its pair's, or one drawn from the
     /// whole pass with density `drawn` (per light subpath and draw). A pass that
-    /// learns the table of cached connections notes the connection in `learnt`.
+    /// learns the table of cached connections notes the connection in `learnt`; `work`
+    /// counts it and whether its shadow ray was clear.
     fn connect(
         &self,
         v: &Vertex,
         lv: &LightVertex,
         s: &mut impl Sampler,
         drawn: Option<f64>,
-        learnt: &mut Vec<Sample>,
+        (work, learnt): (&mut Work, &mut Vec<Sample>),
     ) -> Rgb {
         let pass = self.pass;
         let d = lv.place.p - v.place.p;
@@ -750,6 +756,8 @@ impl Cameras<'_> {
             return Vec3::ZERO;
         }
         let seen = vertex::visible_between(pass.scene, &v.place, &lv.place, s);
+        work.connections += 1;
+        work.connections_clear += u64::from(seen != Vec3::ZERO);
         if let Some(cells) = &pass.link_cells {
             let unweighted = (carried * (g * once(v, lv))).as_dvec3() * pass.scene.photon_scale;
             let value = crate::spectrum::luminance((unweighted.as_vec3() * seen).max(Vec3::ZERO));

@@ -592,6 +592,10 @@ impl<'a> Vcm<'a> {
         self.sums = sums;
         self.learn(self.iteration, parts.as_deref(), &done);
         self.iteration += 1;
+        (self.stats.connections, self.stats.connections_clear) = (
+            self.stats.connections + done.camera.connections,
+            self.stats.connections_clear + done.camera.connections_clear,
+        );
         self.note(&done.counts, done.stored, done.times);
     }
 
