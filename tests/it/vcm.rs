@@ -849,6 +849,14 @@ fn choosing_how_an_sppm_render_emits_is_a_clear_error() {
     assert!(!d.join("x.exr").exists());
 }
 
+#[test]
+fn choosing_what_an_sppm_render_connects_to_is_a_clear_error() {
+    let d = crate::shards::dir("connections-sppm");
+    let err = crate::shards::error(&d, &["render", "scene.pbrt", "--connections", "cached", "--outfile", "x.exr"]);
+    assert!(err.contains("scene.pbrt: error: --connections is vcm's and bdpt's"), "{err}");
+    assert!(!d.join("x.exr").exists());
+}
+
 /// A spot light shining up at a mirror whose shading normals lean 27° from its face,
 /// onto a floor: every light subpath bounces where its direction to the light is
 /// normal to the face and leaves at 0.6 of that, so pbrt's shading-normal correction
