@@ -298,3 +298,57 @@ pub enum State {
     Learnt(std::sync::Arc<Links>),
     Unknown,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    /// χ² of `counts` against `expected` stays below its 99.9th percentile (the
+    /// degrees of freedom plus 3.1 of its standard deviations).
+    fn assert_chi2(counts: &[u32], expected: &[f64]) {
+        let chi2: f64 = counts.iter().zip(expected).map(|(&c, &e)| (c as f64 - e).powi(2) / e).sum();
+        let dof = (counts.len() - 1) as f64;
+        assert!(chi2 < dof + 3.1 * (2.0 * dof).sqrt(), "χ² {chi2} over {dof} degrees of freedom");
+    }
+
+    /// The chance a draw reports for a vertex is how often draws take it: the estimate
+    /// divides each connection by it.
+    #[test]
+    fn a_draw_reports_the_chance_it_had() {
+        let cells = Cells::new(Vec3::ZERO, Vec3::ONE);
+        let mut rng = Rng::new(9);
+        let mut point = || Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+        let points: Vec<Vec3> = (0..400).map(|_| point()).collect();
+        // Connections from around one camera point, to a third of the cells.
+        let x = Vec3::splat(0.3);
+        let samples: Vec<Sample> = points
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| i % 3 == 0)
+            .map(|(i, &p)| Sample { camera: cells.of(x), light: cells.of(p), value: 1.0 + (i % 5) as f32 })
+            .collect();
+        let mut learning = Learning::new(cells.clone());
+        learning.add(&samples, points.iter().copied(), 200);
+        let links = learning.finish();
+        let pool = Pool::new(&cells, points.iter().copied());
+        let (mut counts, mut chance, draws) = (vec![0u32; points.len()], vec![0.0; points.len()], 2_000_000);
+        let mut rng = Rng::new(13);
+        let mut missed = 0;
+        for _ in 0..draws {
+            match pool.draw(&links, x, [rng.uniform(), rng.uniform()]) {
+                Some((i, q)) => {
+                    counts[i as usize] += 1;
+                    assert!(chance[i as usize] == 0.0 || chance[i as usize] == q, "vertex {i}: two chances");
+                    chance[i as usize] = q;
+                }
+                None => missed += 1,
+            }
+        }
+        assert_eq!(missed, 0, "every drawn cell holds vertices");
+        let total: f64 = chance.iter().sum();
+        assert!((total - 1.0).abs() < 1e-9, "the chances sum to {total}");
+        let expected: Vec<f64> = chance.iter().map(|q| q * draws as f64).collect();
+        assert_chi2(&counts, &expected);
+    }
+}
