@@ -238,25 +238,23 @@ impl Pool {
         let c = links.cells.of(x);
         let share = links.uniform_share(c);
         let (u0, u1) = (u[0] as f64, u[1] as f64);
-        let i = if u0 < share {
+        // The drawn vertex's cell and how many the cell holds: read from the table's
+        // side they are at hand, where a look-up by vertex would miss the cache.
+        let (i, l, n) = if u0 < share {
             let k = ((u0 / share * total as f64) as usize).min(total - 1);
-            self.order[k]
+            let i = self.order[k];
+            let l = self.keys[i as usize];
+            (i, l, self.in_cell(l).len())
         } else {
             let cdf = links.rows[c as usize].as_ref()?;
-            let l = cdf.partition_point(|&v| v <= u1).min(cdf.len() - 1);
-            let here = self.in_cell(l as u32);
+            let l = cdf.partition_point(|&v| v <= u1).min(cdf.len() - 1) as u32;
+            let here = self.in_cell(l);
             let k = ((u0 - share) / (1.0 - share) * here.len() as f64) as usize;
-            *here.get(k.min(here.len().checked_sub(1)?))?
+            (*here.get(k.min(here.len().checked_sub(1)?))?, l, here.len())
         };
-        Some((i, self.chance(links, c, i, total)))
-    }
-
-    /// The chance a draw from camera cell `c` takes vertex `i`.
-    fn chance(&self, links: &Links, c: u32, i: u32, total: usize) -> f64 {
-        let share = links.uniform_share(c);
-        let l = self.keys[i as usize];
-        let n = self.in_cell(l).len().max(1) as f64;
-        share / total as f64 + (1.0 - share) * links.share(c, l) / n
+        // The chance of drawing vertex i: by the uniform share, or by its cell's.
+        let q = share / total as f64 + (1.0 - share) * links.share(c, l) / n.max(1) as f64;
+        Some((i, q))
     }
 }
 
