@@ -158,8 +158,8 @@ pub struct Links {
     /// Stored light vertices per light subpath, per cell and in all.
     nu: Vec<f64>,
     stored: f64,
-    /// Draws per camera vertex: the pilot's stored vertices per light subpath, so a
-    /// camera vertex makes as many connections as with its pair.
+    /// Draws per camera vertex: [`DRAWS_PER_VERTEX`] times the pilot's stored vertices
+    /// per light subpath (twice the connections its pair gave), at least one.
     pub draws: u32,
 }
 
