@@ -173,12 +173,15 @@ pub struct Checkpoint {
     #[serde(skip)]
     pub buckets: Vec<f64>,
     /// vcm's state that the passes so far decided and a resumed render would
-    /// otherwise replay them for: the pilot's light subpaths per pass and the path
-    /// guide (none in files written before them).
+    /// otherwise replay them for: the pilot's light subpaths per pass, the path guide
+    /// and `--connections auto`'s choice to keep the pairs (none in files written
+    /// before them; see [`super::vcm::Decided`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub light_paths: Option<u64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub guide: Option<crate::guiding::Guide>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pairs_kept: Option<super::vcm::links::Unblocking>,
 }
 
 impl Checkpoint {
@@ -294,6 +297,7 @@ mod tests {
             buckets: vec![0.5, -1e-300, 7.0],
             light_paths: Some(12_345),
             guide: Some(trained_guide()),
+            pairs_kept: Some(crate::integrators::vcm::links::Unblocking { paired: 0.1 + 0.2, predicted: 1.0 / 3.0 }),
         }
     }
 
@@ -326,6 +330,7 @@ mod tests {
         assert_eq!(back.fingerprint, c.fingerprint);
         assert_eq!(format!("{:?}", back.chains), format!("{:?}", c.chains));
         assert_eq!((back.light_paths, &back.guide), (Some(12_345), &c.guide));
+        assert_eq!(back.pairs_kept, c.pairs_kept);
         assert!(c.guide.as_ref().is_some_and(|g| g.recorded() == 1 && g.importance().is_some()));
     }
 

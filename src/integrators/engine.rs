@@ -160,26 +160,18 @@ impl<'a> Engine<'a> {
         }
     }
 
-    /// vcm's pilot choice of light subpaths per pass, once made (a checkpoint saves it).
-    pub fn chosen_light_paths(&self) -> Option<u64> {
+    /// What vcm's passes so far decided (a checkpoint saves it).
+    pub fn decided(&self) -> super::vcm::Decided {
         match self {
-            Engine::Sppm(_) => None,
-            Engine::Vcm(v) => v.chosen_light_paths(),
-        }
-    }
-
-    /// vcm's path guide, if it renders with one (a checkpoint saves it).
-    pub fn guide(&self) -> Option<crate::guiding::Guide> {
-        match self {
-            Engine::Sppm(_) => None,
-            Engine::Vcm(v) => v.guide().cloned(),
+            Engine::Sppm(_) => Default::default(),
+            Engine::Vcm(v) => v.decided(),
         }
     }
 
     /// What a checkpoint saved of the passes' decisions (after [`Self::restore`]).
-    pub fn restore_decided(&mut self, light_paths: Option<u64>, guide: Option<crate::guiding::Guide>) {
+    pub fn restore_decided(&mut self, saved: super::vcm::Decided) {
         if let Engine::Vcm(v) = self {
-            v.restore_decided(light_paths, guide);
+            v.restore_decided(saved);
         }
     }
 

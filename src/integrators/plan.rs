@@ -120,7 +120,7 @@ pub struct RenderSettings {
     /// `auto`).
     pub emission: Option<EmissionSampling>,
     /// What vcm's and bdpt's camera vertices connect to (`--connections`; default
-    /// `paired`).
+    /// `auto`).
     pub connections: Option<Connections>,
 }
 
@@ -172,6 +172,8 @@ impl Plan {
         .chain((self.guiding != Guiding::Off).then(|| ("guiding", self.guiding.name().to_string())))
         // Checkpoints made before it existed (without it) still resume.
         .chain((self.emission != EmissionSampling::Auto).then(|| ("emission", self.emission.name().to_string())))
+        // Checkpoints made before it existed (without it) were paired's: they do not
+        // resume under `auto`, which may draw from the cache past the pilot.
         .chain((self.connections != Connections::Paired).then(|| ("connections", self.connections.name().into())))
         // Checkpoints made before it existed (without it) still resume.
         .chain((self.algorithm == Algorithm::Sppm).then(|| ("volume-gather", self.volume_gather.name().into())))

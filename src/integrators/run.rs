@@ -136,7 +136,8 @@ pub fn run(
         }
         engine.restore(c.iteration, &c.pixels, c.chains, c.stats)?;
         engine.restore_buckets(&c.buckets)?;
-        engine.restore_decided(c.light_paths, c.guide);
+        let pairs_kept = c.pairs_kept;
+        engine.restore_decided(super::vcm::Decided { light_paths: c.light_paths, guide: c.guide, pairs_kept });
         (progress.prior, progress.errors, progress.saved.0) = (c.seconds, c.errors, c.iteration);
     }
     let mut took = None;
@@ -345,6 +346,7 @@ fn image(engine: &Engine, photons: u64, seconds: f64) -> RgbImage {
 /// checkpoint stays as it was).
 fn save(engine: &Engine, target: &CheckpointTarget, progress: &mut Progress, quiet: bool) {
     let (pixels, chains) = engine.save();
+    let decided = engine.decided();
     let c = Checkpoint {
         fingerprint: target.fingerprint.clone(),
         iteration: engine.iteration(),
@@ -354,8 +356,9 @@ fn save(engine: &Engine, target: &CheckpointTarget, progress: &mut Progress, qui
         pixels,
         chains,
         buckets: engine.save_buckets(),
-        light_paths: engine.chosen_light_paths(),
-        guide: engine.guide(),
+        light_paths: decided.light_paths,
+        guide: decided.guide,
+        pairs_kept: decided.pairs_kept,
     };
     match c.write(&target.path) {
         Ok(()) => (progress.saved, progress.save_failed) = ((engine.iteration(), Instant::now()), false),

@@ -127,6 +127,10 @@ pub struct Stats {
     pub connections: u64,
     #[serde(default)]
     pub connections_clear: u64,
+    /// With vcm's `--connections auto`, once the pilot is done: what chose between
+    /// cached and paired connections.
+    #[serde(default)]
+    pub connections_auto: Option<super::vcm::links::Unblocking>,
 }
 
 /// The progressive state of a render.

@@ -445,8 +445,8 @@ fn stats_say_how_connections_fared_and_how_many_are_drawn() {
         });
         (clear, draws, err)
     };
-    let (paired, draws, err) = stats(&[]);
-    assert!(draws.is_none(), "{err}");
+    let (paired, draws, err) = stats(&["--connections", "paired"]);
+    assert!(draws.is_none() && !err.contains("connections auto"), "{err}");
     let paired = paired.unwrap_or_else(|| panic!("no connections line: {err}"));
     assert!(paired > 0.0 && paired < 100.0, "{err}");
     let (during, draws, err) = stats(&["--connections", "cached", "--spp", "3"]);
@@ -454,7 +454,49 @@ fn stats_say_how_connections_fared_and_how_many_are_drawn() {
     let (cached, draws, err) = stats(&["--connections", "cached"]);
     assert!(draws.is_some_and(|n| (1..=16).contains(&n)), "{err}");
     assert!(cached.is_some_and(|c| c > paired), "paired {paired}%, cached: {err}");
+    // The default, `auto`, says what it chose and why, and draws as it says.
+    let (_, draws, err) = stats(&[]);
+    let line = err.lines().find_map(|l| l.strip_prefix("stats: connections auto: ")).expect("an auto line");
+    assert!(line.starts_with("cached (") == draws.is_some(), "{err}");
     let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A room lit from inside, by a small sphere below the ceiling, as well as by the
+/// light facing its ceiling: most connections find their light vertex in view.
+fn lit_room(iterations: u32, photons: u32) -> String {
+    let lamp = "AttributeBegin Translate 0 1.5 0 AreaLightSource \"diffuse\" \"rgb L\" [20 20 20] \
+                Shape \"sphere\" \"float radius\" 0.1 AttributeEnd";
+    room(iterations, photons, 0.03, ("", lamp))
+}
+
+/// `doorway` (a room lit through a doorway from the next, whose light vertices mostly
+/// stand behind the wall) at 24 × 16 pixels and `passes` passes.
+fn small_doorway(passes: u32) -> String {
+    include_str!("../../pbrt-scenes/v3/doorway.pbrt")
+        .replace(
+            "\"integer xresolution\" [ 160 ] \"integer yresolution\" [ 120 ]",
+            "\"integer xresolution\" [ 24 ] \"integer yresolution\" [ 16 ]",
+        )
+        .replace("\"integer numiterations\" [ 64 ]", &format!("\"integer numiterations\" [ {passes} ]"))
+}
+
+/// `auto`, the default, draws connections from the cache in `doorway`, where the
+/// table unblocks most of them (34% of the pilot's carried light, 90% would), and
+/// keeps each camera vertex's pair in a room lit from inside (88%). Either way the
+/// image is bit for bit the one the mode it chose renders, past the pilot too.
+#[test]
+fn auto_connections_render_the_image_of_the_mode_they_choose() {
+    let same =
+        |a: &[[f32; 3]], b: &[[f32; 3]]| a.iter().zip(b).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits));
+    let dim = small_doorway(6);
+    assert!(dim.contains("[ 24 ]") && dim.contains("[ 6 ]"), "doorway.pbrt changed: {dim}");
+    let auto = render_connecting(&dim, Connections::Auto, 2);
+    assert!(same(&auto, &render_connecting(&dim, Connections::Cached, 1)), "auto did not draw from the cache");
+    assert!(!same(&auto, &render_connecting(&dim, Connections::Paired, 2)));
+    let lit = lit_room(6, 4000);
+    let auto = render_connecting(&lit, Connections::Auto, 2);
+    assert!(same(&auto, &render_connecting(&lit, Connections::Paired, 1)), "auto did not keep the pairs");
+    assert!(!same(&auto, &render_connecting(&lit, Connections::Cached, 2)));
 }
 
 fn render_connecting(text: &str, connections: Connections, threads: usize) -> Vec<[f32; 3]> {

@@ -145,9 +145,10 @@ pub struct RenderArgs {
     #[arg(long, value_parser = str::parse::<EmissionSampling>)]
     pub emission: Option<EmissionSampling>,
     /// What vcm's and bdpt's camera vertices connect to: `paired` (every vertex of one
-    /// light subpath) or `cached` (vertices drawn from the whole pass, by a table of
-    /// where connections found light, learnt over the first four passes). Default:
-    /// `paired`.
+    /// light subpath), `cached` (vertices drawn from the whole pass, by a table of
+    /// where connections found light, learnt over the first four passes) or `auto`
+    /// (`cached` where under half of those four passes' connections were unoccluded,
+    /// else `paired`). Default: `auto`.
     #[arg(long, value_parser = str::parse::<Connections>)]
     pub connections: Option<Connections>,
     /// How SPPM gathers photons in participating media: `beams` (every medium segment

@@ -129,6 +129,14 @@ fn stats(out: &RenderOutput) {
             let clear = 100.0 * s.connections_clear as f64 / s.connections as f64;
             say!("stats: {} connections, {clear:.0}% of them unoccluded", s.connections);
         }
+        if let Some(u) = s.connections_auto {
+            let chose = if u.draws() { "cached" } else { "paired" };
+            say!(
+                "stats: connections auto: {chose} ({:.0}% of the pilot's connections carried light; drawn by its table, {:.0}% would)",
+                100.0 * u.paired,
+                100.0 * u.predicted
+            );
+        }
         if s.connection_draws > 0 {
             say!("stats: cached connections: {} drawn a camera vertex", s.connection_draws);
         }

@@ -23,6 +23,11 @@
 //!
 //! Learning is deterministic: the pilot's samples are summed in pixel order, and a
 //! shard or a resumed render plays the pilot again (`Vcm::rehearse`).
+//!
+//! `auto`, the default, learns the table too, and draws by it only where most of the
+//! pilot's connections were occluded ([`AUTO_CLEAR_BELOW`]) and drawing by the table
+//! would unblock many of them ([`AUTO_GAIN`], [`Unblocking`]); elsewhere each camera
+//! vertex keeps its pair.
 
 use glam::Vec3;
 
@@ -39,6 +44,22 @@ pub const DRAWS_PER_VERTEX: f64 = 2.0;
 
 /// The most draws a camera vertex makes.
 pub const MAX_DRAWS: usize = 16;
+
+/// `auto` considers the cache only when fewer than this share of the pilot's
+/// connections carried light (their shadow ray clear). Measured shares (paired,
+/// `--stats`): `doorway` 0.34, `quadric-gallery` 0.33, buddha-fractal 0.25;
+/// `cornell-glass` 0.81, `window` 0.86, `keyhole` and `pool` 0.95 and more,
+/// `sppm-bench` 0.99, where cached connections gained little or lost (`docs/vcm.md`).
+pub const AUTO_CLEAR_BELOW: f64 = 0.5;
+
+/// ... and draws from it only where the table would take that share up this many
+/// times (predicted from the pilot's share per pair of cells, which flatters the
+/// table: it learnt from the same connections). Occlusion the cells cannot tell apart
+/// is not unblocked: buddha-fractal's fractal shadows itself at every scale
+/// (predicted 1.6 times, measured 0.25 → 0.30 over 32 passes, error × time 1.12 of
+/// paired's); `doorway`'s wall stands between cells (predicted 2.5 times, measured
+/// 0.34 → 0.77, error × time 0.66–0.73); `quadric-gallery` 2.4 times, 1.03.
+pub const AUTO_GAIN: f64 = 2.0;
 
 /// About this many cells over the scene's box. On `doorway` 128 cells left 1.05 of
 /// the error of 512, and 2,048 (a table of 4 million entries, sparsely learnt) 1.3.
@@ -94,36 +115,104 @@ pub struct Learning {
     cells: Cells,
     /// Row-major: camera cell × light cell.
     got: Vec<f64>,
+    /// Row-major as `got`: the connections tried, and those that carried light.
+    tried: Vec<u32>,
+    carried: Vec<u32>,
     /// Light vertices stored per cell over the pilot.
     vertices: Vec<u64>,
     subpaths: u64,
+    /// Whether the table is used whatever the pilot saw (`cached`) or only where it
+    /// would unblock many connections (`auto`).
+    mode: Connections,
+}
+
+/// What `auto` weighs (shares of connections that carried light): the pilot's, and
+/// the one drawing by the table would give, predicted from the pilot's.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Unblocking {
+    pub paired: f64,
+    pub predicted: f64,
+}
+
+impl Unblocking {
+    /// Whether `auto` draws from the cache.
+    pub fn draws(&self) -> bool {
+        self.paired < AUTO_CLEAR_BELOW && self.predicted >= AUTO_GAIN * self.paired
+    }
 }
 
 impl Learning {
-    pub fn new(cells: Cells) -> Learning {
+    pub fn new(cells: Cells, mode: Connections) -> Learning {
         let n = cells.len();
-        Learning { cells, got: vec![0.0; n * n], vertices: vec![0; n], subpaths: 0 }
+        let (got, tried, carried) = (vec![0.0; n * n], vec![0; n * n], vec![0; n * n]);
+        Learning { cells, got, tried, carried, vertices: vec![0; n], subpaths: 0, mode }
     }
 
     pub fn cells(&self) -> &Cells {
         &self.cells
     }
 
-    /// One pilot pass: its connections (in pixel order), where its stored light
-    /// vertices stand and how many light subpaths it traced.
-    pub fn add(&mut self, samples: &[Sample], vertices: impl Iterator<Item = Vec3>, subpaths: u64) {
-        let n = self.cells.len();
-        for s in samples.iter().filter(|s| s.value.is_finite() && s.value > 0.0) {
-            self.got[s.camera as usize * n + s.light as usize] += s.value as f64;
-        }
+    /// The table's sums, for a pilot pass to add its connections to.
+    pub fn tally(&self) -> Tally {
+        Tally { n: self.cells.len(), got: self.got.clone(), tried: self.tried.clone(), carried: self.carried.clone() }
+    }
+
+    /// A pilot pass: the table's sums with its connections added ([`Tally`]), where
+    /// its stored light vertices stand and how many light subpaths it traced.
+    pub fn add_pass(&mut self, tally: Tally, vertices: impl Iterator<Item = Vec3>, subpaths: u64) {
+        (self.got, self.tried, self.carried) = (tally.got, tally.tried, tally.carried);
         for p in vertices {
             self.vertices[self.cells.of(p) as usize] += 1;
         }
         self.subpaths += subpaths;
     }
 
+    /// What the passes after the pilot do: draw by the table (`cached`, or `auto`
+    /// where it would unblock many connections), or keep their pairs.
+    pub fn finish(self) -> State {
+        let links = self.table();
+        let unblocking = self.unblocking(&links);
+        match self.mode {
+            Connections::Auto if !unblocking.draws() => State::Paired(unblocking),
+            Connections::Auto => State::Learnt(std::sync::Arc::new(Links { auto: Some(unblocking), ..links })),
+            _ => State::Learnt(std::sync::Arc::new(links)),
+        }
+    }
+
+    /// The pilot's share of connections that carried light, and the share drawing by
+    /// `links` would give: each camera cell's connections, as many as the pilot's,
+    /// drawn over the light cells by the table, each pair of cells clear as often as
+    /// in the pilot (as often as the camera cell's connections overall where the
+    /// pilot tried none). No connections: nothing to unblock (1 and 1).
+    fn unblocking(&self, links: &Links) -> Unblocking {
+        let n = self.cells.len();
+        let (mut tried, mut carried, mut predicted) = (0u64, 0u64, 0.0);
+        for c in 0..n {
+            let row = c * n..(c + 1) * n;
+            let (t, k) = (&self.tried[row.clone()], &self.carried[row]);
+            let total = |v: &[u32]| v.iter().map(|&x| x as u64).sum::<u64>();
+            let (row_tried, row_carried) = (total(t), total(k));
+            if row_tried == 0 {
+                continue;
+            }
+            let prior = row_carried as f64 / row_tried as f64;
+            let drawn: f64 = (0..n)
+                .map(|l| {
+                    let rate = if t[l] > 0 { k[l] as f64 / t[l] as f64 } else { prior };
+                    links.cell_chance(c as u32, l as u32) * rate
+                })
+                .sum();
+            (tried, carried, predicted) =
+                (tried + row_tried, carried + row_carried, predicted + row_tried as f64 * drawn);
+        }
+        match tried {
+            0 => Unblocking { paired: 1.0, predicted: 1.0 },
+            t => Unblocking { paired: carried as f64 / t as f64, predicted: predicted / t as f64 },
+        }
+    }
+
     /// The table the passes after the pilot draw from.
-    pub fn finish(self) -> Links {
+    fn table(&self) -> Links {
         let n = self.cells.len();
         let per_path = |v: u64| v as f64 / self.subpaths.max(1) as f64;
         let stored = per_path(self.vertices.iter().sum());
@@ -144,7 +233,32 @@ impl Learning {
         // At least one: a fraction of a draw (one more with the chance of the fraction)
         // took `keyhole`'s error × time from 0.90 of paired's to 1.04 (`docs/vcm.md`).
         let draws = (DRAWS_PER_VERTEX * stored).round().clamp(1.0, MAX_DRAWS as f64) as u32;
-        Links { cells: self.cells, rows, nu, stored: stored.max(1e-9), draws }
+        Links { cells: self.cells.clone(), rows, nu, stored: stored.max(1e-9), draws, auto: None }
+    }
+}
+
+/// The table's sums while a pilot pass adds to them: a copy of [`Learning`]'s, so that
+/// the pass adds its connections a band of pixels at a time, in pixel order, and never
+/// holds all of them, while the render's state stays read-only.
+#[derive(Debug)]
+pub struct Tally {
+    n: usize,
+    got: Vec<f64>,
+    tried: Vec<u32>,
+    carried: Vec<u32>,
+}
+
+impl Tally {
+    /// Connections of the pass, the next in pixel order.
+    pub fn add(&mut self, samples: &[Sample]) {
+        for s in samples {
+            let k = s.camera as usize * self.n + s.light as usize;
+            self.tried[k] = self.tried[k].saturating_add(1);
+            if s.value.is_finite() && s.value > 0.0 {
+                self.got[k] += s.value as f64;
+                self.carried[k] = self.carried[k].saturating_add(1);
+            }
+        }
     }
 }
 
@@ -161,6 +275,8 @@ pub struct Links {
     /// Draws per camera vertex: [`DRAWS_PER_VERTEX`] times the pilot's stored vertices
     /// per light subpath (twice the connections its pair gave), at least one.
     pub draws: u32,
+    /// With `auto`: what chose the table.
+    pub auto: Option<Unblocking>,
 }
 
 impl Links {
@@ -174,6 +290,12 @@ impl Links {
             None => 0.0,
             Some(cdf) => cdf[l as usize] - if l == 0 { 0.0 } else { cdf[l as usize - 1] },
         }
+    }
+
+    /// The chance a draw for camera cell `c` lands in light cell `l`.
+    fn cell_chance(&self, c: u32, l: u32) -> f64 {
+        let u = self.uniform_share(c);
+        u * self.nu[l as usize] / self.stored + (1.0 - u) * self.share(c, l)
     }
 
     fn uniform_share(&self, c: u32) -> f64 {
@@ -261,8 +383,11 @@ impl Pool {
 /// What a camera vertex connects to (`--connections`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Connections {
-    /// Every vertex of its pair, one light subpath (Georgiev et al.'s).
+    /// `cached` where the pilot found most connections occluded and the table would
+    /// unblock many of them, else `paired`.
     #[default]
+    Auto,
+    /// Every vertex of its pair, one light subpath (Georgiev et al.'s).
     Paired,
     /// Vertices drawn from the whole pass by a table the pilot learns (the module).
     Cached,
@@ -272,6 +397,7 @@ impl Connections {
     /// The option's value that asks for it.
     pub fn name(self) -> &'static str {
         match self {
+            Connections::Auto => "auto",
             Connections::Paired => "paired",
             Connections::Cached => "cached",
         }
@@ -281,10 +407,10 @@ impl Connections {
 impl std::str::FromStr for Connections {
     type Err = String;
     fn from_str(s: &str) -> Result<Connections, String> {
-        [Connections::Paired, Connections::Cached]
+        [Connections::Auto, Connections::Paired, Connections::Cached]
             .into_iter()
             .find(|e| e.name() == s)
-            .ok_or_else(|| format!("expected paired or cached, not \"{s}\""))
+            .ok_or_else(|| format!("expected auto, paired or cached, not \"{s}\""))
     }
 }
 
@@ -294,6 +420,8 @@ impl std::str::FromStr for Connections {
 pub enum State {
     Learning(Box<Learning>),
     Learnt(std::sync::Arc<Links>),
+    /// `auto` keeps the pairs: the table would not unblock enough connections.
+    Paired(Unblocking),
     Unknown,
 }
 
@@ -308,6 +436,40 @@ mod tests {
         let chi2: f64 = counts.iter().zip(expected).map(|(&c, &e)| (c as f64 - e).powi(2) / e).sum();
         let dof = (counts.len() - 1) as f64;
         assert!(chi2 < dof + 3.1 * (2.0 * dof).sqrt(), "χ² {chi2} over {dof} degrees of freedom");
+    }
+
+    /// `auto` draws from the cache where the pilot's connections were mostly blocked
+    /// and the table picks the cells they were clear to; it keeps the pairs where the
+    /// blocking is spread over every pair of cells alike, or where most were clear.
+    #[test]
+    fn auto_draws_where_the_table_unblocks_connections() {
+        let cells = Cells::new(Vec3::ZERO, Vec3::ONE);
+        let (x, near, far) = (Vec3::splat(0.1), Vec3::splat(0.2), Vec3::splat(0.9));
+        let decide = |clear_near: f32, clear_far: f32| {
+            let mut learning = Learning::new(cells.clone(), Connections::Auto);
+            let cells = &cells;
+            let mut tally = learning.tally();
+            // Ten connections to a near light vertex and thirty to a far one, the
+            // share `clear_near` or `clear_far` of them carrying light.
+            let lit = |i: usize, n: usize, share: f32| if (i as f32) < n as f32 * share { 1.0 } else { 0.0 };
+            let to = |p: Vec3, n: usize, share: f32| {
+                (0..n).map(move |i| Sample { camera: cells.of(x), light: cells.of(p), value: lit(i, n, share) })
+            };
+            let samples: Vec<Sample> = to(near, 10, clear_near).chain(to(far, 30, clear_far)).collect();
+            tally.add(&samples);
+            learning.add_pass(tally, [near, far].into_iter(), 1);
+            match learning.finish() {
+                State::Learnt(l) => (true, l.auto.expect("auto's figures")),
+                State::Paired(u) => (false, u),
+                _ => panic!("neither"),
+            }
+        };
+        let (drawn, u) = decide(0.6, 0.0);
+        assert!(drawn && (u.paired - 0.15).abs() < 1e-9 && (u.predicted - 0.57).abs() < 1e-9, "{u:?}");
+        let (drawn, u) = decide(0.3, 0.3);
+        assert!(!drawn && (u.predicted - u.paired).abs() < 1e-9, "{u:?}");
+        let (drawn, u) = decide(1.0, 0.6);
+        assert!(!drawn && (u.paired - 0.7).abs() < 1e-9, "{u:?}");
     }
 
     /// The chance a draw reports for a vertex is how often draws take it: the estimate
@@ -326,9 +488,11 @@ mod tests {
             .filter(|(i, _)| i % 3 == 0)
             .map(|(i, &p)| Sample { camera: cells.of(x), light: cells.of(p), value: 1.0 + (i % 5) as f32 })
             .collect();
-        let mut learning = Learning::new(cells.clone());
-        learning.add(&samples, points.iter().copied(), 200);
-        let links = learning.finish();
+        let mut learning = Learning::new(cells.clone(), Connections::Cached);
+        let mut tally = learning.tally();
+        tally.add(&samples);
+        learning.add_pass(tally, points.iter().copied(), 200);
+        let links = learning.table();
         let pool = Pool::new(&cells, points.iter().copied());
         let (mut counts, mut chance, draws) = (vec![0u32; points.len()], vec![0.0; points.len()], 2_000_000);
         let mut rng = Rng::new(13);

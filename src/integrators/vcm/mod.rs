@@ -100,6 +100,11 @@ fn mix(tree: &STree, g: Guided) -> Mix<'_> {
 /// Pixel ranges splats are grouped into for the parallel reduction.
 const SPLAT_RANGES: usize = 64;
 
+/// Pixels a band of a pass the table of cached connections learns from: its
+/// connections (12 bytes each) are held until the band ends. 64 work items: a few
+/// connections a pixel make a few megabytes.
+const LEARNING_BAND: usize = 64 * crate::integrators::PIXELS_PER_TASK;
+
 /// One of the ways a path is sampled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Technique {
@@ -368,6 +373,19 @@ pub struct Vcm<'a> {
     links: Option<links::State>,
 }
 
+/// What the passes so far decided that a resumed render would otherwise replay them
+/// for (a checkpoint saves it).
+#[derive(Clone, Debug, Default)]
+pub struct Decided {
+    /// The pilot's light subpaths per pass.
+    pub light_paths: Option<u64>,
+    /// The path guide.
+    pub guide: Option<Guide>,
+    /// `--connections auto`'s choice to keep the pairs. A table it draws by is not
+    /// saved (up to 2 MB): the pilot is played again to learn it.
+    pub pairs_kept: Option<links::Unblocking>,
+}
+
 /// What a pass did besides adding to the sums.
 struct Done {
     counts: light::Counts,
@@ -375,9 +393,9 @@ struct Done {
     camera: camera::Work,
     /// The camera subpaths' records for the guide, in pixel order (a training pass's).
     records: Records,
-    /// The connections camera subpaths made, in pixel order, and where the stored
-    /// light vertices stand (a pass the table learns from).
-    links: Option<(Vec<links::Sample>, Vec<glam::Vec3>)>,
+    /// In a pass the table learns from, the table's sums with the pass's connections
+    /// added, and where the stored light vertices stand.
+    links: Option<(links::Tally, Vec<glam::Vec3>)>,
     times: [Instant; 5],
 }
 
@@ -526,31 +544,40 @@ impl<'a> Vcm<'a> {
         Ok(())
     }
 
-    /// The pilot's choice of light subpaths per pass, once made.
-    pub fn chosen_light_paths(&self) -> Option<u64> {
-        match self.balance {
-            Some(Balance::Chosen(n)) => Some(n),
-            _ => None,
+    /// What the passes so far decided, for a checkpoint to save.
+    pub fn decided(&self) -> Decided {
+        Decided {
+            light_paths: match self.balance {
+                Some(Balance::Chosen(n)) => Some(n),
+                _ => None,
+            },
+            guide: self.guide.clone(),
+            pairs_kept: match &self.links {
+                Some(links::State::Paired(u)) => Some(*u),
+                _ => None,
+            },
         }
     }
 
-    /// The path guide, if the render has one.
-    pub fn guide(&self) -> Option<&Guide> {
-        self.guide.as_ref()
-    }
-
-    /// Takes what a checkpoint saved after [`Self::restore`]: the pilot's choice, where
-    /// the pilot was done, and then the guide, where it is the one the passes so far
-    /// trained (else the passes are replayed before the next, [`Self::rehearse`]).
-    pub fn restore_decided(&mut self, light_paths: Option<u64>, guide: Option<Guide>) {
-        if let (Some(n), Some(Balance::Unknown)) = (light_paths, &self.balance)
-            && self.iteration >= balance::PILOT_PASSES
+    /// Takes what a checkpoint saved after [`Self::restore`]: the pilot's choices,
+    /// where the pilot was done, and then the guide, where it is the one the passes so
+    /// far trained (else the passes are replayed before the next, [`Self::rehearse`]).
+    pub fn restore_decided(&mut self, saved: Decided) {
+        let past_pilot = self.iteration >= balance::PILOT_PASSES;
+        if let (Some(n), Some(Balance::Unknown)) = (saved.light_paths, &self.balance)
+            && past_pilot
         {
             self.balance = Some(Balance::Chosen(n));
         }
         let settled = !matches!(self.balance, Some(Balance::Unknown));
+        if let (Some(u), Some(links::State::Unknown)) = (saved.pairs_kept, &self.links)
+            && past_pilot
+            && settled
+        {
+            self.links = Some(links::State::Paired(u));
+        }
         let trained = self.iteration.min(crate::guiding::training::TRAINING_PASSES);
-        if let (Some(g), Some(mine)) = (guide, &mut self.guide)
+        if let (Some(g), Some(mine)) = (saved.guide, &mut self.guide)
             && settled
             && g.recorded() == trained
         {
@@ -588,9 +615,9 @@ impl<'a> Vcm<'a> {
         let mut parts = self.measuring().then(|| vec![[0f32; 3]; self.sums.len()]);
         let mut sums = std::mem::take(&mut self.sums);
         let buckets = self.buckets.as_ref();
-        let done = self.render_pass(self.iteration, (&mut sums, buckets), parts.as_deref_mut(), preview);
+        let mut done = self.render_pass(self.iteration, (&mut sums, buckets), parts.as_deref_mut(), preview);
         self.sums = sums;
-        self.learn(self.iteration, parts.as_deref(), &done);
+        self.learn(self.iteration, parts.as_deref(), &mut done);
         self.iteration += 1;
         (self.stats.connections, self.stats.connections_clear) = (
             self.stats.connections + done.camera.connections,
@@ -606,18 +633,18 @@ impl<'a> Vcm<'a> {
 
     /// What pass `k` teaches: the pilot its parts (when it measures), the guide its
     /// records (when it trains on the pass).
-    fn learn(&mut self, k: u32, parts: Option<&[balance::Part]>, done: &Done) {
+    fn learn(&mut self, k: u32, parts: Option<&[balance::Part]>, done: &mut Done) {
         if let Some(g) = self.guide.as_mut().filter(|g| g.trains_on(k)) {
             g.add_pass(&done.records);
         }
         let n = self.light_paths(k);
-        if let (Some(links::State::Learning(l)), Some((samples, points))) = (&mut self.links, &done.links) {
-            l.add(samples, points.iter().copied(), n);
+        if let (Some(links::State::Learning(l)), Some((tally, points))) = (&mut self.links, done.links.take()) {
+            l.add_pass(tally, points.into_iter(), n);
         }
         if k + 1 >= balance::PILOT_PASSES
             && let Some(links::State::Learning(l)) = self.links.take_if(|s| matches!(s, links::State::Learning(_)))
         {
-            self.links = Some(links::State::Learnt(std::sync::Arc::new(l.finish())));
+            self.links = Some(l.finish());
         }
         if let (Some(parts), Some(Balance::Measuring(pilot))) = (parts, &mut self.balance) {
             pilot.add(parts, n, done.counts, done.camera, done.stored as u64);
@@ -655,8 +682,8 @@ impl<'a> Vcm<'a> {
         let mut scratch = vec![DVec3::ZERO; self.sums.len()];
         for k in 0..end {
             let mut parts = self.measuring().then(|| vec![[0f32; 3]; self.sums.len()]);
-            let done = self.render_pass(k, (&mut scratch, None), parts.as_deref_mut(), None);
-            self.learn(k, parts.as_deref(), &done);
+            let mut done = self.render_pass(k, (&mut scratch, None), parts.as_deref_mut(), None);
+            self.learn(k, parts.as_deref(), &mut done);
         }
     }
 
@@ -681,14 +708,20 @@ impl<'a> Vcm<'a> {
         let t1 = Instant::now();
         let grid = self.settings.techniques.uses(Technique::Merge).then(|| merge_grid(&lights, pass.radius)).flatten();
         let pool = pass.links.as_ref().map(|l| links::Pool::new(l.cells(), lights.spots.iter().map(|s| s.p)));
+        let mut tally = match &self.links {
+            Some(links::State::Learning(l)) if pass.link_cells.is_some() => Some(l.tally()),
+            _ => None,
+        };
         let t2 = Instant::now();
         let cams = camera::Cameras { pool: pool.as_ref(), ..self.cameras(&pass, &lights, grid.as_ref(), iteration) };
         let (width, live, scene) = (self.size.0, &self.live, self.scene);
         let tasks = crate::integrators::PIXELS_PER_TASK;
-        let (mut work, mut records, mut connections) = (camera::Work::default(), Records::default(), Vec::new());
+        let (mut work, mut records) = (camera::Work::default(), Records::default());
         let halves = balance::Halves::new(pass.light_paths);
         let lanes = buckets.map(|b| (b, b.lanes(iteration)));
-        for band in super::preview::bands(sums.len(), 4 * tasks, usize::MAX, preview.is_some()) {
+        // A pass the table learns from holds one band's connections at a time.
+        let most = if tally.is_some() { LEARNING_BAND } else { usize::MAX };
+        for band in super::preview::bands(sums.len(), 4 * tasks, most, preview.is_some()) {
             let first = band.start;
             let pixel = |i: usize, s: &mut DVec3| {
                 if (first + i).is_multiple_of(256) {
@@ -703,7 +736,7 @@ impl<'a> Vcm<'a> {
                 p
             };
             let band_sums = sums[band.clone()].par_iter_mut().enumerate().with_max_len(tasks);
-            let (w, r, mut l) = match parts.as_deref_mut() {
+            let (w, r, l) = match parts.as_deref_mut() {
                 Some(parts) => band_sums
                     .zip(parts[band.clone()].par_iter_mut())
                     .map(|((i, s), part)| {
@@ -719,7 +752,9 @@ impl<'a> Vcm<'a> {
             };
             work = work + w;
             records.append(r);
-            connections.append(&mut l);
+            if let Some(t) = &mut tally {
+                t.add(&l);
+            }
             if let Some(show) = preview.as_mut() {
                 show(&|| provisional(sums, self.passes_done(), &self.scene.film, band.end));
             }
@@ -731,7 +766,7 @@ impl<'a> Vcm<'a> {
         }
         let (counts, stored) = (lights.counts, lights.stored());
         add_splats((sums, lanes.as_ref()), lights.splats, scale, scene);
-        let links = pass.link_cells.is_some().then(|| (connections, lights.spots.iter().map(|s| s.p).collect()));
+        let links = tally.map(|t| (t, lights.spots.iter().map(|s| s.p).collect()));
         Done { counts, stored, camera: work, records, links, times: [t0, t1, t2, t3, Instant::now()] }
     }
 
@@ -795,8 +830,10 @@ impl<'a> Vcm<'a> {
         s.iterations = self.iteration;
         s.bidirectional = true;
         s.prefix_pixels = self.prefix.as_ref().map_or(0, |m| m.iter().filter(|&&p| p).count() as u64);
-        if let Some(links::State::Learnt(l)) = &self.links {
-            s.connection_draws = l.draws;
+        match &self.links {
+            Some(links::State::Learnt(l)) => (s.connection_draws, s.connections_auto) = (l.draws, l.auto),
+            Some(links::State::Paired(u)) => s.connections_auto = Some(*u),
+            _ => {}
         }
     }
 
@@ -838,9 +875,10 @@ fn merge_grid(lights: &light::LightPass, radius: f32) -> Option<Grid> {
 /// The table of cached connections at its start, where the render asks for one and
 /// the pilot runs to learn it ([`links`]).
 fn learning(scene: &RenderScene, settings: &VcmSettings) -> Option<links::State> {
-    let cached = settings.connections == links::Connections::Cached;
-    let b = scene.geometry.bounds().filter(|_| cached && settings.techniques.uses(Technique::Connect))?;
-    Some(links::State::Learning(Box::new(links::Learning::new(links::Cells::new(b.min, b.max)))))
+    let mode = settings.connections;
+    let learns = mode != links::Connections::Paired && settings.techniques.uses(Technique::Connect);
+    let b = scene.geometry.bounds().filter(|_| learns)?;
+    Some(links::State::Learning(Box::new(links::Learning::new(links::Cells::new(b.min, b.max), mode))))
 }
 
 /// The image part way through a pass: the first `camera_done` pixels with this pass's
