@@ -135,9 +135,10 @@ pub struct Unblocking {
 }
 
 impl Unblocking {
-    /// Whether `auto` draws from the cache.
+    /// Whether `auto` draws from the cache (never where nothing would be unblocked:
+    /// a pilot whose connections all failed predicts 0 either way).
     pub fn draws(&self) -> bool {
-        self.paired < AUTO_CLEAR_BELOW && self.predicted >= AUTO_GAIN * self.paired
+        self.paired < AUTO_CLEAR_BELOW && self.predicted >= AUTO_GAIN * self.paired && self.predicted > self.paired
     }
 }
 
@@ -440,7 +441,8 @@ mod tests {
 
     /// `auto` draws from the cache where the pilot's connections were mostly blocked
     /// and the table picks the cells they were clear to; it keeps the pairs where the
-    /// blocking is spread over every pair of cells alike, or where most were clear.
+    /// blocking is spread over every pair of cells alike, where most were clear, and
+    /// where every connection was blocked (nothing to unblock).
     #[test]
     fn auto_draws_where_the_table_unblocks_connections() {
         let cells = Cells::new(Vec3::ZERO, Vec3::ONE);
@@ -470,6 +472,8 @@ mod tests {
         assert!(!drawn && (u.predicted - u.paired).abs() < 1e-9, "{u:?}");
         let (drawn, u) = decide(1.0, 0.6);
         assert!(!drawn && (u.paired - 0.7).abs() < 1e-9, "{u:?}");
+        let (drawn, u) = decide(0.0, 0.0);
+        assert!(!drawn && u.paired == 0.0 && u.predicted == 0.0, "{u:?}");
     }
 
     /// The chance a draw reports for a vertex is how often draws take it: the estimate
