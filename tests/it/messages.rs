@@ -36,6 +36,7 @@ fn render_help_states_the_defaults_the_code_plans_with() {
         ("sampler", lower(&plan.sampler)),
         ("photon-sampling", lower(&plan.photon_sampling)),
         ("passes", lower(&plan.passes)),
+        ("connections", plan.connections.name().to_string()),
     ] {
         let text = help_of(&help, flag);
         assert!(text.contains(&format!("Default: `{default}`")), "--{flag} does not say `{default}`: {text}");

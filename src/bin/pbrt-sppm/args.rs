@@ -147,8 +147,9 @@ pub struct RenderArgs {
     /// What vcm's and bdpt's camera vertices connect to: `paired` (every vertex of one
     /// light subpath), `cached` (vertices drawn from the whole pass, by a table of
     /// where connections found light, learnt over the first four passes) or `auto`
-    /// (`cached` where under half of those four passes' connections were unoccluded,
-    /// else `paired`). Default: `auto`.
+    /// (`cached` where under half of those four passes' connections carried light and
+    /// drawing by the table would at least double that share, else `paired`; `--stats`
+    /// says which). Default: `auto`.
     #[arg(long, value_parser = str::parse::<Connections>)]
     pub connections: Option<Connections>,
     /// How SPPM gathers photons in participating media: `beams` (every medium segment
