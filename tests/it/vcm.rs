@@ -883,20 +883,25 @@ fn lights_outside_a_window_draw_their_subpaths_toward_what_the_camera_sees() {
     assert_split_merges_in(d, &["--integrator", "vcm", "--photons", "2000"], ["0..2", "2..6"]);
 }
 
+/// An SPPM render given `option value`, which only vcm and bdpt read: the error it
+/// stops with, having written no image.
+fn sppm_refuses(name: &str, option: &str, value: &str) -> String {
+    let d = crate::shards::dir(name);
+    let err = crate::shards::error(&d, &["render", "scene.pbrt", option, value, "--outfile", "x.exr"]);
+    assert!(!d.join("x.exr").exists());
+    err
+}
+
 #[test]
 fn choosing_how_an_sppm_render_emits_is_a_clear_error() {
-    let d = crate::shards::dir("emission-sppm");
-    let err = crate::shards::error(&d, &["render", "scene.pbrt", "--emission", "seen", "--outfile", "x.exr"]);
+    let err = sppm_refuses("emission-sppm", "--emission", "seen");
     assert!(err.contains("--emission is vcm's and bdpt's"), "{err}");
-    assert!(!d.join("x.exr").exists());
 }
 
 #[test]
 fn choosing_what_an_sppm_render_connects_to_is_a_clear_error() {
-    let d = crate::shards::dir("connections-sppm");
-    let err = crate::shards::error(&d, &["render", "scene.pbrt", "--connections", "cached", "--outfile", "x.exr"]);
+    let err = sppm_refuses("connections-sppm", "--connections", "cached");
     assert!(err.contains("scene.pbrt: error: --connections is vcm's and bdpt's"), "{err}");
-    assert!(!d.join("x.exr").exists());
 }
 
 /// A spot light shining up at a mirror whose shading normals lean 27° from its face,
