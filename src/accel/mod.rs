@@ -659,6 +659,7 @@ impl Geometry {
         let pbrt_hyperboloid = !scene.fixes.has(crate::fixes::Fix::HyperboloidSurface);
         for q in &mut set.quadrics {
             q.pbrt_normal_derivatives = pbrt_dndu;
+            q.skip_normal_derivatives = setup.skip_normal_derivatives;
             if let crate::shapes::Quadric::Hyperboloid(h) = &mut q.quadric {
                 h.implicit_fit = pbrt_hyperboloid;
             }
@@ -779,7 +780,9 @@ impl Geometry {
 
     /// The full interaction of a hit, in render space.
     pub fn interaction(&self, hit: &Hit) -> SurfaceInteraction {
-        let si = SurfaceInteraction { time: hit.time, ..self.shapes.interaction(&hit.local) };
+        // Set in place: a struct update copied the whole interaction (a memcpy a hit).
+        let mut si = self.shapes.interaction(&hit.local);
+        si.time = hit.time;
         match hit.instance {
             Some(k) => {
                 let m = self.render_from_instance_at(&self.instances[k as usize], hit.time);

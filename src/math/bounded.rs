@@ -66,6 +66,16 @@ impl Bounded64 {
         Bounded64 { v, r: (v - low).max(high - v) * GROW + ETA }
     }
 
+    /// `EFloat64::new(v, err)`'s value, and a radius that holds its ends, without
+    /// computing them: each end is v ∓ err rounded and stepped out an ulp, at most
+    /// 2U(|v| + err) beyond err (a subnormal step is within [`ETA`]). An exact value
+    /// (err = 0) has both ends at v.
+    #[inline(always)]
+    pub fn around(v: f64, err: f64) -> Bounded64 {
+        let r = if err == 0.0 { 0.0 } else { widened(err, v.abs() + err) };
+        Bounded64 { v, r }
+    }
+
     /// Whether the radius says anything (finite value and radius).
     #[inline]
     pub fn is_known(self) -> bool {
@@ -168,6 +178,33 @@ mod tests {
         let v = if next() < 0.5 { -mag } else { mag };
         let err = if next() < 0.3 { 0.0 } else { v.abs() * 10f64.powf(-16.0 + 15.0 * next()) };
         EFloat64::new(v, err)
+    }
+
+    /// A value and its error bound make a radius that holds the interval's ends, at
+    /// every magnitude, subnormals and zero included.
+    #[test]
+    fn a_radius_around_a_value_holds_its_interval() {
+        let mut rng = Rng::new(7);
+        let odd = [0.0, -0.0, 5e-324, -5e-324, 2.2e-308, f64::MAX / 4.0];
+        for k in 0..200_000 {
+            let mut next = || rng.uniform() as f64;
+            let mag = 10f64.powf(next() * 600.0 - 300.0);
+            let v = match k % 7 {
+                0 => odd[(next() * 6.0) as usize % 6],
+                _ if next() < 0.5 => -mag,
+                _ => mag,
+            };
+            let err = match k % 5 {
+                0 => 0.0,
+                1 => odd[(next() * 6.0) as usize % 6].abs(),
+                _ => v.abs() * 10f64.powf(-17.0 + 16.0 * next()),
+            };
+            let (e, b) = (EFloat64::new(v, err), Bounded64::around(v, err));
+            assert_eq!(e.value().to_bits(), b.v.to_bits());
+            if b.is_known() {
+                assert!(b.low_least() <= e.lower() && e.upper() <= b.high_most(), "{e:?} outside {b:?}");
+            }
+        }
     }
 
     /// Chains of random operations on both types give the same values bit for bit,

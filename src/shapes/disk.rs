@@ -5,7 +5,8 @@
 use super::Quadric;
 use super::params::{f, positive};
 use super::phi_max_radians;
-use super::quadric::{E, Local, QuadricSurface, at};
+use super::quadric::{E, Local, ObjectRay, QuadricSurface, within};
+use crate::math::bounded::Bounded64;
 use crate::math::bounded::Interval;
 use crate::math::transform::row_major;
 use crate::mitsuba::GeometryOut;
@@ -70,24 +71,35 @@ impl QuadricSurface for Disk {
     }
 
     /// The plane z = h, then the annulus test; the point is put exactly on the plane
-    /// before the shared range test.
-    fn hit(&self, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3)> {
+    /// before the shared range test. Whether t's interval lies in (0, t_max) is
+    /// decided from its value and a bound where that settles it.
+    fn hit(&self, ray: &ObjectRay, t_max: f64) -> Option<(f64, DVec3)> {
         let h = self.height as f64;
-        if d[2].value() == 0.0 {
+        if ray.d[2].0 == 0.0 {
             return None;
         }
-        let t = (E::from(h) - o[2]) / d[2];
-        if t.lower() <= 0.0 || t.upper() >= t_max {
+        let (o, d) = ray.bounded();
+        let quick = (Bounded64::from(h) - o[2]) / d[2];
+        let inside = match within(quick, t_max) {
+            Some(inside) => inside,
+            None => {
+                let (o, d) = ray.intervals();
+                let t = (E::from(h) - o[2]) / d[2];
+                !(t.lower() <= 0.0 || t.upper() >= t_max)
+            }
+        };
+        if !inside {
             return None;
         }
-        let mut p = at(o, d, t.value());
+        let t = quick.v;
+        let mut p = ray.at(t);
         let dist2 = p.x * p.x + p.y * p.y;
         let (r, ri) = (self.radius as f64, self.inner_radius as f64);
         if dist2 > r * r || dist2 < ri * ri {
             return None;
         }
         p.z = h;
-        self.accept(p).then_some((t.value(), p))
+        self.accept(p).then_some((t, p))
     }
 
     fn local(&self, p: DVec3, phi: f64) -> Local {

@@ -38,8 +38,10 @@ pub struct QuadricShape {
     pub render_from_object: DMat4,
     pub object_from_render: DMat4,
     pub reverse_orientation: bool,
-    /// ∂n/∂u and ∂n/∂v as pbrt makes them (see [`QuadricShape::interaction`]).
+    /// ∂n/∂u and ∂n/∂v as pbrt makes them (see [`QuadricShape::normal_derivatives`]).
     pub pbrt_normal_derivatives: bool,
+    /// ∂n/∂u and ∂n/∂v left at zero: only bump maps read them, and the scene has none.
+    pub skip_normal_derivatives: bool,
 }
 
 /// The cheap result of a ray–quadric test.
@@ -68,6 +70,7 @@ impl QuadricShape {
             render_from_object,
             reverse_orientation,
             pbrt_normal_derivatives: false,
+            skip_normal_derivatives: false,
         }
     }
 
@@ -77,29 +80,28 @@ impl QuadricShape {
     }
 
     /// The ray in object space, each coordinate with its f64 rounding bound.
-    fn object_ray(&self, r: &Ray) -> ([E; 3], [E; 3]) {
+    fn object_ray(&self, r: &Ray) -> ObjectRay {
         let m = self.object_from_render;
         let (o, d) = (r.o.0.as_dvec3(), r.d.0.as_dvec3());
         let row = |i: usize| m.row(i);
         let op = |i: usize| {
             let w = row(i);
             let v = w.x * o.x + w.y * o.y + w.z * o.z + w.w;
-            let e = gamma64(4) * ((w.x * o.x).abs() + (w.y * o.y).abs() + (w.z * o.z).abs() + w.w.abs());
-            E::new(v, e)
+            (v, gamma64(4) * ((w.x * o.x).abs() + (w.y * o.y).abs() + (w.z * o.z).abs() + w.w.abs()))
         };
         let dp = |i: usize| {
             let w = row(i);
             let v = w.x * d.x + w.y * d.y + w.z * d.z;
-            E::new(v, gamma64(3) * ((w.x * d.x).abs() + (w.y * d.y).abs() + (w.z * d.z).abs()))
+            (v, gamma64(3) * ((w.x * d.x).abs() + (w.y * d.y).abs() + (w.z * d.z).abs()))
         };
-        ([op(0), op(1), op(2)], [dp(0), dp(1), dp(2)])
+        ObjectRay { o: [op(0), op(1), op(2)], d: [dp(0), dp(1), dp(2)] }
     }
 
     /// The first hit with 0 < t < t_max, if any.
     pub fn intersect_t(&self, r: &Ray, t_max: f32) -> Option<QuadricHit> {
-        let (o, d) = self.object_ray(r);
+        let ray = self.object_ray(r);
         let t_max = t_max as f64;
-        let (t, p_obj) = dispatch_quadric!(&self.quadric, s => s.hit(o, d, t_max))?;
+        let (t, p_obj) = dispatch_quadric!(&self.quadric, s => s.hit(&ray, t_max))?;
         Some(QuadricHit { t: t as f32, p_obj })
     }
 
@@ -163,11 +165,17 @@ impl QuadricShape {
         }
     }
 
-    /// Full differential geometry at a hit found by [`QuadricShape::intersect_t`].
-    pub fn interaction(&self, hit: &QuadricHit) -> SurfaceInteraction {
-        let l = self.local_at(hit);
-        let m = self.render_from_object;
-        let m3 = DMat3::from_mat4(m);
+    /// ∂n/∂u and ∂n/∂v in render space from the object-space derivatives `l`, `m3`
+    /// being render-from-object's linear part.
+    fn normal_derivatives(&self, l: &Local, m3: DMat3) -> (DVec3, DVec3) {
+        // DEVIATION(pbrt): appearance, `--fix normal-derivatives`. pbrt transforms the
+        // object-space ∂n/∂u and ∂n/∂v as normals (off by the scale under scaling) and
+        // does not flip them with ReverseOrientation, which bump maps then use; the fix
+        // uses the derivatives of the normal reported.
+        if self.pbrt_normal_derivatives {
+            let ((du, dv), normals) = (weingarten(l), self.normal_matrix());
+            return (normals * du, normals * dv);
+        }
         // The map is affine, so world derivatives of every order are m3 times the
         // object ones; Weingarten on those gives the derivatives of the world normal.
         let world = Local {
@@ -178,19 +186,21 @@ impl QuadricShape {
             d2_uv: m3 * l.d2_uv,
             d2_vv: m3 * l.d2_vv,
         };
-        let (dpdu, dpdv) = (world.dpdu, world.dpdv);
+        let (du, dv) = weingarten(&world);
+        if self.reverse_orientation { (-du, -dv) } else { (du, dv) }
+    }
+
+    /// Full differential geometry at a hit found by [`QuadricShape::intersect_t`].
+    pub fn interaction(&self, hit: &QuadricHit) -> SurfaceInteraction {
+        let l = self.local_at(hit);
+        let m = self.render_from_object;
+        let m3 = DMat3::from_mat4(m);
+        let (dpdu, dpdv) = (m3 * l.dpdu, m3 * l.dpdv);
         let n = dpdu.cross(dpdv).normalize_or_zero();
         let n = if self.reverse_orientation { -n } else { n };
-        // DEVIATION(pbrt): appearance, `--fix normal-derivatives`. pbrt transforms the
-        // object-space ∂n/∂u and ∂n/∂v as normals (off by the scale under scaling) and
-        // does not flip them with ReverseOrientation, which bump maps then use; the fix
-        // uses the derivatives of the normal reported.
-        let (dndu, dndv) = if self.pbrt_normal_derivatives {
-            let ((du, dv), normals) = (weingarten(&l), self.normal_matrix());
-            (normals * du, normals * dv)
-        } else {
-            let (du, dv) = weingarten(&world);
-            if self.reverse_orientation { (-du, -dv) } else { (du, dv) }
+        let (dndu, dndv) = match self.skip_normal_derivatives {
+            true => (DVec3::ZERO, DVec3::ZERO),
+            false => self.normal_derivatives(&l, m3),
         };
         let p = m.transform_point3(hit.p_obj);
         let p32 = p.as_vec3();
@@ -239,9 +249,33 @@ pub(super) fn newton<S: QuadricSurface + ?Sized>(s: &S, p: DVec3) -> DVec3 {
     p
 }
 
-/// The point at parameter t along an object-space ray.
-pub(super) fn at(o: [E; 3], d: [E; 3], t: f64) -> DVec3 {
-    DVec3::new(o[0].value() + t * d[0].value(), o[1].value() + t * d[1].value(), o[2].value() + t * d[2].value())
+/// A ray in object space: each coordinate of its origin and direction as an f64 value
+/// and a bound on that value's rounding error. Tests decide on plain values and a
+/// bound ([`Bounded64`]) where they can, and build the intervals ([`E`]) only where
+/// the bound leaves a doubt: stepping their ends out was a quarter of a sphere test.
+#[derive(Clone, Copy, Debug)]
+pub struct ObjectRay {
+    pub o: [(f64, f64); 3],
+    pub d: [(f64, f64); 3],
+}
+
+impl ObjectRay {
+    /// Origin and direction as intervals: each value ± its bound.
+    pub fn intervals(&self) -> ([E; 3], [E; 3]) {
+        (self.o.map(|(v, e)| E::new(v, e)), self.d.map(|(v, e)| E::new(v, e)))
+    }
+
+    /// Origin and direction as values with radii that hold the ends of
+    /// [`ObjectRay::intervals`].
+    pub fn bounded(&self) -> ([Bounded64; 3], [Bounded64; 3]) {
+        (self.o.map(|(v, e)| Bounded64::around(v, e)), self.d.map(|(v, e)| Bounded64::around(v, e)))
+    }
+
+    /// The point at parameter t (in plain values, as the intervals' values give it).
+    pub fn at(&self, t: f64) -> DVec3 {
+        let (o, d) = (self.o, self.d);
+        DVec3::new(o[0].0 + t * d[0].0, o[1].0 + t * d[1].0, o[2].0 + t * d[2].0)
+    }
 }
 
 /// φ in [0, 2π).
@@ -336,24 +370,25 @@ pub trait QuadricSurface {
     /// The first hit (t, object-space point) with 0 < t < t_max. Decided from the
     /// roots' values and a bound on their intervals ([`quick_roots`]) where that bound
     /// leaves no doubt, from the intervals otherwise: the same decisions either way.
-    fn hit(&self, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3)> {
-        match quick_roots(self, o, d) {
+    fn hit(&self, ray: &ObjectRay, t_max: f64) -> Option<(f64, DVec3)> {
+        match quick_roots(self, ray) {
             Some(None) => return None,
             Some(Some(roots)) => {
-                if let Some(hit) = first_hit(self, roots, o, d, t_max) {
+                if let Some(hit) = first_hit(self, roots, ray, t_max) {
                     return hit;
                 }
             }
             None => {}
         }
-        interval_hit(self, o, d, t_max)
+        interval_hit(self, ray, t_max)
     }
 }
 
 /// [`QuadricSurface::hit`] decided from the roots' intervals alone.
-fn interval_hit<S: QuadricSurface + ?Sized>(s: &S, o: [E; 3], d: [E; 3], t_max: f64) -> Option<(f64, DVec3)> {
+fn interval_hit<S: QuadricSurface + ?Sized>(s: &S, ray: &ObjectRay, t_max: f64) -> Option<(f64, DVec3)> {
+    let (o, d) = ray.intervals();
     let (t0, t1) = s.roots(o, d)?;
-    first_hit(s, (RootEnds::exact(t0), RootEnds::exact(t1)), o, d, t_max).flatten()
+    first_hit(s, (RootEnds::exact(t0), RootEnds::exact(t1)), ray, t_max).flatten()
 }
 
 /// The first of the roots (t0 ≤ t1) in (0, t_max) that lies on the shape, as
@@ -362,8 +397,7 @@ fn interval_hit<S: QuadricSurface + ?Sized>(s: &S, o: [E; 3], d: [E; 3], t_max: 
 fn first_hit<S: QuadricSurface + ?Sized>(
     s: &S,
     (t0, t1): (RootEnds, RootEnds),
-    o: [E; 3],
-    d: [E; 3],
+    ray: &ObjectRay,
     t_max: f64,
 ) -> Option<Option<(f64, DVec3)>> {
     match (settled(t0.high, |h| h > t_max), settled(t1.low, |l| l <= 0.0)) {
@@ -372,7 +406,7 @@ fn first_hit<S: QuadricSurface + ?Sized>(
         _ => return None,
     }
     let try_root = |t: f64| {
-        let p = s.refine(at(o, d, t));
+        let p = s.refine(ray.at(t));
         s.accept(p).then_some((t, p))
     };
     if settled(t0.low, |l| l > 0.0)?
@@ -405,6 +439,16 @@ impl RootEnds {
     }
 }
 
+/// Whether the interval of t lies in (0, t_max), as its ends decide it (low > 0, high
+/// < t_max), from its value and radius: `None` where they leave a doubt.
+pub(super) fn within(t: Bounded64, t_max: f64) -> Option<bool> {
+    if !t.is_known() {
+        return None;
+    }
+    let (low, high) = ([t.low_least(), t.v], [t.v, t.high_most()]);
+    Some(settled(low, |l| l > 0.0)? && settled(high, |h| h < t_max)?)
+}
+
 /// `test` of an interval end known to lie in `end` (least, most), where the two give
 /// the same answer: `test` compares with a fixed value, so the end's answer is theirs.
 /// Exact ends always settle, as the comparison itself (NaN included).
@@ -418,8 +462,9 @@ fn settled(end: [f64; 2], test: impl Fn(f64) -> bool) -> Option<bool> {
 /// discriminant whose interval is surely below 0), `None` where the bound cannot settle
 /// the order or the miss, or a radius is unknown.
 #[inline]
-fn quick_roots<S: QuadricSurface + ?Sized>(s: &S, o: [E; 3], d: [E; 3]) -> Option<Option<(RootEnds, RootEnds)>> {
-    let (a, b, c) = s.coefficients(o.map(Bounded64::of), d.map(Bounded64::of));
+fn quick_roots<S: QuadricSurface + ?Sized>(s: &S, ray: &ObjectRay) -> Option<Option<(RootEnds, RootEnds)>> {
+    let (o, d) = ray.bounded();
+    let (a, b, c) = s.coefficients(o, d);
     let disc = b.v * b.v - 4.0 * a.v * c.v;
     if disc.is_nan() {
         return None;
@@ -467,13 +512,13 @@ mod tests {
     use super::*;
     use crate::sampling::{Rng, uniform_sphere};
     use crate::shapes::sphere::Sphere;
-    use crate::shapes::{Cone, Cylinder, Hyperboloid, Paraboloid};
+    use crate::shapes::{Cone, Cylinder, Disk, Hyperboloid, Paraboloid};
     use glam::Vec3;
 
     /// A ray toward `s`'s surface that starts on it, near it, inside or far off, and
     /// grazes it or ends at or near its hit: where a decision comes closest to a
-    /// bound's doubt. Returns the ray's interval origin and direction and its t_max.
-    fn ray_at<S: QuadricSurface>(s: &S, rng: &mut Rng, scale: f64) -> ([E; 3], [E; 3], f64) {
+    /// bound's doubt. Returns the ray and its t_max.
+    fn ray_at<S: QuadricSurface>(s: &S, rng: &mut Rng, scale: f64) -> (ObjectRay, f64) {
         let on = s.refine(uniform_sphere(rng.uniform2()).as_dvec3() * scale);
         let d = uniform_sphere(rng.uniform2()).as_dvec3();
         let kind = (rng.uniform() * 4.0) as u32;
@@ -491,15 +536,17 @@ mod tests {
         } else {
             d
         };
-        let err = |v: f64| E::new(v, gamma64(4) * v.abs());
-        let (o, d) = (o.to_array().map(err), d.to_array().map(|v| E::new(v, gamma64(3) * v.abs())));
-        let t_hit = interval_hit(s, o, d, f64::INFINITY).map_or(1.0, |h| h.0);
+        let ray = ObjectRay {
+            o: o.to_array().map(|v| (v, gamma64(4) * v.abs())),
+            d: d.to_array().map(|v| (v, gamma64(3) * v.abs())),
+        };
+        let t_hit = interval_hit(s, &ray, f64::INFINITY).map_or(1.0, |h| h.0);
         let t_max = match (rng.uniform() * 3.0) as u32 {
             0 => f64::INFINITY,
             1 => t_hit * (1.0 + 1e-15 * (rng.uniform() as f64 - 0.5)),
             _ => t_hit * 2.0 * rng.uniform() as f64,
         };
-        (o, d, t_max)
+        (ray, t_max)
     }
 
     /// The quick decisions are the intervals' on every kind of quadric and ray, with
@@ -508,19 +555,19 @@ mod tests {
         let (mut rng, mut quick) = (Rng::new(5), 0);
         let n = 200_000;
         for _ in 0..n {
-            let (o, d, t_max) = ray_at(s, &mut rng, scale);
-            let exact = interval_hit(s, o, d, t_max);
-            let fast = match quick_roots(s, o, d) {
+            let (ray, t_max) = ray_at(s, &mut rng, scale);
+            let exact = interval_hit(s, &ray, t_max);
+            let fast = match quick_roots(s, &ray) {
                 Some(None) => Some(None),
-                Some(Some(roots)) => first_hit(s, roots, o, d, t_max),
+                Some(Some(roots)) => first_hit(s, roots, &ray, t_max),
                 None => None,
             };
             if let Some(fast) = fast {
                 quick += 1;
                 let bits = |h: Option<(f64, DVec3)>| h.map(|(t, p)| (t.to_bits(), p.to_array().map(f64::to_bits)));
-                assert_eq!(bits(fast), bits(exact), "o {o:?} d {d:?} t_max {t_max}");
+                assert_eq!(bits(fast), bits(exact), "{ray:?} t_max {t_max}");
             }
-            assert_eq!(s.hit(o, d, t_max).map(|h| h.0.to_bits()), exact.map(|h| h.0.to_bits()));
+            assert_eq!(s.hit(&ray, t_max).map(|h| h.0.to_bits()), exact.map(|h| h.0.to_bits()));
         }
         eprintln!("settled quickly: {quick} of {n}");
         assert!(quick > n / 2, "settled quickly: {quick} of {n}");
@@ -573,6 +620,44 @@ mod tests {
         for (u, v) in [(0.1, 0.2), (0.5, 0.9), (0.8, 0.5), (0.3, 1.0)] {
             let [su, sv] = shape.uv_of_object_point(h.point(u, v));
             assert!((su - u).abs() < 1e-9 && (sv - v).abs() < 1e-9, "({u}, {v}) gave ({su}, {sv})");
+        }
+    }
+
+    /// The disk's hit as it was decided from intervals alone.
+    fn disk_by_intervals(k: &Disk, ray: &ObjectRay, t_max: f64) -> Option<(f64, DVec3)> {
+        let (o, d) = ray.intervals();
+        let h = k.height as f64;
+        if d[2].value() == 0.0 {
+            return None;
+        }
+        let t = (E::from(h) - o[2]) / d[2];
+        if t.lower() <= 0.0 || t.upper() >= t_max {
+            return None;
+        }
+        let mut p = ray.at(t.value());
+        let dist2 = p.x * p.x + p.y * p.y;
+        let (r, ri) = (k.radius as f64, k.inner_radius as f64);
+        if dist2 > r * r || dist2 < ri * ri {
+            return None;
+        }
+        p.z = h;
+        k.accept(p).then_some((t.value(), p))
+    }
+
+    /// The disk's quick decision of t's range is the intervals', bit for bit, on rays
+    /// that start on the plane or end at their hit.
+    #[test]
+    fn disk_decisions_are_the_intervals() {
+        for k in [Disk::new(0.3, 1.2, 0.0, 360.0), Disk::new(-2e3, 4e3, 1e3, 250.0)] {
+            let (mut rng, mut hits) = (Rng::new(3), 0);
+            for _ in 0..200_000 {
+                let (ray, t_max) = ray_at(&k, &mut rng, k.radius as f64);
+                let bits = |h: Option<(f64, DVec3)>| h.map(|(t, p)| (t.to_bits(), p.to_array().map(f64::to_bits)));
+                let exact = disk_by_intervals(&k, &ray, t_max);
+                assert_eq!(bits(k.hit(&ray, t_max)), bits(exact), "{ray:?} t_max {t_max}");
+                hits += exact.is_some() as u32;
+            }
+            assert!(hits > 10_000, "{hits} hits");
         }
     }
 

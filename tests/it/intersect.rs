@@ -883,3 +883,28 @@ fn normal_derivatives_are_there_for_bump_maps_and_left_out_otherwise() {
     assert!((dndv - Vec3::new(0.0, 0.6, -0.2)).length() < 1e-6, "∂n/∂v {dndv}");
     assert_eq!(derivatives("Material \"matte\""), (Vec3::ZERO, Vec3::ZERO));
 }
+
+/// A sphere too: ∂n/∂u and ∂n/∂v where a bump map reads them (a unit sphere's normal
+/// is its point, so they are ∂p/∂u and ∂p/∂v), zero otherwise, and the rest of the
+/// interaction the same bit for bit either way.
+#[test]
+fn quadric_normal_derivatives_are_there_for_bump_maps_and_left_out_otherwise() {
+    let interaction = |material: &str| {
+        let g = pbrt_sppm::accel::Geometry::new(&scene(&format!("WorldBegin {material} Shape \"sphere\"")));
+        let ray = Ray::new(Point3(Vec3::new(0.3, -5.0, 0.4)), Vector3(Vec3::Y));
+        g.interaction(&g.intersect(&ray).expect("the ray hits the sphere"))
+    };
+    let bumped = interaction(
+        "Texture \"b\" \"float\" \"constant\" \"float value\" 0.01 Material \"matte\" \"texture bumpmap\" \"b\"",
+    );
+    let plain = interaction("Material \"matte\"");
+    assert!((bumped.dndu.0 - bumped.dpdu.0).length() < 1e-5, "∂n/∂u {} vs ∂p/∂u {}", bumped.dndu.0, bumped.dpdu.0);
+    assert!((bumped.dndv.0 - bumped.dpdv.0).length() < 1e-5, "∂n/∂v {} vs ∂p/∂v {}", bumped.dndv.0, bumped.dpdv.0);
+    assert!(bumped.dndu.0.length() > 0.1);
+    assert_eq!((plain.dndu.0, plain.dndv.0, plain.shading.dndu.0), (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO));
+    let without = |mut si: pbrt_sppm::interaction::SurfaceInteraction| {
+        (si.dndu, si.dndv, si.shading.dndu, si.shading.dndv) = Default::default();
+        si
+    };
+    assert_eq!(without(bumped), without(plain));
+}
