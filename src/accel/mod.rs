@@ -780,9 +780,7 @@ impl Geometry {
 
     /// The full interaction of a hit, in render space.
     pub fn interaction(&self, hit: &Hit) -> SurfaceInteraction {
-        // Set in place: a struct update copied the whole interaction (a memcpy a hit).
-        let mut si = self.shapes.interaction(&hit.local);
-        si.time = hit.time;
+        let si = SurfaceInteraction { time: hit.time, ..self.shapes.interaction(&hit.local) };
         match hit.instance {
             Some(k) => {
                 let m = self.render_from_instance_at(&self.instances[k as usize], hit.time);
