@@ -523,9 +523,9 @@ mod tests {
     }
 
     /// A shading normal 70° off the geometric one, as on a smooth-shaded mesh's
-    /// silhouette. pbrt-v3 (the shared binary: a floor under a table top shaded so
-    /// stays black) tests a sampled pair's side by the geometric normal even for one
-    /// lobe; pbrt-v4 does not. The value is the lobe's on the sampled local pair.
+    /// silhouette. pbrt-v3 decides a sampled pair's side by the geometric normal even
+    /// for one lobe (the shared pbrt-v3 binary leaves a floor under a table top shaded
+    /// so black); pbrt-v4 does not. The value is the lobe's on the sampled local pair.
     #[test]
     fn a_sampled_f_counts_the_lobes_of_the_geometric_side() {
         let ns = Vec3::new(0.94, 0.0, 0.342).normalize();
