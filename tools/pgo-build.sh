@@ -8,8 +8,10 @@
 #
 # Needs llvm-profdata of the compiler's own LLVM: `rustup component add llvm-tools`.
 # Images are bit for bit those of the plain build; only the speed changes. Measured
-# gains (docs/benchmarks.md, "Profile-guided builds"): 0.85 of the plain build's wall
-# time on sppm-bench and 0.93 on caustic-glass f16-9a, which it does not train on.
+# gains (docs/benchmarks.md, "Profile-guided builds" and the sections after it): 0.81
+# of the plain build's wall time on sppm-bench, also when it is left out of the
+# training, and 0.86 on caustic-glass f16-9a, which it does not train on (both for
+# AVX2, AMD EPYC, 7 December).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD/target/pgo
